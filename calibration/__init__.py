@@ -1,0 +1,5 @@
+"""Calibration: sensor calibration, data collection protocol, training and fixation search."""
+
+from .errors import CalibrationError
+
+__all__ = ["CalibrationError"]

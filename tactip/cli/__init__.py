@@ -1,0 +1,78 @@
+"""The `tactip` command line.
+
+Each subcommand lives in its own module of this package and exposes:
+
+- ``HELP``: one line for the command list;
+- ``add_arguments(parser)``: fills an ``argparse`` parser (parsing only);
+- ``run(args) -> int``: calls the importable function that does the work, returns the exit code.
+
+Heavy imports (OpenCV, h5py, torch) belong inside ``run`` so that ``tactip --help`` stays fast.
+Errors from any package become one line on stderr and a non-zero exit; Ctrl-C prints "Stopped.".
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# Subcommand name -> module. Nested groups (``tactip arm status``) are handled by their module.
+COMMANDS: dict[str, str] = {
+}
+
+
+def _known_errors() -> tuple[type[BaseException], ...]:
+    """The error families whose message is meant for the user (no traceback)."""
+    from arm.errors import ArmError
+    from calibration.errors import CalibrationError
+    from perception.errors import PerceptionError
+    from pins.errors import PinsError
+    from tactip.errors import TactipError
+
+    return (TactipError, PinsError, PerceptionError, ArmError, CalibrationError, OSError)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full argument parser, one subparser per entry of `COMMANDS`."""
+    from tactip import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="tactip",
+        description="TacTip optical tactile sensing: pin tracking, active Bayesian gap inspection, arm control.",
+    )
+    parser.add_argument("--version", action="version", version=f"tactip {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for name, module_name in COMMANDS.items():
+        module = importlib.import_module(module_name)
+        doc = (module.__doc__ or "").strip()
+        cmd = sub.add_parser(name, help=module.HELP, description=doc or module.HELP,
+                             formatter_class=argparse.RawDescriptionHelpFormatter)
+        module.add_arguments(cmd)
+        cmd.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the `tactip` console script; returns the process exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args._run(args) or 0)
+    except KeyboardInterrupt:
+        print("Stopped.", file=sys.stderr)
+        return 1
+    except _known_errors() as exc:
+        print(f"tactip {args.command}: error: {_one_line(exc)}", file=sys.stderr)
+        return 1
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc) or type(exc).__name__
+    if isinstance(exc, OSError) and exc.filename and str(exc.filename) not in text:
+        text = f"{text}: {exc.filename}"
+    return " ".join(text.split())
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
