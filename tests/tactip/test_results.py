@@ -1,0 +1,72 @@
+"""The SQLite results store: rows written as they happen, pass/fail, abort, export, bad files."""
+
+import csv
+import io
+import json
+import sqlite3
+
+import pytest
+
+from tactip.results import EXPORT_FIELDS, ResultsError, ResultsStore
+
+
+def _inspect(store, gap="g1", nominal=2.0, estimate=2.25, decided=True, tolerance=0.25):
+    i = store.start_inspection(gap, nominal_width=nominal, tolerance=tolerance, policy="active",
+                               decision_threshold=0.9)
+    store.record_tap(i, tap=1, depth_mm=1.0, identity_estimate=estimate, belief=0.4,
+                     what_belief=[0.4, 0.6], where_belief=[1.0])
+    store.record_tap(i, tap=2, depth_mm=4.75, identity_estimate=estimate, belief=0.95,
+                     what_belief=[0.05, 0.95], where_belief=[1.0])
+    return i, store.finish_inspection(i, estimated_width=estimate, estimated_depth=4.7, belief=0.95,
+                                      taps=2, decided=decided)
+
+
+def test_pass_fail_and_undecided(tmp_path):
+    with ResultsStore(tmp_path / "r.sqlite") as store:
+        assert _inspect(store, estimate=2.25)[1] is True        # on the tolerance edge: pass
+        assert _inspect(store, estimate=2.5)[1] is False
+        assert _inspect(store, estimate=2.0, decided=False)[1] is None
+        rows = store.inspections()
+    assert [r.passed for r in rows] == [True, False, None]
+    assert all(r.status == "done" and r.taps == 2 for r in rows)
+
+
+def test_rows_are_on_disk_while_running(tmp_path):
+    path = tmp_path / "r.sqlite"
+    store = ResultsStore(path)
+    i = store.start_inspection("g7", nominal_width=1.0, tolerance=0.1, policy="random")
+    store.record_tap(i, tap=1, depth_mm=3.0, what_belief=[0.5, 0.5])
+    # A second connection (another process, or after a crash) sees both rows already.
+    other = sqlite3.connect(path)
+    assert other.execute("SELECT status, taps FROM inspections").fetchall() == [("running", 1)]
+    assert other.execute("SELECT COUNT(*) FROM taps").fetchone()[0] == 1
+    store.close()
+
+
+def test_abort_keeps_taps_and_reason(tmp_path):
+    with ResultsStore(tmp_path / "r.sqlite") as store:
+        i = store.start_inspection("g2", nominal_width=1.0, tolerance=0.1, policy="active")
+        store.record_tap(i, tap=1, depth_mm=2.0, belief=0.3, what_belief=[0.3, 0.7])
+        store.abort_inspection(i, "protective stop")
+        row = store.inspections()[0]
+        taps = store.taps(i)
+    assert (row.status, row.reason, row.passed, row.decided) == ("aborted", "protective stop", None, False)
+    assert taps[0]["what_belief"] == [0.3, 0.7] and taps[0]["depth_mm"] == 2.0
+
+
+def test_export_csv_and_json_have_the_fields(tmp_path):
+    with ResultsStore(tmp_path / "r.sqlite") as store:
+        _inspect(store)
+        text_csv, text_json = store.export_csv(), store.export_json()
+    rows = list(csv.DictReader(io.StringIO(text_csv)))
+    assert tuple(rows[0]) == EXPORT_FIELDS
+    for key in ("gap", "nominal_width", "estimated_width", "belief", "taps", "decided", "passed", "policy", "started_at"):
+        assert key in json.loads(text_json)[0]
+    assert float(rows[0]["estimated_width"]) == 2.25 and rows[0]["passed"] == "True"
+
+
+def test_not_a_database_is_a_clear_error(tmp_path):
+    bad = tmp_path / "notes.sqlite"
+    bad.write_bytes(b"this is not sqlite" * 100)
+    with pytest.raises(ResultsError, match="not a tactip results database"):
+        ResultsStore(bad)
