@@ -18,6 +18,7 @@ import sys
 
 # Subcommand name -> module. Nested groups (``tactip arm status``) are handled by their module.
 COMMANDS: dict[str, str] = {
+    "arm": "tactip.cli.arm",
 }
 
 
