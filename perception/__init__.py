@@ -1,9 +1,26 @@
-"""Perception: likelihood model, sequential Bayes, policies and Monte Carlo validation."""
+"""Perception: likelihood model, sequential Bayes, policies and Monte Carlo validation.
 
+The dataset (`Dataset`, `DatasetWriter`, schema ``tactip-dataset/1``) is the contract with the
+front ends; `fit_model` trains the histogram likelihood; `Perceiver` classifies tap by tap;
+`monte_carlo` and the experiments validate a model on an independent test set.
+"""
+
+from .bayes import adaptive_prior, flat_prior, marginals, normalize, shift, update
 from .dataset import SCHEMA, Dataset, DatasetWriter, load_dataset, save_dataset
 from .errors import DatasetError, ModelError, PerceptionError
+from .experiments import FixationSweep, LateralSweep, compare_policies, fixation_sweep, lateral_sweep
+from .model import MODEL_SCHEMA, HistogramModel, fit_model, load_model, save_model
+from .montecarlo import DEFAULT_THRESHOLDS, MonteCarloResult, VirtualEnvironment, monte_carlo
+from .perceiver import Perceiver, Step
+from .policies import POLICIES, FixationPolicy, Policy, RandomPolicy, StationaryPolicy, make_policy
 
 __all__ = [
     "PerceptionError", "DatasetError", "ModelError",
     "SCHEMA", "Dataset", "DatasetWriter", "load_dataset", "save_dataset",
+    "MODEL_SCHEMA", "HistogramModel", "fit_model", "load_model", "save_model",
+    "normalize", "update", "shift", "marginals", "flat_prior", "adaptive_prior",
+    "Perceiver", "Step",
+    "POLICIES", "Policy", "FixationPolicy", "StationaryPolicy", "RandomPolicy", "make_policy",
+    "DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo",
+    "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
 ]

@@ -1,0 +1,93 @@
+"""Figures of the validation experiments (matplotlib, Agg backend, written to a file).
+
+- `plot_speed_accuracy`: mean error against mean decision taps, one curve per policy (paper 002 Fig. 9);
+- `plot_fixation_sweep`: best error within the tap budget against fixation location (paper 002 Fig. 10);
+- `plot_lateral_sweep`: error ratio against lateral placement noise (paper 002 Fig. 11).
+
+Example
+-------
+>>> plot_speed_accuracy(compare_policies(env, policies), "curves.png")   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+__all__ = ["plot_speed_accuracy", "plot_fixation_sweep", "plot_lateral_sweep"]
+
+_COLOURS = {"active": "tab:blue", "random": "tab:green", "stationary": "tab:red"}
+
+
+def _figure():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt, *plt.subplots(figsize=(6, 4), layout="constrained")
+
+
+def _save(plt, fig, path) -> None:
+    fig.savefig(pathlib.Path(path), dpi=120)
+    plt.close(fig)
+
+
+def plot_speed_accuracy(results, path, *, units: str = "mm") -> None:
+    """Mean identity error (location error for a location task) against mean decision taps.
+
+    Parameters
+    ----------
+    results : mapping of policy name -> MonteCarloResult
+    path : str or os.PathLike
+        Image file to write (format from the suffix, e.g. ``.png``).
+    units : str
+        Unit of the error axis.
+    """
+    plt, fig, ax = _figure()
+    for name, result in results.items():
+        single = result.identity_error_map.shape[-1] == 1
+        error = result.mean_location_error if single else result.mean_identity_error
+        ax.plot(result.mean_taps, error, "o-", ms=3, label=name, color=_COLOURS.get(name))
+    ax.set_xlabel("mean decision time (taps)")
+    ax.set_ylabel(f"mean {'location' if single else 'identity'} error ({units})")
+    ax.set_title(f"Speed-accuracy ({next(iter(results.values())).runs} runs per threshold)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    _save(plt, fig, path)
+
+
+def plot_fixation_sweep(sweep, path, *, units: str = "mm") -> None:
+    """Best error within the tap budget against fixation location, best marked.
+
+    Parameters
+    ----------
+    sweep : FixationSweep
+    path : str or os.PathLike
+    units : str
+        Unit of both axes.
+    """
+    plt, fig, ax = _figure()
+    ax.plot(sweep.fixations, sweep.errors, "o-", color="tab:blue")
+    ax.axvline(sweep.best_fixation, color="tab:red", ls="--",
+               label=f"best {sweep.best_fixation:g} {units} (threshold {sweep.best_threshold:g})")
+    ax.set_xlabel(f"fixation location ({units})")
+    ax.set_ylabel(f"mean error within {sweep.tap_budget:g} taps ({units})")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    _save(plt, fig, path)
+
+
+def plot_lateral_sweep(sweep, path) -> None:
+    """Error relative to the smallest lateral noise against the noise magnitude sigma.
+
+    Parameters
+    ----------
+    sweep : LateralSweep
+    path : str or os.PathLike
+    """
+    plt, fig, ax = _figure()
+    ax.plot(sweep.sigmas, sweep.ratio, "o-", color="tab:blue")
+    ax.set_xlabel("lateral placement noise sigma (mm)")
+    ax.set_ylabel("error ratio e(sigma) / e(0)")
+    ax.grid(alpha=0.3)
+    _save(plt, fig, path)
