@@ -1,0 +1,66 @@
+"""Train a perception model from a tap dataset.
+
+The model is a histogram likelihood over joint (location, identity) classes: the taps'
+locations (e.g. depth, mm) are split into --locations equal classes over their range, each
+distinct identity (e.g. gap width, mm) is a class, and each sensor dimension is binned into
+--bins equal intervals over its training range (papers 000 and 002). Use a dataset collected
+separately from the one you validate with (tactip validate).
+
+Example:
+  tactip train data/train.h5 --out models/gaps.h5 --locations 11
+"""
+
+from __future__ import annotations
+
+import argparse
+
+HELP = "train a perception model (histogram likelihood) from a tap dataset"
+
+
+def _int_at_least(low: int):
+    def parse(text: str) -> int:
+        value = int(text)
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be >= {low}, got {text}")
+        return value
+    return parse
+
+
+def _positive(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the parser of ``tactip train``."""
+    parser.add_argument("dataset", metavar="DATASET.h5", help="training taps (tactip-dataset/1 HDF5)")
+    parser.add_argument("--out", required=True, metavar="MODEL.h5", help="model file to write (tactip-model/1 HDF5)")
+    parser.add_argument("--locations", type=_int_at_least(1), default=11, metavar="N",
+                        help="equal location classes over the training range (default 11; "
+                             "a dataset with one location gets one class)")
+    parser.add_argument("--bins", type=_int_at_least(2), default=100, metavar="N",
+                        help="value bins per sensor dimension (default 100)")
+    parser.add_argument("--epsilon", type=_positive, default=None,
+                        help="count added to every histogram bin (default 1e-3)")
+    parser.add_argument("--min-taps", type=_int_at_least(1), default=1, metavar="N",
+                        help="fewest training taps a class may have (default 1)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load the dataset, fit the model, write it and print a summary."""
+    from perception import fit_model, load_dataset, save_model
+
+    dataset = load_dataset(args.dataset)
+    print(dataset.describe())
+    options = {} if args.epsilon is None else {"epsilon": args.epsilon}
+    model = fit_model(dataset, n_locations=args.locations, bins=args.bins, min_taps_per_class=args.min_taps,
+                      **options)
+    save_model(args.out, model)
+    counts = model.taps_per_class
+    print(model.summary())
+    print(f"training taps per class: {counts.min()}..{counts.max()}; location class width "
+          f"{model.class_width:g} {model.location_unit}")
+    print(f"wrote {args.out}")
+    return 0

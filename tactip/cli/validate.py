@@ -1,0 +1,143 @@
+"""Validate a perception model by Monte Carlo on an independent test dataset.
+
+Each run picks a true class and a random starting location, then taps: every tap is drawn from
+the test taps of the current (location, identity) class, the beliefs update, the policy moves
+the sensor, until the identity belief crosses the decision threshold (papers 000 and 002).
+For each threshold the table gives the mean decision taps, the mean absolute identity error,
+the fraction of exactly right identities and the mean absolute location error.
+
+Policies: active (move to the --fixation location), stationary (never move), random (move
+uniformly over the range). Without --policy all three run on the same starting classes.
+
+--sweep-fixation runs the active policy at every fixation location, picks the one with the
+lowest error within --tap-budget mean taps, and writes it with its threshold into the model's
+recommended settings (used by the station).
+
+Examples:
+  tactip validate models/gaps.h5 data/test.h5 --plot out/curves.png --json out/curves.json
+  tactip validate models/gaps.h5 data/test.h5 --policy active --fixation 4.75 --thresholds 0.9 0.99
+  tactip validate models/gaps.h5 data/test.h5 --sweep-fixation --plot out/fixation.png
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import json
+import pathlib
+
+HELP = "Monte Carlo validation of a model on a test dataset (speed-accuracy, fixation sweep)"
+
+
+def _int_at_least(low: int):
+    def parse(text: str) -> int:
+        value = int(text)
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be >= {low}, got {text}")
+        return value
+    return parse
+
+
+def _fractions(text: str) -> list[float]:
+    values = [float(v) for v in text.split(",") if v.strip()]
+    if not values or any(not 0.0 <= v <= 1.0 for v in values):
+        raise argparse.ArgumentTypeError(f"thresholds must be in [0, 1], got {text}")
+    return values
+
+
+def _fraction(text: str) -> float:
+    value = float(text)
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be in [0, 1], got {text}")
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the parser of ``tactip validate``."""
+    parser.add_argument("model", metavar="MODEL.h5", help="model from tactip train (tactip-model/1)")
+    parser.add_argument("test", metavar="TEST.h5", help="independent test taps (tactip-dataset/1)")
+    parser.add_argument("--policy", choices=("active", "stationary", "random"),
+                        help="one policy (default: all three)")
+    parser.add_argument("--fixation", type=float, metavar="MM",
+                        help="fixation location of the active policy, location units (default: the model's "
+                             "recommended one, else the centre of the range)")
+    parser.add_argument("--thresholds", nargs="+", type=_fractions, metavar="T",
+                        help="decision thresholds, space or comma separated (default: 20 over 0-0.9999)")
+    parser.add_argument("--runs", type=_int_at_least(1), default=5000, metavar="N",
+                        help="Monte Carlo runs per policy (default 5000)")
+    parser.add_argument("--max-taps", type=_int_at_least(1), default=20, metavar="N",
+                        help="taps at which a decision is forced (default 20)")
+    parser.add_argument("--deadline", type=_int_at_least(1), metavar="N",
+                        help="null decision and random relocation after N taps without a decision")
+    parser.add_argument("--move-threshold", type=_fraction, default=0.0, metavar="P",
+                        help="location belief needed before moving (0 always moves, 1 never; default 0)")
+    parser.add_argument("--shift", choices=("edge", "uniform"), default="edge",
+                        help="belief shift at the range boundary after a move (default edge)")
+    parser.add_argument("--sweep-fixation", action="store_true",
+                        help="try every fixation location, write the best into the model's recommended settings")
+    parser.add_argument("--tap-budget", type=float, default=12, metavar="TAPS",
+                        help="mean taps within which --sweep-fixation takes the best error (default 12)")
+    parser.add_argument("--json", metavar="OUT.json", help="write one entry per policy and threshold")
+    parser.add_argument("--plot", metavar="OUT.png", help="plot error against mean taps (or against fixation)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the Monte Carlo validation and report it."""
+    from tqdm import tqdm
+
+    from perception import (DEFAULT_THRESHOLDS, VirtualEnvironment, compare_policies, fixation_sweep, load_dataset,
+                            load_model, make_policy, save_model)
+
+    model = load_model(args.model)
+    test = load_dataset(args.test)
+    environment = VirtualEnvironment(model, test)
+    thresholds = sorted({t for group in args.thresholds for t in group}) if args.thresholds else DEFAULT_THRESHOLDS
+    options = dict(thresholds=thresholds, runs=args.runs, max_taps=args.max_taps, deadline=args.deadline,
+                   move_threshold=args.move_threshold, shift_mode=args.shift, seed=args.seed)
+    unit = model.location_unit
+    print(model.summary())
+    print(f"test: {len(test)} taps; {args.runs} runs per curve")
+    if args.sweep_fixation:
+        progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
+        sweep = fixation_sweep(environment, tap_budget=args.tap_budget, progress=progress, **options)
+        print(f"{'fixation':>10} {'error':>8} {'taps':>6} {'threshold':>9}")
+        for fixation, error, taps, threshold in zip(sweep.fixations, sweep.errors, sweep.taps, sweep.thresholds):
+            print(f"{fixation:>10.3f} {error:>8.3f} {taps:>6.2f} {threshold:>9.4g}")
+        model = model.with_recommended(fixation_location=sweep.best_fixation, decision_threshold=sweep.best_threshold,
+                                       policy="active")
+        save_model(args.model, model)
+        print(f"best fixation {sweep.best_fixation:g} {unit} (threshold {sweep.best_threshold:g}, error "
+              f"{sweep.errors[sweep.best]:.3f} in {sweep.taps[sweep.best]:.1f} taps); written to {args.model}")
+        rows = [{**row, "fixation": float(f)} for f, r in zip(sweep.fixations, sweep.results) for row in r.rows()]
+        if args.plot:
+            from perception.plots import plot_fixation_sweep
+
+            plot_fixation_sweep(sweep, args.plot, units=unit)
+    else:
+        fixation = args.fixation if args.fixation is not None else model.recommended.get("fixation_location")
+        if fixation is None:
+            fixation = float(model.location_centres[model.n_locations // 2])
+        fixation_class = int(model.location_class(fixation))
+        names = [args.policy] if args.policy else ["active", "random", "stationary"]
+        if "active" in names:
+            print(f"active fixation: {model.location_centres[fixation_class]:g} {unit}")
+        policies = [make_policy(name, fixation_class=fixation_class) for name in names]
+        progress = functools.partial(tqdm, desc="policies", unit="policy", disable=args.quiet)
+        results = compare_policies(environment, policies, progress=progress, **options)
+        rows = [row for result in results.values() for row in result.rows()]
+        print(f"{'policy':<11} {'threshold':>9} {'taps':>6} {'id error':>8} {'accuracy':>8} {'loc error':>9}")
+        for row in rows:
+            print(f"{row['policy']:<11} {row['threshold']:>9.4g} {row['mean_taps']:>6.2f} "
+                  f"{row['mean_identity_error']:>8.3f} {row['accuracy']:>8.3f} {row['mean_location_error']:>9.3f}")
+        if args.plot:
+            from perception.plots import plot_speed_accuracy
+
+            plot_speed_accuracy(results, args.plot, units=model.identity_unit if model.n_identities > 1 else unit)
+    if args.json:
+        pathlib.Path(args.json).write_text(json.dumps(rows, indent=1) + "\n")
+        print(f"wrote {args.json}")
+    if args.plot:
+        print(f"wrote {args.plot}")
+    return 0
