@@ -19,6 +19,8 @@ import sys
 # Subcommand name -> module. Nested groups (``tactip arm status``) are handled by their module.
 COMMANDS: dict[str, str] = {
     "arm": "tactip.cli.arm",
+    "train": "tactip.cli.train",
+    "validate": "tactip.cli.validate",
 }
 
 
