@@ -74,6 +74,7 @@ from . import _pad, _render
 __all__ = ["Contact", "SyntheticFrame", "SyntheticTacTip", "tap_profile"]
 
 _DISC_FRACTION = 0.435  # radius of the dark membrane disc / image height
+_DARK_INVERSION = 240.0  # dark_pins: grey level g becomes 240 - g (light membrane, dark tips)
 _PIN_SPACING_FRACTION = 0.3  # pin radius / pin spacing at the apex, both in px (at most 6 px)
 
 
@@ -256,6 +257,8 @@ class SyntheticTacTip:
         self._brightness = 1.0 + 0.05 * layout_rng.standard_normal(self._n)
         background, glare, self._illumination = _render.scene_layers(self.image_size, self.disc,
                                                                      gradient=self.gradient, glare=self.glare)
+        if self.dark_pins:  # dark markers on a light membrane: invert the lit scene, keep the glare
+            background = _DARK_INVERSION - background
         self._static = background + glare
         self.rest_centres, _, _ = self._project(Contact())
         self.rest_centres.setflags(write=False)
@@ -336,9 +339,9 @@ class SyntheticTacTip:
         width = self.image_size[0]
         anchor = np.rint(centres).astype(np.int64)
         levels = _render.PIN_LEVEL * brightness * self._illumination.reshape(-1)[anchor[:, 1] * width + anchor[:, 0]]
-        _render.paint_pins(scene.reshape(-1), self.image_size, centres, shape, levels)
         if self.dark_pins:
-            scene = np.float32(240.0) - scene
+            levels = _DARK_INVERSION - levels
+        _render.paint_pins(scene.reshape(-1), self.image_size, centres, shape, levels)
         if self.blur_sigma > 0:
             import cv2
 
