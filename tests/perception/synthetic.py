@@ -6,12 +6,14 @@ from perception import Dataset
 
 
 def gap_dataset(*, depths=6, widths=3, taps_per_class=4, samples=10, dims=8, seed=0,
-                legible_from=0.0, noise=0.05, width_gain=1.0, lateral=None, structure_seed=0):
+                legible_from=0.0, noise=0.05, width_gain=1.0, lateral=None, structure_seed=0,
+                contact_floor=0.0):
     """Taps over a (depth, width) grid; the width is legible only where depth > `legible_from`.
 
     Each tap is a rise-and-release profile times per-dimension amplitudes: half the dimensions
     encode depth everywhere, the other half encode width scaled by contact strength, which is zero
-    at depths up to `legible_from` (a fraction of the depth range) and grows linearly beyond.
+    at depths up to `legible_from` (a fraction of the depth range) and grows linearly beyond
+    (`contact_floor` > 0 keeps some width signal everywhere: 1 makes every class separable).
     Depths are 0..depths-1 mm, widths 1..widths mm. `lateral`, if given, is an array of lateral
     offsets (mm): every class gets `taps_per_class` taps at each offset, the width signal fading
     with |lateral|. `seed` draws the noise; `structure_seed` the per-dimension codes, so a
@@ -29,6 +31,7 @@ def gap_dataset(*, depths=6, widths=3, taps_per_class=4, samples=10, dims=8, see
     width_code = structure.uniform(0.5, 1.5, dims - half)
     fraction = d / max(depths - 1, 1)
     contact = np.clip((fraction - legible_from) / max(1 - legible_from, 1e-9), 0, 1)
+    contact = contact_floor + (1 - contact_floor) * contact
     amplitude = np.concatenate([
         fraction[:, None] * depth_code,
         width_gain * (contact * w / widths * np.exp(-np.abs(lat)))[:, None] * width_code,
