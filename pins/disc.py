@@ -1,0 +1,222 @@
+"""The sensor disc: where the TacTip membrane is in a camera frame.
+
+A TacTip camera sees the dark membrane of the pad as a disc, surrounded by the bright inside of
+the casing; LED glare spots sit on the rim of the disc. Pin detection only looks inside the disc,
+so that neither the bright surround nor the glare is mistaken for pins.
+
+The disc is found on a reduced, heavily blurred copy of the frame, where the pins average out
+with the membrane around them: Otsu's threshold splits dark (membrane) from bright (surround),
+the largest dark region is filled by its convex hull (which closes the notches glare cuts into
+the rim), and the circle of equal area centred on the hull's centroid is the disc.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .errors import NoSensorError, ShapeError
+
+__all__ = ["SensorDisc", "find_sensor_disc", "as_grey"]
+
+# Grey-level difference between membrane and surround below which there is no disc to see.
+_MIN_CONTRAST = 30.0
+# The disc must cover at least this fraction of the shorter image side, as radius.
+_MIN_RADIUS_FRACTION = 0.15
+# Hull area over its enclosing circle's area: 1 for a disc, ~0.61 for a full 4:3 frame.
+_MIN_CIRCULARITY = 0.8
+
+
+@dataclass(frozen=True)
+class SensorDisc:
+    """The membrane disc in a frame, in px (x to the right, y down, pixel centres at integers).
+
+    Attributes
+    ----------
+    cx, cy : float
+        Centre of the disc, px.
+    radius_px : float
+        Radius of the disc, px.
+    """
+
+    cx: float
+    cy: float
+    radius_px: float
+
+    def mask(self, shape: tuple[int, int], *, margin_px: float = 0.0) -> np.ndarray:
+        """Boolean image that is True inside the disc shrunk by `margin_px`.
+
+        Parameters
+        ----------
+        shape : (height, width)
+            Shape of the mask, px.
+        margin_px : float
+            Distance from the rim left out of the mask, px (negative grows the disc).
+
+        Returns
+        -------
+        mask : (height, width) ndarray of bool
+        """
+        height, width = shape[:2]
+        ys, xs = np.ogrid[:height, :width]
+        radius = max(self.radius_px - margin_px, 0.0)
+        return (xs - self.cx) ** 2 + (ys - self.cy) ** 2 <= radius**2
+
+    def contains(self, points: np.ndarray, *, margin_px: float = 0.0) -> np.ndarray:
+        """Which (x, y) points lie inside the disc shrunk by `margin_px`.
+
+        Parameters
+        ----------
+        points : (N, 2) ndarray of (x, y) px
+        margin_px : float
+            Distance from the rim counted as outside, px.
+
+        Returns
+        -------
+        inside : (N,) ndarray of bool
+        """
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        radius = max(self.radius_px - margin_px, 0.0)
+        return np.hypot(points[:, 0] - self.cx, points[:, 1] - self.cy) <= radius
+
+
+def as_grey(frame: np.ndarray) -> np.ndarray:
+    """A frame as a 2-D uint8 grey image (converting BGR or BGRA once; grey passes through).
+
+    Parameters
+    ----------
+    frame : (H, W) or (H, W, 1|3|4) ndarray
+        Grey or BGR(A) image, uint8 (other dtypes are clipped to 0..255).
+
+    Returns
+    -------
+    grey : (H, W) ndarray of uint8
+    """
+    image = np.asarray(frame)
+    if image.ndim == 3 and image.shape[2] == 1:
+        image = image[:, :, 0]
+    if image.ndim == 3 and image.shape[2] in (3, 4):
+        code = cv2.COLOR_BGR2GRAY if image.shape[2] == 3 else cv2.COLOR_BGRA2GRAY
+        image = cv2.cvtColor(_as_uint8(image), code)
+    if image.ndim != 2 or min(image.shape) < 8:
+        raise ShapeError(f"frame must be a grey (H, W) or BGR (H, W, 3) image, got shape {image.shape}")
+    return _as_uint8(image)
+
+
+def _as_uint8(image: np.ndarray) -> np.ndarray:
+    if image.dtype == np.uint8:
+        return image
+    return np.clip(np.rint(image), 0, 255).astype(np.uint8)
+
+
+def find_sensor_disc(frame: np.ndarray, *, dark_pins: bool = False, scale: float = 0.5) -> SensorDisc:
+    """Locate the membrane disc of a TacTip frame.
+
+    Parameters
+    ----------
+    frame : (H, W) or (H, W, 3) ndarray
+        Grey or BGR camera frame, uint8.
+    dark_pins : bool
+        Dark markers on a light membrane seen against a dark surround: the polarity of the whole
+        image is reversed (see `DetectionParams.dark_pins`).
+    scale : float
+        Resolution at which the disc is searched, as a fraction of the frame (0 < scale <= 1);
+        0.5 locates the rim to about one px at a quarter of the cost.
+
+    Returns
+    -------
+    disc : SensorDisc
+        Centre and radius in px of the full frame.
+
+    Raises
+    ------
+    NoSensorError
+        The frame shows no dark disc against a brighter surround (lens cap on, camera pointing
+        elsewhere, blank image).
+
+    Examples
+    --------
+    >>> disc = find_sensor_disc(frame)            # doctest: +SKIP
+    >>> disc.radius_px                            # doctest: +SKIP
+    214.6
+    """
+    if not 0.0 < scale <= 1.0:
+        raise ValueError(f"scale must be in (0, 1], got {scale}")
+    grey = as_grey(frame)
+    if dark_pins:
+        grey = 255 - grey
+    small = grey if scale == 1.0 else cv2.resize(grey, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+    # Blur over a few pin spacings so that pins and membrane average to one dark level.
+    sigma = max(small.shape) / 80.0
+    smooth = cv2.GaussianBlur(small, (0, 0), sigma)
+    level, bright = cv2.threshold(smooth, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    dark = bright == 0
+    if not dark.any() or dark.all():
+        raise NoSensorError("no sensor disc in the frame: the image has no dark membrane against a bright surround")
+    contrast = float(smooth[~dark].mean()) - float(smooth[dark].mean())
+    if contrast < _MIN_CONTRAST:
+        raise NoSensorError(
+            f"no sensor disc in the frame: membrane and surround differ by {contrast:.0f} grey levels "
+            f"(need {_MIN_CONTRAST:.0f}); is the lens covered or the camera pointing elsewhere?")
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(dark.view(np.uint8), connectivity=8)
+    largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    contours, _ = cv2.findContours((labels == largest).view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    hull = cv2.convexHull(max(contours, key=cv2.contourArea))
+    moments = cv2.moments(hull)
+    area = moments["m00"]
+    (_, _), enclosing = cv2.minEnclosingCircle(hull)
+    circularity = area / (np.pi * enclosing**2) if enclosing > 0 else 0.0
+    # The contour runs through boundary pixel centres: half a pixel inside the true rim.
+    radius = np.sqrt(area / np.pi) + 0.5
+    if radius < _MIN_RADIUS_FRACTION * min(small.shape) or circularity < _MIN_CIRCULARITY:
+        raise NoSensorError(
+            f"no sensor disc in the frame: the dark region is not a disc (radius {radius / scale:.0f} px, "
+            f"circularity {circularity:.2f})")
+    # Pixel centres are at integer coordinates at both scales: x_full = (x_small + 0.5) / scale - 0.5.
+    cx = (moments["m10"] / area + 0.5) / scale - 0.5
+    cy = (moments["m01"] / area + 0.5) / scale - 0.5
+    return _refine_rim(grey, cx, cy, radius / scale)
+
+
+def _refine_rim(grey: np.ndarray, cx: float, cy: float, radius: float, *, rays: int = 180) -> SensorDisc:
+    """Sub-pixel rim: the outermost dark-to-bright crossing on rays from the rough centre, fitted by a circle."""
+    smooth = cv2.GaussianBlur(grey, (0, 0), 1.5)
+    theta = np.linspace(0.0, 2.0 * np.pi, rays, endpoint=False)[:, None]
+    step = 0.5
+    r = radius * np.arange(0.85, 1.15, step / radius)[None, :]
+    map_x = (cx + r * np.cos(theta)).astype(np.float32)
+    map_y = (cy + r * np.sin(theta)).astype(np.float32)
+    profile = cv2.remap(smooth, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).astype(np.float64)
+    inner = r[0] < 0.95 * radius
+    outer = r[0] > 1.08 * radius
+    dark_level = np.percentile(profile[:, inner], 10, axis=1)
+    bright_level = np.median(profile[:, outer], axis=1)
+    mid = 0.5 * (dark_level + bright_level)
+    below = profile < mid[:, None]
+    # Index of the last sample below the midpoint on each ray; the rim lies between it and the next.
+    last = below.shape[1] - 1 - np.argmax(below[:, ::-1], axis=1)
+    good = (bright_level - dark_level > _MIN_CONTRAST) & below.any(axis=1) & (last < below.shape[1] - 1)
+    rows = np.flatnonzero(good)
+    i = last[rows]
+    p0, p1 = profile[rows, i], profile[rows, i + 1]
+    frac = np.clip((mid[rows] - p0) / np.maximum(p1 - p0, 1e-9), 0.0, 1.0)
+    rim_r = r[0, i] + frac * step
+    xs = cx + rim_r * np.cos(theta[rows, 0])
+    ys = cy + rim_r * np.sin(theta[rows, 0])
+    # LED glare lights the membrane inside the rim and pulls the crossing inwards on its rays:
+    # keep rays near the median rim radius, then those near the fitted circle.
+    keep = np.abs(rim_r - np.median(rim_r)) < max(4.0, 0.02 * radius)
+    for _ in range(3):
+        fx, fy, fr = _fit_circle(xs[keep], ys[keep])
+        residual = np.abs(np.hypot(xs - fx, ys - fy) - fr)
+        keep = residual < max(3.0 * 1.4826 * np.median(residual[keep]), 0.3)
+    return SensorDisc(cx=float(fx), cy=float(fy), radius_px=float(fr))
+
+
+def _fit_circle(xs: np.ndarray, ys: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares (Kasa) circle through points: x^2 + y^2 = 2 a x + 2 b y + c."""
+    design = np.column_stack([2.0 * xs, 2.0 * ys, np.ones_like(xs)])
+    (a, b, c), *_ = np.linalg.lstsq(design, xs**2 + ys**2, rcond=None)
+    return a, b, np.sqrt(c + a * a + b * b)
