@@ -1,0 +1,126 @@
+"""Monte Carlo validation: accuracy on separable classes, active beats passive, agreement with Perceiver."""
+
+import numpy as np
+import pytest
+
+from perception import (DatasetError, FixationPolicy, ModelError, Perceiver, RandomPolicy, StationaryPolicy,
+                        VirtualEnvironment, compare_policies, fit_model, monte_carlo)
+from tests.perception.synthetic import gap_dataset
+
+GRID = dict(depths=6, widths=4, samples=10, dims=8)
+
+
+def environment(*, train_taps=4, test_taps=20, seed=0, **options):
+    model = fit_model(gap_dataset(seed=seed + 1, taps_per_class=train_taps, **GRID, **options), n_locations=6)
+    return VirtualEnvironment(model, gap_dataset(seed=seed + 2, taps_per_class=test_taps, **GRID, **options))
+
+
+@pytest.fixture(scope="module")
+def deep_only():
+    """Width legible only in the deeper half of the depth range (paper 002: deep contacts inform)."""
+    return environment(legible_from=0.5)
+
+
+def test_separable_classes_are_all_classified_right():
+    env = environment(contact_floor=1.0, noise=0.03)
+    for policy in (FixationPolicy(3), StationaryPolicy(), RandomPolicy()):
+        result = monte_carlo(env, policy, thresholds=[0.99, 0.999], runs=2000, seed=1)
+        np.testing.assert_array_equal(result.accuracy, 1.0)
+        np.testing.assert_array_equal(result.mean_identity_error, 0.0)
+        assert (result.forced < 0.01).all()  # decided by the threshold, not by max_taps
+
+
+def test_active_beats_passive_when_only_deep_taps_are_informative(deep_only):
+    policies = [FixationPolicy(5), RandomPolicy(), StationaryPolicy()]
+    results = compare_policies(deep_only, policies, thresholds=[0.9, 0.99], runs=3000, seed=2)
+    active, random, stationary = (results[name].mean_identity_error for name in ("active", "random", "stationary"))
+    assert (active < 0.05).all()
+    assert (active < random / 4).all() and (random < stationary).all()  # the paper's ordering
+    assert (stationary > 0.5).all()
+    taps = results["active"].mean_taps
+    assert (taps < results["stationary"].mean_taps).all()
+
+
+def test_monte_carlo_agrees_with_the_perceiver_run_by_run():
+    """One test tap per class makes the virtual environment deterministic for deterministic policies."""
+    env = environment(test_taps=1, legible_from=0.4, noise=0.1)
+    model = env.model
+    start, identity = np.divmod(np.arange(model.n_classes), model.n_identities)
+    for policy, shift_mode in ((FixationPolicy(4), "edge"), (FixationPolicy(1), "uniform"), (StationaryPolicy(), "edge")):
+        thresholds = [0.6, 0.95]
+        result = monte_carlo(env, policy, thresholds=thresholds, runs=len(start), seed=0, start_location=start,
+                             true_identity=identity, max_taps=12, shift_mode=shift_mode)
+        for k, threshold in enumerate(thresholds):
+            for l, i in zip(start, identity):
+                perceiver = Perceiver(model, policy, decision_threshold=threshold, max_taps=12, shift_mode=shift_mode)
+                location = l
+                while True:
+                    step = perceiver.observe(env.test.taps[env.draw([location * model.n_identities + i], np.random.default_rng(0))[0]])
+                    if step.decided:
+                        break
+                    perceiver.moved(step.move)
+                    location = int(np.clip(location + step.move_classes, 0, model.n_locations - 1))
+                assert result.taps_map[k, l, i] == step.taps
+                assert result.identity_error_map[k, l, i] == abs(step.identity_estimate - model.identities[i])
+                centres = model.location_centres
+                assert result.location_error_map[k, l, i] == pytest.approx(abs(step.location_estimate
+                                                                               - centres[location]))
+
+
+def test_higher_thresholds_never_decide_sooner(deep_only):
+    result = monte_carlo(deep_only, RandomPolicy(), thresholds=np.linspace(0, 0.999, 12), runs=500, seed=3)
+    assert (np.diff(result.mean_taps) >= 0).all()
+    assert result.mean_taps[0] == 1.0 and (result.forced[:-1] <= result.forced[1:]).all()
+
+
+def test_maps_average_to_the_means(deep_only):
+    result = monte_carlo(deep_only, FixationPolicy(5), thresholds=[0.5, 0.9], runs=3000, seed=4)
+    rng = np.random.default_rng(4)  # the same starting classes as the run
+    start, identity = rng.integers(0, 6, 3000), rng.integers(0, 4, 3000)
+    runs = np.bincount(start * 4 + identity, minlength=24).reshape(6, 4)
+    for means, maps in ((result.mean_identity_error, result.identity_error_map),
+                        (result.mean_location_error, result.location_error_map), (result.mean_taps, result.taps_map)):
+        np.testing.assert_allclose((maps * runs).sum(axis=(1, 2)) / 3000, means, rtol=1e-12)
+    rows = result.rows()
+    assert [r["threshold"] for r in rows] == [0.5, 0.9] and rows[0]["policy"] == "active"
+    assert set(rows[0]) >= {"threshold", "mean_identity_error", "accuracy", "mean_location_error", "mean_taps"}
+
+
+def test_deadline_counts_null_decisions(deep_only):
+    result = monte_carlo(deep_only, StationaryPolicy(), thresholds=[1.0], runs=200, seed=5, deadline=3, max_taps=10)
+    assert result.null_decisions.tolist() == [3.0] and result.mean_taps.tolist() == [10.0]
+    assert result.forced.tolist() == [1.0]
+    # Relocating after a deadline helps stationary perception (paper 001).
+    options = dict(thresholds=[0.9], runs=2000, seed=6, max_taps=40)
+    with_deadline = monte_carlo(deep_only, StationaryPolicy(), deadline=12, **options)
+    without = monte_carlo(deep_only, StationaryPolicy(), **options)
+    assert with_deadline.mean_identity_error[0] < 0.6 * without.mean_identity_error[0]
+    assert with_deadline.null_decisions[0] > 0.5
+
+
+def test_draw_picks_uniformly_within_the_class(deep_only):
+    rng = np.random.default_rng(7)
+    picks = deep_only.draw(np.full(20000, 9), rng)
+    assert (deep_only.tap_class[picks] == 9).all()
+    counts = np.bincount(picks)[np.bincount(picks) > 0]
+    assert len(counts) == 20
+    np.testing.assert_allclose(counts, 1000, atol=160)
+
+
+def test_environment_refuses_incompatible_test_sets(deep_only):
+    model = deep_only.model
+    test = deep_only.test
+    with pytest.raises(DatasetError, match="classes have no test taps"):
+        VirtualEnvironment(model, test.subset(test.location != 2))
+    with pytest.raises(DatasetError, match="is not one of the model's identities"):
+        VirtualEnvironment(model, gap_dataset(**{**GRID, "widths": 5}))
+    other = gap_dataset(**{**GRID, "dims": 12})
+    with pytest.raises(ModelError, match=r"model trained for tactip \(8 dims, 10 samples\), got tactip taps \(12 dims"):
+        VirtualEnvironment(model, other)
+
+
+@pytest.mark.parametrize("option, value", [("thresholds", [1.5]), ("runs", 0), ("max_taps", 0), ("deadline", 0),
+                                           ("move_threshold", 2.0), ("shift_mode", "wrap")])
+def test_bad_options_name_the_parameter(deep_only, option, value):
+    with pytest.raises(ValueError, match=option):
+        monte_carlo(deep_only, StationaryPolicy(), **{option: value})
