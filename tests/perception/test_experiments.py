@@ -1,0 +1,85 @@
+"""Experiments: fixation sweep, lateral placement noise, policy comparison, and their plots."""
+
+import numpy as np
+import pytest
+
+from perception import (DatasetError, FixationPolicy, StationaryPolicy, VirtualEnvironment, compare_policies,
+                        fit_model, fixation_sweep, lateral_sweep)
+from perception.plots import plot_fixation_sweep, plot_lateral_sweep, plot_speed_accuracy
+from tests.perception.synthetic import gap_dataset
+
+GRID = dict(depths=6, widths=4, samples=10, dims=8, legible_from=0.5)
+OFFSETS = [-2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0]
+
+
+@pytest.fixture(scope="module")
+def model():
+    return fit_model(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=6)
+
+
+@pytest.fixture(scope="module")
+def env(model):
+    return VirtualEnvironment(model, gap_dataset(seed=2, taps_per_class=20, **GRID))
+
+
+@pytest.fixture(scope="module")
+def lateral_env(model):
+    return VirtualEnvironment(model, gap_dataset(seed=3, taps_per_class=6, lateral=OFFSETS, **GRID))
+
+
+def test_fixation_sweep_finds_the_informative_depths(env):
+    sweep = fixation_sweep(env, thresholds=[0.5, 0.9, 0.99], runs=1000, seed=1, tap_budget=12)
+    np.testing.assert_allclose(sweep.fixations, env.model.location_centres)
+    assert sweep.best_fixation >= 4.0  # the deep half, where the width is legible
+    assert sweep.errors[sweep.best] == sweep.errors.min()
+    assert sweep.errors[-1] < sweep.errors[0] / 4  # deep fixation far better than shallow
+    assert sweep.taps[sweep.best] <= 12 and sweep.best_threshold in (0.5, 0.9, 0.99)
+    assert len(sweep.results) == 6
+
+
+def test_fixation_sweep_of_chosen_classes_and_bad_classes(env):
+    sweep = fixation_sweep(env, fixation_classes=[1, 5], thresholds=[0.9], runs=300, seed=1)
+    assert sweep.fixations.tolist() == [env.model.location_centres[1], env.model.location_centres[5]]
+    assert sweep.best == 1
+    with pytest.raises(ValueError, match="fixation_classes"):
+        fixation_sweep(env, fixation_classes=[6])
+
+
+def test_lateral_noise_degrades_gracefully(lateral_env):
+    sweep = lateral_sweep(lateral_env, FixationPolicy(5), sigmas=[0, 0.5, 1, 2], thresholds=[0.5, 0.9, 0.99],
+                          runs=1500, seed=2)
+    assert sweep.ratio[0] == 1.0
+    assert sweep.errors[-1] > sweep.errors[0]  # errors grow with the lateral noise
+    assert sweep.ratio[-1] > sweep.ratio[1]
+
+
+def test_lateral_sweep_needs_lateral_offsets(env, lateral_env):
+    with pytest.raises(DatasetError, match="no lateral offsets"):
+        lateral_sweep(env, FixationPolicy(5))
+    with pytest.raises(DatasetError, match="lateral sigma 0.25 mm: .*no test taps"):
+        lateral_sweep(lateral_env.restrict(lateral_env.lateral != 0), FixationPolicy(5), sigmas=[0.25])
+
+
+def test_compare_policies_uses_the_same_runs(env):
+    seen = []
+
+    def progress(items):
+        seen.extend(items)
+        return items
+
+    policies = [FixationPolicy(5), StationaryPolicy()]
+    results = compare_policies(env, policies, thresholds=[0.0], runs=400, seed=3, progress=progress)
+    assert list(results) == ["active", "stationary"] and seen == policies
+    # At threshold 0 both decide on the first tap at the same starting classes with the same draws.
+    assert results["active"].mean_identity_error == results["stationary"].mean_identity_error
+
+
+def test_plots_write_images(tmp_path, env, lateral_env):
+    results = compare_policies(env, [FixationPolicy(5), StationaryPolicy()], thresholds=[0.5, 0.9], runs=100)
+    plot_speed_accuracy(results, tmp_path / "curves.png")
+    plot_fixation_sweep(fixation_sweep(env, thresholds=[0.9], runs=100), tmp_path / "fixation.png")
+    plot_lateral_sweep(lateral_sweep(lateral_env, FixationPolicy(5), sigmas=[0, 1], thresholds=[0.9], runs=100),
+                       tmp_path / "lateral.png")
+    for name in ("curves.png", "fixation.png", "lateral.png"):
+        data = (tmp_path / name).read_bytes()
+        assert data.startswith(b"\x89PNG") and len(data) > 5000
