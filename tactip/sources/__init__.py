@@ -1,0 +1,70 @@
+"""Frame sources: one streaming interface for cameras, video files, image folders and the synthetic TacTip.
+
+>>> from tactip.sources import open_source
+>>> with open_source("synthetic:127") as source:
+...     first = source.read()
+>>> first.index, first.image.shape
+(0, (480, 640))
+"""
+
+from __future__ import annotations
+
+import pathlib
+import re
+
+from ..errors import SourceError
+from .base import Frame, FrameSource, FrameSourceBase
+from .camera import CameraSource
+from .files import IMAGE_SUFFIXES, ImageFolderSource, VideoSource
+from .simulated import DEFAULT_TAPS, SyntheticSource
+from .threaded import ThreadedReader
+
+__all__ = ["Frame", "FrameSource", "FrameSourceBase", "CameraSource", "VideoSource", "ImageFolderSource",
+           "SyntheticSource", "ThreadedReader", "open_source", "DEFAULT_TAPS", "IMAGE_SUFFIXES"]
+
+_CHOICES = ("a camera index (0) or /dev/videoN, a video file, an image file or folder, "
+            "or 'synthetic' / 'synthetic:PINS'")
+
+
+def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
+    """Open a frame source from a command-line style specification.
+
+    Parameters
+    ----------
+    spec : str, int or path
+        - an int, a digit string or ``/dev/videoN``: a live camera (`CameraSource`);
+        - ``"synthetic"`` or ``"synthetic:331"``: the synthetic TacTip tapping (`SyntheticSource`);
+        - a directory or an image file: `ImageFolderSource`;
+        - any other existing file: a video (`VideoSource`).
+    **options
+        Passed to the source's constructor (for example ``grey=True``, ``exposure=50``, ``taps=[...]``).
+
+    Returns
+    -------
+    FrameSource
+
+    Raises
+    ------
+    SourceError
+        When the spec matches nothing (naming it and the choices) or the source cannot be opened.
+    """
+    if isinstance(spec, bool):
+        raise SourceError(f"cannot open source {spec!r}; choose {_CHOICES}")
+    if isinstance(spec, int):
+        return CameraSource(spec, **options)
+    text = str(spec)
+    if text.isdigit():
+        return CameraSource(int(text), **options)
+    if re.fullmatch(r"/dev/video\d+", text):
+        return CameraSource(text, **options)
+    match = re.fullmatch(r"synthetic(?::(\d+))?", text)
+    if match:
+        if match.group(1):
+            options.setdefault("pins", int(match.group(1)))
+        return SyntheticSource(**options)
+    path = pathlib.Path(text)
+    if path.is_dir() or (path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES):
+        return ImageFolderSource(path, **options)
+    if path.is_file():
+        return VideoSource(path, **options)
+    raise SourceError(f"cannot open source {text!r}: no such file, folder or camera; choose {_CHOICES}")
