@@ -216,7 +216,7 @@ def load_dataset(path) -> Dataset:
 
     path = pathlib.Path(path)
     if not path.exists():
-        raise FileNotFoundError(2, "no such dataset file", str(path))
+        raise FileNotFoundError(f"no such dataset file: {path}")
     try:
         f = h5py.File(path, "r")
     except OSError:

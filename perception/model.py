@@ -399,7 +399,7 @@ def load_model(path) -> HistogramModel:
 
     path = pathlib.Path(path)
     if not path.exists():
-        raise FileNotFoundError(2, "no such model file", str(path))
+        raise FileNotFoundError(f"no such model file: {path}")
     try:
         f = h5py.File(path, "r")
     except OSError:

@@ -1,0 +1,97 @@
+"""`tactip train` and `tactip validate` end to end on small synthetic datasets."""
+
+import json
+
+import numpy as np
+import pytest
+
+from perception import Dataset, load_model, save_dataset
+from tactip.cli import main
+from tests.perception.synthetic import gap_dataset
+
+GRID = dict(depths=6, widths=4, samples=10, dims=8, legible_from=0.5)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    root = tmp_path_factory.mktemp("cli")
+    save_dataset(root / "train.h5", gap_dataset(seed=1, taps_per_class=4, **GRID))
+    save_dataset(root / "test.h5", gap_dataset(seed=2, taps_per_class=20, **GRID))
+    assert main(["train", str(root / "train.h5"), "--out", str(root / "model.h5"), "--locations", "6"]) == 0
+    return root
+
+
+def test_train_prints_the_class_grid_and_writes_a_model(files, capsys):
+    assert main(["train", str(files / "train.h5"), "--out", str(files / "m2.h5"), "--locations", "3",
+                 "--bins", "50"]) == 0
+    out = capsys.readouterr().out
+    assert "96 taps of 10 samples x 8 dims" in out
+    assert "12 classes = 3 locations (0..5 mm) x 4 identities (1..4 mm)" in out and "50 bins" in out
+    assert "training taps per class: 8..8" in out
+    model = load_model(files / "m2.h5")
+    assert (model.n_locations, model.n_identities, model.bins) == (3, 4, 50)
+
+
+def test_validate_all_policies_writes_json_and_plot(files, capsys):
+    out_json, out_png = files / "curves.json", files / "curves.png"
+    code = main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--runs", "1500", "--thresholds",
+                 "0.5,0.9", "0.99", "--fixation", "5", "--json", str(out_json), "--plot", str(out_png), "--quiet"])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "active fixation: 4.58333 mm" in out
+    rows = json.loads(out_json.read_text())
+    assert [(r["policy"], r["threshold"]) for r in rows] == [
+        (p, t) for p in ("active", "random", "stationary") for t in (0.5, 0.9, 0.99)]
+    error = {(r["policy"], r["threshold"]): r["mean_identity_error"] for r in rows}
+    assert error["active", 0.99] < error["random", 0.99] < error["stationary", 0.99]
+    assert all(0 <= r["accuracy"] <= 1 and r["mean_taps"] >= 1 for r in rows)
+    assert out_png.read_bytes().startswith(b"\x89PNG")
+
+
+def test_validate_one_policy_is_reproducible(files, capsys):
+    args = ["validate", str(files / "model.h5"), str(files / "test.h5"), "--policy", "random", "--runs", "300",
+            "--thresholds", "0.9", "--seed", "4", "--quiet"]
+    assert main(args) == 0
+    first = capsys.readouterr().out
+    assert main(args) == 0
+    assert capsys.readouterr().out == first
+    assert "stationary" not in first and "random" in first
+
+
+def test_sweep_fixation_writes_recommended_settings(files, capsys, tmp_path):
+    model_path = tmp_path / "model.h5"
+    model_path.write_bytes((files / "model.h5").read_bytes())
+    assert main(["validate", str(model_path), str(files / "test.h5"), "--sweep-fixation", "--runs", "600",
+                 "--thresholds", "0.5,0.9,0.99", "--plot", str(tmp_path / "fix.png"), "--json",
+                 str(tmp_path / "fix.json"), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    recommended = load_model(model_path).recommended
+    assert recommended["policy"] == "active" and recommended["fixation_location"] >= 4.0
+    assert recommended["decision_threshold"] in (0.5, 0.9, 0.99)
+    assert f"best fixation {recommended['fixation_location']:g} mm" in out
+    rows = json.loads((tmp_path / "fix.json").read_text())
+    assert len(rows) == 6 * 3 and {r["policy"] for r in rows} == {"active"}
+    # The next validation uses the recommended fixation by default.
+    assert main(["validate", str(model_path), str(files / "test.h5"), "--policy", "active", "--runs", "50",
+                 "--thresholds", "0.9", "--quiet"]) == 0
+    assert f"active fixation: {recommended['fixation_location']:g} mm" in capsys.readouterr().out
+
+
+def test_validate_refuses_a_test_set_of_another_front_end(files, capsys, tmp_path):
+    taxel = Dataset(np.zeros((24, 50, 12)), np.repeat(np.arange(6.0), 4), np.tile(np.arange(1.0, 5.0), 6), None,
+                    "taxel")
+    save_dataset(tmp_path / "taxel.h5", taxel)
+    assert main(["validate", str(files / "model.h5"), str(tmp_path / "taxel.h5"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert err.strip() == ("tactip validate: error: model trained for tactip (8 dims, 10 samples), "
+                           "got taxel taps (12 dims, 50 samples)")
+
+
+def test_user_errors_are_one_line(files, capsys, tmp_path):
+    assert main(["train", str(tmp_path / "missing.h5"), "--out", str(tmp_path / "m.h5")]) == 1
+    assert "tactip train: error: no such dataset file" in capsys.readouterr().err
+    assert main(["validate", str(files / "test.h5"), str(files / "test.h5")]) == 1
+    assert "is not a tactip-model/1 file" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--thresholds", "1.5"])
+    assert "thresholds must be in [0, 1]" in capsys.readouterr().err
