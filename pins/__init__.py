@@ -5,10 +5,22 @@ Pure array code: nothing here opens a camera, a file or an arm.
 
 from .detect import Blobs, DetectionParams, detect_blobs, detect_pins
 from .disc import SensorDisc, as_grey, find_sensor_disc
+from .displacement import displacement_from_rest, displacement_magnitude, integrate_flow
 from .errors import NoSensorError, PinsError, ShapeError
+from .features import LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, tap_features
+from .segment import segment_taps, tap_signal
+from .select import select_pins
+from .track import LKParams, PinTracker, match_to_blobs, track_pins
+from .tune import expected_spacing_px, tune_detection
 
 __all__ = [
-    "PinsError", "NoSensorError", "ShapeError",
+    "PinsError", "NoSensorError", "ShapeError", "LostPinError",
     "SensorDisc", "find_sensor_disc", "as_grey",
     "DetectionParams", "Blobs", "detect_pins", "detect_blobs",
+    "tune_detection", "expected_spacing_px",
+    "LKParams", "track_pins", "match_to_blobs", "PinTracker",
+    "displacement_from_rest", "integrate_flow", "displacement_magnitude",
+    "select_pins",
+    "feature_dim_names", "fill_lost", "resample_tap", "tap_features", "TapRecorder",
+    "tap_signal", "segment_taps",
 ]

@@ -1,0 +1,111 @@
+"""Tap segmentation of continuous recordings.
+
+A replayed video holds rest periods and taps one after the other. A tap shows as a rise of the
+pin displacements: the per-frame *tap signal* is a high percentile (default 90th) of the pins'
+displacement magnitudes, so that a contact moving only the pins near the centre still shows.
+`segment_taps` finds taps with hysteresis: a tap is a run of frames above `low_px` that reaches
+`high_px` somewhere; runs separated by at most `merge_gap_frames` quiet frames are one tap (a
+plateau that dips), and runs shorter than `min_frames` are noise. Callers that know when the arm
+taps use `pins.features.TapRecorder` instead.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from .displacement import displacement_magnitude
+from .errors import ShapeError
+
+__all__ = ["tap_signal", "segment_taps"]
+
+
+def tap_signal(displacements: np.ndarray, *, percentile: float = 90.0) -> np.ndarray:
+    """Per-frame tap signal: a percentile of the pins' displacement magnitudes.
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from rest, px; NaN where lost (ignored).
+    percentile : float
+        Which percentile over the pins, in [0, 100].
+
+    Returns
+    -------
+    signal : (T,) ndarray of float64
+        px; 0 for frames where every pin is lost.
+    """
+    displacements = np.asarray(displacements, dtype=np.float64)
+    if displacements.ndim != 3 or displacements.shape[2] != 2:
+        raise ShapeError(f"displacements must have shape (T, N, 2), got {displacements.shape}")
+    if not 0.0 <= percentile <= 100.0:
+        raise ValueError(f"percentile must be in [0, 100], got {percentile}")
+    magnitude = displacement_magnitude(displacements)
+    signal = np.zeros(len(magnitude))
+    seen = np.isfinite(magnitude).any(axis=1)
+    if seen.any():
+        signal[seen] = np.nanpercentile(magnitude[seen], percentile, axis=1)
+    return signal
+
+
+def segment_taps(displacements: np.ndarray, *, high_px: float = 1.5, low_px: float = 0.5,
+                 min_frames: int = 3, merge_gap_frames: int = 2, pad_frames: int = 1,
+                 percentile: float = 90.0) -> list[tuple[int, int]]:
+    """Find the taps in a continuous recording.
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) or (T,) ndarray
+        Displacements from rest, px (NaN where lost), or an already computed tap signal.
+    high_px : float
+        A tap must reach this signal somewhere, px.
+    low_px : float
+        A tap lasts while the signal stays above this, px (< `high_px`).
+    min_frames : int
+        Shortest tap, frames (before padding).
+    merge_gap_frames : int
+        Taps separated by at most this many quiet frames are merged.
+    pad_frames : int
+        Frames added before and after each tap (clipped to the recording) to keep the onset.
+    percentile : float
+        Percentile over pins of the tap signal (see `tap_signal`).
+
+    Returns
+    -------
+    taps : list of (start, stop)
+        Frame index ranges, stop exclusive, in order, not overlapping.
+
+    Examples
+    --------
+    >>> for start, stop in segment_taps(displacements):          # doctest: +SKIP
+    ...     features = tap_features(displacements[start:stop], pins=selected)
+    """
+    data = np.asarray(displacements, dtype=np.float64)
+    signal = data if data.ndim == 1 else tap_signal(data, percentile=percentile)
+    if not 0.0 <= low_px < high_px:
+        raise ValueError(f"need 0 <= low_px < high_px, got low_px={low_px}, high_px={high_px}")
+    for name, value in (("min_frames", min_frames), ("merge_gap_frames", merge_gap_frames),
+                        ("pad_frames", pad_frames)):
+        if int(value) != value or value < 0:
+            raise ValueError(f"{name} must be a non-negative integer, got {value}")
+    signal = np.nan_to_num(signal, nan=0.0)
+    runs, count = ndimage.label(signal > low_px)
+    if count == 0:
+        return []
+    peaks = np.asarray(ndimage.maximum(signal, runs, np.arange(1, count + 1)))
+    slices = ndimage.find_objects(runs)
+    bounds = np.array([(s[0].start, s[0].stop) for s in slices])[peaks > high_px]
+    if len(bounds) == 0:
+        return []
+    # Merge runs whose quiet gap is short: a new tap starts where the gap is longer.
+    gap = bounds[1:, 0] - bounds[:-1, 1]
+    first = np.concatenate([[True], gap > merge_gap_frames])
+    starts = bounds[first, 0]
+    stops = np.maximum.reduceat(bounds[:, 1], np.flatnonzero(first))
+    keep = (stops - starts) >= min_frames
+    starts = np.maximum(starts[keep] - pad_frames, 0)
+    stops = np.minimum(stops[keep] + pad_frames, len(signal))
+    # Padding must not make neighbouring taps overlap.
+    if len(starts) > 1:
+        starts[1:] = np.maximum(starts[1:], stops[:-1])
+    return [(int(a), int(b)) for a, b in zip(starts, stops)]

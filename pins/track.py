@@ -1,0 +1,399 @@
+"""Pin tracking: follow every pin from frame to frame (paper 002, III-A.3).
+
+Pyramidal Lucas-Kanade (`cv2.calcOpticalFlowPyrLK`) moves each pin from the previous frame to
+the next one. A pin's new position is trusted only when LK converged (status flag), its
+residual is small (the blob did not vanish), and tracking the result back to the previous frame
+lands within `fb_threshold_px` of where it started (forward-backward check). A pin that fails is
+*lost*: its position is NaN and `PinTracker.lost` says so; it is never frozen at an old place.
+
+`PinTracker` adds two things on top of the pure `track_pins`:
+
+- refinement: LK on smooth blobs drifts by tenths of a px over a tap, so each tracked pin is
+  moved onto the sub-pixel centroid of the detected blob it landed on (`pins.detect`), one blob
+  per pin, inside a gate of a fraction of the pin spacing; a pin with no blob there is lost;
+- recovery: blobs no pin claimed are assigned to lost pins one-to-one (Hungarian method,
+  `scipy.optimize.linear_sum_assignment`) within the same gate around each lost pin's predicted
+  position (its rest position moved by the median displacement of its tracked neighbours).
+
+Gates below half the pin spacing and one-to-one assignments keep identities: a pin can only be
+given a blob that is nearer to its prediction than any neighbour could be.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
+
+from .detect import DetectionParams, _detect
+from .disc import SensorDisc, as_grey, find_sensor_disc
+from .errors import PinsError, ShapeError
+
+__all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
+
+
+@dataclass(frozen=True)
+class LKParams:
+    """Lucas-Kanade settings shared by `track_pins` and `PinTracker`.
+
+    Attributes
+    ----------
+    window_px : int
+        Side of the LK window, px; odd, below the pin spacing so that a window sees one pin.
+    levels : int
+        Pyramid levels above the full image (0: no pyramid); each doubles the largest motion
+        tracked between frames (about window/2 * 2**levels px).
+    fb_threshold_px : float
+        Largest forward-backward error accepted, px.
+    max_error : float
+        Largest LK residual accepted (mean absolute grey-level difference over the window); a pin
+        that disappears between frames leaves a large residual.
+    iterations : int
+        LK iterations per pyramid level.
+    """
+
+    window_px: int = 11
+    levels: int = 1
+    fb_threshold_px: float = 0.5
+    max_error: float = 25.0
+    iterations: int = 10
+
+    def __post_init__(self) -> None:
+        if int(self.window_px) != self.window_px or self.window_px < 5 or self.window_px % 2 == 0:
+            raise ValueError(f"window_px must be an odd integer >= 5, got {self.window_px}")
+        if int(self.levels) != self.levels or not 0 <= self.levels <= 5:
+            raise ValueError(f"levels must be an integer in [0, 5], got {self.levels}")
+        if not self.fb_threshold_px > 0:
+            raise ValueError(f"fb_threshold_px must be > 0, got {self.fb_threshold_px}")
+        if not self.max_error > 0:
+            raise ValueError(f"max_error must be > 0, got {self.max_error}")
+        if int(self.iterations) != self.iterations or self.iterations < 1:
+            raise ValueError(f"iterations must be a positive integer, got {self.iterations}")
+
+    @property
+    def _criteria(self) -> tuple[int, int, float]:
+        return (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, int(self.iterations), 0.01)
+
+
+def track_pins(prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarray, *,
+               params: LKParams | None = None, **knobs) -> tuple[np.ndarray, np.ndarray]:
+    """Move pins from one frame to the next by pyramidal Lucas-Kanade with a forward-backward check.
+
+    Parameters
+    ----------
+    prev_image, next_image : (H, W) or (H, W, 3) ndarray of uint8
+        Consecutive grey or BGR frames.
+    points : (N, 2) ndarray
+        Pin positions (x, y) in `prev_image`, px; NaN rows are skipped (and stay NaN).
+    params : LKParams, optional
+        LK settings (default ``LKParams()``).
+    **knobs
+        Fields of `LKParams` overriding `params`, e.g. ``window_px=9``.
+
+    Returns
+    -------
+    points : (N, 2) ndarray of float64
+        Positions in `next_image`, px; NaN where tracking failed.
+    ok : (N,) ndarray of bool
+        True where the pin was tracked (finite result).
+
+    Examples
+    --------
+    >>> moved, ok = track_pins(frame0, frame1, pins)          # doctest: +SKIP
+    >>> flow = moved[ok] - pins[ok]                           # doctest: +SKIP
+    """
+    params = _lk_params(params, knobs)
+    points = _as_points(points, "points")
+    prev_grey, next_grey = as_grey(prev_image), as_grey(next_image)
+    if prev_grey.shape != next_grey.shape:
+        raise ShapeError(f"prev_image and next_image must have the same size, got {prev_grey.shape} "
+                         f"and {next_grey.shape}")
+    return _track(prev_grey, next_grey, points, params)
+
+
+def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, params: LKParams,
+           guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """LK forward (from `guess` if given), LK backward from the result, and the checks.
+
+    OpenCV's Python binding cannot take the pyramids of `cv2.buildOpticalFlowPyramid`
+    (opencv/opencv#4777), so each call builds its own; callers pass small crops to keep that cheap.
+    """
+    out = np.full_like(points, np.nan)
+    live = np.flatnonzero(np.isfinite(points).all(axis=1))
+    if live.size == 0:
+        return out, np.zeros(len(points), dtype=bool)
+    start = points[live].astype(np.float32).reshape(-1, 1, 2)
+    window = (params.window_px, params.window_px)
+    if guess is None:
+        forward, status_f, error = cv2.calcOpticalFlowPyrLK(
+            prev_grey, next_grey, start, None, winSize=window, maxLevel=params.levels, criteria=params._criteria)
+    else:
+        initial = guess[live].astype(np.float32).reshape(-1, 1, 2)
+        forward, status_f, error = cv2.calcOpticalFlowPyrLK(
+            prev_grey, next_grey, start, initial, winSize=window, maxLevel=params.levels,
+            criteria=params._criteria, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+    backward, status_b, _ = cv2.calcOpticalFlowPyrLK(
+        next_grey, prev_grey, forward, None, winSize=window, maxLevel=params.levels, criteria=params._criteria)
+    fb_error = np.linalg.norm((backward - start).reshape(-1, 2), axis=1)
+    good = ((status_f.ravel() == 1) & (status_b.ravel() == 1) & (fb_error <= params.fb_threshold_px)
+            & (error.ravel() <= params.max_error))
+    out[live[good]] = forward.reshape(-1, 2)[good]
+    ok = np.zeros(len(points), dtype=bool)
+    ok[live[good]] = True
+    return out, ok
+
+
+def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
+    """One-to-one nearest blob for each point, within a gate.
+
+    Each point takes its nearest blob if that blob lies within `gate_px`; when several points
+    take the same blob, the nearest point keeps it and the others get none.
+
+    Parameters
+    ----------
+    points : (N, 2) ndarray
+        (x, y) px; NaN rows get no blob.
+    blobs : (M, 2) ndarray
+        Detected blob centres (x, y), px.
+    gate_px : float
+        Largest accepted distance, px.
+
+    Returns
+    -------
+    index : (N,) ndarray of int
+        Index into `blobs` for each point, -1 where it has none.
+    """
+    points = _as_points(points, "points")
+    blobs = _as_points(blobs, "blobs")
+    index = np.full(len(points), -1, dtype=np.intp)
+    live = np.flatnonzero(np.isfinite(points).all(axis=1))
+    if live.size == 0 or len(blobs) == 0:
+        return index
+    distance, nearest = cKDTree(blobs).query(points[live], k=1, distance_upper_bound=gate_px)
+    found = np.isfinite(distance)
+    live, distance, nearest = live[found], distance[found], nearest[found]
+    # Nearest point first, then keep each blob's first claimant.
+    order = np.argsort(distance, kind="stable")
+    _, first = np.unique(nearest[order], return_index=True)
+    winners = order[first]
+    index[live[winners]] = nearest[winners]
+    return index
+
+
+class PinTracker:
+    """Track a fixed set of pins through a stream of frames, flagging and recovering lost pins.
+
+    Parameters
+    ----------
+    lk : LKParams, optional
+        Lucas-Kanade settings.
+    detection : DetectionParams, optional
+        Blob detection used for refinement and recovery.
+    refine : bool
+        Move tracked pins onto their detected blob centroids and recover lost pins (default).
+        Without it the tracker is plain LK with checks, equal to `track_pins`, and lost pins stay lost.
+    gate_fraction : float
+        Gate of refinement and recovery as a fraction of the median nearest-neighbour pin
+        spacing at start, in (0, 0.5).
+    neighbours : int
+        Tracked neighbours whose median displacement predicts where a lost pin is.
+    disc : SensorDisc, optional
+        The sensor disc; found in the first frame when not given.
+
+    Examples
+    --------
+    >>> tracker = PinTracker()                               # doctest: +SKIP
+    >>> rest = tracker.start(frames[0])                      # detect the pins of the rest frame
+    >>> for frame in frames[1:]:                             # doctest: +SKIP
+    ...     positions = tracker.update(frame)                # (N, 2) px, NaN where lost
+    ...     displacement = positions - rest
+    """
+
+    def __init__(self, *, lk: LKParams | None = None, detection: DetectionParams | None = None,
+                 refine: bool = True, gate_fraction: float = 0.4, neighbours: int = 6,
+                 disc: SensorDisc | None = None) -> None:
+        if not 0.0 < gate_fraction < 0.5:
+            raise ValueError(f"gate_fraction must be in (0, 0.5), got {gate_fraction}")
+        if int(neighbours) != neighbours or neighbours < 1:
+            raise ValueError(f"neighbours must be a positive integer, got {neighbours}")
+        self.lk = lk or LKParams()
+        self.detection = detection or DetectionParams()
+        self.refine = bool(refine)
+        self.gate_fraction = float(gate_fraction)
+        self.neighbours = int(neighbours)
+        self.disc = disc
+        self.rest_positions: np.ndarray | None = None
+        self.positions: np.ndarray | None = None
+        self.lost: np.ndarray | None = None
+        self.frames = 0
+        self.spacing_px = float("nan")
+        self._previous: np.ndarray | None = None
+        self._velocity: np.ndarray | None = None
+        self._origin = np.zeros(2)
+        self._crop = (slice(None), slice(None))
+        self._last_seen: np.ndarray | None = None
+        self._neighbour_index: np.ndarray | None = None
+
+    def __repr__(self) -> str:
+        state = "not started" if self.positions is None else (
+            f"{len(self.positions)} pins, {int(self.lost.sum())} lost, {self.frames} frames")
+        return (f"PinTracker(lk={self.lk!r}, detection={self.detection!r}, refine={self.refine}, "
+                f"gate_fraction={self.gate_fraction}, neighbours={self.neighbours}) [{state}]")
+
+    @property
+    def gate_px(self) -> float:
+        """Gate of refinement and recovery, px (fraction of the pin spacing at start)."""
+        return self.gate_fraction * self.spacing_px
+
+    def start(self, frame: np.ndarray, pins: np.ndarray | None = None) -> np.ndarray:
+        """Begin tracking from a rest frame.
+
+        Parameters
+        ----------
+        frame : (H, W) or (H, W, 3) ndarray of uint8
+            The first (rest) frame.
+        pins : (N, 2) ndarray, optional
+            Pin positions in `frame`, px; detected in `frame` when not given.
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            The starting positions (also `rest_positions`), px.
+
+        Raises
+        ------
+        NoSensorError
+            The frame shows no sensor disc (when the disc is needed and not given).
+        PinsError
+            Fewer than two pins to track.
+        """
+        grey = as_grey(frame)
+        if self.disc is None and (self.refine or pins is None):
+            self.disc = find_sensor_disc(grey, dark_pins=self.detection.dark_pins)
+        if pins is None:
+            pins = _detect(grey, self.disc, self.detection).centres
+        pins = _as_points(pins, "pins")
+        if len(pins) < 2 or not np.isfinite(pins).all():
+            raise PinsError(f"need at least two finite pin positions to track, got {len(pins)}")
+        tree = cKDTree(pins)
+        distance, index = tree.query(pins, k=min(self.neighbours, len(pins) - 1) + 1)
+        self.spacing_px = float(np.median(distance[:, 1]))
+        self._neighbour_index = index[:, 1:]
+        self.rest_positions = pins.copy()
+        self.positions = pins.copy()
+        self._last_seen = pins.copy()
+        self._velocity = np.zeros_like(pins)
+        self.lost = np.zeros(len(pins), dtype=bool)
+        self._set_crop(grey.shape, pins)
+        self._previous = grey[self._crop].copy()
+        self.frames = 1
+        return self.positions.copy()
+
+    def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:
+        """LK works on the part of the frame the pins can reach (the disc, else the pins' box)."""
+        margin = self.lk.window_px * 2 ** self.lk.levels + 2
+        if self.disc is not None:
+            low = np.array([self.disc.cx, self.disc.cy]) - self.disc.radius_px
+            high = np.array([self.disc.cx, self.disc.cy]) + self.disc.radius_px
+        else:
+            low, high = pins.min(axis=0), pins.max(axis=0)
+        x0, y0 = np.maximum(np.floor(low).astype(int) - margin, 0)
+        x1, y1 = np.ceil(high).astype(int) + margin + 1
+        self._crop = (slice(y0, min(y1, shape[0])), slice(x0, min(x1, shape[1])))
+        self._origin = np.array([x0, y0], dtype=np.float64)
+
+    def update(self, frame: np.ndarray) -> np.ndarray:
+        """Track the pins into the next frame.
+
+        Parameters
+        ----------
+        frame : (H, W) or (H, W, 3) ndarray of uint8
+            The next frame, same size as the first.
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            Pin positions, px, NaN where lost (see `lost`).
+        """
+        if self._previous is None:
+            raise PinsError("PinTracker.update called before start()")
+        grey = as_grey(frame)
+        current = grey[self._crop].copy()
+        if current.shape != self._previous.shape:
+            raise ShapeError(f"frame size changed: expected the crop {self._previous.shape}, got {current.shape}")
+        origin = self._origin
+        guess = self.positions + self._velocity - origin
+        moved, ok = _track(self._previous, current, self.positions - origin, self.lk, guess=guess)
+        positions = moved + origin
+        if self.refine:
+            positions = self._refine_and_recover(grey, positions)
+        # Constant-velocity guess for the next frame (zero for pins just recovered or lost).
+        self._velocity = np.nan_to_num(positions - self.positions)
+        self._previous = current
+        self.positions = positions
+        self.lost = ~np.isfinite(positions).all(axis=1)
+        self._last_seen[~self.lost] = positions[~self.lost]
+        self.frames += 1
+        return positions.copy()
+
+    def _refine_and_recover(self, grey: np.ndarray, tracked: np.ndarray) -> np.ndarray:
+        blobs = _detect(grey, self.disc, self.detection).centres
+        gate = self.gate_px
+        claim = match_to_blobs(tracked, blobs, gate_px=gate)
+        positions = np.full_like(tracked, np.nan)
+        has_blob = claim >= 0
+        positions[has_blob] = blobs[claim[has_blob]]
+        lost = np.flatnonzero(~has_blob)
+        free = np.ones(len(blobs), dtype=bool)
+        free[claim[has_blob]] = False
+        if lost.size and free.any():
+            predicted = self._predict(positions, lost)
+            free_index = np.flatnonzero(free)
+            pins, chosen = _assign(predicted, blobs[free_index], gate)
+            positions[lost[pins]] = blobs[free_index[chosen]]
+        return positions
+
+    def _predict(self, positions: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
+        neighbour_shift = (positions - self.rest_positions)[self._neighbour_index[which]]  # (L, k, 2)
+        seen = np.isfinite(neighbour_shift[..., 0]).any(axis=1)
+        predicted = self._last_seen[which].copy()
+        if seen.any():
+            shift = np.nanmedian(neighbour_shift[seen], axis=1)
+            predicted[seen] = self.rest_positions[which[seen]] + shift
+        return predicted
+
+
+def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
+    """One-to-one assignment of candidates to predictions inside a gate (Hungarian method)."""
+    cost = np.linalg.norm(predicted[:, None, :] - candidates[None, :, :], axis=2)
+    inside = cost <= gate
+    rows = np.flatnonzero(inside.any(axis=1))
+    cols = np.flatnonzero(inside.any(axis=0))
+    if rows.size == 0:
+        return rows, cols
+    sub = np.where(inside[np.ix_(rows, cols)], cost[np.ix_(rows, cols)], 1e6)
+    r, c = linear_sum_assignment(sub)
+    accepted = sub[r, c] <= gate
+    return rows[r[accepted]], cols[c[accepted]]
+
+
+def _lk_params(params: LKParams | None, knobs: dict) -> LKParams:
+    params = params or LKParams()
+    if knobs:
+        from dataclasses import replace
+
+        params = replace(params, **knobs)
+    return params
+
+
+def _as_points(points: np.ndarray, name: str) -> np.ndarray:
+    array = np.asarray(points, dtype=np.float64)
+    if array.size == 0:
+        return array.reshape(0, 2)
+    if array.ndim != 2 or array.shape[1] != 2:
+        raise ShapeError(f"{name} must have shape (N, 2), got {array.shape}")
+    return array
