@@ -171,6 +171,15 @@ class HistogramModel:
         """
         return np.searchsorted(self.location_edges[1:-1], np.asarray(location, dtype=np.float64), side="right")
 
+    def fixation_class(self, fixation: float | None = None) -> int:
+        """Location class to fixate on: of `fixation` (location units) if given, else of the
+        recommended ``fixation_location``, else the middle class of the range."""
+        if fixation is None:
+            fixation = self.recommended.get("fixation_location")
+        if fixation is None:
+            return self.n_locations // 2
+        return int(self.location_class(float(fixation)))
+
     def identity_class(self, identity) -> np.ndarray:
         """Identity class index of each identity value.
 

@@ -116,10 +116,7 @@ def run(args: argparse.Namespace) -> int:
 
             plot_fixation_sweep(sweep, args.plot, units=unit)
     else:
-        fixation = args.fixation if args.fixation is not None else model.recommended.get("fixation_location")
-        if fixation is None:
-            fixation = float(model.location_centres[model.n_locations // 2])
-        fixation_class = int(model.location_class(fixation))
+        fixation_class = model.fixation_class(args.fixation)
         names = [args.policy] if args.policy else ["active", "random", "stationary"]
         if "active" in names:
             print(f"active fixation: {model.location_centres[fixation_class]:g} {unit}")

@@ -88,6 +88,14 @@ def test_location_classes_split_the_range_equally():
     np.testing.assert_array_equal(model.location_class([-1.0, 0.0, 0.5, 5.45, 9.0]), [0, 0, 1, 10, 10])
 
 
+def test_fixation_class_given_recommended_or_middle(small):
+    model = fit_model(small, n_locations=4)  # classes of 0.75 mm over 0-3 mm
+    assert model.fixation_class() == 2
+    assert model.fixation_class(0.8) == 1
+    assert model.with_recommended(fixation_location=2.9).fixation_class() == 3
+    assert model.with_recommended(fixation_location=2.9).fixation_class(0.1) == 0
+
+
 def test_single_location_dataset_is_pure_identity_classification():
     ds = Dataset(np.random.default_rng(0).normal(size=(6, 3, 2)), np.full(6, 2.0), [1, 2, 3, 1, 2, 3], None, "taxel")
     model = fit_model(ds, n_locations=11)
