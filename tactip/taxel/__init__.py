@@ -1,0 +1,26 @@
+"""Capacitive taxel front end: simulated iCub fingertip and skin, pre-processing, CSV and UDP sources.
+
+- `tactip.taxel.sensors`: geometry and receptive fields of the two sensors of paper 000;
+- `tactip.taxel.sim`: the simulated sensor tapping along its location range (raw 8-bit stream);
+- `tactip.taxel.preprocess`: high-pass filter, normalisation, tap segmentation and resampling;
+- `tactip.taxel.sources`: recorded (CSV) and live (UDP) readings, and taps from any source;
+- `tactip.taxel.collect`: simulated training and test datasets (``tactip-dataset/1``).
+"""
+
+from .collect import DEFAULT_TAPS, TaxelDatasetPaths, simulate_taxel_dataset, simulate_taxel_datasets
+from .preprocess import (BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, TapSegmenter, TapSegments,
+                         detect_taps, highpass, remove_tap_baseline, resample_taps, segment_taps, taxel_pressure)
+from .sensors import TAXEL_SENSORS, TaxelSensor, receptive_field_response, taxel_sensor
+from .sim import TaxelSimulator, TaxelStream, contact_profile, sweep_locations
+from .sources import (ENCODINGS, CsvTaxelSource, TaxelReading, TaxelSource, UdpTaxelSender, UdpTaxelSource,
+                      decode_reading, encode_reading, read_taps, write_taxel_csv)
+
+__all__ = [
+    "TAXEL_SENSORS", "TaxelSensor", "taxel_sensor", "receptive_field_response",
+    "TaxelSimulator", "TaxelStream", "contact_profile", "sweep_locations",
+    "FULL_SCALE_COUNTS", "BASELINE_SAMPLES", "HighPassFilter", "highpass", "taxel_pressure", "resample_taps",
+    "remove_tap_baseline", "detect_taps", "segment_taps", "TapSegments", "TapSegmenter",
+    "ENCODINGS", "TaxelReading", "TaxelSource", "CsvTaxelSource", "UdpTaxelSource", "UdpTaxelSender",
+    "encode_reading", "decode_reading", "write_taxel_csv", "read_taps",
+    "DEFAULT_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
+]

@@ -1,0 +1,113 @@
+"""Simulated taxel datasets: the data collection of paper 000 written in the ``tactip-dataset/1`` format.
+
+The robot sweeps the sensor over its location range in small steps, one tap per step (paper 000:
+0.01 mm steps, 3000 taps over the fingertip's 30 mm, 5000 over the skin's 50 mm), and the whole
+collection is done twice, giving independent training and test sets on the same sensor. The task is
+pure localisation: every tap has the same identity (0.0, unit ``"none"``).
+"""
+
+from __future__ import annotations
+
+import pathlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from perception.dataset import Dataset, save_dataset
+
+from .sensors import TaxelSensor
+from .sim import TaxelSimulator, sweep_locations
+
+__all__ = ["DEFAULT_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets"]
+
+#: Taps per collection in paper 000 (0.01 mm steps over the sensor's range).
+DEFAULT_TAPS = {"fingertip": 3000, "skin": 5000}
+
+
+def simulate_taxel_dataset(simulator: TaxelSimulator, locations_mm, *, seed=None, collection: str = "",
+                           progress=None) -> Dataset:
+    """Collect one simulated dataset: a tap at each location, pre-processed, labelled in mm.
+
+    Parameters
+    ----------
+    simulator : TaxelSimulator
+    locations_mm : (N,) array_like
+        Commanded location of each tap, mm, in collection order.
+    seed : int or sequence of int, optional
+        Noise seed of this collection (`TaxelSimulator.stream`).
+    collection : str
+        Name stored in the sensor description (e.g. ``"train"``).
+    progress : callable, optional
+        Called with the number of taps done.
+
+    Returns
+    -------
+    Dataset
+        ``front_end="taxel"``, taps ``(N, 50, K)`` float32 (pressure, fraction of full scale),
+        location in mm, identity 0.0 (unit ``"none"``).
+    """
+    locations = np.asarray(locations_mm, dtype=np.float64).reshape(-1)
+    taps = simulator.taps(locations, seed=seed, progress=progress)
+    sensor: TaxelSensor = simulator.sensor
+    description = {
+        **sensor.describe(),
+        "simulated": True,
+        "simulator_seed": simulator.seed,
+        "collection": collection,
+        "units": "pressure, fraction of 8-bit full scale (high-pass filtered, per-tap baseline removed)",
+    }
+    return Dataset(taps, locations, np.zeros(len(locations)), None, "taxel", location_unit="mm",
+                   identity_unit="none", dim_names=sensor.dim_names, sensor=description)
+
+
+@dataclass(frozen=True)
+class TaxelDatasetPaths:
+    """Files written by `simulate_taxel_datasets`."""
+
+    train: pathlib.Path
+    test: pathlib.Path
+
+
+def simulate_taxel_datasets(out_dir, *, sensor: str = "fingertip", seed: int = 0, locations: int | None = None,
+                            taps_per_location: int = 1, quiet: bool = True) -> TaxelDatasetPaths:
+    """Simulate the two collections of paper 000 and write ``train.h5`` and ``test.h5``.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Output folder, created if missing.
+    sensor : str
+        ``"fingertip"`` (30 mm range, rod) or ``"skin"`` (50 mm range, sphere).
+    seed : int
+        Seed of the simulated sensor; the two collections use the noise seeds ``(seed, 2)`` and ``(seed, 3)``.
+    locations : int, optional
+        Locations per collection, evenly spaced over the range (default: the paper's 3000 / 5000).
+    taps_per_location : int
+        Taps at each location.
+    quiet : bool
+        Hide the progress bars.
+
+    Returns
+    -------
+    TaxelDatasetPaths
+
+    Examples
+    --------
+    >>> paths = simulate_taxel_datasets("data/fingertip", sensor="fingertip", seed=1)   # doctest: +SKIP
+    """
+    from tqdm import tqdm
+
+    simulator = TaxelSimulator(sensor, seed=seed)
+    n = DEFAULT_TAPS.get(simulator.sensor.name, 3000) if locations is None else int(locations)
+    where = sweep_locations(simulator.sensor, n, taps_per_location=taps_per_location)
+    out = pathlib.Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = TaxelDatasetPaths(out / "train.h5", out / "test.h5")
+    for index, (name, path) in enumerate((("train", paths.train), ("test", paths.test))):
+        with tqdm(total=len(where), unit="tap", desc=f"{sensor} {name}", disable=quiet, leave=False) as bar:
+            def advance(done, bar=bar):
+                bar.update(done - bar.n)
+            dataset = simulate_taxel_dataset(simulator, where, seed=(seed, 2 + index), collection=name,
+                                             progress=advance)
+        save_dataset(path, dataset)
+    return paths
