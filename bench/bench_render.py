@@ -1,0 +1,42 @@
+"""Cost of rendering one 640x480 synthetic TacTip frame (ms/frame), at 127, 331 and 532 pins.
+
+Prints the median over repeated renders of an indented contact over a gap, with the default
+appearance (noise, glare, gradient), and the cost of the ground truth alone (``pin_centres``).
+Run: ``.venv/bin/python bench/bench_render.py``
+"""
+
+import time
+
+import numpy as np
+
+from tactip.synthetic import Contact, SyntheticTacTip
+
+REPEATS = 60
+
+
+def per_call_ms(function, repeats=REPEATS):
+    """Median wall time of ``function()`` over ``repeats`` calls, ms (after one warm-up call)."""
+    function()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return 1e3 * float(np.median(times))
+
+
+def main():
+    """Print the table."""
+    contact = Contact(indentation_mm=4.0, gap_width_mm=2.0, gap_offset_mm=1.0)
+    print("pins  render ms/frame  pin_centres ms  (640x480, noise 4, glare, gradient)")
+    for pins in (127, 331, 532):
+        sensor = SyntheticTacTip(pins=pins, seed=0)
+        render = per_call_ms(lambda: sensor.render(contact))
+        truth = per_call_ms(lambda: sensor.pin_centres(contact))
+        print(f"{pins:4d}  {render:15.2f}  {truth:14.2f}")
+    sensor = SyntheticTacTip(pins=331, seed=0, blur_sigma=0.8, jpeg_quality=80)
+    print(f"331 with blur 0.8 px and JPEG q80: {per_call_ms(lambda: sensor.render(contact)):.2f} ms/frame")
+
+
+if __name__ == "__main__":
+    main()
