@@ -34,8 +34,8 @@ def make_samples(out: pathlib.Path) -> list[pathlib.Path]:
     out.mkdir(parents=True, exist_ok=True)
     video_path, truth_path, frame_path = (out / "synthetic_tap.mp4", out / "synthetic_tap_truth.npz",
                                           out / "synthetic_frame.png")
-    source = SyntheticSource(SyntheticTacTip(pins=PINS, noise_sigma=NOISE_SIGMA, seed=SEED), taps=DEFAULT_TAPS, frame_rate=FRAME_RATE,
-                             rest_s=0.5)
+    sensor = SyntheticTacTip(pins=PINS, noise_sigma=NOISE_SIGMA, seed=SEED)
+    source = SyntheticSource(sensor, taps=DEFAULT_TAPS, frame_rate=FRAME_RATE, rest_s=0.5)
     writer = cv2.VideoWriter(str(video_path), cv2.VideoWriter_fourcc(*"mp4v"), FRAME_RATE, source.frame_size,
                              isColor=False)
     if not writer.isOpened():
