@@ -7,7 +7,8 @@
 - `tactip.taxel.collect`: simulated training and test datasets (``tactip-dataset/1``).
 """
 
-from .collect import DEFAULT_TAPS, TaxelDatasetPaths, simulate_taxel_dataset, simulate_taxel_datasets
+from .collect import (DEFAULT_TAPS, TaxelDatasetPaths, simulate_taxel_dataset, simulate_taxel_datasets,
+                      write_taxel_test_stream)
 from .preprocess import (BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, TapSegmenter, TapSegments,
                          detect_taps, highpass, remove_tap_baseline, resample_taps, segment_taps, taxel_pressure)
 from .sensors import TAXEL_SENSORS, TaxelSensor, receptive_field_response, taxel_sensor
@@ -23,4 +24,5 @@ __all__ = [
     "ENCODINGS", "TaxelReading", "TaxelSource", "CsvTaxelSource", "UdpTaxelSource", "UdpTaxelSender",
     "encode_reading", "decode_reading", "write_taxel_csv", "read_taps",
     "DEFAULT_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
+    "write_taxel_test_stream",
 ]

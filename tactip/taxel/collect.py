@@ -17,8 +17,10 @@ from perception.dataset import Dataset, save_dataset
 
 from .sensors import TaxelSensor
 from .sim import TaxelSimulator, sweep_locations
+from .sources import write_taxel_csv
 
-__all__ = ["DEFAULT_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets"]
+__all__ = ["DEFAULT_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
+           "write_taxel_test_stream"]
 
 #: Taps per collection in paper 000 (0.01 mm steps over the sensor's range).
 DEFAULT_TAPS = {"fingertip": 3000, "skin": 5000}
@@ -79,7 +81,8 @@ def simulate_taxel_datasets(out_dir, *, sensor: str = "fingertip", seed: int = 0
     sensor : str
         ``"fingertip"`` (30 mm range, rod) or ``"skin"`` (50 mm range, sphere).
     seed : int
-        Seed of the simulated sensor; the two collections use the noise seeds ``(seed, 2)`` and ``(seed, 3)``.
+        Seed of the simulated sensor; the two collections use the noise seeds ``(seed, 2)`` (train) and
+        ``(seed, 3)`` (test).
     locations : int, optional
         Locations per collection, evenly spaced over the range (default: the paper's 3000 / 5000).
     taps_per_location : int
@@ -97,9 +100,7 @@ def simulate_taxel_datasets(out_dir, *, sensor: str = "fingertip", seed: int = 0
     """
     from tqdm import tqdm
 
-    simulator = TaxelSimulator(sensor, seed=seed)
-    n = DEFAULT_TAPS.get(simulator.sensor.name, 3000) if locations is None else int(locations)
-    where = sweep_locations(simulator.sensor, n, taps_per_location=taps_per_location)
+    simulator, where = _plan(sensor, seed, locations, taps_per_location)
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = TaxelDatasetPaths(out / "train.h5", out / "test.h5")
@@ -107,7 +108,36 @@ def simulate_taxel_datasets(out_dir, *, sensor: str = "fingertip", seed: int = 0
         with tqdm(total=len(where), unit="tap", desc=f"{sensor} {name}", disable=quiet, leave=False) as bar:
             def advance(done, bar=bar):
                 bar.update(done - bar.n)
-            dataset = simulate_taxel_dataset(simulator, where, seed=(seed, 2 + index), collection=name,
+            dataset = simulate_taxel_dataset(simulator, where, seed=_noise_seed(seed, name), collection=name,
                                              progress=advance)
         save_dataset(path, dataset)
     return paths
+
+
+def write_taxel_test_stream(path, *, sensor: str = "fingertip", seed: int = 0, locations: int | None = None,
+                            taps_per_location: int = 1) -> pathlib.Path:
+    """Write the raw readings of the test collection of `simulate_taxel_datasets` as a CSV recording.
+
+    The same arguments give the very readings ``test.h5`` was made from, so the file exercises the
+    recorded-data path (`CsvTaxelSource`, `segment_taps`) against a known dataset.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    simulator, where = _plan(sensor, seed, locations, taps_per_location)
+    stream = simulator.stream(where, seed=_noise_seed(seed, "test"))
+    write_taxel_csv(path, stream.timestamps_s, stream.readings)
+    return pathlib.Path(path)
+
+
+def _plan(sensor: str, seed: int, locations: int | None, taps_per_location: int):
+    """The simulator and the sweep of locations of one collection."""
+    simulator = TaxelSimulator(sensor, seed=seed)
+    n = DEFAULT_TAPS.get(simulator.sensor.name, 3000) if locations is None else int(locations)
+    return simulator, sweep_locations(simulator.sensor, n, taps_per_location=taps_per_location)
+
+
+def _noise_seed(seed: int, collection: str) -> tuple[int, int]:
+    return (int(seed), {"train": 2, "test": 3}[collection])
