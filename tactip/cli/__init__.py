@@ -21,6 +21,7 @@ COMMANDS: dict[str, str] = {
     "arm": "tactip.cli.arm",
     "train": "tactip.cli.train",
     "validate": "tactip.cli.validate",
+    "simulate": "tactip.cli.simulate",
 }
 
 
