@@ -215,7 +215,7 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blob
     # per blob so that a sloping background does not tilt the weights.
     middle_x, middle_y = left + box_w // 2, top + box_h // 2
     if params.split_radius_px > 0:
-        split = _split_touching(binary, labels, count, lab, xs, ys, params.split_radius_px)
+        split = _split_touching(binary, smooth, mean, labels, count, index, lab, xs, ys, params.split_radius_px)
         if split is not None:
             lab, count, (left, top, box_w, box_h, area, middle_x, middle_y) = split[0], split[1], (
                 np.concatenate([old, new]) for old, new in zip((left, top, box_w, box_h, area, middle_x, middle_y),
@@ -241,28 +241,35 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blob
     return Blobs(centres=centres[order], areas=area[keep][order], fills=fill[keep][order], candidates=count - 1)
 
 
-def _split_touching(binary: np.ndarray, labels: np.ndarray, count: int, lab: np.ndarray, xs: np.ndarray,
-                    ys: np.ndarray, radius_px: float):
+def _split_touching(binary: np.ndarray, smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, count: int,
+                    index: np.ndarray, lab: np.ndarray, xs: np.ndarray, ys: np.ndarray, radius_px: float):
     """Split components made of several touching pins.
 
-    Eroding the binary image by a disc of `radius_px` cuts the narrow neck between touching pins
-    but leaves one core in each convex pin. A component with several cores gives each of its
+    The loose threshold makes blobs fat and the neck between two touching pins wide, so the cores
+    are cut at half height first: pixels at least halfway from the neighbourhood mean to the local
+    maximum (over about two pin diameters). Eroding that by a disc of `radius_px` removes the
+    neck but leaves one core in each convex pin. A component with several cores gives each of its
     pixels to the core with the nearest core pixel. Returns the new per-pixel labels, the new
     label count and the stats (left, top, width, height, area, middle x, middle y) of the new
     labels (appended after the old ones, whose split components become empty), or None.
     """
     size = 2 * int(np.ceil(radius_px)) + 1
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
+    reach = 2 * int(np.ceil(5.0 * radius_px)) + 1
+    peak = cv2.dilate(smooth, cv2.getStructuringElement(cv2.MORPH_RECT, (reach, reach)))
+    half_height = cv2.compare(smooth.astype(np.float32) * 2.0, mean + peak, cv2.CMP_GE)
+    core_mask = cv2.erode(cv2.bitwise_and(half_height, binary * np.uint8(255)), kernel)
     # 4-connected cores: a diagonal one-pixel bridge left by the erosion does not join two pins.
-    cores, core_labels = cv2.connectedComponents(cv2.erode(binary, kernel), connectivity=4, ltype=cv2.CV_32S)
+    cores, core_labels = cv2.connectedComponents(core_mask, connectivity=4, ltype=cv2.CV_32S)
     if cores <= 2:
         return None
-    flat_cores = core_labels.ravel()
-    core_index = np.flatnonzero(flat_cores)
-    core_of_pixel = flat_cores[core_index]
+    # Cores lie inside components: look for their pixels among the component pixels only.
+    in_core = core_labels.ravel()[index]
+    core_pixels = np.flatnonzero(in_core)
+    core_of_pixel = in_core[core_pixels]
     core_size = np.bincount(core_of_pixel, minlength=cores)
     component_of_core = np.zeros(cores, dtype=np.int64)
-    component_of_core[core_of_pixel] = labels.ravel()[core_index]
+    component_of_core[core_of_pixel] = lab[core_pixels]
     # Crumbs of a bridge are not pins: cores need a few pixels to count.
     component_of_core[core_size < _MIN_CORE_PX] = 0
     cores_per_component = np.bincount(component_of_core[1:], minlength=count)
@@ -270,8 +277,7 @@ def _split_touching(binary: np.ndarray, labels: np.ndarray, count: int, lab: np.
     multi[0] = False
     if not multi.any():
         return None
-    width = labels.shape[1]
-    core_y, core_x = np.divmod(core_index, width)
+    core_x, core_y = xs[core_pixels], ys[core_pixels]
     split_cores = np.flatnonzero(multi[component_of_core])
     split_cores = split_cores[(split_cores > 0) & (core_size[split_cores] >= _MIN_CORE_PX)]
     n_new = len(split_cores)

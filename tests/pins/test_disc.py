@@ -1,0 +1,62 @@
+"""pins.disc: finding the membrane disc, and the grey conversion every pins function starts with."""
+
+import cv2
+import numpy as np
+import pytest
+
+from pins import NoSensorError, SensorDisc, ShapeError, as_grey, find_sensor_disc
+from tests.pins.conftest import TAP, frame, sensor
+
+
+@pytest.mark.parametrize("pins", [127, 331, 532])
+@pytest.mark.parametrize("dark_pins", [False, True])
+def test_disc_matches_ground_truth(pins, dark_pins):
+    disc = find_sensor_disc(frame(pins, dark_pins=dark_pins).image, dark_pins=dark_pins)
+    cx, cy, radius = sensor(pins, dark_pins=dark_pins).disc
+    assert abs(disc.cx - cx) < 0.5 and abs(disc.cy - cy) < 0.5
+    assert abs(disc.radius_px - radius) < 1.0
+
+
+def test_disc_follows_a_shifted_image():
+    image = frame(331, TAP).image
+    shift = np.float32([[1, 0, 23.4], [0, 1, -11.7]])
+    moved = cv2.warpAffine(image, shift, image.shape[::-1], flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    before, after = find_sensor_disc(image), find_sensor_disc(moved)
+    assert after.cx - before.cx == pytest.approx(23.4, abs=0.3)
+    assert after.cy - before.cy == pytest.approx(-11.7, abs=0.3)
+    assert after.radius_px == pytest.approx(before.radius_px, abs=0.3)
+
+
+def test_bgr_and_grey_give_the_same_disc():
+    grey = frame(331).image
+    assert find_sensor_disc(cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)) == find_sensor_disc(grey)
+
+
+@pytest.mark.parametrize("image", [
+    np.full((480, 640), 30, np.uint8),                                          # lens cap on
+    np.full((480, 640), 200, np.uint8),                                         # pointing at a wall
+    np.random.default_rng(0).integers(0, 256, (480, 640)).astype(np.uint8),     # noise
+    np.tile(np.linspace(0, 255, 640).astype(np.uint8), (480, 1)),               # a ramp
+], ids=["dark", "bright", "noise", "ramp"])
+def test_no_disc_raises(image):
+    with pytest.raises(NoSensorError):
+        find_sensor_disc(image)
+
+
+def test_mask_and_contains_agree():
+    disc = SensorDisc(50.2, 40.7, 20.5)
+    mask = disc.mask((100, 120), margin_px=2.0)
+    ys, xs = np.mgrid[:100, :120]
+    points = np.column_stack([xs.ravel(), ys.ravel()])
+    assert np.array_equal(disc.contains(points, margin_px=2.0), mask.ravel())
+    assert mask.sum() == pytest.approx(np.pi * 18.5**2, rel=0.02)
+
+
+def test_as_grey_converts_once_and_rejects_bad_shapes():
+    grey = np.arange(64 * 48, dtype=np.uint8).reshape(48, 64)
+    assert as_grey(grey) is grey
+    assert np.array_equal(as_grey(cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)), grey)
+    assert np.array_equal(as_grey(grey[:, :, None]), grey)
+    assert as_grey(grey.astype(np.float64) + 0.2).dtype == np.uint8
+    with pytest.raises(ShapeError, match="shape"):
+        as_grey(np.zeros((4, 4, 4, 4), np.uint8))
