@@ -12,8 +12,7 @@
 Example:
   tactip simulate taxel --sensor fingertip --out data/fingertip --seed 1
   tactip train data/fingertip/train.h5 --out data/fingertip/model.h5 --locations 300
-  tactip validate data/fingertip/model.h5 data/fingertip/test.h5 --fixation 15 --shift uniform \
-      --thresholds 0.005 0.007 0.01 0.02 0.05
+  tactip validate data/fingertip/model.h5 data/fingertip/test.h5 --fixation 15 --shift uniform --thresholds 0.005 0.01 0.05
 (With 300 classes a single tap leaves a flat belief, so the thresholds that decide in about
 2 taps are small; paper 000 Table II compares policies at a mean of 2 taps.)
 """
