@@ -12,7 +12,8 @@ from .factory import make_arm
 from .interface import Arm, ArmState, TapEvent
 from .pose import Pose, pose_from_ur, pose_to_ur
 from .safety import SafetyLimits, check_move, check_ready
-from .sim import SimArm, trapezoid_duration
+from .profile import trapezoid_duration
+from .sim import SimArm
 from .tap import TapMotion, plan_tap
 from .world import Gap, PlateWorld, WorldContact
 

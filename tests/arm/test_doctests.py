@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["arm.pose", "arm.world", "arm.tap", "arm.safety", "arm.sim", "arm.factory", "arm.commissioning"]
+MODULES = ["arm.pose", "arm.world", "arm.tap", "arm.safety", "arm.profile", "arm.sim", "arm.factory", "arm.commissioning"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from arm import Arm, SimArm, make_arm
 from arm.errors import ArmFault, SafetyError
 from arm.pose import Pose
-from arm.sim import trapezoid_duration, trapezoid_fraction
+from arm.profile import trapezoid_duration, trapezoid_fraction
 from arm.world import PlateWorld, Gap
 
 from .conftest import make_config

@@ -50,3 +50,70 @@ def test_subcommand_is_required(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["arm"])
     assert exc.value.code == 2
+
+
+UR_TOML = """
+[arm]
+backend = "ur"
+host = "127.0.0.1"
+work_frame = [400.0, -150.0, 20.0, 0.0, 0.0, 0.0]
+workspace = [[-10.0, -10.0, -6.0], [100.0, 40.0, 40.0]]
+max_tap_depth = 5.0
+
+[arm.tap]
+dwell = 0.02
+"""
+
+
+@pytest.fixture(scope="module")
+def ur_station(tmp_path_factory):
+    """A UR station config and the controller emulator it talks to (skipped when the UR ports are taken)."""
+    from tests.arm.ur_emulator import PortsBusy, UrEmulator
+
+    path = tmp_path_factory.mktemp("ur") / "station.toml"
+    path.write_text(UR_TOML)
+    try:
+        with UrEmulator() as emulator:
+            yield str(path), emulator
+    except PortsBusy as exc:
+        pytest.skip(str(exc))
+
+
+@pytest.fixture
+def ur(ur_station):
+    path, emulator = ur_station
+    # TCP 25 mm above the work frame origin, pad pointing down (base frame, m and rotation vector).
+    emulator.reset(tcp=[0.4, -0.15, 0.045, 3.141592653589793, 0.0, 0.0])
+    return path, emulator
+
+
+def test_ur_status_ready(ur, capsys):
+    path, _ = ur
+    assert main(["arm", "status", "--config", path]) == 0
+    out = capsys.readouterr().out
+    assert "backend      ur at 127.0.0.1" in out and "x 0.000  y 0.000  z 25.000 mm" in out
+    assert "robot mode   RUNNING" in out and "program      running" in out and "ready        yes" in out
+
+
+def test_ur_status_in_protective_stop_exits_1_with_the_reason(ur, capsys):
+    path, emulator = ur
+    emulator.protective_stop()
+    assert main(["arm", "status", "--config", path]) == 1
+    out = capsys.readouterr().out
+    assert "safety mode  PROTECTIVE_STOP" in out and "ready        no: the controller reports a protective stop" in out
+
+
+def test_ur_tap_refused_before_connecting(ur, capsys):
+    path, emulator = ur
+    assert main(["arm", "tap", "--config", path, "--depth", "5.5"]) == 1
+    assert "deeper than max_tap_depth 5 mm" in capsys.readouterr().err
+    assert emulator.log() == []                                   # not even the control script was sent
+
+
+def test_ur_tap_moves_down_to_the_depth_slowly(ur, capsys):
+    path, emulator = ur
+    assert main(["arm", "tap", "--config", path, "--depth", "1.5", "--at", "20", "5"]) == 0
+    assert "tapped at (20, 5) mm of the work frame, depth 1.5 mm" in capsys.readouterr().out
+    press = emulator.moves()[-2]
+    assert press["pose"][:3] == pytest.approx([0.42, -0.145, 0.0185])
+    assert press["speed"] == pytest.approx(0.005)
