@@ -16,6 +16,7 @@ RADIAL_FLOW = 0.5  # u_r = RADIAL_FLOW * u_z * r / R
 MEMBRANE_RHO_MM = 8.0  # tension / contact pressure of the skin spanning a gap, mm
 BENDING_MM = 0.5  # bending length of the skin, mm
 STALK_BASE_MM = 1.5  # half-width over which the membrane slope under a stalk is averaged, mm
+CLAMP_POWER = 6  # displacement x (1 - (r / R)^CLAMP_POWER): zero at the clamped base of the pad
 
 
 def hexagonal_number(rings: int) -> int:
@@ -92,7 +93,9 @@ def membrane_displacement(x, y, contact, radius_mm: float):
         sag = w * w / (8.0 * MEMBRANE_RHO_MM) * np.exp(-0.5 * (t / spread) ** 2) * pressure
         sag = u_z * -np.expm1(-sag / np.maximum(u_z, 1e-12))  # soft cap: sag <= u_z (no rise above rest)
         u_z = u_z - sag
-    return u_z, u_r
+    # the pad is clamped to the casing at its base: fade the half-space field to zero at the rim
+    clamp = 1.0 - np.minimum(r2 / radius_mm ** 2, 1.0) ** (CLAMP_POWER / 2)
+    return u_z * clamp, u_r * clamp
 
 
 def deformed_surface(x, y, contact, radius_mm: float):

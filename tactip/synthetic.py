@@ -36,7 +36,9 @@ radius ``a = sqrt(R d)``; displacement towards the camera ``u_z = d - r^2 / 2R``
 outside, continuous in value and slope. (Geometric overlap alone would give ``a = sqrt(2 R d)``; in
 Hertz contact the surrounding gel sinks too, taking half the approach, and gives the smooth decay
 outside the patch.) The incompressible gel flows outward under the plate and drags the skin with it:
-``u_r = 0.5 u_z r / R``. A straight gap (width ``w``, centre line ``gap_offset`` from the axis along
+``u_r = 0.5 u_z r / R``. The pad is clamped to the casing at its base, so both displacements are
+multiplied by ``1 - (r / R)^6``: zero at the rim, within 2 % of the half-space field where the plate
+touches (r < R / 2 up to d = 5 mm). A straight gap (width ``w``, centre line ``gap_offset`` from the axis along
 image y, direction ``gap_angle``) leaves the skin over it unsupported: like a tensioned membrane over
 a slot under pressure it bulges into the gap by ``w^2 / (8 rho)`` (``rho = 8 mm``, the ratio of skin
 tension to contact pressure), spread across the line with a Gaussian of width ``w/4 + 0.5 mm`` (the
