@@ -1,0 +1,62 @@
+"""pins.select: 40 pins at least 4 mm apart, greedy from the centre, deterministic."""
+
+import numpy as np
+import pytest
+from scipy.spatial.distance import pdist
+
+from pins import PinsError, ShapeError, select_pins
+from tests.pins.conftest import sensor
+
+
+@pytest.mark.parametrize("pins", [331, 532])
+def test_selection_respects_the_separation(pins):
+    s = sensor(pins)
+    rest = s.rest_centres
+    chosen = select_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=s.mm_per_px)
+    assert chosen.shape == (40,) and len(set(chosen.tolist())) == 40
+    assert pdist(rest[chosen]).min() * s.mm_per_px >= 4.0
+
+
+def test_greedy_from_the_centre():
+    s = sensor(532)
+    rest = s.rest_centres
+    chosen = select_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=s.mm_per_px)
+    distance = np.linalg.norm(rest - rest.mean(axis=0), axis=1)
+    assert chosen[0] == np.argmin(distance)
+    assert np.all(np.diff(distance[chosen]) >= -1e-9)
+    # Maximal: every pin nearer the centre than the last chosen one was blocked by a chosen pin.
+    separation_px = 4.0 / s.mm_per_px
+    nearer = np.flatnonzero(distance < distance[chosen[-1]])
+    skipped = np.setdiff1d(nearer, chosen)
+    gaps = np.linalg.norm(rest[skipped][:, None] - rest[chosen][None], axis=2).min(axis=1)
+    assert np.all(gaps < separation_px)
+
+
+def test_deterministic_and_independent_of_input_order(rng):
+    s = sensor(331)
+    rest = s.rest_centres
+    chosen = select_pins(rest, mm_per_px=s.mm_per_px)
+    assert np.array_equal(chosen, select_pins(rest.copy(), mm_per_px=s.mm_per_px))
+    # A jittered copy in a shuffled order selects the same physical pins.
+    permutation = rng.permutation(len(rest))
+    jittered = rest + rng.normal(0, 1e-3, rest.shape)
+    shuffled = select_pins(jittered[permutation], mm_per_px=s.mm_per_px)
+    assert set(permutation[shuffled].tolist()) == set(chosen.tolist())
+
+
+def test_too_many_pins_is_a_clear_error():
+    s = sensor(331)
+    with pytest.raises(PinsError, match="at least 4 mm apart"):
+        select_pins(s.rest_centres, n_pins=300, min_separation_mm=4.0, mm_per_px=s.mm_per_px)
+
+
+def test_arguments_checked():
+    rest = np.zeros((10, 2))
+    with pytest.raises(ValueError, match="mm_per_px"):
+        select_pins(rest, mm_per_px=0.0)
+    with pytest.raises(ValueError, match="n_pins"):
+        select_pins(rest, n_pins=0, mm_per_px=0.1)
+    with pytest.raises(ShapeError):
+        select_pins(np.zeros((10, 3)), mm_per_px=0.1)
+    with pytest.raises(PinsError, match="finite"):
+        select_pins(np.full((10, 2), np.nan), mm_per_px=0.1)
