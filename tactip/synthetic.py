@@ -109,7 +109,7 @@ class Contact:
             raise ValueError(f"gap_width_mm must be >= 0, got {self.gap_width_mm}")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SyntheticFrame:
     """One rendered frame and its ground truth.
 
@@ -193,6 +193,21 @@ class SyntheticTacTip:
         Invert the scene: dark pins on a light membrane (dark-marker sensors).
     seed : int
         Seed of the instance's own random generator (pin jitter, brightness, noise).
+
+    Attributes
+    ----------
+    n_pins : int
+    rest_centres : (N, 2) float64 ndarray, read-only
+        True pin-tip centres (x, y) without contact, px.
+    disc : (float, float, float)
+        The dark membrane disc (cx, cy, radius), px.
+    mm_per_px : float
+        Pad-surface mm per image px at the apex (for pin separations in mm; the scale shrinks
+        towards the rim, where the dome is seen obliquely).
+    pin_radius_px : float
+        Image radius of a pin tip at the apex, px.
+    pin_spacing_mm : float
+        Lattice spacing of the pins on the pad surface, mm.
 
     Examples
     --------

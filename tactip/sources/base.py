@@ -13,7 +13,7 @@ from ..errors import SourceError
 __all__ = ["Frame", "FrameSource", "FrameSourceBase"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Frame:
     """One frame from a source.
 
