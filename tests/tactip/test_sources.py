@@ -346,3 +346,14 @@ def test_threaded_reader_over_a_real_source(tmp_path):
     with ThreadedReader(open_source(tmp_path / "clip.mp4", grey=True), when_full="block") as reader:
         frames = list(reader)
     assert [f.index for f in frames] == list(range(8)) and frames[0].image.ndim == 2
+
+
+def test_docstring_examples_run():
+    import doctest
+
+    import tactip.sources
+    import tactip.sources.simulated
+    import tactip.sources.threaded
+
+    for module in (tactip.sources, tactip.sources.simulated, tactip.sources.threaded):
+        assert doctest.testmod(module).failed == 0

@@ -42,8 +42,21 @@ def test_preset_counts_are_exact(pins):
     assert frame.image.shape == (480, 640) and frame.image.dtype == np.uint8
 
 
-def test_any_pin_count_works():
+def test_any_pin_count_and_image_size_works():
     assert SyntheticTacTip(pins=200).rest_centres.shape == (200, 2)
+    small = SyntheticTacTip(pins=331, image_size=(320, 240))
+    frame = small.render(Contact(3.0))
+    assert frame.image.shape == (240, 320) and frame.visible.all()
+    distance, _ = cKDTree(small.rest_centres).query(small.rest_centres, k=2)
+    assert distance[:, 1].min() > 2.5 * small.pin_radius_px
+
+
+def test_docstring_examples_run():
+    import doctest
+
+    import tactip.synthetic
+
+    assert doctest.testmod(tactip.synthetic).failed == 0
 
 
 @pytest.mark.parametrize("pins", PRESETS)
