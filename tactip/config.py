@@ -1,0 +1,308 @@
+"""The station configuration: one TOML file, validated on load; every error names its key.
+
+Tables (see ``samples/station_sim.toml`` for a documented example):
+
+``[station]``
+    ``name``; ``results`` (SQLite path); ``data_dir`` (where calibration, datasets and models go).
+``[sensor]``
+    ``source`` (``"synthetic"``, a camera index such as ``0``, ``/dev/videoN``, or a video file);
+    ``pins`` (expected pin count / synthetic preset); ``pad_diameter_mm``; ``frame_rate`` (frames/s);
+    ``calibration`` (file written by ``tactip calibrate``); ``selected_pins``; ``min_separation_mm``.
+``[arm]``
+    validated by the arm package (``arm.config``): backend, host, tcp, work_frame, workspace, caps.
+``[[gaps]]``
+    one table per gap to inspect: ``name``, ``x``, ``y`` (mm, work frame), ``nominal_width`` (mm),
+    ``tolerance`` (mm), and for the simulated station ``true_width`` (mm, default nominal).
+``[protocol]``
+    the tap protocol: ``depth_min``/``depth_max``/``depth_step`` (mm, the paper's 0-5.5 mm at
+    0.05 mm), ``reference_height_mm``, ``samples`` (per tap), ``lateral_jitter_mm``, ``repeats``
+    (taps per depth and gap), ``seed``. A protocol depth ``d`` puts the bottom of the tap at
+    ``z = reference_height_mm - d`` in the work frame (whose origin is on the part's surface
+    reference), so the top of the range taps air, as in the paper (about 1.5 mm of no contact).
+    How the arm moves during a tap (approach height, stroke speed, dwell) is ``[arm.tap]``.
+``[perception]``
+    ``model`` (file), ``decision_threshold``, ``fixation_depth`` (mm, or omitted: the model's
+    recommendation), ``policy`` (active|stationary|random), ``max_taps``, ``locations`` (depth
+    classes), ``bins``.
+``[sim]``
+    the simulated station only: ``noise_sigma`` (camera noise, grey levels) and ``seed`` of the
+    synthetic TacTip. The simulated arm's own settings (placement noise, realtime) are ``[arm.sim]``;
+    its plate has the ``[[gaps]]`` (at ``true_width``) unless ``[arm.sim]`` lists gaps of its own.
+
+Relative paths are resolved against the configuration file's folder.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import ConfigError
+
+__all__ = ["StationConfig", "SensorConfig", "GapConfig", "ProtocolConfig", "PerceptionConfig",
+           "SimConfig", "load_station_config", "parse_station_config"]
+
+POLICIES = ("active", "stationary", "random")
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """The optical front end: where frames come from and what the sensor is."""
+
+    source: str = "synthetic"
+    pins: int = 331
+    pad_diameter_mm: float = 40.0
+    frame_rate: float = 20.0
+    calibration: Path | None = None
+    selected_pins: int = 40
+    min_separation_mm: float = 4.0
+
+
+@dataclass(frozen=True)
+class GapConfig:
+    """One gap to inspect: position in the work frame (mm), nominal width and tolerance (mm)."""
+
+    name: str
+    x: float
+    y: float
+    nominal_width: float
+    tolerance: float
+    true_width: float | None = None
+
+
+@dataclass(frozen=True)
+class ProtocolConfig:
+    """The tap protocol (paper 002 III-A.2: 0-5.5 mm at 0.05 mm steps, 40 samples per tap)."""
+
+    depth_min: float = 0.0
+    depth_max: float = 5.5
+    depth_step: float = 0.05
+    reference_height_mm: float = 1.5
+    samples: int = 40
+    lateral_jitter_mm: float = 0.0
+    repeats: int = 1
+    seed: int = 0
+
+    @property
+    def depths(self) -> list[float]:
+        """The protocol's tap depths, mm, from ``depth_min`` to ``depth_max`` inclusive."""
+        n = int(math.floor((self.depth_max - self.depth_min) / self.depth_step + 1e-6)) + 1
+        return [round(self.depth_min + k * self.depth_step, 9) for k in range(n)]
+
+    def arm_depth_mm(self, depth: float) -> float:
+        """The arm's tap depth below the surface reference (``z = -value``) for protocol depth ``depth``."""
+        return float(depth) - self.reference_height_mm
+
+
+@dataclass(frozen=True)
+class PerceptionConfig:
+    """The classifier and its decision settings."""
+
+    model: Path | None = None
+    decision_threshold: float = 0.9
+    fixation_depth: float | None = None
+    policy: str = "active"
+    max_taps: int = 20
+    locations: int = 11
+    bins: int = 100
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """The synthetic TacTip of the simulated station."""
+
+    noise_sigma: float = 4.0
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class StationConfig:
+    """A whole station, as loaded from its TOML file."""
+
+    name: str
+    results: Path
+    data_dir: Path
+    sensor: SensorConfig
+    arm: Any  # arm.config.ArmConfig
+    gaps: tuple[GapConfig, ...]
+    protocol: ProtocolConfig
+    perception: PerceptionConfig
+    sim: SimConfig
+    path: Path | None = None
+    raw: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def simulated(self) -> bool:
+        """True when the arm backend is the simulation (the synthetic sensor is then used too)."""
+        return getattr(self.arm, "backend", None) == "sim"
+
+    def gap(self, name: str) -> GapConfig:
+        """The gap called ``name``; ConfigError listing the names when there is none."""
+        for g in self.gaps:
+            if g.name == name:
+                return g
+        raise ConfigError(f"no gap named {name!r}; gaps: {', '.join(g.name for g in self.gaps)}")
+
+
+def load_station_config(path: str | Path) -> StationConfig:
+    """Read and validate a station TOML file; `ConfigError` names the file and the bad key."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise ConfigError(f"station configuration not found: {path}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    try:
+        return parse_station_config(data, base_dir=path.parent, path=path)
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
+
+
+def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path | None = None) -> StationConfig:
+    """Validate a parsed TOML mapping into a `StationConfig` (relative paths against ``base_dir``)."""
+    from arm.config import arm_config_from_table
+    from arm.errors import ArmConfigError
+
+    known = {"station", "sensor", "arm", "gaps", "protocol", "perception", "sim"}
+    _no_unknown(data, known, "")
+    station = _table(data, "station")
+    _no_unknown(station, {"name", "results", "data_dir"}, "station")
+    sensor = _section(data, "sensor", SensorConfig, base_dir, paths={"calibration"})
+    protocol = _section(data, "protocol", ProtocolConfig, base_dir)
+    perception = _section(data, "perception", PerceptionConfig, base_dir, paths={"model"})
+    sim = _section(data, "sim", SimConfig, base_dir)
+    try:
+        arm = arm_config_from_table(_table(data, "arm", required=True))
+    except ArmConfigError as exc:
+        raise ConfigError(str(exc)) from None
+
+    _check(sensor.pins > 0, "sensor.pins", "must be positive")
+    _check(sensor.pad_diameter_mm > 0, "sensor.pad_diameter_mm", "must be positive")
+    _check(sensor.frame_rate > 0, "sensor.frame_rate", "must be positive")
+    _check(0 < sensor.selected_pins <= sensor.pins, "sensor.selected_pins", f"must be in 1..{sensor.pins}")
+    _check(protocol.depth_step > 0, "protocol.depth_step", "must be positive")
+    _check(protocol.depth_max > protocol.depth_min >= 0, "protocol.depth_max",
+           "must exceed protocol.depth_min (both >= 0)")
+    _check(protocol.samples >= 2, "protocol.samples", "must be at least 2")
+    _check(protocol.repeats >= 1, "protocol.repeats", "must be at least 1")
+    _check(protocol.lateral_jitter_mm >= 0, "protocol.lateral_jitter_mm", "must be >= 0")
+    _check(0 < perception.decision_threshold <= 1, "perception.decision_threshold", "must be in (0, 1]")
+    _check(perception.policy in POLICIES, "perception.policy", f"must be one of {', '.join(POLICIES)}")
+    _check(perception.max_taps >= 1, "perception.max_taps", "must be at least 1")
+    _check(perception.locations >= 1, "perception.locations", "must be at least 1")
+    _check(perception.bins >= 2, "perception.bins", "must be at least 2")
+    if perception.fixation_depth is not None:
+        _check(protocol.depth_min <= perception.fixation_depth <= protocol.depth_max,
+               "perception.fixation_depth", f"must lie in the protocol's depth range "
+               f"{protocol.depth_min}..{protocol.depth_max} mm")
+    _check(sim.noise_sigma >= 0, "sim.noise_sigma", "must be >= 0")
+
+    gaps = tuple(_gap(g, k) for k, g in enumerate(_gap_list(data)))
+    names = [g.name for g in gaps]
+    dupes = sorted({n for n in names if names.count(n) > 1})
+    _check(not dupes, "gaps", f"duplicate gap names: {', '.join(dupes)}")
+    deepest = protocol.arm_depth_mm(protocol.depth_max)
+    _check(deepest <= arm.max_tap_depth_mm, "protocol.depth_max",
+           f"{protocol.depth_max} mm taps {deepest:g} mm below the surface, deeper than "
+           f"arm.max_tap_depth {arm.max_tap_depth_mm:g} mm")
+    _check(protocol.arm_depth_mm(protocol.depth_min) > -arm.tap.approach_height_mm, "protocol.depth_min",
+           "puts the bottom of the tap above arm.tap.approach_height")
+
+    data_dir = _path(station.get("data_dir", "station_data"), base_dir)
+    return StationConfig(
+        name=str(station.get("name", path.stem if path else "station")),
+        results=_path(station.get("results", data_dir / "results.sqlite"), base_dir),
+        data_dir=data_dir, sensor=sensor, arm=arm, gaps=gaps, protocol=protocol,
+        perception=perception, sim=sim, path=path, raw=data,
+    )
+
+
+# -- helpers ------------------------------------------------------------------------------------
+
+def _check(ok: bool, key: str, message: str) -> None:
+    if not ok:
+        raise ConfigError(f"{key} {message}")
+
+
+def _no_unknown(table: dict, known: set[str], prefix: str) -> None:
+    unknown = sorted(set(table) - known)
+    if unknown:
+        where = f"[{prefix}] " if prefix else ""
+        raise ConfigError(f"{where}unknown key {', '.join(unknown)}; expected one of {', '.join(sorted(known))}")
+
+
+def _table(data: dict, name: str, required: bool = False) -> dict:
+    if name not in data:
+        if required:
+            raise ConfigError(f"missing table [{name}]")
+        return {}
+    if not isinstance(data[name], dict):
+        raise ConfigError(f"{name} must be a table [{name}]")
+    return data[name]
+
+
+def _path(value, base_dir: Path) -> Path:
+    p = Path(value).expanduser()
+    return p if p.is_absolute() else (base_dir / p)
+
+
+def _section(data: dict, name: str, cls, base_dir: Path, paths: set[str] = frozenset()):
+    """Fill dataclass ``cls`` from table ``name``, type-checking each key against its default."""
+    table = _table(data, name)
+    fields = cls.__dataclass_fields__
+    _no_unknown(table, set(fields), name)
+    values = {}
+    for key, value in table.items():
+        default = fields[key].default
+        if key in paths:
+            if not isinstance(value, str):
+                raise ConfigError(f"{name}.{key} must be a path string")
+            values[key] = _path(value, base_dir)
+        elif isinstance(default, bool):
+            if not isinstance(value, bool):
+                raise ConfigError(f"{name}.{key} must be true or false")
+            values[key] = value
+        elif isinstance(default, int) and not isinstance(default, bool):
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise ConfigError(f"{name}.{key} must be a whole number, got {value!r}")
+            values[key] = value
+        elif isinstance(default, float) or default is None:
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"{name}.{key} must be a number, got {value!r}")
+            values[key] = float(value)
+        else:
+            values[key] = str(value) if not isinstance(value, (list, dict)) else value
+    return cls(**values)
+
+
+def _gap_list(data: dict) -> list:
+    gaps = data.get("gaps")
+    if not gaps:
+        raise ConfigError("no [[gaps]] to inspect: add at least one [[gaps]] table")
+    if not isinstance(gaps, list) or not all(isinstance(g, dict) for g in gaps):
+        raise ConfigError("gaps must be an array of tables [[gaps]]")
+    return gaps
+
+
+def _gap(table: dict, k: int) -> GapConfig:
+    where = f"gaps[{k}]"
+    _no_unknown(table, set(GapConfig.__dataclass_fields__), where)
+    for key in ("x", "y", "nominal_width", "tolerance"):
+        if key not in table:
+            raise ConfigError(f"{where}.{key} is missing")
+        value = table[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ConfigError(f"{where}.{key} must be a number, got {value!r}")
+    _check(table["nominal_width"] > 0, f"{where}.nominal_width", "must be positive (mm)")
+    _check(table["tolerance"] >= 0, f"{where}.tolerance", "must be >= 0 (mm)")
+    true_width = table.get("true_width")
+    if true_width is not None:
+        _check(not isinstance(true_width, bool) and isinstance(true_width, (int, float)) and true_width > 0,
+               f"{where}.true_width", "must be a positive number (mm)")
+    return GapConfig(name=str(table.get("name", f"gap{k + 1:02d}")), x=float(table["x"]), y=float(table["y"]),
+                     nominal_width=float(table["nominal_width"]), tolerance=float(table["tolerance"]),
+                     true_width=None if true_width is None else float(true_width))
