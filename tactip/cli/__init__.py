@@ -22,6 +22,9 @@ COMMANDS: dict[str, str] = {
     "train": "tactip.cli.train",
     "validate": "tactip.cli.validate",
     "simulate": "tactip.cli.simulate",
+    "results": "tactip.cli.results",
+    "detect": "tactip.cli.detect",
+    "replay": "tactip.cli.replay",
 }
 
 

@@ -1,0 +1,82 @@
+"""List and export stored inspection results.
+
+The station writes every inspection (and every tap, with its beliefs) to an SQLite database as it
+happens. Name the database with --config (the station's [station] results) or --db.
+
+Examples:
+  tactip results list --config samples/station_sim.toml
+  tactip results list --db station_data/sim/results.sqlite --limit 20
+  tactip results export --config samples/station_sim.toml --csv --out results.csv
+  tactip results export --db results.sqlite --json
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+HELP = "list or export stored inspection results (SQLite)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the parser for `tactip results`."""
+    sub = parser.add_subparsers(dest="action", metavar="ACTION")
+    sub.required = True
+    for name, text in (("list", "print the inspections as a table"),
+                       ("export", "write the inspections as CSV or JSON")):
+        p = sub.add_parser(name, help=text, description=text)
+        where = p.add_mutually_exclusive_group(required=True)
+        where.add_argument("--config", type=Path, help="station TOML file (its [station] results database)")
+        where.add_argument("--db", type=Path, help="results database file")
+        if name == "list":
+            p.add_argument("--limit", type=int, default=None, help="show only the newest N inspections")
+        else:
+            fmt = p.add_mutually_exclusive_group(required=True)
+            fmt.add_argument("--csv", action="store_true", help="comma-separated values with a header")
+            fmt.add_argument("--json", action="store_true", help="a JSON list of objects")
+            p.add_argument("--out", type=Path, default=None, help="output file (default: standard output)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run `tactip results list|export`."""
+    from tactip.results import ResultsError, ResultsStore
+
+    path = args.db
+    if args.config is not None:
+        from tactip.config import load_station_config
+
+        path = load_station_config(args.config).results
+    if not Path(path).exists():
+        raise ResultsError(f"no results database at {path} (nothing inspected yet?)")
+    with ResultsStore(path) as store:
+        if args.action == "list":
+            print(format_table(store.inspections(limit=args.limit)))
+            return 0
+        text = store.export_csv() if args.csv else store.export_json() + "\n"
+    if args.out is None:
+        sys.stdout.write(text)
+    else:
+        args.out.write_text(text)
+        print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+def format_table(rows) -> str:
+    """Inspections as a fixed-width text table (mm, belief 0-1)."""
+    head = f"{'id':>4}  {'gap':<12} {'nominal':>7} {'estimate':>8} {'belief':>6} {'taps':>4}  {'result':<9} {'policy':<10} started"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        if r.status == "aborted":
+            result = "ABORTED"
+        elif r.status == "running":
+            result = "running"
+        else:
+            result = {True: "pass", False: "FAIL", None: "undecided"}[r.passed]
+        est = "" if r.estimated_width is None else f"{r.estimated_width:.2f}"
+        belief = "" if r.belief is None else f"{r.belief:.3f}"
+        lines.append(f"{r.id:>4}  {r.gap:<12} {r.nominal_width:>7.2f} {est:>8} {belief:>6} {r.taps:>4}  "
+                     f"{result:<9} {r.policy:<10} {r.started_at[:19].replace('T', ' ')}")
+    if len(lines) == 2:
+        lines.append("(no inspections)")
+    return "\n".join(lines)
