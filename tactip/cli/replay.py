@@ -1,0 +1,85 @@
+"""Replay a recorded TacTip video: track every pin, find the taps, write HDF5.
+
+The rest frame (off contact) is the first frame unless --rest-frame says otherwise; pins are
+detected there, tracked through the video, and their displacements from it are integrated. Taps
+are found from the displacements, 40 pins at least 4 mm apart are selected, and each tap becomes
+a 40-sample x 80-dimension feature array (x then y displacements of the selected pins).
+
+The HDF5 file holds positions and displacements (frames x pins x 2, NaN where a pin was lost),
+time stamps, tap bounds, the selected pins, the tap features and the parameters used. It is
+written only when the replay succeeds.
+
+Example:
+  tactip replay samples/synthetic_tap.mp4 --out out/replay.h5 --annotate out/annotated.mp4
+"""
+
+from __future__ import annotations
+
+import argparse
+
+HELP = "track the pins of a recorded video, find the taps and write positions and tap features to HDF5"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments of ``tactip replay``."""
+    parser.add_argument("video", metavar="VIDEO", help="video file (or folder of frames) to replay")
+    parser.add_argument("--out", required=True, metavar="RESULT.h5", help="HDF5 file to write")
+    parser.add_argument("--annotate", metavar="OUT.mp4", help="also write a video with pins, displacement "
+                        "arrows (x3) and the tap state drawn on")
+    parser.add_argument("--expected-pins", type=_positive_int, metavar="N",
+                        help="auto-tune detection to N pins on the rest frame first")
+    parser.add_argument("--samples", type=_positive_int, default=40, metavar="N",
+                        help="samples per tap feature array (default: 40)")
+    parser.add_argument("--pins", type=_positive_int, default=40, metavar="N",
+                        help="tactile pins to select (default: 40)")
+    parser.add_argument("--min-separation-mm", type=_non_negative_float, default=4.0, metavar="MM",
+                        help="minimum distance between selected pins, mm (default: 4)")
+    parser.add_argument("--pad-diameter-mm", type=_positive_float, default=40.0, metavar="MM",
+                        help="pad diameter, mm; the scale is this over the detected disc diameter (default: 40)")
+    parser.add_argument("--rest-frame", type=_non_negative_int, default=0, metavar="N",
+                        help="index of the rest frame, off contact (default: 0, the first frame)")
+    parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
+def _non_negative_int(text: str) -> int:
+    value = int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be a non-negative integer, got {text}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return value
+
+
+def _non_negative_float(text: str) -> float:
+    value = float(text)
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
+
+def run(args: argparse.Namespace) -> int:
+    """Replay the video (`tactip.replay.replay_video`) and print what was found."""
+    from pins import DetectionParams
+    from tactip.replay import replay_video
+
+    result = replay_video(args.video, args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,
+                          params=DetectionParams(dark_pins=args.dark_pins), n_samples=args.samples,
+                          n_pins=args.pins, min_separation_mm=args.min_separation_mm,
+                          pad_diameter_mm=args.pad_diameter_mm, rest_frame=args.rest_frame,
+                          progress=not args.quiet)
+    if not args.quiet:
+        print(result.summary())
+    return 0
