@@ -9,9 +9,10 @@ The pipeline, all inside the sensor disc (`pins.disc`):
    its `block_size_px` neighbourhood (the mean follows the illumination gradient and glare);
 4. connected components, kept when their area, bounding-box fill and aspect look like a pin tip
    (LED glare and merged blobs are too large or too elongated);
-5. sub-pixel centres: the intensity-weighted centroid of each component, weighting each pixel by
-   its grey level above the component's local mean (one value per component), summed by label
-   with `numpy.bincount`. A symmetric blob gives its geometric centre whatever the threshold cut.
+5. sub-pixel centres: the intensity-weighted centroid of each component grown by one pixel,
+   weighting each pixel by its grey level above the component's local mean (one value per
+   component), summed by label with `numpy.bincount`. A symmetric blob gives its geometric centre
+   whatever the threshold cut.
 
 Dark markers on a light membrane (`dark_pins=True`) are handled by inverting the grey image.
 """
@@ -32,6 +33,7 @@ __all__ = ["DetectionParams", "detect_pins", "detect_blobs", "Blobs"]
 
 # Smallest eroded core that counts as a pin when splitting touching pins, px.
 _MIN_CORE_PX = 4
+_GROW = np.ones((3, 3), np.uint8)
 
 @dataclass(frozen=True)
 class DetectionParams:
@@ -205,17 +207,26 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blob
     block = (params.block_size_px, params.block_size_px)
     mean = cv2.boxFilter(smooth, cv2.CV_32F, block, borderType=cv2.BORDER_CONSTANT)
     mean *= _inverse_coverage(disc, grey.shape, params.block_size_px)
-    binary = (smooth > mean + np.float32(params.offset)).view(np.uint8)
+    foreground = smooth > mean + np.float32(params.offset)
+    binary = foreground.view(np.uint8)
     count, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(binary, 8, cv2.CV_32S, cv2.CCL_GRANA)
     left, top, box_w, box_h, area = (column.astype(np.int64) for column in stats.T)
-    index = np.flatnonzero(labels)
-    lab = labels.ravel()[index]
+    # Each component grown by one pixel into the background (not into a neighbour): the threshold
+    # cuts a pin's soft edge unevenly where the neighbourhood mean slopes, and the centroid must
+    # see all of the pin above its background.
+    flat_labels = labels.ravel()
+    grown = cv2.dilate(labels.astype(np.float32), _GROW).ravel()
+    index = np.flatnonzero(grown > 0)
+    lab = flat_labels[index]
+    lab = np.where(lab > 0, lab, grown[index].astype(np.int32))
     ys, xs = np.divmod(index, width)
     # Background of each blob: the neighbourhood mean at the middle of its bounding box, constant
     # per blob so that a sloping background does not tilt the weights.
     middle_x, middle_y = left + box_w // 2, top + box_h // 2
-    if params.split_radius_px > 0:
-        split = _split_touching(binary, smooth, mean, labels, count, index, lab, xs, ys, params.split_radius_px)
+    suspect = _odd_shaped(area, box_w, box_h, params)
+    if params.split_radius_px > 0 and suspect.any():
+        split = _split_touching(binary, smooth, mean, labels, count, suspect, index, lab, xs, ys,
+                                params.split_radius_px)
         if split is not None:
             lab, count, (left, top, box_w, box_h, area, middle_x, middle_y) = split[0], split[1], (
                 np.concatenate([old, new]) for old, new in zip((left, top, box_w, box_h, area, middle_x, middle_y),
@@ -241,15 +252,28 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blob
     return Blobs(centres=centres[order], areas=area[keep][order], fills=fill[keep][order], candidates=count - 1)
 
 
+def _odd_shaped(area: np.ndarray, box_w: np.ndarray, box_h: np.ndarray, params: DetectionParams) -> np.ndarray:
+    """Components that may be several touching pins: large, elongated or poorly filled ones."""
+    plausible = (area >= params.min_area_px) & (area <= params.max_area_px)
+    plausible[0] = False
+    typical = np.median(area[plausible]) if plausible.any() else params.max_area_px / 2.0
+    fill = area / (box_w * box_h)
+    aspect = np.maximum(box_w, box_h) / np.minimum(box_w, box_h)
+    suspect = (area >= 2 * params.min_area_px) & ((area > 1.5 * typical) | (aspect > 1.6) | (fill < 0.65))
+    suspect[0] = False
+    return suspect
+
+
 def _split_touching(binary: np.ndarray, smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, count: int,
-                    index: np.ndarray, lab: np.ndarray, xs: np.ndarray, ys: np.ndarray, radius_px: float):
+                    suspect: np.ndarray, index: np.ndarray, lab: np.ndarray, xs: np.ndarray, ys: np.ndarray,
+                    radius_px: float):
     """Split components made of several touching pins.
 
     The loose threshold makes blobs fat and the neck between two touching pins wide, so the cores
     are cut at half height first: pixels at least halfway from the neighbourhood mean to the local
     maximum (over about two pin diameters). Eroding that by a disc of `radius_px` removes the
-    neck but leaves one core in each convex pin. A component with several cores gives each of its
-    pixels to the core with the nearest core pixel. Returns the new per-pixel labels, the new
+    neck but leaves one core in each convex pin. An odd-shaped component (`suspect`) with several
+    cores gives each of its pixels to the core with the nearest core pixel. Returns the new per-pixel labels, the new
     label count and the stats (left, top, width, height, area, middle x, middle y) of the new
     labels (appended after the old ones, whose split components become empty), or None.
     """
@@ -273,8 +297,7 @@ def _split_touching(binary: np.ndarray, smooth: np.ndarray, mean: np.ndarray, la
     # Crumbs of a bridge are not pins: cores need a few pixels to count.
     component_of_core[core_size < _MIN_CORE_PX] = 0
     cores_per_component = np.bincount(component_of_core[1:], minlength=count)
-    multi = cores_per_component >= 2
-    multi[0] = False
+    multi = (cores_per_component >= 2) & suspect
     if not multi.any():
         return None
     core_x, core_y = xs[core_pixels], ys[core_pixels]
