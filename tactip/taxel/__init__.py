@@ -4,9 +4,11 @@
 - `tactip.taxel.sim`: the simulated sensor tapping along its location range (raw 8-bit stream);
 - `tactip.taxel.preprocess`: high-pass filter, normalisation, tap segmentation and resampling;
 - `tactip.taxel.sources`: recorded (CSV) and live (UDP) readings, and taps from any source;
-- `tactip.taxel.collect`: simulated training and test datasets (``tactip-dataset/1``).
+- `tactip.taxel.collect`: simulated training and test datasets (``tactip-dataset/1``);
+- `tactip.taxel.acuity`: localisation error against class count, passive and active (paper 000 Tables II-III).
 """
 
+from .acuity import ACUITY_THRESHOLDS, TABLE2_CLASSES, TABLE3_CLASSES, AcuityRow, acuity_table
 from .collect import (DEFAULT_TAPS, TaxelDatasetPaths, simulate_taxel_dataset, simulate_taxel_datasets,
                       write_taxel_test_stream)
 from .preprocess import (BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, TapSegmenter, TapSegments,
@@ -25,4 +27,5 @@ __all__ = [
     "encode_reading", "decode_reading", "write_taxel_csv", "read_taps",
     "DEFAULT_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
     "write_taxel_test_stream",
+    "TABLE2_CLASSES", "TABLE3_CLASSES", "ACUITY_THRESHOLDS", "AcuityRow", "acuity_table",
 ]

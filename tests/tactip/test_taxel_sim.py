@@ -84,10 +84,11 @@ def test_rest_noise_is_white_plus_common_mode():
     sim = TaxelSimulator("fingertip", seed=0, drift_counts=0.0)
     readings = sim.stream(np.zeros(200), seed=5).readings.astype(float)
     residual = readings - readings.mean(axis=0)
-    expected = np.sqrt(0.6**2 + 0.5**2 + 1 / 12)             # white, common, rounding
+    white, common = sim.white_noise_counts, sim.common_noise_counts
+    expected = np.sqrt(white**2 + common**2 + 1 / 12)        # white, common, rounding
     assert residual.std() == pytest.approx(expected, rel=0.1)
     correlation = np.corrcoef(residual.T)[np.triu_indices(12, 1)].mean()
-    assert correlation == pytest.approx(0.5**2 / expected**2, abs=0.08)
+    assert correlation == pytest.approx(common**2 / expected**2, abs=0.06)
 
 
 def test_taps_peak_where_the_receptive_fields_say():
