@@ -214,19 +214,18 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blob
     # Each component grown by one pixel into the background (not into a neighbour): the threshold
     # cuts a pin's soft edge unevenly where the neighbourhood mean slopes, and the centroid must
     # see all of the pin above its background.
-    flat_labels = labels.ravel()
+    # Distinct 8-connected components are at least two pixels apart, so the dilation keeps every
+    # component pixel's own label and gives each background pixel next to a component its label.
     grown = cv2.dilate(labels.astype(np.float32), _GROW).ravel()
     index = np.flatnonzero(grown > 0)
-    lab = flat_labels[index]
-    lab = np.where(lab > 0, lab, grown[index].astype(np.int32))
+    lab = grown[index].astype(np.intp)
     ys, xs = np.divmod(index, width)
     # Background of each blob: the neighbourhood mean at the middle of its bounding box, constant
     # per blob so that a sloping background does not tilt the weights.
     middle_x, middle_y = left + box_w // 2, top + box_h // 2
     suspect = _odd_shaped(area, box_w, box_h, params)
     if params.split_radius_px > 0 and suspect.any():
-        split = _split_touching(binary, smooth, mean, labels, count, suspect, index, lab, xs, ys,
-                                params.split_radius_px)
+        split = _split_touching(smooth, mean, labels, count, suspect, index, lab, xs, ys, params.split_radius_px)
         if split is not None:
             lab, count, (left, top, box_w, box_h, area, middle_x, middle_y) = split[0], split[1], (
                 np.concatenate([old, new]) for old, new in zip((left, top, box_w, box_h, area, middle_x, middle_y),
@@ -253,87 +252,97 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blob
 
 
 def _odd_shaped(area: np.ndarray, box_w: np.ndarray, box_h: np.ndarray, params: DetectionParams) -> np.ndarray:
-    """Components that may be several touching pins: large, elongated or poorly filled ones."""
+    """Components that may be several touching pins: large or poorly filled ones."""
     plausible = (area >= params.min_area_px) & (area <= params.max_area_px)
     plausible[0] = False
-    typical = np.median(area[plausible]) if plausible.any() else params.max_area_px / 2.0
+    if plausible.sum() < 10:  # too few to know a pin's area: any component may be a pair
+        suspect = area >= 2 * params.min_area_px
+        suspect[0] = False
+        return suspect
+    typical = np.median(area[plausible])
+    # Two pins side by side cover about twice a pin's area; on a diagonal they also fill their
+    # box poorly. Single foreshortened pins near the rim are smaller, and fill theirs well.
     fill = area / (box_w * box_h)
-    aspect = np.maximum(box_w, box_h) / np.minimum(box_w, box_h)
-    suspect = (area >= 2 * params.min_area_px) & ((area > 1.5 * typical) | (aspect > 1.6) | (fill < 0.65))
+    suspect = (area >= 2 * params.min_area_px) & ((area > 1.4 * typical) | (fill < 0.55))
     suspect[0] = False
     return suspect
 
 
-def _split_touching(binary: np.ndarray, smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, count: int,
-                    suspect: np.ndarray, index: np.ndarray, lab: np.ndarray, xs: np.ndarray, ys: np.ndarray,
-                    radius_px: float):
-    """Split components made of several touching pins.
+def _split_touching(smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, count: int, suspect: np.ndarray,
+                    index: np.ndarray, lab: np.ndarray, xs: np.ndarray, ys: np.ndarray, radius_px: float):
+    """Split odd-shaped components (`suspect`) made of several touching pins.
 
     The loose threshold makes blobs fat and the neck between two touching pins wide, so the cores
-    are cut at half height first: pixels at least halfway from the neighbourhood mean to the local
-    maximum (over about two pin diameters). Eroding that by a disc of `radius_px` removes the
-    neck but leaves one core in each convex pin. An odd-shaped component (`suspect`) with several
-    cores gives each of its pixels to the core with the nearest core pixel. Returns the new per-pixel labels, the new
-    label count and the stats (left, top, width, height, area, middle x, middle y) of the new
-    labels (appended after the old ones, whose split components become empty), or None.
+    are cut at half height first: pixels at least halfway from the neighbourhood mean to the
+    component's peak. Eroding that by a disc of `radius_px` removes the neck but leaves one core
+    in each convex pin. A component with several cores gives each of its pixels to the core with
+    the nearest core pixel (a Voronoi partition by cores, which cuts along the neck). Works on the
+    suspect components' pixels only. Returns the new per-pixel labels, the new label count and
+    the stats (left, top, width, height, area, middle x, middle y) of the new labels (appended
+    after the old ones, whose split components become empty), or None.
     """
+    pixels = np.flatnonzero(suspect[lab])
+    component = lab[pixels]
+    flat = index[pixels]
+    level = smooth.ravel()[flat].astype(np.float32)
+    peak = np.zeros(count, np.float32)
+    np.maximum.at(peak, component, level)
+    # Half height, inside the thresholded component (not its one-pixel growth).
+    core = (2.0 * level >= mean.ravel()[flat] + peak[component]) & (labels.ravel()[flat] > 0)
+    px, py = xs[pixels], ys[pixels]
+    pad = int(np.ceil(radius_px)) + 1
+    x0, y0 = px.min() - pad, py.min() - pad
+    mask = np.zeros((py.max() - y0 + pad + 1, px.max() - x0 + pad + 1), np.uint8)
+    mask[py[core] - y0, px[core] - x0] = 255
     size = 2 * int(np.ceil(radius_px)) + 1
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size))
-    reach = 2 * int(np.ceil(5.0 * radius_px)) + 1
-    peak = cv2.dilate(smooth, cv2.getStructuringElement(cv2.MORPH_RECT, (reach, reach)))
-    half_height = cv2.compare(smooth.astype(np.float32) * 2.0, mean + peak, cv2.CMP_GE)
-    core_mask = cv2.erode(cv2.bitwise_and(half_height, binary * np.uint8(255)), kernel)
+    eroded = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size)))
     # 4-connected cores: a diagonal one-pixel bridge left by the erosion does not join two pins.
-    cores, core_labels = cv2.connectedComponents(core_mask, connectivity=4, ltype=cv2.CV_32S)
+    cores, core_labels = cv2.connectedComponents(eroded, connectivity=4, ltype=cv2.CV_32S)
     if cores <= 2:
         return None
-    # Cores lie inside components: look for their pixels among the component pixels only.
-    in_core = core_labels.ravel()[index]
+    in_core = core_labels[py - y0, px - x0]
     core_pixels = np.flatnonzero(in_core)
     core_of_pixel = in_core[core_pixels]
     core_size = np.bincount(core_of_pixel, minlength=cores)
     component_of_core = np.zeros(cores, dtype=np.int64)
-    component_of_core[core_of_pixel] = lab[core_pixels]
+    component_of_core[core_of_pixel] = component[core_pixels]
     # Crumbs of a bridge are not pins: cores need a few pixels to count.
     component_of_core[core_size < _MIN_CORE_PX] = 0
-    cores_per_component = np.bincount(component_of_core[1:], minlength=count)
-    multi = (cores_per_component >= 2) & suspect
+    multi = np.bincount(component_of_core[1:], minlength=count) >= 2
+    multi[0] = False
     if not multi.any():
         return None
-    core_x, core_y = xs[core_pixels], ys[core_pixels]
     split_cores = np.flatnonzero(multi[component_of_core])
-    split_cores = split_cores[(split_cores > 0) & (core_size[split_cores] >= _MIN_CORE_PX)]
     n_new = len(split_cores)
     new_label = np.full(cores, -1, dtype=np.int64)
     new_label[split_cores] = np.arange(n_new)
-    # Each pixel of a split component goes to the core with the nearest core pixel: a Voronoi
-    # partition by cores, which cuts along the neck between two pins.
     seed = np.flatnonzero(new_label[core_of_pixel] >= 0)
-    pixels = np.flatnonzero(multi[lab])
-    px, py = xs[pixels], ys[pixels]
-    _, nearest_seed = cKDTree(np.column_stack([core_x[seed], core_y[seed]])).query(np.column_stack([px, py]))
+    members = np.flatnonzero(multi[component])
+    mx, my = px[members], py[members]
+    seed_xy = np.column_stack([px[core_pixels[seed]], py[core_pixels[seed]]])
+    _, nearest_seed = cKDTree(seed_xy).query(np.column_stack([mx, my]))
     nearest_core = core_of_pixel[seed[nearest_seed]]
     # A pixel nearer to another component's core than to one of its own is left out (label 0).
-    own = component_of_core[nearest_core] == lab[pixels]
+    own = component_of_core[nearest_core] == component[members]
     nearest = new_label[nearest_core]
     lab = lab.copy()
-    lab[pixels] = np.where(own, count + nearest, 0)
-    pixels, px, py, nearest = pixels[own], px[own], py[own], nearest[own]
+    lab[pixels[members]] = np.where(own, count + nearest, 0)
+    mx, my, nearest = mx[own], my[own], nearest[own]
     area = np.bincount(nearest, minlength=n_new)
     left = np.full(n_new, np.iinfo(np.int64).max)
     top = left.copy()
     right = np.full(n_new, -1)
     bottom = right.copy()
-    np.minimum.at(left, nearest, px)
-    np.minimum.at(top, nearest, py)
-    np.maximum.at(right, nearest, px)
-    np.maximum.at(bottom, nearest, py)
+    np.minimum.at(left, nearest, mx)
+    np.minimum.at(top, nearest, my)
+    np.maximum.at(right, nearest, mx)
+    np.maximum.at(bottom, nearest, my)
     empty = area == 0
     left[empty] = top[empty] = right[empty] = bottom[empty] = 0
-    core_y_mean = np.bincount(core_of_pixel, weights=core_y, minlength=cores) / np.maximum(core_size, 1)
-    core_x_mean = np.bincount(core_of_pixel, weights=core_x, minlength=cores) / np.maximum(core_size, 1)
-    middle_x = np.rint(core_x_mean[split_cores]).astype(np.int64)
-    middle_y = np.rint(core_y_mean[split_cores]).astype(np.int64)
+    cx = np.bincount(core_of_pixel, weights=px[core_pixels], minlength=cores) / np.maximum(core_size, 1)
+    cy = np.bincount(core_of_pixel, weights=py[core_pixels], minlength=cores) / np.maximum(core_size, 1)
+    middle_x = np.rint(cx[split_cores]).astype(np.int64)
+    middle_y = np.rint(cy[split_cores]).astype(np.int64)
     stats = (left, top, right - left + 1, bottom - top + 1, area, middle_x, middle_y)
     return lab, count + n_new, stats
 

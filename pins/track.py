@@ -189,7 +189,8 @@ class PinTracker:
     Parameters
     ----------
     lk : LKParams, optional
-        Lucas-Kanade settings.
+        Lucas-Kanade settings; by default a window of about 0.6 pin spacings (measured at
+        `start`) and one pyramid level.
     detection : DetectionParams, optional
         Blob detection used for refinement and recovery.
     refine : bool
@@ -219,7 +220,8 @@ class PinTracker:
             raise ValueError(f"gate_fraction must be in (0, 0.5), got {gate_fraction}")
         if int(neighbours) != neighbours or neighbours < 1:
             raise ValueError(f"neighbours must be a positive integer, got {neighbours}")
-        self.lk = lk or LKParams()
+        self.lk = lk
+        self._auto_lk = lk is None
         self.detection = detection or DetectionParams()
         self.refine = bool(refine)
         self.gate_fraction = float(gate_fraction)
@@ -281,6 +283,9 @@ class PinTracker:
         tree = cKDTree(pins)
         distance, index = tree.query(pins, k=min(self.neighbours, len(pins) - 1) + 1)
         self.spacing_px = float(np.median(distance[:, 1]))
+        if self._auto_lk:
+            # A window a little wider than a pin and narrower than the spacing sees one pin.
+            self.lk = LKParams(window_px=int(np.clip(2 * round(0.3 * self.spacing_px) + 1, 7, 31)))
         self._neighbour_index = index[:, 1:]
         self.rest_positions = pins.copy()
         self.positions = pins.copy()

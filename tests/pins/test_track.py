@@ -65,10 +65,11 @@ def test_nan_points_stay_nan_and_shapes_checked():
 
 def test_tracker_without_refinement_equals_the_function():
     frames = _tap_frames(331)
-    tracker = PinTracker(refine=False)
+    lk = LKParams(window_px=11, levels=1)
+    tracker = PinTracker(lk=lk, refine=False)
     points = tracker.start(frames[0].image)
     for previous, current in zip(frames[:3], frames[1:4]):
-        expected, ok = track_pins(previous.image, current.image, points)
+        expected, ok = track_pins(previous.image, current.image, points, params=lk)
         got = tracker.update(current.image)
         # The tracker works on a crop and starts LK from a constant-velocity guess: same answer.
         assert np.allclose(got[ok], expected[ok], atol=0.02)
