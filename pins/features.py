@@ -204,11 +204,11 @@ class TapRecorder:
 
     Examples
     --------
-    >>> recorder = TapRecorder(selected, n_samples=40)            # doctest: +SKIP
-    >>> recorder.start()
-    >>> for frame in tap_frames:
-    ...     recorder.add(tracker.update(frame) - rest, timestamp_s=t)
-    >>> features = recorder.stop()                                # (40, 2 P)
+    >>> recorder = TapRecorder(selected, n_samples=40)              # doctest: +SKIP
+    >>> recorder.start()                                            # doctest: +SKIP
+    >>> for frame in tap_frames:                                    # doctest: +SKIP
+    ...     recorder.add(tracker.update(frame.image) - rest, timestamp_s=frame.timestamp_s)
+    >>> features = recorder.stop()                                  # doctest: +SKIP
     """
 
     def __init__(self, pins: np.ndarray, *, n_samples: int = 40) -> None:

@@ -17,11 +17,15 @@ lands within `fb_threshold_px` of where it started (forward-backward check). A p
 
 Gates below half the pin spacing and one-to-one assignments keep identities: a pin can only be
 given a blob that is nearer to its prediction than any neighbour could be.
+
+Speed: the tracker runs LK on the disc's crop only, starting each pin from a constant-velocity
+guess so that one pyramid level suffices. OpenCV's Python binding cannot take the pyramids of
+`cv2.buildOpticalFlowPyramid` (opencv/opencv#4777), so they are not reused between frames.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -116,11 +120,7 @@ def track_pins(prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarra
 
 def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, params: LKParams,
            guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """LK forward (from `guess` if given), LK backward from the result, and the checks.
-
-    OpenCV's Python binding cannot take the pyramids of `cv2.buildOpticalFlowPyramid`
-    (opencv/opencv#4777), so each call builds its own; callers pass small crops to keep that cheap.
-    """
+    """LK forward (from `guess` if given), LK backward from the result, and the checks."""
     out = np.full_like(points, np.nan)
     live = np.flatnonzero(np.isfinite(points).all(axis=1))
     if live.size == 0:
@@ -207,7 +207,7 @@ class PinTracker:
     Examples
     --------
     >>> tracker = PinTracker()                               # doctest: +SKIP
-    >>> rest = tracker.start(frames[0])                      # detect the pins of the rest frame
+    >>> rest = tracker.start(frames[0])                      # doctest: +SKIP
     >>> for frame in frames[1:]:                             # doctest: +SKIP
     ...     positions = tracker.update(frame)                # (N, 2) px, NaN where lost
     ...     displacement = positions - rest
@@ -388,11 +388,7 @@ def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple
 
 def _lk_params(params: LKParams | None, knobs: dict) -> LKParams:
     params = params or LKParams()
-    if knobs:
-        from dataclasses import replace
-
-        params = replace(params, **knobs)
-    return params
+    return replace(params, **knobs) if knobs else params
 
 
 def _as_points(points: np.ndarray, name: str) -> np.ndarray:

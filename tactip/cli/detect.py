@@ -55,10 +55,11 @@ def run(args: argparse.Namespace) -> int:
           f"radius {disc.radius_px:.1f} px)")
     if len(pins):
         spacing = _median_spacing(pins)
-        print(f"x {pins[:, 0].min():.1f}..{pins[:, 0].max():.1f} px, y {pins[:, 1].min():.1f}..{pins[:, 1].max():.1f} px, "
-              f"median spacing {spacing:.1f} px")
+        low, high = pins.min(axis=0), pins.max(axis=0)
+        print(f"x {low[0]:.1f}..{high[0]:.1f} px, y {low[1]:.1f}..{high[1]:.1f} px, median spacing {spacing:.1f} px")
     print(f"parameters{' (tuned)' if args.expected_pins else ''}: blur {params.blur_sigma_px:g} px, "
-          f"block {params.block_size_px} px, offset {params.offset:g}, area {params.min_area_px}-{params.max_area_px} px")
+          f"block {params.block_size_px} px, offset {params.offset:g}, "
+          f"area {params.min_area_px}-{params.max_area_px} px")
     return 0
 
 
