@@ -95,9 +95,9 @@ def test_tracking_through_a_tap_meets_the_bar(pins):
     assert rmse <= 0.15
 
 
-@pytest.mark.parametrize("refine", [True, False])
-def test_hidden_pins_are_flagged_and_recovered(refine):
-    s = sensor(331)
+@pytest.mark.parametrize("pins, refine", [(331, True), (532, True), (331, False)])
+def test_hidden_pins_are_flagged_and_recovered(pins, refine):
+    s = sensor(pins)
     rng = np.random.default_rng(7)
     hidden = np.zeros(s.n_pins, dtype=bool)
     hidden[rng.choice(s.n_pins, int(round(0.05 * s.n_pins)), replace=False)] = True
