@@ -36,6 +36,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="minimum distance between selected pins, mm (default: 4)")
     parser.add_argument("--pad-diameter-mm", type=_positive_float, default=40.0, metavar="MM",
                         help="pad diameter, mm; the scale is this over the detected disc diameter (default: 40)")
+    parser.add_argument("--mm-per-px", type=_positive_float, metavar="MM",
+                        help="image scale at the pad, mm per px, instead of the one from the disc diameter")
     parser.add_argument("--rest-frame", type=_non_negative_int, default=0, metavar="N",
                         help="index of the rest frame, off contact (default: 0, the first frame)")
     parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
@@ -78,7 +80,8 @@ def run(args: argparse.Namespace) -> int:
     result = replay_video(args.video, args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,
                           params=DetectionParams(dark_pins=args.dark_pins), n_samples=args.samples,
                           n_pins=args.pins, min_separation_mm=args.min_separation_mm,
-                          pad_diameter_mm=args.pad_diameter_mm, rest_frame=args.rest_frame,
+                          pad_diameter_mm=args.pad_diameter_mm, mm_per_px=args.mm_per_px,
+                          rest_frame=args.rest_frame,
                           progress=not args.quiet)
     if not args.quiet:
         print(result.summary())
