@@ -27,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import signal
 
 __all__ = [
     "FULL_SCALE_COUNTS", "BASELINE_SAMPLES", "HighPassFilter", "highpass", "taxel_pressure", "resample_taps",
@@ -69,6 +68,8 @@ class HighPassFilter:
         self.sample_rate_hz = float(sample_rate_hz)
         self.cutoff_hz = float(cutoff_hz)
         self.order = int(order)
+        from scipy import signal   # deferred: scipy.signal takes ~0.5 s to import, and the CLI imports tactip
+
         self._sos = signal.butter(self.order, self.cutoff_hz, btype="highpass", fs=self.sample_rate_hz, output="sos")
         self._zi = None
 
@@ -97,6 +98,8 @@ class HighPassFilter:
             raise ValueError(f"readings must have shape (T, {self.taxels}), got {x.shape}")
         if len(x) == 0:
             return x.copy()
+        from scipy import signal
+
         if self._zi is None:
             # steady state for a constant input equal to the first reading: no start-up transient
             self._zi = signal.sosfilt_zi(self._sos)[:, :, None] * x[0][None, None, :]

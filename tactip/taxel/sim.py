@@ -49,7 +49,6 @@ from dataclasses import dataclass
 from typing import Callable, Iterator
 
 import numpy as np
-from scipy import signal
 
 from .preprocess import BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, remove_tap_baseline, resample_taps
 from .sensors import TaxelSensor, receptive_field_response, taxel_sensor
@@ -247,6 +246,8 @@ class TaxelSimulator:
         locations = np.asarray(locations_mm, dtype=np.float64).reshape(-1)
         if not np.all(np.isfinite(locations)):
             raise ValueError("locations_mm must be finite")
+        from scipy import signal   # deferred: slow to import, and the CLI imports tactip
+
         rng = self._noise_rng if seed is None else np.random.default_rng(seed)
         fs = self.sample_rate_hz
         period = int(round(self.tap_period_s * fs))
@@ -288,6 +289,8 @@ class _ArNoise:
         self.zi = (self.a * sigma * rng.standard_normal(channels))[None, :]
 
     def __call__(self, n: int) -> np.ndarray:
+        from scipy import signal
+
         e = self.sigma * np.sqrt(1.0 - self.a**2) * self.rng.standard_normal((n, self.channels))
         # y[i] = a * y[i-1] + sqrt(1 - a^2) * sigma * e[i]
         y, self.zi = signal.lfilter([1.0], [1.0, -self.a], e, axis=0, zi=self.zi)
