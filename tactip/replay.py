@@ -230,17 +230,19 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, progress: bo
                     params = tune_detection(frame.image, int(expected_pins), start=params, disc=disc)
                 tracker = PinTracker(detection=params, disc=disc)
                 rest = tracker.start(frame.image, detect_pins(frame.image, params=params, disc=disc))
-                positions = [np.full_like(rest, np.nan)] * len(positions)
-                positions.append(rest)
+                # float32, as stored: half the memory of a long recording.
+                positions = [np.full(rest.shape, np.nan, np.float32)] * len(positions)
+                positions.append(rest.astype(np.float32))
             elif tracker is not None:
-                positions.append(tracker.update(frame.image))
+                positions.append(tracker.update(frame.image).astype(np.float32))
             else:
                 positions.append(None)
             bar.update(1)
     if tracker is None:
         raise SourceError(f"the video has {len(timestamps)} frames, so there is no rest frame {rest_frame}")
     stacked = np.stack(positions)
-    return dict(positions=stacked, displacements=displacement_from_rest(stacked, tracker.rest_positions),
+    displacements = displacement_from_rest(stacked, tracker.rest_positions).astype(np.float32)
+    return dict(positions=stacked, displacements=displacements,
                 timestamps=np.asarray(timestamps, dtype=np.float64), rest=tracker.rest_positions,
                 disc=tracker.disc, detection=params, tracker=tracker, frame_rate=source.frame_rate,
                 frame_size=source.frame_size)
@@ -251,9 +253,12 @@ def _features(displacements, timestamps, bounds, selected, n_samples):
     taps = np.full((len(bounds), n_samples, 2 * len(selected)), np.nan)
     valid = np.ones(len(bounds), dtype=bool)
     for k, (start, stop) in enumerate(bounds):
+        times = timestamps[start:stop]
+        if not np.all(np.diff(times) > 0):  # a decoder without time stamps: resample by frame
+            times = None
         try:
             taps[k] = tap_features(displacements[start:stop], pins=selected, n_samples=n_samples,
-                                   timestamps_s=timestamps[start:stop])
+                                   timestamps_s=times)
         except PinsError:  # LostPinError, or a tap of a single frame
             valid[k] = False
     return taps, valid
