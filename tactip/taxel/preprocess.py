@@ -386,10 +386,20 @@ class TapSegmenter:
         self._windows = []
 
     def mark(self, start_s: float, stop_s: float | None = None) -> None:
-        """Mark a tap window (explicit mode), in the stream's clock, s."""
+        """Mark a tap window (explicit mode), in the stream's clock, s.
+
+        Raises
+        ------
+        ValueError
+            If the window ends before it starts, or starts before the oldest reading still buffered
+            (about ``pre_trigger_s + 2 * duration_s`` back): mark each tap as it is commanded.
+        """
         stop = start_s + self.duration_s if stop_s is None else stop_s
         if stop <= start_s:
             raise ValueError(f"stop_s ({stop_s}) must come after start_s ({start_s})")
+        if len(self._t) and start_s < self._t[0]:
+            raise ValueError(f"tap window starts at {start_s:.3f} s, before the oldest buffered reading "
+                             f"({self._t[0]:.3f} s); mark each tap when it is commanded")
         self._windows.append((float(start_s), float(stop)))
 
     def feed(self, timestamps_s, readings) -> list[np.ndarray]:

@@ -76,6 +76,8 @@ class TaxelSensor:
         Mean reading without contact (the iCub skin reads about 235 at rest and lower under pressure).
     sample_rate_hz : float
         Readings per second (50 Hz).
+    dim_names : tuple of str
+        One name per taxel for datasets (default ``"taxel00"``, ``"taxel01"``, ...).
     """
 
     name: str

@@ -146,3 +146,5 @@ def test_streaming_segmenter_with_explicit_marks():
         TapSegmenter(12, mode="sometimes")
     with pytest.raises(ValueError, match="must come after"):
         segmenter.mark(3.0, 2.0)
+    with pytest.raises(ValueError, match="before the oldest buffered reading"):
+        segmenter.mark(0.5)                                      # 5.5 s ago: no longer buffered
