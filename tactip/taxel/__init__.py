@@ -2,7 +2,8 @@
 
 - `tactip.taxel.sensors`: geometry and receptive fields of the two sensors of paper 000;
 - `tactip.taxel.sim`: the simulated sensor tapping along its location range (raw 8-bit stream);
-- `tactip.taxel.preprocess`: high-pass filter, normalisation, tap segmentation and resampling;
+- `tactip.taxel.preprocess`: high-pass filter, normalisation, resampling, per-tap baseline;
+- `tactip.taxel.segment`: cutting streams into taps (explicit times or signal magnitude, live or recorded);
 - `tactip.taxel.sources`: recorded (CSV) and live (UDP) readings, and taps from any source;
 - `tactip.taxel.collect`: simulated training and test datasets (``tactip-dataset/1``);
 - `tactip.taxel.acuity`: localisation error against class count, passive and active (paper 000 Tables II-III).
@@ -11,8 +12,9 @@
 from .acuity import ACUITY_THRESHOLDS, TABLE2_CLASSES, TABLE3_CLASSES, AcuityRow, acuity_table
 from .collect import (DEFAULT_TAPS, TaxelDatasetPaths, simulate_taxel_dataset, simulate_taxel_datasets,
                       write_taxel_test_stream)
-from .preprocess import (BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, TapSegmenter, TapSegments,
-                         detect_taps, highpass, remove_tap_baseline, resample_taps, segment_taps, taxel_pressure)
+from .preprocess import (BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, highpass, remove_tap_baseline,
+                         resample_taps, taxel_pressure)
+from .segment import TapSegmenter, TapSegments, detect_taps, segment_taps
 from .sensors import TAXEL_SENSORS, TaxelSensor, receptive_field_response, taxel_sensor
 from .sim import TaxelSimulator, TaxelStream, contact_profile, sweep_locations
 from .sources import (ENCODINGS, CsvTaxelSource, TaxelReading, TaxelSource, UdpTaxelSender, UdpTaxelSource,

@@ -38,7 +38,7 @@ from typing import Iterator
 import numpy as np
 
 from ..errors import SourceError
-from .preprocess import TapSegmenter
+from .segment import TapSegmenter
 
 __all__ = [
     "ENCODINGS", "TaxelReading", "TaxelSource", "CsvTaxelSource", "UdpTaxelSource", "UdpTaxelSender",
