@@ -34,8 +34,9 @@ Monte Carlo over the test set, fixation at the centre of the range) the fingerti
 of paper 000: passive perception ~4 mm mean error at every class count (contacts at the two ends of
 the range give no response and are confused with each other), active perception 0.02-0.1 mm at
 about 2 taps (see ``bench/bench_taxel_table2.py`` and ``tests/perception/test_table2.py``). The
-noise levels were chosen so: with twice the noise, the 300-class error at 2 taps exceeds 0.2 mm
-for some simulated sensors (seeds); with these values ten sensors out of ten stay below 0.18 mm.
+geometry and the tap profile follow the paper; the read noise is what was calibrated: with 0.6 counts
+white and 0.5 counts common-mode noise one simulated sensor in six (seed 4) missed 0.2 mm at 300
+classes; with the values above all ten sensors of seeds 0-9 stay below 0.18 mm.
 
 Everything is drawn from ``numpy.random.default_rng``: a simulator built with the same seed gives the
 same sensor (gains, rest levels) and, for the same collection seed, the same readings. Two collections
@@ -130,8 +131,20 @@ class TaxelSimulator:
         Seed of the sensor's constants (gains, rest levels) and of the default collection noise.
     white_noise_counts, common_noise_counts, drift_counts : float
         Noise standard deviations, counts.
+    common_noise_tau_s, drift_tau_s : float
+        Correlation times of the common-mode noise and of the drift, s.
     gain_spread : float
         Standard deviation of the per-taxel gain (fraction).
+    rest_spread_counts : float
+        Standard deviation of the per-taxel rest reading, counts.
+    amplitude_jitter : float
+        Standard deviation of the log of the tap force from tap to tap.
+    position_noise_mm : float
+        Standard deviation of the robot's placement, mm.
+    contact_delay_s, onset_jitter_s : float
+        Time from tap command to contact and its standard deviation, s.
+    rise_s, hold_s, release_s, relax_s : float
+        Contact profile (`contact_profile`) and the foam's recovery time constant, s.
     samples, tap_duration_s, tap_period_s : int, float, float
         Samples per tap window, its length and the time from one tap command to the next, s.
 
