@@ -18,6 +18,11 @@ lands within `fb_threshold_px` of where it started (forward-backward check). A p
 Gates below half the pin spacing and one-to-one assignments keep identities: a pin can only be
 given a blob that is nearer to its prediction than any neighbour could be.
 
+Limit: frame-to-frame motion must stay below about half the pin spacing (8 px at 331 pins in a
+640x480 frame; a 250 ms tap rise at 20 frames/s moves pins at most ~7 px per frame). Beyond it
+the lattice of identical pins aliases: LK, its backward check and the refinement all agree on
+the neighbouring pin. Record faster taps at a higher frame rate.
+
 Speed: the tracker runs LK on the disc's crop only, starting each pin from a constant-velocity
 guess so that one pyramid level suffices. OpenCV's Python binding cannot take the pyramids of
 `cv2.buildOpticalFlowPyramid` (opencv/opencv#4777), so they are not reused between frames.
@@ -109,7 +114,7 @@ def track_pins(prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarra
     >>> moved, ok = track_pins(frame0, frame1, pins)          # doctest: +SKIP
     >>> flow = moved[ok] - pins[ok]                           # doctest: +SKIP
     """
-    params = _lk_params(params, knobs)
+    params = replace(params or LKParams(), **knobs)
     points = _as_points(points, "points")
     prev_grey, next_grey = as_grey(prev_image), as_grey(next_image)
     if prev_grey.shape != next_grey.shape:
@@ -384,11 +389,6 @@ def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple
     r, c = linear_sum_assignment(sub)
     accepted = sub[r, c] <= gate
     return rows[r[accepted]], cols[c[accepted]]
-
-
-def _lk_params(params: LKParams | None, knobs: dict) -> LKParams:
-    params = params or LKParams()
-    return replace(params, **knobs) if knobs else params
 
 
 def _as_points(points: np.ndarray, name: str) -> np.ndarray:
