@@ -137,6 +137,10 @@ class PlateWorld:
         self._centres = np.array([[gap.x_mm, gap.y_mm] for gap in self.gaps]).reshape(-1, 2)
         self._half_lengths = np.array([gap.length_mm / 2 for gap in self.gaps])
 
+    def reseed(self, seed: int | None) -> None:
+        """Restart the placement-error generator from ``seed`` (per-tap reproducible placement)."""
+        self._rng = np.random.default_rng(seed)
+
     def gap(self, name: str) -> Gap:
         """The gap called ``name`` (KeyError naming the known gaps otherwise)."""
         for gap in self.gaps:

@@ -1,5 +1,14 @@
-"""Calibration: sensor calibration, data collection protocol, training and fixation search."""
+"""Calibration: sensor calibration, data collection protocol, training and fixation search.
 
+Knows the protocols but no hardware: the station (``tactip``) hands it frames and a tap function.
+"""
+
+from .collect import SETS, PlannedTap, collect_datasets, collection_plan, tap_seed
 from .errors import CalibrationError
+from .sensor import SCHEMA, SensorCalibration, calibrate_sensor, load_calibration, save_calibration
 
-__all__ = ["CalibrationError"]
+__all__ = [
+    "CalibrationError",
+    "SensorCalibration", "calibrate_sensor", "save_calibration", "load_calibration", "SCHEMA",
+    "PlannedTap", "collection_plan", "collect_datasets", "tap_seed", "SETS",
+]

@@ -298,6 +298,14 @@ class SyntheticTacTip:
                                   principal_px=self.disc[:2], camera_mm=self._h,
                                   disc_radius_mm=self._tip_radius_mm)
 
+    def reseed_noise(self, seed: int) -> None:
+        """Restart the camera-noise generator from ``seed`` (the pin layout is unchanged).
+
+        The simulated station reseeds before each tap, so a tap's frames depend only on the tap
+        (a resumed collection renders exactly what an uninterrupted one would have).
+        """
+        self._noise_rng = np.random.default_rng(seed)
+
     def pin_centres(self, contact: Contact | None = None) -> tuple[np.ndarray, np.ndarray]:
         """True pin-tip centres for a contact state, without rendering.
 

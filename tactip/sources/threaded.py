@@ -119,6 +119,26 @@ class ThreadedReader:
             return None
         return item
 
+    def drain(self) -> list[Frame]:
+        """All frames queued now, oldest first, without waiting (worker errors are re-raised).
+
+        The station drains at the start of a tap (keeping the newest frame as the rest frame) and
+        again at its end (the frames of the tap).
+        """
+        frames = []
+        while True:
+            try:
+                item = self._queue.get_nowait()
+            except queue.Empty:
+                break
+            if item is _END:
+                self._finished = True
+                if self._error is not None:
+                    raise self._error
+                break
+            frames.append(item)
+        return frames
+
     def seek(self, index: int) -> None:
         """Not supported: frames are already in flight."""
         raise SourceError("a threaded reader cannot seek; seek the source before wrapping it")

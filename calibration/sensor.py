@@ -1,0 +1,214 @@
+"""Sensor calibration: from rest frames to the file every later step reads.
+
+A TacTip is calibrated off contact: a few rest frames are averaged (sensor noise falls as
+1/sqrt(n)), the sensor disc is found, pin detection is auto-tuned to the expected pin count,
+the reference pins are detected, and the subset used as features is chosen (paper 002 III-A.3:
+40 pins at least 4 mm apart). The scale, mm per px, is the pad diameter over the disc diameter
+unless the caller measured it.
+
+The calibration file is HDF5 (schema ``tactip-calibration/1``): datasets ``reference_pins``
+(N, 2) float64 px and ``selected_pins`` (P,) int; attributes ``schema``, ``detection`` (JSON of
+`pins.DetectionParams`), ``disc`` (cx, cy, radius px), ``mm_per_px``, ``expected_pins``,
+``frame_size`` (width, height px), ``rest_frames``, ``min_separation_mm``, ``sensor`` (JSON),
+``created_at``.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from pins import (DetectionParams, NoSensorError, PinsError, SensorDisc, as_grey, detect_pins,
+                  find_sensor_disc, select_pins, tune_detection)
+
+from .errors import CalibrationError
+
+__all__ = ["SensorCalibration", "calibrate_sensor", "save_calibration", "load_calibration", "SCHEMA"]
+
+SCHEMA = "tactip-calibration/1"
+
+
+@dataclass(frozen=True)
+class SensorCalibration:
+    """What the station needs to turn a TacTip's frames into tap features.
+
+    Attributes
+    ----------
+    detection : pins.DetectionParams
+        Tuned detection parameters.
+    disc : pins.SensorDisc
+        The sensor disc in the rest frames, px.
+    reference_pins : (N, 2) ndarray of float64
+        Pin positions (x, y) in the averaged rest frame, px; their order is the pin identity.
+    selected_pins : (P,) ndarray of int
+        Indices into ``reference_pins`` of the feature pins, in selection order.
+    mm_per_px : float
+        Image scale at the pad, mm per px.
+    expected_pins : int
+        Pin count the detection was tuned to.
+    frame_size : (int, int)
+        (width, height) of the frames, px.
+    min_separation_mm : float
+        Minimum separation of the selected pins, mm.
+    rest_frames : int
+        How many rest frames were averaged.
+    sensor : dict
+        Free description of the sensor (source, preset, serial ...).
+    """
+
+    detection: DetectionParams
+    disc: SensorDisc
+    reference_pins: np.ndarray
+    selected_pins: np.ndarray
+    mm_per_px: float
+    expected_pins: int
+    frame_size: tuple[int, int]
+    min_separation_mm: float = 4.0
+    rest_frames: int = 1
+    sensor: dict = field(default_factory=dict)
+
+    @property
+    def n_selected(self) -> int:
+        """Number of feature pins P (the feature arrays have 2 P dimensions)."""
+        return int(len(self.selected_pins))
+
+    def describe(self) -> str:
+        """One line for a person: pins found, pins selected, scale."""
+        return (f"{len(self.reference_pins)} pins (expected {self.expected_pins}), {self.n_selected} selected "
+                f">= {self.min_separation_mm:g} mm apart, {self.mm_per_px:.4f} mm/px, disc r = "
+                f"{self.disc.radius_px:.1f} px at ({self.disc.cx:.1f}, {self.disc.cy:.1f})")
+
+
+def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, pad_diameter_mm: float = 40.0,
+                     selected_pins: int = 40, min_separation_mm: float = 4.0, count_tolerance: float = 0.02,
+                     mm_per_px: float | None = None, dark_pins: bool = False,
+                     sensor: dict | None = None) -> SensorCalibration:
+    """Calibrate a TacTip from frames taken off contact.
+
+    Parameters
+    ----------
+    rest_frames : sequence of (H, W) or (H, W, 3) uint8 arrays
+        Frames with nothing touching the pad (averaged).
+    expected_pins : int
+        The sensor's pin count; detection is tuned to it.
+    pad_diameter_mm : float
+        Diameter of the pad, mm; gives the scale from the disc's diameter in px.
+    selected_pins : int
+        How many feature pins to choose (paper: 40).
+    min_separation_mm : float
+        Their minimum separation, mm (paper: 4).
+    count_tolerance : float
+        Largest accepted relative difference between detected and expected count.
+    mm_per_px : float, optional
+        A measured scale, mm per px, instead of the pad-diameter estimate.
+    dark_pins : bool
+        Dark markers on a light membrane.
+    sensor : dict, optional
+        Description stored with the calibration.
+
+    Returns
+    -------
+    SensorCalibration
+
+    Raises
+    ------
+    CalibrationError
+        No frames, frames of different sizes, no sensor disc in view, a pin count far from
+        expected, or too few pins far enough apart to select.
+    """
+    if len(rest_frames) == 0:
+        raise CalibrationError("no rest frames to calibrate from")
+    greys = [as_grey(np.asarray(f)) for f in rest_frames]
+    if len({g.shape for g in greys}) != 1:
+        raise CalibrationError(f"rest frames differ in size: {sorted({g.shape for g in greys})}")
+    if expected_pins < 2:
+        raise CalibrationError(f"expected_pins must be at least 2, got {expected_pins}")
+    mean = np.rint(np.mean(np.stack(greys), axis=0)).astype(np.uint8)
+
+    try:
+        disc = find_sensor_disc(mean, dark_pins=dark_pins)
+    except NoSensorError as exc:
+        raise CalibrationError(f"no sensor in view: {exc} (is the camera the TacTip's, and its LEDs on?)") from None
+    try:
+        params = tune_detection(mean, expected_pins, disc=disc, tolerance=count_tolerance,
+                                start=DetectionParams(dark_pins=dark_pins))
+    except PinsError as exc:
+        raise CalibrationError(f"pin detection cannot be tuned to {expected_pins} pins: {exc} "
+                               f"(is the pad touching something, or is [sensor] pins wrong?)") from None
+    reference = detect_pins(mean, params=params, disc=disc)
+    if abs(len(reference) - expected_pins) > count_tolerance * expected_pins:
+        raise CalibrationError(f"found {len(reference)} pins, expected {expected_pins} "
+                               f"(more than {count_tolerance:.0%} off)")
+    scale = float(mm_per_px) if mm_per_px is not None else pad_diameter_mm / (2.0 * disc.radius_px)
+    try:
+        chosen = select_pins(reference, n_pins=selected_pins, min_separation_mm=min_separation_mm, mm_per_px=scale,
+                             centre=(disc.cx, disc.cy))
+    except PinsError as exc:
+        raise CalibrationError(f"cannot select the feature pins: {exc}") from None
+    height, width = mean.shape
+    return SensorCalibration(detection=params, disc=disc, reference_pins=reference, selected_pins=np.asarray(chosen),
+                             mm_per_px=scale, expected_pins=int(expected_pins), frame_size=(width, height),
+                             min_separation_mm=float(min_separation_mm), rest_frames=len(greys),
+                             sensor=dict(sensor or {}))
+
+
+def save_calibration(path: str | Path, calibration: SensorCalibration) -> None:
+    """Write a calibration file (HDF5, ``tactip-calibration/1``), atomically."""
+    import h5py
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".partial")
+    with h5py.File(tmp, "w") as f:
+        f.attrs["schema"] = SCHEMA
+        f.create_dataset("reference_pins", data=np.asarray(calibration.reference_pins, dtype=np.float64))
+        f.create_dataset("selected_pins", data=np.asarray(calibration.selected_pins, dtype=np.int64))
+        f.attrs["detection"] = json.dumps(calibration.detection.to_dict())
+        d = calibration.disc
+        f.attrs["disc"] = np.array([d.cx, d.cy, d.radius_px], dtype=np.float64)
+        f.attrs["mm_per_px"] = float(calibration.mm_per_px)
+        f.attrs["expected_pins"] = int(calibration.expected_pins)
+        f.attrs["frame_size"] = np.array(calibration.frame_size, dtype=np.int64)
+        f.attrs["min_separation_mm"] = float(calibration.min_separation_mm)
+        f.attrs["rest_frames"] = int(calibration.rest_frames)
+        f.attrs["sensor"] = json.dumps(calibration.sensor)
+        f.attrs["created_at"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    os.replace(tmp, path)
+
+
+def load_calibration(path: str | Path) -> SensorCalibration:
+    """Read a calibration file; `CalibrationError` when it is missing or of another kind."""
+    import h5py
+
+    path = Path(path)
+    if not path.exists():
+        raise CalibrationError(f"no calibration file at {path}: run 'tactip calibrate' first")
+    try:
+        with h5py.File(path, "r") as f:
+            schema = f.attrs.get("schema")
+            if schema != SCHEMA:
+                raise CalibrationError(f"{path} is not a TacTip calibration file (schema {schema!r}, "
+                                       f"expected {SCHEMA!r})")
+            cx, cy, r = (float(v) for v in f.attrs["disc"])
+            return SensorCalibration(
+                detection=DetectionParams(**json.loads(f.attrs["detection"])),
+                disc=SensorDisc(cx, cy, r),
+                reference_pins=np.asarray(f["reference_pins"][()], dtype=np.float64),
+                selected_pins=np.asarray(f["selected_pins"][()], dtype=np.intp),
+                mm_per_px=float(f.attrs["mm_per_px"]),
+                expected_pins=int(f.attrs["expected_pins"]),
+                frame_size=tuple(int(v) for v in f.attrs["frame_size"]),
+                min_separation_mm=float(f.attrs["min_separation_mm"]),
+                rest_frames=int(f.attrs["rest_frames"]),
+                sensor=json.loads(f.attrs["sensor"]),
+            )
+    except OSError as exc:
+        raise CalibrationError(f"{path} cannot be read as a calibration file ({exc})") from None
+    except KeyError as exc:
+        raise CalibrationError(f"{path} lacks {exc} (damaged calibration file?)") from None
