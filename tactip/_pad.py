@@ -13,7 +13,7 @@ CAMERA_DISTANCE = 2.0  # h / R: camera below the pad's base plane
 PIN_POLAR_MAX_DEG = 80.0  # polar angle of the outermost pins
 CASING_POLAR_DEG = 86.0  # the casing hides the membrane beyond this polar angle: edge of the dark disc
 RADIAL_FLOW = 0.5  # u_r = RADIAL_FLOW * u_z * r / R
-MEMBRANE_RHO_MM = 8.0  # tension / contact pressure of the skin spanning a gap, mm
+MEMBRANE_RHO_MM = 1.0  # tension / contact pressure of the skin spanning a gap, mm
 BENDING_MM = 0.5  # bending length of the skin, mm
 STALK_BASE_MM = 1.5  # half-width over which the membrane slope under a stalk is averaged, mm
 CLAMP_POWER = 6  # displacement x (1 - (r / R)^CLAMP_POWER): zero at the clamped base of the pad

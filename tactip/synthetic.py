@@ -40,16 +40,20 @@ outside the patch.) The incompressible gel flows outward under the plate and dra
 multiplied by ``1 - (r / R)^6``: zero at the rim, within 2 % of the half-space field where the plate
 touches (r < R / 2 up to d = 5 mm). A straight gap (width ``w``, centre line ``gap_offset`` from the axis along
 image y, direction ``gap_angle``) leaves the skin over it unsupported: like a tensioned membrane over
-a slot under pressure it bulges into the gap by ``w^2 / (8 rho)`` (``rho = 8 mm``, the ratio of skin
-tension to contact pressure), spread across the line with a Gaussian of width ``w/4 + 0.5 mm`` (the
+a slot under pressure it bulges into the gap by ``w^2 / (8 rho)`` (``rho = 1 mm``, the ratio of skin
+tension to contact pressure: a thin skin on a very soft gel carries little tension, so a slot a few mm
+wide is almost unsupported in the middle of the contact), spread across the line with a Gaussian of width ``w/4 + 0.5 mm`` (the
 skin's bending length smooths the slot's edges), weighted by the pressure ``(1 - r^2/a^2)^1.5`` in the
 patch, and softly capped by the local indentation (the skin cannot rise above its rest shape).
 Each tip moves with its base plus the lever: ``L`` times the change of the membrane normal, the slope
 being averaged over +-1.5 mm (the stalk's base and the skin's thickness). Flattening tilts stalks
 outward and brings the patch nearer the camera, so pins spread from the contact: the peak tip motion
-is about 10.5 px at d = 4 mm and 14 px at d = 5 mm. The gap's imprint is subtle and grows as ``w^2``:
-at d = 4 mm the fields for w = 1 and w = 5 mm differ by at most about 1.2 px (near the gap), for
-w = 1 and 3 mm by about 0.4 px. Neighbouring tips stay separated (at least 1.8 px between the
+is about 10.5 px at d = 4 mm and 14 px at d = 5 mm. The gap's imprint is subtle and grows with ``w``:
+at d = 4 mm the fields for w = 1 and w = 2 mm differ by at most about 1 px, for w = 1 and 3 mm by
+about 2.7 px and for w = 1 and 5 mm by about 6 px, on the pins right over the gap (331 pins); the 40
+feature pins 4 mm apart see at most about 2.4 px between 0.25 and 5 mm, and 0.15 px between adjacent
+widths 0.25 mm apart, against about 1 px for 0.25 mm more depth. (With ``rho = 8 mm`` adjacent widths
+differed by 0.02 px and no classifier could tell them apart.) Neighbouring tips stay separated (at least 1.8 px between the
 ellipses' edges) up to d = 5 mm on every preset; beyond about 6 mm the densest pad's tips begin
 to touch at the contact edge. A tap follows `tap_profile`: raised-cosine rise, plateau and release,
 250 ms each by default (paper 002, IV-A).
