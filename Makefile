@@ -15,8 +15,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	mkdir -p out
-	$(BIN)/tactip replay samples/synthetic_tap.mp4 --out out/demo_replay.h5 --annotate out/demo_annotated.mp4
+	$(BIN)/tactip inspect --sim
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

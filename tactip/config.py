@@ -21,8 +21,8 @@ Tables (see ``samples/station_sim.toml`` for a documented example):
     reference), so the top of the range taps air, as in the paper (about 1.5 mm of no contact).
     How the arm moves during a tap (approach height, stroke speed, dwell) is ``[arm.tap]``.
 ``[perception]``
-    ``model`` (file), ``decision_threshold``, ``fixation_depth`` (mm, or omitted: the model's
-    recommendation), ``policy`` (active|stationary|random), ``max_taps``, ``locations`` (depth
+    ``model`` (file), ``decision_threshold`` and ``fixation_depth`` (mm) (each omitted: the model's
+    recommendation from ``tactip validate --sweep-fixation``), ``policy`` (active|stationary|random), ``max_taps``, ``locations`` (depth
     classes), ``bins``.
 ``[sim]``
     the simulated station only: ``noise_sigma`` (camera noise, grey levels) and ``seed`` of the
@@ -42,10 +42,11 @@ from typing import Any
 
 from .errors import ConfigError
 
-__all__ = ["StationConfig", "SensorConfig", "GapConfig", "ProtocolConfig", "PerceptionConfig",
+__all__ = ["simulated_station_config", "SIM_PRESET", "StationConfig", "SensorConfig", "GapConfig", "ProtocolConfig", "PerceptionConfig",
            "SimConfig", "load_station_config", "parse_station_config"]
 
 POLICIES = ("active", "stationary", "random")
+SIM_PRESET = Path(__file__).with_name("presets") / "station_sim.toml"
 
 
 @dataclass(frozen=True)
@@ -102,7 +103,7 @@ class PerceptionConfig:
     """The classifier and its decision settings."""
 
     model: Path | None = None
-    decision_threshold: float = 0.9
+    decision_threshold: float | None = None
     fixation_depth: float | None = None
     policy: str = "active"
     max_taps: int = 20
@@ -190,7 +191,8 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     _check(protocol.samples >= 2, "protocol.samples", "must be at least 2")
     _check(protocol.repeats >= 1, "protocol.repeats", "must be at least 1")
     _check(protocol.lateral_jitter_mm >= 0, "protocol.lateral_jitter_mm", "must be >= 0")
-    _check(0 < perception.decision_threshold <= 1, "perception.decision_threshold", "must be in (0, 1]")
+    if perception.decision_threshold is not None:
+        _check(0 < perception.decision_threshold <= 1, "perception.decision_threshold", "must be in (0, 1]")
     _check(perception.policy in POLICIES, "perception.policy", f"must be one of {', '.join(POLICIES)}")
     _check(perception.max_taps >= 1, "perception.max_taps", "must be at least 1")
     _check(perception.locations >= 1, "perception.locations", "must be at least 1")
@@ -306,3 +308,17 @@ def _gap(table: dict, k: int) -> GapConfig:
     return GapConfig(name=str(table.get("name", f"gap{k + 1:02d}")), x=float(table["x"]), y=float(table["y"]),
                      nominal_width=float(table["nominal_width"]), tolerance=float(table["tolerance"]),
                      true_width=None if true_width is None else float(true_width))
+
+
+def simulated_station_config(data_dir: str | Path = "station_data/sim") -> StationConfig:
+    """The packaged simulated station (``tactip inspect --sim``), keeping its files in ``data_dir``.
+
+    The calibration, datasets, model and results database all live in ``data_dir`` (relative paths
+    against the current folder), so a later run finds the model the first run trained.
+    """
+    data = tomllib.loads(SIM_PRESET.read_text())
+    data_dir = Path(data_dir).expanduser().resolve()
+    data["station"]["data_dir"] = str(data_dir)
+    data["station"]["results"] = str(data_dir / "results.sqlite")
+    data["perception"]["model"] = str(data_dir / "model.h5")
+    return parse_station_config(data, base_dir=data_dir, path=SIM_PRESET)

@@ -17,7 +17,7 @@ from .config import StationConfig
 from .errors import TactipError
 from .station import Station
 
-__all__ = ["calibration_path", "calibrate_station", "load_station_calibration", "collect_station",
+__all__ = ["prepare_model", "calibration_path", "calibrate_station", "load_station_calibration", "collect_station",
            "sensor_description"]
 
 
@@ -152,3 +152,23 @@ class _SimPool:
     def __exit__(self, *exc) -> None:
         self._pool.terminate()
         self._pool.join()
+
+
+def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable[[str], None] = print) -> Path:
+    """The whole calibration utility in one call: calibrate (unless calibrated), collect (resuming),
+    train and pick the fixation depth; returns the model path. ``tactip inspect --sim`` runs it on
+    first use."""
+    from calibration import recommend_fixation, train_station_model
+
+    model_path = config.perception.model
+    if model_path is None:
+        raise TactipError("no [perception] model path in the configuration")
+    if not calibration_path(config).exists():
+        calibrate_station(config, log=log)
+    paths = collect_station(config, config.data_dir / "datasets", progress=progress, log=log)
+    log("training the model ...")
+    train_station_model(paths["train"], model_path, n_locations=config.perception.locations,
+                        bins=config.perception.bins, log=log)
+    log("choosing the fixation depth on the test collection ...")
+    recommend_fixation(model_path, paths["test"], log=log)
+    return model_path

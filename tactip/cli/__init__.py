@@ -18,13 +18,16 @@ import sys
 
 # Subcommand name -> module. Nested groups (``tactip arm status``) are handled by their module.
 COMMANDS: dict[str, str] = {
-    "arm": "tactip.cli.arm",
-    "train": "tactip.cli.train",
-    "validate": "tactip.cli.validate",
-    "simulate": "tactip.cli.simulate",
-    "results": "tactip.cli.results",
     "detect": "tactip.cli.detect",
     "replay": "tactip.cli.replay",
+    "calibrate": "tactip.cli.calibrate",
+    "collect": "tactip.cli.collect",
+    "train": "tactip.cli.train",
+    "validate": "tactip.cli.validate",
+    "inspect": "tactip.cli.inspect",
+    "results": "tactip.cli.results",
+    "arm": "tactip.cli.arm",
+    "simulate": "tactip.cli.simulate",
 }
 
 

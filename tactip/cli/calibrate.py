@@ -1,0 +1,38 @@
+"""Calibrate the station's TacTip: rest frames off contact, detection tuned to the expected pin
+count, reference pins and the feature-pin subset, written to the calibration file.
+
+The arm lifts the pad clear of the part (above the first gap) while the rest frames are taken.
+The file goes to [sensor] calibration, or DATA_DIR/calibration.h5; collect and inspect read it.
+Refuses with a clear message when the frame shows no sensor or the pin count is far from [sensor] pins.
+
+Examples:
+  tactip calibrate --config samples/station_sim.toml
+  tactip calibrate --config station.toml --rest-frames 30
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "calibrate the TacTip (detection, reference pins, feature pins) from rest frames"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the parser for `tactip calibrate`."""
+    parser.add_argument("--config", type=Path, required=True, help="station TOML file")
+    parser.add_argument("--rest-frames", type=int, default=10, metavar="N",
+                        help="frames off contact to average (default 10)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="calibration file (default: [sensor] calibration or DATA_DIR/calibration.h5)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run `tactip calibrate`."""
+    from tactip.config import load_station_config
+    from tactip.procedures import calibrate_station
+
+    if args.rest_frames < 1:
+        raise SystemExit("tactip calibrate: error: --rest-frames must be at least 1")
+    calibrate_station(load_station_config(args.config), rest_frames=args.rest_frames, out=args.out)
+    return 0

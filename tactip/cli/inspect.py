@@ -1,0 +1,79 @@
+"""Inspect gaps by active Bayesian perception and store every result.
+
+For each [[gaps]] entry: move over the gap, tap, update the (depth, width) beliefs, move in depth
+as the policy asks, until the width belief crosses the decision threshold or max_taps is reached
+(then the result is 'undecided'); judge the width against nominal +- tolerance. Every tap and
+verdict goes to the SQLite results database as it happens ('tactip results list').
+An arm fault stops the arm, records the inspection as aborted with the reason, and exits 1.
+
+--sim runs the packaged simulated station (synthetic TacTip on a simulated arm over a plate of
+20 gaps, 0.25-5 mm) with no hardware; on first use it calibrates, collects the training taps,
+trains and picks the fixation depth (a few minutes), keeping everything in --data-dir.
+
+Examples:
+  tactip inspect --sim
+  tactip inspect --sim --policy stationary --seed 3
+  tactip inspect --config station.toml --gap door-left
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "inspect the configured gaps (or --sim: the simulated station, no hardware)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the parser for `tactip inspect`."""
+    where = parser.add_mutually_exclusive_group(required=True)
+    where.add_argument("--config", type=Path, help="station TOML file")
+    where.add_argument("--sim", action="store_true", help="the packaged simulated station")
+    parser.add_argument("--data-dir", type=Path, default=Path("station_data/sim"),
+                        help="with --sim: where the model, datasets and results live (default station_data/sim)")
+    parser.add_argument("--policy", choices=("active", "stationary", "random"), default=None,
+                        help="override [perception] policy")
+    parser.add_argument("--seed", type=int, default=None, help="seed of the random start depths")
+    parser.add_argument("--gap", action="append", default=None, metavar="NAME",
+                        help="inspect only this gap (repeatable)")
+    parser.add_argument("--start-depth", type=float, default=None, metavar="MM",
+                        help="start every inspection at this depth instead of a random one")
+    parser.add_argument("--quiet", action="store_true", help="print only the verdicts")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run `tactip inspect`; exit 0 when every inspection finished (pass, fail or undecided)."""
+    import time
+
+    from tactip.config import load_station_config, simulated_station_config
+    from tactip.inspection import inspect_station
+    from tactip.procedures import prepare_model
+
+    config = simulated_station_config(args.data_dir) if args.sim else load_station_config(args.config)
+    if args.sim and not config.perception.model.exists():
+        print(f"No trained model in {config.data_dir} yet: training one on the simulated station first "
+              f"(calibrate, collect, train, choose the fixation depth; a few minutes, once).")
+        started = time.monotonic()
+        prepare_model(config, progress=not args.quiet)
+        print(f"model ready in {time.monotonic() - started:.0f} s")
+    started = time.monotonic()
+    log = (lambda line: None if line.startswith("  ") else print(line)) if args.quiet else print
+    outcomes = inspect_station(config, policy=args.policy, seed=args.seed, gaps=args.gap,
+                               start_depth=args.start_depth, log=log)
+    print(summary(outcomes, time.monotonic() - started))
+    print(f"results: {config.results}  (tactip results list --db {config.results})")
+    return 0
+
+
+def summary(outcomes, elapsed_s: float) -> str:
+    """One paragraph for a person: verdict counts, mean taps, mean width error where known."""
+    import numpy as np
+
+    verdicts = [o.verdict for o in outcomes]
+    text = (f"{len(outcomes)} gap(s) in {elapsed_s:.0f} s: {verdicts.count('PASS')} pass, {verdicts.count('FAIL')} "
+            f"fail, {verdicts.count('UNDECIDED')} undecided; mean {np.mean([o.taps for o in outcomes]):.1f} taps")
+    errors = [abs(o.estimated_width - o.gap.true_width) for o in outcomes if o.gap.true_width is not None]
+    if not errors:
+        errors = [abs(o.estimated_width - o.gap.nominal_width) for o in outcomes]
+        return text + f"; mean |estimate - nominal| {np.mean(errors):.2f} mm"
+    return text + f"; mean width error {np.mean(errors):.2f} mm"

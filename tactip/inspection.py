@@ -1,0 +1,190 @@
+"""Unattended gap inspection by active Bayesian perception (paper 002, Algorithm).
+
+For each gap: move over it at the start depth, tap, extract the tap's features, update the joint
+(depth, width) beliefs, move in depth as the policy asks (every move safety-checked by the arm),
+until the width marginal crosses the decision threshold or ``max_taps`` is reached (the result is
+then *undecided*). The width is judged against the gap's nominal width and tolerance; every tap
+and every verdict is written to the results database as it happens.
+
+The start depth is unknown to the perceiver (paper 002: "no information about the initial contact
+depth"): it is drawn at random from the protocol depths, seeded, unless given.
+
+An arm fault mid-inspection stops the arm (the station's context manager), records the inspection
+as aborted with the reason, and propagates, so the command exits non-zero; stored rows stay.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+
+from .config import GapConfig, StationConfig
+from .errors import TactipError
+from .results import ResultsStore
+
+__all__ = ["InspectionOutcome", "inspect_gap", "inspect_station", "load_station_model", "make_perceiver"]
+
+
+@dataclass(frozen=True)
+class InspectionOutcome:
+    """The verdict on one gap.
+
+    Attributes
+    ----------
+    gap : GapConfig
+    estimated_width : float
+        MAP width, mm.
+    estimated_depth : float
+        MAP depth class centre at the last tap, mm.
+    belief : float
+        Posterior of the estimated width, 0-1.
+    taps : int
+    decided : bool
+        The belief crossed the decision threshold (False: stopped at ``max_taps``).
+    passed : bool or None
+        Decided and within tolerance; None when undecided.
+    duration_s : float
+    inspection_id : int
+        Row id in the results database.
+    depths : tuple of float
+        Protocol depth of every tap, mm.
+    """
+
+    gap: GapConfig
+    estimated_width: float
+    estimated_depth: float
+    belief: float
+    taps: int
+    decided: bool
+    passed: bool | None
+    duration_s: float
+    inspection_id: int
+    depths: tuple[float, ...]
+
+    @property
+    def verdict(self) -> str:
+        """PASS, FAIL or UNDECIDED."""
+        return {True: "PASS", False: "FAIL", None: "UNDECIDED"}[self.passed]
+
+
+def load_station_model(config: StationConfig, calibration):
+    """The station's model, checked against its sensor calibration and protocol."""
+    from perception import ModelError, load_model
+
+    path = config.perception.model
+    if path is None:
+        raise TactipError("no [perception] model in the configuration")
+    if not path.exists():
+        raise ModelError(f"no model at {path}: collect taps and run 'tactip train' (or 'tactip inspect --sim')")
+    model = load_model(path)
+    dims = 2 * calibration.n_selected
+    if model.front_end != "tactip" or model.dims != dims or model.samples != config.protocol.samples:
+        raise ModelError(f"{path} was trained for {model.front_end} taps of {model.samples} samples x {model.dims} "
+                         f"dims; this station makes tactip taps of {config.protocol.samples} x {dims} "
+                         f"({calibration.n_selected} pins): train a model for this sensor")
+    return model
+
+
+def make_perceiver(config: StationConfig, model, *, policy: str | None = None, seed: int | None = None):
+    """A `perception.Perceiver` with the station's (or the model's recommended) settings."""
+    from perception import Perceiver, make_policy
+
+    p = config.perception
+    name = policy or p.policy
+    # fixation_class(None) is the model's recommended fixation (tactip validate --sweep-fixation).
+    threshold = p.decision_threshold
+    if threshold is None:
+        threshold = model.recommended.get("decision_threshold", 0.9)
+    return Perceiver(model, make_policy(name, fixation_class=model.fixation_class(p.fixation_depth)),
+                     decision_threshold=threshold, max_taps=p.max_taps, rng=seed)
+
+
+def inspect_gap(station, perceiver, gap: GapConfig, store: ResultsStore, *, start_depth: float, policy: str,
+                log: Callable[[str], None] = print) -> InspectionOutcome:
+    """Inspect one gap (see the module docstring); returns the outcome, stored in ``store``."""
+    config = station.config
+    protocol = config.protocol
+    inspection = store.start_inspection(gap.name, nominal_width=gap.nominal_width, tolerance=gap.tolerance,
+                                        policy=policy, decision_threshold=perceiver.decision_threshold,
+                                        station=config.name, model=str(config.perception.model))
+    started = time.monotonic()
+    perceiver.reset()
+    depth = float(start_depth)
+    depths = []
+    try:
+        while True:
+            result = station.tap(gap, depth)
+            depths.append(depth)
+            step = perceiver.observe(result.features)
+            store.record_tap(inspection, tap=step.taps, depth_mm=depth, location_estimate=step.location_estimate,
+                             identity_estimate=step.identity_estimate, belief=step.belief,
+                             what_belief=step.what_belief, where_belief=step.where_belief)
+            log(f"  {gap.name} tap {step.taps:>2}  depth {depth:4.2f} mm  width {step.identity_estimate:4.2f} mm "
+                f"(belief {step.belief:.3f})  depth est. {step.location_estimate:4.2f} mm")
+            if step.decided:
+                break
+            target = float(np.clip(depth + step.move, protocol.depth_min, protocol.depth_max))
+            perceiver.moved(target - depth)
+            depth = target
+    except BaseException as exc:
+        reason = "interrupted (Ctrl-C)" if isinstance(exc, KeyboardInterrupt) else f"{type(exc).__name__}: {exc}"
+        store.abort_inspection(inspection, reason)
+        raise
+    decided = bool(step.decided and not step.forced)
+    passed = store.finish_inspection(inspection, estimated_width=step.identity_estimate,
+                                     estimated_depth=step.location_estimate, belief=step.belief, taps=step.taps,
+                                     decided=decided)
+    return InspectionOutcome(gap, float(step.identity_estimate), float(step.location_estimate), float(step.belief),
+                             int(step.taps), decided, passed, time.monotonic() - started, inspection, tuple(depths))
+
+
+def inspect_station(config: StationConfig, *, policy: str | None = None, seed: int | None = None,
+                    gaps: Sequence[str] | None = None, start_depth: float | None = None,
+                    log: Callable[[str], None] = print, station=None) -> list[InspectionOutcome]:
+    """Inspect the configured gaps (or those named in ``gaps``); returns the outcomes in order.
+
+    Parameters
+    ----------
+    config : StationConfig
+    policy : {"active", "stationary", "random"}, optional
+        Overrides ``[perception] policy``.
+    seed : int, optional
+        Seed of the random start depths and of the random policy.
+    gaps : sequence of str, optional
+        Names of the gaps to inspect (default all).
+    start_depth : float, optional
+        Start every inspection at this protocol depth (mm) instead of a random one.
+    station : Station, optional
+        An open station to use (tests); opened from ``config`` otherwise.
+    """
+    from .procedures import load_station_calibration
+    from .station import Station
+
+    calibration = load_station_calibration(config)
+    model = load_station_model(config, calibration)
+    name = policy or config.perception.policy
+    perceiver = make_perceiver(config, model, policy=name, seed=seed)
+    targets = [config.gap(g) for g in gaps] if gaps else list(config.gaps)
+    rng = np.random.default_rng(seed)
+    depths = np.asarray(config.protocol.depths)
+    fixation = perceiver.policy
+    log(f"inspecting {len(targets)} gap(s) on {config.name}: policy {name}"
+        f"{'' if name != 'active' else f' (fixation {model.location_centres[fixation.fixation_class]:g} mm)'}, "
+        f"decision threshold {perceiver.decision_threshold:g}, at most {perceiver.max_taps} taps")
+    outcomes = []
+    with (station if station is not None else Station(config, calibration=calibration)) as open_station:
+        store = ResultsStore(config.results)
+        try:
+            for gap in targets:
+                start = float(start_depth) if start_depth is not None else float(rng.choice(depths))
+                outcome = inspect_gap(open_station, perceiver, gap, store, start_depth=start, policy=name, log=log)
+                log(f"{gap.name}: width {outcome.estimated_width:.2f} mm (nominal {gap.nominal_width:.2f} "
+                    f"+- {gap.tolerance:.2f}), belief {outcome.belief:.3f}, {outcome.taps} taps, "
+                    f"{outcome.duration_s:.1f} s -> {outcome.verdict}")
+                outcomes.append(outcome)
+        finally:
+            store.close()
+    return outcomes
