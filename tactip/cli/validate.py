@@ -11,12 +11,14 @@ uniformly over the range). Without --policy all three run on the same starting c
 
 --sweep-fixation runs the active policy at every fixation location, picks the one with the
 lowest error within --tap-budget mean taps, and writes it with its threshold into the model's
-recommended settings (used by the station).
+recommended settings (used by the station). --sweep-lateral gives the error when the test taps'
+lateral placement is within [-SIGMA, SIGMA] mm, relative to the smallest SIGMA (paper 002 Fig. 11).
 
 Examples:
   tactip validate models/gaps.h5 data/test.h5 --plot out/curves.png --json out/curves.json
   tactip validate models/gaps.h5 data/test.h5 --policy active --fixation 4.75 --thresholds 0.9 0.99
   tactip validate models/gaps.h5 data/test.h5 --sweep-fixation --plot out/fixation.png
+  tactip validate models/gaps.h5 data/test_jitter.h5 --sweep-lateral 0.25 0.5 1 2 --plot out/lateral.png
 """
 
 from __future__ import annotations
@@ -73,8 +75,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="location belief needed before moving (0 always moves, 1 never; default 0)")
     parser.add_argument("--shift", choices=("edge", "uniform"), default="edge",
                         help="belief shift at the range boundary after a move (default edge)")
-    parser.add_argument("--sweep-fixation", action="store_true",
-                        help="try every fixation location, write the best into the model's recommended settings")
+    sweep = parser.add_mutually_exclusive_group()
+    sweep.add_argument("--sweep-fixation", action="store_true",
+                       help="try every fixation location, write the best into the model's recommended settings")
+    sweep.add_argument("--sweep-lateral", nargs="+", type=float, metavar="SIGMA",
+                       help="robustness to lateral placement noise (paper 002 Fig. 11): errors with test taps "
+                            "whose lateral offset is within [-SIGMA, SIGMA] mm, e.g. 0 0.25 0.5 1 2 (the test set "
+                            "must be collected with [protocol] lateral_jitter_mm)")
     parser.add_argument("--tap-budget", type=float, default=12, metavar="TAPS",
                         help="mean taps within which --sweep-fixation takes the best error (default 12)")
     parser.add_argument("--json", metavar="OUT.json", help="write one entry per policy and threshold")
@@ -115,6 +122,23 @@ def run(args: argparse.Namespace) -> int:
             from perception.plots import plot_fixation_sweep
 
             plot_fixation_sweep(sweep, args.plot, units=unit)
+    elif args.sweep_lateral:
+        from perception import lateral_sweep
+
+        name = args.policy or "active"
+        policy = make_policy(name, fixation_class=model.fixation_class(args.fixation))
+        progress = functools.partial(tqdm, desc="sigmas", unit="sigma", disable=args.quiet)
+        sweep = lateral_sweep(environment, policy, sigmas=args.sweep_lateral, tap_budget=args.tap_budget,
+                              progress=progress, **options)
+        print(f"{name} policy; best error within {args.tap_budget:g} mean taps")
+        print(f"{'sigma':>8} {'error':>8} {'ratio':>6}")
+        for sigma, error, ratio in zip(sweep.sigmas, sweep.errors, sweep.ratio):
+            print(f"{sigma:>8.3g} {error:>8.3f} {ratio:>6.2f}")
+        rows = [{**row, "sigma": float(s)} for s, r in zip(sweep.sigmas, sweep.results) for row in r.rows()]
+        if args.plot:
+            from perception.plots import plot_lateral_sweep
+
+            plot_lateral_sweep(sweep, args.plot)
     else:
         fixation_class = model.fixation_class(args.fixation)
         names = [args.policy] if args.policy else ["active", "random", "stationary"]

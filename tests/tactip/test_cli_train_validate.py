@@ -95,3 +95,27 @@ def test_user_errors_are_one_line(files, capsys, tmp_path):
     with pytest.raises(SystemExit):
         main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--thresholds", "1.5"])
     assert "thresholds must be in [0, 1]" in capsys.readouterr().err
+
+
+def test_sweep_lateral_shows_errors_growing_with_placement_noise(files, capsys, tmp_path):
+    # Test taps placed laterally within [-2, 2] mm; the further off, the more their features are corrupted.
+    rng = np.random.default_rng(5)
+    base = gap_dataset(seed=2, taps_per_class=40, **GRID)
+    lateral = rng.uniform(-2.0, 2.0, len(base))
+    taps = base.taps + (rng.standard_normal(base.taps.shape) * 3.0 * np.abs(lateral)[:, None, None]).astype(np.float32)
+    save_dataset(tmp_path / "jitter.h5", Dataset(taps, base.location, base.identity, lateral, base.front_end))
+    out_json = tmp_path / "lateral.json"
+    assert main(["validate", str(files / "model.h5"), str(tmp_path / "jitter.h5"), "--sweep-lateral", "0.5", "1", "2",
+                 "--runs", "400", "--quiet", "--json", str(out_json), "--plot", str(tmp_path / "lateral.png")]) == 0
+    text = capsys.readouterr().out
+    lines = text[text.index("sigma"):].splitlines()[1:4]
+    errors = [float(line.split()[1]) for line in lines]
+    ratios = [float(line.split()[2]) for line in lines]
+    assert ratios[0] == 1.0 and errors[2] > errors[0]
+    assert {row["sigma"] for row in json.loads(out_json.read_text())} == {0.5, 1.0, 2.0}
+    assert (tmp_path / "lateral.png").stat().st_size > 1000
+
+
+def test_sweep_lateral_needs_lateral_offsets(files, capsys):
+    assert main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--sweep-lateral", "1", "--quiet"]) == 1
+    assert "no lateral offsets" in capsys.readouterr().err
