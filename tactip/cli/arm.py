@@ -21,14 +21,9 @@ from __future__ import annotations
 
 import argparse
 
+from tactip.cli._types import positive_float
+
 HELP = "check the arm of a station (status) and try one slow tap (tap)"
-
-
-def _positive(text: str) -> float:
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -47,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                      help="depth of the tap below the surface reference z = 0, mm (positive = into the part)")
     tap.add_argument("--at", nargs=2, type=float, default=(0.0, 0.0), metavar=("X", "Y"),
                      help="tap point in the work frame, mm (default: the origin)")
-    tap.add_argument("--speed", type=_positive, default=5.0, metavar="MM_S",
+    tap.add_argument("--speed", type=positive_float, default=5.0, metavar="MM_S",
                      help="stroke speed, mm/s (default 5; capped by max_tap_speed)")
 
 

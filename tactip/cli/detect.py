@@ -12,6 +12,8 @@ Example:
 from __future__ import annotations
 
 import argparse
+
+from tactip.cli._types import positive_int
 import json
 
 HELP = "detect the pins in one image (optionally auto-tuned to an expected count)"
@@ -20,17 +22,10 @@ HELP = "detect the pins in one image (optionally auto-tuned to an expected count
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``tactip detect``."""
     parser.add_argument("image", metavar="IMAGE", help="image file (png, jpg, bmp, tif)")
-    parser.add_argument("--expected-pins", type=_positive_int, metavar="N",
+    parser.add_argument("--expected-pins", type=positive_int, metavar="N",
                         help="tune detection to N pins first (127, 331, 532 ...)")
     parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
     parser.add_argument("--json", action="store_true", help='print {"count": n, "pins": [[x, y], ...]}')
-
-
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
-    return value
 
 
 def run(args: argparse.Namespace) -> int:

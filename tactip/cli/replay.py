@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import argparse
 
+from tactip.cli._types import non_negative_float, non_negative_int, positive_float, positive_int
+
 HELP = "track the pins of a recorded video, find the taps and write positions and tap features to HDF5"
 
 
@@ -26,50 +28,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="RESULT.h5", help="HDF5 file to write")
     parser.add_argument("--annotate", metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
-    parser.add_argument("--expected-pins", type=_positive_int, metavar="N",
+    parser.add_argument("--expected-pins", type=positive_int, metavar="N",
                         help="auto-tune detection to N pins on the rest frame first")
-    parser.add_argument("--samples", type=_positive_int, default=40, metavar="N",
+    parser.add_argument("--samples", type=positive_int, default=40, metavar="N",
                         help="samples per tap feature array (default: 40)")
-    parser.add_argument("--pins", type=_positive_int, default=40, metavar="N",
+    parser.add_argument("--pins", type=positive_int, default=40, metavar="N",
                         help="tactile pins to select (default: 40)")
-    parser.add_argument("--min-separation-mm", type=_non_negative_float, default=4.0, metavar="MM",
+    parser.add_argument("--min-separation-mm", type=non_negative_float, default=4.0, metavar="MM",
                         help="minimum distance between selected pins, mm (default: 4)")
-    parser.add_argument("--pad-diameter-mm", type=_positive_float, default=40.0, metavar="MM",
+    parser.add_argument("--pad-diameter-mm", type=positive_float, default=40.0, metavar="MM",
                         help="pad diameter, mm; the scale is this over the detected disc diameter (default: 40)")
-    parser.add_argument("--mm-per-px", type=_positive_float, metavar="MM",
+    parser.add_argument("--mm-per-px", type=positive_float, metavar="MM",
                         help="image scale at the pad, mm per px, instead of the one from the disc diameter")
-    parser.add_argument("--rest-frame", type=_non_negative_int, default=0, metavar="N",
+    parser.add_argument("--rest-frame", type=non_negative_int, default=0, metavar="N",
                         help="index of the rest frame, off contact (default: 0, the first frame)")
     parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
-
-
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
-    return value
-
-
-def _non_negative_int(text: str) -> int:
-    value = int(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be a non-negative integer, got {text}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
-    return value
-
-
-def _non_negative_float(text: str) -> float:
-    value = float(text)
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
-    return value
 
 
 def run(args: argparse.Namespace) -> int:

@@ -21,19 +21,9 @@ from __future__ import annotations
 
 import argparse
 
+from tactip.cli._types import int_at_least
+
 HELP = "simulate training and test datasets (taxel: iCub fingertip or skin, paper 000)"
-
-
-def _int_at_least(low: int):
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"must be >= {low}, got {text}")
-        return value
-    return parse
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -52,12 +42,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     taxel.add_argument("--sensor", choices=TAXEL_SENSORS, default="fingertip",
                        help="which sensor (default fingertip)")
     taxel.add_argument("--out", required=True, metavar="DIR", help="folder for train.h5 and test.h5 (created)")
-    taxel.add_argument("--seed", type=_int_at_least(0), default=0, metavar="S",
+    taxel.add_argument("--seed", type=int_at_least(0), default=0, metavar="S",
                        help="seed of the simulated sensor and its noise (default 0)")
-    taxel.add_argument("--locations", type=_int_at_least(2), default=None, metavar="N",
+    taxel.add_argument("--locations", type=int_at_least(2), default=None, metavar="N",
                        help="evenly spaced tap locations per collection (default: the paper's 0.01 mm steps, "
                             "3000 for the fingertip, 5000 for the skin)")
-    taxel.add_argument("--taps-per-location", type=_int_at_least(1), default=1, metavar="N",
+    taxel.add_argument("--taps-per-location", type=int_at_least(1), default=1, metavar="N",
                        help="taps at each location (default 1)")
     taxel.add_argument("--csv", action="store_true", help="also write the raw test stream to DIR/test_stream.csv")
     taxel.add_argument("--quiet", action="store_true", help="no progress bars")

@@ -14,37 +14,23 @@ from __future__ import annotations
 
 import argparse
 
+from tactip.cli._types import int_at_least, positive_float
+
 HELP = "train a perception model (histogram likelihood) from a tap dataset"
-
-
-def _int_at_least(low: int):
-    def parse(text: str) -> int:
-        value = int(text)
-        if value < low:
-            raise argparse.ArgumentTypeError(f"must be >= {low}, got {text}")
-        return value
-    return parse
-
-
-def _positive(text: str) -> float:
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser of ``tactip train``."""
     parser.add_argument("dataset", metavar="DATASET.h5", help="training taps (tactip-dataset/1 HDF5)")
     parser.add_argument("--out", required=True, metavar="MODEL.h5", help="model file to write (tactip-model/1 HDF5)")
-    parser.add_argument("--locations", type=_int_at_least(1), default=11, metavar="N",
+    parser.add_argument("--locations", type=int_at_least(1), default=11, metavar="N",
                         help="equal location classes over the training range (default 11; "
                              "a dataset with one location gets one class)")
-    parser.add_argument("--bins", type=_int_at_least(2), default=100, metavar="N",
+    parser.add_argument("--bins", type=int_at_least(2), default=100, metavar="N",
                         help="value bins per sensor dimension (default 100)")
-    parser.add_argument("--epsilon", type=_positive, default=None,
+    parser.add_argument("--epsilon", type=positive_float, default=None,
                         help="count added to every histogram bin (default 1e-3)")
-    parser.add_argument("--min-taps", type=_int_at_least(1), default=1, metavar="N",
+    parser.add_argument("--min-taps", type=int_at_least(1), default=1, metavar="N",
                         help="fewest training taps a class may have (default 1)")
 
 

@@ -24,34 +24,13 @@ Examples:
 from __future__ import annotations
 
 import argparse
+
+from tactip.cli._types import fraction, fractions, int_at_least
 import functools
 import json
 import pathlib
 
 HELP = "Monte Carlo validation of a model on a test dataset (speed-accuracy, fixation sweep)"
-
-
-def _int_at_least(low: int):
-    def parse(text: str) -> int:
-        value = int(text)
-        if value < low:
-            raise argparse.ArgumentTypeError(f"must be >= {low}, got {text}")
-        return value
-    return parse
-
-
-def _fractions(text: str) -> list[float]:
-    values = [float(v) for v in text.split(",") if v.strip()]
-    if not values or any(not 0.0 <= v <= 1.0 for v in values):
-        raise argparse.ArgumentTypeError(f"thresholds must be in [0, 1], got {text}")
-    return values
-
-
-def _fraction(text: str) -> float:
-    value = float(text)
-    if not 0.0 <= value <= 1.0:
-        raise argparse.ArgumentTypeError(f"must be in [0, 1], got {text}")
-    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -63,15 +42,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fixation", type=float, metavar="MM",
                         help="fixation location of the active policy, location units (default: the model's "
                              "recommended one, else the centre of the range)")
-    parser.add_argument("--thresholds", nargs="+", type=_fractions, metavar="T",
+    parser.add_argument("--thresholds", nargs="+", type=fractions, metavar="T",
                         help="decision thresholds, space or comma separated (default: 20 over 0-0.9999)")
-    parser.add_argument("--runs", type=_int_at_least(1), default=5000, metavar="N",
+    parser.add_argument("--runs", type=int_at_least(1), default=5000, metavar="N",
                         help="Monte Carlo runs per policy (default 5000)")
-    parser.add_argument("--max-taps", type=_int_at_least(1), default=20, metavar="N",
+    parser.add_argument("--max-taps", type=int_at_least(1), default=20, metavar="N",
                         help="taps at which a decision is forced (default 20)")
-    parser.add_argument("--deadline", type=_int_at_least(1), metavar="N",
+    parser.add_argument("--deadline", type=int_at_least(1), metavar="N",
                         help="null decision and random relocation after N taps without a decision")
-    parser.add_argument("--move-threshold", type=_fraction, default=0.0, metavar="P",
+    parser.add_argument("--move-threshold", type=fraction, default=0.0, metavar="P",
                         help="location belief needed before moving (0 always moves, 1 never; default 0)")
     parser.add_argument("--shift", choices=("edge", "uniform"), default="edge",
                         help="belief shift at the range boundary after a move (default edge)")
