@@ -49,6 +49,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tactip",
         description="TacTip optical tactile sensing: pin tracking, active Bayesian gap inspection, arm control.",
+        epilog="Try it with no hardware: tactip inspect --sim. A new station: tactip arm status, calibrate, "
+               "collect, train, validate --sweep-fixation, then inspect. 'tactip COMMAND --help' for each.",
     )
     parser.add_argument("--version", action="version", version=f"tactip {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
