@@ -103,8 +103,13 @@ def make_perceiver(config: StationConfig, model, *, policy: str | None = None, s
 
 
 def inspect_gap(station, perceiver, gap: GapConfig, store: ResultsStore, *, start_depth: float, policy: str,
-                log: Callable[[str], None] = print) -> InspectionOutcome:
-    """Inspect one gap (see the module docstring); returns the outcome, stored in ``store``."""
+                seed: int | None = None, log: Callable[[str], None] = print) -> InspectionOutcome:
+    """Inspect one gap (see the module docstring); returns the outcome, stored in ``store``.
+
+    ``seed`` makes a simulated inspection reproducible (each tap's camera noise and placement).
+    """
+    from calibration import tap_seed
+
     config = station.config
     protocol = config.protocol
     inspection = store.start_inspection(gap.name, nominal_width=gap.nominal_width, tolerance=gap.tolerance,
@@ -116,7 +121,7 @@ def inspect_gap(station, perceiver, gap: GapConfig, store: ResultsStore, *, star
     depths = []
     try:
         while True:
-            result = station.tap(gap, depth)
+            result = station.tap(gap, depth, seed=None if seed is None else tap_seed(seed, len(depths)))
             depths.append(depth)
             step = perceiver.observe(result.features)
             store.record_tap(inspection, tap=step.taps, depth_mm=depth, location_estimate=step.location_estimate,
@@ -152,7 +157,8 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
     policy : {"active", "stationary", "random"}, optional
         Overrides ``[perception] policy``.
     seed : int, optional
-        Seed of the random start depths and of the random policy.
+        Seed of the random start depths, the random policy and (simulated station) each tap's
+        camera noise and placement: the same seed repeats the same inspection.
     gaps : sequence of str, optional
         Names of the gaps to inspect (default all).
     start_depth : float, optional
@@ -180,7 +186,9 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
         try:
             for gap in targets:
                 start = float(start_depth) if start_depth is not None else float(rng.choice(depths))
-                outcome = inspect_gap(open_station, perceiver, gap, store, start_depth=start, policy=name, log=log)
+                gap_seed = None if seed is None else int(rng.integers(2**62))
+                outcome = inspect_gap(open_station, perceiver, gap, store, start_depth=start, policy=name,
+                                      seed=gap_seed, log=log)
                 log(f"{gap.name}: width {outcome.estimated_width:.2f} mm (nominal {gap.nominal_width:.2f} "
                     f"+- {gap.tolerance:.2f}), belief {outcome.belief:.3f}, {outcome.taps} taps, "
                     f"{outcome.duration_s:.1f} s -> {outcome.verdict}")

@@ -74,6 +74,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("Stopped.", file=sys.stderr)
         return 1
+    except BrokenPipeError:  # output piped into `head` and the like: stop quietly
+        sys.stderr.close()
+        return 1
     except _known_errors() as exc:
         print(f"tactip {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
