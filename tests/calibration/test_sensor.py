@@ -1,0 +1,139 @@
+"""Sensor calibration against the synthetic TacTip's ground truth; its refusals; its file."""
+
+import h5py
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+from scipy.spatial.distance import pdist
+
+from calibration import SCHEMA, CalibrationError, calibrate_sensor, load_calibration, save_calibration
+from perception import Dataset, save_dataset
+from tactip.synthetic import SyntheticTacTip
+
+
+@pytest.fixture(scope="module")
+def sensor():
+    """The station's sensor: 331 pins, camera noise 4 grey levels."""
+    return SyntheticTacTip(pins=331, noise_sigma=4.0, seed=0)
+
+
+@pytest.fixture(scope="module")
+def rest_frames(sensor):
+    return [sensor.render().image for _ in range(5)]
+
+
+@pytest.fixture(scope="module")
+def calibration(rest_frames):
+    return calibrate_sensor(rest_frames, expected_pins=331, selected_pins=40, min_separation_mm=4.0,
+                            sensor={"source": "synthetic", "serial": "T-07"})
+
+
+def test_reference_pins_are_the_true_pins(sensor, calibration):
+    truth, visible = sensor.pin_centres()
+    assert len(calibration.reference_pins) == 331 == visible.sum()
+    # one detected pin per true pin, each within a tenth of a pixel (5 averaged noisy frames)
+    distance, index = cKDTree(calibration.reference_pins).query(truth[visible])
+    assert len(np.unique(index)) == 331
+    assert distance.max() < 0.1
+    assert calibration.rest_frames == 5 and calibration.frame_size == sensor.image_size
+    cx, cy, radius = sensor.disc
+    assert (calibration.disc.cx, calibration.disc.cy) == pytest.approx((cx, cy), abs=1.0)
+    assert calibration.disc.radius_px == pytest.approx(radius, rel=0.02)
+    # the scale is the pad diameter over the disc diameter
+    assert calibration.mm_per_px == pytest.approx(40.0 / (2 * radius), rel=0.02)
+
+
+def test_selected_pins_are_far_enough_apart_in_mm(calibration):
+    chosen = calibration.selected_pins
+    assert calibration.n_selected == 40 == len(np.unique(chosen))
+    assert chosen.min() >= 0 and chosen.max() < len(calibration.reference_pins)
+    separation_mm = pdist(calibration.reference_pins[chosen]) * calibration.mm_per_px
+    assert separation_mm.min() >= 4.0
+
+
+def test_a_larger_separation_selects_pins_further_apart(rest_frames, calibration):
+    wide = calibrate_sensor(rest_frames, expected_pins=331, selected_pins=20, min_separation_mm=6.0)
+    assert (pdist(wide.reference_pins[wide.selected_pins]) * wide.mm_per_px).min() >= 6.0
+    assert np.array_equal(wide.reference_pins, calibration.reference_pins)
+
+
+def test_a_measured_scale_overrides_the_pad_estimate(rest_frames):
+    measured = calibrate_sensor(rest_frames, expected_pins=331, mm_per_px=0.146, selected_pins=20)
+    assert measured.mm_per_px == 0.146
+    assert (pdist(measured.reference_pins[measured.selected_pins]) * 0.146).min() >= 4.0
+
+
+@pytest.mark.parametrize("pins", [127, 532])
+def test_other_presets_calibrate_to_their_count(pins):
+    sensor = SyntheticTacTip(pins=pins, seed=1)
+    calibration = calibrate_sensor([sensor.render().image for _ in range(3)], expected_pins=pins)
+    truth, visible = sensor.pin_centres()
+    assert len(calibration.reference_pins) == pins
+    assert cKDTree(calibration.reference_pins).query(truth[visible])[0].max() < 0.2
+
+
+@pytest.mark.parametrize("frame", [
+    np.full((480, 640), 128, np.uint8),                                          # uniform grey
+    np.random.default_rng(0).integers(0, 256, (480, 640), dtype=np.uint8),      # noise
+    np.zeros((480, 640, 3), np.uint8),                                           # lens covered
+], ids=["grey", "noise", "black"])
+def test_a_frame_without_a_sensor_is_refused(frame):
+    with pytest.raises(CalibrationError, match="no sensor in view"):
+        calibrate_sensor([frame, frame], expected_pins=331)
+
+
+def test_a_pin_count_far_from_expected_is_refused(rest_frames):
+    with pytest.raises(CalibrationError, match="532 pins") as info:
+        calibrate_sensor(rest_frames, expected_pins=532)
+    assert "[sensor] pins" in str(info.value)
+
+
+@pytest.mark.parametrize("frames, message", [
+    ([], "no rest frames"),
+    ([np.zeros((480, 640), np.uint8), np.zeros((240, 320), np.uint8)], "differ in size"),
+])
+def test_bad_rest_frames_are_refused(frames, message):
+    with pytest.raises(CalibrationError, match=message):
+        calibrate_sensor(frames, expected_pins=331)
+
+
+def test_too_many_pins_for_the_separation_is_refused(rest_frames):
+    with pytest.raises(CalibrationError, match="cannot select the feature pins"):
+        calibrate_sensor(rest_frames, expected_pins=331, selected_pins=300, min_separation_mm=4.0)
+
+
+def test_the_file_round_trips(tmp_path, calibration):
+    path = tmp_path / "cal" / "calibration.h5"
+    save_calibration(path, calibration)
+    assert sorted(p.name for p in path.parent.iterdir()) == ["calibration.h5"]   # no temporary left behind
+    loaded = load_calibration(path)
+    assert np.array_equal(loaded.reference_pins, calibration.reference_pins)
+    assert np.array_equal(loaded.selected_pins, calibration.selected_pins)
+    assert loaded.detection == calibration.detection
+    assert loaded.disc == calibration.disc
+    for name in ("mm_per_px", "expected_pins", "frame_size", "min_separation_mm", "rest_frames", "sensor"):
+        assert getattr(loaded, name) == getattr(calibration, name), name
+    with h5py.File(path, "r") as f:
+        assert f.attrs["schema"] == SCHEMA
+
+
+def test_a_file_of_another_schema_is_refused(tmp_path):
+    path = tmp_path / "train.h5"
+    save_dataset(path, Dataset(np.zeros((1, 4, 2)), [0.0], [1.0], None, "tactip"))
+    with pytest.raises(CalibrationError, match="not a TacTip calibration file"):
+        load_calibration(path)
+
+
+def test_a_damaged_or_foreign_file_is_refused(tmp_path, calibration):
+    text = tmp_path / "notes.h5"
+    text.write_text("not HDF5")
+    with pytest.raises(CalibrationError, match="cannot be read"):
+        load_calibration(text)
+    damaged = tmp_path / "damaged.h5"
+    save_calibration(damaged, calibration)
+    with h5py.File(damaged, "r+") as f:
+        del f.attrs["mm_per_px"]
+    with pytest.raises(CalibrationError, match="mm_per_px"):
+        load_calibration(damaged)
+    with pytest.raises(CalibrationError, match="run 'tactip calibrate' first"):
+        load_calibration(tmp_path / "missing.h5")
