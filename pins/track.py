@@ -6,17 +6,19 @@ residual is small (the blob did not vanish), and tracking the result back to the
 lands within `fb_threshold_px` of where it started (forward-backward check). A pin that fails is
 *lost*: its position is NaN and `PinTracker.lost` says so; it is never frozen at an old place.
 
-`PinTracker` adds two things on top of the pure `track_pins`:
+`PinTracker` adds two things on top of the pure `track_pins` (`pins._refine` says how):
 
-- refinement: LK on smooth blobs drifts by tenths of a px over a tap, so each tracked pin is
-  moved onto the sub-pixel centroid of the detected blob it landed on (`pins.detect`), one blob
-  per pin, inside a gate of a fraction of the pin spacing; a pin with no blob there is lost;
-- recovery: blobs no pin claimed are assigned to lost pins one-to-one (Hungarian method,
-  `scipy.optimize.linear_sum_assignment`) within the same gate around each lost pin's predicted
-  position (its rest position moved by the median displacement of its tracked neighbours).
-
-Gates below half the pin spacing and one-to-one assignments keep identities: a pin can only be
-given a blob that is nearer to its prediction than any neighbour could be.
+- refinement: LK errors add up from frame to frame, so each tracked pin is moved onto the
+  intensity-weighted centroid of its tip, measured in a small window around its LK estimate
+  that stays inside the pin's own Voronoi cell, for all pins at once; the centroid is kept when
+  it is plausible (near the LK estimate, tip area and contrast like at rest);
+- recovery: only in frames where some pin is lost or implausible, the frame's blobs are
+  detected (`pins.detect`); an implausible pin takes the blob it landed on, one blob per pin,
+  inside a gate of a fraction of the pin spacing (no blob: lost), and blobs no pin claimed are
+  assigned to lost pins one-to-one (Hungarian method) within the same gate around each lost
+  pin's predicted position (its rest position moved by the median displacement of its tracked
+  neighbours). Gates below half the pin spacing and one-to-one assignments keep identities: a
+  pin can only be given a blob that is nearer to its prediction than any neighbour could be.
 
 Limit: frame-to-frame motion must stay below about half the pin spacing (8 px at 331 pins in a
 640x480 frame; a 250 ms tap rise at 20 frames/s moves pins at most ~7 px per frame). Beyond it
@@ -24,8 +26,11 @@ the lattice of identical pins aliases: LK, its backward check and the refinement
 the neighbouring pin. Record faster taps at a higher frame rate.
 
 Speed: the tracker runs LK on the disc's crop only, starting each pin from a constant-velocity
-guess so that one pyramid level suffices. OpenCV's Python binding cannot take the pyramids of
+guess, on the full image alone (the pyramid only for pins that then fail a check or move more
+than a third of a window from the guess). OpenCV's Python binding cannot take the pyramids of
 `cv2.buildOpticalFlowPyramid` (opencv/opencv#4777), so they are not reused between frames.
+Windowed refinement costs about 0.2 ms per frame for 331-532 pins, against 3-4 ms for blob
+detection, which a frame pays only when a pin is lost or implausible.
 """
 
 from __future__ import annotations
@@ -34,14 +39,15 @@ from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
+from ._refine import Refiner, _as_points, match_to_blobs
 from .detect import DetectionParams, _detect
 from .disc import SensorDisc, as_grey, find_sensor_disc
 from .errors import PinsError, ShapeError
 
 __all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
+
 
 
 @dataclass(frozen=True)
@@ -125,67 +131,49 @@ def track_pins(prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarra
 
 def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, params: LKParams,
            guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """LK forward (from `guess` if given), LK backward from the result, and the checks."""
+    """LK forward (from `guess` if given), LK backward from the result, and the checks.
+
+    From a guess, the forward pass first runs on the full image only (a good guess leaves little
+    motion to find); the pins that then fail a check are tracked again with the whole pyramid.
+    """
     out = np.full_like(points, np.nan)
+    ok = np.zeros(len(points), dtype=bool)
     live = np.flatnonzero(np.isfinite(points).all(axis=1))
     if live.size == 0:
-        return out, np.zeros(len(points), dtype=bool)
+        return out, ok
     start = points[live].astype(np.float32).reshape(-1, 1, 2)
+    initial = None if guess is None else guess[live].astype(np.float32).reshape(-1, 1, 2)
+    forward, good = _forward_backward(prev_grey, next_grey, start, initial, params,
+                                      params.levels if guess is None else 0)
+    if guess is not None and params.levels > 0:
+        # Without the pyramid, LK only finds motion within about a third of a window from the guess.
+        far = np.sum((forward - initial) ** 2, axis=2).ravel() > (0.35 * params.window_px) ** 2
+        again = np.flatnonzero(~good | far)
+    if guess is not None and params.levels > 0 and again.size:
+        forward[again], good[again] = _forward_backward(prev_grey, next_grey, start[again], initial[again], params,
+                                                        params.levels)
+    out[live[good]] = forward.reshape(-1, 2)[good]
+    ok[live[good]] = True
+    return out, ok
+
+
+def _forward_backward(prev_grey: np.ndarray, next_grey: np.ndarray, start: np.ndarray, initial: np.ndarray | None,
+                      params: LKParams, forward_levels: int) -> tuple[np.ndarray, np.ndarray]:
+    """LK forward with `forward_levels` pyramid levels, backward with all; (M, 1, 2) positions and the checks."""
     window = (params.window_px, params.window_px)
-    if guess is None:
+    if initial is None:
         forward, status_f, error = cv2.calcOpticalFlowPyrLK(
-            prev_grey, next_grey, start, None, winSize=window, maxLevel=params.levels, criteria=params._criteria)
+            prev_grey, next_grey, start, None, winSize=window, maxLevel=forward_levels, criteria=params._criteria)
     else:
-        initial = guess[live].astype(np.float32).reshape(-1, 1, 2)
         forward, status_f, error = cv2.calcOpticalFlowPyrLK(
-            prev_grey, next_grey, start, initial, winSize=window, maxLevel=params.levels,
+            prev_grey, next_grey, start, initial.copy(), winSize=window, maxLevel=forward_levels,
             criteria=params._criteria, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
     backward, status_b, _ = cv2.calcOpticalFlowPyrLK(
         next_grey, prev_grey, forward, None, winSize=window, maxLevel=params.levels, criteria=params._criteria)
     fb_error = np.linalg.norm((backward - start).reshape(-1, 2), axis=1)
     good = ((status_f.ravel() == 1) & (status_b.ravel() == 1) & (fb_error <= params.fb_threshold_px)
             & (error.ravel() <= params.max_error))
-    out[live[good]] = forward.reshape(-1, 2)[good]
-    ok = np.zeros(len(points), dtype=bool)
-    ok[live[good]] = True
-    return out, ok
-
-
-def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
-    """One-to-one nearest blob for each point, within a gate.
-
-    Each point takes its nearest blob if that blob lies within `gate_px`; when several points
-    take the same blob, the nearest point keeps it and the others get none.
-
-    Parameters
-    ----------
-    points : (N, 2) ndarray
-        (x, y) px; NaN rows get no blob.
-    blobs : (M, 2) ndarray
-        Detected blob centres (x, y), px.
-    gate_px : float
-        Largest accepted distance, px.
-
-    Returns
-    -------
-    index : (N,) ndarray of int
-        Index into `blobs` for each point, -1 where it has none.
-    """
-    points = _as_points(points, "points")
-    blobs = _as_points(blobs, "blobs")
-    index = np.full(len(points), -1, dtype=np.intp)
-    live = np.flatnonzero(np.isfinite(points).all(axis=1))
-    if live.size == 0 or len(blobs) == 0:
-        return index
-    distance, nearest = cKDTree(blobs).query(points[live], k=1, distance_upper_bound=gate_px)
-    found = np.isfinite(distance)
-    live, distance, nearest = live[found], distance[found], nearest[found]
-    # Nearest point first, then keep each blob's first claimant.
-    order = np.argsort(distance, kind="stable")
-    _, first = np.unique(nearest[order], return_index=True)
-    winners = order[first]
-    index[live[winners]] = nearest[winners]
-    return index
+    return forward, good
 
 
 class PinTracker:
@@ -197,9 +185,9 @@ class PinTracker:
         Lucas-Kanade settings; by default a window of about 0.6 pin spacings (measured at
         `start`) and one pyramid level.
     detection : DetectionParams, optional
-        Blob detection used for refinement and recovery.
+        Blob detection used for recovery (and for the pins at start when `start` is not given them).
     refine : bool
-        Move tracked pins onto their detected blob centroids and recover lost pins (default).
+        Move tracked pins onto their tips' windowed centroids and recover lost pins (default).
         Without it the tracker is plain LK with checks, equal to `track_pins`, and lost pins stay lost.
     gate_fraction : float
         Gate of refinement and recovery as a fraction of the median nearest-neighbour pin
@@ -208,6 +196,20 @@ class PinTracker:
         Tracked neighbours whose median displacement predicts where a lost pin is.
     disc : SensorDisc, optional
         The sensor disc; found in the first frame when not given.
+
+    Attributes
+    ----------
+    rest_positions, positions : (N, 2) ndarray of float64
+        Pins at `start` and after the last `update`, px (NaN where lost).
+    lost : (N,) ndarray of bool
+        Pins lost in the last frame.
+    frames : int
+        Frames seen since `start`, the rest frame included.
+    detection_frames : int
+        Updates that had to detect blobs because some pin was lost or its windowed centroid
+        implausible (each costs a blob detection, a few ms).
+    spacing_px : float
+        Median nearest-neighbour pin spacing at `start`, px.
 
     Examples
     --------
@@ -242,7 +244,8 @@ class PinTracker:
         self._origin = np.zeros(2)
         self._crop = (slice(None), slice(None))
         self._last_seen: np.ndarray | None = None
-        self._neighbour_index: np.ndarray | None = None
+        self._refiner: Refiner | None = None
+        self.detection_frames = 0
 
     def __repr__(self) -> str:
         state = "not started" if self.positions is None else (
@@ -285,13 +288,10 @@ class PinTracker:
         pins = _as_points(pins, "pins")
         if len(pins) < 2 or not np.isfinite(pins).all():
             raise PinsError(f"need at least two finite pin positions to track, got {len(pins)}")
-        tree = cKDTree(pins)
-        distance, index = tree.query(pins, k=min(self.neighbours, len(pins) - 1) + 1)
-        self.spacing_px = float(np.median(distance[:, 1]))
+        self.spacing_px = float(np.median(cKDTree(pins).query(pins, k=2)[0][:, 1]))
         if self._auto_lk:
             # A window a little wider than a pin and narrower than the spacing sees one pin.
             self.lk = LKParams(window_px=int(np.clip(2 * round(0.3 * self.spacing_px) + 1, 7, 31)))
-        self._neighbour_index = index[:, 1:]
         self.rest_positions = pins.copy()
         self.positions = pins.copy()
         self._last_seen = pins.copy()
@@ -300,6 +300,11 @@ class PinTracker:
         self._set_crop(grey.shape, pins)
         self._previous = grey[self._crop].copy()
         self.frames = 1
+        self.detection_frames = 0
+        if self.refine:
+            self._refiner = Refiner(self._bright(self._previous), self.rest_positions, self._origin,
+                                    spacing_px=self.spacing_px, gate_px=self.gate_px, neighbours=self.neighbours,
+                                    detection=self.detection, disc=self.disc)
         return self.positions.copy()
 
     def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:
@@ -339,7 +344,8 @@ class PinTracker:
         moved, ok = _track(self._previous, current, self.positions - origin, self.lk, guess=guess)
         positions = moved + origin
         if self.refine:
-            positions = self._refine_and_recover(grey, positions)
+            positions, detected = self._refiner(grey, self._bright(current), positions, self._last_seen)
+            self.detection_frames += detected
         # Constant-velocity guess for the next frame (zero for pins just recovered or lost).
         self._velocity = np.nan_to_num(positions - self.positions)
         self._previous = current
@@ -349,52 +355,6 @@ class PinTracker:
         self.frames += 1
         return positions.copy()
 
-    def _refine_and_recover(self, grey: np.ndarray, tracked: np.ndarray) -> np.ndarray:
-        blobs = _detect(grey, self.disc, self.detection).centres
-        gate = self.gate_px
-        claim = match_to_blobs(tracked, blobs, gate_px=gate)
-        positions = np.full_like(tracked, np.nan)
-        has_blob = claim >= 0
-        positions[has_blob] = blobs[claim[has_blob]]
-        lost = np.flatnonzero(~has_blob)
-        free = np.ones(len(blobs), dtype=bool)
-        free[claim[has_blob]] = False
-        if lost.size and free.any():
-            predicted = self._predict(positions, lost)
-            free_index = np.flatnonzero(free)
-            pins, chosen = _assign(predicted, blobs[free_index], gate)
-            positions[lost[pins]] = blobs[free_index[chosen]]
-        return positions
-
-    def _predict(self, positions: np.ndarray, which: np.ndarray) -> np.ndarray:
-        """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
-        neighbour_shift = (positions - self.rest_positions)[self._neighbour_index[which]]  # (L, k, 2)
-        seen = np.isfinite(neighbour_shift[..., 0]).any(axis=1)
-        predicted = self._last_seen[which].copy()
-        if seen.any():
-            shift = np.nanmedian(neighbour_shift[seen], axis=1)
-            predicted[seen] = self.rest_positions[which[seen]] + shift
-        return predicted
-
-
-def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
-    """One-to-one assignment of candidates to predictions inside a gate (Hungarian method)."""
-    cost = np.linalg.norm(predicted[:, None, :] - candidates[None, :, :], axis=2)
-    inside = cost <= gate
-    rows = np.flatnonzero(inside.any(axis=1))
-    cols = np.flatnonzero(inside.any(axis=0))
-    if rows.size == 0:
-        return rows, cols
-    sub = np.where(inside[np.ix_(rows, cols)], cost[np.ix_(rows, cols)], 1e6)
-    r, c = linear_sum_assignment(sub)
-    accepted = sub[r, c] <= gate
-    return rows[r[accepted]], cols[c[accepted]]
-
-
-def _as_points(points: np.ndarray, name: str) -> np.ndarray:
-    array = np.asarray(points, dtype=np.float64)
-    if array.size == 0:
-        return array.reshape(0, 2)
-    if array.ndim != 2 or array.shape[1] != 2:
-        raise ShapeError(f"{name} must have shape (N, 2), got {array.shape}")
-    return array
+    def _bright(self, crop: np.ndarray) -> np.ndarray:
+        """The crop with bright pins (dark markers inverted)."""
+        return cv2.bitwise_not(crop) if self.detection.dark_pins else crop
