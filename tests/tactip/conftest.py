@@ -1,0 +1,151 @@
+"""Shared fixtures of the station tests: a small simulated station, calibrated, collected and trained once.
+
+The station is the packaged simulated one (`tactip.config.SIM_PRESET`) cut down to four gaps far apart
+in width (0.5, 1.5, 2.5, 3.5 mm) and a 0.5 mm depth step over the paper's 0-5.5 mm, so that one
+collection is 2 x 48 taps; 11 depth classes make the class width the depth step, so the perceiver's
+moves keep it on the collected depths. `sim_station` runs calibrate, collect, train and validate through the CLI
+once per session; the tests read its files and must not change them (copy them to change them).
+"""
+
+import contextlib
+import io
+import json
+import tomllib
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from arm.sim import SimArm
+from arm.world import Gap, PlateWorld
+from tactip.config import SIM_PRESET, load_station_config
+
+SMALL_GAPS = ("g02", "g06", "g10", "g14")
+DEPTH_STEP_MM = 0.5
+LOCATIONS = 11
+THRESHOLDS = (0.5, 0.9, 0.99)
+
+
+def dump_toml(table: dict) -> str:
+    """TOML text for a mapping of the station file's shapes (scalars, arrays, tables, arrays of tables)."""
+    def value(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, (int, float)):
+            return repr(v)
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        raise TypeError(f"cannot write {v!r} as TOML")
+
+    def section(name, body, header):
+        scalars = {k: v for k, v in body.items() if not isinstance(v, dict) and not _is_tables(v)}
+        lines = [header] if header and (scalars or not body) else []
+        lines += [f"{k} = {value(v)}" for k, v in scalars.items()]
+        for k, v in body.items():
+            if isinstance(v, dict):
+                lines += section(f"{name}.{k}" if name else k, v, f"[{name}.{k}]" if name else f"[{k}]")
+            elif _is_tables(v):
+                for item in v:
+                    full = f"{name}.{k}" if name else k
+                    lines += [f"[[{full}]]"] + section(full, item, None)
+        return lines
+
+    return "\n".join(section("", table, None)) + "\n"
+
+
+def _is_tables(v) -> bool:
+    return isinstance(v, list) and bool(v) and all(isinstance(x, dict) for x in v)
+
+
+def small_station_table(root: Path, *, gaps=SMALL_GAPS, depth_step: float = DEPTH_STEP_MM, **sections) -> dict:
+    """The simulated preset with only ``gaps``, a coarse ``depth_step`` (mm), every file under ``root``.
+
+    ``sections`` update tables key by key, e.g. ``perception={"max_taps": 5}``.
+    """
+    table = tomllib.loads(SIM_PRESET.read_text())
+    root = Path(root)
+    table["station"].update(data_dir=str(root), results=str(root / "results.sqlite"))
+    table["perception"].update(model=str(root / "model.h5"), locations=LOCATIONS)
+    table["protocol"]["depth_step"] = depth_step
+    table["gaps"] = [g for g in table["gaps"] if g["name"] in gaps]
+    for name, values in sections.items():
+        table.setdefault(name, {}).update(values)
+    return table
+
+
+def write_station(root: Path, table: dict, name: str = "station.toml") -> Path:
+    """Write ``table`` as ``root/name`` and return the path."""
+    path = Path(root) / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(dump_toml(table))
+    return path
+
+
+class FaultyArm(SimArm):
+    """A simulated arm whose protective stop trips half-way down the press of its ``fault_tap``-th tap."""
+
+    def __init__(self, config, *, fault_tap: int, **kwargs):
+        super().__init__(config, **kwargs)
+        self.fault_tap = fault_tap
+        self.taps = 0
+
+    def tap(self, x, y, *, on_contact=None, **kwargs):
+        """`SimArm.tap`, arming the fault injection just before the press of the faulty tap."""
+        self.taps += 1
+        if self.taps == self.fault_tap:
+            def contact_then_fault(event):
+                if on_contact is not None:
+                    on_contact(event)
+                self.trigger_protective_stop(during_next_move=True)
+            return super().tap(x, y, on_contact=contact_then_fault, **kwargs)
+        return super().tap(x, y, on_contact=on_contact, **kwargs)
+
+
+def sim_arm(config, arm_class=SimArm, **kwargs):
+    """A simulated arm over the plate of ``config``'s gaps (at their true widths), as the station makes it."""
+    world = PlateWorld(gaps=[Gap(g.name, g.x, g.y, g.true_width or g.nominal_width) for g in config.gaps])
+    return arm_class(config.arm, world=world, **kwargs)
+
+
+def run_cli(argv) -> tuple[int, str, str]:
+    """``tactip.cli.main(argv)`` with stdout and stderr captured: (exit code, out, err)."""
+    from tactip.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="session")
+def sim_station(tmp_path_factory):
+    """The small simulated station after ``tactip calibrate``, ``collect``, ``train`` and ``validate``.
+
+    Attributes: ``root``, ``toml``, ``config``, ``calibration``, ``train``, ``test`` (dataset paths),
+    ``model``, ``validation`` (validate's JSON), ``runs`` (command name -> (code, out, err)).
+    """
+    from calibration import load_calibration
+
+    root = tmp_path_factory.mktemp("station")
+    toml = write_station(root, small_station_table(root))
+    datasets = root / "datasets"
+    model = root / "model.h5"
+    validation = root / "validation.json"
+    thresholds = [str(t) for t in THRESHOLDS]
+    runs = {
+        "calibrate": run_cli(["calibrate", "--config", toml]),
+        "collect": run_cli(["collect", "--config", toml, "--out", datasets, "--workers", "2", "--quiet"]),
+        "train": run_cli(["train", datasets / "train.h5", "--out", model, "--locations", LOCATIONS]),
+        "sweep": run_cli(["validate", model, datasets / "test.h5", "--sweep-fixation", "--runs", "300",
+                          "--thresholds", *thresholds, "--quiet"]),
+        "validate": run_cli(["validate", model, datasets / "test.h5", "--policy", "active", "--runs", "300",
+                             "--thresholds", *thresholds, "--json", validation, "--quiet"]),
+    }
+    failed = {name: run for name, run in runs.items() if run[0] != 0}
+    assert not failed, f"the station pipeline failed: {failed}"
+    config = load_station_config(toml)
+    return SimpleNamespace(root=root, toml=toml, config=config, calibration=load_calibration(root / "calibration.h5"),
+                           train=datasets / "train.h5", test=datasets / "test.h5", model=model,
+                           validation=validation, runs=runs)
