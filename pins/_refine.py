@@ -14,7 +14,7 @@ one (N, P) uint8 array, O(pins x window):
    0.55 of the distance to the nearest neighbouring pin: that disc lies inside the pin's own
    Voronoi cell but for a sliver that holds at most the neighbour's foot, below the threshold,
    so no neighbour's pixels count, even when contact pushes pins together;
-4. the weighted centroid (zeroth and first moments, one matrix product) is the centre.
+4. the weighted centroid (zeroth, first and second moments, one matrix product) is the centre.
 
 A point-symmetric tip whose foot lies inside the mask gives its centre whatever the threshold;
 a tip cut by the mask (near the rim, seen obliquely; pushed against a neighbour) is cut
@@ -22,10 +22,14 @@ symmetrically when the estimate is good, as LK's is (a few hundredths of a px). 
 noise sigma 4, gradient and glare, at rest and under 5 mm contact, this gives 0.02-0.03 px RMSE
 against ground truth (blob detection: 0.03).
 
-Plausibility. A centroid is kept when it lies within a tenth of the pin spacing of the LK
-estimate and the tip's area (mass over the threshold-to-top height, px) and contrast (top minus
-darkest pixel) are like the pin's own at rest: a hidden pin has no contrast, a window reaching
-into a neighbour or glare has too much area.
+Plausibility. A centroid is kept when it lies within 0.03 pin spacings of the LK estimate (half
+a px at 331 pins in 640x480), and the tip's area (mass over the threshold-to-top height, px),
+contrast (top minus darkest pixel) and compactness (area over 2 pi times the mean squared
+distance from the centroid: 1 for a disc) are like the pin's own at rest: a hidden pin has no
+contrast; a neighbour, glare or a speck in the window pulls the centroid, adds area and spreads
+the mass. Limit: a small bright speck detached from a tip but inside its window pulls it by less
+than that bound (up to 0.5 px in tests where blob detection would have kept them apart); a speck
+touching a tip fools blob detection as much.
 
 Recovery. Only in frames where some pin is lost or implausible, the frame's blobs are detected
 (`pins.detect`): an implausible pin takes the blob it landed on, one blob per pin, inside a gate
@@ -50,10 +54,13 @@ __all__ = ["match_to_blobs", "WindowCentroids", "Refiner"]
 # Sub-pixel steps per px of the window masks' centres and radii.
 _PHASES = 4
 # A windowed centroid is plausible when it lies within this fraction of the pin spacing of the LK
-# estimate, and the tip's area and contrast are within these factors of the pin's own at rest.
-_MAX_SHIFT_FRACTION = 0.1
+# estimate, and the tip's area, contrast and compactness are within these factors of the pin's own
+# at rest. On renders and the sample video (5-6 mm taps) centroids stay within 0.01 spacings of
+# LK, area within 0.9-1.3 and compactness within 0.92-1.09 of rest.
+_MAX_SHIFT_FRACTION = 0.03
 _AREA_RATIO = (0.5, 2.0)
 _MIN_CONTRAST_RATIO = 0.5
+_MIN_COMPACTNESS_RATIO = 0.85
 # Neighbours whose distance bounds each refinement window (a hexagonal lattice has six), and the
 # window's radius as a fraction of the distance to the nearest one (see `Refiner.window_radius`).
 _WINDOW_NEIGHBOURS = 6
@@ -118,8 +125,8 @@ class WindowCentroids:
         side = 2 * self.half_px + 1
         offsets = np.arange(-self.half_px, self.half_px + 1, dtype=np.float32)
         gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
-        # Moments of each window pixel: mass, x, y relative to the window's centre pixel.
-        self._moments = np.column_stack([np.ones_like(gx), gx, gy])  # (P, 3)
+        # Moments of each window pixel: mass, x, y and squared distance from the window's centre pixel.
+        self._moments = np.column_stack([np.ones_like(gx), gx, gy, gx * gx + gy * gy])  # (P, 4)
         middle = gx.size // 2
         self._top = np.array([middle, middle - 1, middle + 1, middle - side, middle + side])
         # Disc masks for every quarter-pixel centre in [-0.5, 0.5]^2 and radius up to half_px + 0.5.
@@ -136,7 +143,7 @@ class WindowCentroids:
         return f"WindowCentroids(half_px={self.half_px}, threshold_fraction={self.threshold_fraction})"
 
     def __call__(self, image: np.ndarray, points: np.ndarray,
-                 radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Centroids of the bright tips around `points`.
 
         Parameters
@@ -157,6 +164,9 @@ class WindowCentroids:
             Mass over the threshold-to-top height: about the tip's area, px.
         contrast : (N,) ndarray of float64
             Pin top minus the darkest pixel of the window, grey levels.
+        compactness : (N,) ndarray
+            Area over 2 pi times the weights' mean squared distance from the centroid: 1 for a
+            uniform disc, more for a domed tip, less for an elongated one or one with a speck.
         """
         half, side = self.half_px, 2 * self.half_px + 1
         image = np.ascontiguousarray(image)
@@ -181,13 +191,17 @@ class WindowCentroids:
         radius = np.rint(np.asarray(radius_px) * _PHASES).astype(np.intp) - 1
         np.minimum(np.maximum(radius, 0, out=radius), len(self._radii) - 1, out=radius)
         patches *= self._masks[(radius * self._n_phases + phase[:, 1]) * self._n_phases + phase[:, 0]]
-        moments = patches.astype(np.float32) @ self._moments  # (N, 3): mass, sum x, sum y
+        moments = patches.astype(np.float32) @ self._moments  # (N, 4): mass, sum x, sum y, sum r^2
         mass = moments[:, 0].astype(np.float64)
         with np.errstate(divide="ignore", invalid="ignore"):
-            centres = anchor + moments[:, 1:] / mass[:, None]
+            offset = moments[:, 1:3] / mass[:, None]
             area = mass / (top - threshold)
+            # Mean squared distance from the centroid; a disc of area A has A / (2 pi).
+            spread = moments[:, 3] / mass - np.einsum("nd,nd->n", offset, offset)
+            compactness = area / (2 * np.pi * spread)
+        centres = anchor + offset
         centres[~fits | (mass <= 0)] = np.nan
-        return centres, area, contrast
+        return centres, area, contrast, compactness
 
 
 class Refiner:
@@ -226,7 +240,9 @@ class Refiner:
         self._neighbour_index = index[:, :neighbours]
         self._window_neighbours = np.ascontiguousarray(index[:, :_WINDOW_NEIGHBOURS].T)  # (k, N)
         self.windows = WindowCentroids(int(np.clip(np.ceil(0.5 * spacing_px), 2, 32)))
-        _, area, contrast = self.windows(rest_crop, rest_positions - origin, self.window_radius(rest_positions))
+        _, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
+                                                      self.window_radius(rest_positions))
+        self._min_compactness = _MIN_COMPACTNESS_RATIO * compactness
         self._area_range = (_AREA_RATIO[0] * area, _AREA_RATIO[1] * area)
         self._min_contrast = _MIN_CONTRAST_RATIO * contrast
         self._max_shift_px = _MAX_SHIFT_FRACTION * spacing_px
@@ -277,13 +293,13 @@ class Refiner:
             filled = tracked.copy()
             filled[lost] = self._predict(tracked, lost, last_seen)
             radius = self.window_radius(filled)
-        centres, area, contrast = self.windows(crop, tracked[live] - self.origin, radius[live])
+        centres, area, contrast, compactness = self.windows(crop, tracked[live] - self.origin, radius[live])
         centres += self.origin
         step = centres - tracked[live]
         # NaN compares False: an empty window is not plausible.
         plausible = ((np.einsum("nd,nd->n", step, step) <= self._max_shift_px ** 2)
                      & (area >= self._area_range[0][live]) & (area <= self._area_range[1][live])
-                     & (contrast >= self._min_contrast[live]))
+                     & (contrast >= self._min_contrast[live]) & (compactness >= self._min_compactness[live]))
         if every and plausible.all():
             return centres, False
         refined = np.full_like(tracked, np.nan)
