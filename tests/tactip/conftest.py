@@ -84,23 +84,30 @@ def write_station(root: Path, table: dict, name: str = "station.toml") -> Path:
 
 
 class FaultyArm(SimArm):
-    """A simulated arm whose protective stop trips half-way down the press of its ``fault_tap``-th tap."""
+    """A simulated arm that faults at the press of its ``fault_tap``-th tap (the pad just leaving the approach).
 
-    def __init__(self, config, *, fault_tap: int, **kwargs):
+    ``fault``: ``"protective"`` (a protective stop half-way down the press), ``"emergency"`` (an
+    emergency stop) or ``"program"`` (the control program stops): `SimArm`'s own fault injection.
+    """
+
+    def __init__(self, config, *, fault_tap: int, fault: str = "protective", **kwargs):
         super().__init__(config, **kwargs)
-        self.fault_tap = fault_tap
+        self.fault_tap, self.fault = fault_tap, fault
         self.taps = 0
 
     def tap(self, x, y, *, on_contact=None, **kwargs):
-        """`SimArm.tap`, arming the fault injection just before the press of the faulty tap."""
+        """`SimArm.tap`, injecting the fault just before the press of the faulty tap."""
         self.taps += 1
-        if self.taps == self.fault_tap:
-            def contact_then_fault(event):
-                if on_contact is not None:
-                    on_contact(event)
-                self.trigger_protective_stop(during_next_move=True)
-            return super().tap(x, y, on_contact=contact_then_fault, **kwargs)
-        return super().tap(x, y, on_contact=on_contact, **kwargs)
+        if self.taps != self.fault_tap:
+            return super().tap(x, y, on_contact=on_contact, **kwargs)
+
+        def contact_then_fault(event):
+            if on_contact is not None:
+                on_contact(event)
+            {"protective": lambda: self.trigger_protective_stop(during_next_move=True),
+             "emergency": self.trigger_emergency_stop, "program": self.stop_program}[self.fault]()
+
+        return super().tap(x, y, on_contact=contact_then_fault, **kwargs)
 
 
 def sim_arm(config, arm_class=SimArm, **kwargs):
