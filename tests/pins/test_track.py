@@ -1,4 +1,4 @@
-"""pins.track: LK tracking against ground truth, lost-pin flags, recovery without identity swaps."""
+"""pins.track (and its helper pins._refine): LK tracking and windowed refinement against ground truth, lost-pin flags, recovery without identity swaps."""
 
 import functools
 
@@ -7,7 +7,9 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from pins import LKParams, PinsError, PinTracker, ShapeError, detect_pins, match_to_blobs, track_pins
+from pins import (DetectionParams, LKParams, PinsError, PinTracker, ShapeError, detect_pins, find_sensor_disc,
+                  match_to_blobs, track_pins)
+from pins._refine import Refiner
 from tactip.synthetic import Contact
 from tests.pins.conftest import TAP, frame, sensor
 
@@ -93,6 +95,67 @@ def test_tracking_through_a_tap_meets_the_bar(pins):
         assert np.array_equal(cKDTree(f.centres).query(positions)[1], identity)
     rmse = np.sqrt(np.mean(np.sum(np.concatenate(errors) ** 2, axis=1)))
     assert rmse <= 0.15
+    # Every windowed centroid was plausible: the tap needed no blob detection.
+    assert tracker.detection_frames == 0
+
+
+def test_dark_markers_are_tracked_through_a_tap():
+    s = sensor(331, dark_pins=True)
+    frames = [s.render()] + list(s.tap(TAP, frame_rate=20.0))
+    tracker = PinTracker(detection=DetectionParams(dark_pins=True))
+    identity = _identity(tracker.start(frames[0].image), frames[0].centres)
+    errors = np.concatenate([tracker.update(f.image) - f.centres[identity] for f in frames[1:]])
+    assert np.sqrt(np.mean(np.sum(errors**2, axis=1))) <= 0.15
+    assert tracker.detection_frames == 0
+
+
+def _refiner(pins):
+    """A Refiner on the whole rest frame (crop origin 0), as `PinTracker.start` builds it, and the rest frame."""
+    rest = frame(pins)
+    spacing = float(np.median(cKDTree(rest.centres).query(rest.centres, k=2)[0][:, 1]))
+    refiner = Refiner(rest.image, rest.centres, np.zeros(2), spacing_px=spacing, gate_px=0.4 * spacing, neighbours=6,
+                      detection=DetectionParams(), disc=find_sensor_disc(rest.image))
+    return refiner, rest
+
+
+@pytest.mark.parametrize("pins", [331, 532])
+@pytest.mark.parametrize("depth_mm", [0.0, 5.0])
+def test_windowed_centroids_meet_the_bar_without_detection(pins, depth_mm, rng):
+    refiner, rest = _refiner(pins)
+    f = sensor(pins).render(Contact(indentation_mm=depth_mm, gap_width_mm=2.0))
+    assert f.visible.all()
+    # LK-like estimates; under 5 mm contact neighbouring tips come within 2 px of each other.
+    guess = f.centres + rng.normal(0.0, 0.1, f.centres.shape)
+    positions, detected = refiner(f.image, f.image, guess, rest.centres)
+    assert not detected
+    error = np.linalg.norm(positions - f.centres, axis=1)
+    assert np.sqrt(np.mean(error**2)) <= 0.05 and error.max() <= 0.2
+
+
+@pytest.mark.parametrize("pins", [331, 532])
+def test_a_pin_slipped_towards_its_neighbour_is_recovered_on_its_own_tip(pins):
+    refiner, rest = _refiner(pins)
+    f = sensor(pins).render(Contact(indentation_mm=3.0, gap_width_mm=2.0))
+    guess = f.centres.copy()
+    i = int(np.argmin(np.linalg.norm(guess - [320, 240], axis=1)))
+    j = cKDTree(guess).query(guess[i], k=2)[1][1]
+    guess[i] = 0.5 * (guess[i] + guess[j])
+    positions, detected = refiner(f.image, f.image, guess, rest.centres)
+    # Its window holds halves of two tips: implausible, so the frame's blobs are detected and
+    # the pin, lost for matching, is recovered on its own blob; the neighbour keeps its own.
+    assert detected
+    assert np.abs(positions - f.centres).max() < 0.15
+
+
+def test_a_vanished_pin_that_lk_still_follows_is_lost():
+    refiner, rest = _refiner(331)
+    hidden = np.zeros(331, dtype=bool)
+    hidden[np.random.default_rng(3).choice(331, 17, replace=False)] = True
+    f = sensor(331).render(Contact(indentation_mm=3.0, gap_width_mm=2.0), hidden=hidden)
+    positions, detected = refiner(f.image, f.image, f.centres, rest.centres)
+    # No contrast in their windows and no blob there: NaN, never the window's noise.
+    assert detected and np.isnan(positions[hidden]).all()
+    assert np.abs(positions[~hidden] - f.centres[~hidden]).max() < 0.15
 
 
 @pytest.mark.parametrize("pins, refine", [(331, True), (532, True), (331, False)])
