@@ -1,4 +1,5 @@
-"""pins.track (and its helper pins._refine): LK tracking and windowed refinement against ground truth, lost-pin flags, recovery without identity swaps."""
+"""pins.track and its helper pins._refine: LK tracking and windowed refinement against ground truth,
+lost-pin flags, recovery without identity swaps."""
 
 import functools
 
