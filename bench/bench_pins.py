@@ -4,10 +4,13 @@ Prints ms/frame at 331 and 532 pins (wall time of the best pass, and CPU time) f
 
 - disc:       `find_sensor_disc` (once per video or sensor, not per frame);
 - detect:     `detect_pins` with a known disc (what every tracked frame pays when refining);
-- LK+checks:  pyramidal LK forward and backward on the disc crop, status / residual /
+- LK+checks:  LK forward (full image from the constant-velocity guess, the pyramid only for pins
+              that need it) and pyramidal LK backward on the disc crop, status / residual /
               forward-backward checks (`PinTracker(refine=False).update`);
-- tracker:    the full `PinTracker.update`: LK + checks + detection + refinement onto blob
-              centroids + recovery of lost pins (what `tactip replay` runs).
+- tracker:    the full `PinTracker.update`: LK + checks + refinement onto windowed centroids,
+              with detection + recovery of lost pins only in frames that need it (what
+              `tactip replay` runs); also its RMSE against the renderer's ground truth, px, and
+              the frames that needed detection.
 
 Frames are a 5 mm tap (peak displacement ~14 px), so LK sees real motion. Goals: tracking all
 331 pins at >= 500 frames/s (2 ms/frame), detection <= 3 ms.
@@ -21,6 +24,8 @@ import time
 
 import cv2
 import numpy as np
+
+from scipy.spatial import cKDTree
 
 from pins import PinTracker, detect_pins, find_sensor_disc
 from tactip.synthetic import Contact, SyntheticTacTip
@@ -49,14 +54,20 @@ def _per_frame_ms(step, frames, repeats=REPEATS, setup=None) -> tuple[float, flo
 def bench(pins: int) -> dict[str, float]:
     """ms/frame of each stage at `pins` pins."""
     sensor = SyntheticTacTip(pins=pins, noise_sigma=4.0, seed=0)
-    rest = sensor.render().image
-    frames = [f.image for f in sensor.tap(Contact(indentation_mm=5.0, gap_width_mm=2.0), frame_rate=20.0)]
-    disc = find_sensor_disc(rest)
+    rest = sensor.render()
+    tap = list(sensor.tap(Contact(indentation_mm=5.0, gap_width_mm=2.0), frame_rate=20.0))
+    frames = [f.image for f in tap]
+    disc = find_sensor_disc(rest.image)
     results = {"disc": _per_frame_ms(find_sensor_disc, frames[:5])}
     results["detect"] = _per_frame_ms(lambda image: detect_pins(image, disc=disc), frames)
     for name, refine in (("LK+checks", False), ("tracker", True)):
         tracker = PinTracker(refine=refine, disc=disc)
-        results[name] = _per_frame_ms(tracker.update, frames, setup=lambda t=tracker: t.start(rest))
+        results[name] = _per_frame_ms(tracker.update, frames, setup=lambda t=tracker: t.start(rest.image))
+    # Accuracy of one more pass, against ground truth.
+    identity = cKDTree(rest.centres).query(tracker.start(rest.image))[1]
+    error = np.concatenate([tracker.update(f.image) - f.centres[identity] for f in tap])
+    results["rmse"] = float(np.sqrt(np.mean(np.sum(error**2, axis=1))))
+    results["detection frames"] = f"{tracker.detection_frames}/{len(tap)}"
     return results
 
 
@@ -65,11 +76,12 @@ def main() -> None:
     cv2.setNumThreads(1)
     print(f"pins bench: ms/frame on one thread (cv2.setNumThreads(1)), 640x480, best of {REPEATS} passes, "
           "wall (cpu)")
-    print(f"{'pins':>5} {'disc':>14} {'detect':>14} {'LK+checks':>14} {'tracker':>14} {'tracker fps':>12}")
+    print(f"{'pins':>5} {'disc':>14} {'detect':>14} {'LK+checks':>14} {'tracker':>14} {'tracker fps':>12} "
+          f"{'RMSE px':>8} {'detected':>9}")
     for pins in (331, 532):
         r = bench(pins)
         cells = " ".join(f"{r[k][0]:6.2f} ({r[k][1]:5.2f})" for k in ("disc", "detect", "LK+checks", "tracker"))
-        print(f"{pins:>5} {cells} {1e3 / r['tracker'][0]:12.0f}")
+        print(f"{pins:>5} {cells} {1e3 / r['tracker'][0]:12.0f} {r['rmse']:8.3f} {r['detection frames']:>9}")
 
 
 if __name__ == "__main__":
