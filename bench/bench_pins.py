@@ -3,7 +3,7 @@
 Prints ms/frame at 331 and 532 pins (wall time of the best pass, and CPU time) for:
 
 - disc:       `find_sensor_disc` (once per video or sensor, not per frame);
-- detect:     `detect_pins` with a known disc (what every tracked frame pays when refining);
+- detect:     `detect_pins` with a known disc (what a tracked frame pays when a pin is lost or implausible);
 - LK+checks:  LK forward (full image from the constant-velocity guess, the pyramid only for pins
               that need it) and pyramidal LK backward on the disc crop, status / residual /
               forward-backward checks (`PinTracker(refine=False).update`);
