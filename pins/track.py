@@ -11,7 +11,7 @@ lands within `fb_threshold_px` of where it started (forward-backward check). A p
 - refinement: LK errors add up from frame to frame, so each tracked pin is moved onto the
   intensity-weighted centroid of its tip, measured in a small window around its LK estimate
   that stays inside the pin's own Voronoi cell, for all pins at once; the centroid is kept when
-  it is plausible (near the LK estimate, tip area and contrast like at rest);
+  it is plausible (near the LK estimate; tip area, contrast and compactness like at rest);
 - recovery: only in frames where some pin is lost or implausible, the frame's blobs are
   detected (`pins.detect`); an implausible pin takes the blob it landed on, one blob per pin,
   inside a gate of a fraction of the pin spacing (no blob: lost), and blobs no pin claimed are
@@ -29,8 +29,9 @@ Speed: the tracker runs LK on the disc's crop only, starting each pin from a con
 guess, on the full image alone (the pyramid only for pins that then fail a check or move more
 than a third of a window from the guess). OpenCV's Python binding cannot take the pyramids of
 `cv2.buildOpticalFlowPyramid` (opencv/opencv#4777), so they are not reused between frames.
-Windowed refinement costs about 0.2 ms per frame for 331-532 pins, against 3-4 ms for blob
-detection, which a frame pays only when a pin is lost or implausible.
+Windowed refinement costs about 0.2-0.3 ms per frame for 331-532 pins, against about 3 ms for
+blob detection, which a frame pays only when a pin is lost or implausible: a whole update takes
+about 1.4 ms at 331 pins and 1.6 ms at 532 on one core (`bench/bench_pins.py`).
 """
 
 from __future__ import annotations
@@ -134,7 +135,8 @@ def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, par
     """LK forward (from `guess` if given), LK backward from the result, and the checks.
 
     From a guess, the forward pass first runs on the full image only (a good guess leaves little
-    motion to find); the pins that then fail a check are tracked again with the whole pyramid.
+    motion to find); the pins that then fail a check, or land more than a third of a window from
+    the guess (about as far as LK reaches without the pyramid), are tracked again with it.
     """
     out = np.full_like(points, np.nan)
     ok = np.zeros(len(points), dtype=bool)
@@ -143,15 +145,14 @@ def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, par
         return out, ok
     start = points[live].astype(np.float32).reshape(-1, 1, 2)
     initial = None if guess is None else guess[live].astype(np.float32).reshape(-1, 1, 2)
-    forward, good = _forward_backward(prev_grey, next_grey, start, initial, params,
-                                      params.levels if guess is None else 0)
-    if guess is not None and params.levels > 0:
-        # Without the pyramid, LK only finds motion within about a third of a window from the guess.
+    levels = params.levels if guess is None else 0
+    forward, good = _forward_backward(prev_grey, next_grey, start, initial, params, levels)
+    if levels < params.levels:
         far = np.sum((forward - initial) ** 2, axis=2).ravel() > (0.35 * params.window_px) ** 2
         again = np.flatnonzero(~good | far)
-    if guess is not None and params.levels > 0 and again.size:
-        forward[again], good[again] = _forward_backward(prev_grey, next_grey, start[again], initial[again], params,
-                                                        params.levels)
+        if again.size:
+            forward[again], good[again] = _forward_backward(prev_grey, next_grey, start[again], initial[again],
+                                                            params, params.levels)
     out[live[good]] = forward.reshape(-1, 2)[good]
     ok[live[good]] = True
     return out, ok
@@ -165,7 +166,7 @@ def _forward_backward(prev_grey: np.ndarray, next_grey: np.ndarray, start: np.nd
         forward, status_f, error = cv2.calcOpticalFlowPyrLK(
             prev_grey, next_grey, start, None, winSize=window, maxLevel=forward_levels, criteria=params._criteria)
     else:
-        forward, status_f, error = cv2.calcOpticalFlowPyrLK(
+        forward, status_f, error = cv2.calcOpticalFlowPyrLK(  # a copy: OpenCV writes into the guess
             prev_grey, next_grey, start, initial.copy(), winSize=window, maxLevel=forward_levels,
             criteria=params._criteria, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
     backward, status_b, _ = cv2.calcOpticalFlowPyrLK(
