@@ -242,10 +242,10 @@ class Refiner:
         self.windows = WindowCentroids(int(np.clip(np.ceil(0.5 * spacing_px), 2, 32)))
         _, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
                                                       self.window_radius(rest_positions))
-        self._min_compactness = _MIN_COMPACTNESS_RATIO * compactness
+        self._max_shift_px = _MAX_SHIFT_FRACTION * spacing_px
         self._area_range = (_AREA_RATIO[0] * area, _AREA_RATIO[1] * area)
         self._min_contrast = _MIN_CONTRAST_RATIO * contrast
-        self._max_shift_px = _MAX_SHIFT_FRACTION * spacing_px
+        self._min_compactness = _MIN_COMPACTNESS_RATIO * compactness
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
