@@ -46,7 +46,8 @@ def test_seeds_depend_only_on_seed_set_gap_depth_and_repeat():
         for t in taps:
             assert t.seed == tap_seed(3, t.set, GAPS.index(t.gap), DEPTHS.index(t.depth_mm), t.repeat)
     # a plan of one set, or with an extra gap and depth at the end, keeps every tap it shares
-    assert collection_plan(GAPS, DEPTHS, repeats=2, lateral_jitter_mm=0.5, seed=3, sets=("test",))["test"] == plan["test"]
+    alone = collection_plan(GAPS, DEPTHS, repeats=2, lateral_jitter_mm=0.5, seed=3, sets=("test",))
+    assert alone["test"] == plan["test"]
     more = collection_plan(GAPS + (GapConfig("d", 90.0, 0.0, 3.5, 0.25),), DEPTHS + [4.0], repeats=2,
                            lateral_jitter_mm=0.5, seed=3)
     shared = {(t.gap.name, t.depth_mm, t.repeat): (t.seed, t.lateral_mm) for t in more["train"]}

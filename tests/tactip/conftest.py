@@ -1,10 +1,12 @@
 """Shared fixtures of the station tests: a small simulated station, calibrated, collected and trained once.
 
 The station is the packaged simulated one (`tactip.config.SIM_PRESET`) cut down to four gaps far apart
-in width (0.5, 1.5, 2.5, 3.5 mm) and a 0.5 mm depth step over the paper's 0-5.5 mm, so that one
-collection is 2 x 48 taps; 11 depth classes make the class width the depth step, so the perceiver's
-moves keep it on the collected depths. `sim_station` runs calibrate, collect, train and validate through the CLI
-once per session; the tests read its files and must not change them (copy them to change them).
+in width (0.5, 1.5, 2.5, 3.5 mm), a 0.5 mm depth step over the paper's 0-5.5 mm and two taps per
+depth, so that one collection is 2 x 96 taps (with one tap per depth the histograms are too sparse
+to tell the widths apart reliably); 11 depth classes make the class width the depth step, so the
+perceiver's moves keep it on the collected depths. `sim_station` runs calibrate, collect, train and
+validate through the CLI once per session; the tests read its files and must not change them (copy
+them to change them).
 """
 
 import contextlib
@@ -22,6 +24,7 @@ from tactip.config import SIM_PRESET, load_station_config
 
 SMALL_GAPS = ("g02", "g06", "g10", "g14")
 DEPTH_STEP_MM = 0.5
+REPEATS = 2
 LOCATIONS = 11
 THRESHOLDS = (0.5, 0.9, 0.99)
 
@@ -59,7 +62,8 @@ def _is_tables(v) -> bool:
     return isinstance(v, list) and bool(v) and all(isinstance(x, dict) for x in v)
 
 
-def small_station_table(root: Path, *, gaps=SMALL_GAPS, depth_step: float = DEPTH_STEP_MM, **sections) -> dict:
+def small_station_table(root: Path, *, gaps=SMALL_GAPS, depth_step: float = DEPTH_STEP_MM, repeats: int = REPEATS,
+                        **sections) -> dict:
     """The simulated preset with only ``gaps``, a coarse ``depth_step`` (mm), every file under ``root``.
 
     ``sections`` update tables key by key, e.g. ``perception={"max_taps": 5}``.
@@ -68,7 +72,7 @@ def small_station_table(root: Path, *, gaps=SMALL_GAPS, depth_step: float = DEPT
     root = Path(root)
     table["station"].update(data_dir=str(root), results=str(root / "results.sqlite"))
     table["perception"].update(model=str(root / "model.h5"), locations=LOCATIONS)
-    table["protocol"]["depth_step"] = depth_step
+    table["protocol"].update(depth_step=depth_step, repeats=repeats)
     table["gaps"] = [g for g in table["gaps"] if g["name"] in gaps]
     for name, values in sections.items():
         table.setdefault(name, {}).update(values)

@@ -110,10 +110,12 @@ def test_every_tap_is_stored_with_its_beliefs(tmp_path, model, test_taps):
     assert [t["depth_mm"] for t in taps] == list(outcome.depths) == station.depths
     for t in taps:
         assert len(t["what_belief"]) == 3 and len(t["where_belief"]) == 6
-        assert sum(t["what_belief"]) == pytest.approx(1, abs=1e-5) and sum(t["where_belief"]) == pytest.approx(1, abs=1e-5)
+        assert sum(t["what_belief"]) == pytest.approx(1, abs=1e-5)
+        assert sum(t["where_belief"]) == pytest.approx(1, abs=1e-5)
         assert t["belief"] == pytest.approx(max(t["what_belief"]), abs=1e-6)
         assert t["identity_estimate"] == model.identities[int(np.argmax(t["what_belief"]))]
-    assert taps[-1]["belief"] == pytest.approx(outcome.belief) and taps[-1]["identity_estimate"] == outcome.estimated_width
+    assert taps[-1]["belief"] == pytest.approx(outcome.belief)
+    assert taps[-1]["identity_estimate"] == outcome.estimated_width
     assert taps[0]["belief"] < taps[-1]["belief"]                    # evidence accumulates
 
 
