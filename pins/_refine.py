@@ -212,7 +212,7 @@ class Refiner:
     rest_crop : (h, w) ndarray of uint8
         The rest frame's crop, bright pins (dark markers inverted).
     rest_positions : (N, 2) ndarray
-        Pins at rest (x, y), px in the frame.
+        Pins at rest (x, y), px in the frame (as given or detected).
     origin : (2,) ndarray
         Frame coordinates (x, y) of the crop's top-left pixel, px.
     spacing_px : float
@@ -225,12 +225,18 @@ class Refiner:
         Blob detection for the frames that need it.
     disc : SensorDisc
         The sensor disc.
+
+    Attributes
+    ----------
+    rest_positions : (N, 2) ndarray of float64
+        The given rest positions moved onto their windowed centroids in `rest_crop` (where those
+        lie within the plausibility bound; elsewhere as given): the same estimator as later
+        frames, so that displacements from rest carry none of its bias.
     """
 
     def __init__(self, rest_crop: np.ndarray, rest_positions: np.ndarray, origin: np.ndarray, *,
                  spacing_px: float, gate_px: float, neighbours: int, detection: DetectionParams,
                  disc: SensorDisc) -> None:
-        self.rest_positions = rest_positions
         self.origin = origin
         self.gate_px = gate_px
         self.detection = detection
@@ -240,9 +246,12 @@ class Refiner:
         self._neighbour_index = index[:, :neighbours]
         self._window_neighbours = np.ascontiguousarray(index[:, :_WINDOW_NEIGHBOURS].T)  # (k, N)
         self.windows = WindowCentroids(int(np.clip(np.ceil(0.5 * spacing_px), 2, 32)))
-        _, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
-                                                      self.window_radius(rest_positions))
+        centres, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
+                                                            self.window_radius(rest_positions))
         self._max_shift_px = _MAX_SHIFT_FRACTION * spacing_px
+        step = centres + origin - rest_positions
+        settled = np.einsum("nd,nd->n", step, step) <= self._max_shift_px ** 2
+        self.rest_positions = np.where(settled[:, None], centres + origin, rest_positions)
         self._area_range = (_AREA_RATIO[0] * area, _AREA_RATIO[1] * area)
         self._min_contrast = _MIN_CONTRAST_RATIO * contrast
         self._min_compactness = _MIN_COMPACTNESS_RATIO * compactness

@@ -272,7 +272,10 @@ class PinTracker:
         Returns
         -------
         positions : (N, 2) ndarray of float64
-            The starting positions (also `rest_positions`), px.
+            The starting positions (also `rest_positions`), px. With refinement, each pin is moved
+            onto its tip's windowed centroid in `frame` (when that lies within the plausibility
+            bound of the given position), so that rest and later positions come from the same
+            estimator and displacements carry none of its bias.
 
         Raises
         ------
@@ -293,19 +296,20 @@ class PinTracker:
         if self._auto_lk:
             # A window a little wider than a pin and narrower than the spacing sees one pin.
             self.lk = LKParams(window_px=int(np.clip(2 * round(0.3 * self.spacing_px) + 1, 7, 31)))
+        self._set_crop(grey.shape, pins)
+        self._previous = grey[self._crop].copy()
+        if self.refine:
+            self._refiner = Refiner(self._bright(self._previous), pins, self._origin,
+                                    spacing_px=self.spacing_px, gate_px=self.gate_px, neighbours=self.neighbours,
+                                    detection=self.detection, disc=self.disc)
+            pins = self._refiner.rest_positions
         self.rest_positions = pins.copy()
         self.positions = pins.copy()
         self._last_seen = pins.copy()
         self._velocity = np.zeros_like(pins)
         self.lost = np.zeros(len(pins), dtype=bool)
-        self._set_crop(grey.shape, pins)
-        self._previous = grey[self._crop].copy()
         self.frames = 1
         self.detection_frames = 0
-        if self.refine:
-            self._refiner = Refiner(self._bright(self._previous), self.rest_positions, self._origin,
-                                    spacing_px=self.spacing_px, gate_px=self.gate_px, neighbours=self.neighbours,
-                                    detection=self.detection, disc=self.disc)
         return self.positions.copy()
 
     def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:

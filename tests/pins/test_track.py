@@ -100,6 +100,18 @@ def test_tracking_through_a_tap_meets_the_bar(pins):
     assert tracker.detection_frames == 0
 
 
+def test_start_settles_given_pins_on_their_tips():
+    f = frame(331)
+    given = f.centres + [0.2, -0.15]
+    given[0] += 3.0  # beyond the plausibility bound: kept as given
+    tracker = PinTracker()
+    rest = tracker.start(f.image, pins=given)
+    # Rest positions by the same estimator as later frames: displacements carry none of its bias.
+    assert np.abs(rest[1:] - f.centres[1:]).max() < 0.1
+    assert np.array_equal(rest[0], given[0]) and np.array_equal(tracker.rest_positions, rest)
+    assert np.array_equal(PinTracker(refine=False).start(f.image, pins=given), given)
+
+
 def test_dark_markers_are_tracked_through_a_tap():
     s = sensor(331, dark_pins=True)
     frames = [s.render()] + list(s.tap(TAP, frame_rate=20.0))
