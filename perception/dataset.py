@@ -291,15 +291,20 @@ class DatasetWriter:
                 self._file.close()
                 raise
         else:
-            self._file = h5py.File(self.path, "w")
-            f = self._file
-            _write_attributes(f, template.front_end, template.location_unit, template.identity_unit,
-                              template.dim_names, template.sensor)
-            f.create_dataset("taps", shape=(0, *self._shape), dtype=np.float32,
-                             chunks=_taps_chunks(*self._shape), maxshape=(None, *self._shape))
-            for name in ("location", "identity"):
-                f.create_dataset(name, shape=(0,), dtype=np.float64, chunks=(1024,), maxshape=(None,))
-            f.flush()
+            # Made under a temporary name and renamed: a crash here leaves no half-made file to refuse.
+            tmp = self.path.with_name(f".{self.path.name}.tmp-{os.getpid()}")
+            try:
+                with h5py.File(tmp, "w") as f:
+                    _write_attributes(f, template.front_end, template.location_unit, template.identity_unit,
+                                      template.dim_names, template.sensor)
+                    f.create_dataset("taps", shape=(0, *self._shape), dtype=np.float32,
+                                     chunks=_taps_chunks(*self._shape), maxshape=(None, *self._shape))
+                    for name in ("location", "identity"):
+                        f.create_dataset(name, shape=(0,), dtype=np.float64, chunks=(1024,), maxshape=(None,))
+                os.replace(tmp, self.path)
+            finally:
+                tmp.unlink(missing_ok=True)
+            self._file = h5py.File(self.path, "r+")
 
     def _check_resume(self, template: Dataset) -> None:
         f = self._file
