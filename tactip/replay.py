@@ -2,7 +2,7 @@
 
 ``replay_video`` reads every frame of a video (or any non-live frame source), detects the pins
 in the rest frame (the first frame unless told otherwise; it must be off contact), tracks them
-through the video (`pins.PinTracker`: Lucas-Kanade, blob refinement, lost-pin recovery),
+through the video (`pins.PinTracker`: Lucas-Kanade, windowed centroid refinement, lost-pin recovery),
 integrates displacements from the rest frame, finds the taps (`pins.segment_taps`), selects the
 tactile pins (`pins.select_pins`) and resamples each tap into a feature array
 (`pins.tap_features`). Frames before the rest frame are not tracked (NaN).
