@@ -16,6 +16,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from tactip.cli._types import positive_int
+
 HELP = "collect training and test taps over every gap and depth (resumable)"
 
 
@@ -23,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser for `tactip collect`."""
     parser.add_argument("--config", type=Path, required=True, help="station TOML file")
     parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="folder for train.h5 and test.h5")
-    parser.add_argument("--workers", type=int, default=None,
+    parser.add_argument("--workers", type=positive_int, default=None,
                         help="processes rendering taps on the simulated station (default: CPU count, at most 4)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
