@@ -125,3 +125,10 @@ def test_a_model_for_other_pins_or_samples_is_refused(sim_station):
 def test_a_missing_model_is_refused(sim_station, tmp_path):
     with pytest.raises(ModelError, match="no model at .*tactip train"):
         load_station_model(with_model(sim_station.config, tmp_path / "none.h5"), sim_station.calibration)
+
+
+def test_a_model_for_another_tactip_with_the_same_shapes_is_refused(sim_station):
+    # 40 feature pins of a 532-pin pad make taps of the same shape as this 331-pin station's.
+    other = dataclasses.replace(sim_station.calibration, expected_pins=532)
+    with pytest.raises(ModelError, match=r"trained on another sensor: pins 331 \(this station: 532\)"):
+        load_station_model(sim_station.config, other)
