@@ -22,7 +22,8 @@ Tables (see ``samples/station_sim.toml`` for a documented example):
     How the arm moves during a tap (approach height, stroke speed, dwell) is ``[arm.tap]``.
 ``[perception]``
     ``model`` (file), ``decision_threshold`` and ``fixation_depth`` (mm) (each omitted: the model's
-    recommendation from ``tactip validate --sweep-fixation``), ``policy`` (active|stationary|random), ``max_taps``, ``locations`` (depth
+    recommendation from ``tactip validate --sweep-fixation``), ``start_depth`` (mm: where each
+    inspection starts; omitted: a random protocol depth, the paper's unknown start), ``policy`` (active|stationary|random), ``max_taps``, ``locations`` (depth
     classes), ``bins``.
 ``[sim]``
     the simulated station only: ``noise_sigma`` (camera noise, grey levels) and ``seed`` of the
@@ -105,6 +106,7 @@ class PerceptionConfig:
     model: Path | None = None
     decision_threshold: float | None = None
     fixation_depth: float | None = None
+    start_depth: float | None = None
     policy: str = "active"
     max_taps: int = 20
     locations: int = 11
@@ -197,6 +199,9 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     _check(perception.max_taps >= 1, "perception.max_taps", "must be at least 1")
     _check(perception.locations >= 1, "perception.locations", "must be at least 1")
     _check(perception.bins >= 2, "perception.bins", "must be at least 2")
+    if perception.start_depth is not None:
+        _check(protocol.depth_min <= perception.start_depth <= protocol.depth_max, "perception.start_depth",
+               f"must lie in the protocol's depth range {protocol.depth_min}..{protocol.depth_max} mm")
     if perception.fixation_depth is not None:
         _check(protocol.depth_min <= perception.fixation_depth <= protocol.depth_max,
                "perception.fixation_depth", f"must lie in the protocol's depth range "

@@ -6,8 +6,9 @@ until the width marginal crosses the decision threshold or ``max_taps`` is reach
 then *undecided*). The width is judged against the gap's nominal width and tolerance; every tap
 and every verdict is written to the results database as it happens.
 
-The start depth is unknown to the perceiver (paper 002: "no information about the initial contact
-depth"): it is drawn at random from the protocol depths, seeded, unless given.
+The perceiver knows nothing of the start depth (paper 002: "no information about the initial contact
+depth"); the station starts at ``[perception] start_depth``, or, when it is not set, at a protocol depth
+drawn at random (seeded), as in the paper's evaluation.
 
 An arm fault mid-inspection stops the arm (the station's context manager), records the inspection
 as aborted with the reason, and propagates, so the command exits non-zero; stored rows stay.
@@ -172,7 +173,8 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
     gaps : sequence of str, optional
         Names of the gaps to inspect (default all).
     start_depth : float, optional
-        Start every inspection at this protocol depth (mm) instead of a random one.
+        Start every inspection at this protocol depth (mm); default ``[perception] start_depth``,
+        else a random protocol depth (seeded).
     station : Station, optional
         An open station to use (tests); opened from ``config`` otherwise.
     """
@@ -195,7 +197,8 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
         store = ResultsStore(config.results)
         try:
             for gap in targets:
-                start = float(start_depth) if start_depth is not None else float(rng.choice(depths))
+                start = start_depth if start_depth is not None else config.perception.start_depth
+                start = float(rng.choice(depths)) if start is None else float(start)
                 gap_seed = None if seed is None else int(rng.integers(2**62))
                 outcome = inspect_gap(open_station, perceiver, gap, store, start_depth=start, policy=name,
                                       seed=gap_seed, log=log)

@@ -34,6 +34,7 @@ def test_sample_ur_station_loads():
 @pytest.mark.parametrize("mutate, key", [
     (lambda d: d["perception"].update(decision_threshold=1.5), "perception.decision_threshold"),
     (lambda d: d["perception"].update(policy="psychic"), "perception.policy"),
+    (lambda d: d["perception"].update(start_depth=7.0), "perception.start_depth"),
     (lambda d: d["protocol"].update(depth_step=0), "protocol.depth_step"),
     (lambda d: d["protocol"].update(samples="forty"), "protocol.samples"),
     (lambda d: d["protocol"].update(depth_max=9.0), "protocol.depth_max"),

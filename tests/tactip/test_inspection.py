@@ -220,3 +220,12 @@ def test_the_same_seed_repeats_the_simulated_inspection(sim_station, tmp_path):
         assert (a.estimated_width, a.belief, a.taps) == (b.estimated_width, b.belief, b.taps)
     other = inspect_station(config, gaps=["g10", "g14"], seed=5, log=lambda _: None)
     assert [o.depths for o in other] != [o.depths for o in runs[0]]
+
+
+def test_the_configured_start_depth_is_where_every_inspection_starts(sim_station, tmp_path):
+    config = sim_config(sim_station, tmp_path, start_depth=1.5, max_taps=1)
+    outcomes = inspect_station(config, gaps=["g10", "g14"], seed=3, log=lambda _: None)
+    assert [o.depths[0] for o in outcomes] == [1.5, 1.5]
+    # An explicit start depth (tactip inspect --start-depth) wins over the configuration.
+    outcome, = inspect_station(config, gaps=["g10"], start_depth=4.0, log=lambda _: None)
+    assert outcome.depths[0] == 4.0
