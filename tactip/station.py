@@ -175,8 +175,8 @@ class LiveCamera:
 
     Parameters
     ----------
-    source : str or int
-        Camera index, device path or video file (`tactip.sources.open_source`).
+    source : str, int or FrameSource
+        Camera index, device path or video file (`tactip.sources.open_source`), or an open source.
     queue_frames : int
         Capacity of the frame queue; a tap must fit in it.
     timeout_s : float
@@ -189,7 +189,9 @@ class LiveCamera:
         from .sources import ThreadedReader, open_source
 
         self.timeout_s = float(timeout_s)
-        self._reader = ThreadedReader(open_source(source, grey=True), maxsize=queue_frames, when_full="drop")
+        if not hasattr(source, "read"):
+            source = open_source(source, grey=True)
+        self._reader = ThreadedReader(source, maxsize=queue_frames, when_full="drop")
         self.frame_rate = self._reader.frame_rate
         self._rest = None
 
