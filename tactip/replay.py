@@ -21,6 +21,16 @@ The HDF5 file (format ``tactip-replay/1``) holds:
   (cx, cy, radius px), mm_per_px, pad diameter, detection and tracking parameters (JSON),
   selection and sampling settings.
 
+With a sensor calibration (``calibration``), its detection parameters, disc and reference pins
+(snapped to the rest frame's blobs, as the station does for each tap) are used, and its feature
+pins and scale, so the taps line up with a model trained on that station. With a model as well
+(``model``), a passive perceiver decides the gap width from the valid taps in order
+(`tactip.replay_decisions`), and the file gets a ``decisions`` group: per tap
+``location_estimate``, ``identity_estimate``, ``belief`` (taps,) and ``what_belief`` (taps,
+identities), NaN for taps that did not enter the belief (invalid, or after the decision);
+``used`` (taps,) bool; ``identities``; attributes ``identity_estimate``, ``belief``, ``decided``,
+``decided_at_tap`` (-1 if never), ``decision_threshold``, ``model`` (path) and the units.
+
 The file is written to a temporary name next to the target and renamed at the end, so a failure
 never leaves a half-written result; the output paths are checked before any processing.
 """
@@ -32,6 +42,7 @@ import json
 import os
 import pathlib
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -39,7 +50,7 @@ from pins import (DetectionParams, PinsError, PinTracker, SensorDisc, detect_pin
                   displacement_from_rest, feature_dim_names, find_sensor_disc, segment_taps, select_pins,
                   tap_features, tune_detection)
 
-from .errors import SourceError
+from .errors import ConfigError, SourceError
 
 __all__ = ["ReplayResult", "replay_video", "FORMAT"]
 
@@ -72,6 +83,8 @@ class ReplayResult:
     mm_per_px : float
     disc : SensorDisc
     detection : DetectionParams
+    decisions : tactip.replay_decisions.ReplayDecisions or None
+        The decision, when a model was given.
     """
 
     out_path: pathlib.Path
@@ -88,6 +101,7 @@ class ReplayResult:
     mm_per_px: float
     disc: SensorDisc
     detection: DetectionParams
+    decisions: Any = None
 
     def summary(self) -> str:
         """A few readable lines: frames, pins, lost pins, taps and the files written."""
@@ -101,6 +115,8 @@ class ReplayResult:
         ]
         if self.invalid_taps:
             lines.append(f"Warning: taps {self.invalid_taps} have a selected pin lost throughout (features NaN)")
+        if self.decisions is not None:
+            lines += self.decisions.lines()
         written = [str(self.out_path)] + ([str(self.annotate_path)] if self.annotate_path else [])
         lines.append("Wrote " + " and ".join(written))
         return "\n".join(lines)
@@ -110,7 +126,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                  annotate_path: str | os.PathLike | None = None, expected_pins: int | None = None,
                  params: DetectionParams | None = None, n_samples: int = 40, n_pins: int = 40,
                  min_separation_mm: float = 4.0, pad_diameter_mm: float = 40.0, mm_per_px: float | None = None,
-                 rest_frame: int = 0, progress: bool = False) -> ReplayResult:
+                 rest_frame: int = 0, calibration=None, model=None, decision_threshold: float | None = None,
+                 progress: bool = False) -> ReplayResult:
     """Track the pins of a recorded video and write positions, displacements and tap features to HDF5.
 
     Parameters
@@ -135,6 +152,13 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         The scale, mm per px, overriding the one from the disc.
     rest_frame : int
         Index of the rest frame (off contact) the displacements are measured from.
+    calibration : str, path or calibration.SensorCalibration, optional
+        The station's sensor calibration: its detection parameters, disc, reference pins, feature
+        pins and scale replace detection, selection and `mm_per_px` (do not give those too).
+    model : str, path or perception.HistogramModel, optional
+        The station's model (needs `calibration`): decide the gap width from the taps.
+    decision_threshold : float in [0, 1], optional
+        theta_dec of the decision; default the model's recommended one, else 0.9.
     progress : bool
         Show a tqdm progress bar in frames (on stderr).
 
@@ -150,6 +174,12 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         The video is missing, unreadable, live, or shorter than `rest_frame`.
     PinsError
         No sensor disc or too few pins in the rest frame, or too few pins for the selection.
+    ConfigError
+        A model without a calibration, or a calibration with `expected_pins`, `params` or `mm_per_px`.
+    CalibrationError
+        The calibration cannot be read, or was made for frames of another size.
+    ModelError
+        The model cannot be read or does not fit the taps (checked before processing).
 
     Examples
     --------
@@ -164,6 +194,9 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         raise ValueError(f"pad_diameter_mm must be > 0, got {pad_diameter_mm}")
     if mm_per_px is not None and not mm_per_px > 0:
         raise ValueError(f"mm_per_px must be > 0, got {mm_per_px}")
+    cal, model, model_path = _load_station_files(calibration, model, decision_threshold, n_samples=n_samples,
+                                                 given=dict(expected_pins=expected_pins, params=params,
+                                                            mm_per_px=mm_per_px))
     out_path = pathlib.Path(out_path)
     annotate = None if annotate_path is None else pathlib.Path(annotate_path)
     temporary: list[pathlib.Path] = []
@@ -174,18 +207,34 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         with open_source(video, grey=True) as source:
             if source.live:
                 raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
+            if cal is not None and tuple(source.frame_size) != tuple(cal.frame_size):
+                from calibration import CalibrationError
+
+                raise CalibrationError(f"the calibration was made for {cal.frame_size[0]}x{cal.frame_size[1]} px "
+                                       f"frames, the video's are {source.frame_size[0]}x{source.frame_size[1]} px")
             track = _track_video(source, rest_frame=int(rest_frame), expected_pins=expected_pins,
-                                 params=params, progress=progress)
-        scale = mm_per_px or pad_diameter_mm / (2.0 * track["disc"].radius_px)
-        selected = select_pins(track["rest"], n_pins=n_pins, min_separation_mm=min_separation_mm, mm_per_px=scale)
+                                 params=params, calibration=cal, progress=progress)
+        if cal is None:
+            scale = mm_per_px or pad_diameter_mm / (2.0 * track["disc"].radius_px)
+            selected = select_pins(track["rest"], n_pins=n_pins, min_separation_mm=min_separation_mm,
+                                   mm_per_px=scale)
+        else:
+            scale, selected = cal.mm_per_px, np.asarray(cal.selected_pins)
+            n_pins, min_separation_mm = cal.n_selected, cal.min_separation_mm
         bounds = segment_taps(track["displacements"])
         taps, valid = _features(track["displacements"], track["timestamps"], bounds, selected, n_samples)
+        decisions = None
+        if model is not None:
+            from .replay_decisions import decide_taps
+
+            decisions = decide_taps(taps, valid, model, decision_threshold=decision_threshold, model_path=model_path)
         settings = dict(video=str(video), rest_frame=int(rest_frame), mm_per_px=float(scale),
                         pad_diameter_mm=float(pad_diameter_mm), n_pins=int(n_pins), n_samples=int(n_samples),
-                        min_separation_mm=float(min_separation_mm))
-        _write_hdf5(temporary[0], track, selected, bounds, taps, valid, settings)
+                        min_separation_mm=float(min_separation_mm),
+                        calibration=str(calibration) if isinstance(calibration, (str, os.PathLike)) else "")
+        _write_hdf5(temporary[0], track, selected, bounds, taps, valid, settings, decisions)
         if annotate:
-            _write_annotated(video, temporary[1], track, bounds, selected)
+            _write_annotated(video, temporary[1], track, bounds, selected, decisions)
         for part, final in zip(temporary, [out_path, annotate]):
             os.replace(part, final)
     finally:
@@ -197,7 +246,36 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         lost_pin_frames=int(lost.sum()), most_lost=int(lost.sum(axis=1).max(initial=0)),
                         tap_bounds=bounds, invalid_taps=[k for k, ok in enumerate(valid) if not ok],
                         selected_pins=selected, mm_per_px=float(scale), disc=track["disc"],
-                        detection=track["detection"])
+                        detection=track["detection"], decisions=decisions)
+
+
+def _load_station_files(calibration, model, decision_threshold, *, n_samples: int, given: dict):
+    """The calibration and model objects (read from paths), checked against each other and the options."""
+    if decision_threshold is not None and not 0.0 <= decision_threshold <= 1.0:
+        raise ValueError(f"decision_threshold must be in [0, 1], got {decision_threshold}")
+    if calibration is None:
+        if model is not None:
+            raise ConfigError("a model needs the calibration of its station (--calibration): the taps must use "
+                              "the feature pins it was trained on")
+        return None, None, ""
+    clash = [name for name, value in given.items() if value is not None]
+    if clash:
+        raise ConfigError(f"{', '.join(clash)} cannot be combined with a calibration (it sets detection and "
+                          f"scale)")
+    if not hasattr(calibration, "reference_pins"):
+        from calibration import load_calibration
+
+        calibration = load_calibration(calibration)
+    model_path = ""
+    if model is not None:
+        if not hasattr(model, "log_likelihood"):
+            from perception import load_model
+
+            model_path, model = str(model), load_model(model)
+        from .replay_decisions import check_model
+
+        check_model(model, calibration, n_samples=int(n_samples), path=model_path or "the model")
+    return calibration, model, model_path
 
 
 def _claim(path: pathlib.Path, suffix: str) -> pathlib.Path:
@@ -213,18 +291,25 @@ def _claim(path: pathlib.Path, suffix: str) -> pathlib.Path:
     return part
 
 
-def _track_video(source, *, rest_frame: int, expected_pins, params, progress: bool) -> dict:
-    """Read every frame: detect in the rest frame, track after it. Returns arrays and metadata."""
+def _track_video(source, *, rest_frame: int, expected_pins, params, calibration, progress: bool) -> dict:
+    """Read every frame: detect in the rest frame (or place the calibrated pins there), track after it."""
     from tqdm import tqdm
 
-    params = params or DetectionParams()
+    params = calibration.detection if calibration is not None else params or DetectionParams()
     tracker: PinTracker | None = None
     positions, timestamps = [], []
     total = getattr(source, "frame_count", None)
     with tqdm(total=total, unit="frame", disable=not progress, desc="replay") as bar:
         for frame in source:
             timestamps.append(frame.timestamp_s)
-            if frame.index == rest_frame:
+            if frame.index == rest_frame and calibration is not None:
+                from .replay_decisions import calibrated_rest
+
+                tracker = PinTracker(detection=params, disc=calibration.disc)
+                rest = tracker.start(frame.image, pins=calibrated_rest(calibration, frame.image))
+                positions = [np.full(rest.shape, np.nan, np.float32)] * len(positions)
+                positions.append(rest.astype(np.float32))
+            elif frame.index == rest_frame:
                 disc = find_sensor_disc(frame.image, dark_pins=params.dark_pins)
                 if expected_pins is not None:
                     params = tune_detection(frame.image, int(expected_pins), start=params, disc=disc)
@@ -264,7 +349,7 @@ def _features(displacements, timestamps, bounds, selected, n_samples):
     return taps, valid
 
 
-def _write_hdf5(path, track, selected, bounds, taps, valid, settings) -> None:
+def _write_hdf5(path, track, selected, bounds, taps, valid, settings, decisions=None) -> None:
     import h5py
 
     from tactip import __version__
@@ -297,10 +382,15 @@ def _write_hdf5(path, track, selected, bounds, taps, valid, settings) -> None:
                                   "pad_diameter_mm": settings["pad_diameter_mm"]}),
             **settings,
         })
+        if decisions is not None:
+            from .replay_decisions import write_decisions
+
+            write_decisions(h5, decisions)
 
 
-def _write_annotated(video, path, track, bounds, selected) -> None:
-    """The video again, with pins, displacement arrows (x ARROW_SCALE) and the tap state drawn on."""
+def _write_annotated(video, path, track, bounds, selected, decisions=None) -> None:
+    """The video again, with pins, displacement arrows (x ARROW_SCALE), the tap state and the
+    running decision (each tap's width estimate and belief) drawn on."""
     import cv2
 
     from tactip.sources import open_source
@@ -338,6 +428,20 @@ def _write_annotated(video, path, track, bounds, selected) -> None:
                 text = f"frame {frame.index}  {frame.timestamp_s:6.2f} s  {state}  lost {int((~seen).sum())}"
                 cv2.putText(image, text, (10, height - 12), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (0, 255, 255), 1,
                             cv2.LINE_AA)
+                if decisions is not None and tap >= 0:
+                    cv2.putText(image, _decision_text(decisions, tap), (10, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.55,
+                                (0, 255, 255), 1, cv2.LINE_AA)
                 writer.write(image)
     finally:
         writer.release()
+
+
+def _decision_text(decisions, tap: int) -> str:
+    """The running decision shown on the frames of tap ``tap``."""
+    if decisions.used[tap]:
+        mark = "  DECIDED" if tap == decisions.decided_at_tap else ""
+        return (f"width {decisions.identity_estimate[tap]:g} {decisions.identity_unit}  "
+                f"belief {decisions.belief[tap]:.3f}{mark}")
+    if 0 <= decisions.decided_at_tap < tap:
+        return f"decided {decisions.identity:g} {decisions.identity_unit} at tap {decisions.decided_at_tap + 1}"
+    return "tap not used (pins lost)"
