@@ -9,7 +9,7 @@ from .displacement import displacement_from_rest, displacement_magnitude, integr
 from .errors import NoSensorError, PinsError, ShapeError
 from .features import LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, tap_features
 from .segment import segment_taps, tap_signal
-from .select import select_pins
+from .select import median_spacing_px, select_pins
 from .track import LKParams, PinTracker, match_to_blobs, track_pins
 from .tune import expected_spacing_px, tune_detection
 
@@ -20,7 +20,7 @@ __all__ = [
     "tune_detection", "expected_spacing_px",
     "LKParams", "track_pins", "match_to_blobs", "PinTracker",
     "displacement_from_rest", "integrate_flow", "displacement_magnitude",
-    "select_pins",
+    "select_pins", "median_spacing_px",
     "feature_dim_names", "fill_lost", "resample_tap", "tap_features", "TapRecorder",
     "tap_signal", "segment_taps",
 ]

@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 from .errors import PinsError, ShapeError
 
-__all__ = ["select_pins"]
+__all__ = ["select_pins", "median_spacing_px"]
 
 
 def select_pins(rest_positions: np.ndarray, *, n_pins: int = 40, min_separation_mm: float = 4.0,
@@ -81,3 +81,20 @@ def select_pins(rest_positions: np.ndarray, *, n_pins: int = 40, min_separation_
         raise PinsError(f"only {len(chosen)} of {len(rest)} pins are at least {min_separation_mm:g} mm apart; "
                         f"lower n_pins ({n_pins}) or min_separation_mm")
     return np.array(chosen, dtype=np.intp)
+
+
+def median_spacing_px(points: np.ndarray) -> float:
+    """Median distance from each pin to its nearest neighbour, px (NaN with fewer than 2 pins).
+
+    Parameters
+    ----------
+    points : (N, 2) ndarray
+        Pin positions (x, y), px.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 2:
+        raise ShapeError(f"points must have shape (N, 2), got {points.shape}")
+    if len(points) < 2:
+        return float("nan")
+    distance, _ = cKDTree(points).query(points, k=2)
+    return float(np.median(distance[:, 1]))

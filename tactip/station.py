@@ -72,7 +72,7 @@ class OpticalFrontEnd:
         -------
         features : (samples, 2 P) ndarray of float32
         """
-        from pins import PinTracker, as_grey, detect_pins, match_to_blobs, tap_features
+        from pins import PinTracker, as_grey, detect_pins, match_to_blobs, median_spacing_px, tap_features
 
         if len(frames) < 2:
             raise TactipError(f"a tap needs at least 2 frames, got {len(frames)} (camera too slow or stalled?)")
@@ -83,7 +83,7 @@ class OpticalFrontEnd:
         tracker = PinTracker(detection=cal.detection, disc=cal.disc)
         rest = np.array(cal.reference_pins, dtype=np.float64)
         blobs = detect_pins(first, params=cal.detection, disc=cal.disc)
-        spacing = _median_spacing(rest)
+        spacing = median_spacing_px(rest)
         index = match_to_blobs(rest, blobs, gate_px=0.4 * spacing)
         rest[index >= 0] = blobs[index[index >= 0]]
         rest = tracker.start(first, pins=rest)
@@ -94,13 +94,6 @@ class OpticalFrontEnd:
         times = None if timestamps_s is None else np.asarray(timestamps_s, dtype=np.float64)
         return tap_features(positions - rest, pins=cal.selected_pins, n_samples=self.samples,
                             timestamps_s=times).astype(np.float32)
-
-
-def _median_spacing(points: np.ndarray) -> float:
-    from scipy.spatial import cKDTree
-
-    distance, _ = cKDTree(points).query(points, k=2)
-    return float(np.median(distance[:, 1]))
 
 
 class SimulatedCamera:

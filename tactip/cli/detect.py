@@ -30,7 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read the image, tune if asked, detect and print."""
-    from pins import DetectionParams, detect_pins, find_sensor_disc, tune_detection
+    from pins import DetectionParams, detect_pins, find_sensor_disc, median_spacing_px, tune_detection
     from tactip.errors import SourceError
     from tactip.sources import ImageFolderSource
 
@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"{len(pins)} pins in {args.image} (disc centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
           f"radius {disc.radius_px:.1f} px)")
     if len(pins):
-        spacing = _median_spacing(pins)
+        spacing = median_spacing_px(pins)
         low, high = pins.min(axis=0), pins.max(axis=0)
         print(f"x {low[0]:.1f}..{high[0]:.1f} px, y {low[1]:.1f}..{high[1]:.1f} px, median spacing {spacing:.1f} px")
     print(f"parameters{' (tuned)' if args.expected_pins else ''}: blur {params.blur_sigma_px:g} px, "
@@ -57,11 +57,3 @@ def run(args: argparse.Namespace) -> int:
           f"area {params.min_area_px}-{params.max_area_px} px")
     return 0
 
-
-def _median_spacing(pins) -> float:
-    import numpy as np
-    from scipy.spatial import cKDTree
-
-    if len(pins) < 2:
-        return float("nan")
-    return float(np.median(cKDTree(pins).query(pins, k=2)[0][:, 1]))

@@ -60,3 +60,11 @@ def test_arguments_checked():
         select_pins(np.zeros((10, 3)), mm_per_px=0.1)
     with pytest.raises(PinsError, match="finite"):
         select_pins(np.full((10, 2), np.nan), mm_per_px=0.1)
+
+
+def test_median_spacing_of_a_square_grid_is_its_pitch():
+    from pins import median_spacing_px
+
+    x, y = np.meshgrid(np.arange(5) * 12.5, np.arange(4) * 12.5)
+    assert median_spacing_px(np.column_stack([x.ravel(), y.ravel()])) == pytest.approx(12.5)
+    assert np.isnan(median_spacing_px(np.zeros((1, 2))))
