@@ -68,8 +68,8 @@ class ReplayDecisions:
     def lines(self) -> list[str]:
         """Readable lines: one per tap that entered the belief, then the decision."""
         unit = self.identity_unit
-        lines = [f"  tap {k + 1}: {self.identity_estimate[k]:g} {unit} (belief {self.belief[k]:.3f}, "
-                 f"{self.location_unit} estimate {self.location_estimate[k]:g})" for k in np.flatnonzero(self.used)]
+        lines = [f"  tap {k + 1}: {self.identity_estimate[k]:g} {unit} (belief {self.belief[k]:.3f}; "
+                 f"location {self.location_estimate[k]:g} {self.location_unit})" for k in np.flatnonzero(self.used)]
         if self.decided:
             lines.append(f"Decision: {self.identity:g} {unit} (belief {self.final_belief:.3f} > "
                          f"{self.decision_threshold:g}) at tap {self.decided_at_tap + 1}")
