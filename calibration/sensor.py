@@ -25,11 +25,12 @@ from typing import Sequence
 import numpy as np
 
 from pins import (DetectionParams, NoSensorError, PinsError, SensorDisc, as_grey, detect_pins,
-                  find_sensor_disc, select_pins, tune_detection)
+                  find_sensor_disc, match_to_blobs, median_spacing_px, select_pins, tune_detection)
 
 from .errors import CalibrationError
 
-__all__ = ["SensorCalibration", "calibrate_sensor", "save_calibration", "load_calibration", "SCHEMA"]
+__all__ = ["SensorCalibration", "calibrate_sensor", "save_calibration", "load_calibration", "SCHEMA",
+           "place_reference_pins", "check_model_fits"]
 
 SCHEMA = "tactip-calibration/1"
 
@@ -212,3 +213,51 @@ def load_calibration(path: str | Path) -> SensorCalibration:
         raise CalibrationError(f"{path} cannot be read as a calibration file ({exc})") from None
     except KeyError as exc:
         raise CalibrationError(f"{path} lacks {exc} (damaged calibration file?)") from None
+
+
+def place_reference_pins(calibration: SensorCalibration, image: np.ndarray) -> np.ndarray:
+    """The calibration's reference pins, each moved onto its blob in ``image`` when one is close.
+
+    Tracking a tap from these keeps the calibration's pin identities (and so its feature pins)
+    while starting from where the pins really are in this rest frame.
+
+    Parameters
+    ----------
+    calibration : SensorCalibration
+    image : (H, W) or (H, W, 3) uint8 ndarray
+        A rest frame (off contact).
+
+    Returns
+    -------
+    rest : (N, 2) ndarray of float64
+        Pin positions (x, y), px, in the calibration's pin order.
+    """
+    rest = np.array(calibration.reference_pins, dtype=np.float64)
+    blobs = detect_pins(image, params=calibration.detection, disc=calibration.disc)
+    index = match_to_blobs(rest, blobs, gate_px=0.4 * median_spacing_px(rest))
+    rest[index >= 0] = blobs[index[index >= 0]]
+    return rest
+
+
+def check_model_fits(model, calibration: SensorCalibration, *, samples: int, source: str = "the model",
+                     maker: str = "this station") -> None:
+    """Refuse a model that does not fit this sensor's taps (`perception.ModelError`, one line).
+
+    The model must be a TacTip model of ``2 x feature pins`` dimensions and ``samples`` samples, and
+    (where it records them) trained on a sensor with the calibration's pin count, feature pins and
+    pin separation: 40 feature pins of a 532-pin pad make taps of the same shape as a 331-pin one's.
+    ``source`` names the model and ``maker`` what makes the taps, in the message.
+    """
+    from perception import ModelError
+
+    dims = 2 * calibration.n_selected
+    if (model.front_end, model.dims, model.samples) != ("tactip", dims, samples):
+        raise ModelError(f"{source} was trained for {model.front_end} taps of {model.samples} samples x {model.dims} "
+                         f"dims; {maker} makes tactip taps of {samples} x {dims} ({calibration.n_selected} pins): "
+                         f"train a model for this sensor")
+    ours = {"kind": "tactip", "pins": int(calibration.expected_pins), "selected_pins": calibration.n_selected,
+            "min_separation_mm": float(calibration.min_separation_mm)}
+    differ = {k: (model.sensor[k], v) for k, v in ours.items() if k in model.sensor and model.sensor[k] != v}
+    if differ:
+        detail = ", ".join(f"{k} {a} ({maker}: {b})" for k, (a, b) in differ.items())
+        raise ModelError(f"{source} was trained on another sensor: {detail}; train a model for this sensor")

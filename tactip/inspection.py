@@ -73,6 +73,7 @@ class InspectionOutcome:
 
 def load_station_model(config: StationConfig, calibration):
     """The station's model, checked against its sensor calibration and protocol."""
+    from calibration import check_model_fits
     from perception import ModelError, load_model
 
     path = config.perception.model
@@ -81,21 +82,7 @@ def load_station_model(config: StationConfig, calibration):
     if not path.exists():
         raise ModelError(f"no model at {path}: collect taps and run 'tactip train' (or 'tactip inspect --sim')")
     model = load_model(path)
-    dims = 2 * calibration.n_selected
-    if model.front_end != "tactip" or model.dims != dims or model.samples != config.protocol.samples:
-        raise ModelError(f"{path} was trained for {model.front_end} taps of {model.samples} samples x {model.dims} "
-                         f"dims; this station makes tactip taps of {config.protocol.samples} x {dims} "
-                         f"({calibration.n_selected} pins): train a model for this sensor")
-    # Same shapes can still come from another TacTip (e.g. 40 feature pins of a 532-pin pad).
-    from .procedures import sensor_description
-
-    ours = sensor_description(config, calibration)
-    keys = ("kind", "pins", "selected_pins", "min_separation_mm")
-    theirs = {k: model.sensor.get(k) for k in keys if k in model.sensor}
-    differ = {k: (v, ours[k]) for k, v in theirs.items() if v != ours[k]}
-    if differ:
-        detail = ", ".join(f"{k} {a} (this station: {b})" for k, (a, b) in differ.items())
-        raise ModelError(f"{path} was trained on another sensor: {detail}; train a model for this sensor")
+    check_model_fits(model, calibration, samples=config.protocol.samples, source=str(path))
     return model
 
 

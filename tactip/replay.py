@@ -303,10 +303,10 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, calibration,
         for frame in source:
             timestamps.append(frame.timestamp_s)
             if frame.index == rest_frame and calibration is not None:
-                from .replay_decisions import calibrated_rest
+                from calibration import place_reference_pins
 
                 tracker = PinTracker(detection=params, disc=calibration.disc)
-                rest = tracker.start(frame.image, pins=calibrated_rest(calibration, frame.image))
+                rest = tracker.start(frame.image, pins=place_reference_pins(calibration, frame.image))
                 positions = [np.full(rest.shape, np.nan, np.float32)] * len(positions)
                 positions.append(rest.astype(np.float32))
             elif frame.index == rest_frame:

@@ -2,10 +2,9 @@
 
 `tactip.replay.replay_video` uses this module when it is given a sensor calibration and a model:
 
-- `calibrated_rest` places the calibrated reference pins on the rest frame (each moved onto its
-  blob within 0.4 x the median pin spacing, `pins.match_to_blobs`), as the station's
-  `tactip.station.OpticalFrontEnd` does for every tap, so pin identities and the feature subset
-  are the calibration's;
+- `calibration.place_reference_pins` (called by the replay) places the calibrated reference pins on
+  the rest frame, as the station's `tactip.station.OpticalFrontEnd` does for every tap, so pin
+  identities and the feature subset are the calibration's;
 - `check_model` refuses a model that does not fit the replay's taps (one-line `ModelError`);
 - `decide_taps` runs a passive `perception.Perceiver` (stationary policy: a recording cannot move
   the sensor) over the valid taps in order, stopping at the decision as the station would.
@@ -19,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ReplayDecisions", "calibrated_rest", "check_model", "decide_taps", "write_decisions"]
+__all__ = ["ReplayDecisions", "check_model", "decide_taps", "write_decisions"]
 
 DEFAULT_THRESHOLD = 0.9
 
@@ -81,51 +80,11 @@ class ReplayDecisions:
         return lines
 
 
-def calibrated_rest(calibration, image: np.ndarray) -> np.ndarray:
-    """The calibration's reference pins, each moved onto its blob in ``image`` when one is close.
-
-    Parameters
-    ----------
-    calibration : calibration.SensorCalibration
-    image : (H, W) uint8 ndarray
-        The rest frame (off contact).
-
-    Returns
-    -------
-    rest : (N, 2) ndarray of float64
-        Pin positions (x, y), px, in the calibration's pin order.
-    """
-    from scipy.spatial import cKDTree
-
-    from pins import detect_pins, match_to_blobs
-
-    rest = np.array(calibration.reference_pins, dtype=np.float64)
-    blobs = detect_pins(image, params=calibration.detection, disc=calibration.disc)
-    distance, _ = cKDTree(rest).query(rest, k=2)
-    index = match_to_blobs(rest, blobs, gate_px=0.4 * float(np.median(distance[:, 1])))
-    rest[index >= 0] = blobs[index[index >= 0]]
-    return rest
-
-
 def check_model(model, calibration, *, n_samples: int, path: str = "the model") -> None:
-    """Refuse a model that does not fit the taps of this calibration (`perception.ModelError`, one line).
+    """Refuse a model that does not fit the taps of this calibration (`calibration.check_model_fits`)."""
+    from calibration import check_model_fits
 
-    The model must be a TacTip model of ``2 x selected pins`` dimensions and ``n_samples`` samples,
-    trained on a sensor with the calibration's pin count, feature pins and pin separation.
-    """
-    from perception import ModelError
-
-    dims = 2 * calibration.n_selected
-    if (model.front_end, model.dims, model.samples) != ("tactip", dims, n_samples):
-        raise ModelError(f"{path} was trained for {model.front_end} taps of {model.samples} samples x {model.dims} "
-                         f"dims; the replay makes tactip taps of {n_samples} x {dims} "
-                         f"({calibration.n_selected} pins): use the model of this sensor")
-    ours = {"kind": "tactip", "pins": int(calibration.expected_pins), "selected_pins": calibration.n_selected,
-            "min_separation_mm": float(calibration.min_separation_mm)}
-    differ = {k: (model.sensor[k], v) for k, v in ours.items() if k in model.sensor and model.sensor[k] != v}
-    if differ:
-        detail = ", ".join(f"{k} {a} (calibration: {b})" for k, (a, b) in differ.items())
-        raise ModelError(f"{path} was trained on another sensor: {detail}; use the model of this sensor")
+    check_model_fits(model, calibration, samples=n_samples, source=path, maker="the replay")
 
 
 def decide_taps(taps: np.ndarray, valid: np.ndarray, model, *, decision_threshold: float | None = None,

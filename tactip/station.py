@@ -72,7 +72,8 @@ class OpticalFrontEnd:
         -------
         features : (samples, 2 P) ndarray of float32
         """
-        from pins import PinTracker, as_grey, detect_pins, match_to_blobs, median_spacing_px, tap_features
+        from calibration import place_reference_pins
+        from pins import PinTracker, as_grey, tap_features
 
         if len(frames) < 2:
             raise TactipError(f"a tap needs at least 2 frames, got {len(frames)} (camera too slow or stalled?)")
@@ -81,11 +82,7 @@ class OpticalFrontEnd:
         # Start from the calibrated pins, each moved onto its blob in this tap's rest frame, so the
         # pin identities (and the feature subset) are those of the calibration.
         tracker = PinTracker(detection=cal.detection, disc=cal.disc)
-        rest = np.array(cal.reference_pins, dtype=np.float64)
-        blobs = detect_pins(first, params=cal.detection, disc=cal.disc)
-        spacing = median_spacing_px(rest)
-        index = match_to_blobs(rest, blobs, gate_px=0.4 * spacing)
-        rest[index >= 0] = blobs[index[index >= 0]]
+        rest = place_reference_pins(cal, first)
         rest = tracker.start(first, pins=rest)
         positions = np.empty((len(frames), len(rest), 2))
         positions[0] = rest
