@@ -119,7 +119,7 @@ def collection_plan(gaps: Sequence, depths: Sequence[float], *, repeats: int = 1
     return plan
 
 
-def collect_datasets(tap: Callable[[PlannedTap], np.ndarray], plan: dict[str, list[PlannedTap]], out_dir: str | Path,
+def collect_datasets(tap: Callable[[PlannedTap], np.ndarray] | None, plan: dict[str, list[PlannedTap]], out_dir: str | Path,
                      *, samples: int, dims: int, dim_names: Sequence[str] = (), sensor: dict | None = None,
                      front_end: str = "tactip", progress: bool = True,
                      tap_many: Callable[[Iterable[PlannedTap]], Iterable[np.ndarray]] | None = None) -> dict[str, Path]:
@@ -127,8 +127,8 @@ def collect_datasets(tap: Callable[[PlannedTap], np.ndarray], plan: dict[str, li
 
     Parameters
     ----------
-    tap : callable(PlannedTap) -> (samples, dims) ndarray
-        Takes one tap (moves the arm, captures, extracts features).
+    tap : callable(PlannedTap) -> (samples, dims) ndarray, or None
+        Takes one tap (moves the arm, captures, extracts features); None when ``tap_many`` is given.
     plan : dict of set name -> list of PlannedTap
         From `collection_plan`.
     out_dir : path
@@ -155,6 +155,8 @@ def collect_datasets(tap: Callable[[PlannedTap], np.ndarray], plan: dict[str, li
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    if (tap is None) == (tap_many is None):
+        raise ValueError("give exactly one of tap and tap_many")
     mapper = tap_many or (lambda planned: map(tap, planned))
     paths = {}
     writers = {}

@@ -110,8 +110,6 @@ class SimulatedCamera:
         Seed of the sensor (pin layout and noise).
     """
 
-    live = False
-
     def __init__(self, *, pins: int = 331, frame_rate: float = 20.0, tap_speed_mm_s: float = 20.0,
                  dwell_s: float = 0.25, approach_height_mm: float = 5.0, noise_sigma: float = 4.0, seed: int = 0):
         from .synthetic import SyntheticTacTip
@@ -172,8 +170,6 @@ class LiveCamera:
     timeout_s : float
         How long to wait for a frame before the camera counts as stalled, s.
     """
-
-    live = True
 
     def __init__(self, source: str | int, *, queue_frames: int = 512, timeout_s: float = 2.0):
         from .sources import ThreadedReader, open_source
