@@ -19,6 +19,7 @@ import sys
 # Subcommand name -> module. Nested groups (``tactip arm status``) are handled by their module.
 COMMANDS: dict[str, str] = {
     "detect": "tactip.cli.detect",
+    "record": "tactip.cli.record",
     "replay": "tactip.cli.replay",
     "calibrate": "tactip.cli.calibrate",
     "collect": "tactip.cli.collect",

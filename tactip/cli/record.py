@@ -1,0 +1,42 @@
+"""Record frames from a camera (or the synthetic TacTip) to a video file, to replay it later.
+
+A live camera needs --seconds or --frames. The recording can then be replayed:
+tactip replay REC.mp4 --out REC.h5 --annotate REC_annotated.mp4.
+
+Examples:
+  tactip record 0 --seconds 10 --out taps.avi                 # camera 0, Motion-JPEG
+  tactip record /dev/video2 --frames 400 --exposure 50 --out taps.mp4
+  tactip record synthetic --out synthetic.mp4                 # scripted taps, no hardware
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from tactip.cli._types import positive_float, positive_int
+
+HELP = "record a camera (or the synthetic TacTip) to a video file for replay"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the parser for `tactip record`."""
+    parser.add_argument("source", metavar="SOURCE",
+                        help="camera index (0) or /dev/videoN, 'synthetic' or 'synthetic:PINS', or a video")
+    parser.add_argument("--out", required=True, metavar="FILE", help="video to write: .mp4 or .avi (Motion-JPEG)")
+    parser.add_argument("--seconds", type=positive_float, default=None, help="stop after this long")
+    parser.add_argument("--frames", type=positive_int, default=None, help="stop after this many frames")
+    parser.add_argument("--frame-rate", type=positive_float, default=None,
+                        help="frames/s in the file header (default: the source's)")
+    parser.add_argument("--exposure", type=float, default=None, help="fixed camera exposure, where the driver allows")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run `tactip record`."""
+    from tactip.record import record_video
+
+    options = {} if args.exposure is None else {"exposure": args.exposure}
+    result = record_video(args.source, args.out, seconds=args.seconds, frames=args.frames,
+                          frame_rate=args.frame_rate, progress=not args.quiet, **options)
+    print(result.summary())
+    return 0
