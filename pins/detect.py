@@ -225,7 +225,8 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blob
     middle_x, middle_y = left + box_w // 2, top + box_h // 2
     suspect = _odd_shaped(area, box_w, box_h, params)
     if params.split_radius_px > 0 and suspect.any():
-        split = _split_touching(smooth, mean, labels, count, suspect, index, lab, xs, ys, params.split_radius_px)
+        split = _split_touching(smooth, mean, labels, count, suspect, index, lab, xs, ys, params.split_radius_px,
+                                (left, top, box_w, box_h))
         if split is not None:
             lab, count, (left, top, box_w, box_h, area, middle_x, middle_y) = split[0], split[1], (
                 np.concatenate([old, new]) for old, new in zip((left, top, box_w, box_h, area, middle_x, middle_y),
@@ -269,7 +270,8 @@ def _odd_shaped(area: np.ndarray, box_w: np.ndarray, box_h: np.ndarray, params: 
 
 
 def _split_touching(smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, count: int, suspect: np.ndarray,
-                    index: np.ndarray, lab: np.ndarray, xs: np.ndarray, ys: np.ndarray, radius_px: float):
+                    index: np.ndarray, lab: np.ndarray, xs: np.ndarray, ys: np.ndarray, radius_px: float,
+                    boxes: tuple[np.ndarray, ...]):
     """Split odd-shaped components (`suspect`) made of several touching pins.
 
     The loose threshold makes blobs fat and the neck between two touching pins wide, so the cores
@@ -277,7 +279,9 @@ def _split_touching(smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, co
     component's peak. Eroding that by a disc of `radius_px` removes the neck but leaves one core
     in each convex pin. A component with several cores gives each of its pixels to the core with
     the nearest core pixel (a Voronoi partition by cores, which cuts along the neck). Works on the
-    suspect components' pixels only. Returns the new per-pixel labels, the new label count and
+    suspect components' pixels only, laid out side by side in a mosaic of their bounding boxes
+    (`boxes`: left, top, width, height per label) so that the erosion and labelling cost does not
+    grow with the distance between suspects. Returns the new per-pixel labels, the new label count and
     the stats (left, top, width, height, area, middle x, middle y) of the new labels (appended
     after the old ones, whose split components become empty), or None.
     """
@@ -290,17 +294,26 @@ def _split_touching(smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, co
     # Half height, inside the thresholded component (not its one-pixel growth).
     core = (2.0 * level >= mean.ravel()[flat] + peak[component]) & (labels.ravel()[flat] > 0)
     px, py = xs[pixels], ys[pixels]
+    # Mosaic: each suspect's box grown by one pixel (the grown pixels) and a margin of zeros that
+    # keeps the erosion and the labelling of one tile from reaching the next.
     pad = int(np.ceil(radius_px)) + 1
-    x0, y0 = px.min() - pad, py.min() - pad
-    mask = np.zeros((py.max() - y0 + pad + 1, px.max() - x0 + pad + 1), np.uint8)
-    mask[py[core] - y0, px[core] - x0] = 255
+    left, top, box_w, box_h = boxes
+    tiles = np.flatnonzero(suspect)
+    tile_w = box_w[tiles] + 2 + 2 * pad
+    origin_x = np.zeros(count, np.int64)
+    origin_x[tiles] = np.cumsum(tile_w) - tile_w + pad + 1 - left[tiles]
+    origin_y = np.zeros(count, np.int64)
+    origin_y[tiles] = pad + 1 - top[tiles]
+    mx, my = px + origin_x[component], py + origin_y[component]
+    mask = np.zeros((int(box_h[tiles].max()) + 2 + 2 * pad, int(tile_w.sum())), np.uint8)
+    mask[my[core], mx[core]] = 255
     size = 2 * int(np.ceil(radius_px)) + 1
     eroded = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size)))
     # 4-connected cores: a diagonal one-pixel bridge left by the erosion does not join two pins.
     cores, core_labels = cv2.connectedComponents(eroded, connectivity=4, ltype=cv2.CV_32S)
     if cores <= 2:
         return None
-    in_core = core_labels[py - y0, px - x0]
+    in_core = core_labels[my, mx]
     core_pixels = np.flatnonzero(in_core)
     core_of_pixel = in_core[core_pixels]
     core_size = np.bincount(core_of_pixel, minlength=cores)
