@@ -416,6 +416,10 @@ def _weighted_sums(index: np.ndarray, lab: np.ndarray, weight: np.ndarray, width
     boundary[0] = True
     np.not_equal(np.diff(index), 1, out=boundary[1:])
     boundary[1:] |= lab[1:] != lab[:-1]
+    # A run also ends with its row (a blob touching both sides of the image would wrap around).
+    row_start = np.arange(0, index[-1] + 1, width)
+    at = np.searchsorted(index, row_start)
+    boundary[at[index[at] == row_start]] = True
     starts = np.flatnonzero(boundary)
     run_lab = lab[starts]
     run_y = index[starts] // width

@@ -116,3 +116,19 @@ def test_params_validated_by_name(field, value):
 def test_params_round_trip_through_dict():
     params = DetectionParams(offset=7.5, dark_pins=True)
     assert DetectionParams(**params.to_dict()) == params
+
+
+def test_weighted_sums_by_row_runs_equal_sums_by_pixel(rng):
+    from pins.detect import _weighted_sums
+    width, count = 7, 5
+    # Sparse pixels with runs of one label that reach the end of a row and go on in the next one.
+    index = np.sort(rng.choice(20 * width, 90, replace=False))
+    index = np.union1d(index, [2 * width - 1, 2 * width, 2 * width + 1])
+    lab = rng.integers(1, count, len(index))
+    lab[np.searchsorted(index, [2 * width - 1, 2 * width, 2 * width + 1])] = 3
+    lab[10:30] = 2  # long runs across rows
+    weight = rng.uniform(0.0, 50.0, len(index))
+    ys, xs = np.divmod(index, width)
+    expected = [np.bincount(lab, weights=weight * f, minlength=count) for f in (1.0, xs, ys)]
+    for got, want in zip(_weighted_sums(index, lab, weight, width, count), expected):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-9)
