@@ -3,7 +3,9 @@
 Prints ms/frame at 331 and 532 pins (wall time of the best pass, and CPU time) for:
 
 - disc:       `find_sensor_disc` (once per video or sensor, not per frame);
-- detect:     `detect_pins` with a known disc (what a tracked frame pays when a pin is lost or implausible);
+- detect:     `detect_pins(frame, disc=disc)` on the grey 640x480 frame, the disc found beforehand (what
+              a tracked frame pays when a pin is lost or implausible): the disc crop, blur, adaptive
+              threshold, labelling, touching-pin splitting and weighted centroids; not the disc search;
 - LK+checks:  LK forward (full image from the constant-velocity guess, the pyramid only for pins
               that need it) and pyramidal LK backward on the disc crop, status / residual /
               forward-backward checks (`PinTracker(refine=False).update`);
