@@ -155,8 +155,22 @@ class UrArm(BaseArm):
             emergency_stop=bool(bits >> _EMERGENCY_STOP_BIT & 1) or receive.isEmergencyStopped())
 
     def _cause(self) -> str:
-        problem = self._read_state().problem
+        problem = self._root_cause(self._read_state())
         return problem or "the controller gave no reason (check the pendant's log)"
+
+    def _root_cause(self, state: ArmState) -> str | None:
+        """The state's problem once the receive interface has caught up with the control one.
+
+        A protective or emergency stop also halts the control program, and the control interface sees
+        the program stop a few RTDE cycles before the receive interface reports the safety bits: when
+        the program has stopped, wait up to `_SETTLE_CYCLES` for the stop that caused it.
+        """
+        deadline = time.monotonic() + _SETTLE_CYCLES / self.frequency_hz
+        while (state.connected and not state.program_running and not (state.protective_stop or state.emergency_stop)
+               and time.monotonic() < deadline):
+            time.sleep(1.0 / self.frequency_hz)
+            state = self._read_state()
+        return state.problem
 
     # -- moving ------------------------------------------------------------------------------------
 
@@ -173,6 +187,7 @@ class UrArm(BaseArm):
         while control.getAsyncOperationProgressEx().isAsyncOperationRunning():
             problem = self._read_state().problem
             if problem is not None:
+                problem = self._root_cause(self._read_state())
                 raise ArmFault(f"the move to {where} was interrupted: {problem}; the arm stopped at "
                                f"{self._describe(self._read_base_pose())}")
             if time.monotonic() > deadline:
@@ -186,6 +201,8 @@ class UrArm(BaseArm):
             if problem is None and arrived.distance_to(target) <= _ARRIVED_MM:
                 return
             if problem is not None or time.monotonic() > settle_deadline:
+                if problem is not None:
+                    problem = self._root_cause(self._read_state())
                 raise ArmFault(f"the move to {where} ended at {self._describe(arrived)}: "
                                f"{problem or 'short of the target'}")
             time.sleep(period)
