@@ -31,7 +31,7 @@ from typing import Iterable, Sequence
 
 from .errors import TactipError
 
-__all__ = ["ResultsStore", "InspectionRow", "EXPORT_FIELDS", "ResultsError"]
+__all__ = ["ResultsStore", "InspectionRow", "EXPORT_FIELDS", "ResultsError", "plot_inspections"]
 
 SCHEMA_VERSION = 1
 
@@ -284,3 +284,45 @@ def _row(values: tuple) -> InspectionRow:
     d["decided"] = bool(d["decided"])
     d["passed"] = None if d["passed"] is None else bool(d["passed"])
     return InspectionRow(**d)
+
+
+def plot_inspections(rows: Sequence[InspectionRow], path) -> None:
+    """Estimated against nominal width of each finished inspection, with its tolerance band.
+
+    Pass, fail and undecided verdicts get their own marker; aborted and running inspections are
+    left out (they have no estimate). Written with matplotlib (Agg) to ``path`` (format from the
+    suffix, e.g. ``.png``).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    done = [r for r in rows if r.status == "done" and r.estimated_width is not None]
+    if not done:
+        raise ResultsError("no finished inspections to plot")
+    nominal = np.array([r.nominal_width for r in done])
+    estimate = np.array([r.estimated_width for r in done])
+    tolerance = np.array([r.tolerance for r in done])
+    fig, ax = plt.subplots(figsize=(6, 5), layout="constrained")
+    low, high = min(nominal.min(), estimate.min()), max(nominal.max(), estimate.max())
+    pad = 0.05 * (high - low or 1.0)
+    ax.plot([low - pad, high + pad], [low - pad, high + pad], color="0.6", lw=1, zorder=0)
+    ax.errorbar(nominal, nominal, yerr=tolerance, fmt="none", ecolor="0.8", elinewidth=6, zorder=1,
+                label="nominal ± tolerance")
+    for verdict, marker, colour in ((True, "o", "tab:green"), (False, "x", "tab:red"), (None, "s", "tab:orange")):
+        chosen = np.array([r.passed is verdict for r in done])
+        if chosen.any():
+            label = {True: "pass", False: "fail", None: "undecided"}[verdict]
+            ax.scatter(nominal[chosen], estimate[chosen], marker=marker, color=colour, zorder=2,
+                       label=f"{label} ({int(chosen.sum())})")
+    error = np.abs(estimate - nominal)
+    ax.set_xlabel("nominal width (mm)")
+    ax.set_ylabel("estimated width (mm)")
+    ax.set_title(f"{len(done)} inspections: mean |estimate - nominal| {error.mean():.2f} mm, "
+                 f"mean {np.mean([r.taps for r in done]):.1f} taps", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper left")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -8,6 +8,7 @@ Examples:
   tactip results list --db station_data/sim/results.sqlite --limit 20
   tactip results export --config samples/station_sim.toml --csv --out results.csv
   tactip results export --db results.sqlite --json
+  tactip results plot --config samples/station_sim.toml --out widths.png --last 20
 """
 
 from __future__ import annotations
@@ -24,13 +25,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="action", metavar="ACTION")
     sub.required = True
     for name, text in (("list", "print the inspections as a table"),
-                       ("export", "write the inspections as CSV or JSON")):
+                       ("export", "write the inspections as CSV or JSON"),
+                       ("plot", "plot estimated against nominal widths with the tolerance bands")):
         p = sub.add_parser(name, help=text, description=text)
         where = p.add_mutually_exclusive_group(required=True)
         where.add_argument("--config", type=Path, help="station TOML file (its [station] results database)")
         where.add_argument("--db", type=Path, help="results database file")
         if name == "list":
             p.add_argument("--limit", type=int, default=None, help="show only the newest N inspections")
+        elif name == "plot":
+            p.add_argument("--out", type=Path, required=True, help="image file (.png, .pdf, .svg)")
+            p.add_argument("--last", type=int, default=None, metavar="N", help="only the newest N inspections")
         else:
             fmt = p.add_mutually_exclusive_group(required=True)
             fmt.add_argument("--csv", action="store_true", help="comma-separated values with a header")
@@ -52,6 +57,12 @@ def run(args: argparse.Namespace) -> int:
     with ResultsStore(path) as store:
         if args.action == "list":
             print(format_table(store.inspections(limit=args.limit)))
+            return 0
+        if args.action == "plot":
+            from tactip.results import plot_inspections
+
+            plot_inspections(store.inspections(limit=args.last), args.out)
+            print(f"wrote {args.out}")
             return 0
         text = store.export_csv() if args.csv else store.export_json() + "\n"
     if args.out is None:

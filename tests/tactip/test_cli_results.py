@@ -42,3 +42,24 @@ def test_missing_database_is_one_line(tmp_path, capsys):
     assert main(["results", "list", "--db", str(tmp_path / "none.sqlite")]) == 1
     err = capsys.readouterr().err
     assert "no results database" in err and len(err.strip().splitlines()) == 1
+
+
+def test_plot_draws_the_finished_inspections(tmp_path, capsys):
+    import matplotlib.image
+
+    out = tmp_path / "widths.png"
+    assert main(["results", "plot", "--db", str(_db(tmp_path)), "--out", str(out)]) == 0
+    image = matplotlib.image.imread(out)
+    assert image.shape[0] > 300 and image.shape[1] > 300
+    # red fail markers are drawn (g02 failed), not only the grey tolerance bands and green passes
+    red = (image[..., 0] > 0.7) & (image[..., 1] < 0.3) & (image[..., 2] < 0.3)
+    assert red.sum() > 10
+
+
+def test_plot_with_nothing_finished_is_one_line(tmp_path, capsys):
+    path = tmp_path / "r.sqlite"
+    with ResultsStore(path) as store:
+        store.abort_inspection(store.start_inspection("g1", nominal_width=1, tolerance=0.1, policy="active"), "stop")
+    assert main(["results", "plot", "--db", str(path), "--out", str(tmp_path / "x.png")]) == 1
+    assert "no finished inspections" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
