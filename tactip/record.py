@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import os
 import pathlib
-import time
 from dataclasses import dataclass
 
+from ._output import claim_output
 from .errors import SourceError
 
 __all__ = ["RecordResult", "record_video"]
@@ -93,12 +93,7 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
         raise ValueError(f"seconds must be > 0, got {seconds}")
     if frames is not None and frames < 1:
         raise ValueError(f"frames must be >= 1, got {frames}")
-    part = out_path.with_name(f".{out_path.stem}.{os.getpid()}.part{out_path.suffix}")
-    try:
-        with open(part, "wb"):
-            pass
-    except OSError as exc:
-        raise OSError(exc.errno, f"cannot write {str(out_path)!r} ({exc.strerror})") from None
+    part = claim_output(out_path)
     writer = None
     count, first_s, last_s, dropped = 0, None, None, 0
     try:
@@ -114,16 +109,13 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
         if not writer.isOpened():
             raise OSError(f"cannot write {str(out_path)!r}: no {fourcc} encoder in this OpenCV build")
         total = frames if frames is not None else (round(seconds * rate) if seconds is not None else None)
-        started = time.monotonic()
         with source, tqdm(total=total, unit="frame", desc="record", disable=not progress) as bar:
             while frames is None or count < frames:
-                if seconds is not None and time.monotonic() - started >= seconds and source.live:
-                    break
                 frame = source.read()
                 if frame is None:
                     break
-                if seconds is not None and not source.live and first_s is not None \
-                        and frame.timestamp_s - first_s >= seconds:
+                # Frame time stamps (monotonic on a camera, from the frame rate on a recording) end it.
+                if seconds is not None and first_s is not None and frame.timestamp_s - first_s >= seconds:
                     break
                 image = frame.image if frame.image.ndim == 3 else cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
                 writer.write(image)

@@ -50,6 +50,7 @@ from pins import (DetectionParams, PinsError, PinTracker, SensorDisc, detect_pin
                   displacement_from_rest, feature_dim_names, find_sensor_disc, segment_taps, select_pins,
                   tap_features, tune_detection)
 
+from ._output import claim_output
 from .errors import ConfigError, SourceError
 
 __all__ = ["ReplayResult", "replay_video", "FORMAT"]
@@ -201,9 +202,9 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
     annotate = None if annotate_path is None else pathlib.Path(annotate_path)
     temporary: list[pathlib.Path] = []
     try:
-        temporary.append(_claim(out_path, ".h5"))
+        temporary.append(claim_output(out_path, ".h5"))
         if annotate:
-            temporary.append(_claim(annotate, ".mp4"))
+            temporary.append(claim_output(annotate, ".mp4"))
         with open_source(video, grey=True) as source:
             if source.live:
                 raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
@@ -276,19 +277,6 @@ def _load_station_files(calibration, model, decision_threshold, *, n_samples: in
 
         check_model(model, calibration, n_samples=int(n_samples), path=model_path or "the model")
     return calibration, model, model_path
-
-
-def _claim(path: pathlib.Path, suffix: str) -> pathlib.Path:
-    """Create the temporary file the output will be renamed from: fails early if `path` is not writable."""
-    if path.is_dir():
-        raise IsADirectoryError(21, "output path is a directory", str(path))
-    part = path.with_name(f".{path.stem}.{os.getpid()}.part{suffix}")
-    try:
-        with open(part, "wb"):
-            pass
-    except OSError as exc:
-        raise OSError(exc.errno, f"cannot write {str(path)!r} ({exc.strerror})") from None
-    return part
 
 
 def _track_video(source, *, rest_frame: int, expected_pins, params, calibration, progress: bool) -> dict:
