@@ -41,6 +41,8 @@ _RECEIVE_VARIABLES = ["timestamp", "actual_TCP_pose", "robot_mode", "safety_mode
                       "robot_status_bits", "safety_status_bits"]
 _PROTECTIVE_STOP_BIT, _EMERGENCY_STOP_BIT = 2, 7
 _ARRIVED_MM = 0.5          # a finished move must end this close to its target
+_SETTLED_MM = 0.01         # ... and is settled once the pose read back is this close (UR repeatability)
+_STILL_MM = 0.001          # ... and moved less than this since the previous RTDE cycle
 _SETTLE_CYCLES = 10        # RTDE cycles to wait for the receive interface to catch up after a move
 
 
@@ -194,13 +196,19 @@ class UrArm(BaseArm):
                 raise ArmFault(f"the move to {where} did not finish within {allowed_s:.1f} s (expected "
                                f"{expected_s:.2f} s); the arm was stopped")
             time.sleep(period)
-        # The receive interface has its own RTDE connection and may lag the control one by a few cycles.
+        # The receive interface has its own RTDE connection and may lag the control one by a few cycles:
+        # wait for the pose it reports to settle on the target, so pose() after a move reads where it ended.
         settle_deadline = time.monotonic() + _SETTLE_CYCLES * period
+        previous = None
         while True:
             problem, arrived = self._read_state().problem, self._read_base_pose()
-            if problem is None and arrived.distance_to(target) <= _ARRIVED_MM:
+            late = time.monotonic() > settle_deadline
+            still = previous is not None and arrived.distance_to(previous) <= _STILL_MM
+            if problem is None and (arrived.distance_to(target) <= _ARRIVED_MM if late
+                                    else still and arrived.distance_to(target) <= _SETTLED_MM):
                 return
-            if problem is not None or time.monotonic() > settle_deadline:
+            previous = arrived
+            if problem is not None or late:
                 if problem is not None:
                     problem = self._root_cause(self._read_state())
                 raise ArmFault(f"the move to {where} ended at {self._describe(arrived)}: "
