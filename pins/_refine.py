@@ -65,6 +65,11 @@ _MIN_COMPACTNESS_RATIO = 0.85
 # window's radius as a fraction of the distance to the nearest one (see `Refiner.window_radius`).
 _WINDOW_NEIGHBOURS = 6
 _WINDOW_REACH = 0.55
+# Windows per searched pin (each re-centred on the last centroid), and how near two positions
+# must be, as a fraction of the pin spacing, to be one tip (tips of neighbours pushed together
+# stay more than half a spacing apart).
+_SEARCH_STEPS = 3
+_SAME_TIP_FRACTION = 0.25
 
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
@@ -169,6 +174,9 @@ class WindowCentroids:
             uniform disc, more for a domed tip, less for an elongated one or one with a speck.
         """
         half, side = self.half_px, 2 * self.half_px + 1
+        if len(points) == 0:
+            empty = np.empty(0)
+            return np.empty((0, 2)), empty, empty.copy(), empty.copy()
         image = np.ascontiguousarray(image)
         height, width = image.shape
         anchor = np.rint(points).astype(np.intp)
@@ -239,6 +247,7 @@ class Refiner:
                  disc: SensorDisc) -> None:
         self.origin = origin
         self.gate_px = gate_px
+        self.spacing_px = spacing_px
         self.detection = detection
         self.disc = disc
         k = min(max(neighbours, _WINDOW_NEIGHBOURS), len(rest_positions) - 1)
@@ -272,7 +281,11 @@ class Refiner:
 
     def __call__(self, grey: np.ndarray, crop: np.ndarray, tracked: np.ndarray,
                  last_seen: np.ndarray) -> tuple[np.ndarray, bool]:
-        """Refined positions of the tracked pins, and whether blobs had to be detected.
+        """Refined positions of the tracked pins, lost pins searched for, blobs detected if still needed.
+
+        The three steps of `refine`, `search` (every pin without a plausible centroid) and
+        `recover` (only when some pin is still missing); `pins.track.PinTracker` runs the same
+        steps with its own schedule (search and detection at bounded rates).
 
         Parameters
         ----------
@@ -290,37 +303,173 @@ class Refiner:
         positions : (N, 2) ndarray of float64
             Refined or recovered positions, px; NaN where lost.
         detected : bool
-            Whether this frame needed blob detection (some pin lost or implausible).
+            Whether this frame needed blob detection (some pin neither plausible nor found by search).
         """
+        positions, radius = self.refine(crop, tracked, last_seen)
+        missing = np.flatnonzero(np.isnan(positions[:, 0]))
+        if missing.size == 0:
+            return positions, False
+        positions = self.search(crop, positions, missing, last_seen, radius)
+        if not np.isnan(positions[:, 0]).any():
+            return positions, False
+        return self.recover(grey, tracked, positions, last_seen), True
+
+    def refine(self, crop: np.ndarray, tracked: np.ndarray, last_seen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Tracked pins moved onto their windowed centroids where those are plausible.
+
+        Parameters
+        ----------
+        crop : (h, w) ndarray of uint8
+            The frame's crop at `origin`, bright pins.
+        tracked : (N, 2) ndarray
+            Estimates (x, y), px in the frame; NaN where the pin is lost.
+        last_seen : (N, 2) ndarray
+            Each pin's last known position, px.
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            Windowed centroids, px; NaN where the estimate was NaN or its centroid implausible.
+        radius : (N,) ndarray of float64
+            Each pin's window radius, px (lost pins at their predicted positions), for `search`.
+        """
+        lost = np.flatnonzero(np.isnan(tracked[:, 0]))
+        if lost.size == 0:
+            radius = self.window_radius(tracked)
+            centres, plausible = self._centroids(crop, tracked, radius, slice(None))
+            if plausible.all():
+                return centres, radius
+            centres[~plausible] = np.nan
+            return centres, radius
+        # A lost pin still bounds its neighbours' windows, at its predicted position.
+        filled = tracked.copy()
+        filled[lost] = self._predict(tracked, lost, last_seen)
+        radius = self.window_radius(filled)
+        positions = np.full_like(tracked, np.nan)
         live = np.flatnonzero(np.isfinite(tracked[:, 0]))
-        every = live.size == len(tracked)
-        if every:
-            live, radius = slice(None), self.window_radius(tracked)
-        else:
-            # A lost pin still bounds its neighbours' windows, at its predicted position.
-            lost = np.flatnonzero(np.isnan(tracked[:, 0]))
-            filled = tracked.copy()
-            filled[lost] = self._predict(tracked, lost, last_seen)
-            radius = self.window_radius(filled)
-        centres, area, contrast, compactness = self.windows(crop, tracked[live] - self.origin, radius[live])
+        if live.size:
+            centres, plausible = self._centroids(crop, tracked[live], radius[live], live)
+            positions[live[plausible]] = centres[plausible]
+        return positions, radius
+
+    def _centroids(self, crop: np.ndarray, points: np.ndarray, radius: np.ndarray,
+                   which: np.ndarray | slice) -> tuple[np.ndarray, np.ndarray]:
+        """Windowed centroids (frame px) at finite `points` of pins `which`, and whether each is plausible."""
+        centres, area, contrast, compactness = self.windows(crop, points - self.origin, radius)
         centres += self.origin
-        step = centres - tracked[live]
+        step = centres - points
         # NaN compares False: an empty window is not plausible.
         plausible = ((np.einsum("nd,nd->n", step, step) <= self._max_shift_px ** 2)
-                     & (area >= self._area_range[0][live]) & (area <= self._area_range[1][live])
-                     & (contrast >= self._min_contrast[live]) & (compactness >= self._min_compactness[live]))
-        if every and plausible.all():
-            return centres, False
-        refined = np.full_like(tracked, np.nan)
-        refined[np.arange(len(tracked))[live][plausible]] = centres[plausible]
-        return self._recover(grey, tracked, refined, last_seen), True
+                     & self._like_at_rest(area, contrast, compactness, which))
+        return centres, plausible
 
-    def _recover(self, grey: np.ndarray, tracked: np.ndarray, refined: np.ndarray,
-                 last_seen: np.ndarray) -> np.ndarray:
-        """Detected blobs for pins without a refined position; leftover blobs to lost pins."""
+    def _like_at_rest(self, area: np.ndarray, contrast: np.ndarray, compactness: np.ndarray,
+                      which: np.ndarray | slice) -> np.ndarray:
+        """Whether tips' area, contrast and compactness are like those of pins `which` at rest."""
+        return ((area >= self._area_range[0][which]) & (area <= self._area_range[1][which])
+                & (contrast >= self._min_contrast[which]) & (compactness >= self._min_compactness[which]))
+
+    def search(self, crop: np.ndarray, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
+               radius: np.ndarray) -> np.ndarray:
+        """Look for lost pins in windows around their predicted positions (no blob detection).
+
+        Each pin's window starts at its prediction (`_predict`) and moves onto the centroid it
+        finds, `_SEARCH_STEPS` times (a mean shift: a tip cut by the first window is whole in the
+        next). A pin is found when the last move is within the plausibility bound (converged),
+        the tip's area, contrast and compactness are like the pin's own at rest, the centroid lies
+        within `gate_px` (below half the pin spacing) of the prediction, and no other pin is within
+        `_SAME_TIP_FRACTION` of the spacing (two pins never take one tip; a found pin yields to a
+        tracked one, and of two found pins the one farther from its prediction yields).
+        Cost: `_SEARCH_STEPS` windows per searched pin, as cheap as refinement.
+
+        Parameters
+        ----------
+        crop : (h, w) ndarray of uint8
+            The frame's crop at `origin`, bright pins.
+        positions : (N, 2) ndarray
+            Positions so far, px; NaN where missing.
+        which : (L,) ndarray of int
+            Missing pins to look for.
+        last_seen : (N, 2) ndarray
+            Each pin's last known position, px (the prediction when no neighbour is tracked).
+        radius : (N,) ndarray
+            Window radii, px (`refine`).
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            `positions` with the pins found filled in.
+        """
+        positions = positions.copy()
+        which = np.asarray(which, dtype=np.intp)
+        if which.size == 0:
+            return positions
+        predicted = self._predict(positions, which, last_seen)
+        point = predicted.copy()
+        active = np.arange(which.size)
+        moved = np.full(which.size, np.inf)
+        area = contrast = compactness = None
+        for _ in range(_SEARCH_STEPS):
+            inside = np.isfinite(point[active, 0])
+            active = active[inside]
+            if active.size == 0:
+                break
+            centres, area_a, contrast_a, compactness_a = self.windows(crop, point[active] - self.origin,
+                                                                      radius[which[active]])
+            centres += self.origin
+            step = centres - point[active]
+            moved[active] = np.einsum("nd,nd->n", step, step)
+            point[active] = centres
+            if area is None:
+                area, contrast, compactness = (np.full(which.size, np.nan) for _ in range(3))
+            area[active], contrast[active], compactness[active] = area_a, contrast_a, compactness_a
+        if area is None:
+            return positions
+        offset = point - predicted
+        found = ((moved <= self._max_shift_px ** 2) & (np.einsum("nd,nd->n", offset, offset) <= self.gate_px ** 2)
+                 & self._like_at_rest(area, contrast, compactness, which))
+        if not found.any():
+            return positions
+        candidates, point, offset = which[found], point[found], offset[found]
+        # No two pins on one tip: a found pin yields to any pin already placed ...
+        same_px = _SAME_TIP_FRACTION * self.spacing_px
+        placed = np.isfinite(positions[:, 0])
+        keep = np.ones(candidates.size, dtype=bool)
+        if placed.any():
+            keep = ~np.isfinite(cKDTree(positions[placed]).query(point, k=1, distance_upper_bound=same_px)[0])
+        # ... and of two found pins on one tip, the one farther from its prediction yields.
+        pairs = cKDTree(point).query_pairs(same_px, output_type="ndarray")
+        if len(pairs):
+            error = np.einsum("nd,nd->n", offset, offset)
+            a, b = pairs[:, 0], pairs[:, 1]
+            keep[np.where(error[a] > error[b], a, b)] = False
+        positions[candidates[keep]] = point[keep]
+        return positions
+
+    def recover(self, grey: np.ndarray, tracked: np.ndarray, refined: np.ndarray,
+                last_seen: np.ndarray) -> np.ndarray:
+        """Detected blobs for pins without a position; leftover blobs to lost pins (a blob detection).
+
+        Parameters
+        ----------
+        grey : (H, W) ndarray of uint8
+            The frame.
+        tracked : (N, 2) ndarray
+            LK estimates, px; NaN where LK lost the pin.
+        refined : (N, 2) ndarray
+            Positions so far (refined or found), px; NaN where missing.
+        last_seen : (N, 2) ndarray
+            Each pin's last known position, px.
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            `refined` with blobs for missing pins (an LK estimate's own blob, else one assigned
+            one-to-one within the gate around the pin's prediction), px; NaN where still lost.
+        """
         blobs = _detect(grey, self.disc, self.detection).centres
         gate = self.gate_px
-        # Refined pins claim their blobs too, so that no other pin takes them.
+        # Placed pins claim their blobs too, so that no other pin takes them.
         claim = match_to_blobs(np.where(np.isfinite(refined), refined, tracked), blobs, gate_px=gate)
         positions = refined.copy()
         has_blob = claim >= 0

@@ -49,6 +49,8 @@ from .errors import PinsError, ShapeError
 
 __all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
 
+# A frame in which fewer than this fraction of the expected (not retired) pins are found is blank.
+_BLANK_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
@@ -131,12 +133,15 @@ def track_pins(prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarra
 
 
 def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, params: LKParams,
-           guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+           guess: np.ndarray | None = None, *, backward: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """LK forward (from `guess` if given), LK backward from the result, and the checks.
 
     From a guess, the forward pass first runs on the full image only (a good guess leaves little
     motion to find); the pins that then fail a check, or land more than a third of a window from
     the guess (about as far as LK reaches without the pyramid), are tracked again with it.
+    Without `backward`, that first pass skips the backward LK and its check (status and residual
+    only: `PinTracker` checks each result by its windowed centroid instead); the pins tracked
+    again with the pyramid still get the backward check.
     """
     out = np.full_like(points, np.nan)
     ok = np.zeros(len(points), dtype=bool)
@@ -146,7 +151,8 @@ def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, par
     start = points[live].astype(np.float32).reshape(-1, 1, 2)
     initial = None if guess is None else guess[live].astype(np.float32).reshape(-1, 1, 2)
     levels = params.levels if guess is None else 0
-    forward, good = _forward_backward(prev_grey, next_grey, start, initial, params, levels)
+    forward, good = _forward_backward(prev_grey, next_grey, start, initial, params, levels,
+                                      backward=backward or guess is None)
     if levels < params.levels:
         far = np.sum((forward - initial) ** 2, axis=2).ravel() > (0.35 * params.window_px) ** 2
         again = np.flatnonzero(~good | far)
@@ -159,7 +165,7 @@ def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, par
 
 
 def _forward_backward(prev_grey: np.ndarray, next_grey: np.ndarray, start: np.ndarray, initial: np.ndarray | None,
-                      params: LKParams, forward_levels: int) -> tuple[np.ndarray, np.ndarray]:
+                      params: LKParams, forward_levels: int, *, backward: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """LK forward with `forward_levels` pyramid levels, backward with all; (M, 1, 2) positions and the checks."""
     window = (params.window_px, params.window_px)
     if initial is None:
@@ -169,16 +175,36 @@ def _forward_backward(prev_grey: np.ndarray, next_grey: np.ndarray, start: np.nd
         forward, status_f, error = cv2.calcOpticalFlowPyrLK(  # a copy: OpenCV writes into the guess
             prev_grey, next_grey, start, initial.copy(), winSize=window, maxLevel=forward_levels,
             criteria=params._criteria, flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
-    backward, status_b, _ = cv2.calcOpticalFlowPyrLK(
+    good = (status_f.ravel() == 1) & (error.ravel() <= params.max_error)
+    if not backward:
+        return forward, good
+    backward_points, status_b, _ = cv2.calcOpticalFlowPyrLK(
         next_grey, prev_grey, forward, None, winSize=window, maxLevel=params.levels, criteria=params._criteria)
-    fb_error = np.linalg.norm((backward - start).reshape(-1, 2), axis=1)
-    good = ((status_f.ravel() == 1) & (status_b.ravel() == 1) & (fb_error <= params.fb_threshold_px)
-            & (error.ravel() <= params.max_error))
-    return forward, good
+    fb_error = np.linalg.norm((backward_points - start).reshape(-1, 2), axis=1)
+    return forward, good & (status_b.ravel() == 1) & (fb_error <= params.fb_threshold_px)
 
 
 class PinTracker:
-    """Track a fixed set of pins through a stream of frames, flagging and recovering lost pins.
+    """Track a fixed set of pins through a stream of frames, flagging, searching for and recovering lost pins.
+
+    Each `update` (with refinement, the default):
+
+    1. LK forward from a constant-velocity guess, from the last good frame (`_track`; the
+       backward pass only for pins that need the pyramid);
+    2. refinement: every tracked pin onto its windowed centroid, kept when plausible (the check
+       of LK's answer);
+    3. windowed search for the pins still missing, in a window around each one's prediction
+       (`Refiner.search`): every frame for a pin lost for at most `retire_after` frames; a pin
+       lost longer is *retired* and searched for only every `check_every` frames (pins take
+       turns, so a frame searches about 1/`check_every` of the retired pins);
+    4. full blob detection with recovery (`Refiner.recover`), only when a pin that is not retired
+       is still missing, and at most once every `detect_every` frames: blob detection (a few ms)
+       costs at most 1/`detect_every` of it per frame on average, whatever the video.
+
+    A frame in which fewer than a tenth of the expected (not retired) pins are found is *blank*
+    (LEDs off, a dropped or black USB frame, the disc gone): all positions are NaN, `blank` is
+    True, nothing is detected, no pin counts as lost for longer, and the last good frame stays
+    the LK reference, so the next good frame recovers the pins by LK from it and by search.
 
     Parameters
     ----------
@@ -188,13 +214,20 @@ class PinTracker:
     detection : DetectionParams, optional
         Blob detection used for recovery (and for the pins at start when `start` is not given them).
     refine : bool
-        Move tracked pins onto their tips' windowed centroids and recover lost pins (default).
-        Without it the tracker is plain LK with checks, equal to `track_pins`, and lost pins stay lost.
+        Move tracked pins onto their tips' windowed centroids and search for and recover lost pins
+        (default). Without it the tracker is plain LK with checks, equal to `track_pins` (but for
+        blank frames), and lost pins stay lost.
     gate_fraction : float
-        Gate of refinement and recovery as a fraction of the median nearest-neighbour pin
-        spacing at start, in (0, 0.5).
+        Gate of search and recovery as a fraction of the median nearest-neighbour pin spacing at
+        start, in (0, 0.5).
     neighbours : int
         Tracked neighbours whose median displacement predicts where a lost pin is.
+    retire_after : int
+        Frames a pin may stay lost before it is retired, >= 1.
+    check_every : int
+        A retired pin is searched for once in this many frames, >= 1.
+    detect_every : int
+        At most one frame in this many detects blobs, >= 1 (1: any frame with a missing pin).
     disc : SensorDisc, optional
         The sensor disc; found in the first frame when not given.
 
@@ -203,12 +236,17 @@ class PinTracker:
     rest_positions, positions : (N, 2) ndarray of float64
         Pins at `start` and after the last `update`, px (NaN where lost).
     lost : (N,) ndarray of bool
-        Pins lost in the last frame.
+        Pins lost in the last frame, retired pins included (all of them in a blank frame).
+    retired : (N,) ndarray of bool
+        Pins lost for more than `retire_after` frames and not found since.
+    blank : bool
+        Whether the last frame was blank (nothing trackable).
     frames : int
         Frames seen since `start`, the rest frame included.
     detection_frames : int
-        Updates that had to detect blobs because some pin was lost or its windowed centroid
-        implausible (each costs a blob detection, a few ms).
+        Updates that detected blobs (bounded by `detect_every`).
+    blank_frames : int
+        Updates whose frame was blank.
     spacing_px : float
         Median nearest-neighbour pin spacing at `start`, px.
 
@@ -223,40 +261,56 @@ class PinTracker:
 
     def __init__(self, *, lk: LKParams | None = None, detection: DetectionParams | None = None,
                  refine: bool = True, gate_fraction: float = 0.4, neighbours: int = 6,
+                 retire_after: int = 5, check_every: int = 5, detect_every: int = 10,
                  disc: SensorDisc | None = None) -> None:
         if not 0.0 < gate_fraction < 0.5:
             raise ValueError(f"gate_fraction must be in (0, 0.5), got {gate_fraction}")
-        if int(neighbours) != neighbours or neighbours < 1:
-            raise ValueError(f"neighbours must be a positive integer, got {neighbours}")
+        for name, value in (("neighbours", neighbours), ("retire_after", retire_after),
+                            ("check_every", check_every), ("detect_every", detect_every)):
+            if int(value) != value or value < 1:
+                raise ValueError(f"{name} must be a positive integer, got {value}")
         self.lk = lk
         self._auto_lk = lk is None
         self.detection = detection or DetectionParams()
         self.refine = bool(refine)
         self.gate_fraction = float(gate_fraction)
         self.neighbours = int(neighbours)
+        self.retire_after = int(retire_after)
+        self.check_every = int(check_every)
+        self.detect_every = int(detect_every)
         self.disc = disc
         self.rest_positions: np.ndarray | None = None
         self.positions: np.ndarray | None = None
         self.lost: np.ndarray | None = None
+        self.retired: np.ndarray | None = None
+        self.blank = False
         self.frames = 0
+        self.detection_frames = 0
+        self.blank_frames = 0
         self.spacing_px = float("nan")
-        self._previous: np.ndarray | None = None
+        self._previous: np.ndarray | None = None      # crop of the last good frame (the LK reference)
+        self._reference: np.ndarray | None = None     # pin positions in it, px (NaN where lost there)
         self._velocity: np.ndarray | None = None
+        self._since_good = 1                          # frames from the reference to the next frame
+        self._since_detection = 0
+        self._lost_run: np.ndarray | None = None
         self._origin = np.zeros(2)
         self._crop = (slice(None), slice(None))
         self._last_seen: np.ndarray | None = None
         self._refiner: Refiner | None = None
-        self.detection_frames = 0
 
     def __repr__(self) -> str:
         state = "not started" if self.positions is None else (
-            f"{len(self.positions)} pins, {int(self.lost.sum())} lost, {self.frames} frames")
+            f"{len(self.positions)} pins, {int(self.lost.sum())} lost, {int(self.retired.sum())} retired, "
+            f"{self.frames} frames")
         return (f"PinTracker(lk={self.lk!r}, detection={self.detection!r}, refine={self.refine}, "
-                f"gate_fraction={self.gate_fraction}, neighbours={self.neighbours}) [{state}]")
+                f"gate_fraction={self.gate_fraction}, neighbours={self.neighbours}, "
+                f"retire_after={self.retire_after}, check_every={self.check_every}, "
+                f"detect_every={self.detect_every}) [{state}]")
 
     @property
     def gate_px(self) -> float:
-        """Gate of refinement and recovery, px (fraction of the pin spacing at start)."""
+        """Gate of search and recovery, px (fraction of the pin spacing at start)."""
         return self.gate_fraction * self.spacing_px
 
     def start(self, frame: np.ndarray, pins: np.ndarray | None = None) -> np.ndarray:
@@ -282,7 +336,8 @@ class PinTracker:
         NoSensorError
             The frame shows no sensor disc (when the disc is needed and not given).
         PinsError
-            Fewer than two pins to track.
+            Fewer than two pins to track, or (with refinement) a blank rest frame: no pin shows a tip
+            where it is given.
         """
         grey = as_grey(frame)
         if self.disc is None and (self.refine or pins is None):
@@ -299,17 +354,27 @@ class PinTracker:
         self._set_crop(grey.shape, pins)
         self._previous = grey[self._crop].copy()
         if self.refine:
-            self._refiner = Refiner(self._bright(self._previous), pins, self._origin,
-                                    spacing_px=self.spacing_px, gate_px=self.gate_px, neighbours=self.neighbours,
-                                    detection=self.detection, disc=self.disc)
-            pins = self._refiner.rest_positions
+            refiner = Refiner(self._bright(self._previous), pins, self._origin,
+                              spacing_px=self.spacing_px, gate_px=self.gate_px, neighbours=self.neighbours,
+                              detection=self.detection, disc=self.disc)
+            if not np.isfinite(refiner._min_contrast).any() or not (refiner._min_contrast > 0).any():
+                raise PinsError("the rest frame is blank: no pin shows a tip where it is given")
+            self._refiner = refiner
+            pins = refiner.rest_positions
         self.rest_positions = pins.copy()
         self.positions = pins.copy()
+        self._reference = pins.copy()
         self._last_seen = pins.copy()
         self._velocity = np.zeros_like(pins)
         self.lost = np.zeros(len(pins), dtype=bool)
+        self.retired = np.zeros(len(pins), dtype=bool)
+        self._lost_run = np.zeros(len(pins), dtype=np.int64)
+        self.blank = False
         self.frames = 1
         self.detection_frames = 0
+        self.blank_frames = 0
+        self._since_good = 1
+        self._since_detection = self.detect_every
         return self.positions.copy()
 
     def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:
@@ -336,7 +401,7 @@ class PinTracker:
         Returns
         -------
         positions : (N, 2) ndarray of float64
-            Pin positions, px, NaN where lost (see `lost`).
+            Pin positions, px, NaN where lost (see `lost`, `retired`; all NaN when `blank`).
         """
         if self._previous is None:
             raise PinsError("PinTracker.update called before start()")
@@ -345,20 +410,63 @@ class PinTracker:
         if current.shape != self._previous.shape:
             raise ShapeError(f"frame size changed: expected the crop {self._previous.shape}, got {current.shape}")
         origin = self._origin
-        guess = self.positions + self._velocity - origin
-        moved, ok = _track(self._previous, current, self.positions - origin, self.lk, guess=guess)
+        # Constant velocity over one frame; after blank frames, from where the pins were last seen.
+        guess = self._reference + (self._velocity if self._since_good == 1 else 0.0) - origin
+        moved, _ = _track(self._previous, current, self._reference - origin, self.lk, guess=guess,
+                          backward=not self.refine)
         positions = moved + origin
+        detected = False
         if self.refine:
-            positions, detected = self._refiner(grey, self._bright(current), positions, self._last_seen)
-            self.detection_frames += detected
+            positions, blank, detected = self._refine(grey, current, positions)
+        else:
+            blank = self._too_few(positions)
+        self.frames += 1
+        self.blank = blank
+        if blank:
+            self.blank_frames += 1
+            self._since_good += 1
+            self._since_detection += 1
+            positions = np.full_like(positions, np.nan)
+            self.positions, self.lost = positions, np.ones(len(positions), dtype=bool)
+            return positions.copy()
+        self.detection_frames += detected
+        self._since_detection = 0 if detected else self._since_detection + 1
         # Constant-velocity guess for the next frame (zero for pins just recovered or lost).
-        self._velocity = np.nan_to_num(positions - self.positions)
+        self._velocity = np.nan_to_num((positions - self._reference) / self._since_good)
+        self._since_good = 1
         self._previous = current
+        self._reference = positions
         self.positions = positions
         self.lost = ~np.isfinite(positions).all(axis=1)
+        self._lost_run = np.where(self.lost, self._lost_run + 1, 0)
+        self.retired = self._lost_run > self.retire_after
         self._last_seen[~self.lost] = positions[~self.lost]
-        self.frames += 1
         return positions.copy()
+
+    def _refine(self, grey: np.ndarray, current: np.ndarray, tracked: np.ndarray) -> tuple[np.ndarray, bool, bool]:
+        """Refinement, search and bounded-rate detection: positions, whether blank, whether detected."""
+        refiner = self._refiner
+        crop = self._bright(current)
+        positions, radius = refiner.refine(crop, tracked, self._last_seen)
+        missing = np.isnan(positions[:, 0])
+        if not missing.any():
+            return positions, False, False
+        # Retired pins take turns: each is searched for once in `check_every` frames.
+        turn = (np.arange(len(positions)) + self.frames) % self.check_every == 0
+        search = np.flatnonzero(missing & (~self.retired | turn))
+        positions = refiner.search(crop, positions, search, self._last_seen, radius)
+        if self._too_few(positions):
+            return positions, True, False
+        pending = np.isnan(positions[:, 0]) & ~self.retired
+        if pending.any() and self._since_detection + 1 >= self.detect_every:
+            return refiner.recover(grey, tracked, positions, self._last_seen), False, True
+        return positions, False, False
+
+    def _too_few(self, positions: np.ndarray) -> bool:
+        """Whether fewer than a tenth of the pins expected (not retired) were found: a blank frame."""
+        expected = int(np.count_nonzero(~self.retired))
+        found = int(np.count_nonzero(np.isfinite(positions[:, 0])))
+        return found < max(1, _BLANK_FRACTION * expected)
 
     def _bright(self, crop: np.ndarray) -> np.ndarray:
         """The crop with bright pins (dark markers inverted)."""
