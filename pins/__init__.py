@@ -9,7 +9,9 @@ from .displacement import displacement_from_rest, displacement_magnitude, integr
 from .errors import NoSensorError, PinsError, ShapeError
 from .features import LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, tap_features
 from .segment import segment_taps, tap_signal
-from .select import median_spacing_px, select_pins
+from .scale import (SENSOR_PRESETS, PadScale, SensorDescription, central_spacing_px, pad_scale, pin_pitch_mm,
+                    sensor_preset)
+from .select import PinSelection, median_spacing_px, select_feature_pins, select_pins
 from .track import LKParams, PinTracker, match_to_blobs, track_pins
 from .tune import expected_spacing_px, tune_detection
 
@@ -20,7 +22,9 @@ __all__ = [
     "tune_detection", "expected_spacing_px",
     "LKParams", "track_pins", "match_to_blobs", "PinTracker",
     "displacement_from_rest", "integrate_flow", "displacement_magnitude",
-    "select_pins", "median_spacing_px",
+    "select_pins", "select_feature_pins", "PinSelection", "median_spacing_px",
+    "pad_scale", "PadScale", "pin_pitch_mm", "central_spacing_px", "SensorDescription", "SENSOR_PRESETS",
+    "sensor_preset",
     "feature_dim_names", "fill_lost", "resample_tap", "tap_features", "TapRecorder",
     "tap_signal", "segment_taps",
 ]

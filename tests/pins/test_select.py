@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.distance import pdist
 
-from pins import PinsError, ShapeError, select_pins
+from pins import PinsError, ShapeError, select_feature_pins, select_pins
 from tests.pins.conftest import sensor
 
 
@@ -68,3 +68,46 @@ def test_median_spacing_of_a_square_grid_is_its_pitch():
     x, y = np.meshgrid(np.arange(5) * 12.5, np.arange(4) * 12.5)
     assert median_spacing_px(np.column_stack([x.ravel(), y.ravel()])) == pytest.approx(12.5)
     assert np.isnan(median_spacing_px(np.zeros((1, 2))))
+
+
+# select_feature_pins: never fails for lack of room.
+
+def test_feature_pins_as_requested_equal_select_pins():
+    s = sensor(331)
+    rest = s.rest_centres
+    chosen = select_feature_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=s.mm_per_px)
+    assert chosen.as_requested and chosen.warning == "" and chosen.n_pins == 40
+    assert np.array_equal(chosen.indices, select_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=s.mm_per_px))
+    assert chosen.separation_mm == pytest.approx(pdist(rest[chosen.indices]).min() * s.mm_per_px)
+    assert chosen.separation_mm >= 4.0
+
+
+def test_feature_pins_spread_as_far_as_the_pad_allows():
+    s = sensor(331)
+    rest = s.rest_centres
+    # 300 pins cannot be 4 mm apart (about 36 can): 300 pins, as far apart as the greedy rule allows.
+    chosen = select_feature_pins(rest, n_pins=300, min_separation_mm=4.0, mm_per_px=s.mm_per_px)
+    assert chosen.n_pins == 300 and len(set(chosen.indices.tolist())) == 300
+    reached = pdist(rest[chosen.indices]).min() * s.mm_per_px
+    assert chosen.separation_mm == pytest.approx(reached) and reached < 4.0
+    assert "cannot be 4 mm apart" in chosen.warning and f"{reached:.2f} mm" in chosen.warning
+    # Largest: a hair more separation and the same rule no longer finds 300.
+    with pytest.raises(PinsError):
+        select_pins(rest, n_pins=300, min_separation_mm=reached * 1.001, mm_per_px=s.mm_per_px)
+
+
+def test_feature_pins_fewer_than_asked_with_a_warning():
+    s = sensor(127)
+    rest = s.rest_centres[:30]
+    chosen = select_feature_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=s.mm_per_px)
+    assert chosen.n_pins == 30 and sorted(chosen.indices.tolist()) == list(range(30))
+    assert "only 30 pins" in chosen.warning and not chosen.as_requested
+    single = select_feature_pins(rest[:1], n_pins=40, mm_per_px=1.0)
+    assert single.n_pins == 1 and single.separation_mm == np.inf
+
+
+def test_feature_pins_deterministic():
+    s = sensor(532)
+    a = select_feature_pins(s.rest_centres, n_pins=120, mm_per_px=s.mm_per_px)
+    b = select_feature_pins(s.rest_centres.copy(), n_pins=120, mm_per_px=s.mm_per_px)
+    assert np.array_equal(a.indices, b.indices) and a.separation_mm == b.separation_mm

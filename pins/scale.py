@@ -1,0 +1,265 @@
+"""Image scale at the pad (mm per px) from the pin pitch and a description of the sensor.
+
+A TacTip's pins stand on a hemispherical pad on a lattice of known pitch, so the pins measure the
+scale themselves: ``mm_per_px = pitch_mm / pitch_px``, with ``pitch_px`` the median nearest-neighbour
+spacing of the rest pins near the centre of the field (where the dome faces the camera: towards the
+rim it is seen obliquely and the spacing shrinks in the image) and ``pitch_mm`` from a description
+of the sensor. The disc's diameter is a poorer ruler: where the membrane ends in the image depends
+on the casing, a black rim ring or LED glare, and differs between TacTips.
+
+Geometry assumed for ``pitch_mm`` from a pin count and a pad diameter (`pin_pitch_mm`): the pad is a
+hemisphere of radius ``R = pad_diameter / 2``; the pins' bases lie on a hexagonal lattice laid out
+in arc length from the apex, ring k (k = 1 .. K) holding about 6 k pins, so K rings hold
+``1 + 3 K (K + 1)`` pins (127 = 6 rings, 331 = 10, 1027 = 18); the outermost ring lies at polar
+angle ``field_polar_deg`` (80 degrees: the TacTip's pins stop short of the clamped rim). Then
+``pitch_mm = R * radians(field_polar_deg) / K``, measured along the pad surface, with K the
+fewest rings that hold the pins (a count up to 3 % above a full hexagonal number is taken as
+that number with a few spurious detections; any count a few rings short of full, as when rim
+pins are hidden, rounds up to the same K). Millimetres are pad-surface mm at the apex, the
+scale of the paper's "4 mm apart".
+
+Named sensors (`SENSOR_PRESETS`) give pin count, pad diameter and the field's extent in one word;
+`pad_scale` turns any of these (or an explicit ``mm_per_px``) into a `PadScale` that says how it
+was derived.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import PinsError, ShapeError
+
+__all__ = ["SensorDescription", "SENSOR_PRESETS", "sensor_preset", "pin_pitch_mm", "central_spacing_px",
+           "PadScale", "pad_scale"]
+
+FIELD_POLAR_DEG = 80.0
+# A count this much above a full hexagonal number is that number plus spurious detections.
+_OVERCOUNT = 0.03
+
+
+def pin_pitch_mm(pins: int, pad_diameter_mm: float, *, field_polar_deg: float = FIELD_POLAR_DEG) -> float:
+    """Pin pitch along the pad surface, mm, of `pins` pins in hexagonal rings on a hemispherical pad.
+
+    Parameters
+    ----------
+    pins : int
+        Pins on the pad (>= 7).
+    pad_diameter_mm : float
+        Diameter of the hemispherical pad, mm.
+    field_polar_deg : float
+        Polar angle of the outermost ring of pins from the pad's apex, degrees (0, 90].
+
+    Returns
+    -------
+    pitch_mm : float
+        ``R * radians(field_polar_deg) / K``, K the fewest hexagonal rings holding the pins.
+
+    Examples
+    --------
+    >>> round(pin_pitch_mm(331, 40.0), 3)      # 10 rings out to 80 degrees of a 20 mm hemisphere
+    2.793
+    """
+    if int(pins) != pins or pins < 7:
+        raise ValueError(f"pins must be an integer >= 7 (at least one ring), got {pins}")
+    if not (pad_diameter_mm > 0 and math.isfinite(pad_diameter_mm)):
+        raise ValueError(f"pad_diameter_mm must be a finite number > 0, got {pad_diameter_mm}")
+    if not 0 < field_polar_deg <= 90:
+        raise ValueError(f"field_polar_deg must be in (0, 90], got {field_polar_deg}")
+    # Fewest rings K with 1 + 3 K (K + 1) >= pins (allowing a small overcount).
+    target = pins * (1.0 - _OVERCOUNT)
+    rings = max(1, math.ceil((-3.0 + math.sqrt(9.0 + 12.0 * (target - 1.0))) / 6.0 - 1e-9))
+    return pad_diameter_mm / 2.0 * math.radians(field_polar_deg) / rings
+
+
+@dataclass(frozen=True)
+class SensorDescription:
+    """What `pad_scale` needs to know about a TacTip.
+
+    Attributes
+    ----------
+    name : str
+    pins : int
+        Pins on the whole pad.
+    pad_diameter_mm : float
+        Diameter of the hemispherical pad, mm.
+    field_polar_deg : float
+        Polar angle of the outermost ring of pins, degrees.
+    note : str
+        Where the sensor comes from.
+    """
+
+    name: str
+    pins: int
+    pad_diameter_mm: float
+    field_polar_deg: float = FIELD_POLAR_DEG
+    note: str = ""
+
+    @property
+    def pitch_mm(self) -> float:
+        """Pin pitch along the pad surface, mm (`pin_pitch_mm`)."""
+        return pin_pitch_mm(self.pins, self.pad_diameter_mm, field_polar_deg=self.field_polar_deg)
+
+    def describe(self) -> str:
+        """One line: pins, pad and pitch."""
+        return (f"{self.name}: {self.pins} pins on a {self.pad_diameter_mm:g} mm pad, pitch "
+                f"{self.pitch_mm:.2f} mm")
+
+
+SENSOR_PRESETS: dict[str, SensorDescription] = {d.name: d for d in (
+    SensorDescription("tactip-127", 127, 40.0, note="TacTip, 40 mm pad, 127 pins (6 rings)"),
+    SensorDescription("tactip-331", 331, 40.0, note="TacTip, 40 mm pad, 331 pins (10 rings)"),
+    SensorDescription("tactip-532", 532, 40.0, note="TacTip, 40 mm pad, 532 pins (paper 002)"),
+    SensorDescription("rim-ring-331", 331, 40.0, note="331-pin TacTip with a black rim ring and LED glare"),
+    SensorDescription("brown-127", 127, 40.0, note="127-pin TacTip with a brown, low-contrast skin"),
+    SensorDescription("radial-120", 120, 20.0, note="home-built TacTip, ~120 small pins in a radial layout"),
+    SensorDescription("small-pad-100", 100, 20.0, note="small home-built pad of 100 pins"),
+    SensorDescription("dense-1000", 1000, 40.0, note="dense 1000-pin pad"),
+)}
+
+
+def sensor_preset(name: str) -> SensorDescription:
+    """The named sensor of `SENSOR_PRESETS`; `ValueError` listing the names when unknown."""
+    try:
+        return SENSOR_PRESETS[name]
+    except KeyError:
+        raise ValueError(f"unknown sensor {name!r}; choose from {', '.join(SENSOR_PRESETS)}") from None
+
+
+def central_spacing_px(rest_positions: np.ndarray, *, centre: tuple[float, float] | None = None,
+                       fraction: float = 1.0 / 3.0) -> float:
+    """Median nearest-neighbour spacing of the pins near the centre of the field, px.
+
+    Parameters
+    ----------
+    rest_positions : (N, 2) ndarray
+        Pin positions (x, y) at rest, px; NaN rows are ignored.
+    centre : (x, y), optional
+        Centre of the field, px; the mean of the pins by default.
+    fraction : float
+        Pins within this fraction of the field's radius count (at least the 7 nearest the centre),
+        in (0, 1]; neighbours are searched among all pins.
+
+    Returns
+    -------
+    pitch_px : float
+        NaN with fewer than 2 pins.
+    """
+    rest = np.asarray(rest_positions, dtype=np.float64)
+    if rest.ndim != 2 or rest.shape[1] != 2:
+        raise ShapeError(f"rest_positions must have shape (N, 2), got {rest.shape}")
+    if not 0 < fraction <= 1:
+        raise ValueError(f"fraction must be in (0, 1], got {fraction}")
+    rest = rest[np.isfinite(rest).all(axis=1)]
+    if len(rest) < 2:
+        return float("nan")
+    middle = rest.mean(axis=0) if centre is None else np.asarray(centre, dtype=np.float64)
+    distance = np.hypot(*(rest - middle).T)
+    inner = distance <= fraction * distance.max()
+    if inner.sum() < 7:
+        inner = distance <= np.sort(distance)[min(6, len(rest) - 1)]
+    nearest = cKDTree(rest).query(rest[inner], k=2)[0][:, 1]
+    return float(np.median(nearest))
+
+
+@dataclass(frozen=True)
+class PadScale:
+    """The image scale at the pad and how it was found.
+
+    Attributes
+    ----------
+    mm_per_px : float
+    pitch_px : float
+        Median nearest-neighbour spacing of the central rest pins, px (NaN when not measured).
+    pitch_mm : float
+        Pin pitch of the sensor along the pad surface, mm (NaN when the scale was given).
+    source : str
+        How the scale was derived, for a person (e.g. "pin pitch 2.79 mm (sensor tactip-331) / 19.6 px").
+    sensor : dict
+        The description used: ``name``, ``pins``, ``pad_diameter_mm``, ``field_polar_deg`` (those known).
+    """
+
+    mm_per_px: float
+    pitch_px: float
+    pitch_mm: float
+    source: str
+    sensor: dict
+
+    def describe(self) -> str:
+        """One line: the scale and its derivation."""
+        return f"{self.mm_per_px:.4f} mm/px ({self.source})"
+
+
+def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | None = None,
+              pins: int | None = None, pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
+              centre: tuple[float, float] | None = None) -> PadScale:
+    """The scale, mm/px, from the rest pins' pitch and the sensor's description (or given outright).
+
+    Precedence: `mm_per_px` when given; else the pitch of `sensor` (a `SENSOR_PRESETS` name or a
+    `SensorDescription`), with `pins` and `pad_diameter_mm` overriding its fields when given; else
+    `pins` (default: the number of rest pins) on a pad of `pad_diameter_mm` (required then).
+
+    Parameters
+    ----------
+    rest_positions : (N, 2) ndarray
+        Pin positions at rest, px.
+    sensor : str or SensorDescription, optional
+    pins : int, optional
+        Pins on the whole pad (not only those in view).
+    pad_diameter_mm : float, optional
+    mm_per_px : float, optional
+        A measured scale: used as is.
+    centre : (x, y), optional
+        Centre of the pin field, px (for `central_spacing_px`).
+
+    Returns
+    -------
+    PadScale
+
+    Raises
+    ------
+    PinsError
+        Fewer than 2 pins to measure the pitch from (when the scale is not given).
+    ValueError
+        An unknown sensor name or an out-of-range number.
+
+    Examples
+    --------
+    >>> scale = pad_scale(rest, sensor="tactip-331")       # doctest: +SKIP
+    >>> scale.describe()                                    # doctest: +SKIP
+    '0.1420 mm/px (pin pitch 2.79 mm of tactip-331: 331 pins on a 40 mm pad / 19.66 px measured)'
+    """
+    pitch_px = central_spacing_px(rest_positions, centre=centre)
+    if mm_per_px is not None:
+        if not (mm_per_px > 0 and math.isfinite(mm_per_px)):
+            raise ValueError(f"mm_per_px must be a finite number > 0, got {mm_per_px}")
+        return PadScale(float(mm_per_px), pitch_px, float("nan"), "given (--mm-per-px)", {})
+    if isinstance(sensor, str):
+        sensor = sensor_preset(sensor)
+    counted = pins is None and sensor is None
+    if sensor is not None:
+        description = SensorDescription(sensor.name, int(pins if pins is not None else sensor.pins),
+                                        float(pad_diameter_mm if pad_diameter_mm is not None
+                                              else sensor.pad_diameter_mm), sensor.field_polar_deg)
+    else:
+        if pad_diameter_mm is None:
+            raise ValueError("pad_diameter_mm is needed to derive the scale without a sensor preset or mm_per_px")
+        count = len(np.asarray(rest_positions)) if pins is None else pins
+        if count < 7:
+            raise PinsError(f"{count} pins are too few to derive the scale from the pin pitch; give mm_per_px")
+        description = SensorDescription("", int(count), float(pad_diameter_mm))
+    if not np.isfinite(pitch_px) or pitch_px <= 0:
+        raise PinsError("fewer than two distinct rest pins: cannot measure the pin pitch; give mm_per_px")
+    pitch_mm = description.pitch_mm
+    what = f"{description.pins} pins{' detected' if counted else ''} on a {description.pad_diameter_mm:g} mm pad"
+    if description.name:
+        what = f"{description.name}: {what}"
+    source = f"pin pitch {pitch_mm:.3f} mm ({what}) / {pitch_px:.2f} px measured"
+    info = {"pins": description.pins, "pad_diameter_mm": description.pad_diameter_mm,
+            "field_polar_deg": description.field_polar_deg, "pins_counted": counted}
+    if description.name:
+        info["name"] = description.name
+    return PadScale(pitch_mm / pitch_px, pitch_px, pitch_mm, source, info)

@@ -1,0 +1,53 @@
+"""pins.scale: mm/px from the pin pitch and a description of the sensor, against the renderer's truth."""
+
+import numpy as np
+import pytest
+
+from pins import PinsError, central_spacing_px, pad_scale, pin_pitch_mm, sensor_preset
+from tactip.synthetic import SyntheticTacTip
+
+
+@pytest.mark.parametrize("pins, pad_mm", [(127, 40.0), (331, 40.0), (532, 40.0), (1000, 40.0), (100, 20.0)])
+def test_pitch_of_the_ring_model_matches_the_renderer(pins, pad_mm):
+    sensor = SyntheticTacTip(pins=pins, pad_diameter_mm=pad_mm, seed=0)
+    assert pin_pitch_mm(pins, pad_mm) == pytest.approx(sensor.pin_spacing_mm, rel=1e-9)
+    scale = pad_scale(sensor.rest_centres, pad_diameter_mm=pad_mm)
+    assert scale.mm_per_px == pytest.approx(sensor.mm_per_px, rel=0.05)
+    assert scale.sensor["pins"] == pins and scale.sensor["pins_counted"]
+
+
+def test_counts_short_of_the_pad_round_up_to_its_rings():
+    # Rim pins hidden (300 of 331 seen) or a few specks more (335): the same 10 rings.
+    assert pin_pitch_mm(300, 40.0) == pin_pitch_mm(331, 40.0) == pin_pitch_mm(335, 40.0)
+    assert pin_pitch_mm(400, 40.0) < pin_pitch_mm(331, 40.0)
+
+
+def test_preset_and_overrides():
+    sensor = SyntheticTacTip(pins=331, seed=1)
+    seen = sensor.rest_centres[:250]  # the outer pins hidden: the count alone would mislead
+    by_name = pad_scale(seen, sensor="tactip-331")
+    assert by_name.mm_per_px == pytest.approx(sensor.mm_per_px, rel=0.05)
+    assert "tactip-331" in by_name.source and by_name.sensor["name"] == "tactip-331"
+    assert by_name.pitch_mm == pytest.approx(sensor_preset("tactip-331").pitch_mm)
+    smaller = pad_scale(seen, sensor="tactip-331", pad_diameter_mm=30.0)
+    assert smaller.mm_per_px == pytest.approx(by_name.mm_per_px * 0.75)
+    given = pad_scale(seen, mm_per_px=0.2)
+    assert given.mm_per_px == 0.2 and "given" in given.source and np.isfinite(given.pitch_px)
+
+
+def test_bad_descriptions_are_named():
+    rest = SyntheticTacTip(pins=127, seed=0).rest_centres
+    with pytest.raises(ValueError, match="unknown sensor 'nope'; choose from tactip-127"):
+        pad_scale(rest, sensor="nope")
+    with pytest.raises(ValueError, match="mm_per_px"):
+        pad_scale(rest, mm_per_px=float("inf"))
+    with pytest.raises(ValueError, match="pad_diameter_mm"):
+        pad_scale(rest)
+    with pytest.raises(PinsError, match="too few"):
+        pad_scale(rest[:3], pad_diameter_mm=40.0)
+    assert np.isnan(central_spacing_px(rest[:1]))
+
+
+def test_central_spacing_of_a_square_grid():
+    x, y = np.meshgrid(np.arange(9) * 7.0, np.arange(9) * 7.0)
+    assert central_spacing_px(np.column_stack([x.ravel(), y.ravel()])) == pytest.approx(7.0)
