@@ -17,7 +17,7 @@ from scipy import ndimage
 from .displacement import displacement_magnitude
 from .errors import ShapeError
 
-__all__ = ["tap_signal", "segment_taps"]
+__all__ = ["tap_signal", "segment_taps", "converging_frames"]
 
 
 def tap_signal(displacements: np.ndarray, *, percentile: float = 90.0) -> np.ndarray:
@@ -40,12 +40,18 @@ def tap_signal(displacements: np.ndarray, *, percentile: float = 90.0) -> np.nda
         raise ShapeError(f"displacements must have shape (T, N, 2), got {displacements.shape}")
     if not 0.0 <= percentile <= 100.0:
         raise ValueError(f"percentile must be in [0, 100], got {percentile}")
-    magnitude = displacement_magnitude(displacements)
-    signal = np.zeros(len(magnitude))
-    seen = np.isfinite(magnitude).any(axis=1)
-    if seen.any():
-        signal[seen] = np.nanpercentile(magnitude[seen], percentile, axis=1)
-    return signal
+    # np.nanpercentile's linear rule, vectorised over frames (it loops over rows in Python when
+    # some are NaN): sorting puts NaN last, so each row's valid values come first.
+    ordered = np.sort(displacement_magnitude(displacements), axis=1)
+    count = np.count_nonzero(np.isfinite(ordered), axis=1)
+    rank = percentile / 100.0 * np.maximum(count - 1, 0)
+    low = np.floor(rank).astype(np.intp)
+    high = np.minimum(low + 1, np.maximum(count - 1, 0))
+    rows = np.arange(len(ordered))
+    if ordered.shape[1] == 0:
+        return np.zeros(len(ordered))
+    value = ordered[rows, low] + (ordered[rows, high] - ordered[rows, low]) * (rank - low)
+    return np.where(count > 0, value, 0.0)
 
 
 def segment_taps(displacements: np.ndarray, *, high_px: float = 1.5, low_px: float = 0.5,
@@ -109,3 +115,58 @@ def segment_taps(displacements: np.ndarray, *, high_px: float = 1.5, low_px: flo
     if len(starts) > 1:
         starts[1:] = np.maximum(starts[1:], stops[:-1])
     return [(int(a), int(b)) for a, b in zip(starts, stops)]
+
+
+def converging_frames(displacements: np.ndarray, rest_positions: np.ndarray, *, high_px: float = 1.5,
+                      cosine: float = -0.5, percentile: float = 90.0) -> np.ndarray:
+    """Frames whose displaced pins move *towards* the centre of their displacement: a pressed reference.
+
+    A TacTip pressed by an object spreads its pins away from the contact, so displacements
+    measured from a true rest frame point outward from the displaced region. When the "rest"
+    frame was itself taken during a tap, the frames where the pad is really at rest show the
+    opposite: the displaced pins drawn together. This finds those frames.
+
+    For each frame, the pins are weighted by their squared displacement magnitude; the centre is
+    the weighted mean of their rest positions; the frame's score is the weighted mean cosine
+    between each pin's displacement and its rest position's offset from that centre (+1 all
+    outward, -1 all inward). A frame converges when its score is below `cosine` and its tap
+    signal (`tap_signal`) exceeds `high_px`.
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from the rest frame, px; NaN where lost (ignored).
+    rest_positions : (N, 2) ndarray
+        Pin positions in the rest frame, px.
+    high_px : float
+        Smallest tap signal of a converging frame, px.
+    cosine : float
+        Largest score of a converging frame, in [-1, 1].
+    percentile : float
+        Percentile of the tap signal.
+
+    Returns
+    -------
+    frames : (K,) ndarray of int
+        Indices of the converging frames, in order.
+    """
+    data = np.asarray(displacements, dtype=np.float32)
+    rest = np.asarray(rest_positions, dtype=np.float32)
+    if data.ndim != 3 or data.shape[2] != 2 or rest.shape != data.shape[1:]:
+        raise ShapeError(f"displacements must have shape (T, N, 2) and rest_positions (N, 2), got {data.shape} "
+                         f"and {rest.shape}")
+    if not -1.0 <= cosine <= 1.0:
+        raise ValueError(f"cosine must be in [-1, 1], got {cosine}")
+    data = np.nan_to_num(data)
+    magnitude = np.hypot(data[..., 0], data[..., 1])
+    weight = magnitude**2
+    total = weight.sum(axis=1) + 1e-12
+    centre = (weight @ rest) / total[:, None]
+    # Offsets (T, N, 2) of each pin's rest position from its frame's centre.
+    offset = rest[None] - centre[:, None]
+    along = np.einsum("tnk,tnk->tn", offset, data)
+    norms = np.hypot(offset[..., 0], offset[..., 1]) * magnitude
+    cosines = np.divide(along, norms, out=np.zeros_like(along), where=norms > 0)
+    score = (weight * cosines).sum(axis=1) / total
+    signal = tap_signal(displacements, percentile=percentile)
+    return np.flatnonzero((score < cosine) & (signal > high_px))

@@ -70,7 +70,8 @@ class PinSelection:
     def describe(self) -> str:
         """One line for a person: how many pins, how far apart, against what was asked."""
         reached = "n/a" if not np.isfinite(self.separation_mm) else f"{self.separation_mm:.2f} mm"
-        text = f"{self.n_pins} of {self.requested} pins, at least {reached} apart"
+        asked = f" ({self.requested} asked)" if self.n_pins != self.requested else ""
+        text = f"{self.n_pins} pins{asked} at least {reached} apart"
         if self.separation_mm < self.min_separation_mm * (1 - 1e-9) and self.n_pins > 1:
             text += f" ({self.min_separation_mm:g} mm asked)"
         return text
@@ -208,7 +209,7 @@ def select_feature_pins(rest_positions: np.ndarray, *, n_pins: int = 40, min_sep
     --------
     >>> chosen = select_feature_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=0.12)  # doctest: +SKIP
     >>> chosen.describe()                                                                     # doctest: +SKIP
-    '40 of 40 pins, at least 2.87 mm apart (4 mm asked)'
+    '40 pins at least 2.87 mm apart (4 mm asked)'
     """
     rest, order = _check(rest_positions, n_pins, min_separation_mm, mm_per_px, centre)
     n_pins = int(n_pins)

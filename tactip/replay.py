@@ -2,24 +2,42 @@
 
 ``replay_video`` reads every frame of a video (or any non-live frame source), detects the pins
 in the rest frame (the first frame unless told otherwise; it must be off contact), tracks them
-through the video (`pins.PinTracker`: Lucas-Kanade, windowed centroid refinement, lost-pin recovery),
-integrates displacements from the rest frame, finds the taps (`pins.segment_taps`), selects the
-tactile pins (`pins.select_pins`) and resamples each tap into a feature array
-(`pins.tap_features`). Frames before the rest frame are not tracked (NaN).
+through the video (`pins.PinTracker`: Lucas-Kanade, windowed refinement, a windowed search for
+lost pins, retirement of pins that stay lost, blank frames marked), integrates displacements from
+the rest frame, finds the taps (`pins.segment_taps`), selects the tactile pins
+(`pins.select_feature_pins`) and resamples each tap into a feature array (`pins.tap_features`).
+Frames before the rest frame are not tracked (NaN, and counted lost).
 
-The HDF5 file (format ``tactip-replay/1``) holds:
+The tracking is never thrown away: once the video has been read, positions, displacements, lost
+masks and time stamps are always written. Problems of the later steps (a pad too small for the
+requested feature pins, no taps, a scale that cannot be measured, a rest frame that looks taken
+during a tap) become warnings in the summary and in the file (``warnings`` attribute).
+
+The scale (mm per px) is the sensor's pin pitch in mm over the rest pins' pitch in px
+(`pins.pad_scale`): the pitch in mm comes from a named sensor (``sensor``, `pins.SENSOR_PRESETS`),
+or from the pin count on the whole pad (``pins_on_pad``, default the expected or detected count)
+and the pad diameter (``pad_diameter_mm``, default 40 mm), unless ``mm_per_px`` is given.
+
+The HDF5 file (format ``tactip-replay/2``) holds:
 
 - ``positions`` float32 (frames, pins, 2): (x, y) px, NaN where a pin was lost (or before the rest frame);
 - ``displacements`` float32 (frames, pins, 2): from the rest frame, px, NaN likewise;
+- ``lost`` bool (frames, pins): pin not found (retired pins, blank frames and frames before the rest
+  frame included); ``retired`` bool (frames, pins): lost long enough to be searched for only now and
+  then (a rim pin out of view); ``lost_count``, ``retired_count`` int32 (frames,); ``blank`` bool
+  (frames,): nothing trackable in the frame (LEDs off, a dropped or black frame); ``tracked`` bool
+  (frames,): at or after the rest frame;
 - ``timestamps`` float64 (frames,): s;  ``rest_positions`` float64 (pins, 2): px;
-- ``selected_pins`` int (P,): indices of the tactile pins, in selection order;
+- ``selected_pins`` int (P,): indices of the tactile pins, in selection order (attributes
+  ``requested``, ``min_separation_mm`` asked, ``separation_mm`` reached);
 - ``tap_bounds`` int (taps, 2): [start, stop) frame indices;
 - ``taps`` float32 (taps, samples, 2 P) when taps were found: columns 0..P-1 dx, P..2P-1 dy of the
   selected pins (``feature_names`` attribute); ``tap_valid`` bool (taps,): False where a selected
   pin was lost for a whole tap (its features are NaN);
 - attributes: format, software version, video path, frame size and rate, rest frame, disc
-  (cx, cy, radius px), mm_per_px, pad diameter, detection and tracking parameters (JSON),
-  selection and sampling settings.
+  (cx, cy, radius px), ``mm_per_px`` and ``scale`` (JSON: mm_per_px, pitch_px, pitch_mm, source,
+  sensor), pad diameter, detection and tracking parameters (JSON), selection and sampling settings,
+  ``warnings`` (JSON list of strings), ``blank_frames``, ``pins_detected`` and ``expected_pins``.
 
 With a sensor calibration (``calibration``), its detection parameters, disc and reference pins
 (snapped to the rest frame's blobs, as the station does for each tap) are used, and its feature
@@ -31,6 +49,10 @@ identities), NaN for taps that did not enter the belief (invalid, or after the d
 ``used`` (taps,) bool; ``identities``; attributes ``identity_estimate``, ``belief``, ``decided``,
 ``decided_at_tap`` (-1 if never), ``decision_threshold``, ``model`` (path) and the units.
 
+Speed: frames are decoded on a thread (`tactip.sources.ThreadedReader`, blocking, so no frame is
+dropped) while the main thread tracks, so a replay costs about the larger of decoding and
+tracking rather than their sum (`bench/bench_replay.py`).
+
 The file is written to a temporary name next to the target and renamed at the end, so a failure
 never leaves a half-written result; the output paths are checked before any processing.
 """
@@ -39,23 +61,25 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import os
 import pathlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from pins import (DetectionParams, PinsError, PinTracker, SensorDisc, detect_pins,
-                  displacement_from_rest, feature_dim_names, find_sensor_disc, segment_taps, select_pins,
-                  tap_features, tune_detection)
+from pins import (DetectionParams, PadScale, PinSelection, PinsError, PinTracker, SensorDisc, detect_pins,
+                  displacement_from_rest, feature_dim_names, find_sensor_disc, pad_scale, segment_taps,
+                  select_feature_pins, tap_features, tap_signal, tune_detection)
 
 from ._output import claim_output
 from .errors import ConfigError, SourceError
 
-__all__ = ["ReplayResult", "replay_video", "FORMAT"]
+__all__ = ["ReplayResult", "replay_video", "FORMAT", "check_rest_frame"]
 
-FORMAT = "tactip-replay/1"
+FORMAT = "tactip-replay/2"
+DEFAULT_PAD_DIAMETER_MM = 40.0
 # Displacement arrows in the annotated video are drawn this many times their length.
 ARROW_SCALE = 3.0
 _BAR_X = np.array([24, 0], dtype=np.int32)
@@ -73,17 +97,28 @@ class ReplayResult:
     frames, pins : int
         Frames read; pins tracked.
     frame_rate : float or None
-    lost_pin_frames : int
-        Pin-frames flagged lost after the rest frame.
-    most_lost : int
-        Largest number of pins lost in one frame.
+    lost_per_frame, retired_per_frame : (frames,) ndarray of int
+        Pins lost (retired included) and retired in each frame (all pins before the rest frame
+        and in blank frames).
+    blank_frames : list of int
+        Frames with nothing trackable (all pins lost), after the rest frame.
+    rest_frame : int
     tap_bounds : list of (start, stop)
     invalid_taps : list of int
         Taps whose features are NaN (a selected pin lost for the whole tap).
     selected_pins : (P,) ndarray of int
+    selection : pins.PinSelection or None
+        How the feature pins were chosen (None with a calibration, or when selection failed).
     mm_per_px : float
+    scale : pins.PadScale or None
+        How the scale was derived (None with a calibration).
     disc : SensorDisc
     detection : DetectionParams
+    pins_detected : int
+        Pins found in the rest frame.
+    expected_pins : int or None
+    warnings : list of str
+        What did not go as asked (also in the file).
     decisions : tactip.replay_decisions.ReplayDecisions or None
         The decision, when a model was given.
     """
@@ -94,26 +129,51 @@ class ReplayResult:
     frames: int
     pins: int
     frame_rate: float | None
-    lost_pin_frames: int
-    most_lost: int
+    lost_per_frame: np.ndarray
+    retired_per_frame: np.ndarray
+    blank_frames: list
+    rest_frame: int
     tap_bounds: list
     invalid_taps: list
     selected_pins: np.ndarray
+    selection: PinSelection | None
     mm_per_px: float
+    scale: PadScale | None
     disc: SensorDisc
     detection: DetectionParams
+    pins_detected: int
+    expected_pins: int | None = None
+    warnings: list = field(default_factory=list)
     decisions: Any = None
 
+    @property
+    def lost_pin_frames(self) -> int:
+        """Pin-frames flagged lost after the rest frame (blank frames included)."""
+        return int(self.lost_per_frame[self.rest_frame:].sum())
+
+    @property
+    def most_lost(self) -> int:
+        """Largest number of pins lost in one frame after the rest frame."""
+        return int(self.lost_per_frame[self.rest_frame:].max(initial=0))
+
     def summary(self) -> str:
-        """A few readable lines: frames, pins, lost pins, taps and the files written."""
+        """A few readable lines: frames, pins, scale, lost and retired pins, taps, warnings, files."""
         rate = f" at {self.frame_rate:g} fps" if self.frame_rate else ""
         taps = ", ".join(f"{a}-{b - 1}" for a, b in self.tap_bounds) or "none"
+        detected = f"{self.pins_detected} found in rest frame {self.rest_frame}"
+        if self.expected_pins:
+            off = self.pins_detected - self.expected_pins
+            detected += f", {self.expected_pins} expected ({off:+d}, {off / self.expected_pins:+.1%})"
+        scale = self.scale.describe() if self.scale is not None else f"{self.mm_per_px:.4f} mm/px (calibration)"
         lines = [
             f"Replayed {self.video}: {self.frames} frames{rate}",
-            f"Pins: {self.pins} tracked (disc radius {self.disc.radius_px:.1f} px, {self.mm_per_px:.4f} mm/px); "
-            f"lost: {self.lost_pin_frames} pin-frames, at most {self.most_lost} in one frame",
-            f"Taps: {len(self.tap_bounds)} (frames {taps}); features of {len(self.selected_pins)} pins",
+            f"Pins: {self.pins} tracked ({detected}); disc radius {self.disc.radius_px:.1f} px",
+            f"Scale: {scale}",
+            self._losses(),
+            f"Taps: {len(self.tap_bounds)} (frames {taps}); features of "
+            + (self.selection.describe() if self.selection is not None else f"{len(self.selected_pins)} pins"),
         ]
+        lines += [f"Warning: {w}" for w in self.warnings]
         if self.invalid_taps:
             lines.append(f"Warning: taps {self.invalid_taps} have a selected pin lost throughout (features NaN)")
         if self.decisions is not None:
@@ -122,14 +182,33 @@ class ReplayResult:
         lines.append("Wrote " + " and ".join(written))
         return "\n".join(lines)
 
+    def _losses(self) -> str:
+        """Lost and retired pins per tracked frame (blank frames apart), and the blank frames."""
+        tracked = np.arange(self.frames) >= self.rest_frame
+        tracked[self.blank_frames] = False
+        lost, retired = self.lost_per_frame[tracked], self.retired_per_frame[tracked]
+        if lost.size == 0:
+            text = "Lost pins: no tracked frame"
+        else:
+            worst = np.flatnonzero(tracked)[np.argsort(-lost, kind="stable")[:3]]
+            worst = [int(f) for f in worst if self.lost_per_frame[f] > 0]
+            text = (f"Lost pins per frame: median {np.median(lost):g}, max {lost.max()} of {self.pins}"
+                    + (f" (frames {', '.join(map(str, worst))})" if worst else "")
+                    + f"; retired: median {np.median(retired):g}, max {retired.max()}")
+        if self.blank_frames:
+            shown = ", ".join(map(str, self.blank_frames[:10])) + (" ..." if len(self.blank_frames) > 10 else "")
+            text += f"; {len(self.blank_frames)} blank frame(s): {shown}"
+        return text
+
 
 def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                  annotate_path: str | os.PathLike | None = None, expected_pins: int | None = None,
                  params: DetectionParams | None = None, n_samples: int = 40, n_pins: int = 40,
-                 min_separation_mm: float = 4.0, pad_diameter_mm: float = 40.0, mm_per_px: float | None = None,
+                 min_separation_mm: float = 4.0, sensor: str | None = None, pins_on_pad: int | None = None,
+                 pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
                  rest_frame: int = 0, calibration=None, model=None, decision_threshold: float | None = None,
                  progress: bool = False) -> ReplayResult:
-    """Track the pins of a recorded video and write positions, displacements and tap features to HDF5.
+    """Track the pins of a recorded video and write positions, displacements, lost masks and tap features to HDF5.
 
     Parameters
     ----------
@@ -140,22 +219,31 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
     annotate_path : str or path, optional
         Also write an MP4 showing the pins, their displacements (x3) and the tap state.
     expected_pins : int, optional
-        Tune detection to this many pins on the rest frame (`pins.tune_detection`) first.
+        The pins expected in view on the rest frame: detection is tuned to it first
+        (`pins.tune_detection`) and the summary says how far off the count is.
     params : DetectionParams, optional
         Detection parameters (default ones, or the starting point of tuning).
     n_samples : int
         Samples per tap feature array (paper: 40).
     n_pins, min_separation_mm : int, float
-        Tactile pin selection (paper: 40 pins at least 4 mm apart).
-    pad_diameter_mm : float
-        Diameter of the pad, mm: the scale is pad diameter / detected disc diameter.
+        Tactile pins wanted and their preferred separation, mm (paper: 40 pins at least 4 mm
+        apart). A pad with no room for them gets `n_pins` pins as far apart as it allows (or all
+        its pins, when it has fewer), with a warning.
+    sensor : str, optional
+        A named sensor (`pins.SENSOR_PRESETS`): its pin pitch gives the scale.
+    pins_on_pad : int, optional
+        Pins on the whole pad (in view or not), for the pin pitch; default the sensor's, else
+        `expected_pins`, else the pins detected.
+    pad_diameter_mm : float, optional
+        Diameter of the hemispherical pad, mm; default the sensor's, else 40.
     mm_per_px : float, optional
-        The scale, mm per px, overriding the one from the disc.
+        The scale, mm per px, instead of the one from the pin pitch.
     rest_frame : int
-        Index of the rest frame (off contact) the displacements are measured from.
+        Index of the rest frame (off contact) the displacements are measured from. A rest frame
+        that looks taken during a tap is reported in the warnings, with a frame that looks at rest.
     calibration : str, path or calibration.SensorCalibration, optional
         The station's sensor calibration: its detection parameters, disc, reference pins, feature
-        pins and scale replace detection, selection and `mm_per_px` (do not give those too).
+        pins and scale replace detection, selection and the scale (do not give those too).
     model : str, path or perception.HistogramModel, optional
         The station's model (needs `calibration`): decide the gap width from the taps.
     decision_threshold : float in [0, 1], optional
@@ -169,14 +257,18 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
 
     Raises
     ------
+    ValueError
+        An option out of range (checked before processing).
     OSError
         An output path cannot be written (checked before processing).
     SourceError
         The video is missing, unreadable, live, or shorter than `rest_frame`.
     PinsError
-        No sensor disc or too few pins in the rest frame, or too few pins for the selection.
+        No sensor disc or too few pins in the rest frame (nothing could be tracked). Nothing after
+        the tracking raises for lack of pins: it warns.
     ConfigError
-        A model without a calibration, or a calibration with `expected_pins`, `params` or `mm_per_px`.
+        A model without a calibration, or a calibration with `expected_pins`, `params`, a sensor
+        description or `mm_per_px`.
     CalibrationError
         The calibration cannot be read, or was made for frames of another size.
     ModelError
@@ -184,20 +276,29 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
 
     Examples
     --------
-    >>> result = replay_video("samples/synthetic_tap.mp4", "out/replay.h5")   # doctest: +SKIP
-    >>> print(result.summary())                                                # doctest: +SKIP
+    >>> result = replay_video("samples/synthetic_tap.mp4", "out/replay.h5", sensor="tactip-331")  # doctest: +SKIP
+    >>> print(result.summary())                                                                   # doctest: +SKIP
     """
-    from tactip.sources import open_source
+    from tactip.sources import ThreadedReader, open_source
 
     if int(rest_frame) != rest_frame or rest_frame < 0:
         raise ValueError(f"rest_frame must be a non-negative integer, got {rest_frame}")
-    if not pad_diameter_mm > 0:
-        raise ValueError(f"pad_diameter_mm must be > 0, got {pad_diameter_mm}")
-    if mm_per_px is not None and not mm_per_px > 0:
-        raise ValueError(f"mm_per_px must be > 0, got {mm_per_px}")
+    for name, value in (("pad_diameter_mm", pad_diameter_mm), ("mm_per_px", mm_per_px)):
+        if value is not None and not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be a finite number > 0, got {value}")
+    for name, value in (("n_pins", n_pins), ("pins_on_pad", pins_on_pad), ("expected_pins", expected_pins)):
+        if value is not None and (int(value) != value or value < 1):
+            raise ValueError(f"{name} must be a positive integer, got {value}")
+    if not (min_separation_mm >= 0 and math.isfinite(min_separation_mm)):
+        raise ValueError(f"min_separation_mm must be a finite number >= 0, got {min_separation_mm}")
+    if sensor is not None:
+        from pins import sensor_preset
+
+        sensor_preset(sensor)  # ValueError naming the choices
     cal, model, model_path = _load_station_files(calibration, model, decision_threshold, n_samples=n_samples,
                                                  given=dict(expected_pins=expected_pins, params=params,
-                                                            mm_per_px=mm_per_px))
+                                                            mm_per_px=mm_per_px, sensor=sensor,
+                                                            pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm))
     out_path = pathlib.Path(out_path)
     annotate = None if annotate_path is None else pathlib.Path(annotate_path)
     temporary: list[pathlib.Path] = []
@@ -213,41 +314,48 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
 
                 raise CalibrationError(f"the calibration was made for {cal.frame_size[0]}x{cal.frame_size[1]} px "
                                        f"frames, the video's are {source.frame_size[0]}x{source.frame_size[1]} px")
-            track = _track_video(source, rest_frame=int(rest_frame), expected_pins=expected_pins,
-                                 params=params, calibration=cal, progress=progress)
-        if cal is None:
-            scale = mm_per_px or pad_diameter_mm / (2.0 * track["disc"].radius_px)
-            selected = select_pins(track["rest"], n_pins=n_pins, min_separation_mm=min_separation_mm,
-                                   mm_per_px=scale)
-        else:
-            scale, selected = cal.mm_per_px, np.asarray(cal.selected_pins)
-            n_pins, min_separation_mm = cal.n_selected, cal.min_separation_mm
-        bounds = segment_taps(track["displacements"])
-        taps, valid = _features(track["displacements"], track["timestamps"], bounds, selected, n_samples)
+            # Decode on a thread while this one tracks; blocking, so that no frame is dropped.
+            with ThreadedReader(source, maxsize=8, when_full="block", close_source=False) as reader:
+                track = _track_video(reader, rest_frame=int(rest_frame), expected_pins=expected_pins,
+                                     params=params, calibration=cal, progress=progress,
+                                     total=getattr(source, "frame_count", None))
+        # From here on the tracking is kept whatever happens: problems become warnings.
+        analysis = _analyse(track, calibration=cal, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),
+                            sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
+                            mm_per_px=mm_per_px, expected_pins=expected_pins, n_samples=int(n_samples),
+                            rest_frame=int(rest_frame))
         decisions = None
-        if model is not None:
+        if model is not None and analysis["taps"] is not None:
             from .replay_decisions import decide_taps
 
-            decisions = decide_taps(taps, valid, model, decision_threshold=decision_threshold, model_path=model_path)
-        settings = dict(video=str(video), rest_frame=int(rest_frame), mm_per_px=float(scale),
-                        pad_diameter_mm=float(pad_diameter_mm), n_pins=int(n_pins), n_samples=int(n_samples),
-                        min_separation_mm=float(min_separation_mm),
+            try:
+                decisions = decide_taps(analysis["taps"], analysis["valid"], model,
+                                        decision_threshold=decision_threshold, model_path=model_path)
+            except Exception as exc:  # the tracking is still written
+                analysis["warnings"].append(f"no decision: {exc}")
+        scale = analysis["scale"]
+        settings = dict(video=str(video), rest_frame=int(rest_frame), mm_per_px=float(analysis["mm_per_px"]),
+                        pad_diameter_mm=float(scale.sensor.get("pad_diameter_mm", np.nan)) if scale else np.nan,
+                        n_pins=int(n_pins), n_samples=int(n_samples), min_separation_mm=float(min_separation_mm),
                         calibration=str(calibration) if isinstance(calibration, (str, os.PathLike)) else "")
-        _write_hdf5(temporary[0], track, selected, bounds, taps, valid, settings, decisions)
+        _write_hdf5(temporary[0], track, analysis, settings, decisions)
         if annotate:
-            _write_annotated(video, temporary[1], track, bounds, selected, decisions)
+            _write_annotated(video, temporary[1], track, analysis["bounds"], analysis["selected"], decisions)
         for part, final in zip(temporary, [out_path, annotate]):
             os.replace(part, final)
     finally:
         for part in temporary:
             part.unlink(missing_ok=True)
-    lost = ~np.isfinite(track["positions"][rest_frame:, :, 0])
     return ReplayResult(out_path=out_path, annotate_path=annotate, video=str(video), frames=len(track["timestamps"]),
                         pins=track["rest"].shape[0], frame_rate=track["frame_rate"],
-                        lost_pin_frames=int(lost.sum()), most_lost=int(lost.sum(axis=1).max(initial=0)),
-                        tap_bounds=bounds, invalid_taps=[k for k, ok in enumerate(valid) if not ok],
-                        selected_pins=selected, mm_per_px=float(scale), disc=track["disc"],
-                        detection=track["detection"], decisions=decisions)
+                        lost_per_frame=track["lost"].sum(axis=1), retired_per_frame=track["retired"].sum(axis=1),
+                        blank_frames=np.flatnonzero(track["blank"]).tolist(), rest_frame=int(rest_frame),
+                        tap_bounds=analysis["bounds"],
+                        invalid_taps=[k for k, ok in enumerate(analysis["valid"]) if not ok],
+                        selected_pins=analysis["selected"], selection=analysis["selection"],
+                        mm_per_px=float(analysis["mm_per_px"]), scale=scale, disc=track["disc"],
+                        detection=track["detection"], pins_detected=track["pins_detected"],
+                        expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions)
 
 
 def _load_station_files(calibration, model, decision_threshold, *, n_samples: int, given: dict):
@@ -279,46 +387,181 @@ def _load_station_files(calibration, model, decision_threshold, *, n_samples: in
     return calibration, model, model_path
 
 
-def _track_video(source, *, rest_frame: int, expected_pins, params, calibration, progress: bool) -> dict:
-    """Read every frame: detect in the rest frame (or place the calibrated pins there), track after it."""
+def _track_video(source, *, rest_frame: int, expected_pins, params, calibration, progress: bool,
+                 total: int | None = None) -> dict:
+    """Read every frame: find the pins in the rest frame (or place the calibrated pins there), track after it.
+
+    Positions are kept as float32 (half the memory of a long recording), with the tracker's lost
+    and retired masks and blank flag of every frame (`getattr` defaults for trackers without them).
+    """
     from tqdm import tqdm
 
     params = calibration.detection if calibration is not None else params or DetectionParams()
     tracker: PinTracker | None = None
-    positions, timestamps = [], []
-    total = getattr(source, "frame_count", None)
-    with tqdm(total=total, unit="frame", disable=not progress, desc="replay") as bar:
+    positions, lost, retired, blank, timestamps = [], [], [], [], []
+    warnings: list[str] = []
+    before = 0
+    detected = 0
+    with tqdm(total=total, unit="frame", disable=not progress, desc="replay", mininterval=0.5) as bar:
         for frame in source:
             timestamps.append(frame.timestamp_s)
-            if frame.index == rest_frame and calibration is not None:
-                from calibration import place_reference_pins
-
-                tracker = PinTracker(detection=params, disc=calibration.disc)
-                rest = tracker.start(frame.image, pins=place_reference_pins(calibration, frame.image))
-                positions = [np.full(rest.shape, np.nan, np.float32)] * len(positions)
-                positions.append(rest.astype(np.float32))
-            elif frame.index == rest_frame:
-                disc = find_sensor_disc(frame.image, dark_pins=params.dark_pins)
-                if expected_pins is not None:
-                    params = tune_detection(frame.image, int(expected_pins), start=params, disc=disc)
-                tracker = PinTracker(detection=params, disc=disc)
-                rest = tracker.start(frame.image, detect_pins(frame.image, params=params, disc=disc))
-                # float32, as stored: half the memory of a long recording.
-                positions = [np.full(rest.shape, np.nan, np.float32)] * len(positions)
-                positions.append(rest.astype(np.float32))
-            elif tracker is not None:
+            if tracker is not None:
                 positions.append(tracker.update(frame.image).astype(np.float32))
+                gone = getattr(tracker, "lost", None)
+                gone = np.isnan(positions[-1][:, 0]) if gone is None else np.array(gone, dtype=bool)
+                lost.append(gone)
+                away = getattr(tracker, "retired", None)
+                retired.append(np.zeros_like(gone) if away is None else np.array(away, dtype=bool))
+                blank.append(bool(getattr(tracker, "blank", gone.all())))
+            elif frame.index == rest_frame:
+                tracker, rest, detected, params = _start(frame.image, params=params, expected_pins=expected_pins,
+                                                         calibration=calibration, warnings=warnings)
+                positions.append(rest.astype(np.float32))
+                lost.append(np.zeros(len(rest), dtype=bool))
+                retired.append(np.zeros(len(rest), dtype=bool))
+                blank.append(False)
             else:
-                positions.append(None)
-            bar.update(1)
+                before += 1
+            if progress:
+                bar.update(1)
     if tracker is None:
         raise SourceError(f"the video has {len(timestamps)} frames, so there is no rest frame {rest_frame}")
-    stacked = np.stack(positions)
-    displacements = displacement_from_rest(stacked, tracker.rest_positions).astype(np.float32)
-    return dict(positions=stacked, displacements=displacements,
+    pins = tracker.rest_positions.shape[0]
+    stacked = np.concatenate([np.full((before, pins, 2), np.nan, np.float32), np.stack(positions)])
+    lost = np.concatenate([np.ones((before, pins), bool), np.stack(lost)])
+    retired = np.concatenate([np.zeros((before, pins), bool), np.stack(retired)])
+    blank = np.concatenate([np.zeros(before, bool), np.asarray(blank, dtype=bool)])
+    rest32 = tracker.rest_positions.astype(np.float32)
+    displacements = displacement_from_rest(stacked, rest32).astype(np.float32, copy=False)
+    return dict(positions=stacked, displacements=displacements, lost=lost, retired=retired, blank=blank,
+                tracked=np.arange(len(stacked)) >= rest_frame,
                 timestamps=np.asarray(timestamps, dtype=np.float64), rest=tracker.rest_positions,
                 disc=tracker.disc, detection=params, tracker=tracker, frame_rate=source.frame_rate,
-                frame_size=source.frame_size)
+                frame_size=source.frame_size, pins_detected=int(detected), warnings=warnings)
+
+
+def _start(image, *, params, expected_pins, calibration, warnings):
+    """The tracker started on the rest frame: (tracker, rest positions, pins found, detection params)."""
+    if calibration is not None:
+        from calibration import place_reference_pins
+
+        tracker = PinTracker(detection=params, disc=calibration.disc)
+        rest = tracker.start(image, pins=place_reference_pins(calibration, image))
+        return tracker, rest, len(rest), params
+    disc = find_sensor_disc(image, dark_pins=params.dark_pins)
+    if expected_pins is not None:
+        try:
+            params = tune_detection(image, int(expected_pins), start=params, disc=disc)
+        except PinsError as exc:
+            warnings.append(f"detection could not be tuned to {expected_pins} pins ({exc}); "
+                            f"the detection parameters given were used")
+    pins = detect_pins(image, params=params, disc=disc)
+    tracker = PinTracker(detection=params, disc=disc)
+    rest = tracker.start(image, pins)
+    return tracker, rest, len(pins), params
+
+
+def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, rest_frame: int,
+                     high_px: float = 1.5) -> str:
+    """A warning when the rest frame looks taken during a tap (`pins.converging_frames`), else "".
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from the rest frame, px (NaN where lost or not tracked).
+    rest_positions : (N, 2) ndarray
+        px.
+    rest_frame : int
+        The rest frame's index (named in the warning).
+    high_px : float
+        Smallest tap signal of a frame that counts, px.
+
+    Returns
+    -------
+    warning : str
+        Names the frames where the pins are drawn together (as at rest after a press, seen from
+        a pressed reference) and suggests ``--rest-frame`` of the first of the most displaced of
+        them; "" when fewer than max(3, 5 % of the frames) converge.
+    """
+    from pins import converging_frames
+
+    frames = converging_frames(displacements, rest_positions, high_px=high_px)
+    tracked = int(np.isfinite(displacements[:, :, 0]).any(axis=1).sum())
+    if len(frames) < max(3, 0.05 * tracked):
+        return ""
+    signal = tap_signal(displacements[frames])
+    suggested = int(frames[np.flatnonzero(signal >= 0.95 * signal.max())[0]])
+    return (f"the rest frame {rest_frame} looks taken during a tap: in {len(frames)} frames (e.g. {suggested}) "
+            f"the pins are drawn together by up to {signal.max():.1f} px from it, as a pad at rest looks from a "
+            f"pressed one; displacements and taps are measured from a deformed pad: give --rest-frame of a "
+            f"frame off contact (frame {suggested} looks like one)")
+
+
+def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float, sensor, pins_on_pad,
+             pad_diameter_mm, mm_per_px, expected_pins, n_samples: int, rest_frame: int) -> dict:
+    """Scale, feature pins, rest-frame check, taps and features; every problem becomes a warning."""
+    warnings = list(track["warnings"])
+    rest, disc, displacements = track["rest"], track["disc"], track["displacements"]
+    blank = np.flatnonzero(track["blank"])
+    if blank.size:
+        warnings.append(f"{blank.size} blank frame(s) (nothing trackable: LEDs off, a dropped or black frame): "
+                        f"{blank[:10].tolist()}{' ...' if blank.size > 10 else ''}; pins are NaN there")
+    scale = selection = None
+    selected = np.zeros(0, dtype=np.intp)
+    if calibration is not None:
+        scale_mm_per_px, selected = float(calibration.mm_per_px), np.asarray(calibration.selected_pins)
+    else:
+        pad = pad_diameter_mm if pad_diameter_mm is not None or sensor is not None else DEFAULT_PAD_DIAMETER_MM
+        count = pins_on_pad if pins_on_pad is not None or sensor is not None else expected_pins
+        try:
+            scale = pad_scale(rest, sensor=sensor, pins=count, pad_diameter_mm=pad, mm_per_px=mm_per_px)
+        except (PinsError, ValueError) as exc:
+            fallback = (pad or DEFAULT_PAD_DIAMETER_MM) / (2.0 * disc.radius_px)
+            scale = PadScale(fallback, float("nan"), float("nan"),
+                             f"pad diameter {pad or DEFAULT_PAD_DIAMETER_MM:g} mm / disc diameter "
+                             f"{2 * disc.radius_px:.1f} px", {"pad_diameter_mm": pad or DEFAULT_PAD_DIAMETER_MM})
+            warnings.append(f"the scale could not come from the pin pitch ({exc}); the disc's diameter was used")
+        if sensor is None and pad_diameter_mm is None and mm_per_px is None:
+            scale = dataclasses.replace(scale, source=f"{scale.source}; pad diameter assumed, describe the sensor "
+                                                      f"with --sensor or --pad-diameter-mm")
+        scale_mm_per_px = scale.mm_per_px
+        try:
+            selection = _select(track, n_pins=n_pins, min_separation_mm=min_separation_mm, mm_per_px=scale_mm_per_px)
+            selected = selection.indices
+            if selection.warning:
+                warnings.append(f"feature pins: {selection.warning}")
+        except (PinsError, ValueError) as exc:
+            warnings.append(f"no feature pins ({exc})")
+    try:
+        check = check_rest_frame(displacements, rest, rest_frame=rest_frame)
+        if check:
+            warnings.append(check)
+    except (PinsError, ValueError) as exc:
+        warnings.append(f"the rest frame could not be checked ({exc})")
+    bounds, taps, valid = [], None, np.zeros(0, dtype=bool)
+    try:
+        bounds = segment_taps(displacements)
+        if not bounds:
+            warnings.append("no taps found (no frame moved the pins by 1.5 px): only the tracking was written")
+        elif len(selected):
+            taps, valid = _features(displacements, track["timestamps"], bounds, selected, n_samples)
+        else:
+            valid = np.zeros(len(bounds), dtype=bool)
+    except (PinsError, ValueError) as exc:
+        warnings.append(f"no tap features ({exc})")
+    return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
+                bounds=bounds, taps=taps, valid=valid, warnings=warnings)
+
+
+def _select(track: dict, *, n_pins: int, min_separation_mm: float, mm_per_px: float) -> PinSelection:
+    """Feature pins among the pins seen in at least half the tracked frames (all pins if too few are)."""
+    rest = track["rest"]
+    usable = track["tracked"] & ~track["blank"]
+    seen = (~track["lost"][usable]).mean(axis=0) >= 0.5 if usable.any() else np.ones(len(rest), bool)
+    candidates = np.flatnonzero(seen) if seen.sum() >= min(n_pins, len(rest)) else np.arange(len(rest))
+    selection = select_feature_pins(rest[candidates], n_pins=n_pins, min_separation_mm=min_separation_mm,
+                                    mm_per_px=mm_per_px, centre=tuple(rest.mean(axis=0)))
+    return dataclasses.replace(selection, indices=candidates[selection.indices])
 
 
 def _features(displacements, timestamps, bounds, selected, n_samples):
@@ -337,25 +580,46 @@ def _features(displacements, timestamps, bounds, selected, n_samples):
     return taps, valid
 
 
-def _write_hdf5(path, track, selected, bounds, taps, valid, settings, decisions=None) -> None:
+def _write_hdf5(path, track, analysis, settings, decisions=None) -> None:
+    """The replay file (see the module docstring for its layout)."""
     import h5py
 
     from tactip import __version__
 
     tracker = track["tracker"]
+    frames, pins = track["lost"].shape
+    # Chunks of about 64 frames, fast gzip: the arrays of a long video compress several times.
+    packed = dict(compression="gzip", compression_opts=1, shuffle=True)
     with h5py.File(path, "w") as h5:
-        h5.create_dataset("positions", data=track["positions"].astype(np.float32), compression="gzip")
-        h5.create_dataset("displacements", data=track["displacements"].astype(np.float32), compression="gzip")
+        for name in ("positions", "displacements"):
+            h5.create_dataset(name, data=track[name], chunks=(min(64, max(frames, 1)), pins, 2) if frames else None,
+                              **(packed if frames else {}))
+        for name in ("lost", "retired"):
+            h5.create_dataset(name, data=track[name], chunks=(min(64, max(frames, 1)), pins) if frames else None,
+                              **(packed if frames else {}))
+        h5.create_dataset("lost_count", data=track["lost"].sum(axis=1, dtype=np.int32))
+        h5.create_dataset("retired_count", data=track["retired"].sum(axis=1, dtype=np.int32))
+        h5.create_dataset("blank", data=track["blank"])
+        h5.create_dataset("tracked", data=track["tracked"])
         h5.create_dataset("timestamps", data=track["timestamps"])
         h5.create_dataset("rest_positions", data=track["rest"])
-        h5.create_dataset("selected_pins", data=np.asarray(selected, dtype=np.int64))
+        selected = h5.create_dataset("selected_pins", data=np.asarray(analysis["selected"], dtype=np.int64))
+        selection = analysis["selection"]
+        if selection is not None:
+            selected.attrs.update({"requested": selection.requested, "min_separation_mm": selection.min_separation_mm,
+                                   "separation_mm": selection.separation_mm, "warning": selection.warning})
+        bounds = analysis["bounds"]
         h5.create_dataset("tap_bounds", data=np.asarray(bounds, dtype=np.int64).reshape(-1, 2))
-        if len(bounds):
-            dataset = h5.create_dataset("taps", data=taps.astype(np.float32))
-            dataset.attrs["feature_names"] = json.dumps(feature_dim_names(len(selected)))
+        if analysis["taps"] is not None:
+            dataset = h5.create_dataset("taps", data=analysis["taps"].astype(np.float32))
+            dataset.attrs["feature_names"] = json.dumps(feature_dim_names(len(analysis["selected"])))
             dataset.attrs["layout"] = "columns 0..P-1 dx, P..2P-1 dy of the selected pins, px"
-            h5.create_dataset("tap_valid", data=valid)
+            h5.create_dataset("tap_valid", data=analysis["valid"])
         disc = track["disc"]
+        scale = analysis["scale"]
+        scale_info = {"mm_per_px": float(analysis["mm_per_px"]), "source": "calibration"} if scale is None else {
+            "mm_per_px": scale.mm_per_px, "pitch_px": scale.pitch_px, "pitch_mm": scale.pitch_mm,
+            "source": scale.source, "sensor": scale.sensor}
         h5.attrs.update({
             "format": FORMAT,
             "software_version": __version__,
@@ -368,6 +632,10 @@ def _write_hdf5(path, track, selected, bounds, taps, valid, settings, decisions=
                                            "neighbours": tracker.neighbours}),
             "sensor": json.dumps({"kind": "tactip", "pins": int(track["rest"].shape[0]),
                                   "pad_diameter_mm": settings["pad_diameter_mm"]}),
+            "scale": json.dumps(scale_info, default=float),
+            "pins_detected": int(track["pins_detected"]),
+            "blank_frames": np.flatnonzero(track["blank"]).astype(np.int64),
+            "warnings": json.dumps(analysis["warnings"]),
             **settings,
         })
         if decisions is not None:

@@ -2,12 +2,20 @@
 
 The rest frame (off contact) is the first frame unless --rest-frame says otherwise; pins are
 detected there, tracked through the video, and their displacements from it are integrated. Taps
-are found from the displacements, 40 pins at least 4 mm apart are selected, and each tap becomes
+are found from the displacements, 40 pins at least 4 mm apart are selected (on a pad without room
+for them: 40 pins as far apart as it allows, or all its pins, with a warning), and each tap becomes
 a 40-sample x 80-dimension feature array (x then y displacements of the selected pins).
 
-The HDF5 file holds positions and displacements (frames x pins x 2, NaN where a pin was lost),
-time stamps, tap bounds, the selected pins, the tap features and the parameters used. It is
-written only when the replay succeeds.
+The scale (mm/px) is the sensor's pin pitch over the pitch measured on the rest frame: name the
+sensor (--sensor tactip-331; the list is in --help), or give its pin count and pad diameter
+(--pins-on-pad, --pad-diameter-mm; default the pins detected on a 40 mm pad), or the scale itself
+(--mm-per-px). The summary prints the scale and how it was derived.
+
+Once the video has been tracked the HDF5 file is always written: positions and displacements
+(frames x pins x 2, NaN where a pin was lost), lost and retired pin masks and counts per frame,
+blank frames, time stamps, tap bounds, the selected pins, the tap features, the scale and the
+parameters used, and any warnings (a rest frame that looks taken during a tap, feature pins closer
+than asked, no taps). The summary lists lost and retired pins per frame and the blank frames.
 
 With --calibration (the station's sensor calibration, from 'tactip calibrate') the calibrated
 detection, pins, feature pins and scale are used instead, so the taps line up with the station's
@@ -16,39 +24,70 @@ model. With --model as well, a passive perceiver decides the gap width from the 
 estimate is printed, and the annotated video shows each tap's width estimate and belief.
 
 Example:
-  tactip replay samples/synthetic_tap.mp4 --out out/replay.h5 --annotate out/annotated.mp4
+  tactip replay samples/synthetic_tap.mp4 --out out/replay.h5 --annotate out/annotated.mp4 --sensor tactip-331
   tactip replay taps.mp4 --out out/replay.h5 --calibration data/calibration.h5 --model data/model.h5
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 
 from tactip.cli._types import fraction, non_negative_float, non_negative_int, positive_float, positive_int
 
 HELP = "track the pins of a recorded video, find the taps and write positions and tap features to HDF5"
 
 
+def _finite(parse):
+    """An argparse type: ``parse``'s value, which must also be finite (inf and nan say nothing)."""
+    def finite(text: str) -> float:
+        value = parse(text)
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+        return value
+    return finite
+
+
+def _pin_count(text: str) -> int:
+    """An argparse type: a pin count of at least one ring (>= 7)."""
+    from tactip.cli._types import int_at_least
+
+    return int_at_least(7)(text)
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``tactip replay``."""
+    from pins import SENSOR_PRESETS
+
     parser.add_argument("video", metavar="VIDEO", help="video file (or folder of frames) to replay")
     parser.add_argument("--out", required=True, metavar="RESULT.h5", help="HDF5 file to write")
     parser.add_argument("--annotate", metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
     parser.add_argument("--expected-pins", type=positive_int, metavar="N",
-                        help="auto-tune detection to N pins on the rest frame first")
+                        help="pins expected in view on the rest frame: tune detection to N first and report how "
+                        "far off the count is")
     parser.add_argument("--samples", type=positive_int, default=40, metavar="N",
                         help="samples per tap feature array (default: 40)")
     parser.add_argument("--pins", type=positive_int, default=40, metavar="N",
                         help="tactile pins to select (default: 40)")
-    parser.add_argument("--min-separation-mm", type=non_negative_float, default=4.0, metavar="MM",
-                        help="minimum distance between selected pins, mm (default: 4)")
-    parser.add_argument("--pad-diameter-mm", type=positive_float, default=40.0, metavar="MM",
-                        help="pad diameter, mm; the scale is this over the detected disc diameter (default: 40)")
-    parser.add_argument("--mm-per-px", type=positive_float, metavar="MM",
-                        help="image scale at the pad, mm per px, instead of the one from the disc diameter")
+    parser.add_argument("--min-separation-mm", type=_finite(non_negative_float), default=4.0, metavar="MM",
+                        help="preferred distance between selected pins, mm; a pad without room for --pins pins "
+                        "this far apart gets them as far apart as it allows (default: 4)")
+    parser.add_argument("--sensor", choices=sorted(SENSOR_PRESETS), metavar="NAME",
+                        help="the sensor, for the scale from its pin pitch: "
+                        + "; ".join(f"{d.name} ({d.pins} pins, {d.pad_diameter_mm:g} mm pad)"
+                                    for d in SENSOR_PRESETS.values()))
+    parser.add_argument("--pins-on-pad", type=_pin_count, metavar="N",
+                        help="pins on the whole pad, in view or not, for the pin pitch (default: the sensor's, "
+                        "else --expected-pins, else the pins detected)")
+    parser.add_argument("--pad-diameter-mm", type=_finite(positive_float), metavar="MM",
+                        help="diameter of the hemispherical pad, mm, for the pin pitch (default: the sensor's, "
+                        "else 40)")
+    parser.add_argument("--mm-per-px", type=_finite(positive_float), metavar="MM",
+                        help="image scale at the pad, mm per px, instead of the one from the pin pitch")
     parser.add_argument("--rest-frame", type=non_negative_int, default=0, metavar="N",
-                        help="index of the rest frame, off contact (default: 0, the first frame)")
+                        help="index of the rest frame, off contact (default: 0, the first frame); one that looks "
+                        "taken during a tap is reported")
     parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
     parser.add_argument("--calibration", metavar="CAL.h5", help="the station's sensor calibration: use its "
                         "detection, pins, feature pins and scale (instead of --expected-pins, --mm-per-px, ...)")
@@ -68,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
     result = replay_video(args.video, args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,
                           params=params, n_samples=args.samples,
                           n_pins=args.pins, min_separation_mm=args.min_separation_mm,
+                          sensor=args.sensor, pins_on_pad=args.pins_on_pad,
                           pad_diameter_mm=args.pad_diameter_mm, mm_per_px=args.mm_per_px,
                           rest_frame=args.rest_frame, calibration=args.calibration, model=args.model,
                           decision_threshold=args.decision_threshold, progress=not args.quiet)
