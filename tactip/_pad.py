@@ -55,6 +55,61 @@ def pin_lattice(n_pins: int) -> np.ndarray:
     return np.column_stack([z.real, z.imag])
 
 
+RADIAL_SPOKE_RATIO = 2.4  # radial layout: spokes / rings aimed at (17 spokes on 7 rings for 120 pins)
+
+
+def radial_rings(n_pins: int) -> tuple[int, int, bool]:
+    """Rings, spokes and centre pin of a radial layout of ``n_pins``: ``n_pins = rings * spokes (+ 1)``.
+
+    Of the factorisations with 3-20 rings and at least 6 spokes (with or without a centre pin), the one
+    whose spokes / rings is nearest `RADIAL_SPOKE_RATIO` (on a log scale); a centre pin breaks ties.
+
+    Raises
+    ------
+    ValueError
+        When ``n_pins`` has no such factorisation.
+    """
+    best = None
+    for centre in (1, 0):
+        for rings in range(3, 21):
+            spokes, rest = divmod(n_pins - centre, rings)
+            if rest == 0 and spokes >= 6:
+                score = abs(np.log(spokes / rings / RADIAL_SPOKE_RATIO))
+                if best is None or score < best[0] - 1e-12:
+                    best = (score, rings, spokes, bool(centre))
+    if best is None:
+        raise ValueError(f"pins must be rings x spokes (+ 1 centre pin) with 3-20 rings and >= 6 spokes "
+                         f"for the radial layout, got {n_pins}")
+    return best[1:]
+
+
+def radial_lattice(n_pins: int) -> np.ndarray:
+    """Pin positions of a radial layout on the unrolled pad in ring units, (N, 2); the centre pin first.
+
+    Pins sit where equally spaced rings (one ring unit apart) cross straight spokes: every ring holds
+    the same number of pins, so the spacing along a ring grows with its radius, as on home-built TacTips
+    whose pins are placed with a rotary jig. The innermost ring is at ``max(1, spokes / 2 pi)`` ring
+    units, so neighbours along it are at least one unit apart; a centre pin, if any, sits alone inside.
+    """
+    rings, spokes, centre = radial_rings(n_pins)
+    inner = max(1.0, spokes / (2 * np.pi))
+    radius = np.repeat(inner + np.arange(rings), spokes)
+    azimuth = np.tile(2 * np.pi * np.arange(spokes) / spokes, rings)
+    z = radius * np.exp(1j * azimuth)
+    if centre:
+        z = np.concatenate([[0j], z])
+    return np.column_stack([z.real, z.imag])
+
+
+def membrane_points(x, y, contact, radius_mm: float):
+    """Positions of membrane material points (skin texture) under the plate, mm, (N, 3)."""
+    u_n, u_r = membrane_displacement(x, y, contact, radius_mm)
+    z0 = np.sqrt(np.clip(radius_mm ** 2 - x * x - y * y, 1e-9, None))
+    r = np.hypot(x, y)
+    outward = np.divide(u_r, r, out=np.zeros_like(r), where=r > 0)
+    return np.stack([x * (1 + outward), y * (1 + outward), z0 - u_n], axis=-1)
+
+
 def membrane_displacement(x, y, contact, radius_mm: float):
     """Displacement of membrane points at lateral position (x, y), mm, under the plate.
 

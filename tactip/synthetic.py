@@ -71,17 +71,23 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 
 from . import _pad, _render
 
-__all__ = ["Contact", "SyntheticFrame", "SyntheticTacTip", "tap_profile"]
+__all__ = ["Contact", "PRESETS", "SyntheticFrame", "SyntheticTacTip", "preset_names", "tap_profile"]
 
 _DISC_FRACTION = 0.435  # radius of the dark membrane disc / image height
 _DARK_INVERSION = 240.0  # dark_pins: grey level g becomes 240 - g (light membrane, dark tips)
 _PIN_SPACING_FRACTION = 0.3  # pin radius / pin spacing at the apex, both in px (at most 6 px)
+_LAYOUTS = ("auto", "radial")
+_SKIN_TINTS = (None, "brown")
+_TEXTURE_POLAR_DEG = 84.0  # skin texture is drawn out to this polar angle (inside the casing edge)
+_SHADOW_OFFSET = 2.2  # pin shadows: centre this many pin radii from the tip, towards the pad axis
+_SHADOW_SIGMA = 0.7  # pin shadows: Gaussian sigma in pin radii
 
 
 @dataclass(frozen=True)
@@ -123,11 +129,14 @@ class SyntheticFrame:
     centres : (N, 2) float64 ndarray
         True pin-tip centres (x, y), px; pixel centres at integer coordinates (OpenCV convention).
     visible : (N,) bool ndarray
-        Whether each pin is drawn (False when hidden or outside the image).
+        Whether each pin's whole tip is drawn (False when hidden, cut or outside the image).
     timestamp_s : float
         Time within the sequence, s.
     contact : Contact
         The contact state that was rendered.
+    partial : (N,) bool ndarray
+        Pins drawn but partly hidden: cut by the black rim ring (casing lip) or by the image edge.
+        A detector may find them or not; see "Scoring" in the module docstring. All False when not given.
     """
 
     image: np.ndarray
@@ -135,6 +144,11 @@ class SyntheticFrame:
     visible: np.ndarray
     timestamp_s: float
     contact: Contact
+    partial: np.ndarray | None = field(default=None)
+
+    def __post_init__(self):
+        if self.partial is None:
+            object.__setattr__(self, "partial", np.zeros(len(self.visible), bool))
 
 
 def tap_profile(t_s, *, rise_s: float = 0.25, plateau_s: float = 0.25, release_s: float = 0.25):
@@ -197,6 +211,34 @@ class SyntheticTacTip:
         Invert the scene: dark pins on a light membrane (dark-marker sensors).
     seed : int
         Seed of the instance's own random generator (pin jitter, brightness, noise).
+    layout : {"auto", "radial"}
+        "auto": hexagonal rings for a hexagonal number of pins, else concentric circles; "radial": pins
+        where equally spaced rings cross straight spokes (``pins = rings x spokes (+ 1 centre pin)``).
+    pad_fraction : float
+        Diameter of the dark disc (membrane, with the rim ring if any) / image height, 0.25-0.9.
+    pin_fraction : float
+        Pin-tip radius / pin spacing at the apex, 0.1-0.4 (the radius is kept within 1-6 px).
+    rim_polar_deg : float or None
+        Draw a black rim ring (the casing lip) from the disc edge in to where the pin tips at this
+        polar angle, degrees (60-85.9), are seen; it hides the pins behind it. None: no ring.
+    ring_glare : int
+        Number of LED glare blobs on the rim ring (0-64); needs ``rim_polar_deg``.
+    membrane_level, pin_level, surround_level : float or None
+        Grey levels of the membrane, of a pin tip at the apex and of the casing around the disc
+        (None: 25, 215 and 200).
+    glare_gain : float
+        Brightness of the six LED glare spots relative to the default (>= 0).
+    veil : float
+        Veiling glare of a bright surround: grey levels added at the disc edge, fading inward (>= 0).
+    skin_texture : float
+        Skin texture, grey levels (>= 0): low-frequency mottling, soft highlights between the pins
+        and small specks, all in proportion; 0 for a clean skin.
+    pin_shadows : float
+        Depth of the soft shadow each pin casts on the skin towards the pad axis, grey levels (>= 0).
+    skin_tint : {None, "brown"}
+        Colour frames only: a brown skin with cream pins instead of the neutral tint.
+    frame_rate : float
+        The camera's frame rate, frames/s; `tap` uses it when not given one.
 
     Attributes
     ----------
@@ -212,6 +254,14 @@ class SyntheticTacTip:
         Image radius of a pin tip at the apex, px.
     pin_spacing_mm : float
         Lattice spacing of the pins on the pad surface, mm.
+    rim_radius_px : float or None
+        Inner edge of the black rim ring, px from the disc centre (None without a ring).
+    ring_glare_centres : (K, 2) float64 ndarray
+        Centres (x, y) px of the LED glare blobs on the rim ring (empty without them).
+    frame_rate : float
+        Frames per second of `tap` by default.
+    preset : str or None
+        The preset's name when built by `from_preset`.
 
     Examples
     --------
@@ -224,9 +274,40 @@ class SyntheticTacTip:
     def __init__(self, *, pins: int = 331, pad_diameter_mm: float = 40.0, image_size=(640, 480),
                  noise_sigma: float = 4.0, glare: bool = True, gradient: bool = True,
                  blur_sigma: float = 0.0, jpeg_quality: int | None = None, colour: bool = False,
-                 dark_pins: bool = False, seed: int = 0):
+                 dark_pins: bool = False, seed: int = 0, layout: str = "auto", pad_fraction: float = 0.87,
+                 pin_fraction: float = _PIN_SPACING_FRACTION, rim_polar_deg: float | None = None,
+                 ring_glare: int = 0, membrane_level: float | None = None, pin_level: float | None = None,
+                 surround_level: float | None = None, glare_gain: float = 1.0, veil: float = 0.0,
+                 skin_texture: float = 0.0, pin_shadows: float = 0.0, skin_tint: str | None = None,
+                 frame_rate: float = 20.0):
         if int(pins) != pins or pins < 7:
             raise ValueError(f"pins must be an integer >= 7, got {pins!r}")
+        if layout not in _LAYOUTS:
+            raise ValueError(f"layout must be one of {_LAYOUTS}, got {layout!r}")
+        if not 0.25 <= pad_fraction <= 0.9:
+            raise ValueError(f"pad_fraction must be in 0.25..0.9, got {pad_fraction!r}")
+        if not 0.1 <= pin_fraction <= 0.4:
+            raise ValueError(f"pin_fraction must be in 0.1..0.4, got {pin_fraction!r}")
+        if rim_polar_deg is not None and not 60.0 <= rim_polar_deg < _pad.CASING_POLAR_DEG:
+            raise ValueError(f"rim_polar_deg must be None or in 60..{_pad.CASING_POLAR_DEG}, got {rim_polar_deg!r}")
+        if int(ring_glare) != ring_glare or not 0 <= ring_glare <= 64:
+            raise ValueError(f"ring_glare must be an integer in 0..64, got {ring_glare!r}")
+        if ring_glare and rim_polar_deg is None:
+            raise ValueError("ring_glare needs a rim ring: give rim_polar_deg")
+        for name, value in (("membrane_level", membrane_level), ("pin_level", pin_level),
+                            ("surround_level", surround_level)):
+            if value is not None and not 0 <= value <= 255:
+                raise ValueError(f"{name} must be None or in 0..255, got {value!r}")
+        for name, value in (("glare_gain", glare_gain), ("veil", veil), ("skin_texture", skin_texture),
+                            ("pin_shadows", pin_shadows)):
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
+        if skin_tint not in _SKIN_TINTS:
+            raise ValueError(f"skin_tint must be one of {_SKIN_TINTS}, got {skin_tint!r}")
+        if not (math.isfinite(frame_rate) and frame_rate > 0):
+            raise ValueError(f"frame_rate must be > 0, got {frame_rate!r}")
+        if layout == "radial":
+            _pad.radial_rings(int(pins))  # raises ValueError naming pins
         if not pad_diameter_mm > 4 * _pad.STALK_MM:
             raise ValueError(f"pad_diameter_mm must be > {4 * _pad.STALK_MM}, got {pad_diameter_mm!r}")
         width, height = (int(v) for v in image_size)
@@ -247,17 +328,26 @@ class SyntheticTacTip:
         self.jpeg_quality = jpeg_quality
         self.colour, self.dark_pins = bool(colour), bool(dark_pins)
         self.seed = seed
+        self.layout, self.pad_fraction, self.pin_fraction = layout, float(pad_fraction), float(pin_fraction)
+        self.rim_polar_deg = None if rim_polar_deg is None else float(rim_polar_deg)
+        self.ring_glare = int(ring_glare)
+        self.membrane_level, self.pin_level, self.surround_level = membrane_level, pin_level, surround_level
+        self.glare_gain, self.veil = float(glare_gain), float(veil)
+        self.skin_texture, self.pin_shadows, self.skin_tint = float(skin_texture), float(pin_shadows), skin_tint
+        self.frame_rate = float(frame_rate)
+        self.preset = None
         layout_rng, self._noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
+        scene_rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(2,)))  # new layers only
 
         radius = self._radius = self.pad_diameter_mm / 2.0
         self._h = _pad.CAMERA_DISTANCE * radius
         casing = np.deg2rad(_pad.CASING_POLAR_DEG)
-        disc_px = _DISC_FRACTION * height
+        disc_px = self.pad_fraction / 2.0 * height  # 0.87 / 2 == _DISC_FRACTION exactly
         self._f = disc_px * (radius * math.cos(casing) + self._h) / (radius * math.sin(casing))
         self._c = ((width - 1) / 2.0, (height - 1) / 2.0)
         self.disc = (self._c[0], self._c[1], float(disc_px))
 
-        lattice = _pad.pin_lattice(self._n)
+        lattice = _pad.radial_lattice(self._n) if layout == "radial" else _pad.pin_lattice(self._n)
         ring_count = np.hypot(*lattice.T).max()
         spacing = radius * np.deg2rad(_pad.PIN_POLAR_MAX_DEG) / ring_count  # mm of pad surface
         lattice = lattice + layout_rng.normal(0.0, 0.02, lattice.shape)
@@ -271,18 +361,95 @@ class SyntheticTacTip:
         apex_depth = radius - _pad.STALK_MM + self._h
         # pin radius: a fixed fraction of the pin spacing at the apex, at most 6 px
         centre_spacing_px = spacing * (radius - _pad.STALK_MM) / radius * self._f / apex_depth
-        pin_px = float(np.clip(_PIN_SPACING_FRACTION * centre_spacing_px, 1.0, 6.0))
+        pin_px = float(np.clip(self.pin_fraction * centre_spacing_px, 1.0, 6.0))
         self._tip_radius_mm = pin_px * apex_depth / self._f
         self.pin_radius_px = pin_px
         self.mm_per_px = float(apex_depth / self._f * radius / (radius - _pad.STALK_MM))
         self._brightness = 1.0 + 0.05 * layout_rng.standard_normal(self._n)
-        background, glare, self._illumination = _render.scene_layers(self.image_size, self.disc,
-                                                                     gradient=self.gradient, glare=self.glare)
+        self._pin_level = _render.PIN_LEVEL if pin_level is None else float(pin_level)
+        levels = {} if membrane_level is None else {"membrane_level": float(membrane_level)}
+        # the LED glare spots keep their size in px at the default pad; a pad given a size scales them with it
+        scale = {} if self.pad_fraction == 0.87 else {"glare_scale": self.pad_fraction / 0.87 * height / 480.0}
+        if surround_level is not None:
+            levels["casing_level"] = float(surround_level)
+        background, glare, self._illumination = _render.scene_layers(
+            self.image_size, self.disc, gradient=self.gradient, glare=self.glare, glare_gain=self.glare_gain,
+            veil=self.veil, **levels, **scale)
+        if self.skin_texture > 0:  # low-frequency mottling of the skin (static: thickness and pigment)
+            yy, xx = np.mgrid[0:height, 0:width]
+            on_skin = np.hypot(xx - self._c[0], yy - self._c[1]) < disc_px
+            spacing_px = centre_spacing_px
+            background += (0.6 * self.skin_texture * on_skin * _render.mottling(scene_rng, self.image_size,
+                                                                               2.5 * spacing_px))
         if self.dark_pins:  # dark markers on a light membrane: invert the lit scene, keep the glare
             background = _DARK_INVERSION - background
         self._static = background + glare
         self.rest_centres, _, _ = self._project(Contact())
         self.rest_centres.setflags(write=False)
+        self.rim_radius_px = None
+        self.ring_glare_centres = np.zeros((0, 2))
+        self._ring = None
+        if self.rim_polar_deg is not None:
+            polar = np.deg2rad(self.rim_polar_deg)
+            tip = radius - _pad.STALK_MM  # where the tips at this polar angle are seen
+            self.rim_radius_px = float(self._f * tip * np.sin(polar) / (tip * np.cos(polar) + self._h))
+            alpha, value, self.ring_glare_centres = _render.rim_ring(
+                self.image_size, self.disc, self.rim_radius_px, rng=scene_rng, glare_count=self.ring_glare,
+                spot_px=max(pin_px, 2.0))
+            self._ring = ((1.0 - alpha).reshape(-1), value.reshape(-1))
+        self._texture = self._skin_spots(scene_rng) if self.skin_texture > 0 else None
+        self._tint = (_render.tint_table(self.membrane_level or _render.MEMBRANE_LEVEL, 0.85 * self._pin_level)
+                      if self.skin_tint == "brown" else None)
+
+    @classmethod
+    def from_preset(cls, name: str, **overrides) -> "SyntheticTacTip":
+        """A renderer of one of the named sensors in `PRESETS`, with any option overridden.
+
+        Parameters
+        ----------
+        name : str
+            A key of `PRESETS` (see `preset_names`).
+        **overrides
+            Constructor options replacing the preset's (e.g. ``seed=3``, ``noise_sigma=0.0``).
+
+        Examples
+        --------
+        >>> sensor = SyntheticTacTip.from_preset("radial-120")
+        >>> sensor.n_pins, sensor.frame_rate
+        (120, 120.0)
+        """
+        if name not in PRESETS:
+            raise ValueError(f"unknown synthetic TacTip preset {name!r}; choose from {', '.join(PRESETS)}")
+        sensor = cls(**{**PRESETS[name], **overrides})
+        sensor.preset = name
+        return sensor
+
+    def _skin_spots(self, rng: np.random.Generator):
+        """Material points of the skin texture between the pins: x, y (mm), sigma (px), amplitude (grey)."""
+        n_high, n_speck = int(0.8 * self._n), 2 * self._n
+        count = 4 * (n_high + n_speck)
+        cos_polar = rng.uniform(np.cos(np.deg2rad(_TEXTURE_POLAR_DEG)), 1.0, count)  # uniform over the cap
+        azimuth = rng.uniform(0.0, 2 * np.pi, count)
+        sin_polar = np.sqrt(1.0 - cos_polar ** 2)
+        x, y = self._radius * sin_polar * np.cos(azimuth), self._radius * sin_polar * np.sin(azimuth)
+        highlight = np.arange(count) % (n_high + n_speck) < n_high
+        sigma = np.where(highlight, rng.uniform(0.5, 1.0, count) * self.pin_radius_px, rng.uniform(0.5, 0.9, count))
+        sign = np.where(highlight | (rng.uniform(size=count) < 0.4), 1.0, -1.0)
+        amplitude = sign * self.skin_texture * np.where(highlight, rng.uniform(1.0, 2.5, count),
+                                                        rng.uniform(1.5, 3.0, count))
+        from scipy.spatial import cKDTree
+
+        seen = self._skin_image(x, y, Contact())
+        gap, _ = cKDTree(self.rest_centres).query(seen)
+        keep = gap >= self.pin_radius_px + 2.0 * sigma + 1.0  # texture lies between the pins
+        keep &= np.cumsum(keep & highlight) <= n_high
+        keep &= np.cumsum(keep & ~highlight) <= n_speck
+        return x[keep], y[keep], sigma[keep], amplitude[keep]
+
+    def _skin_image(self, x, y, contact: Contact):
+        """Image positions (M, 2) px of skin material points at rest lateral position (x, y) mm."""
+        point = _pad.membrane_points(x, y, contact, self._radius)
+        return np.asarray(self.disc[:2]) + self._f * point[:, :2] / (point[:, 2:] + self._h)
 
     @property
     def n_pins(self) -> int:
@@ -290,10 +457,12 @@ class SyntheticTacTip:
         return self._n
 
     def __repr__(self) -> str:
+        extra = "".join(f", {name}={getattr(self, name)!r}" for name, default in _NEW_OPTIONS.items()
+                        if getattr(self, name) != default)
         return (f"SyntheticTacTip(pins={self._n}, pad_diameter_mm={self.pad_diameter_mm}, "
                 f"image_size={self.image_size}, noise_sigma={self.noise_sigma}, glare={self.glare}, "
                 f"gradient={self.gradient}, blur_sigma={self.blur_sigma}, jpeg_quality={self.jpeg_quality}, "
-                f"colour={self.colour}, dark_pins={self.dark_pins}, seed={self.seed})")
+                f"colour={self.colour}, dark_pins={self.dark_pins}, seed={self.seed}{extra})")
 
     def _project(self, contact: Contact):
         """Pin tips through the camera: centres (N, 2) px, ellipse matrices (N, 2, 2) px^2, facing (N,) bool."""
@@ -325,13 +494,33 @@ class SyntheticTacTip:
             True where the whole pin tip lies inside the image and faces the camera.
         """
         centres, shape, facing = self._project(contact or Contact())
-        return centres, facing & self._inside(centres, shape)
+        return centres, self._visibility(centres, shape, facing)[0]
 
     def _inside(self, centres, shape):
         """Whether each ellipse lies entirely inside the image."""
         width, height = self.image_size
         half = np.sqrt(np.stack([shape[:, 0, 0], shape[:, 1, 1]], axis=1)) + 1.0
         return np.all((centres - half >= 0) & (centres + half <= [width - 1, height - 1]), axis=1)
+
+    def _visibility(self, centres, shape, facing):
+        """Whole and partly hidden pins, (N,) bool each: by the image edge and the rim ring.
+
+        A tip (its ellipse plus the 1 px edge ramp) is whole when it clears the image edge and the ring's
+        inner edge by a pixel, hidden when it lies wholly beyond the ring or the image, partial between.
+        """
+        width, height = self.image_size
+        inside = self._inside(centres, shape)
+        half = np.sqrt(np.stack([shape[:, 0, 0], shape[:, 1, 1]], axis=1)) + 0.5 * _render.EDGE_PX
+        touches = np.all((centres + half > -0.5) & (centres - half < [width - 0.5, height - 0.5]), axis=1)
+        if self.rim_radius_px is not None:
+            offset = centres - np.asarray(self.disc[:2])
+            distance = np.linalg.norm(offset, axis=1)
+            direction = offset / np.maximum(distance, 1e-9)[:, None]
+            reach = np.sqrt(np.einsum("ni,nij,nj->n", direction, shape, direction)) + 0.5 * _render.EDGE_PX
+            inside &= distance + reach + 0.5 <= self.rim_radius_px
+            touches &= distance - reach - 0.5 < self.rim_radius_px
+        visible = facing & inside
+        return visible, facing & touches & ~visible
 
     def render(self, contact: Contact | None = None, *, hidden: np.ndarray | None = None,
                timestamp_s: float = 0.0) -> SyntheticFrame:
@@ -352,30 +541,48 @@ class SyntheticTacTip:
         """
         contact = contact or Contact()
         centres, shape, facing = self._project(contact)
-        visible = facing & self._inside(centres, shape)
+        visible, partial = self._visibility(centres, shape, facing)
         if hidden is not None:
             hidden = np.asarray(hidden, dtype=bool)
             if hidden.shape != (self._n,):
                 raise ValueError(f"hidden must have shape ({self._n},), got {hidden.shape}")
             visible &= ~hidden
-        image = self._draw(centres[visible], shape[visible], self._brightness[visible])
+            partial &= ~hidden
+        drawn = visible | partial
+        image = self._draw(centres[drawn], shape[drawn], self._brightness[drawn], contact)
         return SyntheticFrame(image=image, centres=centres, visible=visible, timestamp_s=float(timestamp_s),
-                              contact=contact)
+                              contact=contact, partial=partial)
 
-    def _draw(self, centres, shape, brightness):
+    def _draw(self, centres, shape, brightness, contact):
         """Composite pins over the static scene, add blur, noise and compression; returns uint8."""
         scene = self._static.copy()
-        width = self.image_size[0]
-        anchor = np.rint(centres).astype(np.int64)
-        levels = _render.PIN_LEVEL * brightness * self._illumination.reshape(-1)[anchor[:, 1] * width + anchor[:, 0]]
+        flat = scene.reshape(-1)
+        width, height = self.image_size
+        sign = -1.0 if self.dark_pins else 1.0
+        if self._texture is not None:  # specks and highlights ride on the skin
+            x, y, sigma, amplitude = self._texture
+            _render.paint_spots(flat, self.image_size, self._skin_image(x, y, contact), sigma, sign * amplitude)
+        if self.pin_shadows > 0 and len(centres):  # each pin shades the skin on the side away from the LEDs
+            offset = np.asarray(self.disc[:2]) - centres
+            offset *= (_SHADOW_OFFSET * self.pin_radius_px) / np.maximum(np.linalg.norm(offset, axis=1), 1.0)[:, None]
+            _render.paint_spots(flat, self.image_size, centres + offset,
+                                np.full(len(centres), max(_SHADOW_SIGMA * self.pin_radius_px, 0.8)),
+                                np.full(len(centres), -sign * self.pin_shadows))
+        anchor = np.clip(np.rint(centres).astype(np.int64), 0, [width - 1, height - 1])
+        levels = self._pin_level * brightness * self._illumination.reshape(-1)[anchor[:, 1] * width + anchor[:, 0]]
         if self.dark_pins:
             levels = _DARK_INVERSION - levels
-        _render.paint_pins(scene.reshape(-1), self.image_size, centres, shape, levels)
+        _render.paint_pins(flat, self.image_size, centres, shape, levels)
+        if self._ring is not None:  # the casing lip in front of the membrane hides what lies behind it
+            flat *= self._ring[0]
+            flat += self._ring[1]
         if self.blur_sigma > 0:
             import cv2
 
             scene = cv2.GaussianBlur(scene, (0, 0), self.blur_sigma)
-        if self.colour:
+        if self._tint is not None and self.colour:
+            scene = scene[:, :, None] * self._tint[np.clip(scene, 0, 255).astype(np.uint8)]
+        elif self.colour:
             scene = scene[:, :, None] * np.array([1.0, 0.97, 0.93], dtype=np.float32)
         if self.noise_sigma > 0:
             scene += _render.byte_noise(self._noise_rng, scene.shape, self.noise_sigma)
@@ -388,7 +595,7 @@ class SyntheticTacTip:
             image = cv2.imdecode(buffer, cv2.IMREAD_UNCHANGED)
         return image
 
-    def tap(self, contact: Contact, *, frame_rate: float = 20.0, rise_s: float = 0.25, plateau_s: float = 0.25,
+    def tap(self, contact: Contact, *, frame_rate: float | None = None, rise_s: float = 0.25, plateau_s: float = 0.25,
             release_s: float = 0.25, rest_before_s: float = 0.1,
             rest_after_s: float = 0.1) -> Iterator[SyntheticFrame]:
         """Frames of one tap: rest, rise, plateau, release, rest, at ``frame_rate``.
@@ -400,8 +607,8 @@ class SyntheticTacTip:
         ----------
         contact : Contact
             Contact at the deepest point of the tap.
-        frame_rate : float
-            Frames per second.
+        frame_rate : float or None
+            Frames per second; None: the sensor's `frame_rate`.
         rise_s, plateau_s, release_s, rest_before_s, rest_after_s : float
             Phase durations, s.
 
@@ -410,6 +617,7 @@ class SyntheticTacTip:
         SyntheticFrame
             Time stamps ``k / frame_rate`` from 0 to the end of the rest after, inclusive.
         """
+        frame_rate = self.frame_rate if frame_rate is None else frame_rate
         if not frame_rate > 0:
             raise ValueError(f"frame_rate must be > 0, got {frame_rate!r}")
         if not (rest_before_s >= 0 and rest_after_s >= 0):
@@ -422,3 +630,38 @@ class SyntheticTacTip:
             state = Contact(contact.indentation_mm * fraction, contact.gap_width_mm, contact.gap_offset_mm,
                             contact.gap_angle_deg)
             yield self.render(state, timestamp_s=t)
+
+
+# Options added after the first release, with their defaults (the repr names them only when changed).
+_NEW_OPTIONS = {"layout": "auto", "pad_fraction": 0.87, "pin_fraction": _PIN_SPACING_FRACTION, "rim_polar_deg": None,
+                "ring_glare": 0, "membrane_level": None, "pin_level": None, "surround_level": None,
+                "glare_gain": 1.0, "veil": 0.0, "skin_texture": 0.0, "pin_shadows": 0.0, "skin_tint": None,
+                "frame_rate": 20.0}
+
+#: Named sensors: constructor options of `SyntheticTacTip` for each (see the module docstring, "Presets").
+PRESETS = MappingProxyType({
+    "tactip-331": MappingProxyType({"pins": 331}),
+    "tactip-127": MappingProxyType({"pins": 127}),
+    "tactip-532": MappingProxyType({"pins": 532}),
+    "dark-331": MappingProxyType({"pins": 331, "dark_pins": True}),
+    "rim-ring-331": MappingProxyType({"pins": 331, "glare": False, "rim_polar_deg": 77.0, "ring_glare": 16}),
+    "brown-127": MappingProxyType({"pins": 127, "colour": True, "skin_tint": "brown", "membrane_level": 70.0,
+                                   "pin_level": 150.0, "skin_texture": 10.0, "pin_shadows": 18.0}),
+    "radial-120": MappingProxyType({"pins": 120, "layout": "radial", "pad_fraction": 1 / 3, "pin_fraction": 0.25,
+                                    "surround_level": 245.0, "glare_gain": 1.6, "veil": 40.0, "noise_sigma": 5.0,
+                                    "frame_rate": 120.0}),
+    "small-pad-100": MappingProxyType({"pins": 100, "image_size": (320, 240), "pad_fraction": 0.25,
+                                       "surround_level": 235.0}),
+    "dense-1000": MappingProxyType({"pins": 1000, "image_size": (1280, 720), "pad_fraction": 0.9}),
+})
+
+
+def preset_names() -> tuple[str, ...]:
+    """Names of the synthetic TacTip presets, in `PRESETS` order.
+
+    Examples
+    --------
+    >>> preset_names()[:3]
+    ('tactip-331', 'tactip-127', 'tactip-532')
+    """
+    return tuple(PRESETS)

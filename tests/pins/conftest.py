@@ -40,6 +40,60 @@ def match(detected: np.ndarray, truth: np.ndarray, gate_px: float = 3.0):
     return ok.sum() / len(truth), ok.sum() / len(detected), rmse
 
 
+@functools.lru_cache(maxsize=None)
+def preset_sensor(name: str, seed: int = 0, **overrides) -> SyntheticTacTip:
+    """The synthetic TacTip preset ``name`` (`tactip.synthetic.PRESETS`), cached."""
+    return SyntheticTacTip.from_preset(name, seed=seed, **overrides)
+
+
+@functools.lru_cache(maxsize=None)
+def preset_frame(name: str, contact: Contact | None = None, seed: int = 0):
+    """One rendered frame of the preset ``name`` (cached: tests must not modify it).
+
+    The frame carries its ground truth: ``centres``, ``visible`` (whole tips: must be found) and
+    ``partial`` (tips cut by the rim ring or the image edge: may be found or not).
+    """
+    return preset_sensor(name, seed).render(contact)
+
+
+def score(detected: np.ndarray, frame, gate_px: float = 3.0):
+    """Recall, precision and RMSE (px) of detections scored against a frame's ground truth.
+
+    Detections are matched one-to-one (Hungarian method, pairs farther than ``gate_px`` do not count)
+    to the drawn pins, visible or partial. Recall is the fraction of visible pins matched; a detection
+    matched to a visible or a partial pin is correct (precision: correct / detections; partial pins
+    count neither for nor against); RMSE is over the matched visible pins. No detections: (0, 0, inf)
+    (precision 1.0 when nothing is drawn either).
+
+    Parameters
+    ----------
+    detected : (M, 2) ndarray of (x, y), px
+    frame : tactip.synthetic.SyntheticFrame
+    gate_px : float
+
+    Returns
+    -------
+    recall, precision, rmse_px : float
+    """
+    detected = np.asarray(detected, dtype=float).reshape(-1, 2)
+    visible = np.asarray(frame.visible, bool)
+    drawn = visible | np.asarray(frame.partial, bool)
+    truth = frame.centres[drawn]
+    is_visible = visible[drawn]
+    if len(detected) == 0 or len(truth) == 0:
+        return (0.0 if is_visible.any() else 1.0), (1.0 if len(detected) == 0 else 0.0), np.inf
+    distance = cdist(truth, detected)
+    cost = np.where(distance <= gate_px, distance, 1e6)
+    rows, cols = linear_sum_assignment(cost)
+    ok = cost[rows, cols] <= gate_px
+    rows, cols = rows[ok], cols[ok]
+    on_visible = is_visible[rows]
+    errors = detected[cols[on_visible]] - truth[rows[on_visible]]
+    rmse = float(np.sqrt(np.mean(np.sum(errors ** 2, axis=1)))) if on_visible.any() else np.inf
+    recall = on_visible.sum() / is_visible.sum() if is_visible.any() else 1.0
+    return float(recall), float(ok.sum() / len(detected)), rmse
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
