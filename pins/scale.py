@@ -15,8 +15,11 @@ angle ``field_polar_deg`` (80 degrees: the TacTip's pins stop short of the clamp
 ``pitch_mm = R * radians(field_polar_deg) / K``, measured along the pad surface, with K the
 fewest rings that hold the pins (a count up to 3 % above a full hexagonal number is taken as
 that number with a few spurious detections; any count a few rings short of full, as when rim
-pins are hidden, rounds up to the same K). Millimetres are pad-surface mm at the apex, the
-scale of the paper's "4 mm apart".
+pins are hidden, rounds up to the same K). A radial layout (home-built TacTips whose pins are set
+with a rotary jig: ``rings`` rings one pitch apart, each crossed by the same ``spokes`` spokes, the
+innermost at ``max(1, spokes / 2 pi)`` pitches so that its neighbours are one pitch apart) has
+``pitch_mm = R * radians(field_polar_deg) / (max(1, spokes / 2 pi) + rings - 1)``. Millimetres
+are pad-surface mm at the apex, the scale of the paper's "4 mm apart".
 
 Named sensors (`SENSOR_PRESETS`) give pin count, pad diameter and the field's extent in one word;
 `pad_scale` turns any of these (or an explicit ``mm_per_px``) into a `PadScale` that says how it
@@ -25,6 +28,7 @@ was derived.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -88,6 +92,8 @@ class SensorDescription:
         Diameter of the hemispherical pad, mm.
     field_polar_deg : float
         Polar angle of the outermost ring of pins, degrees.
+    rings, spokes : int
+        A radial layout's rings and spokes (0: hexagonal rings, the pitch from the pin count).
     note : str
         Where the sensor comes from.
     """
@@ -96,11 +102,16 @@ class SensorDescription:
     pins: int
     pad_diameter_mm: float
     field_polar_deg: float = FIELD_POLAR_DEG
+    rings: int = 0
+    spokes: int = 0
     note: str = ""
 
     @property
     def pitch_mm(self) -> float:
-        """Pin pitch along the pad surface, mm (`pin_pitch_mm`)."""
+        """Pin pitch along the pad surface, mm (`pin_pitch_mm`, or the radial layout's ring spacing)."""
+        if self.spokes:
+            span = max(1.0, self.spokes / (2 * math.pi)) + self.rings - 1
+            return self.pad_diameter_mm / 2.0 * math.radians(self.field_polar_deg) / span
         return pin_pitch_mm(self.pins, self.pad_diameter_mm, field_polar_deg=self.field_polar_deg)
 
     def describe(self) -> str:
@@ -113,10 +124,12 @@ SENSOR_PRESETS: dict[str, SensorDescription] = {d.name: d for d in (
     SensorDescription("tactip-127", 127, 40.0, note="TacTip, 40 mm pad, 127 pins (6 rings)"),
     SensorDescription("tactip-331", 331, 40.0, note="TacTip, 40 mm pad, 331 pins (10 rings)"),
     SensorDescription("tactip-532", 532, 40.0, note="TacTip, 40 mm pad, 532 pins (paper 002)"),
-    SensorDescription("rim-ring-331", 331, 40.0, note="331-pin TacTip with a black rim ring and LED glare"),
+    SensorDescription("dark-331", 331, 40.0, note="331-pin TacTip with dark markers on a light membrane"),
+    SensorDescription("rim-ring-331", 331, 40.0, note="331-pin TacTip behind a black rim ring with LED glare"),
     SensorDescription("brown-127", 127, 40.0, note="127-pin TacTip with a brown, low-contrast skin"),
-    SensorDescription("radial-120", 120, 20.0, note="home-built TacTip, ~120 small pins in a radial layout"),
-    SensorDescription("small-pad-100", 100, 20.0, note="small home-built pad of 100 pins"),
+    SensorDescription("radial-120", 120, 40.0, rings=7, spokes=17,
+                      note="home-built TacTip: 7 rings x 17 spokes + a centre pin"),
+    SensorDescription("small-pad-100", 100, 40.0, note="100-pin pad, small in the image"),
     SensorDescription("dense-1000", 1000, 40.0, note="dense 1000-pin pad"),
 )}
 
@@ -241,9 +254,9 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
         sensor = sensor_preset(sensor)
     counted = pins is None and sensor is None
     if sensor is not None:
-        description = SensorDescription(sensor.name, int(pins if pins is not None else sensor.pins),
-                                        float(pad_diameter_mm if pad_diameter_mm is not None
-                                              else sensor.pad_diameter_mm), sensor.field_polar_deg)
+        description = dataclasses.replace(
+            sensor, pins=int(pins if pins is not None else sensor.pins),
+            pad_diameter_mm=float(pad_diameter_mm if pad_diameter_mm is not None else sensor.pad_diameter_mm))
     else:
         if pad_diameter_mm is None:
             raise ValueError("pad_diameter_mm is needed to derive the scale without a sensor preset or mm_per_px")
@@ -260,6 +273,8 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
     source = f"pin pitch {pitch_mm:.3f} mm ({what}) / {pitch_px:.2f} px measured"
     info = {"pins": description.pins, "pad_diameter_mm": description.pad_diameter_mm,
             "field_polar_deg": description.field_polar_deg, "pins_counted": counted}
+    if description.spokes:
+        info.update(rings=description.rings, spokes=description.spokes)
     if description.name:
         info["name"] = description.name
     return PadScale(pitch_mm / pitch_px, pitch_px, pitch_mm, source, info)

@@ -68,6 +68,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy import ndimage
 
 from pins import (DetectionParams, PadScale, PinSelection, PinsError, PinTracker, SensorDisc, detect_pins,
                   displacement_from_rest, feature_dim_names, find_sensor_disc, pad_scale, segment_taps,
@@ -197,7 +198,7 @@ class ReplayResult:
                     + f"; retired: median {np.median(retired):g}, max {retired.max()}")
         if self.blank_frames:
             shown = ", ".join(map(str, self.blank_frames[:10])) + (" ..." if len(self.blank_frames) > 10 else "")
-            text += f"; {len(self.blank_frames)} blank frame(s): {shown}"
+            text += f"; {len(self.blank_frames)} blank frame(s) (nothing trackable, pins NaN): {shown}"
         return text
 
 
@@ -480,8 +481,9 @@ def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, r
     -------
     warning : str
         Names the frames where the pins are drawn together (as at rest after a press, seen from
-        a pressed reference) and suggests ``--rest-frame`` of the first of the most displaced of
-        them; "" when fewer than max(3, 5 % of the frames) converge.
+        a pressed reference) and suggests for ``--rest-frame`` the middle of the longest run of
+        frames drawn together about the most (the pad still, at rest); "" when fewer than
+        max(3, 5 % of the tracked frames) converge.
     """
     from pins import converging_frames
 
@@ -489,8 +491,12 @@ def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, r
     tracked = int(np.isfinite(displacements[:, :, 0]).any(axis=1).sum())
     if len(frames) < max(3, 0.05 * tracked):
         return ""
-    signal = tap_signal(displacements[frames])
-    suggested = int(frames[np.flatnonzero(signal >= 0.95 * signal.max())[0]])
+    signal = np.zeros(len(displacements))
+    signal[frames] = tap_signal(displacements[frames])
+    # The pad at rest: the middle of the longest run of frames drawn together about the most.
+    runs, count = ndimage.label(signal >= 0.9 * signal.max())
+    longest = np.argmax(np.bincount(runs.ravel())[1:]) + 1
+    suggested = int(np.median(np.flatnonzero(runs == longest)))
     return (f"the rest frame {rest_frame} looks taken during a tap: in {len(frames)} frames (e.g. {suggested}) "
             f"the pins are drawn together by up to {signal.max():.1f} px from it, as a pad at rest looks from a "
             f"pressed one; displacements and taps are measured from a deformed pad: give --rest-frame of a "
@@ -502,10 +508,6 @@ def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float,
     """Scale, feature pins, rest-frame check, taps and features; every problem becomes a warning."""
     warnings = list(track["warnings"])
     rest, disc, displacements = track["rest"], track["disc"], track["displacements"]
-    blank = np.flatnonzero(track["blank"])
-    if blank.size:
-        warnings.append(f"{blank.size} blank frame(s) (nothing trackable: LEDs off, a dropped or black frame): "
-                        f"{blank[:10].tolist()}{' ...' if blank.size > 10 else ''}; pins are NaN there")
     scale = selection = None
     selected = np.zeros(0, dtype=np.intp)
     if calibration is not None:

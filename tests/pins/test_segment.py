@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pins import PinTracker, displacement_from_rest, segment_taps, tap_signal
+from pins import PinTracker, converging_frames, displacement_from_rest, segment_taps, tap_signal
 from tactip.synthetic import Contact
 from tests.pins.conftest import sensor
 
@@ -80,3 +80,24 @@ def test_taps_of_a_tracked_recording_cover_the_contacts():
 def test_arguments_checked(kwargs, name):
     with pytest.raises(ValueError, match=name):
         segment_taps(np.zeros(10), **kwargs)
+
+
+def test_signal_equals_nanpercentile_with_lost_pins(rng):
+    displacements = rng.normal(size=(40, 25, 2))
+    displacements[rng.random((40, 25)) < 0.3] = np.nan
+    displacements[7] = np.nan  # a blank frame
+    magnitude = np.hypot(displacements[..., 0], displacements[..., 1])
+    with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
+        expected = np.nan_to_num(np.nanpercentile(magnitude, 75, axis=1))
+    assert np.allclose(tap_signal(displacements, percentile=75), expected, atol=1e-12)
+
+
+def test_converging_frames_tell_a_pressed_reference():
+    s = sensor(331)
+    rest = s.rest_centres
+    pressed = s.pin_centres(Contact(indentation_mm=4.0))[0]
+    frames = np.stack([rest, pressed, rest, pressed, rest])
+    # From the true rest frame the pins spread: nothing converges.
+    assert converging_frames(displacement_from_rest(frames, rest), rest).size == 0
+    # From the pressed frame, the frames at rest show the pins drawn together.
+    assert converging_frames(displacement_from_rest(frames, pressed), pressed).tolist() == [0, 2, 4]

@@ -14,10 +14,12 @@ from pins import NoSensorError, PinsError
 from tactip.cli import main
 from tactip.errors import SourceError
 from tactip.replay import FORMAT, replay_video
+from tactip.synthetic import Contact, SyntheticTacTip
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SAMPLE = ROOT / "samples" / "synthetic_tap.mp4"
 TRUTH = ROOT / "samples" / "synthetic_tap_truth.npz"
+TRUE_MM_PER_PX = SyntheticTacTip(pins=331).mm_per_px  # the sample's sensor (samples/make_samples.py)
 
 
 @functools.lru_cache(maxsize=None)
@@ -41,6 +43,12 @@ def test_positions_match_ground_truth(replayed):
         displacements = h5["displacements"][:]
         timestamps = h5["timestamps"][:]
         assert h5["positions"].dtype == np.float32 and positions.shape == (86, 331, 2)
+        lost, retired = h5["lost"][:], h5["retired"][:]
+        assert lost.dtype == bool and lost.shape == (86, 331) and retired.shape == (86, 331)
+        assert np.array_equal(h5["lost_count"][:], lost.sum(axis=1))
+        assert np.array_equal(h5["retired_count"][:], retired.sum(axis=1))
+        assert np.array_equal(lost, np.isnan(positions[:, :, 0]))
+        assert h5["blank"].shape == (86,) and not h5["blank"][:].any() and h5["tracked"][:].all()
     identity = cKDTree(truth["centres"][0]).query(positions[0])[1]
     assert len(set(identity.tolist())) == 331
     error = positions - truth["centres"][:, identity]
@@ -74,6 +82,10 @@ def test_taps_found_and_featured(replayed):
     assert attrs["format"] == FORMAT and attrs["frame_rate"] == pytest.approx(20.0)
     assert json.loads(attrs["detection_params"])["block_size_px"] > 0
     assert attrs["mm_per_px"] == pytest.approx(result.mm_per_px)
+    # The scale from the pin pitch of the 331 pins detected on a 40 mm pad: the renderer's within 5 %.
+    scale = json.loads(attrs["scale"])
+    assert scale["mm_per_px"] == pytest.approx(TRUE_MM_PER_PX, rel=0.05) and "331 pins" in scale["source"]
+    assert json.loads(attrs["warnings"]) == [] and result.warnings == []
     assert str(SAMPLE) == attrs["video"] and list(attrs["frame_size"]) == [640, 480]
 
 
@@ -86,6 +98,7 @@ def test_annotated_video_and_summary(replayed):
     assert ok and image.shape == (480, 640, 3) and frames == 86
     text = result.summary()
     assert "86 frames" in text and "331 tracked" in text and "Taps: 3" in text and str(out) in text
+    assert "Lost pins per frame: median 0, max 0 of 331" in text and "mm/px (pin pitch" in text
     assert not list(out.parent.glob(".*part*"))
 
 
@@ -145,3 +158,94 @@ def test_cli_replay(tmp_path, capsys):
     assert main(["replay", str(SAMPLE), "--out", str(tmp_path / "b.h5"), "--rest-frame", "999", "--quiet"]) == 1
     error = capsys.readouterr().err
     assert error.startswith("tactip replay: error:") and error.count("\n") == 1 and "Traceback" not in error
+
+
+def _tap_video(path, sensor, *, black_at=None):
+    """One 4 mm tap of ``sensor`` as an mp4v video (frame ``black_at`` all black); the true centres."""
+    width, height = sensor.image_size
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 20.0, (width, height), True)
+    truth = []
+    for k, frame in enumerate(sensor.tap(Contact(4.0, 2.0), frame_rate=20.0, rest_before_s=0.1, rest_after_s=0.2)):
+        image = frame.image if frame.image.ndim == 3 else cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
+        writer.write(np.zeros_like(image) if k == black_at else image)
+        truth.append(frame.centres)
+    writer.release()
+    return np.array(truth)
+
+
+def test_black_frame_is_marked_and_pins_recovered_after(tmp_path):
+    sensor = SyntheticTacTip(pins=331, seed=3)
+    video = tmp_path / "black.mp4"
+    truth = _tap_video(video, sensor, black_at=8)  # mid-rise: the pins move while the LEDs are off
+    result = replay_video(video, tmp_path / "r.h5", sensor="tactip-331")
+    with h5py.File(tmp_path / "r.h5") as h5:
+        positions, blank, lost_count = h5["positions"][:], h5["blank"][:], h5["lost_count"][:]
+        assert list(h5.attrs["blank_frames"]) == [8]
+    assert blank.tolist() == [k == 8 for k in range(len(truth))]
+    assert np.isnan(positions[8]).all() and lost_count[8] == 331
+    assert result.blank_frames == [8] and "1 blank frame(s)" in result.summary()
+    # Every pin back in the next frame, on its own true centre.
+    identity = cKDTree(truth[0]).query(positions[0])[1]
+    assert len(set(identity.tolist())) == 331
+    after = positions[9:] - truth[9:, identity]
+    assert np.isfinite(after).all() and np.sqrt(np.mean(np.sum(after**2, axis=2))) < 0.2
+    assert len(result.tap_bounds) == 1 and not result.invalid_taps
+
+
+@pytest.mark.parametrize("rest_frame, suspect", [(0, False), (17, True), (42, True)])
+def test_rest_frame_taken_during_a_tap_is_reported(tmp_path, rest_frame, suspect):
+    truth = np.load(TRUTH)
+    result = replay_video(SAMPLE, tmp_path / "r.h5", rest_frame=rest_frame)
+    warned = [w for w in result.warnings if "--rest-frame" in w]
+    assert bool(warned) == suspect
+    with h5py.File(tmp_path / "r.h5") as h5:  # written all the same, warning included
+        assert h5["positions"].shape == (86, 331, 2)
+        assert json.loads(h5.attrs["warnings"]) == result.warnings
+    if suspect:
+        assert f"rest frame {rest_frame} looks taken during a tap" in warned[0]
+        suggested = int(warned[0].rsplit("(frame ", 1)[1].split()[0])
+        assert truth["indentation_mm"][suggested] == 0.0
+
+
+def test_a_video_without_taps_is_still_written(tmp_path):
+    sensor = SyntheticTacTip(pins=127, seed=4)
+    video = tmp_path / "rest.mp4"
+    _write_video(video, [sensor.render().image for _ in range(6)])
+    result = replay_video(video, tmp_path / "r.h5")
+    with h5py.File(tmp_path / "r.h5") as h5:
+        assert h5["positions"].shape == (6, 127, 2) and h5["tap_bounds"].shape == (0, 2) and "taps" not in h5
+        assert len(h5["selected_pins"]) == 40 and h5["timestamps"].shape == (6,)
+    assert result.tap_bounds == [] and any("no taps" in w for w in result.warnings)
+
+
+def test_a_pad_without_room_gets_closer_pins_not_an_error(tmp_path):
+    # 100 pins on a 20 mm pad (pitch 2.3 mm): 40 pins cannot be 4 mm apart.
+    sensor = SyntheticTacTip(pins=100, pad_diameter_mm=20.0, seed=5)
+    video = tmp_path / "small.mp4"
+    _tap_video(video, sensor)
+    result = replay_video(video, tmp_path / "r.h5", pins_on_pad=100, pad_diameter_mm=20.0)
+    assert result.mm_per_px == pytest.approx(sensor.mm_per_px, rel=0.05)
+    assert result.selection.n_pins == 40 and 2.0 < result.selection.separation_mm < 4.0
+    assert any("cannot be 4 mm apart" in w for w in result.warnings)
+    with h5py.File(tmp_path / "r.h5") as h5:
+        selected = h5["selected_pins"]
+        assert len(selected) == 40 and selected.attrs["separation_mm"] == pytest.approx(result.selection.separation_mm)
+        assert h5["taps"].shape == (1, 40, 80)
+    assert "40 pins at least" in result.summary() and "(4 mm asked)" in result.summary()
+
+
+def test_cli_sensor_and_scale_options(tmp_path, capsys):
+    out = tmp_path / "s.h5"
+    assert main(["replay", str(SAMPLE), "--out", str(out), "--sensor", "tactip-331", "--pins", "12"]) == 0
+    printed = capsys.readouterr().out
+    assert "tactip-331: 331 pins on a 40 mm pad" in printed and "Lost pins per frame" in printed
+    with h5py.File(out) as h5:
+        assert json.loads(h5.attrs["scale"])["sensor"]["name"] == "tactip-331" and len(h5["selected_pins"]) == 12
+    assert main(["replay", str(SAMPLE), "--out", str(out), "--mm-per-px", "0.2", "--quiet"]) == 0
+    with h5py.File(out) as h5:
+        assert h5.attrs["mm_per_px"] == 0.2
+    for bad in (["--mm-per-px", "inf"], ["--sensor", "nope"], ["--pins-on-pad", "3"]):
+        with pytest.raises(SystemExit):
+            main(["replay", str(SAMPLE), "--out", str(tmp_path / "x.h5"), *bad])
+        assert bad[0] in capsys.readouterr().err
+    assert not (tmp_path / "x.h5").exists()

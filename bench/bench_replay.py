@@ -1,0 +1,111 @@
+"""Replay against decoding alone, side by side on one real-like video (issue 8, outcome 4: ratio <= 2).
+
+Writes a real-like video to a temporary folder: a synthetic TacTip preset (default
+``rim-ring-331``: a black rim ring with LED glare on it, rim pins sliding behind it and back as the
+pad spreads) tapping a 2 mm gap at 3-5 mm indentation and a few offsets, rendered with sensor
+noise and written through ``cv2.VideoWriter`` as MPEG-4 part 2 (mp4v), as a camera recording would
+be. Then, alternating within each repeat so that machine load falls on both alike:
+
+- decode:  every frame read through the project's video source (`tactip.sources.open_source`, grey,
+           as replay reads them) and nothing else;
+- replay:  `tactip.replay.replay_video` on the same file (no --annotate, no progress bar): decode
+           on a thread, pin detection on the rest frame, tracking, displacements, taps, features
+           and the HDF5 file;
+- tracker: `pins.PinTracker.update` alone over the decoded frames (what replay cannot make faster:
+           helper T's); decode + tracker is what replay would cost without overlapping the two.
+
+Prints seconds, ms/frame, and the ratios replay / decode (the bar) and tracker / decode, from
+the best of the repeats (the run least disturbed by other processes).
+
+Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import tempfile
+import time
+
+import cv2
+import numpy as np
+
+from pins import PinTracker, detect_pins, find_sensor_disc
+from tactip.replay import replay_video
+from tactip.sources import open_source
+from tactip.synthetic import Contact, SyntheticTacTip
+
+
+def write_video(path: pathlib.Path, preset: str, taps: int, *, frame_rate: float = 20.0) -> int:
+    """A tap sequence of `preset` as an mp4v video at `path`; returns the number of frames."""
+    sensor = SyntheticTacTip.from_preset(preset, seed=1)
+    rng = np.random.default_rng(0)
+    width, height = sensor.image_size
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), frame_rate, (width, height), True)
+    if not writer.isOpened():
+        raise SystemExit("no MPEG-4 encoder in this OpenCV build")
+    frames = 0
+    try:
+        for _ in range(taps):
+            contact = Contact(indentation_mm=float(rng.uniform(3.0, 5.0)), gap_width_mm=2.0,
+                              gap_offset_mm=float(rng.uniform(-2.0, 2.0)))
+            for frame in sensor.tap(contact, frame_rate=frame_rate, rest_before_s=0.2, rest_after_s=0.2):
+                image = frame.image if frame.image.ndim == 3 else cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
+                writer.write(image)
+                frames += 1
+    finally:
+        writer.release()
+    return frames
+
+
+def decode(path: pathlib.Path) -> list:
+    """Every frame of the video, grey, through the project's source."""
+    with open_source(path, grey=True) as source:
+        return [frame.image for frame in source]
+
+
+def track(images: list) -> None:
+    """`PinTracker.update` over the frames from the first (pins detected there, not timed)."""
+    disc = find_sensor_disc(images[0])
+    tracker = PinTracker(disc=disc)
+    tracker.start(images[0], detect_pins(images[0], disc=disc))
+    start = time.perf_counter()
+    for image in images[1:]:
+        tracker.update(image)
+    return time.perf_counter() - start
+
+
+def main() -> None:
+    """Write the video, time decode / replay / tracker side by side, print the figures."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--preset", default="rim-ring-331")
+    parser.add_argument("--taps", type=int, default=8)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as folder:
+        video = pathlib.Path(folder) / "taps.mp4"
+        frames = write_video(video, args.preset, args.taps)
+        times: dict[str, list[float]] = {"decode": [], "replay": [], "tracker": []}
+        for repeat in range(args.repeats):
+            start = time.perf_counter()
+            images = decode(video)
+            times["decode"].append(time.perf_counter() - start)
+            start = time.perf_counter()
+            result = replay_video(video, pathlib.Path(folder) / f"replay{repeat}.h5", sensor=args.preset)
+            times["replay"].append(time.perf_counter() - start)
+            times["tracker"].append(track(images))
+        best = {name: min(values) for name, values in times.items()}
+    width, height = SyntheticTacTip.from_preset(args.preset).image_size
+    print(f"{args.preset}: {frames} frames {width}x{height} mp4v, {result.pins} pins; "
+          f"lost per frame median {np.median(result.lost_per_frame):g}, max {result.lost_per_frame.max()}; "
+          f"{len(result.tap_bounds)} taps; best of {args.repeats}")
+    print(f"{'':10s}{'s':>8s}{'ms/frame':>10s}{'/ decode':>10s}")
+    for name in ("decode", "replay", "tracker"):
+        print(f"{name:10s}{best[name]:8.3f}{best[name] / frames * 1e3:10.2f}{best[name] / best['decode']:10.2f}")
+    print(f"replay / decode = {best['replay'] / best['decode']:.2f} (bar <= 2); tracker / decode = "
+          f"{best['tracker'] / best['decode']:.2f}; decode + tracker = "
+          f"{(best['decode'] + best['tracker']) / best['decode']:.2f} x decode")
+
+
+if __name__ == "__main__":
+    main()
