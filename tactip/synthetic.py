@@ -86,8 +86,8 @@ _PIN_SPACING_FRACTION = 0.3  # pin radius / pin spacing at the apex, both in px 
 _LAYOUTS = ("auto", "radial")
 _SKIN_TINTS = (None, "brown")
 _TEXTURE_POLAR_DEG = 84.0  # skin texture is drawn out to this polar angle (inside the casing edge)
-_SHADOW_OFFSET = 2.2  # pin shadows: centre this many pin radii from the tip, towards the pad axis
-_SHADOW_SIGMA = 0.7  # pin shadows: Gaussian sigma in pin radii
+_SHADOW_OFFSET = 2.5  # pin shadows: centre this many pin radii from the tip, towards the pad axis
+_SHADOW_SIGMA = 0.6  # pin shadows: Gaussian sigma in pin radii
 
 
 @dataclass(frozen=True)
@@ -380,7 +380,7 @@ class SyntheticTacTip:
             on_skin = np.hypot(xx - self._c[0], yy - self._c[1]) < disc_px
             spacing_px = centre_spacing_px
             background += (0.6 * self.skin_texture * on_skin * _render.mottling(scene_rng, self.image_size,
-                                                                               2.5 * spacing_px))
+                                                                               5.0 * spacing_px))
         if self.dark_pins:  # dark markers on a light membrane: invert the lit scene, keep the glare
             background = _DARK_INVERSION - background
         self._static = background + glare
@@ -426,22 +426,22 @@ class SyntheticTacTip:
 
     def _skin_spots(self, rng: np.random.Generator):
         """Material points of the skin texture between the pins: x, y (mm), sigma (px), amplitude (grey)."""
-        n_high, n_speck = int(0.8 * self._n), 2 * self._n
+        n_high, n_speck = self._n, 2 * self._n
         count = 4 * (n_high + n_speck)
         cos_polar = rng.uniform(np.cos(np.deg2rad(_TEXTURE_POLAR_DEG)), 1.0, count)  # uniform over the cap
         azimuth = rng.uniform(0.0, 2 * np.pi, count)
         sin_polar = np.sqrt(1.0 - cos_polar ** 2)
         x, y = self._radius * sin_polar * np.cos(azimuth), self._radius * sin_polar * np.sin(azimuth)
         highlight = np.arange(count) % (n_high + n_speck) < n_high
-        sigma = np.where(highlight, rng.uniform(0.5, 1.0, count) * self.pin_radius_px, rng.uniform(0.5, 0.9, count))
+        sigma = np.where(highlight, rng.uniform(0.6, 1.1, count) * self.pin_radius_px, rng.uniform(0.5, 0.9, count))
         sign = np.where(highlight | (rng.uniform(size=count) < 0.4), 1.0, -1.0)
-        amplitude = sign * self.skin_texture * np.where(highlight, rng.uniform(1.0, 2.5, count),
+        amplitude = sign * self.skin_texture * np.where(highlight, rng.uniform(1.5, 3.5, count),
                                                         rng.uniform(1.5, 3.0, count))
         from scipy.spatial import cKDTree
 
         seen = self._skin_image(x, y, Contact())
         gap, _ = cKDTree(self.rest_centres).query(seen)
-        keep = gap >= self.pin_radius_px + 2.0 * sigma + 1.0  # texture lies between the pins
+        keep = gap >= self.pin_radius_px + 3.0 * sigma + 1.0  # texture lies between the pins
         keep &= np.cumsum(keep & highlight) <= n_high
         keep &= np.cumsum(keep & ~highlight) <= n_speck
         return x[keep], y[keep], sigma[keep], amplitude[keep]
@@ -644,14 +644,14 @@ PRESETS = MappingProxyType({
     "tactip-127": MappingProxyType({"pins": 127}),
     "tactip-532": MappingProxyType({"pins": 532}),
     "dark-331": MappingProxyType({"pins": 331, "dark_pins": True}),
-    "rim-ring-331": MappingProxyType({"pins": 331, "glare": False, "rim_polar_deg": 77.0, "ring_glare": 16}),
+    "rim-ring-331": MappingProxyType({"pins": 331, "glare": False, "rim_polar_deg": 77.0, "ring_glare": 18}),
     "brown-127": MappingProxyType({"pins": 127, "colour": True, "skin_tint": "brown", "membrane_level": 70.0,
-                                   "pin_level": 150.0, "skin_texture": 10.0, "pin_shadows": 18.0}),
+                                   "pin_level": 140.0, "skin_texture": 12.0, "pin_shadows": 22.0}),
     "radial-120": MappingProxyType({"pins": 120, "layout": "radial", "pad_fraction": 1 / 3, "pin_fraction": 0.25,
                                     "surround_level": 245.0, "glare_gain": 1.6, "veil": 40.0, "noise_sigma": 5.0,
                                     "frame_rate": 120.0}),
     "small-pad-100": MappingProxyType({"pins": 100, "image_size": (320, 240), "pad_fraction": 0.25,
-                                       "surround_level": 235.0}),
+                                       "pin_fraction": 0.22, "surround_level": 235.0}),
     "dense-1000": MappingProxyType({"pins": 1000, "image_size": (1280, 720), "pad_fraction": 0.9}),
 })
 

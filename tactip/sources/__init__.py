@@ -23,7 +23,7 @@ __all__ = ["Frame", "FrameSource", "FrameSourceBase", "CameraSource", "VideoSour
            "SyntheticSource", "ThreadedReader", "open_source", "DEFAULT_TAPS", "IMAGE_SUFFIXES"]
 
 _CHOICES = ("a camera index (0) or /dev/videoN, a video file, an image file or folder, "
-            "or 'synthetic' / 'synthetic:PINS'")
+            "or 'synthetic' / 'synthetic:PINS' / 'synthetic:PRESET'")
 
 
 def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
@@ -33,7 +33,8 @@ def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
     ----------
     spec : str, int or path
         - an int, a digit string or ``/dev/videoN``: a live camera (`CameraSource`);
-        - ``"synthetic"`` or ``"synthetic:331"``: the synthetic TacTip tapping (`SyntheticSource`);
+        - ``"synthetic"``, ``"synthetic:331"`` or ``"synthetic:rim-ring-331"`` (a preset of
+          `tactip.synthetic.PRESETS`): the synthetic TacTip tapping (`SyntheticSource`);
         - a directory or an image file: `ImageFolderSource`;
         - any other existing file: a video (`VideoSource`).
     **options
@@ -57,10 +58,12 @@ def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
         return CameraSource(int(text), **options)
     if re.fullmatch(r"/dev/video\d+", text):
         return CameraSource(text, **options)
-    match = re.fullmatch(r"synthetic(?::(\d+))?", text)
+    match = re.fullmatch(r"synthetic(?::([\w.-]+))?", text)
     if match:
-        if match.group(1):
+        if match.group(1) and match.group(1).isdigit():
             options.setdefault("pins", int(match.group(1)))
+        elif match.group(1):
+            options.setdefault("preset", match.group(1))
         return SyntheticSource(**options)
     path = pathlib.Path(text)
     if path.is_dir() or (path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES):

@@ -26,13 +26,14 @@ class SyntheticSource(FrameSourceBase):
     Parameters
     ----------
     sensor : SyntheticTacTip or None
-        The renderer; None builds one from ``pins`` and ``seed`` (other renderer options via ``sensor``).
+        The renderer; None builds one from ``preset`` or ``pins``, and ``seed`` (other renderer options
+        via ``sensor``).
     taps : sequence of Contact
         Contact at the deepest point of each tap.
     pins : int
         Pin count when ``sensor`` is None.
-    frame_rate : float
-        Frames per second.
+    frame_rate : float or None
+        Frames per second; None: the sensor's own (20, or e.g. 120 for the "radial-120" preset).
     rise_s, plateau_s, release_s : float
         Phases of every tap, s (paper 002, IV-A: about 250 ms each).
     rest_s : float
@@ -41,6 +42,8 @@ class SyntheticSource(FrameSourceBase):
         Accepted for a uniform interface (frames are grey unless the sensor renders colour).
     seed : int
         Seed when ``sensor`` is None.
+    preset : str or None
+        A `tactip.synthetic.PRESETS` name (e.g. "rim-ring-331") when ``sensor`` is None; it wins over ``pins``.
 
     Examples
     --------
@@ -51,9 +54,17 @@ class SyntheticSource(FrameSourceBase):
     """
 
     def __init__(self, sensor: SyntheticTacTip | None = None, *, taps: Sequence[Contact] = DEFAULT_TAPS,
-                 pins: int = 331, frame_rate: float = 20.0, rise_s: float = 0.25, plateau_s: float = 0.25,
-                 release_s: float = 0.25, rest_s: float = 0.5, grey: bool = False, seed: int = 0):
+                 pins: int = 331, frame_rate: float | None = None, rise_s: float = 0.25, plateau_s: float = 0.25,
+                 release_s: float = 0.25, rest_s: float = 0.5, grey: bool = False, seed: int = 0,
+                 preset: str | None = None):
         super().__init__(grey=grey)
+        if sensor is None and preset is not None:
+            try:
+                sensor = SyntheticTacTip.from_preset(preset, seed=seed)
+            except ValueError as exc:
+                raise SourceError(str(exc)) from None
+        self.sensor = sensor if sensor is not None else SyntheticTacTip(pins=pins, seed=seed)
+        frame_rate = self.sensor.frame_rate if frame_rate is None else frame_rate
         if not frame_rate > 0:
             raise SourceError(f"frame_rate must be > 0, got {frame_rate!r}")
         if not rest_s >= 0:
@@ -62,8 +73,7 @@ class SyntheticSource(FrameSourceBase):
             tap_profile(0.0, rise_s=rise_s, plateau_s=plateau_s, release_s=release_s)
         except ValueError as exc:
             raise SourceError(str(exc)) from None
-        self.sensor = sensor if sensor is not None else SyntheticTacTip(pins=pins, seed=seed)
-        self.name = f"synthetic:{self.sensor.n_pins}"
+        self.name = f"synthetic:{self.sensor.preset or self.sensor.n_pins}"
         self.taps = tuple(taps)
         self.frame_rate = float(frame_rate)
         self.frame_size = tuple(self.sensor.image_size)
