@@ -122,7 +122,8 @@ def collection_plan(gaps: Sequence, depths: Sequence[float], *, repeats: int = 1
 def collect_datasets(tap: Callable[[PlannedTap], np.ndarray] | None, plan: dict[str, list[PlannedTap]], out_dir: str | Path,
                      *, samples: int, dims: int, dim_names: Sequence[str] = (), sensor: dict | None = None,
                      front_end: str = "tactip", progress: bool = True,
-                     tap_many: Callable[[Iterable[PlannedTap]], Iterable[np.ndarray]] | None = None) -> dict[str, Path]:
+                     tap_many: Callable[[Iterable[PlannedTap]], Iterable[np.ndarray]] | None = None,
+                     protocol: dict | None = None) -> dict[str, Path]:
     """Take the planned taps and append each to ``out_dir/<set>.h5``, resuming stored ones.
 
     Parameters
@@ -146,6 +147,9 @@ def collect_datasets(tap: Callable[[PlannedTap], np.ndarray] | None, plan: dict[
     tap_many : callable(iterable of PlannedTap) -> iterable of features, optional
         An ordered, lazy map over taps (e.g. the simulated station rendering on several cores);
         ``map(tap, ...)`` when omitted.
+    protocol : dict, optional
+        The settings the plan was made from (seed, depths, repeats, ...), stored in the datasets: a
+        rerun with other settings is refused, naming the setting, rather than mixing two collections.
 
     Returns
     -------
@@ -165,10 +169,11 @@ def collect_datasets(tap: Callable[[PlannedTap], np.ndarray] | None, plan: dict[
             path = out_dir / f"{set_name}.h5"
             writers[set_name] = DatasetWriter(path, samples=samples, dims=dims, front_end=front_end,
                                               location_unit="mm", identity_unit="mm", dim_names=tuple(dim_names),
-                                              sensor=sensor or {})
+                                              sensor=sensor or {}, protocol=protocol)
             if writers[set_name].count > len(taps):
                 raise CalibrationError(f"{path} holds {writers[set_name].count} taps but the plan has {len(taps)}: "
                                        f"it belongs to another protocol (use another --out)")
+            _check_stored_labels(path, writers[set_name].labels(), taps)
             paths[set_name] = path
         total = sum(len(taps) for taps in plan.values())
         done = sum(w.count for w in writers.values())
@@ -185,3 +190,20 @@ def collect_datasets(tap: Callable[[PlannedTap], np.ndarray] | None, plan: dict[
         for writer in writers.values():
             writer.close()
     return paths
+
+
+def _check_stored_labels(path: Path, labels: dict, taps: Sequence[PlannedTap]) -> None:
+    """The taps already stored must be the plan's first taps (depth, width, lateral offset), else refuse."""
+    n = len(labels["location"])
+    if n == 0:
+        return
+    planned = {"location": np.array([t.depth_mm for t in taps[:n]]), "identity": np.array([t.width_mm for t in taps[:n]]),
+               "lateral": np.array([t.lateral_mm for t in taps[:n]])}
+    names = {"location": "depth (mm)", "identity": "width (mm)", "lateral": "lateral offset (mm)"}
+    for key, stored in labels.items():
+        bad = np.flatnonzero(~np.isclose(stored, planned[key], rtol=0, atol=1e-9))
+        if bad.size:
+            k = int(bad[0])
+            raise CalibrationError(f"{path}: stored tap {k} has {names[key]} {stored[k]:g} but the plan has "
+                                   f"{planned[key][k]:g}: the file belongs to another protocol (seed, gaps or "
+                                   f"depths changed); restore the settings or collect into another folder")

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._files import atomic_path, write_error
 from .errors import DatasetError
 
 __all__ = ["SCHEMA", "FRONT_ENDS", "Dataset", "save_dataset", "load_dataset", "DatasetWriter"]
@@ -46,6 +47,9 @@ __all__ = ["SCHEMA", "FRONT_ENDS", "Dataset", "save_dataset", "load_dataset", "D
 SCHEMA = "tactip-dataset/1"
 FRONT_ENDS = ("tactip", "taxel")
 _ARRAYS = ("taps", "location", "identity")
+#: Attribute holding how many taps are complete: written (and flushed) after each tap's data, so a
+#: tap whose data never reached the disk (full disk, crash) is not counted, and never read back.
+COUNT_ATTRIBUTE = "complete_taps"
 
 
 @dataclass(frozen=True)
@@ -162,8 +166,8 @@ class Dataset:
                 f"location {span(self.location, self.location_unit)}; identity {span(self.identity, self.identity_unit)}")
 
 
-def save_dataset(path, dataset: Dataset) -> None:
-    """Write a dataset to an HDF5 file atomically (temporary file, then rename).
+def save_dataset(path, dataset: Dataset, *, inputs=()) -> None:
+    """Write a dataset to an HDF5 file atomically (temporary file, fsync, then rename).
 
     Parameters
     ----------
@@ -171,14 +175,22 @@ def save_dataset(path, dataset: Dataset) -> None:
         Destination file; replaced if it exists.
     dataset : Dataset
         The taps and their labels.
+    inputs : iterable of path
+        Files the caller read: ``path`` must not be one of them.
+
+    Raises
+    ------
+    OSError
+        Disk full or permission denied (named so); ``path`` keeps its old content.
+    FileExistsError
+        ``path`` is one of ``inputs``.
     """
     import h5py
 
     if not isinstance(dataset, Dataset):
         raise DatasetError(f"dataset must be a Dataset, got {type(dataset).__name__}")
     path = pathlib.Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
+    with atomic_path(path, inputs=inputs) as tmp:
         with h5py.File(tmp, "w") as f:
             _write_attributes(f, dataset.front_end, dataset.location_unit, dataset.identity_unit,
                               dataset.dim_names, dataset.sensor)
@@ -188,9 +200,7 @@ def save_dataset(path, dataset: Dataset) -> None:
                 value = getattr(dataset, name)
                 if value is not None:
                     f.create_dataset(name, data=value, chunks=(1024,), maxshape=(None,))
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+            f.attrs[COUNT_ATTRIBUTE] = len(dataset)
 
 
 def load_dataset(path) -> Dataset:
@@ -211,16 +221,16 @@ def load_dataset(path) -> Dataset:
         The file is not HDF5, has another schema, misses a field, or holds mismatched shapes or NaNs.
     FileNotFoundError
         No such file.
-    """
-    import h5py
+    PermissionError
+        The file cannot be read.
 
+    Notes
+    -----
+    Only the complete taps are read: those counted by the ``complete_taps`` attribute that
+    `DatasetWriter` updates after each tap's data reached the disk.
+    """
     path = pathlib.Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"no such dataset file: {path}")
-    try:
-        f = h5py.File(path, "r")
-    except OSError:
-        raise DatasetError(f"{path} is not an HDF5 file") from None
+    f = _open_hdf5(path, "r")
     with f:
         _check_schema(f, path)
         missing = [name for name in _ARRAYS if name not in f]
@@ -228,10 +238,14 @@ def load_dataset(path) -> Dataset:
                     if name not in f.attrs]
         if missing:
             raise DatasetError(f"{path} misses {', '.join(missing)} (required by {SCHEMA})")
+        _check_arrays(f, path)
         lengths = {name: f[name].shape[0] for name in (*_ARRAYS, "lateral") if name in f}
-        if len(set(lengths.values())) > 1:
+        complete = _complete_count(f)
+        short = len(set(lengths.values())) > 1 if complete is None else min(lengths.values()) < complete
+        if short:
             raise DatasetError(f"{path} has mismatched lengths: " + ", ".join(f"{k} {v}" for k, v in lengths.items()))
-        arrays = {name: f[name][()] for name in (*_ARRAYS, "lateral") if name in f}
+        n = min(lengths.values()) if complete is None else min(complete, *lengths.values())
+        arrays = {name: f[name][:n] for name in (*_ARRAYS, "lateral") if name in f}
         attrs = _read_attributes(f, path)
     try:
         return Dataset(arrays["taps"], arrays["location"], arrays["identity"], arrays.get("lateral"), **attrs)
@@ -239,13 +253,67 @@ def load_dataset(path) -> Dataset:
         raise DatasetError(f"{path}: {exc}") from None
 
 
+def _open_hdf5(path: pathlib.Path, mode: str, **kwargs):
+    """``h5py.File(path, mode)`` with errors that say what is wrong (missing, permission, not HDF5)."""
+    import h5py
+
+    if not path.exists():
+        raise FileNotFoundError(f"no such dataset file: {path}")
+    if path.is_dir():
+        raise DatasetError(f"{path} is a folder, not a dataset file")
+    wanted = os.R_OK | (os.W_OK if mode != "r" else 0)
+    if not os.access(path, wanted):
+        doing = "reading" if mode == "r" else "writing"
+        raise PermissionError(13, f"permission denied {doing} {str(path)!r}")
+    try:
+        return h5py.File(path, mode, **kwargs)
+    except OSError as exc:
+        text = str(exc).lower()
+        if "permission denied" in text or "errno = 13" in text:
+            raise PermissionError(13, f"permission denied opening {str(path)!r}") from None
+        if "unable to lock" in text or "resource temporarily unavailable" in text:
+            raise DatasetError(f"{path} is open in another process (collect running twice?)") from None
+        raise DatasetError(f"{path} is not an HDF5 file") from None
+
+
+def _check_arrays(f, path) -> None:
+    """Each array of the schema holds numbers (not bytes, strings or records) and has the right rank."""
+    for name, rank in (("taps", 3), ("location", 1), ("identity", 1), ("lateral", 1)):
+        if name not in f:
+            continue
+        node = f[name]
+        if not hasattr(node, "dtype"):
+            raise DatasetError(f"{path}: {name!r} is a group, not a dataset of numbers")
+        if node.dtype.kind not in "fiu":
+            raise DatasetError(f"{path}: dataset {name!r} holds {node.dtype} values, not numbers "
+                               f"(required by {SCHEMA})")
+        if node.ndim != rank:
+            raise DatasetError(f"{path}: dataset {name!r} has {node.ndim} dimensions, not {rank}")
+
+
+def _complete_count(f) -> int | None:
+    """The complete-tap count attribute, or None for files written before it existed."""
+    if COUNT_ATTRIBUTE not in f.attrs:
+        return None
+    value = f.attrs[COUNT_ATTRIBUTE]
+    try:
+        count = int(value)
+    except (TypeError, ValueError):
+        raise DatasetError(f"{f.filename}: attribute {COUNT_ATTRIBUTE} is {value!r}, not a count") from None
+    if count < 0:
+        raise DatasetError(f"{f.filename}: attribute {COUNT_ATTRIBUTE} is negative ({count})")
+    return count
+
+
 class DatasetWriter:
     """Append taps one at a time to a dataset file, resuming it if it exists.
 
-    Each `append` resizes the chunked datasets and flushes the file, so a crash loses at most
-    the tap in progress. Opening an existing file checks that its schema, tap shape, front end,
-    units, dim names and sensor description match; taps stored by an interrupted append
-    (some arrays one longer than the others) are dropped.
+    Each `append` writes the tap straight to the file (no chunk cache, one chunk per tap, so a
+    write error surfaces at once), flushes it, and only then counts it in the ``complete_taps``
+    attribute (flushed again): a tap whose data did not reach the disk (disk full, crash, Ctrl-C)
+    is never counted, and a resumed file keeps only the counted taps. Opening an existing file
+    checks that its schema, tap shape, front end, units, dim names, sensor description and
+    protocol match.
 
     Parameters
     ----------
@@ -259,11 +327,16 @@ class DatasetWriter:
         One name per dimension; empty generates ``("dim00", ...)``.
     sensor : dict or None
         JSON-serialisable sensor description.
+    protocol : dict or None
+        JSON-serialisable description of the collection protocol (seed, depths, repeats, ...):
+        stored in a new file; a resumed file must hold the same (the message names the setting).
 
     Raises
     ------
     DatasetError
         The existing file does not match (the message names the field).
+    OSError
+        Disk full or permission denied, named so (the taps stored before stay intact).
 
     Examples
     --------
@@ -272,46 +345,49 @@ class DatasetWriter:
     """
 
     def __init__(self, path, *, samples: int, dims: int, front_end: str, location_unit: str = "mm",
-                 identity_unit: str = "mm", dim_names=(), sensor: dict | None = None):
+                 identity_unit: str = "mm", dim_names=(), sensor: dict | None = None, protocol: dict | None = None):
         import h5py
 
         # Validate every knob through the Dataset contract (an empty dataset of this shape).
         template = Dataset(np.zeros((0, int(samples), int(dims)), np.float32), np.zeros(0), np.zeros(0), None,
                            front_end, location_unit, identity_unit, tuple(dim_names), sensor or {})
+        try:
+            protocol_text = None if protocol is None else json.dumps(protocol, sort_keys=True)
+        except (TypeError, ValueError) as exc:
+            raise DatasetError(f"protocol must be a JSON-serialisable dict: {exc}") from None
         self.path = pathlib.Path(path)
         self._shape = (template.samples, template.dims)
-        if self.path.exists():
-            try:
-                self._file = h5py.File(self.path, "r+")
-            except OSError:
-                raise DatasetError(f"{self.path} is not an HDF5 file (or is open elsewhere)") from None
-            try:
-                self._check_resume(template)
-            except BaseException:
-                self._file.close()
-                raise
-        else:
+        self._file = None
+        self._count = 0
+        if not self.path.exists():
             # Made under a temporary name and renamed: a crash here leaves no half-made file to refuse.
-            tmp = self.path.with_name(f".{self.path.name}.tmp-{os.getpid()}")
-            try:
+            with atomic_path(self.path) as tmp:
                 with h5py.File(tmp, "w") as f:
                     _write_attributes(f, template.front_end, template.location_unit, template.identity_unit,
                                       template.dim_names, template.sensor)
-                    f.create_dataset("taps", shape=(0, *self._shape), dtype=np.float32,
-                                     chunks=_taps_chunks(*self._shape), maxshape=(None, *self._shape))
+                    if protocol_text is not None:
+                        f.attrs["protocol"] = protocol_text
+                    f.create_dataset("taps", shape=(0, *self._shape), dtype=np.float32, chunks=(1, *self._shape),
+                                     maxshape=(None, *self._shape))
                     for name in ("location", "identity"):
                         f.create_dataset(name, shape=(0,), dtype=np.float64, chunks=(1024,), maxshape=(None,))
-                os.replace(tmp, self.path)
-            finally:
-                tmp.unlink(missing_ok=True)
-            self._file = h5py.File(self.path, "r+")
+                    f.attrs[COUNT_ATTRIBUTE] = 0
+        # No chunk cache: every write goes to the file at once, so its error is raised by that write.
+        self._file = _open_hdf5(self.path, "r+", rdcc_nbytes=0)
+        try:
+            self._check_resume(template, protocol)
+            self._arrays = {name: self._file[name] for name in (*_ARRAYS, "lateral") if name in self._file}
+        except BaseException:
+            self._file.close()
+            raise
 
-    def _check_resume(self, template: Dataset) -> None:
+    def _check_resume(self, template: Dataset, protocol: dict | None) -> None:
         f = self._file
         _check_schema(f, self.path)
         missing = [name for name in _ARRAYS if name not in f]
         if missing:
             raise DatasetError(f"{self.path} misses {', '.join(missing)} (required by {SCHEMA})")
+        _check_arrays(f, self.path)
         stored = _read_attributes(f, self.path)
         shape = f["taps"].shape[1:]
         if shape != self._shape:
@@ -319,19 +395,48 @@ class DatasetWriter:
         for name, value in stored.items():
             if value != getattr(template, name):
                 raise DatasetError(f"{self.path} has {name} {value!r}, not {getattr(template, name)!r}")
-        # An interrupted append may have grown some arrays and not others: keep the complete taps.
+        if protocol is not None and "protocol" in f.attrs:
+            try:
+                old = json.loads(_text(f.attrs["protocol"]))
+            except ValueError:
+                raise DatasetError(f"{self.path}: protocol attribute is not JSON") from None
+            new = json.loads(json.dumps(protocol, sort_keys=True))
+            differ = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
+            if differ:
+                k = differ[0]
+                raise DatasetError(f"{self.path} was collected with protocol {k} = {old.get(k)!r}, not "
+                                   f"{new.get(k)!r}: resuming would mix two collections (restore the setting, "
+                                   f"or collect into another folder)")
+        # An interrupted append may have grown some arrays and not others, or grown them without
+        # its data reaching the disk: keep the complete taps only.
         names = [name for name in (*_ARRAYS, "lateral") if name in f]
         count = min(f[name].shape[0] for name in names)
-        for name in names:
-            f[name].resize(count, axis=0)
+        complete = _complete_count(f)
+        if complete is not None:
+            count = min(count, complete)
+        try:
+            for name in names:
+                if f[name].shape[0] != count:
+                    f[name].resize(count, axis=0)
+            if complete is None or complete != count:
+                f.attrs[COUNT_ATTRIBUTE] = count
+            f.flush()
+        except OSError as exc:
+            raise write_error(exc, self.path) from None
+        self._count = int(count)
 
     @property
     def count(self) -> int:
-        """Number of taps already stored."""
-        return self._file["taps"].shape[0]
+        """Number of complete taps stored."""
+        return self._count
+
+    def labels(self) -> dict[str, np.ndarray]:
+        """The labels of the complete taps: ``location``, ``identity`` and (if stored) ``lateral``, (count,) each."""
+        return {name: self._arrays[name][:self._count] for name in ("location", "identity", "lateral")
+                if name in self._arrays}
 
     def append(self, tap, location: float, identity: float, lateral: float | None = None) -> None:
-        """Store one tap with its labels and flush it to disk.
+        """Store one tap with its labels, flush it to disk, then count it.
 
         Parameters
         ----------
@@ -346,7 +451,12 @@ class DatasetWriter:
         ------
         DatasetError
             Wrong tap shape, NaN or infinite values, or `lateral` given for some taps only.
+        OSError
+            Disk full or permission denied, named so. The tap is not counted and the writer is
+            closed; the taps before it stay intact and a rerun resumes after them.
         """
+        if self._file is None or not self._file.id.valid:
+            raise DatasetError(f"{self.path}: the writer is closed")
         tap = np.asarray(tap, dtype=np.float32)
         if tap.shape != self._shape:
             raise DatasetError(f"tap must have shape (samples, dims) {self._shape}, got {tap.shape}")
@@ -360,23 +470,40 @@ class DatasetWriter:
                 raise DatasetError(f"{name} must be finite, got {value}")
         f = self._file
         n = self.count
-        if lateral is not None and "lateral" not in f:
+        if lateral is not None and "lateral" not in self._arrays:
             if n:
                 raise DatasetError(f"lateral given for tap {n} but not for the {n} taps before it")
-            f.create_dataset("lateral", shape=(0,), dtype=np.float64, chunks=(1024,), maxshape=(None,))
-        elif lateral is None and "lateral" in f:
+        elif lateral is None and "lateral" in self._arrays:
             raise DatasetError(f"lateral missing for tap {n}; the file has lateral for every tap")
-        f["taps"].resize(n + 1, axis=0)
-        f["taps"][n] = tap
-        for name, value in labels.items():
-            f[name].resize(n + 1, axis=0)
-            f[name][n] = float(value)
-        f.flush()
+        try:
+            if lateral is not None and "lateral" not in self._arrays:
+                self._arrays["lateral"] = f.create_dataset("lateral", shape=(0,), dtype=np.float64, chunks=(1024,),
+                                                           maxshape=(None,))
+            arrays = self._arrays
+            arrays["taps"].resize(n + 1, axis=0)
+            arrays["taps"][n] = tap
+            for name, value in labels.items():
+                arrays[name].resize(n + 1, axis=0)
+                arrays[name][n] = float(value)
+            f.flush()
+            # P(tap n complete) only once its data is on the disk.
+            f.attrs[COUNT_ATTRIBUTE] = n + 1
+            f.flush()
+            self._count = n + 1
+        except OSError as exc:
+            error = write_error(exc, self.path)
+            self.close()
+            raise error from None
 
     def close(self) -> None:
-        """Flush and close the file (idempotent)."""
-        if self._file.id.valid:
+        """Flush and close the file (idempotent; a write error at close is named, the counted taps stay)."""
+        if self._file is None or not self._file.id.valid:
+            return
+        self._arrays = {}
+        try:
             self._file.close()
+        except OSError as exc:
+            raise write_error(exc, self.path) from None
 
     def __enter__(self) -> DatasetWriter:
         return self
@@ -385,7 +512,7 @@ class DatasetWriter:
         self.close()
 
     def __repr__(self) -> str:
-        count = self.count if self._file.id.valid else "closed"
+        count = self._count if self._file is not None and self._file.id.valid else "closed"
         return f"DatasetWriter({str(self.path)!r}, samples={self._shape[0]}, dims={self._shape[1]}, count={count})"
 
 
@@ -411,9 +538,12 @@ def _check_schema(f, path) -> None:
         raise DatasetError(f"{path} is not a {SCHEMA} file (schema {schema!r})")
 
 
+def _text(value) -> str:
+    return value.decode() if isinstance(value, bytes) else str(value)
+
+
 def _read_attributes(f, path) -> dict:
-    def text(value):
-        return value.decode() if isinstance(value, bytes) else str(value)
+    text = _text
 
     try:
         sensor = json.loads(text(f.attrs["sensor"]))

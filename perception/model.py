@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._files import atomic_path
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 
@@ -100,6 +101,29 @@ class HistogramModel:
         unknown = set(self.recommended) - set(RECOMMENDED_KEYS)
         if unknown:
             raise ModelError(f"unknown recommended settings {sorted(unknown)}; choose from {RECOMMENDED_KEYS}")
+        if not (isinstance(self.epsilon, (int, float, np.floating)) and np.isfinite(self.epsilon) and self.epsilon > 0):
+            raise ModelError(f"epsilon must be a finite number > 0, got {self.epsilon!r}")
+        self._check_recommended()
+
+    def _check_recommended(self) -> None:
+        """Each recommended setting is a number in its range, as a station file's key would be."""
+        lo, hi = float(self.location_edges[0]), float(self.location_edges[-1])
+        checks = {
+            "decision_threshold": (lambda v: 0.0 < v <= 1.0, "a number in (0, 1]"),
+            "fixation_location": (lambda v: lo - 1e-9 <= v <= hi + 1e-9,
+                                  f"a location inside the model's range {lo:g}..{hi:g} {self.location_unit}"),
+        }
+        for key, (inside, accepted) in checks.items():
+            if key not in self.recommended:
+                continue
+            value = self.recommended[key]
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not (number and np.isfinite(value) and inside(float(value))):
+                raise ModelError(f"recommended {key} must be {accepted}, got {value!r} (run 'tactip validate "
+                                 f"--sweep-fixation' again)")
+        policy = self.recommended.get("policy")
+        if policy is not None and policy not in ("active", "stationary", "random"):
+            raise ModelError(f"recommended policy must be one of active, stationary, random, got {policy!r}")
 
     def __repr__(self) -> str:
         return f"<HistogramModel {self.summary()}>"
@@ -321,8 +345,8 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
                              ("min_taps_per_class", min_taps_per_class, 1)):
         if int(value) != value or value < low:
             raise ValueError(f"{name} must be an integer >= {low}, got {value}")
-    if not epsilon > 0:
-        raise ValueError(f"epsilon must be > 0, got {epsilon}")
+    if not (np.isfinite(epsilon) and epsilon > 0):
+        raise ValueError(f"epsilon must be a finite number > 0, got {epsilon}")
     if len(dataset) == 0:
         raise DatasetError("dataset has no taps")
     lo, hi = float(dataset.location.min()), float(dataset.location.max())
@@ -360,19 +384,27 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
                                taps_per_class=taps_per_class.reshape(n_locations, len(identities)))
 
 
-def save_model(path, model: HistogramModel) -> None:
-    """Write a model to an HDF5 file of schema ``tactip-model/1`` atomically.
+def save_model(path, model: HistogramModel, *, inputs=()) -> None:
+    """Write a model to an HDF5 file of schema ``tactip-model/1`` atomically (temporary file, fsync, rename).
 
     Parameters
     ----------
     path : str or os.PathLike
     model : HistogramModel
+    inputs : iterable of path
+        Files the caller read (e.g. the training dataset): ``path`` must not be one of them.
+
+    Raises
+    ------
+    OSError
+        Disk full or permission denied (named so); ``path`` keeps its old content.
+    FileExistsError
+        ``path`` is one of ``inputs``.
     """
     import h5py
 
     path = pathlib.Path(path)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
+    with atomic_path(path, inputs=inputs) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["schema"] = MODEL_SCHEMA
             for name in ("log_probability", "bin_lower", "bin_width", "location_edges", "identities",
@@ -385,9 +417,6 @@ def save_model(path, model: HistogramModel) -> None:
             f.attrs["dim_names"] = list(model.dim_names)
             f.attrs["sensor"] = json.dumps(model.sensor, sort_keys=True)
             f.attrs["recommended"] = json.dumps(model.recommended, sort_keys=True)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def load_model(path) -> HistogramModel:
@@ -409,9 +438,15 @@ def load_model(path) -> HistogramModel:
     path = pathlib.Path(path)
     if not path.exists():
         raise FileNotFoundError(f"no such model file: {path}")
+    if path.is_dir():
+        raise ModelError(f"{path} is a folder, not a model file")
+    if not os.access(path, os.R_OK):
+        raise PermissionError(13, f"permission denied reading {str(path)!r}")
     try:
         f = h5py.File(path, "r")
-    except OSError:
+    except OSError as exc:
+        if "permission denied" in str(exc).lower():
+            raise PermissionError(13, f"permission denied reading {str(path)!r}") from None
         raise ModelError(f"{path} is not an HDF5 file") from None
     with f:
         schema = f.attrs.get("schema")
@@ -424,9 +459,43 @@ def load_model(path) -> HistogramModel:
         missing = [n for n in names if n not in f] + [n for n in attr_names if n not in f.attrs]
         if missing:
             raise ModelError(f"{path} misses {', '.join(missing)} (required by {MODEL_SCHEMA})")
+        for name in names:
+            if not hasattr(f[name], "dtype") or f[name].dtype.kind not in "fiu":
+                raise ModelError(f"{path}: {name!r} does not hold numbers")
         arrays = {name: f[name][()] for name in names}
         attrs = {name: str(f.attrs[name]) for name in ("front_end", "location_unit", "identity_unit")}
-        return HistogramModel(
-            **arrays, **attrs, samples=int(f.attrs["samples"]), epsilon=float(f.attrs["epsilon"]),
-            dim_names=tuple(str(n) for n in np.atleast_1d(f.attrs["dim_names"])),
-            sensor=json.loads(f.attrs["sensor"]), recommended=json.loads(f.attrs["recommended"]))
+        try:
+            settings = dict(samples=int(f.attrs["samples"]), epsilon=float(f.attrs["epsilon"]),
+                            sensor=json.loads(f.attrs["sensor"]), recommended=json.loads(f.attrs["recommended"]))
+        except (TypeError, ValueError) as exc:
+            raise ModelError(f"{path}: unreadable settings ({exc})") from None
+        dim_names = tuple(str(n) for n in np.atleast_1d(f.attrs["dim_names"]))
+    _check_model_arrays(path, arrays)
+    if not isinstance(settings["recommended"], dict):
+        raise ModelError(f"{path}: recommended settings are not a table")
+    try:
+        return HistogramModel(**arrays, **attrs, dim_names=dim_names, **settings)
+    except ModelError as exc:
+        raise ModelError(f"{path}: {exc}") from None
+
+
+def _check_model_arrays(path, arrays: dict) -> None:
+    """Refuse a model whose numbers cannot be right (NaN or infinite likelihoods, empty or reversed grids)."""
+    log_p = arrays["log_probability"]
+    if log_p.ndim != 3 or 0 in log_p.shape:
+        raise ModelError(f"{path}: log_probability must be a non-empty (dims, bins, classes) array, got {log_p.shape}")
+    bad = ~np.isfinite(log_p)
+    if bad.any():
+        raise ModelError(f"{path}: log_probability holds {int(bad.sum())} NaN or infinite likelihoods of "
+                         f"{log_p.size} (a model trained with a non-finite epsilon?); train it again")
+    if (log_p > 1e-4).any():
+        raise ModelError(f"{path}: log_probability holds probabilities above 1; train it again")
+    for name in ("bin_lower", "bin_width", "location_edges", "identities"):
+        value = np.asarray(arrays[name], dtype=np.float64)
+        if value.ndim != 1 or not np.isfinite(value).all():
+            raise ModelError(f"{path}: {name} must be a 1-d array of finite numbers")
+    if not (arrays["bin_width"] > 0).all():
+        raise ModelError(f"{path}: bin_width must be > 0")
+    edges = arrays["location_edges"]
+    if len(edges) < 2 or (len(edges) > 2 and not (np.diff(edges) > 0).all()):
+        raise ModelError(f"{path}: location_edges must increase (at least 2 edges)")

@@ -12,6 +12,8 @@ drawn at random (seeded), as in the paper's evaluation.
 
 An arm fault mid-inspection stops the arm (the station's context manager), records the inspection
 as aborted with the reason, and propagates, so the command exits non-zero; stored rows stay.
+Ctrl-C and SIGTERM abort the same way (reasons "interrupted (Ctrl-C)", "terminated (SIGTERM)"); a
+write error of the results database (disk full) is reported as such, the rows already stored stay.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 
 from .config import GapConfig, StationConfig
 from .errors import TactipError
-from .results import ResultsStore
+from .results import ResultsError, ResultsStore
 
 __all__ = ["InspectionOutcome", "inspect_gap", "inspect_station", "load_station_model", "make_perceiver"]
 
@@ -133,8 +135,12 @@ def inspect_gap(station, perceiver, gap: GapConfig, store: ResultsStore, *, star
             perceiver.moved(target - depth)
             depth = target
     except BaseException as exc:
-        reason = "interrupted (Ctrl-C)" if isinstance(exc, KeyboardInterrupt) else f"{type(exc).__name__}: {exc}"
-        store.abort_inspection(inspection, reason)
+        from ._signals import interruption_reason
+
+        try:
+            store.abort_inspection(inspection, interruption_reason(exc))
+        except (OSError, ResultsError):  # e.g. the disk is full: the first error is the one to report
+            pass
         raise
     decided = bool(step.decided and not step.forced)
     passed = store.finish_inspection(inspection, estimated_width=step.identity_estimate,
@@ -183,6 +189,10 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
     with (station if station is not None else Station(config, calibration=calibration)) as open_station:
         store = ResultsStore(config.results)
         try:
+            stale = store.close_stale_inspections(config.name)
+            if stale:
+                log(f"closed {len(stale)} inspection(s) left 'running' by a process that ended without closing "
+                    f"them (ids {', '.join(map(str, stale))}) as aborted")
             for gap in targets:
                 start = start_depth if start_depth is not None else config.perception.start_depth
                 start = float(rng.choice(depths)) if start is None else float(start)

@@ -18,7 +18,7 @@ from .errors import TactipError
 from .station import Station
 
 __all__ = ["prepare_model", "calibration_path", "calibrate_station", "load_station_calibration", "collect_station",
-           "sensor_description"]
+           "sensor_description", "protocol_description"]
 
 
 def calibration_path(config: StationConfig) -> Path:
@@ -70,6 +70,14 @@ def sensor_description(config: StationConfig, calibration) -> dict:
             "samples": config.protocol.samples}
 
 
+def protocol_description(config: StationConfig) -> dict:
+    """The collection settings stored in the datasets: resuming with other settings is refused, naming them."""
+    p = config.protocol
+    return {"seed": int(p.seed), "depth_min": float(p.depth_min), "depth_max": float(p.depth_max),
+            "depth_step": float(p.depth_step), "repeats": int(p.repeats),
+            "lateral_jitter_mm": float(p.lateral_jitter_mm), "gaps": [g.name for g in config.gaps]}
+
+
 def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = True, workers: int | None = None,
                     log: Callable[[str], None] = print) -> dict[str, Path]:
     """Collect ``out_dir/train.h5`` and ``out_dir/test.h5`` by the configured protocol (resumable).
@@ -102,7 +110,8 @@ def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = Tr
     from pins import feature_dim_names
 
     common = dict(samples=p.samples, dims=dims, dim_names=feature_dim_names(calibration.n_selected),
-                  sensor=sensor_description(config, calibration), progress=progress)
+                  sensor=sensor_description(config, calibration), progress=progress,
+                  protocol=protocol_description(config))
     if workers is None:
         workers = min(os.cpu_count() or 1, 4)
     if config.simulated and workers > 1:

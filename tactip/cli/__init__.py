@@ -7,13 +7,19 @@ Each subcommand lives in its own module of this package and exposes:
 - ``run(args) -> int``: calls the importable function that does the work, returns the exit code.
 
 Heavy imports (OpenCV, h5py, torch) belong inside ``run`` so that ``tactip --help`` stays fast.
-Errors from any package become one line on stderr and a non-zero exit; Ctrl-C prints "Stopped.".
+Errors from any package become one line on stderr and a non-zero exit; Ctrl-C prints "Stopped."
+and exits 1; SIGTERM is handled like Ctrl-C (work in progress is closed as aborted, reason
+"terminated") and exits 143. Output piped into ``head`` stops quietly; any other broken pipe (a
+worker pool, a robot socket) is an error like the others.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
+import os
+import signal
 import sys
 
 # Subcommand name -> module. Nested groups (``tactip arm status``) are handled by their module.
@@ -68,23 +74,65 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `tactip` console script; returns the process exit code."""
+    from tactip._signals import Terminated, terminate_like_ctrl_c
+
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args._run(args) or 0)
+        with terminate_like_ctrl_c():
+            return int(args._run(args) or 0)
+    except Terminated:
+        print("Stopped (terminated).", file=sys.stderr)
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         print("Stopped.", file=sys.stderr)
         return 1
-    except BrokenPipeError:  # output piped into `head` and the like: stop quietly
-        sys.stderr.close()
+    except BrokenPipeError as exc:
+        if _stdout_broken():  # output piped into `head` and the like: stop quietly
+            _silence_stdout()
+            return 1
+        print(f"tactip {args.command}: error: broken pipe ({_one_line(exc)}): a connection or a worker "
+              f"process closed", file=sys.stderr)
         return 1
     except _known_errors() as exc:
         print(f"tactip {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
 
 
+def _stdout_broken() -> bool:
+    """Whether standard output is a pipe whose reader has gone (``tactip ... | head``)."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, ValueError, OSError):  # replaced by a StringIO, or closed
+        return getattr(sys.stdout, "closed", False)
+    try:
+        import select
+
+        poller = select.poll()
+        poller.register(fd, select.POLLOUT)
+        return any(event & (select.POLLERR | select.POLLHUP) for _, event in poller.poll(0))
+    except (OSError, ValueError):
+        return False
+
+
+def _silence_stdout() -> None:
+    # Python flushes stdout at exit: point it at /dev/null so that flush cannot fail again.
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
 def _one_line(exc: BaseException) -> str:
-    text = str(exc) or type(exc).__name__
+    if isinstance(exc, OSError) and exc.strerror and exc.errno is not None and str(exc).startswith("[Errno"):
+        text = exc.strerror  # our own OSErrors carry the whole message in strerror
+        if exc.errno in (errno.ENOENT, errno.EACCES, errno.EPERM, errno.EISDIR) and exc.filename and \
+                str(exc.filename) not in text:
+            text = f"{text}: {exc.filename}"
+    else:
+        text = str(exc) or type(exc).__name__
     if isinstance(exc, OSError) and exc.filename and str(exc.filename) not in text:
         text = f"{text}: {exc.filename}"
     return " ".join(text.split())

@@ -17,6 +17,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from tactip.cli._types import int_at_least
+
 HELP = "list or export stored inspection results (SQLite)"
 
 
@@ -32,10 +34,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         where.add_argument("--config", type=Path, help="station TOML file (its [station] results database)")
         where.add_argument("--db", type=Path, help="results database file")
         if name == "list":
-            p.add_argument("--limit", type=int, default=None, help="show only the newest N inspections")
+            p.add_argument("--limit", type=int_at_least(1), default=None, metavar="N",
+                           help="show only the newest N inspections (N >= 1)")
         elif name == "plot":
             p.add_argument("--out", type=Path, required=True, help="image file (.png, .pdf, .svg)")
-            p.add_argument("--last", type=int, default=None, metavar="N", help="only the newest N inspections")
+            p.add_argument("--last", type=int_at_least(1), default=None, metavar="N",
+                           help="only the newest N inspections (N >= 1)")
         else:
             fmt = p.add_mutually_exclusive_group(required=True)
             fmt.add_argument("--csv", action="store_true", help="comma-separated values with a header")
@@ -45,30 +49,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip results list|export`."""
-    from tactip.results import ResultsError, ResultsStore
+    from tactip.results import ResultsStore
 
     path = args.db
     if args.config is not None:
         from tactip.config import load_station_config
 
         path = load_station_config(args.config).results
-    if not Path(path).exists():
-        raise ResultsError(f"no results database at {path} (nothing inspected yet?)")
-    with ResultsStore(path) as store:
+    out = getattr(args, "out", None)
+    if out is not None:
+        from tactip._output import refuse_overwriting_inputs
+
+        # The database and its WAL companions are inputs: an output over one of them would destroy it.
+        refuse_overwriting_inputs([out], [path, Path(f"{path}-wal"), Path(f"{path}-shm"), args.config])
+    with ResultsStore(path, read_only=True) as store:
         if args.action == "list":
             print(format_table(store.inspections(limit=args.limit)))
             return 0
         if args.action == "plot":
             from tactip.results import plot_inspections
 
-            plot_inspections(store.inspections(limit=args.last), args.out)
+            plot_inspections(store.inspections(limit=args.last), args.out, inputs=[path])
             print(f"wrote {args.out}")
             return 0
         text = store.export_csv() if args.csv else store.export_json() + "\n"
     if args.out is None:
         sys.stdout.write(text)
     else:
-        args.out.write_text(text)
+        from tactip._output import write_text_atomic
+
+        write_text_atomic(args.out, text, inputs=[path])
         print(f"wrote {args.out}", file=sys.stderr)
     return 0
 

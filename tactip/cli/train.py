@@ -36,14 +36,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Load the dataset, fit the model, write it and print a summary."""
-    from perception import fit_model, load_dataset, save_model
+    import math
 
+    from perception import fit_model, load_dataset, save_model
+    from tactip._output import refuse_overwriting_inputs
+    from tactip.errors import TactipError
+
+    if args.epsilon is not None and not math.isfinite(args.epsilon):
+        raise TactipError(f"--epsilon must be a finite number > 0, got {args.epsilon}")
+    refuse_overwriting_inputs([args.out], [args.dataset])
     dataset = load_dataset(args.dataset)
     print(dataset.describe())
     options = {} if args.epsilon is None else {"epsilon": args.epsilon}
     model = fit_model(dataset, n_locations=args.locations, bins=args.bins, min_taps_per_class=args.min_taps,
                       **options)
-    save_model(args.out, model)
+    save_model(args.out, model, inputs=[args.dataset])
     counts = model.taps_per_class
     print(model.summary())
     print(f"training taps per class: {counts.min()}..{counts.max()}; location class width "

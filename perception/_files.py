@@ -1,0 +1,174 @@
+"""Atomic file writing and honest write errors, shared by every package that writes files.
+
+perception is the lowest package that writes files (datasets, models, figures); calibration and
+tactip import these helpers from here (calibration cannot import tactip), so the logic lives once.
+
+- `atomic_path`: a context manager giving a temporary name beside the output (``.NAME.PID.part``
+  plus the output's suffix); on success the file is fsynced and renamed over the output (and the
+  folder fsynced), on any error it is removed, so the output is either the old file or the new one.
+- `refuse_overwriting_inputs`: raises before any work when an output is one of the command's inputs.
+- `write_error`: an `OSError` raised while writing, re-raised as what it is ("disk full while
+  writing X", "permission denied writing X").
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import pathlib
+from typing import Iterable, Iterator
+
+__all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name"]
+
+_WHAT = {
+    errno.ENOSPC: "disk full while writing",
+    errno.EDQUOT: "disk quota exceeded while writing",
+    errno.EFBIG: "file size limit reached while writing",
+    errno.EACCES: "permission denied writing",
+    errno.EPERM: "permission denied writing",
+    errno.EROFS: "read-only file system: cannot write",
+    errno.EIO: "input/output error while writing",
+}
+
+
+def write_error(exc: BaseException, path) -> OSError:
+    """The `OSError` to raise for ``exc``, an error met while writing ``path``, named for what it is.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The error met (an `OSError`, or an h5py/SQLite error carrying ``errno`` or a message).
+    path : str or os.PathLike
+        The output being written (the final name, not its temporary one).
+
+    Returns
+    -------
+    OSError
+        With the errno of ``exc`` (``ENOSPC`` recognised from an HDF5 or SQLite message too) and a
+        message such as ``"disk full while writing 'out/model.h5'"``.
+    """
+    code = getattr(exc, "errno", None)
+    text = str(exc)
+    if code not in _WHAT:
+        lowered = text.lower()
+        if "no space left" in lowered or "disk is full" in lowered or "errno = 28" in lowered:
+            code = errno.ENOSPC
+        elif "permission denied" in lowered or "errno = 13" in lowered or "readonly" in lowered:
+            code = errno.EACCES
+        elif "errno = 27" in lowered:
+            code = errno.EFBIG
+    what = _WHAT.get(code)
+    if what is None:
+        strerror = getattr(exc, "strerror", None) or " ".join(text.split()) or type(exc).__name__
+        return OSError(code or errno.EIO, f"cannot write {str(path)!r}: {strerror}")
+    return OSError(code, f"{what} {str(path)!r}")
+
+
+def temporary_name(path: pathlib.Path, suffix: str | None = None) -> pathlib.Path:
+    """``.STEM.PID.partSUFFIX`` beside ``path`` (hidden, per process, keeping a suffix writers need)."""
+    path = pathlib.Path(path)
+    return path.with_name(f".{path.stem}.{os.getpid()}.part{path.suffix if suffix is None else suffix}")
+
+
+def fsync_path(path: pathlib.Path, *, folder: bool = False) -> None:
+    """Flush a file (or, with ``folder``, a folder's entries) to the disk."""
+    fd = os.open(path, os.O_RDONLY | (getattr(os, "O_DIRECTORY", 0) if folder else 0))
+    try:
+        os.fsync(fd)
+    except OSError:
+        if not folder:  # some file systems cannot fsync a folder; a file must be flushed
+            raise
+    finally:
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def atomic_path(path, *, suffix: str | None = None, inputs: Iterable = ()) -> Iterator[pathlib.Path]:
+    """Write ``path`` atomically: yield a temporary name, then fsync and rename it over ``path``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final output file; replaced only when the body finishes without error.
+    suffix : str, optional
+        Suffix of the temporary file (default ``path``'s), for writers that pick a format by suffix.
+    inputs : iterable of path
+        Files the command reads: ``path`` must not be one of them (`refuse_overwriting_inputs`).
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file to write (it does not exist yet).
+
+    Raises
+    ------
+    OSError
+        A write error, named for what it is (`write_error`); the temporary file is removed and
+        ``path`` keeps its old content.
+    """
+    path = pathlib.Path(path)
+    refuse_overwriting_inputs([path], inputs)
+    if path.is_dir():
+        raise IsADirectoryError(errno.EISDIR, f"output path {str(path)!r} is a directory")
+    tmp = temporary_name(path, suffix)
+    try:
+        try:
+            yield tmp
+        except OSError as exc:
+            if _is_write_error(exc):
+                raise write_error(exc, path) from None
+            raise
+        try:
+            fsync_path(tmp)
+            os.replace(tmp, path)
+            fsync_path(path.parent if str(path.parent) else pathlib.Path("."), folder=True)
+        except OSError as exc:
+            raise write_error(exc, path) from None
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+
+
+def _is_write_error(exc: OSError) -> bool:
+    text = str(exc).lower()
+    return exc.errno in _WHAT or "write failed" in text or "no space" in text or "errno = 28" in text
+
+
+def _same_file(a: pathlib.Path, b: pathlib.Path) -> bool:
+    try:
+        if a.resolve() == b.resolve():
+            return True
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def refuse_overwriting_inputs(outputs: Iterable, inputs: Iterable) -> None:
+    """Raise `FileExistsError` when an output is one of the inputs, or two outputs are one file.
+
+    Compares resolved paths and, for existing files, `os.path.samefile` (hard links, symlinks).
+
+    Parameters
+    ----------
+    outputs : iterable of path or None
+        Files the command writes (None entries are skipped).
+    inputs : iterable of path or None
+        Files the command reads (None entries, and non-path inputs such as a camera index, are skipped).
+
+    Raises
+    ------
+    FileExistsError
+        ``"output 'X' is the input 'Y': writing it would destroy the input; choose another output"``.
+    """
+    outs = [pathlib.Path(p) for p in outputs if isinstance(p, (str, os.PathLike))]
+    ins = [pathlib.Path(p) for p in inputs if isinstance(p, (str, os.PathLike))]
+    for k, out in enumerate(outs):
+        for other in ins:
+            if _same_file(out, other):
+                raise FileExistsError(errno.EEXIST, f"output {str(out)!r} is the input {str(other)!r}: writing it "
+                                                    f"would destroy the input; choose another output")
+        for other in outs[k + 1:]:
+            if _same_file(out, other):
+                raise FileExistsError(errno.EEXIST, f"outputs {str(out)!r} and {str(other)!r} are the same file; "
+                                                    f"choose two different outputs")
