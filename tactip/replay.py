@@ -590,12 +590,12 @@ def _write_hdf5(path, track, analysis, settings, decisions=None) -> None:
 
     tracker = track["tracker"]
     frames, pins = track["lost"].shape
-    # Chunks of about 64 frames, fast gzip: the arrays of a long video compress several times.
-    packed = dict(compression="gzip", compression_opts=1, shuffle=True)
+    # Positions are sub-pixel floats with sensor noise: gzip saves a third of their size for about
+    # 10 % of the decoding time, so they are stored plain; the masks shrink to almost nothing.
+    packed = dict(compression="gzip", compression_opts=1)
     with h5py.File(path, "w") as h5:
         for name in ("positions", "displacements"):
-            h5.create_dataset(name, data=track[name], chunks=(min(64, max(frames, 1)), pins, 2) if frames else None,
-                              **(packed if frames else {}))
+            h5.create_dataset(name, data=track[name])
         for name in ("lost", "retired"):
             h5.create_dataset(name, data=track[name], chunks=(min(64, max(frames, 1)), pins) if frames else None,
                               **(packed if frames else {}))
