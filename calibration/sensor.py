@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
@@ -163,10 +162,11 @@ def save_calibration(path: str | Path, calibration: SensorCalibration) -> None:
     """Write a calibration file (HDF5, ``tactip-calibration/1``), atomically."""
     import h5py
 
+    from perception._files import atomic_path
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".partial")
-    with h5py.File(tmp, "w") as f:
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:  # temporary name, fsync, rename
         f.attrs["schema"] = SCHEMA
         f.create_dataset("reference_pins", data=np.asarray(calibration.reference_pins, dtype=np.float64))
         f.create_dataset("selected_pins", data=np.asarray(calibration.selected_pins, dtype=np.int64))
@@ -180,7 +180,6 @@ def save_calibration(path: str | Path, calibration: SensorCalibration) -> None:
         f.attrs["rest_frames"] = int(calibration.rest_frames)
         f.attrs["sensor"] = json.dumps(calibration.sensor)
         f.attrs["created_at"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-    os.replace(tmp, path)
 
 
 def load_calibration(path: str | Path) -> SensorCalibration:

@@ -28,8 +28,14 @@ def _figure():
 
 
 def _save(plt, fig, path) -> None:
-    fig.savefig(pathlib.Path(path), dpi=120)
-    plt.close(fig)
+    from ._files import atomic_path
+
+    path = pathlib.Path(path)
+    try:
+        with atomic_path(path) as tmp:  # a full disk leaves the old figure, not half a new one
+            fig.savefig(tmp, dpi=120, format=path.suffix.lstrip(".") or "png")
+    finally:
+        plt.close(fig)
 
 
 def plot_speed_accuracy(results, path, *, units: str = "mm") -> None:

@@ -182,6 +182,13 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
     rng = np.random.default_rng(seed)
     depths = np.asarray(config.protocol.depths)
     fixation = perceiver.policy
+    missing = [key for key, own in (("decision_threshold", config.perception.decision_threshold),
+                                    ("fixation_location", config.perception.fixation_depth))
+               if own is None and key not in model.recommended]
+    if missing:
+        log(f"warning: the model {config.perception.model} has no recommended {' or '.join(missing)} and "
+            f"[perception] sets none: using the defaults (threshold {perceiver.decision_threshold:g}, the middle "
+            f"depth class); run 'tactip validate --sweep-fixation' to choose them")
     log(f"inspecting {len(targets)} gap(s) on {config.name}: policy {name}"
         f"{'' if name != 'active' else f' (fixation {model.location_centres[fixation.fixation_class]:g} mm)'}, "
         f"decision threshold {perceiver.decision_threshold:g}, at most {perceiver.max_taps} taps")

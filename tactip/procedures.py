@@ -17,7 +17,7 @@ from .config import StationConfig
 from .errors import TactipError
 from .station import Station
 
-__all__ = ["prepare_model", "calibration_path", "calibrate_station", "load_station_calibration", "collect_station",
+__all__ = ["prepare_model", "model_is_prepared", "calibration_path", "calibrate_station", "load_station_calibration", "collect_station",
            "sensor_description", "protocol_description"]
 
 
@@ -166,8 +166,16 @@ class _SimPool:
 def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable[[str], None] = print) -> Path:
     """The whole calibration utility in one call: calibrate (unless calibrated), collect (resuming),
     train and pick the fixation depth; returns the model path. ``tactip inspect --sim`` runs it on
-    first use."""
+    first use, and again after an interrupted first use (`model_is_prepared`).
+
+    The model is trained and given its recommended settings under a temporary name and renamed into
+    place only when both are done: an interruption (Ctrl-C, SIGTERM, a full disk) during training or
+    the fixation sweep leaves no half-prepared model, and the next run resumes the preparation
+    (the collected taps are kept and resumed, only training and the sweep are repeated).
+    """
     from calibration import recommend_fixation, train_station_model
+
+    from ._output import atomic_output
 
     model_path = config.perception.model
     if model_path is None:
@@ -175,9 +183,24 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
     if not calibration_path(config).exists():
         calibrate_station(config, log=log)
     paths = collect_station(config, config.data_dir / "datasets", progress=progress, log=log)
-    log("training the model ...")
-    train_station_model(paths["train"], model_path, n_locations=config.perception.locations,
-                        bins=config.perception.bins, log=log)
-    log("choosing the fixation depth on the test collection ...")
-    recommend_fixation(model_path, paths["test"], log=log)
+    with atomic_output(model_path, inputs=list(paths.values())) as partial:
+        log("training the model ...")
+        train_station_model(paths["train"], partial, n_locations=config.perception.locations,
+                            bins=config.perception.bins, log=log)
+        log("choosing the fixation depth on the test collection ...")
+        recommend_fixation(partial, paths["test"], log=lambda line: log(line.replace(str(partial), str(model_path))))
     return model_path
+
+
+def model_is_prepared(path: Path) -> bool:
+    """Whether ``path`` holds a model with its recommended settings (fixation depth and threshold).
+
+    False for a missing file and for a model an interrupted preparation left without its settings
+    (written by versions that trained in place); `load_model`'s errors propagate for a bad file.
+    """
+    from perception import load_model
+
+    if not Path(path).exists():
+        return False
+    recommended = load_model(path).recommended
+    return "decision_threshold" in recommended and "fixation_location" in recommended

@@ -47,12 +47,16 @@ def run(args: argparse.Namespace) -> int:
 
     from tactip.config import load_station_config, simulated_station_config
     from tactip.inspection import inspect_station
-    from tactip.procedures import prepare_model
+    from tactip.procedures import model_is_prepared, prepare_model
 
     config = simulated_station_config(args.data_dir) if args.sim else load_station_config(args.config)
-    if args.sim and not config.perception.model.exists():
-        print(f"No trained model in {config.data_dir} yet: training one on the simulated station first "
-              f"(calibrate, collect, train, choose the fixation depth; a few minutes, once).")
+    if args.sim and not model_is_prepared(config.perception.model):
+        if config.perception.model.exists():
+            print(f"The model in {config.data_dir} has no recommended settings (an earlier preparation was "
+                  f"interrupted): resuming the preparation.")
+        else:
+            print(f"No trained model in {config.data_dir} yet: training one on the simulated station first "
+                  f"(calibrate, collect, train, choose the fixation depth; a few minutes, once).")
         started = time.monotonic()
         prepare_model(config, progress=not args.quiet)
         print(f"model ready in {time.monotonic() - started:.0f} s")
