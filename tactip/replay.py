@@ -74,7 +74,7 @@ from pins import (DetectionParams, PadScale, PinSelection, PinsError, PinTracker
                   displacement_from_rest, feature_dim_names, find_sensor_disc, pad_scale, segment_taps,
                   select_feature_pins, tap_features, tap_signal, tune_detection)
 
-from ._output import claim_output
+from ._output import claim_output, refuse_overwriting_inputs, write_error
 from .errors import ConfigError, SourceError
 
 __all__ = ["ReplayResult", "replay_video", "FORMAT", "check_rest_frame"]
@@ -302,6 +302,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                                                             pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm))
     out_path = pathlib.Path(out_path)
     annotate = None if annotate_path is None else pathlib.Path(annotate_path)
+    refuse_overwriting_inputs([out_path, annotate], [video, calibration, model])  # issue 9: never over an input
     temporary: list[pathlib.Path] = []
     try:
         temporary.append(claim_output(out_path, ".h5"))
@@ -339,9 +340,16 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         pad_diameter_mm=float(scale.sensor.get("pad_diameter_mm", np.nan)) if scale else np.nan,
                         n_pins=int(n_pins), n_samples=int(n_samples), min_separation_mm=float(min_separation_mm),
                         calibration=str(calibration) if isinstance(calibration, (str, os.PathLike)) else "")
-        _write_hdf5(temporary[0], track, analysis, settings, decisions)
-        if annotate:
-            _write_annotated(video, temporary[1], track, analysis["bounds"], analysis["selected"], decisions)
+        for part, final in zip(temporary, [out_path, annotate]):
+            try:  # a full disk or a lost permission is named as such; the outputs keep their old content
+                if final is out_path:
+                    _write_hdf5(part, track, analysis, settings, decisions)
+                else:
+                    _write_annotated(video, part, track, analysis["bounds"], analysis["selected"], decisions)
+                with open(part, "rb+") as written:
+                    os.fsync(written.fileno())
+            except (OSError, RuntimeError) as exc:
+                raise write_error(exc, final) from None
         for part, final in zip(temporary, [out_path, annotate]):
             os.replace(part, final)
     finally:
@@ -453,7 +461,7 @@ def _start(image, *, params, expected_pins, calibration, warnings):
     if expected_pins is not None:
         try:
             params = tune_detection(image, int(expected_pins), start=params, disc=disc)
-        except PinsError as exc:
+        except (PinsError, ValueError) as exc:
             warnings.append(f"detection could not be tuned to {expected_pins} pins ({exc}); "
                             f"the detection parameters given were used")
     pins = detect_pins(image, params=params, disc=disc)
@@ -508,6 +516,10 @@ def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float,
     """Scale, feature pins, rest-frame check, taps and features; every problem becomes a warning."""
     warnings = list(track["warnings"])
     rest, disc, displacements = track["rest"], track["disc"], track["displacements"]
+    found = track["pins_detected"]
+    if expected_pins and abs(found - expected_pins) > 0.1 * expected_pins:
+        warnings.append(f"{found} pins found in the rest frame, {expected_pins} expected "
+                        f"({(found - expected_pins) / expected_pins:+.0%}): check --expected-pins and the rest frame")
     scale = selection = None
     selected = np.zeros(0, dtype=np.intp)
     if calibration is not None:

@@ -63,7 +63,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="RESULT.h5", help="HDF5 file to write")
     parser.add_argument("--annotate", metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
-    parser.add_argument("--expected-pins", type=positive_int, metavar="N",
+    parser.add_argument("--expected-pins", type=_pin_count, metavar="N",
                         help="pins expected in view on the rest frame: tune detection to N first and report how "
                         "far off the count is")
     parser.add_argument("--samples", type=positive_int, default=40, metavar="N",

@@ -249,3 +249,19 @@ def test_cli_sensor_and_scale_options(tmp_path, capsys):
             main(["replay", str(SAMPLE), "--out", str(tmp_path / "x.h5"), *bad])
         assert bad[0] in capsys.readouterr().err
     assert not (tmp_path / "x.h5").exists()
+
+
+def test_a_full_disk_is_named_and_leaves_nothing(tmp_path, monkeypatch):
+    import errno
+
+    import tactip.replay
+
+    def full(path, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    out = tmp_path / "r.h5"
+    out.write_bytes(b"old result")
+    monkeypatch.setattr(tactip.replay, "_write_hdf5", full)
+    with pytest.raises(OSError, match="disk full while writing"):
+        replay_video(SAMPLE, out)
+    assert out.read_bytes() == b"old result" and sorted(p.name for p in tmp_path.iterdir()) == ["r.h5"]
