@@ -54,7 +54,7 @@ def leftover_temporaries(*folders: Path) -> list[Path]:
 
 
 def run_tactip(*args, cwd, inputs=(), timeout: float = 120, env: dict | None = None,
-               stdin: str | None = None) -> subprocess.CompletedProcess:
+               stdin: str | None = None, **popen) -> subprocess.CompletedProcess:
     """Run ``tactip ARGS`` as a subprocess in ``cwd`` and check the invariants of every fault case.
 
     Parameters
@@ -72,6 +72,8 @@ def run_tactip(*args, cwd, inputs=(), timeout: float = 120, env: dict | None = N
         Extra environment variables (added to a copy of ``os.environ``).
     stdin : str, optional
         Text fed to the process's standard input.
+    **popen
+        Passed to `subprocess.run` (e.g. ``preexec_fn`` to set a resource limit, ``user`` to drop root).
 
     Returns
     -------
@@ -87,7 +89,7 @@ def run_tactip(*args, cwd, inputs=(), timeout: float = 120, env: dict | None = N
         full_env.update({k: str(v) for k, v in env.items()})
     argv = [sys.executable, "-m", "tactip.cli", *map(str, args)]
     result = subprocess.run(argv, cwd=cwd, capture_output=True, text=True, timeout=timeout, env=full_env,
-                            input=stdin, stdin=None if stdin is not None else subprocess.DEVNULL)
+                            input=stdin, stdin=None if stdin is not None else subprocess.DEVNULL, **popen)
     where = f"`tactip {' '.join(map(str, args))}` (exit {result.returncode})"
     assert "Traceback" not in result.stderr, f"{where} printed a traceback:\n{result.stderr}"
     changed = [str(p) for p in paths if digest(p) != before[p]]
