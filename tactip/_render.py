@@ -145,8 +145,8 @@ def paint_pins(scene, image_size, centres, shape, levels) -> None:
     np.add.at(scene, pixel.reshape(-1), value.reshape(-1))
 
 
-def paint_spots(scene, image_size, centres, sigmas, amplitudes, angles=None) -> None:
-    """Add elliptical Gaussian spots to a flat (H*W,) float32 scene, in place, all spots at once.
+def paint_spots(scene, image_size, centres, sigmas, amplitudes, angles=None, *, ring_px: float = 0.0) -> None:
+    """Add elliptical Gaussian spots (or round Gaussian rings) to a flat (H*W,) float32 scene, in place.
 
     Parameters
     ----------
@@ -161,6 +161,9 @@ def paint_spots(scene, image_size, centres, sigmas, amplitudes, angles=None) -> 
         Grey levels added at each centre (negative for shadows).
     angles : (M,) ndarray or None
         Direction of each spot's first axis, radians from image x (None: 0).
+    ring_px : float
+        If > 0, draw round rings instead: the Gaussian profile (first sigma) is across a circle of this
+        radius, px, centred on each centre.
     """
     centres = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
     if len(centres) == 0:
@@ -168,15 +171,19 @@ def paint_spots(scene, image_size, centres, sigmas, amplitudes, angles=None) -> 
     width, height = image_size
     sigmas = np.broadcast_to(np.asarray(sigmas, dtype=np.float64).reshape(len(centres), -1), (len(centres), 2))
     angles = np.zeros(len(centres)) if angles is None else np.asarray(angles, dtype=np.float64)
-    half = int(np.ceil(3.0 * sigmas.max()))
+    half = int(np.ceil(ring_px + 3.0 * sigmas.max()))
     offsets = np.arange(-half, half + 1)
     anchor = np.rint(centres).astype(np.int64)
     frac = (anchor - centres).astype(np.float32)
     dx = offsets.astype(np.float32)[None, None, :] + frac[:, 0, None, None]  # (M, 1, S)
     dy = offsets.astype(np.float32)[None, :, None] + frac[:, 1, None, None]  # (M, S, 1)
     cos, sin = (v.astype(np.float32)[:, None, None] for v in (np.cos(angles), np.sin(angles)))
-    along = (dx * cos + dy * sin) / sigmas[:, 0, None, None].astype(np.float32)
-    across = (dy * cos - dx * sin) / sigmas[:, 1, None, None].astype(np.float32)
+    if ring_px > 0:
+        across = (np.sqrt(dx * dx + dy * dy) - np.float32(ring_px)) / sigmas[:, 0, None, None].astype(np.float32)
+        along = np.zeros_like(across)
+    else:
+        along = (dx * cos + dy * sin) / sigmas[:, 0, None, None].astype(np.float32)
+        across = (dy * cos - dx * sin) / sigmas[:, 1, None, None].astype(np.float32)
     value = np.asarray(amplitudes, dtype=np.float32)[:, None, None] * np.exp(-0.5 * (along ** 2 + across ** 2))
     px = anchor[:, 0, None, None] + offsets[None, None, :]
     py = anchor[:, 1, None, None] + offsets[None, :, None]

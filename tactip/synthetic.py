@@ -65,6 +65,82 @@ anti-aliased 1 px edge ramp; sensor noise of ``noise_sigma`` grey levels (near-G
 uniform bytes, fresh every frame and deterministic given the seed); optional optical blur and JPEG
 compression (as from an MJPG webcam). ``dark_pins`` inverts the scene for dark-marker sensors.
 Rendering is vectorised over pins: about 2-5 ms per 640x480 frame.
+
+What broke the front end on real TacTips (issue 8), as options
+--------------------------------------------------------------
+Real recordings differ from the clean default in ways that each fooled detection or tracking; each is
+an option (all off by default, so the default frames are unchanged byte for byte) and a preset below.
+
+- Layout ``layout="radial"``: home-built TacTips place pins with a rotary jig, on rings crossed by
+  straight spokes, the same count on every ring, so the spacing along a ring grows with its radius
+  while the ring spacing stays one pitch; a lattice-consistency test tuned to hexagons sees a pitch
+  that varies across the pad. ``pins = rings x spokes (+ 1 centre pin)``, spokes / rings near 2.4
+  (120 = 1 + 7 x 17); the innermost ring sits at ``spokes / 2 pi`` pitches so its pins are a pitch
+  apart, leaving an empty zone round the centre pin.
+- Pad size ``pad_fraction``: the dark disc's diameter over the image height (default 0.87). The
+  camera's focal length follows from it (the casing edge at 86 degrees lands on the disc edge), so
+  a small pad is a wide-angle view of the same pad: everything, pins included, shrinks with it. A pin
+  is never smaller than 1 px in radius, so on the smallest pads (``small-pad-100``: 60 px across at
+  320x240, pitch about 4 px) ``pin_fraction`` must drop to keep neighbouring tips apart. The six LED
+  glare spots scale with a pad whose size is given (at the default they keep their historical size).
+- Black rim ring ``rim_polar_deg``, ``ring_glare``: on many TacTips the casing lip in front of the
+  membrane's edge is matt or glossy black plastic. It is drawn as an opaque ring (level 8) from the
+  disc edge in to where the pin tips at polar angle ``rim_polar_deg`` are seen, with a 1 px
+  anti-aliased inner edge; it is composited over the pins, so the outermost pins are cut by it (on a
+  hexagonal pad a circular lip cuts the hexagon's corners first). An LED ring facing the lip reflects
+  in it as ``ring_glare`` bright blobs: one to three elongated Gaussian lobes each, one to a few pins
+  in size (main lobe sigma 0.6-1.8 pin radii along the ring, 0.4-0.8 across), 110-230 grey,
+  irregular in shape and brightness, at evenly spaced azimuths with jitter. Their light stays on the
+  ring: they lie outside the pin field, and their true centres are ``ring_glare_centres``.
+- Low-contrast coloured skin ``membrane_level``, ``pin_level``, ``skin_texture``, ``pin_shadows``,
+  ``skin_tint``: a pigmented (brown) skin reflects far more than black rubber, so the pins stand only
+  40-70 grey levels above it. The skin carries texture: a static low-frequency mottling (pigment and
+  thickness, standard deviation 0.6 x ``skin_texture`` over five pitches), soft highlights between
+  the pins (about one per pin, 0.6-1.1 pin radii, 1.5-3.5 x ``skin_texture`` grey, where the skin
+  bulges between stalks) and small specks (two per pin, 0.5-0.9 px, dust and bubbles, 60 % dark).
+  Highlights and specks are material points of the skin: they move with it under contact. Lit by
+  LEDs all round the pad, each stalk casts several faint shadows that together shade a soft ring of
+  skin round its tip (``pin_shadows`` deep at 1.4 pin radii, Gaussian 0.35 pin radii across), so the
+  skin between pins breaks into blob-like light patches at the lattice's interstices, ringed by dark. Texture stays 3 sigma clear of the tips at rest, so a tip's
+  weighted centroid is still its true centre. In colour frames ``skin_tint="brown"`` colours each
+  pixel by its grey level, from brown skin (B, G, R gains 0.6, 0.95, 1.3) to cream paint on the pins,
+  each gain triple normalised so that the BT.601 grey of the colour frame is the grey scene.
+- Bright surround and strong glare ``surround_level``, ``glare_gain``, ``veil``: a small pad in a very
+  bright surround (an open, white-lit casing near saturation) with LED glare made stronger, and a
+  veil of scattered light that brightens the disc edge (grey levels ``veil`` at the edge, fading
+  inward over a tenth of the radius). Pins near the edge lose contrast.
+- Pin count 100-1000: any count works (``dense-1000``: 1000 pins at 1280x720, 5 px tips about 18 px
+  apart); rendering stays vectorised (about 15 ms for 1000 pins at 1280x720, 20 ms for a textured
+  colour frame at 640x480).
+
+Ground truth and scoring
+------------------------
+``SyntheticFrame.centres`` holds every pin's true tip centre. ``visible`` marks pins whose whole tip
+(ellipse plus its 1 px edge ramp) is drawn, clear of the image edge and a pixel clear of the rim
+ring's inner edge; ``partial`` marks pins drawn but cut by the rim ring or the image edge; the others
+(hidden by ``render(hidden=...)``, wholly behind the ring, facing away) are not drawn. Scoring
+convention for detection and tracking: a detector must find the ``visible`` pins (recall is over
+them); a ``partial`` pin may be found or not (a detection matched to one counts neither for nor
+against); any other detection (glare, texture, shadow, rim) is a false positive. The
+intensity-weighted centroid of a visible pin over its ellipse, above a constant local background,
+is its true centre to about 0.03 px on noise-free renders (0.05 px on the 1 px tips of the smallest
+pad and with skin texture under contact), whatever the options.
+
+Presets
+-------
+`PRESETS` names the sensors that tests, benches and ``open_source("synthetic:NAME")`` use;
+`SyntheticTacTip.from_preset` builds one with any option overridden:
+
+- ``tactip-331``, ``tactip-127``, ``tactip-532``: the default renderer (exactly) with 331, 127, 532 pins.
+- ``dark-331``: dark markers on a light membrane.
+- ``rim-ring-331``: a black rim ring cutting the outer pins (12 partial at rest, seed 0) with 18 LED
+  glare blobs on it; no glare on the membrane's rim.
+- ``brown-127``: colour frames of a brown skin, pins about 57 grey above it (median; 30-75), texture 12
+  and shadows 22 grey.
+- ``radial-120``: 120 small pins (2 px) on 7 rings x 17 spokes plus a centre pin, the pad a third of the
+  frame height in a near-saturated surround (245) with strong glare and a veil, noise 5, 120 frames/s.
+- ``small-pad-100``: 100 pins, the pad a quarter of the frame height, 320x240, bright surround (1 px tips).
+- ``dense-1000``: 1000 pins at 1280x720, the pad 0.9 of the frame height.
 """
 
 from __future__ import annotations
@@ -86,8 +162,8 @@ _PIN_SPACING_FRACTION = 0.3  # pin radius / pin spacing at the apex, both in px 
 _LAYOUTS = ("auto", "radial")
 _SKIN_TINTS = (None, "brown")
 _TEXTURE_POLAR_DEG = 84.0  # skin texture is drawn out to this polar angle (inside the casing edge)
-_SHADOW_OFFSET = 2.5  # pin shadows: centre this many pin radii from the tip, towards the pad axis
-_SHADOW_SIGMA = 0.6  # pin shadows: Gaussian sigma in pin radii
+_SHADOW_RING = 1.4  # pin shadows: a soft dark ring of this radius round each tip, in pin radii
+_SHADOW_SIGMA = 0.35  # pin shadows: Gaussian sigma across the ring, in pin radii
 
 
 @dataclass(frozen=True)
@@ -496,6 +572,24 @@ class SyntheticTacTip:
         centres, shape, facing = self._project(contact or Contact())
         return centres, self._visibility(centres, shape, facing)[0]
 
+    def pin_ellipses(self, contact: Contact | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """True pin-tip ellipses for a contact state: what each tip covers in the image.
+
+        Parameters
+        ----------
+        contact : Contact or None
+            None means no contact (rest).
+
+        Returns
+        -------
+        centres : (N, 2) float64 ndarray of (x, y), px
+        shape : (N, 2, 2) float64 ndarray, px^2
+            The tip covers ``{c + e : e^T shape^-1 e <= 1}`` (semi-axes: square roots of the
+            eigenvalues), plus a 1 px anti-aliased edge ramp centred on that boundary.
+        """
+        centres, shape, _ = self._project(contact or Contact())
+        return centres, shape
+
     def _inside(self, centres, shape):
         """Whether each ellipse lies entirely inside the image."""
         width, height = self.image_size
@@ -562,12 +656,11 @@ class SyntheticTacTip:
         if self._texture is not None:  # specks and highlights ride on the skin
             x, y, sigma, amplitude = self._texture
             _render.paint_spots(flat, self.image_size, self._skin_image(x, y, contact), sigma, sign * amplitude)
-        if self.pin_shadows > 0 and len(centres):  # each pin shades the skin on the side away from the LEDs
-            offset = np.asarray(self.disc[:2]) - centres
-            offset *= (_SHADOW_OFFSET * self.pin_radius_px) / np.maximum(np.linalg.norm(offset, axis=1), 1.0)[:, None]
-            _render.paint_spots(flat, self.image_size, centres + offset,
-                                np.full(len(centres), max(_SHADOW_SIGMA * self.pin_radius_px, 0.8)),
-                                np.full(len(centres), -sign * self.pin_shadows))
+        if self.pin_shadows > 0 and len(centres):  # LEDs all round: each pin shades a ring of skin round it
+            _render.paint_spots(flat, self.image_size, centres,
+                                np.full(len(centres), max(_SHADOW_SIGMA * self.pin_radius_px, 0.6)),
+                                np.full(len(centres), -sign * self.pin_shadows),
+                                ring_px=_SHADOW_RING * self.pin_radius_px)
         anchor = np.clip(np.rint(centres).astype(np.int64), 0, [width - 1, height - 1])
         levels = self._pin_level * brightness * self._illumination.reshape(-1)[anchor[:, 1] * width + anchor[:, 0]]
         if self.dark_pins:
