@@ -1,7 +1,9 @@
-"""Cost of rendering one 640x480 synthetic TacTip frame (ms/frame), at 127, 331 and 532 pins.
+"""Cost of rendering one 640x480 synthetic TacTip frame (ms/frame), at 127, 331 and 532 pins, and per preset.
 
 Prints the median over repeated renders of an indented contact over a gap, with the default
-appearance (noise, glare, gradient), and the cost of the ground truth alone (``pin_centres``).
+appearance (noise, glare, gradient), and the cost of the ground truth alone (``pin_centres``); then
+the same for every preset of `tactip.synthetic.PRESETS` (image size, pins; target < 40 ms for
+``dense-1000``, 1000 pins at 1280x720), with the default 331-pin render beside it as the yardstick.
 Run: ``.venv/bin/python bench/bench_render.py``
 """
 
@@ -9,7 +11,7 @@ import time
 
 import numpy as np
 
-from tactip.synthetic import Contact, SyntheticTacTip
+from tactip.synthetic import PRESETS, Contact, SyntheticTacTip
 
 REPEATS = 60
 
@@ -36,6 +38,14 @@ def main():
         print(f"{pins:4d}  {render:15.2f}  {truth:14.2f}")
     sensor = SyntheticTacTip(pins=331, seed=0, blur_sigma=0.8, jpeg_quality=80)
     print(f"331 with blur 0.8 px and JPEG q80: {per_call_ms(lambda: sensor.render(contact)):.2f} ms/frame")
+    print("\npreset          size       pins  render ms/frame  x default-331")
+    default = SyntheticTacTip(pins=331, seed=0)
+    for name in PRESETS:
+        sensor = SyntheticTacTip.from_preset(name)
+        yardstick = per_call_ms(lambda: default.render(contact), repeats=20)
+        render = per_call_ms(lambda: sensor.render(contact), repeats=20)
+        size = "x".join(map(str, sensor.image_size))
+        print(f"{name:14s}  {size:9s}  {sensor.n_pins:4d}  {render:15.2f}  {render / yardstick:13.2f}")
 
 
 if __name__ == "__main__":

@@ -110,8 +110,8 @@ an option (all off by default, so the default frames are unchanged byte for byte
   veil of scattered light that brightens the disc edge (grey levels ``veil`` at the edge, fading
   inward over a tenth of the radius). Pins near the edge lose contrast.
 - Pin count 100-1000: any count works (``dense-1000``: 1000 pins at 1280x720, 5 px tips about 18 px
-  apart); rendering stays vectorised (about 15 ms for 1000 pins at 1280x720, 20 ms for a textured
-  colour frame at 640x480).
+  apart); rendering stays vectorised: about 3x the default 331-pin frame for 1000 pins at 1280x720
+  (15-20 ms), 4x for a textured colour frame at 640x480 (20-30 ms; ``bench/bench_render.py``).
 
 Ground truth and scoring
 ------------------------
@@ -655,7 +655,10 @@ class SyntheticTacTip:
         sign = -1.0 if self.dark_pins else 1.0
         if self._texture is not None:  # specks and highlights ride on the skin
             x, y, sigma, amplitude = self._texture
-            _render.paint_spots(flat, self.image_size, self._skin_image(x, y, contact), sigma, sign * amplitude)
+            seen = self._skin_image(x, y, contact)
+            small = sigma < 1.0  # specks apart from highlights: each call paints patches sized for its largest
+            for group in (small, ~small):
+                _render.paint_spots(flat, self.image_size, seen[group], sigma[group], sign * amplitude[group])
         if self.pin_shadows > 0 and len(centres):  # LEDs all round: each pin shades a ring of skin round it
             _render.paint_spots(flat, self.image_size, centres,
                                 np.full(len(centres), max(_SHADOW_SIGMA * self.pin_radius_px, 0.6)),
@@ -674,7 +677,7 @@ class SyntheticTacTip:
 
             scene = cv2.GaussianBlur(scene, (0, 0), self.blur_sigma)
         if self._tint is not None and self.colour:
-            scene = scene[:, :, None] * self._tint[np.clip(scene, 0, 255).astype(np.uint8)]
+            scene = scene[:, :, None] * np.take(self._tint, np.clip(scene, 0, 255).astype(np.uint8), axis=0)
         elif self.colour:
             scene = scene[:, :, None] * np.array([1.0, 0.97, 0.93], dtype=np.float32)
         if self.noise_sigma > 0:
