@@ -101,8 +101,9 @@ an option (all off by default, so the default frames are unchanged byte for byte
   Highlights and specks are material points of the skin: they move with it under contact. Lit by
   LEDs all round the pad, each stalk casts several faint shadows that together shade a soft ring of
   skin round its tip (``pin_shadows`` deep at 1.4 pin radii, Gaussian 0.35 pin radii across), so the
-  skin between pins breaks into blob-like light patches at the lattice's interstices, ringed by dark. Texture stays 3 sigma clear of the tips at rest, so a tip's
-  weighted centroid is still its true centre. In colour frames ``skin_tint="brown"`` colours each
+  skin between pins breaks into blob-like light patches at the lattice's interstices, ringed by dark.
+  Texture stays 3 sigma clear of the tips at rest and the shadow rings are centred on the tips, so a
+  tip's weighted centroid is still its true centre. In colour frames ``skin_tint="brown"`` colours each
   pixel by its grey level, from brown skin (B, G, R gains 0.6, 0.95, 1.3) to cream paint on the pins,
   each gain triple normalised so that the BT.601 grey of the colour frame is the grey scene.
 - Bright surround and strong glare ``surround_level``, ``glare_gain``, ``veil``: a small pad in a very
@@ -135,7 +136,7 @@ Presets
 - ``dark-331``: dark markers on a light membrane.
 - ``rim-ring-331``: a black rim ring cutting the outer pins (12 partial at rest, seed 0) with 18 LED
   glare blobs on it; no glare on the membrane's rim.
-- ``brown-127``: colour frames of a brown skin, pins about 57 grey above it (median; 30-75), texture 12
+- ``brown-127``: colour frames of a brown skin, pins about 60 grey above it (median; 33-78), texture 12
   and shadows 22 grey.
 - ``radial-120``: 120 small pins (2 px) on 7 rings x 17 spokes plus a centre pin, the pad a third of the
   frame height in a near-saturated surround (245) with strong glare and a veil, noise 5, 120 frames/s.

@@ -70,7 +70,8 @@ def weighted_centroids(sensor, contact):
         x0, y0 = np.rint(centres[i]).astype(int) - half
         yy, xx = np.mgrid[y0:y0 + 2 * half + 1, x0:x0 + 2 * half + 1]
         offset = np.stack([xx - centres[i, 0], yy - centres[i, 1]], axis=-1)
-        window = np.einsum("...i,ij,...j->...", offset, np.linalg.inv(shape[i]), offset) <= ((minor + 1) / minor) ** 2
+        scaled = np.einsum("...i,ij,...j->...", offset, np.linalg.inv(shape[i]), offset)
+        window = scaled <= ((minor + 1) / minor) ** 2
         patch = image[yy, xx]
         contrast = (empty[yy, xx][window].mean() - patch) if sensor.dark_pins else (patch - empty[yy, xx][window].mean())
         weight = np.clip(contrast, 0.0, None) * window  # what stands out from the background towards the tip
@@ -329,3 +330,20 @@ def test_score_counts_partial_pins_neither_for_nor_against():
     recall, precision, _ = score(visible[::2], frame)
     assert recall == pytest.approx(np.ceil(len(visible) / 2) / len(visible)) and precision == 1.0
     assert score(np.zeros((0, 2)), frame)[:2] == (0.0, 1.0)
+
+
+def test_pins_cut_by_the_image_edge_are_partial():
+    sensor = SyntheticTacTip(pins=331, image_size=(320, 480), noise_sigma=0.0)  # narrower than the pad
+    frame = sensor.render()
+    x = frame.centres[:, 0]
+    assert frame.partial.sum() >= 5 and frame.visible.sum() >= 150
+    reach = 1.5 * sensor.pin_radius_px + 1.0
+    assert np.all((x[frame.partial] < reach) | (x[frame.partial] > 319 - reach))
+    margin = 0.3 * sensor.pin_radius_px
+    assert np.all((x[frame.visible] > margin) & (x[frame.visible] < 319 - margin))
+    assert np.all((x[~frame.visible & ~frame.partial] < 0) | (x[~frame.visible & ~frame.partial] > 319))
+    # the part inside the image is drawn: the column at the edge is bright where a cut pin reaches it
+    for i in np.flatnonzero(frame.partial):
+        column = 0 if x[i] < 160 else 319
+        if abs(x[i] - column) < 0.5 * sensor.pin_radius_px:
+            assert frame.image[int(round(frame.centres[i, 1])), column] > 120
