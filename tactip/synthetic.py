@@ -568,7 +568,8 @@ class SyntheticTacTip:
         -------
         centres : (N, 2) float64 ndarray of (x, y), px
         visible : (N,) bool ndarray
-            True where the whole pin tip lies inside the image and faces the camera.
+            True where the whole pin tip is drawn: it faces the camera and clears the image edge and
+            the rim ring (the `SyntheticFrame.visible` of a render).
         """
         centres, shape, facing = self._project(contact or Contact())
         return centres, self._visibility(centres, shape, facing)[0]
