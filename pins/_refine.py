@@ -65,10 +65,17 @@ _MIN_COMPACTNESS_RATIO = 0.85
 # window's radius as a fraction of the distance to the nearest one (see `Refiner.window_radius`).
 _WINDOW_NEIGHBOURS = 6
 _WINDOW_REACH = 0.55
-# Windows per searched pin (each re-centred on the last centroid), and how near two positions
-# must be, as a fraction of the pin spacing, to be one tip (tips of neighbours pushed together
-# stay more than half a spacing apart).
-_SEARCH_STEPS = 3
+# A searched pin is found when its second window moved by at most this fraction of the pin
+# spacing (its tip, of radius ~0.3 spacings, then lies whole inside the window of radius ~0.55),
+# and two positions nearer than this fraction of the spacing are one tip (tips of neighbours
+# pushed together stay more than half a spacing apart).
+_SEARCH_SETTLED_FRACTION = 0.1
+# A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
+# this fraction of the spacing (a few tenths of a px: the window was centred on the tip as LK
+# centres it), and it ended within the second fraction of the spacing of its guess (farther, LK
+# with its pyramid decides: the identity limit is LK's).
+_GUESS_FRACTION = 0.03
+_FOLLOW_FRACTION = 0.25
 _SAME_TIP_FRACTION = 0.25
 
 
@@ -283,9 +290,9 @@ class Refiner:
                  last_seen: np.ndarray) -> tuple[np.ndarray, bool]:
         """Refined positions of the tracked pins, lost pins searched for, blobs detected if still needed.
 
-        The three steps of `refine`, `search` (every pin without a plausible centroid) and
-        `recover` (only when some pin is still missing); `pins.track.PinTracker` runs the same
-        steps with its own schedule (search and detection at bounded rates).
+        `refine` (searching for every lost pin), then `recover` only when some pin is still
+        missing; `pins.track.PinTracker` runs the same steps on its own schedule (retired pins
+        searched for in turns, detection at a bounded rate).
 
         Parameters
         ----------
@@ -305,17 +312,103 @@ class Refiner:
         detected : bool
             Whether this frame needed blob detection (some pin neither plausible nor found by search).
         """
-        positions, radius = self.refine(crop, tracked, last_seen)
-        missing = np.flatnonzero(np.isnan(positions[:, 0]))
-        if missing.size == 0:
-            return positions, False
-        positions = self.search(crop, positions, missing, last_seen, radius)
+        positions = self.refine(crop, tracked, last_seen)
         if not np.isnan(positions[:, 0]).any():
             return positions, False
         return self.recover(grey, tracked, positions, last_seen), True
 
-    def refine(self, crop: np.ndarray, tracked: np.ndarray, last_seen: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Tracked pins moved onto their windowed centroids where those are plausible.
+    def follow(self, crop: np.ndarray, guess: np.ndarray, last_seen: np.ndarray,
+               search: np.ndarray | None = None) -> np.ndarray:
+        """Pins followed from their guesses by windowed centroids alone; lost pins searched for.
+
+        Two passes of windows (steps of mean shift), all pins in one array per pass. First pass:
+        a window per pin with a guess (its constant-velocity guess) and per lost pin to search for
+        (at its prediction, `_predict`). Second pass, re-centred on the first centroid, for the
+        pins whose first centroid moved. A pin with a guess is placed when a pass moved its window
+        by at most `_GUESS_FRACTION` of the spacing (a few tenths of a px: the window was centred
+        on the tip as LK would centre it), its tip is like at rest, and it ended within
+        `_FOLLOW_FRACTION` of the spacing of its guess; the others need LK (`refine` then checks
+        them). A lost pin is found as in `refine`'s search: its second window moved by at most
+        `_SEARCH_SETTLED_FRACTION` of the spacing and it lies within `gate_px` of its prediction.
+        No two pins take one tip (`_one_pin_per_tip`).
+
+        Parameters
+        ----------
+        crop : (h, w) ndarray of uint8
+            The frame's crop at `origin`, bright pins.
+        guess : (N, 2) ndarray
+            Guessed positions (x, y), px in the frame; NaN for lost pins.
+        last_seen : (N, 2) ndarray
+            Each pin's last known position, px.
+        search : (N,) ndarray of bool, optional
+            Lost pins to search for (default: all of them).
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            Pins placed or found, px; NaN elsewhere (a pin with a guess and NaN here needs LK).
+        filled : (N, 2) ndarray of float64
+            `guess` with lost pins at their predictions, px (for `refine`).
+        """
+        missing = np.isnan(guess[:, 0])
+        lost = np.flatnonzero(missing)
+        if lost.size == 0:
+            filled, which, n = guess, np.arange(len(guess)), len(guess)
+        else:
+            filled = guess.copy()
+            filled[lost] = self._predict(guess, lost, last_seen)
+            look = lost if search is None else lost[search[lost]]
+            live = np.flatnonzero(~missing)
+            which, n = np.concatenate([live, look]), live.size
+        radius = self.window_radius(filled)[which]
+        start = filled[which]
+        first, area, contrast, compactness = self.windows(crop, start - self.origin, radius)
+        first += self.origin
+        step = first - start
+        moved = np.einsum("nd,nd->n", step, step)
+        like = self._like_at_rest(area, contrast, compactness, which)
+        fine = (_GUESS_FRACTION * self.spacing_px) ** 2
+        done = (moved <= fine) & like
+        done[n:] = False  # a lost pin's prediction is no guess: two passes
+        positions = np.full_like(guess, np.nan)
+        positions[which[done]] = first[done]
+        again = np.flatnonzero(~done & (moved <= (_FOLLOW_FRACTION * self.spacing_px) ** 2))
+        if again.size:
+            second, area, contrast, compactness = self.windows(crop, first[again] - self.origin, radius[again])
+            second += self.origin
+            step = second - first[again]
+            moved = np.einsum("nd,nd->n", step, step)
+            offset = second - start[again]
+            error = np.einsum("nd,nd->n", offset, offset)
+            searched = again >= n
+            ok = (self._like_at_rest(area, contrast, compactness, which[again])
+                  & np.where(searched, (moved <= (_SEARCH_SETTLED_FRACTION * self.spacing_px) ** 2)
+                             & (error <= self.gate_px ** 2),
+                             (moved <= fine) & (error <= (_FOLLOW_FRACTION * self.spacing_px) ** 2)))
+            positions[which[again[ok]]] = second[ok]
+            placed = np.concatenate([np.flatnonzero(done), again[ok]])
+        else:
+            placed = np.flatnonzero(done)
+        if placed.size:
+            offset = positions[which[placed]] - start[placed]
+            self._one_pin_per_tip(positions, which[placed], np.einsum("nd,nd->n", offset, offset))
+        return positions, filled
+
+    def refine(self, crop: np.ndarray, tracked: np.ndarray, last_seen: np.ndarray,
+               search: np.ndarray | None = None, settled: np.ndarray | None = None, *,
+               filled: np.ndarray | None = None) -> np.ndarray:
+        """Tracked pins onto their windowed centroids; lost pins searched for around their predictions.
+
+        First pass: one window per tracked pin, at its estimate, and one per lost pin to search for,
+        at its prediction (`_predict`). A tracked pin whose centroid is plausible takes it; one
+        whose centroid is implausible gets a window at its prediction. Second pass, for the
+        pins searched for: a window re-centred on the first centroid, where a tip cut by the first
+        window is whole (a step of mean shift). Such a pin is found when that last move is within
+        `_SEARCH_SETTLED_FRACTION` of the spacing, its tip's area, contrast and compactness are like
+        its own at rest, the centroid lies within `gate_px` (below half the pin spacing) of its
+        prediction, and no neighbour is within `_SAME_TIP_FRACTION` of the spacing (two pins
+        never share a tip: a found pin yields to a refined one, and of two found pins the one
+        farther from its prediction yields). Blob detection is never run here (`recover` does).
 
         Parameters
         ----------
@@ -324,127 +417,115 @@ class Refiner:
         tracked : (N, 2) ndarray
             Estimates (x, y), px in the frame; NaN where the pin is lost.
         last_seen : (N, 2) ndarray
-            Each pin's last known position, px.
+            Each pin's last known position, px (the prediction of a pin without tracked neighbours).
+        search : (N,) ndarray of bool, optional
+            Lost pins to search for (default: all of them).
+        settled : (N,) ndarray of bool, optional
+            Pins whose `tracked` position is already a plausible windowed centroid (`follow`):
+            kept as they are, without a window.
+        filled : (N, 2) ndarray, optional
+            `tracked` with lost pins at their predictions, when already known (`follow`).
 
         Returns
         -------
         positions : (N, 2) ndarray of float64
-            Windowed centroids, px; NaN where the estimate was NaN or its centroid implausible.
-        radius : (N,) ndarray of float64
-            Each pin's window radius, px (lost pins at their predicted positions), for `search`.
+            Windowed centroids, px; NaN where a pin was neither plausible nor found.
         """
-        lost = np.flatnonzero(np.isnan(tracked[:, 0]))
-        if lost.size == 0:
+        missing = np.isnan(tracked[:, 0])
+        lost = np.flatnonzero(missing)
+        if lost.size == 0 and settled is None:
             radius = self.window_radius(tracked)
-            centres, plausible = self._centroids(crop, tracked, radius, slice(None))
+            centres, area, contrast, compactness = self.windows(crop, tracked - self.origin, radius)
+            centres += self.origin
+            plausible = self._plausible(centres, tracked, area, contrast, compactness, slice(None))
             if plausible.all():
-                return centres, radius
-            centres[~plausible] = np.nan
-            return centres, radius
-        # A lost pin still bounds its neighbours' windows, at its predicted position.
-        filled = tracked.copy()
-        filled[lost] = self._predict(tracked, lost, last_seen)
-        radius = self.window_radius(filled)
-        positions = np.full_like(tracked, np.nan)
-        live = np.flatnonzero(np.isfinite(tracked[:, 0]))
-        if live.size:
-            centres, plausible = self._centroids(crop, tracked[live], radius[live], live)
-            positions[live[plausible]] = centres[plausible]
-        return positions, radius
+                return centres
+            positions = centres
+            positions[~plausible] = np.nan
+            look, first, predicted = np.empty(0, dtype=np.intp), np.empty((0, 2)), np.empty((0, 2))
+            implausible = np.flatnonzero(~plausible)
+        else:
+            # A lost pin still bounds its neighbours' windows, at its predicted position.
+            if filled is None:
+                filled = tracked.copy()
+                filled[lost] = self._predict(tracked, lost, last_seen)
+            else:
+                unknown = lost[np.isnan(filled[lost, 0])]
+                if unknown.size:
+                    filled = filled.copy()
+                    filled[unknown] = self._predict(tracked, unknown, last_seen)
+            radius = self.window_radius(filled)
+            live = ~missing if settled is None else ~missing & ~settled
+            live = np.flatnonzero(live)
+            look = lost if search is None else lost[search[lost]]
+            which = np.concatenate([live, look])
+            centres, area, contrast, compactness = self.windows(crop, filled[which] - self.origin, radius[which])
+            centres += self.origin
+            n = live.size
+            plausible = self._plausible(centres[:n], tracked[live], area[:n], contrast[:n], compactness[:n], live)
+            if settled is None:
+                positions = np.full_like(tracked, np.nan)
+            else:
+                positions = tracked.copy()
+                positions[~settled] = np.nan
+            positions[live[plausible]] = centres[:n][plausible]
+            implausible = live[~plausible]
+            first, predicted = centres[n:], filled[look]
+        retry = look
+        if implausible.size:
+            # A tracked pin whose centroid is implausible (LK between two tips, or on a vanished
+            # one) is searched for from its prediction too.
+            guess = self._predict(positions, implausible, last_seen)
+            again = self.windows(crop, guess - self.origin, radius[implausible])[0] + self.origin
+            retry = np.concatenate([look, implausible])
+            first, predicted = np.concatenate([first, again]), np.concatenate([predicted, guess])
+        # Second pass, from the first centroids (NaN where a window was empty or off the image).
+        ok = np.isfinite(first[:, 0])
+        retry, first, predicted = retry[ok], first[ok], predicted[ok]
+        if retry.size == 0:
+            return positions
+        second, area, contrast, compactness = self.windows(crop, first - self.origin, radius[retry])
+        second += self.origin
+        step, offset = second - first, second - predicted
+        error = np.einsum("nd,nd->n", offset, offset)
+        found = ((np.einsum("nd,nd->n", step, step) <= (_SEARCH_SETTLED_FRACTION * self.spacing_px) ** 2)
+                 & (error <= self.gate_px ** 2) & self._like_at_rest(area, contrast, compactness, retry))
+        if not found.any():
+            return positions
+        retry, second, error = retry[found], second[found], error[found]
+        positions[retry] = second
+        self._one_pin_per_tip(positions, retry, error)
+        return positions
 
-    def _centroids(self, crop: np.ndarray, points: np.ndarray, radius: np.ndarray,
-                   which: np.ndarray | slice) -> tuple[np.ndarray, np.ndarray]:
-        """Windowed centroids (frame px) at finite `points` of pins `which`, and whether each is plausible."""
-        centres, area, contrast, compactness = self.windows(crop, points - self.origin, radius)
-        centres += self.origin
-        step = centres - points
+    def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
+        """Unplace (NaN, in place) found pins that share a tip with a neighbour.
+
+        Two pins on one tip are neighbours at rest: the one farther from its prediction (squared
+        distance `error`, px^2) yields; a pin placed otherwise (not in `found`) never yields to a
+        found one; ties: both yield.
+        """
+        neighbours = self._window_neighbours[:, found].T  # (F, k)
+        gap = positions[neighbours] - positions[found][:, None, :]
+        near = np.einsum("nkd,nkd->nk", gap, gap) < (_SAME_TIP_FRACTION * self.spacing_px) ** 2
+        if near.any():
+            rank = np.full(len(positions), -1.0)
+            rank[found] = error
+            yields = (near & (rank[neighbours] <= error[:, None])).any(axis=1)
+            positions[found[yields]] = np.nan
+
+    def _plausible(self, centres: np.ndarray, estimates: np.ndarray, area: np.ndarray, contrast: np.ndarray,
+                   compactness: np.ndarray, which: np.ndarray | slice) -> np.ndarray:
+        """Whether windowed centroids of pins `which` are plausible: near their estimates, tips like at rest."""
+        step = centres - estimates
         # NaN compares False: an empty window is not plausible.
-        plausible = ((np.einsum("nd,nd->n", step, step) <= self._max_shift_px ** 2)
-                     & self._like_at_rest(area, contrast, compactness, which))
-        return centres, plausible
+        return ((np.einsum("nd,nd->n", step, step) <= self._max_shift_px ** 2)
+                & self._like_at_rest(area, contrast, compactness, which))
 
     def _like_at_rest(self, area: np.ndarray, contrast: np.ndarray, compactness: np.ndarray,
                       which: np.ndarray | slice) -> np.ndarray:
         """Whether tips' area, contrast and compactness are like those of pins `which` at rest."""
         return ((area >= self._area_range[0][which]) & (area <= self._area_range[1][which])
                 & (contrast >= self._min_contrast[which]) & (compactness >= self._min_compactness[which]))
-
-    def search(self, crop: np.ndarray, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
-               radius: np.ndarray) -> np.ndarray:
-        """Look for lost pins in windows around their predicted positions (no blob detection).
-
-        Each pin's window starts at its prediction (`_predict`) and moves onto the centroid it
-        finds, `_SEARCH_STEPS` times (a mean shift: a tip cut by the first window is whole in the
-        next). A pin is found when the last move is within the plausibility bound (converged),
-        the tip's area, contrast and compactness are like the pin's own at rest, the centroid lies
-        within `gate_px` (below half the pin spacing) of the prediction, and no other pin is within
-        `_SAME_TIP_FRACTION` of the spacing (two pins never take one tip; a found pin yields to a
-        tracked one, and of two found pins the one farther from its prediction yields).
-        Cost: `_SEARCH_STEPS` windows per searched pin, as cheap as refinement.
-
-        Parameters
-        ----------
-        crop : (h, w) ndarray of uint8
-            The frame's crop at `origin`, bright pins.
-        positions : (N, 2) ndarray
-            Positions so far, px; NaN where missing.
-        which : (L,) ndarray of int
-            Missing pins to look for.
-        last_seen : (N, 2) ndarray
-            Each pin's last known position, px (the prediction when no neighbour is tracked).
-        radius : (N,) ndarray
-            Window radii, px (`refine`).
-
-        Returns
-        -------
-        positions : (N, 2) ndarray of float64
-            `positions` with the pins found filled in.
-        """
-        positions = positions.copy()
-        which = np.asarray(which, dtype=np.intp)
-        if which.size == 0:
-            return positions
-        predicted = self._predict(positions, which, last_seen)
-        point = predicted.copy()
-        active = np.arange(which.size)
-        moved = np.full(which.size, np.inf)
-        area = contrast = compactness = None
-        for _ in range(_SEARCH_STEPS):
-            inside = np.isfinite(point[active, 0])
-            active = active[inside]
-            if active.size == 0:
-                break
-            centres, area_a, contrast_a, compactness_a = self.windows(crop, point[active] - self.origin,
-                                                                      radius[which[active]])
-            centres += self.origin
-            step = centres - point[active]
-            moved[active] = np.einsum("nd,nd->n", step, step)
-            point[active] = centres
-            if area is None:
-                area, contrast, compactness = (np.full(which.size, np.nan) for _ in range(3))
-            area[active], contrast[active], compactness[active] = area_a, contrast_a, compactness_a
-        if area is None:
-            return positions
-        offset = point - predicted
-        found = ((moved <= self._max_shift_px ** 2) & (np.einsum("nd,nd->n", offset, offset) <= self.gate_px ** 2)
-                 & self._like_at_rest(area, contrast, compactness, which))
-        if not found.any():
-            return positions
-        candidates, point, offset = which[found], point[found], offset[found]
-        # No two pins on one tip: a found pin yields to any pin already placed ...
-        same_px = _SAME_TIP_FRACTION * self.spacing_px
-        placed = np.isfinite(positions[:, 0])
-        keep = np.ones(candidates.size, dtype=bool)
-        if placed.any():
-            keep = ~np.isfinite(cKDTree(positions[placed]).query(point, k=1, distance_upper_bound=same_px)[0])
-        # ... and of two found pins on one tip, the one farther from its prediction yields.
-        pairs = cKDTree(point).query_pairs(same_px, output_type="ndarray")
-        if len(pairs):
-            error = np.einsum("nd,nd->n", offset, offset)
-            a, b = pairs[:, 0], pairs[:, 1]
-            keep[np.where(error[a] > error[b], a, b)] = False
-        positions[candidates[keep]] = point[keep]
-        return positions
 
     def recover(self, grey: np.ndarray, tracked: np.ndarray, refined: np.ndarray,
                 last_seen: np.ndarray) -> np.ndarray:
@@ -487,12 +568,18 @@ class Refiner:
 
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
         """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
-        neighbour_shift = (positions - self.rest_positions)[self._neighbour_index[which]]  # (L, k, 2)
-        seen = np.isfinite(neighbour_shift[..., 0]).any(axis=1)
+        index = self._neighbour_index[which]
+        shift = (positions[index] - self.rest_positions[index])  # (L, k, 2)
+        count = np.count_nonzero(np.isfinite(shift[..., 0]), axis=1)
         predicted = last_seen[which].copy()
-        if seen.any():
-            shift = np.nanmedian(neighbour_shift[seen], axis=1)
-            predicted[seen] = self.rest_positions[which[seen]] + shift
+        seen = np.flatnonzero(count)
+        if seen.size:
+            # Median over the finite neighbours (sorting puts NaN last): mean of the middle one or two.
+            ordered = np.sort(shift[seen], axis=1)
+            n = count[seen]
+            low = np.take_along_axis(ordered, ((n - 1) // 2)[:, None, None], axis=1)[:, 0]
+            high = np.take_along_axis(ordered, (n // 2)[:, None, None], axis=1)[:, 0]
+            predicted[seen] = self.rest_positions[which[seen]] + 0.5 * (low + high)
         return predicted
 
 

@@ -51,6 +51,9 @@ __all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
 
 # A frame in which fewer than this fraction of the expected (not retired) pins are found is blank.
 _BLANK_FRACTION = 0.1
+# Without the backward check, failed pins are tracked again with the pyramid only when more than
+# this fraction of them failed on the full image alone; fewer are left to the windowed search.
+_RETRY_FRACTION = 0.1
 
 
 @dataclass(frozen=True)
@@ -139,9 +142,10 @@ def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, par
     From a guess, the forward pass first runs on the full image only (a good guess leaves little
     motion to find); the pins that then fail a check, or land more than a third of a window from
     the guess (about as far as LK reaches without the pyramid), are tracked again with it.
-    Without `backward`, that first pass skips the backward LK and its check (status and residual
-    only: `PinTracker` checks each result by its windowed centroid instead); the pins tracked
-    again with the pyramid still get the backward check.
+    Without `backward`, no pass runs the backward LK and its check (status and residual only:
+    `PinTracker` checks each result by its windowed centroid instead, and searches for the pins
+    that fail), and the pyramid runs only when more than `_RETRY_FRACTION` of all the points
+    (NaN rows included) fail (the guess was poor for many: a sudden change of motion).
     """
     out = np.full_like(points, np.nan)
     ok = np.zeros(len(points), dtype=bool)
@@ -154,11 +158,17 @@ def _track(prev_grey: np.ndarray, next_grey: np.ndarray, points: np.ndarray, par
     forward, good = _forward_backward(prev_grey, next_grey, start, initial, params, levels,
                                       backward=backward or guess is None)
     if levels < params.levels:
-        far = np.sum((forward - initial) ** 2, axis=2).ravel() > (0.35 * params.window_px) ** 2
-        again = np.flatnonzero(~good | far)
+        if backward:
+            far = np.sum((forward - initial) ** 2, axis=2).ravel() > (0.35 * params.window_px) ** 2
+            again = np.flatnonzero(~good | far)
+        else:
+            # Checked by their centroids, far pins need no retry; a few failed ones are searched for.
+            again = np.flatnonzero(~good)
+            if again.size <= _RETRY_FRACTION * len(points):
+                again = again[:0]
         if again.size:
             forward[again], good[again] = _forward_backward(prev_grey, next_grey, start[again], initial[again],
-                                                            params, params.levels)
+                                                            params, params.levels, backward=backward)
     out[live[good]] = forward.reshape(-1, 2)[good]
     ok[live[good]] = True
     return out, ok
@@ -194,7 +204,7 @@ class PinTracker:
     2. refinement: every tracked pin onto its windowed centroid, kept when plausible (the check
        of LK's answer);
     3. windowed search for the pins still missing, in a window around each one's prediction
-       (`Refiner.search`): every frame for a pin lost for at most `retire_after` frames; a pin
+       (`Refiner.refine`): every frame for a pin lost for at most `retire_after` frames; a pin
        lost longer is *retired* and searched for only every `check_every` frames (pins take
        turns, so a frame searches about 1/`check_every` of the retired pins);
     4. full blob detection with recovery (`Refiner.recover`), only when a pin that is not retired
@@ -261,7 +271,7 @@ class PinTracker:
 
     def __init__(self, *, lk: LKParams | None = None, detection: DetectionParams | None = None,
                  refine: bool = True, gate_fraction: float = 0.4, neighbours: int = 6,
-                 retire_after: int = 5, check_every: int = 5, detect_every: int = 10,
+                 retire_after: int = 5, check_every: int = 5, detect_every: int = 20,
                  disc: SensorDisc | None = None) -> None:
         if not 0.0 < gate_fraction < 0.5:
             raise ValueError(f"gate_fraction must be in (0, 0.5), got {gate_fraction}")
@@ -369,6 +379,7 @@ class PinTracker:
         self.lost = np.zeros(len(pins), dtype=bool)
         self.retired = np.zeros(len(pins), dtype=bool)
         self._lost_run = np.zeros(len(pins), dtype=np.int64)
+        self._index = np.arange(len(pins))
         self.blank = False
         self.frames = 1
         self.detection_frames = 0
@@ -411,14 +422,13 @@ class PinTracker:
             raise ShapeError(f"frame size changed: expected the crop {self._previous.shape}, got {current.shape}")
         origin = self._origin
         # Constant velocity over one frame; after blank frames, from where the pins were last seen.
-        guess = self._reference + (self._velocity if self._since_good == 1 else 0.0) - origin
-        moved, _ = _track(self._previous, current, self._reference - origin, self.lk, guess=guess,
-                          backward=not self.refine)
-        positions = moved + origin
+        guess = self._reference + self._velocity if self._since_good == 1 else self._reference
         detected = False
         if self.refine:
-            positions, blank, detected = self._refine(grey, current, positions)
+            positions, blank, detected = self._refine(grey, current, guess)
         else:
+            moved, _ = _track(self._previous, current, self._reference - origin, self.lk, guess=guess - origin)
+            positions = moved + origin
             blank = self._too_few(positions)
         self.frames += 1
         self.blank = blank
@@ -443,22 +453,28 @@ class PinTracker:
         self._last_seen[~self.lost] = positions[~self.lost]
         return positions.copy()
 
-    def _refine(self, grey: np.ndarray, current: np.ndarray, tracked: np.ndarray) -> tuple[np.ndarray, bool, bool]:
-        """Refinement, search and bounded-rate detection: positions, whether blank, whether detected."""
-        refiner = self._refiner
+    def _refine(self, grey: np.ndarray, current: np.ndarray, guess: np.ndarray) -> tuple[np.ndarray, bool, bool]:
+        """Windowed following, LK where needed, search and bounded-rate detection: positions, blank?, detected?"""
+        refiner, origin = self._refiner, self._origin
         crop = self._bright(current)
-        positions, radius = refiner.refine(crop, tracked, self._last_seen)
+        # Retired pins take turns: each is searched for once in `check_every` frames.
+        search = ~self.retired | ((self._index + self.frames) % self.check_every == 0)
+        positions, filled = refiner.follow(crop, guess, self._last_seen, search)
+        need = np.isnan(positions[:, 0]) & np.isfinite(guess[:, 0])
+        tracked = positions
+        if need.any():
+            # LK for the pins whose windows did not settle near their guesses, checked by refinement.
+            start = np.where(need[:, None], self._reference, np.nan)
+            moved, _ = _track(self._previous, current, start - origin, self.lk, guess=guess - origin, backward=False)
+            tracked = np.where(need[:, None], moved + origin, positions)
+            positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
+                                       filled=np.where(need[:, None], tracked, filled))
         missing = np.isnan(positions[:, 0])
         if not missing.any():
             return positions, False, False
-        # Retired pins take turns: each is searched for once in `check_every` frames.
-        turn = (np.arange(len(positions)) + self.frames) % self.check_every == 0
-        search = np.flatnonzero(missing & (~self.retired | turn))
-        positions = refiner.search(crop, positions, search, self._last_seen, radius)
         if self._too_few(positions):
             return positions, True, False
-        pending = np.isnan(positions[:, 0]) & ~self.retired
-        if pending.any() and self._since_detection + 1 >= self.detect_every:
+        if (missing & ~self.retired).any() and self._since_detection + 1 >= self.detect_every:
             return refiner.recover(grey, tracked, positions, self._last_seen), False, True
         return positions, False, False
 
