@@ -42,4 +42,6 @@ def interruption_reason(exc: BaseException) -> str:
         return "terminated (SIGTERM)"
     if isinstance(exc, KeyboardInterrupt):
         return "interrupted (Ctrl-C)"
+    if isinstance(exc, OSError) and exc.strerror and str(exc).startswith("[Errno"):
+        return exc.strerror  # e.g. "disk full while writing 'results.sqlite'"
     return f"{type(exc).__name__}: {exc}"

@@ -170,7 +170,11 @@ class ResultsStore:
             else:
                 self._db = sqlite3.connect(self.path, isolation_level=None)  # autocommit: each write lands
             if read_only:
+                tables = {r[0] for r in self._db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+                if not {"meta", "inspections", "taps"} <= tables:
+                    raise ResultsError(f"{self.path} holds no inspections yet (its creation was cut short)")
                 version = self._db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()
+                version = version or (f"tactip-results/{SCHEMA_VERSION}",)  # cut short before the schema row
             else:
                 self._db.execute("PRAGMA busy_timeout=10000")  # concurrent inspections share the file
                 self._db.execute("PRAGMA journal_mode=WAL")
@@ -225,7 +229,9 @@ class ResultsStore:
                         schema = row and row[0]
             except sqlite3.Error as exc:
                 raise self._error(exc, "reading") from None
-            ours = schema is not None and str(schema).startswith("tactip-results/")
+            # A database whose creation was cut short (disk full) holds some of our tables and no schema yet.
+            ours = (schema is not None and str(schema).startswith("tactip-results/")) or \
+                tables <= {"meta", "inspections", "taps", "sqlite_sequence"}
             if tables - {"sqlite_sequence"} and not ours:
                 names = ", ".join(sorted(tables - {"sqlite_sequence"})[:5])
                 raise ResultsError(f"{path} is another SQLite database (tables {names}), not tactip results; "

@@ -1,0 +1,480 @@
+"""Issue 9, data safety: nothing lost, nothing overwritten, no traceback (the real CLI, in subprocesses).
+
+Every case runs ``tactip`` through `faultkit.run_tactip`, which checks that no traceback is printed,
+that the command's inputs are byte-identical afterwards and that no temporary file is left; refusals
+are checked with `faultkit.assert_refused` (non-zero exit, the message names the problem).
+
+Disk-full cases run on a small tmpfs the test mounts itself when it may (root); otherwise on a fake
+full disk: a file-size limit (RLIMIT_FSIZE) makes the write layer fail (EFBIG) at the same place.
+`FULL_DISK_MODE` records which ran (printed in the test report with ``-rA``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import json
+import os
+import resource
+import shutil
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from perception import load_dataset, load_model
+from tests.tactip.conftest import LOCATIONS, small_station_table, write_station
+from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip
+
+FULL_DISK_MODE: dict[str, str] = {}
+
+
+# -- helpers -----------------------------------------------------------------------------------------
+
+def station_copy(sim_station, root: Path, *, datasets: bool = True, model: bool = True, **sections) -> Path:
+    """A copy of the session's small station in ``root`` (its calibration, model and datasets); returns the TOML."""
+    root.mkdir(parents=True, exist_ok=True)
+    shutil.copy(sim_station.root / "calibration.h5", root / "calibration.h5")
+    if model:
+        shutil.copy(sim_station.model, root / "model.h5")
+    if datasets:
+        (root / "datasets").mkdir(exist_ok=True)
+        shutil.copy(sim_station.train, root / "datasets" / "train.h5")
+        shutil.copy(sim_station.test, root / "datasets" / "test.h5")
+    return write_station(root, small_station_table(root, **sections))
+
+
+@contextlib.contextmanager
+def small_filesystem(folder: Path, size_kb: int):
+    """Mount a ``size_kb`` tmpfs on ``folder`` (root only); yields True if mounted, False if not permitted."""
+    folder.mkdir(parents=True, exist_ok=True)
+    mounted = False
+    if hasattr(os, "geteuid") and os.geteuid() == 0 and shutil.which("mount"):
+        done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size_kb}k", "tmpfs", str(folder)],
+                              capture_output=True)
+        mounted = done.returncode == 0
+    try:
+        yield mounted
+    finally:
+        if mounted:
+            subprocess.run(["umount", "-l", str(folder)], capture_output=True)
+
+
+def fill(folder: Path, leave_bytes: int) -> Path:
+    """Fill the file system of ``folder`` with one file, leaving about ``leave_bytes`` free."""
+    stat = os.statvfs(folder)
+    free = stat.f_bavail * stat.f_frsize
+    filler = folder / "filler.bin"
+    with open(filler, "wb") as f:
+        f.write(b"\0" * max(0, free - leave_bytes))
+    return filler
+
+
+def file_size_limit(limit_bytes: int):
+    """A ``preexec_fn``: regular files may not grow past ``limit_bytes`` (writes fail with EFBIG: a fake full disk)."""
+    def limit():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit_bytes, limit_bytes))
+    return limit
+
+
+def disk_full_words(mounted: bool) -> tuple[str, ...]:
+    return ("disk full while writing",) if mounted else ("file size limit reached while writing",)
+
+
+def rows(db: Path) -> list[tuple]:
+    with contextlib.closing(sqlite3.connect(f"{db.as_uri()}?mode=ro", uri=True)) as con:
+        return con.execute("SELECT id, gap, status, reason, taps, station FROM inspections ORDER BY id").fetchall()
+
+
+# -- outputs over inputs --------------------------------------------------------------------------------
+
+def test_train_refuses_to_write_the_model_over_its_dataset(sim_station, tmp_path):
+    data = tmp_path / "train.h5"
+    shutil.copy(sim_station.train, data)
+    result = run_tactip("train", "train.h5", "--out", "train.h5", cwd=tmp_path, inputs=[data])
+    assert_refused(result, "train.h5", "input")
+    os.link(data, tmp_path / "hardlink.h5")       # the same file under another name
+    os.symlink(data, tmp_path / "symlink.h5")
+    for alias in ("hardlink.h5", "symlink.h5", "./sub/../train.h5"):
+        (tmp_path / "sub").mkdir(exist_ok=True)
+        result = run_tactip("train", "train.h5", "--out", alias, cwd=tmp_path, inputs=[data])
+        assert_refused(result, "input")
+    assert len(load_dataset(data)) == len(load_dataset(sim_station.train))
+
+
+def test_results_export_and_plot_refuse_to_write_over_the_database(sim_station, tmp_path):
+    toml = station_copy(sim_station, tmp_path, datasets=False)
+    done = run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", "--quiet", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    db = tmp_path / "results.sqlite"
+    for argv in (("export", "--db", db, "--csv", "--out", db), ("export", "--db", db, "--json", "--out", "results.sqlite"),
+                 ("plot", "--db", db, "--out", db), ("export", "--config", toml, "--csv", "--out", toml)):
+        result = run_tactip("results", *argv, cwd=tmp_path, inputs=[db, toml])
+        assert_refused(result, "input")
+    assert rows(db)[0][2] == "done"
+
+
+def test_replay_refuses_outputs_over_the_video_or_each_other(tmp_path):
+    video = tmp_path / "v.mp4"
+    shutil.copy(Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4", video)
+    for argv in (("--out", "o.h5", "--annotate", "v.mp4"), ("--out", "v.mp4"), ("--out", "o.h5", "--annotate", "o.h5")):
+        result = run_tactip("replay", "v.mp4", *argv, "--quiet", cwd=tmp_path, inputs=[video])
+        assert_refused(result, "v.mp4" if "v.mp4" in argv else "same file")
+    assert not (tmp_path / "o.h5").exists()
+
+
+# -- full disk ----------------------------------------------------------------------------------------
+
+def test_collect_on_a_full_disk_keeps_only_complete_taps_and_resumes(sim_station, tmp_path):
+    toml = station_copy(sim_station, tmp_path / "station", datasets=False, model=False)
+    out = tmp_path / "small"
+    with small_filesystem(out, 160) as mounted:
+        FULL_DISK_MODE["collect"] = "tmpfs 160 kB" if mounted else "RLIMIT_FSIZE 160 kB (no mount permission)"
+        extra = {} if mounted else {"preexec_fn": file_size_limit(160 * 1024)}
+        result = run_tactip("collect", "--config", toml, "--out", out, "--workers", "1", "--quiet",
+                            cwd=tmp_path, inputs=[toml, tmp_path / "station" / "calibration.h5"], **extra)
+        assert_refused(result, *disk_full_words(mounted), "train.h5")
+        assert result.returncode == 1                                      # not a segfault (139)
+        stored = load_dataset(out / "train.h5")
+        reference = load_dataset(sim_station.train)
+        assert 0 < len(stored) < len(reference)
+        # Every stored tap is the tap an uninterrupted collection takes: nothing zero, nothing partial.
+        assert np.array_equal(stored.taps, reference.taps[:len(stored)])
+        assert np.abs(stored.taps).reshape(len(stored), -1).max(axis=1).min() > 0
+        kept = len(stored)
+        # The resume after the full disk: space again (a bigger file system, or no limit).
+        if mounted:
+            subprocess.run(["mount", "-o", "remount,size=8m", str(out)], check=True)
+        again = run_tactip("collect", "--config", toml, "--out", out, "--workers", "2", "--quiet", cwd=tmp_path,
+                           timeout=300)
+        assert again.returncode == 0, again.stderr
+        for name, ref in (("train.h5", sim_station.train), ("test.h5", sim_station.test)):
+            whole, expected = load_dataset(out / name), load_dataset(ref)
+            assert np.array_equal(whole.taps, expected.taps) and np.array_equal(whole.location, expected.location)
+        assert kept > 0
+
+
+def test_replay_on_a_full_disk_reports_it_and_leaves_nothing(tmp_path):
+    video = tmp_path / "v.mp4"
+    shutil.copy(Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4", video)
+    out = tmp_path / "small"
+    with small_filesystem(out, 96) as mounted:
+        FULL_DISK_MODE["replay"] = "tmpfs 96 kB" if mounted else "RLIMIT_FSIZE 96 kB"
+        extra = {} if mounted else {"preexec_fn": file_size_limit(96 * 1024)}
+        result = run_tactip("replay", video, "--out", out / "o.h5", "--quiet", cwd=tmp_path, inputs=[video], **extra)
+        assert_refused(result, *disk_full_words(mounted), "o.h5")
+        assert result.returncode == 1
+        assert not (out / "o.h5").exists() and not leftover_temporaries(out)
+
+
+def test_results_export_on_a_full_disk_keeps_the_old_file(sim_station, tmp_path):
+    toml = station_copy(sim_station, tmp_path, datasets=False)
+    assert run_tactip("inspect", "--config", toml, "--seed", "1", "--quiet", cwd=tmp_path).returncode == 0
+    db = tmp_path / "results.sqlite"
+    out = tmp_path / "small"
+    with small_filesystem(out, 64) as mounted:
+        FULL_DISK_MODE["results export"] = "tmpfs 64 kB" if mounted else "RLIMIT_FSIZE 2 kB"
+        old = out / "old.json"
+        old.write_text('["the export of yesterday"]\n')
+        if mounted:
+            fill(out, 512)
+        extra = {} if mounted else {"preexec_fn": file_size_limit(2048)}
+        result = run_tactip("results", "export", "--db", db, "--json", "--out", old, cwd=tmp_path,
+                            inputs=[db, old], **extra)
+        assert_refused(result, *disk_full_words(mounted), "old.json")
+        assert old.read_text() == '["the export of yesterday"]\n'
+
+
+def test_inspect_on_a_full_disk_reports_it_and_keeps_the_stored_rows(sim_station, tmp_path):
+    small = tmp_path / "small"
+    with small_filesystem(small, 400) as mounted:
+        if not mounted:
+            pytest.skip("needs a small file system (root): SQLite's own writes are not size-limited the same way")
+        FULL_DISK_MODE["inspect"] = "tmpfs 400 kB"
+        toml = station_copy(sim_station, tmp_path / "station", datasets=False,
+                            station={"results": str(small / "results.sqlite")})
+        first = run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", "--quiet", cwd=tmp_path)
+        assert first.returncode == 0, first.stderr
+        before = rows(small / "results.sqlite")
+        filler = fill(small, 40 * 1024)
+        result = run_tactip("inspect", "--config", toml, "--seed", "2", "--quiet", cwd=tmp_path, inputs=[toml])
+        assert_refused(result, "disk full while writing", "results.sqlite")
+        filler.unlink()
+        after = rows(small / "results.sqlite")
+        assert after[:len(before)] == before                               # nothing stored before is lost
+        for row in after[len(before):]:                                    # new rows say why they stopped
+            assert row[2] == "aborted" and "disk full" in row[3], row
+
+
+# -- half-prepared, bad or mixed inputs ------------------------------------------------------------------
+
+def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, tmp_path, monkeypatch):
+    """inspect --sim's preparation: interrupted in the fixation sweep, then resumed (in-process: the
+    real preparation of the packaged simulated station takes minutes)."""
+    import calibration
+    from tactip.config import load_station_config
+    from tactip.procedures import model_is_prepared, prepare_model
+
+    toml = station_copy(sim_station, tmp_path, model=False)
+    config = load_station_config(toml)
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    sweep = calibration.recommend_fixation
+    monkeypatch.setattr(calibration, "recommend_fixation", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        prepare_model(config, progress=False, log=lambda line: None)
+    assert not config.perception.model.exists() and not model_is_prepared(config.perception.model)
+    assert not leftover_temporaries(tmp_path)
+    monkeypatch.setattr(calibration, "recommend_fixation",
+                        lambda *a, **k: sweep(*a, **{**k, "runs": 100}))
+    prepare_model(config, progress=False, log=lambda line: None)
+    assert model_is_prepared(config.perception.model)
+
+
+def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tmp_path):
+    from perception import save_model
+    from tactip.procedures import model_is_prepared
+
+    bare = load_model(sim_station.model)
+    bare = type(bare)(**{**bare.__dict__, "recommended": {}})
+    save_model(tmp_path / "model.h5", bare)
+    assert not model_is_prepared(tmp_path / "model.h5") and model_is_prepared(sim_station.model)
+    toml = station_copy(sim_station, tmp_path / "station", datasets=False)
+    shutil.copy(tmp_path / "model.h5", tmp_path / "station" / "model.h5")
+    result = run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", cwd=tmp_path,
+                        inputs=[tmp_path / "station" / "model.h5"])
+    assert result.returncode == 0, result.stderr
+    assert "no recommended decision_threshold or fixation_location" in result.stdout
+
+
+@pytest.mark.parametrize("key, value, words", [
+    ("decision_threshold", 0.0, ("decision_threshold", "(0, 1]")),
+    ("decision_threshold", float("nan"), ("decision_threshold",)),
+    ("decision_threshold", 1.5, ("decision_threshold",)),
+    ("fixation_location", 40.0, ("fixation_location", "range")),
+    ("fixation_location", float("inf"), ("fixation_location",)),
+    ("policy", "sideways", ("policy",)),
+])
+def test_a_model_with_bad_recommended_settings_is_refused(sim_station, tmp_path, key, value, words):
+    toml = station_copy(sim_station, tmp_path, datasets=False)
+    with h5py.File(tmp_path / "model.h5", "r+") as f:
+        settings = json.loads(f.attrs["recommended"])
+        f.attrs["recommended"] = json.dumps({**settings, key: value})
+    model = tmp_path / "model.h5"
+    for argv in (("inspect", "--config", toml, "--quiet"),
+                 ("validate", model, sim_station.test, "--runs", "10", "--quiet")):
+        result = run_tactip(*argv, cwd=tmp_path, inputs=[model, toml])
+        assert_refused(result, "model.h5", *words)
+    assert not (tmp_path / "results.sqlite").exists() or rows(tmp_path / "results.sqlite") == []
+
+
+def test_a_model_with_nan_likelihoods_is_refused_and_train_refuses_inf_epsilon(sim_station, tmp_path):
+    model = tmp_path / "model.h5"
+    shutil.copy(sim_station.model, model)
+    with h5py.File(model, "r+") as f:
+        f["log_probability"][0, 0, 0] = np.nan
+    result = run_tactip("validate", model, sim_station.test, "--runs", "10", "--quiet", cwd=tmp_path,
+                        inputs=[model, sim_station.test])
+    assert_refused(result, "model.h5", "log_probability", "nan")
+    result = run_tactip("train", sim_station.train, "--out", "inf.h5", "--epsilon", "inf", cwd=tmp_path,
+                        inputs=[sim_station.train])
+    assert_refused(result, "--epsilon", "finite")
+    assert not (tmp_path / "inf.h5").exists()
+
+
+def test_taps_stored_as_bytes_are_refused_naming_the_dataset(sim_station, tmp_path):
+    data = tmp_path / "bytes.h5"
+    shutil.copy(sim_station.train, data)
+    with h5py.File(data, "r+") as f:
+        shape = f["taps"].shape
+        del f["taps"]
+        f.create_dataset("taps", data=np.full(shape[:1], b"x" * 8, dtype="S8"))
+    result = run_tactip("train", data, "--out", "m.h5", cwd=tmp_path, inputs=[data])
+    assert_refused(result, "bytes.h5", "taps", "not numbers")
+
+
+def test_a_partly_written_tap_is_never_read(sim_station, tmp_path):
+    """A tap whose arrays grew but whose data never reached the disk (the full-disk failure) is not counted."""
+    data = tmp_path / "train.h5"
+    shutil.copy(sim_station.train, data)
+    with h5py.File(data, "r+") as f:
+        n = f.attrs["complete_taps"]
+        for name in ("taps", "location", "identity"):
+            f[name].resize(n + 3, axis=0)                                  # three zero taps, not counted
+    result = run_tactip("train", data, "--out", "m.h5", "--locations", LOCATIONS, cwd=tmp_path, inputs=[data])
+    assert result.returncode == 0, result.stderr
+    assert f"{n} taps" in result.stdout
+    assert np.array_equal(load_model(tmp_path / "m.h5").log_probability, load_model(sim_station.model).log_probability)
+
+
+@pytest.mark.parametrize("section, change, word", [
+    ("protocol", {"seed": 7}, "seed"),
+    ("protocol", {"repeats": 1}, "repeats"),
+    ("protocol", {"lateral_jitter_mm": 0.3}, "lateral_jitter_mm"),
+])
+def test_a_resumed_collection_with_another_protocol_is_refused(sim_station, tmp_path, section, change, word):
+    toml = station_copy(sim_station, tmp_path, model=False, **{section: change})
+    datasets = tmp_path / "datasets"
+    with h5py.File(datasets / "train.h5", "r+") as f:                   # an interrupted collection
+        f.attrs["complete_taps"] = 5
+    with h5py.File(datasets / "test.h5", "r+") as f:
+        f.attrs["complete_taps"] = 0
+    before = {p: digest(p) for p in datasets.iterdir()}
+    result = run_tactip("collect", "--config", toml, "--out", datasets, "--workers", "1", "--quiet", cwd=tmp_path,
+                        inputs=[toml])
+    assert_refused(result, "train.h5", word)
+    assert {p: digest(p) for p in datasets.iterdir()} == before
+
+
+# -- the results database ----------------------------------------------------------------------------
+
+def test_results_refuse_another_sqlite_database_unchanged(sim_station, tmp_path):
+    other = tmp_path / "other.sqlite"
+    with contextlib.closing(sqlite3.connect(other)) as con:
+        con.execute("CREATE TABLE invoices (id INTEGER PRIMARY KEY, amount REAL)")
+        con.execute("INSERT INTO invoices (amount) VALUES (12.5)")
+        con.commit()
+    toml = station_copy(sim_station, tmp_path / "station", datasets=False, station={"results": str(other)})
+    for argv in (("results", "list", "--db", other), ("results", "export", "--db", other, "--csv"),
+                 ("inspect", "--config", toml, "--gap", "g02", "--quiet")):
+        result = run_tactip(*argv, cwd=tmp_path, inputs=[other])
+        assert_refused(result, "other.sqlite", "another SQLite database", "invoices")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["other.sqlite", "station"]   # no -wal, no -shm
+
+
+def test_results_list_refuses_a_limit_below_one(sim_station, tmp_path):
+    toml = station_copy(sim_station, tmp_path, datasets=False)
+    assert run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", "--quiet", cwd=tmp_path).returncode == 0
+    db = tmp_path / "results.sqlite"
+    for limit in ("-1", "0"):
+        result = run_tactip("results", "list", "--db", db, "--limit", limit, cwd=tmp_path, inputs=[db])
+        assert_refused(result, "--limit")
+        assert "(no inspections)" not in result.stdout
+
+
+def test_a_read_only_data_folder_is_reported_as_permission_denied(sim_station, tmp_path):
+    """Root ignores file modes: as root the folder is a tmpfs remounted read-only, otherwise chmod 555."""
+    root = tmp_path / "ro"
+    with small_filesystem(root, 8192) as mounted:
+        if not mounted and os.geteuid() == 0:
+            pytest.skip("root without mount permission: file modes cannot make a folder read-only")
+        toml = station_copy(sim_station, root / "station", datasets=True)
+        done = run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", "--quiet", cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        station = root / "station"
+        if mounted:
+            subprocess.run(["mount", "-o", "remount,ro", str(root)], check=True)
+        else:
+            for path in [station, *station.rglob("*")]:
+                path.chmod(0o555 if path.is_dir() else 0o444)
+        try:
+            inputs = [station / "results.sqlite", station / "datasets"]
+            listed = run_tactip("results", "list", "--db", station / "results.sqlite", cwd=tmp_path, inputs=inputs)
+            assert listed.returncode == 0, listed.stderr                   # reading needs no write access
+            assert "g02" in listed.stdout
+            for argv, words in ((("inspect", "--config", toml, "--gap", "g02", "--quiet"),
+                                 ("permission denied", "results")),
+                                (("collect", "--config", toml, "--out", station / "datasets", "--quiet",
+                                  "--workers", "1"),
+                                 ("permission denied", "train.h5")),
+                                (("train", station / "datasets" / "train.h5", "--out", station / "m.h5"),
+                                 ("m.h5",))):
+                result = run_tactip(*argv, cwd=tmp_path, inputs=inputs)
+                assert_refused(result, *words)
+                assert "not a results database" not in result.stderr and "not an HDF5 file" not in result.stderr
+        finally:
+            if not mounted:
+                for path in [station, *station.rglob("*")]:
+                    path.chmod(0o755 if path.is_dir() else 0o644)
+
+
+def _start_inspect(toml: Path, cwd: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "tactip.cli", "inspect", "--config", str(toml), "--seed", "1",
+                             "--quiet"], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            stdin=subprocess.DEVNULL)
+
+
+def _wait_for_a_tap(db: Path, process: subprocess.Popen, timeout_s: float = 60) -> None:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and process.poll() is None:
+        if db.exists():
+            with contextlib.suppress(sqlite3.Error):
+                if any(r[2] == "running" and r[4] >= 1 for r in rows(db)):
+                    return
+        time.sleep(0.05)
+    pytest.fail("the inspection never reached its first tap")
+
+
+def test_sigterm_during_inspect_stores_the_inspection_as_aborted(sim_station, tmp_path):
+    toml = station_copy(sim_station, tmp_path, datasets=False)
+    db = tmp_path / "results.sqlite"
+    process = _start_inspect(toml, tmp_path)
+    _wait_for_a_tap(db, process)
+    process.send_signal(signal.SIGTERM)
+    out, err = process.communicate(timeout=60)
+    assert "Traceback" not in err, err
+    assert process.returncode == 128 + signal.SIGTERM and "Stopped (terminated)" in err
+    statuses = [(r[2], r[3]) for r in rows(db)]
+    assert statuses[-1] == ("aborted", "terminated (SIGTERM)") and "running" not in [s for s, _ in statuses]
+    assert not leftover_temporaries(tmp_path)
+
+
+def test_stale_running_rows_are_closed_but_live_ones_are_not(sim_station, tmp_path):
+    toml = station_copy(sim_station, tmp_path, datasets=False)
+    db = tmp_path / "results.sqlite"
+    killed = _start_inspect(toml, tmp_path)                              # SIGKILL: no chance to close its row
+    _wait_for_a_tap(db, killed)
+    killed.kill()
+    killed.communicate(timeout=30)
+    # A concurrent inspection (this test's own live process) and another station's row stay running.
+    import socket
+
+    with contextlib.closing(sqlite3.connect(db)) as con:
+        for station, pid in (("sim-line-1", os.getpid()), ("another-line", 2**22 + 7)):
+            con.execute("INSERT INTO inspections (gap, nominal_width, tolerance, policy, station, started_at, pid, "
+                        "host) VALUES ('g02', 0.5, 0.1, 'active', ?, ?, ?, ?)",
+                        (station, "2099-01-01T00:00:00+00:00", pid, socket.gethostname()))
+        con.commit()
+    before = rows(db)
+    assert [r[2] for r in before].count("running") == 3
+    result = run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "closed 1 inspection(s) left 'running'" in result.stdout
+    after = {r[0]: r for r in rows(db)}
+    assert after[before[0][0]][2] == "aborted" and "stale" in after[before[0][0]][3]
+    assert after[before[1][0]][2] == "running" and after[before[2][0]][2] == "running"
+
+
+# -- broken pipes --------------------------------------------------------------------------------------
+
+def test_only_a_broken_stdout_is_the_quiet_broken_pipe(sim_station, tmp_path, monkeypatch, capsys):
+    toml = station_copy(sim_station, tmp_path, datasets=False)
+    assert run_tactip("inspect", "--config", toml, "--seed", "1", "--quiet", cwd=tmp_path).returncode == 0
+    db = tmp_path / "results.sqlite"
+    # Piped into a reader that has gone: quiet, exit 1, no traceback.
+    process = subprocess.Popen([sys.executable, "-m", "tactip.cli", "results", "export", "--db", str(db), "--json"],
+                               cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
+    process.stdout.close()
+    err = process.stderr.read().decode()
+    process.wait(timeout=60)
+    assert process.returncode == 1 and err == ""
+    # A broken pipe elsewhere (a worker pool, a robot socket) is an error with a message.
+    import tactip.cli.train
+    from tactip.cli import main
+
+    def broken(args):
+        raise BrokenPipeError(errno.EPIPE, "Broken pipe")
+
+    monkeypatch.setattr(tactip.cli.train, "run", broken)
+    assert main(["train", str(sim_station.train), "--out", str(tmp_path / "m.h5")]) == 1
+    assert "broken pipe" in capsys.readouterr().err.lower()
+
