@@ -53,6 +53,9 @@ __all__ = ["match_to_blobs", "WindowCentroids", "Refiner"]
 
 # Sub-pixel steps per px of the window masks' centres and radii.
 _PHASES = 4
+_MEAN_FRACTION = 0.0
+_TIP_REACH = 1.6
+_TIP_MARGIN_PX = 1.5
 # A windowed centroid is plausible when it lies within this fraction of the pin spacing of the LK
 # estimate, and the tip's area, contrast and compactness are within these factors of the pin's own
 # at rest. On renders and the sample video (5-6 mm taps) centroids stay within 0.01 spacings of
@@ -60,7 +63,7 @@ _PHASES = 4
 _MAX_SHIFT_FRACTION = 0.03
 _AREA_RATIO = (0.5, 2.0)
 _MIN_CONTRAST_RATIO = 0.5
-_MIN_COMPACTNESS_RATIO = 0.85
+_MIN_COMPACTNESS_RATIO = 0.6
 # Neighbours whose distance bounds each refinement window (a hexagonal lattice has six), and the
 # window's radius as a fraction of the distance to the nearest one (see `Refiner.window_radius`).
 _WINDOW_NEIGHBOURS = 6
@@ -76,6 +79,8 @@ _SEARCH_SETTLED_FRACTION = 0.1
 # with its pyramid decides: the identity limit is LK's).
 _GUESS_FRACTION = 0.03
 _FOLLOW_FRACTION = 0.25
+_MIN_SHIFT_PX = 0.4
+_MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
 
 
@@ -197,7 +202,11 @@ class WindowCentroids:
         low = patches.min(axis=1)
         top = patches[:, self._top].mean(axis=1)
         contrast = top - low
-        threshold = np.rint(low + self.threshold_fraction * np.maximum(contrast, 0.0)).astype(np.uint8)
+        # Above the window's mean too: on a textured or shadowed skin the darkest pixel lies well
+        # below the membrane, and a threshold near it would let the membrane's texture count.
+        mean = patches.mean(axis=1)
+        level = np.maximum(low + self.threshold_fraction * np.maximum(contrast, 0.0), mean + _MEAN_FRACTION * (top - mean))
+        threshold = np.rint(np.minimum(level, top)).astype(np.uint8)
         # Positive part of (pixel - threshold), in place, without leaving uint8.
         np.maximum(patches, threshold[:, None], out=patches)
         patches -= threshold[:, None]
@@ -262,9 +271,20 @@ class Refiner:
         self._neighbour_index = index[:, :neighbours]
         self._window_neighbours = np.ascontiguousarray(index[:, :_WINDOW_NEIGHBOURS].T)  # (k, N)
         self.windows = WindowCentroids(int(np.clip(np.ceil(0.5 * spacing_px), 2, 32)))
+        self._radius_cap = np.inf
         centres, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
                                                             self.window_radius(rest_positions))
-        self._max_shift_px = _MAX_SHIFT_FRACTION * spacing_px
+        if _TIP_REACH:
+            # Windows no wider than the tip needs: less membrane (texture, shadows) in them.
+            tip = np.sqrt(np.where(area > 0, area, np.nan) / np.pi)
+            self._radius_cap = np.where(np.isfinite(tip), _TIP_REACH * tip + _TIP_MARGIN_PX, np.inf)
+            centres, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
+                                                                self.window_radius(rest_positions))
+        # Fractions of the spacing, with floors in px for the smallest pads (tips of 1 px, 4 px apart,
+        # whose centroids scatter by a few tenths of a px in camera noise).
+        self._max_shift_px = max(_MAX_SHIFT_FRACTION * spacing_px, _MIN_SHIFT_PX)
+        self._guess_px = max(_GUESS_FRACTION * spacing_px, _MIN_GUESS_PX)
+        self._settled_px = max(_SEARCH_SETTLED_FRACTION * spacing_px, _MIN_SHIFT_PX)
         step = centres + origin - rest_positions
         settled = np.einsum("nd,nd->n", step, step) <= self._max_shift_px ** 2
         self.rest_positions = np.where(settled[:, None], centres + origin, rest_positions)
@@ -284,7 +304,7 @@ class Refiner:
         x, y = points[:, 0], points[:, 1]
         dx = x.take(self._window_neighbours) - x  # (k, N): a minimum over rows is fast
         dy = y.take(self._window_neighbours) - y
-        return _WINDOW_REACH * np.sqrt(np.min(dx * dx + dy * dy, axis=0))
+        return np.minimum(_WINDOW_REACH * np.sqrt(np.min(dx * dx + dy * dy, axis=0)), self._radius_cap)
 
     def __call__(self, grey: np.ndarray, crop: np.ndarray, tracked: np.ndarray,
                  last_seen: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -367,7 +387,7 @@ class Refiner:
         step = first - start
         moved = np.einsum("nd,nd->n", step, step)
         like = self._like_at_rest(area, contrast, compactness, which)
-        fine = (_GUESS_FRACTION * self.spacing_px) ** 2
+        fine = self._guess_px ** 2
         done = (moved <= fine) & like
         done[n:] = False  # a lost pin's prediction is no guess: two passes
         positions = np.full_like(guess, np.nan)
@@ -382,7 +402,7 @@ class Refiner:
             error = np.einsum("nd,nd->n", offset, offset)
             searched = again >= n
             ok = (self._like_at_rest(area, contrast, compactness, which[again])
-                  & np.where(searched, (moved <= (_SEARCH_SETTLED_FRACTION * self.spacing_px) ** 2)
+                  & np.where(searched, (moved <= self._settled_px ** 2)
                              & (error <= self.gate_px ** 2),
                              (moved <= fine) & (error <= (_FOLLOW_FRACTION * self.spacing_px) ** 2)))
             positions[which[again[ok]]] = second[ok]
