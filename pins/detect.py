@@ -117,12 +117,17 @@ class Blobs:
         Component area over bounding-box area.
     candidates : int
         Number of components before the area and shape filters.
+    contrasts : (N,) ndarray of float64
+        Summed grey level above the local background (the neighbourhood mean) of each blob grown
+        by one pixel, over its area: about its mean contrast, grey levels (of the inverted image
+        for dark pins).
     """
 
     centres: np.ndarray
     areas: np.ndarray
     fills: np.ndarray
     candidates: int
+    contrasts: np.ndarray = dataclasses.field(default_factory=lambda: np.empty(0))
 
 
 def detect_pins(frame: np.ndarray, *, params: DetectionParams | None = None, disc: SensorDisc | None = None,
@@ -247,7 +252,9 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blob
     keep[keep] = inside
     centres = centres[inside]
     order = np.lexsort((centres[:, 0], centres[:, 1]))
-    return Blobs(centres=centres[order], areas=area[keep][order], fills=fill[keep][order], candidates=count - 1)
+    areas = area[keep][order]
+    return Blobs(centres=centres[order], areas=areas, fills=fill[keep][order], candidates=count - 1,
+                 contrasts=total[keep][order] / np.maximum(areas, 1))
 
 
 def _odd_shaped(area: np.ndarray, box_w: np.ndarray, box_h: np.ndarray, params: DetectionParams) -> np.ndarray:
@@ -359,7 +366,8 @@ def _split_touching(smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, co
 
 
 def _empty_blobs(candidates: int) -> Blobs:
-    return Blobs(centres=np.empty((0, 2)), areas=np.empty(0, int), fills=np.empty(0), candidates=candidates)
+    return Blobs(centres=np.empty((0, 2)), areas=np.empty(0, int), fills=np.empty(0), candidates=candidates,
+                 contrasts=np.empty(0))
 
 
 def _roi(disc: SensorDisc, shape: tuple[int, int]) -> tuple[int, int, np.ndarray]:

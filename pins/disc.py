@@ -24,7 +24,7 @@ __all__ = ["SensorDisc", "find_sensor_disc", "as_grey"]
 # Grey-level difference between membrane and surround below which there is no disc to see.
 _MIN_CONTRAST = 30.0
 # The disc must cover at least this fraction of the shorter image side, as radius.
-_MIN_RADIUS_FRACTION = 0.15
+_MIN_RADIUS_FRACTION = 0.08
 # Hull area over its enclosing circle's area: 1 for a disc, ~0.61 for a full 4:3 frame.
 _MIN_CIRCULARITY = 0.8
 

@@ -1,0 +1,373 @@
+"""The pin field: the blobs that form the pin lattice, told apart from everything else.
+
+A TacTip frame shows more bright blobs than pins: LED glare and its reflections on a black rim
+ring, specks of dust, light patches of skin between the shadows of the pins, skin texture. What
+makes a pin a pin is that it belongs to the lattice: it has neighbours at the lattice pitch, and its
+size and contrast are like its neighbours'. `find_pin_field` finds that lattice without being told
+the pin count:
+
+1. candidates: blobs detected permissively (`pins.detect`) at a few parameter sets scaled to the
+   possible pin pitches of the disc (from a tenth to a fifth of its radius, 100 to 1000 pins);
+2. lattice consistency, per candidate set, iterated until nothing changes (removing an impostor
+   changes its neighbours' statistics): a blob much smaller or larger than the median of its
+   neighbours is rejected for its ``size``, one much fainter for its ``contrast``; of two blobs much
+   closer than the local pitch (the median nearest-neighbour distance around them, so that radial
+   layouts whose spacing grows with the radius work) the weaker is ``off lattice``;
+3. the field: blobs joined by lattice links (two blobs at most 1.45 local pitches apart) form
+   connected groups; the large groups are the pin field, and a blob outside their convex hull
+   (glare on the rim ring) is ``outside field``; an isolated blob inside it (the centre pin of a
+   radial layout) stays;
+4. the candidate set with the most pins in its field wins (ties: the most regular);
+5. the detection parameters for later frames (`PinField.params`, `PinField.disc`) keep the area
+   range of the kept pins and search only the field's circle, so the per-frame fast path
+   `pins.detect_pins` does not detect the rim and the glare again.
+
+A known pin count does not steer the search: it is compared with the result (`count_error`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from .detect import Blobs, DetectionParams, _detect
+from .disc import SensorDisc, as_grey, find_sensor_disc
+
+__all__ = ["PinField", "find_pin_field", "REJECTION_REASONS", "draw_pin_field"]
+
+#: Why a candidate blob was rejected, in `PinField.rejected_reason`.
+REJECTION_REASONS = ("outside field", "off lattice", "size", "contrast")
+_OUTSIDE, _OFF, _SIZE, _CONTRAST = range(4)
+_KEPT = -1
+
+# Possible pin pitches, as fractions of the disc radius (1000 pins on a hexagonal lattice filling
+# the disc: 0.06; 100 pins: 0.19; radial layouts and small pads between).
+_PITCH_FRACTIONS = (0.05, 0.075, 0.11, 0.165, 0.25)
+_BLOCK_PITCHES = (1.3, 2.2)
+_OFFSETS = (5.0, 9.0, 15.0, 25.0)
+_COARSE_BLOCK = (2.2,)
+_COARSE_OFFSETS = (9.0,)
+_NEIGHBOURS = 6
+# Lattice consistency: fractions of the neighbours' medians and of the local pitch.
+_SIZE_RANGE = (0.4, 2.2)
+_MIN_FILL = 0.6
+_MIN_CONTRAST = 0.45
+_TOO_CLOSE = 0.6
+_LINK = 1.3
+# Area range of the final parameters around the kept pins' median area.
+_AREA_RANGE = (0.25, 2.5)
+
+
+@dataclass(frozen=True)
+class PinField:
+    """The pins of a frame that form the pin lattice, and the blobs rejected beside them.
+
+    Attributes
+    ----------
+    centres : (N, 2) ndarray of float64
+        Kept pins (x, y), px, sorted by y then x; (0, 2) when there are none.
+    params : DetectionParams
+        Detection parameters for later frames of this sensor (`pins.detect_pins` with
+        ``disc=field.disc``): tuned to the kept pins' blur, threshold and area range.
+    disc : SensorDisc
+        The region that later frames should search: the pin field's circle (inside the membrane
+        disc, clear of a rim ring's glare).
+    pitch_px : float
+        Median nearest-neighbour distance of the kept pins, px (nan with fewer than two).
+    rejected : (M, 2) ndarray of float64
+        Centres of the candidate blobs rejected, px.
+    rejected_reason : (M,) ndarray of str
+        Why each was rejected: one of `REJECTION_REASONS` ("outside field": beyond the lattice, such
+        as glare on a rim ring; "off lattice": too close to a stronger pin, such as a speck or a
+        light patch of skin between pins; "size": much smaller or larger than its neighbours;
+        "contrast": much fainter than its neighbours).
+    expected_pins : int or None
+        The pin count given, if any.
+    count_error : int or None
+        Pins kept minus `expected_pins` (None without a count).
+    """
+
+    centres: np.ndarray
+    params: DetectionParams
+    disc: SensorDisc
+    pitch_px: float
+    rejected: np.ndarray
+    rejected_reason: np.ndarray
+    expected_pins: int | None = None
+    count_error: int | None = None
+
+    @property
+    def count(self) -> int:
+        """Number of pins kept."""
+        return int(len(self.centres))
+
+    def rejected_counts(self) -> dict[str, int]:
+        """How many blobs were rejected for each reason (every reason listed, zeros included)."""
+        return {reason: int(np.count_nonzero(self.rejected_reason == reason)) for reason in REJECTION_REASONS}
+
+    def summary(self) -> str:
+        """One line for a person: pins kept, pitch, blobs rejected by reason, the count check."""
+        rejected = ", ".join(f"{n} {reason}" for reason, n in self.rejected_counts().items() if n)
+        line = f"{self.count} pins, pitch {self.pitch_px:.1f} px; rejected {len(self.rejected)}"
+        line += f" ({rejected})" if rejected else ""
+        if self.expected_pins is not None:
+            error = self.count_error
+            off = "exact" if error == 0 else f"{error:+d} ({error / self.expected_pins:+.1%})"
+            line += f"; expected {self.expected_pins}: {off}"
+        return line
+
+
+def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, params: DetectionParams | None = None,
+                   disc: SensorDisc | None = None, dark_pins: bool = False) -> PinField:
+    """Find the pins of a frame as the blobs that form the pin lattice, without knowing their count.
+
+    Parameters
+    ----------
+    frame : (H, W) or (H, W, 3) ndarray of uint8
+        Grey or BGR frame, best a rest frame (nothing touching the pad).
+    expected_pins : int, optional
+        The sensor's pin count: checked against the result (`PinField.count_error`), never used
+        to steer the search.
+    params : DetectionParams, optional
+        Starting parameters: tried among the candidates; their polarity and rim margin are kept.
+    disc : SensorDisc, optional
+        The membrane disc, found with `find_sensor_disc` when not given.
+    dark_pins : bool
+        Dark markers on a light membrane (also taken from ``params.dark_pins``).
+
+    Returns
+    -------
+    field : PinField
+
+    Raises
+    ------
+    NoSensorError
+        When `disc` is not given and the frame shows no sensor disc.
+    ValueError
+        `expected_pins` is not a positive integer.
+
+    Examples
+    --------
+    >>> field = find_pin_field(rest_frame)                          # doctest: +SKIP
+    >>> field.summary()                                             # doctest: +SKIP
+    '331 pins, pitch 17.7 px; rejected 21 (18 outside field, 3 off lattice)'
+    >>> pins = detect_pins(frame, params=field.params, disc=field.disc)   # doctest: +SKIP
+    """
+    if expected_pins is not None and (isinstance(expected_pins, bool) or int(expected_pins) != expected_pins
+                                      or expected_pins < 1):
+        raise ValueError(f"expected_pins must be a positive integer, got {expected_pins!r}")
+    start = params or DetectionParams()
+    if dark_pins and not start.dark_pins:
+        start = start.replace(dark_pins=True)
+    grey = as_grey(frame)
+    if disc is None:
+        disc = find_sensor_disc(grey, dark_pins=start.dark_pins)
+    # Coarse: one permissive candidate set per possible pitch; the strongest lattice gives the pitch.
+    coarse = [_evaluate(grey, disc, candidate) for candidate in _candidates(disc.radius_px * np.array(_PITCH_FRACTIONS),
+                                                                            start, _COARSE_BLOCK, _COARSE_OFFSETS)]
+    first = max(coarse, key=lambda run: run[0][1])
+    pitch = first[5] if np.isfinite(first[5]) else _PITCH_FRACTIONS[len(_PITCH_FRACTIONS) // 2] * disc.radius_px
+    # Fine: blocks and offsets at the measured pitch; the most pins in the field wins (then the
+    # most regular).
+    fine = [_evaluate(grey, disc, candidate) for candidate in _candidates(np.array([pitch]), start, _BLOCK_PITCHES,
+                                                                          _OFFSETS)]
+    if params is not None:
+        fine.append(_evaluate(grey, disc, start))
+    best = max(fine, key=lambda run: run[0])
+    _, _, chosen, blobs, reason, pitch = best
+    kept = reason == _KEPT
+    final, field_disc = _final_params(chosen, blobs, kept, disc, pitch)
+    centres = blobs.centres[kept]
+    count_error = None if expected_pins is None else len(centres) - int(expected_pins)
+    return PinField(centres=centres, params=final, disc=field_disc,
+                    pitch_px=float(_median_nn(centres)), rejected=blobs.centres[~kept],
+                    rejected_reason=np.array(REJECTION_REASONS, dtype=object)[reason[~kept]].astype(str),
+                    expected_pins=None if expected_pins is None else int(expected_pins), count_error=count_error)
+
+
+def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams):
+    """((pins kept, -irregularity), strength kept, params, blobs, reasons, pitch) of one candidate set."""
+    blobs = _detect(grey, disc, params)
+    reason, pitch = _judge_lattice(blobs)
+    kept = reason == _KEPT
+    strength = float(np.sum(blobs.contrasts[kept] * blobs.areas[kept]))
+    return (int(kept.sum()), -_irregularity(blobs, kept)), strength, params, blobs, reason, pitch
+
+
+def _candidates(pitches: np.ndarray, start: DetectionParams, blocks, offsets):
+    """Permissive parameter sets scaled to each pitch (px)."""
+    for pitch in pitches:
+        blur = float(np.clip(0.07 * pitch, 0.6, 2.5))
+        loose = dict(blur_sigma_px=round(blur, 2), min_area_px=2, max_area_px=max(int(1.2 * pitch**2), 8),
+                     min_fill=0.3, max_aspect=4.0, split_radius_px=round(0.12 * pitch, 2))
+        for block in blocks:
+            size = max(2 * int(round(block * pitch / 2.0)) + 1, 3)
+            for offset in offsets:
+                yield start.replace(block_size_px=size, offset=offset, **loose)
+
+
+def _judge_lattice(blobs: Blobs) -> tuple[np.ndarray, float]:
+    """Which blobs form a lattice: (reason per blob, -1 for kept; median pitch of the kept, px)."""
+    n = len(blobs.centres)
+    reason = np.full(n, _OFF, dtype=np.int64)
+    if n < 4:
+        return reason, np.nan
+    centres = blobs.centres
+    areas = blobs.areas.astype(np.float64)
+    fills = blobs.fills
+    contrasts = np.maximum(blobs.contrasts, 1e-6)
+    strength = contrasts * areas
+    active = np.ones(n, bool)
+    reason[:] = _KEPT
+    for _ in range(8):
+        index = np.flatnonzero(active)
+        if len(index) < 4:
+            reason[index] = _OFF
+            return reason, np.nan
+        k = min(_NEIGHBOURS + 1, len(index))
+        dist, near = cKDTree(centres[index]).query(centres[index], k)
+        near_global = index[near]
+        nn = dist[:, 1]
+        # Local pitch: median nearest-neighbour distance of the blob and its neighbours.
+        local_pitch = np.median(nn[near], axis=1)
+        area_ref = np.median(areas[near_global], axis=1)
+        contrast_ref = np.median(contrasts[near_global], axis=1)
+        verdict = np.full(len(index), _KEPT)
+        fill_ref = np.median(fills[near_global], axis=1)
+        size_bad = ((areas[index] < _SIZE_RANGE[0] * area_ref) | (areas[index] > _SIZE_RANGE[1] * area_ref)
+                    | (fills[index] < _MIN_FILL * fill_ref))
+        contrast_bad = contrasts[index] < _MIN_CONTRAST * contrast_ref
+        # Too close to a stronger neighbour.
+        close = (dist[:, 1:] < _TOO_CLOSE * local_pitch[:, None]) & (strength[near_global[:, 1:]] > strength[index][:, None])
+        off = close.any(axis=1)
+        verdict[off] = _OFF
+        verdict[contrast_bad] = _CONTRAST
+        verdict[size_bad] = _SIZE
+        if not (verdict != _KEPT).any():
+            break
+        reason[index] = verdict
+        active[index[verdict != _KEPT]] = False
+    index = np.flatnonzero(active)
+    if len(index) < 4:
+        reason[index] = _OFF
+        return reason, np.nan
+    # The field: groups of blobs joined by lattice links.
+    k = min(_NEIGHBOURS + 1, len(index))
+    dist, near = cKDTree(centres[index]).query(centres[index], k)
+    nn = dist[:, 1]
+    local_pitch = np.median(nn[near], axis=1)
+    limit = _LINK * np.maximum(local_pitch[:, None], local_pitch[near[:, 1:]])
+    link = dist[:, 1:] <= limit
+    rows = np.repeat(np.arange(len(index)), k - 1)[link.ravel()]
+    cols = near[:, 1:].ravel()[link.ravel()]
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(index), len(index)))
+    groups, label = connected_components(graph, directed=False)
+    sizes = np.bincount(label, minlength=groups)
+    big = sizes >= max(4, 0.1 * sizes.max())
+    core = big[label]
+    if core.sum() >= 3:
+        hull = cv2.convexHull(centres[index[core]].astype(np.float32))
+        margin = 0.3 * float(np.median(local_pitch[core]))
+        inside = np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), True) >= -margin
+                           for x, y in centres[index[~core]]], dtype=bool)
+        outside = index[~core][~inside] if len(inside) else index[:0]
+    else:
+        outside = index[~core]
+    reason[outside] = _OUTSIDE
+    kept = reason == _KEPT
+    return reason, float(_median_nn(centres[kept]))
+
+
+def _irregularity(blobs: Blobs, kept: np.ndarray) -> float:
+    if kept.sum() < 4:
+        return np.inf
+    areas = blobs.areas[kept]
+    q25, q50, q75 = np.percentile(areas, [25, 50, 75])
+    return float((q75 - q25) / q50 + (1.0 - np.median(blobs.fills[kept])))
+
+
+def _median_nn(centres: np.ndarray) -> float:
+    if len(centres) < 2:
+        return np.nan
+    dist, _ = cKDTree(centres).query(centres, 2)
+    return float(np.median(dist[:, 1]))
+
+
+def _final_params(chosen: DetectionParams, blobs: Blobs, kept: np.ndarray, disc: SensorDisc,
+                  pitch: float) -> tuple[DetectionParams, SensorDisc]:
+    """Parameters and search region for later frames, from the kept pins."""
+    if kept.sum() < 4 or not np.isfinite(pitch):
+        return chosen, disc
+    median_area = float(np.median(blobs.areas[kept]))
+    radius = np.sqrt(median_area / np.pi)
+    params = chosen.replace(min_area_px=max(int(_AREA_RANGE[0] * median_area), 1),
+                            max_area_px=max(int(np.ceil(_AREA_RANGE[1] * median_area)), 2),
+                            min_fill=0.4, max_aspect=3.0, split_radius_px=round(float(0.4 * radius), 2))
+    centres = blobs.centres[kept]
+    reach = float(np.max(np.hypot(centres[:, 0] - disc.cx, centres[:, 1] - disc.cy)))
+    field_radius = min(reach + 0.6 * pitch + params.rim_margin_px, disc.radius_px)
+    return params, SensorDisc(disc.cx, disc.cy, field_radius)
+
+
+#: Colours (B, G, R) of `draw_pin_field`: kept pins, then each rejection reason.
+COLOURS = {"kept": (0, 200, 0), "outside field": (255, 80, 255), "off lattice": (0, 160, 255),
+           "size": (255, 160, 0), "contrast": (0, 0, 255)}
+
+
+def draw_pin_field(frame: np.ndarray, field: PinField, *, legend: bool = True) -> np.ndarray:
+    """A colour picture of what `find_pin_field` kept and rejected, and why.
+
+    Kept pins are green circles; rejected blobs are crosses coloured by reason (`COLOURS`); the
+    search region (`PinField.disc`) is a thin yellow circle; a legend with the counts sits top left.
+
+    Parameters
+    ----------
+    frame : (H, W) or (H, W, 3) ndarray of uint8
+        The frame the field was found in.
+    field : PinField
+    legend : bool
+        Draw the legend.
+
+    Returns
+    -------
+    picture : (H, W, 3) ndarray of uint8
+        BGR.
+    """
+    grey = as_grey(frame)
+    image = np.asarray(frame)
+    picture = image.copy() if image.ndim == 3 and image.shape[2] == 3 else cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)
+    height, width = grey.shape
+    scale = max(min(height, width) / 480.0, 0.5)
+    pitch = field.pitch_px if np.isfinite(field.pitch_px) else 10.0
+    radius = max(int(round(0.3 * pitch)), 2)
+    thick = max(int(round(scale)), 1)
+    shift = 4
+    d = field.disc
+    cv2.circle(picture, (int(round(d.cx * 16)), int(round(d.cy * 16))), int(round(d.radius_px * 16)), (0, 230, 230),
+               thick, cv2.LINE_AA, shift)
+    for x, y in field.centres:
+        cv2.circle(picture, (int(round(x * 16)), int(round(y * 16))), radius * 16, COLOURS["kept"], thick,
+                   cv2.LINE_AA, shift)
+    for (x, y), reason in zip(field.rejected, field.rejected_reason):
+        colour = COLOURS[str(reason)]
+        for dx, dy in ((1, 1), (1, -1)):
+            cv2.line(picture, (int(round((x - dx * radius) * 16)), int(round((y - dy * radius) * 16))),
+                     (int(round((x + dx * radius) * 16)), int(round((y + dy * radius) * 16))), colour, thick,
+                     cv2.LINE_AA, shift)
+    if legend:
+        counts = field.rejected_counts()
+        lines = [("kept", f"kept {field.count}")] + [(r, f"{r} {n}") for r, n in counts.items()]
+        font_scale = 0.45 * scale
+        step = int(round(18 * scale))
+        box_w = int(round(150 * scale))
+        cv2.rectangle(picture, (0, 0), (box_w, step * len(lines) + step // 2), (0, 0, 0), -1)
+        for i, (key, text) in enumerate(lines):
+            y = step * (i + 1)
+            cv2.putText(picture, text, (int(round(6 * scale)), y), cv2.FONT_HERSHEY_SIMPLEX, font_scale, COLOURS[key],
+                        thick, cv2.LINE_AA)
+    return picture
