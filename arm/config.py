@@ -62,6 +62,13 @@ _SCALARS = {
 }
 _TAP_KEYS = {"approach_height": "approach_height_mm", "speed": "speed_mm_s",
              "acceleration": "acceleration_mm_s2", "dwell": "dwell_s", "travel_speed": "travel_speed_mm_s"}
+# Ranges of the [arm.tap] keys: TOML key -> (low, high, low included, unit). A dwell of hours or a crawl
+# of a micrometre per second would hang an inspection; the caps of [arm] bound speeds further.
+_TAP_RANGES = {"approach_height": (0.0, 100.0, False, "mm"), "speed": (0.0, 250.0, False, "mm/s"),
+               "acceleration": (0.0, 2500.0, False, "mm/s^2"), "dwell": (0.0, 10.0, True, "s"),
+               "travel_speed": (0.0, 250.0, False, "mm/s")}
+_MIN_SPEED_MM_S = 0.1   # slower strokes and travels take minutes per tap
+_MAX_SEED = 2**32 - 1
 _SIM_KEYS = ("realtime", "surface_z", "placement_noise", "seed", "home", "gaps")
 _GAP_KEYS = {"name": "name", "x": "x_mm", "y": "y_mm", "width": "width_mm", "angle": "angle_deg",
              "length": "length_mm"}
@@ -195,6 +202,10 @@ def load_arm_config(path: str | Path) -> ArmConfig:
     with path.open("rb") as handle:
         try:
             document = tomllib.load(handle)
+        except UnicodeDecodeError as exc:
+            raise ArmConfigError(f"{path}: not UTF-8 text (a binary file, or saved as Latin-1?): byte "
+                                 f"0x{exc.object[exc.start]:02x} at offset {exc.start}; a TOML file must be "
+                                 f"UTF-8 text") from None
         except tomllib.TOMLDecodeError as exc:
             raise ArmConfigError(f"{path}: not valid TOML: {exc}") from None
     if "arm" not in document:
@@ -271,7 +282,14 @@ def _tap(table: Any) -> TapMotion:
     for key, value in table.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ArmConfigError(f"[arm.tap] {key} must be a number, got {value!r}")
-        kwargs[_TAP_KEYS[key]] = float(value)
+        low, high, closed, unit = _TAP_RANGES[key]
+        if key.endswith("speed"):
+            low, closed = _MIN_SPEED_MM_S, True
+        value = float(value)
+        if not (math.isfinite(value) and (low <= value if closed else low < value) and value <= high):
+            raise ArmConfigError(f"[arm.tap] {key}: must be in {'[' if closed else '('}{low:g}, {high:g}] {unit}, "
+                                 f"got {value:g}")
+        kwargs[_TAP_KEYS[key]] = value
     try:
         return TapMotion(**kwargs)
     except ValueError as exc:
@@ -288,8 +306,8 @@ def _sim(table: Any) -> SimSettings:
     if not isinstance(realtime, bool):
         raise ArmConfigError(f"[arm.sim] realtime must be true or false, got {realtime!r}")
     seed = table.get("seed")
-    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
-        raise ArmConfigError(f"[arm.sim] seed must be an integer >= 0, got {seed!r}")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= _MAX_SEED):
+        raise ArmConfigError(f"[arm.sim] seed must be a whole number in 0..{_MAX_SEED}, got {seed!r}")
     noise = _number("sim.placement_noise", table.get("placement_noise", 0.0))
     if not (math.isfinite(noise) and 0 <= noise <= 10):
         raise ArmConfigError(f"[arm.sim] placement_noise must be in [0, 10] mm, got {noise:g}")
@@ -300,7 +318,10 @@ def _sim(table: Any) -> SimSettings:
     names = [gap.get("name") for gap in gaps if isinstance(gap, Mapping)]
     if len(set(names)) != len(names):
         raise ArmConfigError(f"[arm.sim] gaps: names must be unique, got {names}")
-    return SimSettings(realtime=realtime, surface_z_mm=_number("sim.surface_z", table.get("surface_z", 0.0)),
+    surface_z = _number("sim.surface_z", table.get("surface_z", 0.0))
+    if not (math.isfinite(surface_z) and abs(surface_z) <= 100):
+        raise ArmConfigError(f"[arm.sim] surface_z must be in [-100, 100] mm, got {surface_z:g}")
+    return SimSettings(realtime=realtime, surface_z_mm=surface_z,
                        placement_noise_mm=noise, seed=seed,
                        home=None if home is None else _pose("sim.home", home),
                        gaps=tuple(_gap(i, gap) for i, gap in enumerate(gaps)))

@@ -47,6 +47,20 @@ __all__ = ["simulated_station_config", "SIM_PRESET", "StationConfig", "SensorCon
            "SimConfig", "load_station_config", "parse_station_config"]
 
 POLICIES = ("active", "stationary", "random")
+
+# Ranges of the keys whose extremes would hang or exhaust a station (the paper's protocol is 111 depths
+# of 40 samples, 11 depth classes, 100 bins, a 331-pin TacTip).
+MIN_PINS, MAX_PINS = 7, 2000            # [sensor] pins: one ring of six around a centre .. a dense pad
+MAX_DEPTH_MM = 100.0                     # [protocol] depths and reference height, mm
+MAX_DEPTHS = 10_000                      # protocol depths per gap
+MAX_SAMPLES = 1000                       # samples per tap feature array
+MAX_REPEATS = 1000                       # taps per depth and gap
+MAX_COLLECTION_TAPS = 200_000            # taps per collection, all gaps
+MAX_TAPS = 1000                          # [perception] max_taps
+MAX_LOCATIONS = 1000                     # depth classes
+MAX_BINS = 10_000                        # value bins per feature
+MAX_SEED = 2**32 - 1
+MAX_GAP_MM = 100.0                       # gap widths and tolerances, mm
 SIM_PRESET = Path(__file__).with_name("presets") / "station_sim.toml"
 
 
@@ -153,12 +167,7 @@ class StationConfig:
 def load_station_config(path: str | Path) -> StationConfig:
     """Read and validate a station TOML file; `ConfigError` names the file and the bad key."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ConfigError(f"station configuration not found: {path}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    data = _read_toml(path, "station configuration")
     try:
         return parse_station_config(data, base_dir=path.parent, path=path)
     except ConfigError as exc:
@@ -174,6 +183,10 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     _no_unknown(data, known, "")
     station = _table(data, "station")
     _no_unknown(station, {"name", "results", "data_dir"}, "station")
+    for key in ("name", "results", "data_dir"):
+        if key in station and (not isinstance(station[key], str) or not station[key].strip()):
+            what = "a name" if key == "name" else "a path string"
+            raise ConfigError(f"station.{key} must be {what}, got {station[key]!r}")
     sensor = _section(data, "sensor", SensorConfig, base_dir, paths={"calibration"})
     protocol = _section(data, "protocol", ProtocolConfig, base_dir)
     perception = _section(data, "perception", PerceptionConfig, base_dir, paths={"model"})
@@ -183,35 +196,53 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     except ArmConfigError as exc:
         raise ConfigError(str(exc)) from None
 
-    _check(sensor.pins > 0, "sensor.pins", "must be positive")
-    _check(sensor.pad_diameter_mm > 0, "sensor.pad_diameter_mm", "must be positive")
-    _check(sensor.frame_rate > 0, "sensor.frame_rate", "must be positive")
-    _check(0 < sensor.selected_pins <= sensor.pins, "sensor.selected_pins", f"must be in 1..{sensor.pins}")
-    _check(protocol.depth_step > 0, "protocol.depth_step", "must be positive")
-    _check(protocol.depth_max > protocol.depth_min >= 0, "protocol.depth_max",
+    _range(sensor.pins, "sensor.pins", MIN_PINS, MAX_PINS, "pins")
+    _range(sensor.pad_diameter_mm, "sensor.pad_diameter_mm", 0, 500, "mm", low_open=True)
+    _range(sensor.frame_rate, "sensor.frame_rate", 0, 1000, "frames/s", low_open=True)
+    _range(sensor.selected_pins, "sensor.selected_pins", 1, sensor.pins, "pins")
+    _range(sensor.min_separation_mm, "sensor.min_separation_mm", 0, sensor.pad_diameter_mm, "mm")
+    _range(protocol.depth_min, "protocol.depth_min", 0, MAX_DEPTH_MM, "mm")
+    _range(protocol.depth_max, "protocol.depth_max", 0, MAX_DEPTH_MM, "mm")
+    _check(protocol.depth_max > protocol.depth_min, "protocol.depth_max",
            "must exceed protocol.depth_min (both >= 0)")
-    _check(protocol.samples >= 2, "protocol.samples", "must be at least 2")
-    _check(protocol.repeats >= 1, "protocol.repeats", "must be at least 1")
-    _check(protocol.lateral_jitter_mm >= 0, "protocol.lateral_jitter_mm", "must be >= 0")
+    _range(protocol.depth_step, "protocol.depth_step", 0, protocol.depth_max - protocol.depth_min, "mm", low_open=True)
+    depths = int(math.floor((protocol.depth_max - protocol.depth_min) / protocol.depth_step + 1e-6)) + 1
+    _check(depths <= MAX_DEPTHS, "protocol.depth_step",
+           f"{protocol.depth_step:g} mm gives {depths} depths over {protocol.depth_min:g}..{protocol.depth_max:g} mm; "
+           f"at most {MAX_DEPTHS} (a step of at least "
+           f"{(protocol.depth_max - protocol.depth_min) / (MAX_DEPTHS - 1):.3g} mm)")
+    _range(protocol.reference_height_mm, "protocol.reference_height_mm", -MAX_DEPTH_MM, MAX_DEPTH_MM, "mm")
+    _range(protocol.samples, "protocol.samples", 2, MAX_SAMPLES, "samples")
+    _range(protocol.repeats, "protocol.repeats", 1, MAX_REPEATS, "taps per depth")
+    _range(protocol.lateral_jitter_mm, "protocol.lateral_jitter_mm", 0, 10, "mm")
+    _range(protocol.seed, "protocol.seed", 0, MAX_SEED, "")
     if perception.decision_threshold is not None:
-        _check(0 < perception.decision_threshold <= 1, "perception.decision_threshold", "must be in (0, 1]")
-    _check(perception.policy in POLICIES, "perception.policy", f"must be one of {', '.join(POLICIES)}")
-    _check(perception.max_taps >= 1, "perception.max_taps", "must be at least 1")
-    _check(perception.locations >= 1, "perception.locations", "must be at least 1")
-    _check(perception.bins >= 2, "perception.bins", "must be at least 2")
+        _check(0 < perception.decision_threshold <= 1, "perception.decision_threshold",
+               f"must be in (0, 1], got {perception.decision_threshold:g}")
+    _check(perception.policy in POLICIES, "perception.policy",
+           f"must be one of {', '.join(POLICIES)}, got {perception.policy!r}")
+    _range(perception.max_taps, "perception.max_taps", 1, MAX_TAPS, "taps")
+    _range(perception.locations, "perception.locations", 1, MAX_LOCATIONS, "depth classes")
+    _range(perception.bins, "perception.bins", 2, MAX_BINS, "bins")
     if perception.start_depth is not None:
         _check(protocol.depth_min <= perception.start_depth <= protocol.depth_max, "perception.start_depth",
-               f"must lie in the protocol's depth range {protocol.depth_min}..{protocol.depth_max} mm")
+               f"must lie in the protocol's depth range {protocol.depth_min}..{protocol.depth_max} mm, "
+               f"got {perception.start_depth:g}")
     if perception.fixation_depth is not None:
         _check(protocol.depth_min <= perception.fixation_depth <= protocol.depth_max,
                "perception.fixation_depth", f"must lie in the protocol's depth range "
-               f"{protocol.depth_min}..{protocol.depth_max} mm")
-    _check(sim.noise_sigma >= 0, "sim.noise_sigma", "must be >= 0")
+               f"{protocol.depth_min}..{protocol.depth_max} mm, got {perception.fixation_depth:g}")
+    _range(sim.noise_sigma, "sim.noise_sigma", 0, 255, "grey levels")
+    _range(sim.seed, "sim.seed", 0, MAX_SEED, "")
 
     gaps = tuple(_gap(g, k) for k, g in enumerate(_gap_list(data)))
     names = [g.name for g in gaps]
     dupes = sorted({n for n in names if names.count(n) > 1})
     _check(not dupes, "gaps", f"duplicate gap names: {', '.join(dupes)}")
+    taps = depths * protocol.repeats * len(gaps)
+    _check(taps <= MAX_COLLECTION_TAPS, "protocol",
+           f"asks for {taps} taps per collection ({depths} depths x repeats {protocol.repeats} x {len(gaps)} gaps); "
+           f"at most {MAX_COLLECTION_TAPS}: raise protocol.depth_step or lower protocol.repeats")
     deepest = protocol.arm_depth_mm(protocol.depth_max)
     _check(deepest <= arm.max_tap_depth_mm, "protocol.depth_max",
            f"{protocol.depth_max} mm taps {deepest:g} mm below the surface, deeper than "
@@ -233,6 +264,44 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
 def _check(ok: bool, key: str, message: str) -> None:
     if not ok:
         raise ConfigError(f"{key} {message}")
+
+
+def _range(value, key: str, low, high, unit: str, *, low_open: bool = False) -> None:
+    """Refuse ``value`` outside ``[low, high]`` (``(low, high]`` with ``low_open``), naming the key and the range."""
+    inside = (low < value if low_open else low <= value) and value <= high
+    if not inside:
+        unit = f" {unit}" if unit else ""
+        if isinstance(value, int) and isinstance(low, int) and isinstance(high, int):
+            accepted = f"{low}..{high}"
+        else:
+            accepted = f"{'(' if low_open else '['}{low:g}, {high:g}]"
+        raise ConfigError(f"{key} must be in {accepted}{unit}, got {value:g}")
+
+
+def _read_toml(path: Path, what: str) -> dict:
+    """The parsed TOML file at ``path``; `ConfigError` naming the path when it is missing, unreadable,
+    not UTF-8 text or not valid TOML."""
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise ConfigError(f"{what} not found: {path}") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{what} {path} is a folder, not a TOML file") from None
+    except PermissionError:
+        raise ConfigError(f"{what} {path}: permission denied") from None
+    except OSError as exc:
+        raise ConfigError(f"{what} {path}: cannot read ({exc.strerror or exc})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        binary = b"\0" in raw
+        kind = "a binary file" if binary else "not UTF-8 text (saved as Latin-1 or another encoding?)"
+        raise ConfigError(f"{path}: {kind}: byte 0x{raw[exc.start]:02x} at offset {exc.start}; a TOML file "
+                          f"must be UTF-8 text") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
 
 
 def _no_unknown(table: dict, known: set[str], prefix: str) -> None:
@@ -281,8 +350,15 @@ def _section(data: dict, name: str, cls, base_dir: Path, paths: set[str] = froze
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ConfigError(f"{name}.{key} must be a number, got {value!r}")
             values[key] = float(value)
-        else:
-            values[key] = str(value) if not isinstance(value, (list, dict)) else value
+        elif isinstance(default, str):
+            if isinstance(value, int) and not isinstance(value, bool) and key == "source" and value >= 0:
+                values[key] = str(value)  # a camera index
+            elif not isinstance(value, str) or not value.strip():
+                raise ConfigError(f"{name}.{key} must be a non-empty string, got {value!r}")
+            else:
+                values[key] = value
+        else:  # pragma: no cover - every field has a typed default
+            raise ConfigError(f"{name}.{key}: unsupported value {value!r}")
     return cls(**values)
 
 
@@ -304,13 +380,16 @@ def _gap(table: dict, k: int) -> GapConfig:
         value = table[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ConfigError(f"{where}.{key} must be a number, got {value!r}")
-    _check(table["nominal_width"] > 0, f"{where}.nominal_width", "must be positive (mm)")
-    _check(table["tolerance"] >= 0, f"{where}.tolerance", "must be >= 0 (mm)")
+    _range(table["nominal_width"], f"{where}.nominal_width", 0, MAX_GAP_MM, "mm", low_open=True)
+    _range(table["tolerance"], f"{where}.tolerance", 0, MAX_GAP_MM, "mm")
     true_width = table.get("true_width")
     if true_width is not None:
-        _check(not isinstance(true_width, bool) and isinstance(true_width, (int, float)) and true_width > 0,
-               f"{where}.true_width", "must be a positive number (mm)")
-    return GapConfig(name=str(table.get("name", f"gap{k + 1:02d}")), x=float(table["x"]), y=float(table["y"]),
+        _check(not isinstance(true_width, bool) and isinstance(true_width, (int, float)) and
+               math.isfinite(true_width), f"{where}.true_width", f"must be a number (mm), got {true_width!r}")
+        _range(true_width, f"{where}.true_width", 0, MAX_GAP_MM, "mm", low_open=True)
+    name = table.get("name", f"gap{k + 1:02d}")
+    _check(isinstance(name, str) and bool(name.strip()), f"{where}.name", f"must be a non-empty string, got {name!r}")
+    return GapConfig(name=name, x=float(table["x"]), y=float(table["y"]),
                      nominal_width=float(table["nominal_width"]), tolerance=float(table["tolerance"]),
                      true_width=None if true_width is None else float(true_width))
 

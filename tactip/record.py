@@ -9,6 +9,7 @@ temporary name and renamed at the end, so a failure or Ctrl-C leaves no half-wri
 
 from __future__ import annotations
 
+import math
 import os
 import pathlib
 from dataclasses import dataclass
@@ -89,10 +90,12 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
     fourcc = _FOURCC.get(out_path.suffix.lower())
     if fourcc is None:
         raise SourceError(f"cannot record to {str(out_path)!r}: use a .mp4 or .avi file")
-    if seconds is not None and not seconds > 0:
-        raise ValueError(f"seconds must be > 0, got {seconds}")
+    if seconds is not None and not (math.isfinite(seconds) and seconds > 0):
+        raise ValueError(f"seconds must be a finite number > 0, got {seconds}")
     if frames is not None and frames < 1:
         raise ValueError(f"frames must be >= 1, got {frames}")
+    if frame_rate is not None and not (math.isfinite(frame_rate) and 0 < frame_rate <= 1000):
+        raise ValueError(f"frame_rate must be in (0, 1000] frames/s, got {frame_rate}")
     part = claim_output(out_path)
     writer = None
     count, first_s, last_s, dropped = 0, None, None, 0

@@ -1,43 +1,81 @@
-"""Argument types shared by the subcommands: each names the bad value in its message."""
+"""Argument types shared by the subcommands: each names the bad value and the accepted range.
+
+Every number is finite (``nan`` and ``inf`` are refused: they say nothing and poison what follows),
+whole numbers have an upper bound where a huge value would exhaust memory or time, and output files
+are checked before any work starts (an existing folder, a missing parent folder, an image format
+the plotting library cannot write). `check_memory` refuses a job whose arrays cannot fit in memory.
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
+from pathlib import Path
 
-__all__ = ["int_at_least", "positive_int", "non_negative_int", "positive_float", "non_negative_float",
-           "fraction", "fractions"]
+from tactip.errors import TactipError
+
+__all__ = ["int_at_least", "int_in_range", "positive_int", "non_negative_int", "seed", "finite_float",
+           "float_in_range", "positive_float", "non_negative_float", "fraction", "fractions", "output_file", "creatable_file", "output_folder",
+           "image_file", "worker_count", "check_memory", "available_memory_bytes", "format_bytes"]
 
 
-def int_at_least(low: int):
-    """An argparse type: a whole number >= ``low``."""
+def int_at_least(low: int, high: int | None = None):
+    """An argparse type: a whole number >= ``low`` (and <= ``high`` when given)."""
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"must be >= {low}, got {text}")
+        if value < low or (high is not None and value > high):
+            accepted = f">= {low}" if high is None else f"in {low}..{high}"
+            raise argparse.ArgumentTypeError(f"must be {accepted}, got {text}")
         return value
     return parse
 
 
+def int_in_range(low: int, high: int):
+    """An argparse type: a whole number in ``low..high`` (both included)."""
+    return int_at_least(low, high)
+
+
 positive_int = int_at_least(1)
 non_negative_int = int_at_least(0)
+#: A random seed: a whole number in 0..2**32 - 1.
+seed = int_at_least(0, 2**32 - 1)
+
+
+def finite_float(text: str) -> float:
+    """An argparse type: any finite number."""
+    return _float(text)
+
+
+def float_in_range(low: float, high: float, *, low_open: bool = False, unit: str = ""):
+    """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` with ``low_open``)."""
+    suffix = f" {unit}" if unit else ""
+
+    def parse(text: str) -> float:
+        value = _float(text)
+        if not ((low < value if low_open else low <= value) and value <= high):
+            raise argparse.ArgumentTypeError(f"must be in {'(' if low_open else '['}{low:g}, {high:g}]{suffix}, "
+                                             f"got {text}")
+        return value
+    return parse
 
 
 def positive_float(text: str) -> float:
-    """An argparse type: a number > 0."""
+    """An argparse type: a finite number > 0."""
     value = _float(text)
     if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
     return value
 
 
 def non_negative_float(text: str) -> float:
-    """An argparse type: a number >= 0."""
+    """An argparse type: a finite number >= 0."""
     value = _float(text)
     if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
     return value
 
 
@@ -51,14 +89,137 @@ def fraction(text: str) -> float:
 
 def fractions(text: str) -> list[float]:
     """An argparse type: comma-separated numbers in [0, 1] (e.g. thresholds)."""
-    values = [_float(v) for v in text.split(",") if v.strip()]
+    try:
+        values = [_float(v) for v in text.split(",") if v.strip()]
+    except argparse.ArgumentTypeError:
+        values = []
     if not values or any(not 0.0 <= v <= 1.0 for v in values):
-        raise argparse.ArgumentTypeError(f"thresholds must be in [0, 1], got {text}")
+        raise argparse.ArgumentTypeError(f"thresholds must be in [0, 1], got {text!r}")
     return values
+
+
+def output_file(text: str) -> Path:
+    """An argparse type: a file to write in an existing folder; refused when it names a folder."""
+    path = creatable_file(text)
+    if not path.parent.is_dir():
+        raise argparse.ArgumentTypeError(f"the folder {str(path.parent)!r} of {text!r} does not exist")
+    return path
+
+
+def creatable_file(text: str) -> Path:
+    """An argparse type: a file to write whose missing folders the writer creates; refused when it names a
+    folder or when one of its folders is a file."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("must name a file, got ''")
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
+    _folders_or_missing(path.parent, text)
+    return path
+
+
+def output_folder(text: str) -> Path:
+    """An argparse type: a folder to write into (created if missing); refused when it is a file."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("must name a folder, got ''")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a file, not a folder")
+    _folders_or_missing(path.parent, text)
+    return path
+
+
+def _folders_or_missing(folder: Path, text: str) -> None:
+    for parent in (folder, *folder.parents):
+        if parent.exists():
+            if not parent.is_dir():
+                raise argparse.ArgumentTypeError(f"{str(parent)!r} (in {text!r}) is a file, not a folder")
+            return
+
+
+def image_file(text: str) -> Path:
+    """An argparse type: an image file to plot into, in a format the plotting library writes (png, pdf, svg ...)."""
+    path = output_file(text)
+    formats = _image_formats()
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix not in formats:
+        got = f"'.{suffix}'" if suffix else "no extension"
+        raise argparse.ArgumentTypeError(f"cannot plot to {text!r} ({got}); use one of the image formats "
+                                         f"{', '.join(sorted(formats))}")
+    return path
+
+
+def worker_count(text: str) -> int:
+    """An argparse type: a number of worker processes in ``1..4 x CPU count``."""
+    cpus = os.cpu_count() or 1
+    high = 4 * cpus
+    try:
+        return int_at_least(1, high)(text)
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"{exc} (at most 4 x the {cpus} CPUs)") from None
+
+
+def available_memory_bytes() -> int | None:
+    """Memory the system can give a new allocation without swapping, bytes (None when unknown)."""
+    try:
+        with open("/proc/meminfo") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def format_bytes(nbytes: float) -> str:
+    """``nbytes`` for a person: ``'1.5 GiB'``."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if abs(nbytes) < 1024 or unit == "PiB":
+            return f"{nbytes:.0f} {unit}" if unit == "B" else f"{nbytes:.1f} {unit}"
+        nbytes /= 1024
+    return f"{nbytes:.1f} PiB"  # pragma: no cover
+
+
+def check_memory(nbytes: float, *, what: str, hint: str) -> None:
+    """Refuse a job whose arrays need more memory than is available.
+
+    Parameters
+    ----------
+    nbytes : float
+        Estimated peak memory of the job's arrays, bytes.
+    what : str
+        The job, for the message (``"5000000 Monte Carlo runs of 44 classes"``).
+    hint : str
+        What to change (``"use fewer --runs"``).
+
+    Raises
+    ------
+    TactipError
+        Naming the estimate, the memory available and the hint.
+    """
+    available = available_memory_bytes()
+    if available is None:
+        return
+    usable = 0.8 * available
+    if nbytes > usable:
+        raise TactipError(f"{what} need about {format_bytes(nbytes)} of memory, more than the {format_bytes(usable)} "
+                          f"usable (80% of the {format_bytes(available)} available): {hint}")
+
+
+def _image_formats() -> set[str]:
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return set(FigureCanvasBase.get_supported_filetypes())
 
 
 def _float(text: str) -> float:
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number, got {text}")
+    return value

@@ -15,15 +15,20 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from tactip.cli._types import creatable_file, int_in_range
+
+#: Most rest frames calibrate averages: a few seconds of a camera is plenty.
+MAX_REST_FRAMES = 1000
+
 HELP = "calibrate the TacTip (detection, reference pins, feature pins) from rest frames"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser for `tactip calibrate`."""
     parser.add_argument("--config", type=Path, required=True, help="station TOML file")
-    parser.add_argument("--rest-frames", type=int, default=10, metavar="N",
-                        help="frames off contact to average (default 10)")
-    parser.add_argument("--out", type=Path, default=None,
+    parser.add_argument("--rest-frames", type=int_in_range(1, MAX_REST_FRAMES), default=10, metavar="N",
+                        help=f"frames off contact to average, 1..{MAX_REST_FRAMES} (default 10)")
+    parser.add_argument("--out", type=creatable_file, default=None,
                         help="calibration file (default: [sensor] calibration or DATA_DIR/calibration.h5)")
 
 
@@ -32,7 +37,5 @@ def run(args: argparse.Namespace) -> int:
     from tactip.config import load_station_config
     from tactip.procedures import calibrate_station
 
-    if args.rest_frames < 1:
-        raise SystemExit("tactip calibrate: error: --rest-frames must be at least 1")
     calibrate_station(load_station_config(args.config), rest_frames=args.rest_frames, out=args.out)
     return 0

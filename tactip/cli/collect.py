@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from tactip.cli._types import positive_int
+from tactip.cli._types import output_folder, worker_count
 
 HELP = "collect training and test taps over every gap and depth (resumable)"
 
@@ -24,9 +24,10 @@ HELP = "collect training and test taps over every gap and depth (resumable)"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser for `tactip collect`."""
     parser.add_argument("--config", type=Path, required=True, help="station TOML file")
-    parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="folder for train.h5 and test.h5")
-    parser.add_argument("--workers", type=positive_int, default=None,
-                        help="processes rendering taps on the simulated station (default: CPU count, at most 4)")
+    parser.add_argument("--out", type=output_folder, required=True, metavar="DIR", help="folder for train.h5 and test.h5")
+    parser.add_argument("--workers", type=worker_count, default=None,
+                        help="processes rendering taps on the simulated station, 1..4 x CPU count "
+                             "(default: CPU count, at most 4)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 

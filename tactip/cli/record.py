@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import argparse
 
-from tactip.cli._types import positive_float, positive_int
+from tactip.cli._types import finite_float, float_in_range, output_file, positive_float, positive_int
 
 HELP = "record a camera (or the synthetic TacTip) to a video file for replay"
 
@@ -22,12 +22,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser for `tactip record`."""
     parser.add_argument("source", metavar="SOURCE",
                         help="camera index (0) or /dev/videoN, 'synthetic' or 'synthetic:PINS', or a video")
-    parser.add_argument("--out", required=True, metavar="FILE", help="video to write: .mp4 or .avi (Motion-JPEG)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="FILE",
+                        help="video to write: .mp4 or .avi (Motion-JPEG)")
     parser.add_argument("--seconds", type=positive_float, default=None, help="stop after this long")
     parser.add_argument("--frames", type=positive_int, default=None, help="stop after this many frames")
-    parser.add_argument("--frame-rate", type=positive_float, default=None,
-                        help="frames/s in the file header (default: the source's)")
-    parser.add_argument("--exposure", type=float, default=None, help="fixed camera exposure, where the driver allows")
+    parser.add_argument("--frame-rate", type=float_in_range(0, 1000, low_open=True, unit="frames/s"), default=None,
+                        help="frames/s in the file header, up to 1000 (default: the source's)")
+    parser.add_argument("--exposure", type=finite_float, default=None,
+                        help="fixed camera exposure, where the driver allows")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 

@@ -21,7 +21,10 @@ from __future__ import annotations
 
 import argparse
 
-from tactip.cli._types import int_at_least
+from tactip.cli._types import int_at_least, int_in_range, output_folder, seed
+
+#: Most taps per collection (tactip.taxel.collect.MAX_TAPS; repeated here so that --help imports nothing heavy).
+MAX_TAPS = 100_000
 
 HELP = "simulate training and test datasets (taxel: iCub fingertip or skin, paper 000)"
 
@@ -41,14 +44,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     taxel.add_argument("--sensor", choices=TAXEL_SENSORS, default="fingertip",
                        help="which sensor (default fingertip)")
-    taxel.add_argument("--out", required=True, metavar="DIR", help="folder for train.h5 and test.h5 (created)")
-    taxel.add_argument("--seed", type=int_at_least(0), default=0, metavar="S",
-                       help="seed of the simulated sensor and its noise (default 0)")
-    taxel.add_argument("--locations", type=int_at_least(2), default=None, metavar="N",
-                       help="evenly spaced tap locations per collection (default: the paper's 0.01 mm steps, "
-                            "3000 for the fingertip, 5000 for the skin)")
-    taxel.add_argument("--taps-per-location", type=int_at_least(1), default=1, metavar="N",
-                       help="taps at each location (default 1)")
+    taxel.add_argument("--out", type=output_folder, required=True, metavar="DIR", help="folder for train.h5 and test.h5 (created)")
+    taxel.add_argument("--seed", type=seed, default=0, metavar="S",
+                       help="seed of the simulated sensor and its noise, >= 0 (default 0)")
+    taxel.add_argument("--locations", type=int_in_range(2, MAX_TAPS), default=None, metavar="N",
+                       help=f"evenly spaced tap locations per collection, 2..{MAX_TAPS} (default: the paper's "
+                            f"0.01 mm steps, 3000 for the fingertip, 5000 for the skin)")
+    taxel.add_argument("--taps-per-location", type=int_in_range(1, MAX_TAPS // 2), default=1, metavar="N",
+                       help="taps at each location (default 1); locations x taps at most "
+                            f"{MAX_TAPS} per collection")
     taxel.add_argument("--csv", action="store_true", help="also write the raw test stream to DIR/test_stream.csv")
     taxel.add_argument("--quiet", action="store_true", help="no progress bars")
 
@@ -56,7 +60,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run ``tactip simulate taxel``."""
     from perception import load_dataset
+    from tactip.errors import TactipError
     from tactip.taxel import simulate_taxel_datasets, write_taxel_test_stream
+    from tactip.taxel.collect import DEFAULT_TAPS
+
+    locations = DEFAULT_TAPS[args.sensor] if args.locations is None else args.locations
+    if locations * args.taps_per_location > MAX_TAPS:
+        raise TactipError(f"--locations {locations} x --taps-per-location {args.taps_per_location} = "
+                          f"{locations * args.taps_per_location} taps per collection; at most {MAX_TAPS}")
 
     paths = simulate_taxel_datasets(args.out, sensor=args.sensor, seed=args.seed, locations=args.locations,
                                     taps_per_location=args.taps_per_location, quiet=args.quiet)

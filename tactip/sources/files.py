@@ -46,16 +46,20 @@ class VideoSource(FrameSourceBase):
         self.name = f"video {str(self.path)!r}"
         if not self.path.is_file():
             self._closed = True
-            raise SourceError(f"cannot open video {str(self.path)!r}: no such file")
+            what = "a folder, not a video file" if self.path.is_dir() else "no such file"
+            raise SourceError(f"cannot open video {str(self.path)!r}: {what}")
+        container = _sniff_video(self.path)  # permission denied and empty files are told apart here
         self._capture = cv2.VideoCapture(str(self.path))
         if not self._capture.isOpened():
             self._closed = True
-            raise SourceError(f"cannot open video {str(self.path)!r}: not a readable video (corrupt, or an "
-                              f"unsupported format)")
+            raise SourceError(f"cannot open video {str(self.path)!r}: " + (
+                f"a corrupt {container} file (the decoder cannot open it)" if container else
+                "not a video (its content is no known video container: mp4, avi, mkv, webm, mov ...)"))
         ok, first = self._capture.read()
         if not ok or first is None:
             self.close()
-            raise SourceError(f"cannot read video {str(self.path)!r}: no decodable frame")
+            kind = f"{container} " if container else ""
+            raise SourceError(f"cannot read video {str(self.path)!r}: a corrupt {kind}file with no decodable frame")
         self._pending = first
         fps = self._capture.get(cv2.CAP_PROP_FPS)
         self.frame_rate = float(fps) if fps and math.isfinite(fps) and 0 < fps < 1000 else None
@@ -132,7 +136,13 @@ class ImageFolderSource(FrameSourceBase):
     def _load(self, file: pathlib.Path):
         image = self._cv2.imread(str(file), self._cv2.IMREAD_ANYCOLOR)
         if image is None:
-            raise SourceError(f"cannot read image {str(file)!r}: not an image or corrupt")
+            head = _read_head(file, "image")
+            if not head:
+                raise SourceError(f"cannot read image {str(file)!r}: an empty file")
+            known = any(head.startswith(magic) for magic in _IMAGE_MAGIC)
+            raise SourceError(f"cannot read image {str(file)!r}: " + (
+                "a corrupt image (its header is an image format's, its data cannot be decoded)" if known
+                else "not an image (its content is no png, jpeg, bmp or tiff)"))
         return image
 
     def _read(self):
@@ -146,3 +156,48 @@ class ImageFolderSource(FrameSourceBase):
 
     def __len__(self) -> int:
         return len(self.files)
+
+
+# File signatures: what a file claims to be, to tell "not a video" from "a corrupt video".
+_IMAGE_MAGIC = (b"\x89PNG", b"\xff\xd8\xff", b"BM", b"II*\x00", b"MM\x00*")
+
+
+def _read_head(path: pathlib.Path, what: str, size: int = 512) -> bytes:
+    """The first ``size`` bytes of ``path``; `SourceError` saying so when it cannot be read."""
+    try:
+        with open(path, "rb") as handle:
+            return handle.read(size)
+    except PermissionError:
+        raise SourceError(f"cannot open {what} {str(path)!r}: permission denied") from None
+    except OSError as exc:
+        raise SourceError(f"cannot open {what} {str(path)!r}: {exc.strerror or exc}") from None
+
+
+def _sniff_video(path: pathlib.Path) -> str | None:
+    """The container a video file's first bytes announce (``"MP4"``, ``"AVI"`` ...), or None.
+
+    Raises
+    ------
+    SourceError
+        The file cannot be read (permission denied) or is empty.
+    """
+    head = _read_head(path, "video")
+    if not head:
+        raise SourceError(f"cannot open video {str(path)!r}: an empty file")
+    if head[4:8] in (b"ftyp", b"moov", b"mdat", b"free", b"wide", b"skip"):
+        return "MP4/MOV"
+    if head[:4] == b"RIFF" and head[8:12] == b"AVI ":
+        return "AVI"
+    if head[:4] == b"\x1a\x45\xdf\xa3":
+        return "Matroska/WebM"
+    if head[:3] == b"FLV":
+        return "FLV"
+    if head[:4] == b"\x00\x00\x01\xba" or (len(head) > 188 and head[0] == head[188] == 0x47):
+        return "MPEG"
+    if head[:4] == b"OggS":
+        return "Ogg"
+    if head[:4] == b"\x30\x26\xb2\x75":
+        return "ASF/WMV"
+    if head[:6] in (b"GIF87a", b"GIF89a"):
+        return "GIF"
+    return None

@@ -19,11 +19,14 @@ from .sensors import TaxelSensor
 from .sim import TaxelSimulator, sweep_locations
 from .sources import write_taxel_csv
 
-__all__ = ["DEFAULT_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
+__all__ = ["DEFAULT_TAPS", "MAX_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
            "write_taxel_test_stream"]
 
 #: Taps per collection in paper 000 (0.01 mm steps over the sensor's range).
 DEFAULT_TAPS = {"fingertip": 3000, "skin": 5000}
+#: Most taps per collection (locations x taps per location): 20 times the paper's skin collection,
+#: about a minute per 50000 taps and 1 GB per file.
+MAX_TAPS = 100_000
 
 
 def simulate_taxel_dataset(simulator: TaxelSimulator, locations_mm, *, seed=None, collection: str = "",
@@ -136,6 +139,9 @@ def _plan(sensor: str, seed: int, locations: int | None, taps_per_location: int)
     """The simulator and the sweep of locations of one collection."""
     simulator = TaxelSimulator(sensor, seed=seed)
     n = DEFAULT_TAPS.get(simulator.sensor.name, 3000) if locations is None else int(locations)
+    if int(taps_per_location) < 1 or n * int(taps_per_location) > MAX_TAPS:
+        raise ValueError(f"locations x taps_per_location must be in 1..{MAX_TAPS} taps per collection, got "
+                         f"{n} x {taps_per_location}")
     return simulator, sweep_locations(simulator.sensor, n, taps_per_location=taps_per_location)
 
 

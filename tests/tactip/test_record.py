@@ -53,6 +53,11 @@ def test_a_live_camera_needs_a_limit_and_nothing_is_left_behind(tmp_path, monkey
 
 def test_bad_outputs_are_one_line_errors(tmp_path, capsys):
     assert main(["record", "synthetic", "--out", str(tmp_path / "x.mkv"), "--quiet"]) == 1
-    assert main(["record", "synthetic", "--out", str(tmp_path / "missing" / "x.mp4"), "--quiet"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 2 and "use a .mp4 or .avi" in err[0] and "cannot write" in err[1]
+    assert len(err) == 1 and "use a .mp4 or .avi" in err[0]
+    # a missing folder is refused while parsing, before the source opens
+    with pytest.raises(SystemExit) as exit_:
+        main(["record", "synthetic", "--out", str(tmp_path / "missing" / "x.mp4"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_.value.code == 2 and "argument --out" in err[-1] and "does not exist" in err[-1]
+    assert not list(tmp_path.iterdir())
