@@ -256,6 +256,9 @@ class Refiner:
         The given rest positions moved onto their windowed centroids in `rest_crop` (where those
         lie within the plausibility bound; elsewhere as given): the same estimator as later
         frames, so that displacements from rest carry none of its bias.
+    settled_share : float
+        Share of the pins whose windowed centroid at rest lies within that bound (about 0 in a
+        blank frame).
     """
 
     def __init__(self, rest_crop: np.ndarray, rest_positions: np.ndarray, origin: np.ndarray, *,
@@ -288,6 +291,7 @@ class Refiner:
         step = centres + origin - rest_positions
         settled = np.einsum("nd,nd->n", step, step) <= self._max_shift_px ** 2
         self.rest_positions = np.where(settled[:, None], centres + origin, rest_positions)
+        self.settled_share = float(np.mean(settled & (contrast > 0)))
         self._area_range = (_AREA_RATIO[0] * area, _AREA_RATIO[1] * area)
         self._min_contrast = _MIN_CONTRAST_RATIO * contrast
         self._min_compactness = _MIN_COMPACTNESS_RATIO * compactness

@@ -346,8 +346,8 @@ class PinTracker:
         NoSensorError
             The frame shows no sensor disc (when the disc is needed and not given).
         PinsError
-            Fewer than two pins to track, or (with refinement) a blank rest frame: no pin shows a tip
-            where it is given.
+            Fewer than two pins to track, or (with refinement) a blank rest frame: fewer than a tenth
+            of the pins show a tip where they are given.
         """
         grey = as_grey(frame)
         if self.disc is None and (self.refine or pins is None):
@@ -367,8 +367,9 @@ class PinTracker:
             refiner = Refiner(self._bright(self._previous), pins, self._origin,
                               spacing_px=self.spacing_px, gate_px=self.gate_px, neighbours=self.neighbours,
                               detection=self.detection, disc=self.disc)
-            if not np.isfinite(refiner._min_contrast).any() or not (refiner._min_contrast > 0).any():
-                raise PinsError("the rest frame is blank: no pin shows a tip where it is given")
+            if refiner.settled_share < _BLANK_FRACTION:
+                raise PinsError(f"the rest frame is blank: only {refiner.settled_share:.0%} of the pins show a tip "
+                                f"where they are given")
             self._refiner = refiner
             pins = refiner.rest_positions
         self.rest_positions = pins.copy()

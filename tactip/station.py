@@ -73,20 +73,28 @@ class OpticalFrontEnd:
         features : (samples, 2 P) ndarray of float32
         """
         from calibration import place_reference_pins
-        from pins import PinTracker, as_grey, tap_features
+        from pins import PinsError, PinTracker, as_grey, tap_features
 
         if len(frames) < 2:
             raise TactipError(f"a tap needs at least 2 frames, got {len(frames)} (camera too slow or stalled?)")
         cal = self.calibration
-        first = as_grey(np.asarray(frames[0]))
         # Start from the calibrated pins, each moved onto its blob in this tap's rest frame, so the
-        # pin identities (and the feature subset) are those of the calibration.
+        # pin identities (and the feature subset) are those of the calibration. A blank first frame
+        # (LEDs off, a dropped USB frame) is skipped: the first frame showing the pins is the rest.
         tracker = PinTracker(detection=cal.detection, disc=cal.disc)
-        rest = place_reference_pins(cal, first)
-        rest = tracker.start(first, pins=rest)
-        positions = np.empty((len(frames), len(rest), 2))
-        positions[0] = rest
-        for k in range(1, len(frames)):
+        for first_index in range(len(frames) - 1):
+            first = as_grey(np.asarray(frames[first_index]))
+            try:
+                rest = tracker.start(first, pins=place_reference_pins(cal, first))
+                break
+            except PinsError as error:
+                blank_error = error
+        else:
+            raise TactipError(f"no frame of the tap shows the pins ({blank_error}); is the camera's light on?")
+        positions = np.full((len(frames), len(rest), 2), np.nan)
+        positions[first_index] = rest
+        for k in range(first_index + 1, len(frames)):
+            # NaN in a blank frame (`tracker.blank`) and for lost pins: tap_features fills them in time.
             positions[k] = tracker.update(frames[k])
         times = None if timestamps_s is None else np.asarray(timestamps_s, dtype=np.float64)
         return tap_features(positions - rest, pins=cal.selected_pins, n_samples=self.samples,

@@ -132,3 +132,33 @@ def test_a_model_for_another_tactip_with_the_same_shapes_is_refused(sim_station)
     other = dataclasses.replace(sim_station.calibration, expected_pins=532)
     with pytest.raises(ModelError, match=r"trained on another sensor: pins 331 \(this station: 532\)"):
         load_station_model(sim_station.config, other)
+
+
+@pytest.mark.parametrize("blank_at", [0, 4])
+def test_a_blank_frame_in_a_tap_is_marked_and_the_pins_recovered(station, blank_at, monkeypatch):
+    # LEDs off or a dropped USB frame: a black frame as the rest frame or mid-tap.
+    gap = station.config.gap("g06")
+    clean = station.tap(gap, 4.0, seed=3)
+    end_tap = station.camera.end_tap
+
+    def with_a_blank_frame(event):
+        frames, times = end_tap(event)
+        frames = list(frames)
+        frames[blank_at] = np.zeros_like(frames[blank_at])
+        return frames, times
+
+    monkeypatch.setattr(station.camera, "end_tap", with_a_blank_frame)
+    tap = station.tap(gap, 4.0, seed=3)
+    assert tap.features.shape == clean.features.shape and np.isfinite(tap.features).all()
+    # The blank frame is filled in from its neighbours in time (linearly: mid-rise that misses the
+    # curve by a few % of the peak); the rest of the tap is the same.
+    peak = np.abs(clean.features).max()
+    difference = np.abs(tap.features - clean.features)
+    assert peak > 1.0
+    assert difference.max() < 0.1 * peak and difference.mean() < 0.01 * peak
+
+
+def test_a_tap_of_blank_frames_is_refused_in_one_line(station, monkeypatch):
+    monkeypatch.setattr(station.camera, "end_tap", lambda event: ([np.zeros((480, 640), np.uint8)] * 5, list(range(5))))
+    with pytest.raises(TactipError, match="no frame of the tap shows the pins"):
+        station.tap(station.config.gap("g06"), 4.0, seed=3)
