@@ -1,7 +1,8 @@
 """Replay a recorded TacTip video through the pin pipeline and store the result in HDF5.
 
-``replay_video`` reads every frame of a video (or any non-live frame source), detects the pins
-in the rest frame (the first frame unless told otherwise; it must be off contact), tracks them
+``replay_video`` reads every frame of a video (or any non-live frame source), finds the pins in
+the rest frame (the first frame unless told otherwise; it must be off contact) as the blobs that
+form the pin lattice (`pins.find_pin_field`: rim-ring glare, specks and skin texture rejected), tracks them
 through the video (`pins.PinTracker`: Lucas-Kanade, windowed refinement, a windowed search for
 lost pins, retirement of pins that stay lost, blank frames marked), integrates displacements from
 the rest frame, finds the taps (`pins.segment_taps`), selects the tactile pins
@@ -70,9 +71,9 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from pins import (DetectionParams, PadScale, PinSelection, PinsError, PinTracker, SensorDisc, detect_pins,
-                  displacement_from_rest, feature_dim_names, find_sensor_disc, pad_scale, segment_taps,
-                  select_feature_pins, tap_features, tap_signal, tune_detection)
+from pins import (DetectionParams, PadScale, PinSelection, PinsError, PinTracker, SensorDisc,
+                  displacement_from_rest, feature_dim_names, find_pin_field, pad_scale, segment_taps,
+                  select_feature_pins, tap_features, tap_signal)
 
 from ._output import claim_output, refuse_overwriting_inputs, write_error
 from .errors import ConfigError, SourceError
@@ -81,6 +82,8 @@ __all__ = ["ReplayResult", "replay_video", "FORMAT", "check_rest_frame"]
 
 FORMAT = "tactip-replay/2"
 DEFAULT_PAD_DIAMETER_MM = 40.0
+# Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
+REFERENCE_PITCH_PX = 17.5
 # Displacement arrows in the annotated video are drawn this many times their length.
 ARROW_SCALE = 3.0
 _BAR_X = np.array([24, 0], dtype=np.int32)
@@ -117,6 +120,8 @@ class ReplayResult:
     detection : DetectionParams
     pins_detected : int
         Pins found in the rest frame.
+    pin_field : str
+        The rest frame's pin field: pins kept, pitch, blobs rejected and why (`pins.PinField.summary`).
     expected_pins : int or None
     warnings : list of str
         What did not go as asked (also in the file).
@@ -143,6 +148,7 @@ class ReplayResult:
     disc: SensorDisc
     detection: DetectionParams
     pins_detected: int
+    pin_field: str = ""
     expected_pins: int | None = None
     warnings: list = field(default_factory=list)
     decisions: Any = None
@@ -161,8 +167,8 @@ class ReplayResult:
         """A few readable lines: frames, pins, scale, lost and retired pins, taps, warnings, files."""
         rate = f" at {self.frame_rate:g} fps" if self.frame_rate else ""
         taps = ", ".join(f"{a}-{b - 1}" for a, b in self.tap_bounds) or "none"
-        detected = f"{self.pins_detected} found in rest frame {self.rest_frame}"
-        if self.expected_pins:
+        detected = f"rest frame {self.rest_frame}: {self.pin_field or f'{self.pins_detected} pins'}"
+        if self.expected_pins and "expected" not in self.pin_field:
             off = self.pins_detected - self.expected_pins
             detected += f", {self.expected_pins} expected ({off:+d}, {off / self.expected_pins:+.1%})"
         scale = self.scale.describe() if self.scale is not None else f"{self.mm_per_px:.4f} mm/px (calibration)"
@@ -220,10 +226,12 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
     annotate_path : str or path, optional
         Also write an MP4 showing the pins, their displacements (x3) and the tap state.
     expected_pins : int, optional
-        The pins expected in view on the rest frame: detection is tuned to it first
-        (`pins.tune_detection`) and the summary says how far off the count is.
+        The pins expected in view on the rest frame: it confirms the pin field found there
+        (`pins.find_pin_field`, which does not need it); the summary says how far off the count
+        is, and a count more than 10 % off is a warning. Also the default of `pins_on_pad`.
     params : DetectionParams, optional
-        Detection parameters (default ones, or the starting point of tuning).
+        Detection parameters: a hint for the pin field search (default: none; ``dark_pins`` is
+        always kept).
     n_samples : int
         Samples per tap feature array (paper: 40).
     n_pins, min_separation_mm : int, float
@@ -363,7 +371,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         invalid_taps=[k for k, ok in enumerate(analysis["valid"]) if not ok],
                         selected_pins=analysis["selected"], selection=analysis["selection"],
                         mm_per_px=float(analysis["mm_per_px"]), scale=scale, disc=track["disc"],
-                        detection=track["detection"], pins_detected=track["pins_detected"],
+                        detection=track["detection"], pins_detected=track["pins_detected"], pin_field=track["field"],
                         expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions)
 
 
@@ -410,7 +418,7 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, calibration,
     positions, lost, retired, blank, timestamps = [], [], [], [], []
     warnings: list[str] = []
     before = 0
-    detected = 0
+    detected, field = 0, ""
     with tqdm(total=total, unit="frame", disable=not progress, desc="replay", mininterval=0.5) as bar:
         for frame in source:
             timestamps.append(frame.timestamp_s)
@@ -423,8 +431,9 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, calibration,
                 retired.append(np.zeros_like(gone) if away is None else np.array(away, dtype=bool))
                 blank.append(bool(getattr(tracker, "blank", gone.all())))
             elif frame.index == rest_frame:
-                tracker, rest, detected, params = _start(frame.image, params=params, expected_pins=expected_pins,
-                                                         calibration=calibration, warnings=warnings)
+                tracker, rest, detected, params, field = _start(frame.image, params=params,
+                                                                expected_pins=expected_pins, calibration=calibration,
+                                                                warnings=warnings)
                 positions.append(rest.astype(np.float32))
                 lost.append(np.zeros(len(rest), dtype=bool))
                 retired.append(np.zeros(len(rest), dtype=bool))
@@ -446,28 +455,28 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, calibration,
                 tracked=np.arange(len(stacked)) >= rest_frame,
                 timestamps=np.asarray(timestamps, dtype=np.float64), rest=tracker.rest_positions,
                 disc=tracker.disc, detection=params, tracker=tracker, frame_rate=source.frame_rate,
-                frame_size=source.frame_size, pins_detected=int(detected), warnings=warnings)
+                frame_size=source.frame_size, pins_detected=int(detected), field=field, warnings=warnings)
 
 
 def _start(image, *, params, expected_pins, calibration, warnings):
-    """The tracker started on the rest frame: (tracker, rest positions, pins found, detection params)."""
+    """The tracker started on the rest frame: (tracker, rest positions, pins found, detection params, field line).
+
+    Without a calibration the pins are the rest frame's pin field (`pins.find_pin_field`: the blobs
+    that form the pin lattice, the rim ring's glare, specks and skin texture rejected); its
+    detection parameters and field circle serve the tracker's recovery in later frames.
+    """
     if calibration is not None:
         from calibration import place_reference_pins
 
         tracker = PinTracker(detection=params, disc=calibration.disc)
         rest = tracker.start(image, pins=place_reference_pins(calibration, image))
-        return tracker, rest, len(rest), params
-    disc = find_sensor_disc(image, dark_pins=params.dark_pins)
-    if expected_pins is not None:
-        try:
-            params = tune_detection(image, int(expected_pins), start=params, disc=disc)
-        except (PinsError, ValueError) as exc:
-            warnings.append(f"detection could not be tuned to {expected_pins} pins ({exc}); "
-                            f"the detection parameters given were used")
-    pins = detect_pins(image, params=params, disc=disc)
-    tracker = PinTracker(detection=params, disc=disc)
-    rest = tracker.start(image, pins)
-    return tracker, rest, len(pins), params
+        return tracker, rest, len(rest), params, "the calibration's pins"
+    # Default parameters are no hint: the field search finds its own (polarity apart).
+    hint = None if params == DetectionParams(dark_pins=params.dark_pins) else params
+    field = find_pin_field(image, expected_pins=expected_pins, params=hint, dark_pins=params.dark_pins)
+    tracker = PinTracker(detection=field.params, disc=field.disc)
+    rest = tracker.start(image, field.centres)
+    return tracker, rest, field.count, field.params, field.summary()
 
 
 def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, rest_frame: int,
@@ -547,16 +556,21 @@ def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float,
         except (PinsError, ValueError) as exc:
             warnings.append(f"no feature pins ({exc})")
     try:
-        check = check_rest_frame(displacements, rest, rest_frame=rest_frame)
+        spacing = track["tracker"].spacing_px
+        check = check_rest_frame(displacements, rest, rest_frame=rest_frame,
+                                 high_px=1.5 * min(1.0, spacing / REFERENCE_PITCH_PX) if spacing > 0 else 1.5)
         if check:
             warnings.append(check)
     except (PinsError, ValueError) as exc:
         warnings.append(f"the rest frame could not be checked ({exc})")
     bounds, taps, valid = [], None, np.zeros(0, dtype=bool)
+    high_px, low_px = tap_thresholds_px(displacements, track["tracker"].spacing_px,
+                                        usable=track["tracked"] & ~track["blank"])
     try:
-        bounds = segment_taps(displacements)
+        bounds = segment_taps(displacements, high_px=high_px, low_px=low_px)
         if not bounds:
-            warnings.append("no taps found (no frame moved the pins by 1.5 px): only the tracking was written")
+            warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
+                            f"was written")
         elif len(selected):
             taps, valid = _features(displacements, track["timestamps"], bounds, selected, n_samples)
         else:
@@ -564,7 +578,32 @@ def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float,
     except (PinsError, ValueError) as exc:
         warnings.append(f"no tap features ({exc})")
     return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
-                bounds=bounds, taps=taps, valid=valid, warnings=warnings)
+                bounds=bounds, taps=taps, valid=valid, warnings=warnings, tap_thresholds_px=(high_px, low_px))
+
+
+def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None
+                      ) -> tuple[float, float]:
+    """The hysteresis thresholds of `pins.segment_taps` for this sensor, px: (high, low).
+
+    The defaults (1.5 and 0.5 px) fit a pad whose pins are about `REFERENCE_PITCH_PX` apart in the
+    image; on a pad seen smaller (a small pad, a low resolution) the pins move proportionally less
+    and the thresholds shrink with the pitch (never grow), but stay above the tracking noise: the
+    low threshold at least twice the quiet frames' tap signal (its 10th percentile).
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        px, NaN where lost.
+    spacing_px : float
+        Median nearest-neighbour pin spacing at rest, px.
+    usable : (T,) ndarray of bool, optional
+        Frames to measure the noise on (tracked, not blank); all by default.
+    """
+    factor = min(1.0, spacing_px / REFERENCE_PITCH_PX) if np.isfinite(spacing_px) and spacing_px > 0 else 1.0
+    signal = tap_signal(displacements if usable is None else displacements[usable])
+    floor = float(np.percentile(signal, 10)) if signal.size else 0.0
+    low = max(0.5 * factor, 2.0 * floor)
+    return max(1.5 * factor, 2.0 * low), low
 
 
 def _select(track: dict, *, n_pins: int, min_separation_mm: float, mm_per_px: float) -> PinSelection:
@@ -650,6 +689,7 @@ def _write_hdf5(path, track, analysis, settings, decisions=None) -> None:
             "pins_detected": int(track["pins_detected"]),
             "blank_frames": np.flatnonzero(track["blank"]).astype(np.int64),
             "warnings": json.dumps(analysis["warnings"]),
+            "tap_thresholds_px": np.asarray(analysis["tap_thresholds_px"], dtype=np.float64),
             **settings,
         })
         if decisions is not None:
