@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from pins import (DetectionParams, LKParams, PinsError, PinTracker, ShapeError, detect_pins, find_sensor_disc,
-                  match_to_blobs, track_pins)
+from pins import (DetectionParams, LKParams, PinsError, PinTracker, SensorDisc, ShapeError, detect_pins,
+                  find_sensor_disc, match_to_blobs, track_pins)
 from pins._refine import Refiner
 from tactip.synthetic import Contact
-from tests.pins.conftest import TAP, frame, sensor
+from tests.pins.conftest import TAP, frame, preset_sensor, sensor
 
 
 def _shift(image, dx, dy):
@@ -223,3 +223,116 @@ def test_tracker_state_and_errors():
         PinTracker(gate_fraction=0.7)
     with pytest.raises(ValueError, match="window_px"):
         LKParams(window_px=8)
+
+
+# Tracking on the phenomenon presets (tactip.synthetic.PRESETS): one 5 mm tap over a 2 mm gap,
+# started from the drawn pins' true rest centres (detection has its own tests).
+TRACKING_PRESETS = ["tactip-331", "dark-331", "rim-ring-331", "brown-127", "radial-120", "small-pad-100", "dense-1000"]
+
+
+@functools.lru_cache(maxsize=None)
+def _preset_tap(name):
+    s = preset_sensor(name)
+    return s, [s.render()] + list(s.tap(TAP))
+
+
+def _preset_tracker(name):
+    s, frames = _preset_tap(name)
+    rest = frames[0]
+    drawn = np.flatnonzero(rest.visible | rest.partial)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
+    tracker.start(rest.image, pins=rest.centres[drawn])
+    return tracker, drawn, frames
+
+
+@pytest.mark.parametrize("name", TRACKING_PRESETS)
+def test_tracking_a_tap_on_every_preset_meets_the_bars(name):
+    tracker, identity, frames = _preset_tracker(name)
+    errors, swaps, lost_visible = [], 0, []
+    for f in frames[1:]:
+        positions = tracker.update(f.image)
+        found = np.isfinite(positions[:, 0])
+        visible = f.visible[identity]
+        errors.append(positions[found & visible] - f.centres[identity][found & visible])
+        # Identity: each found pin is nearest to its own true pin among all drawn ones.
+        drawn = np.flatnonzero(f.visible | f.partial)
+        swaps += int(np.count_nonzero(drawn[cKDTree(f.centres[drawn]).query(positions[found])[1]] != identity[found]))
+        lost_visible.append(np.count_nonzero(tracker.lost & visible) / visible.sum())
+    errors = np.concatenate(errors)
+    assert np.sqrt(np.mean(np.sum(errors**2, axis=1))) <= 0.1
+    assert swaps == 0
+    assert np.median(lost_visible) <= 0.05
+    # After the tap the pins are back at rest (the last frames are off contact).
+    back = np.linalg.norm(positions - tracker.rest_positions, axis=1)
+    assert np.nanmedian(back) <= 0.3
+    assert tracker.detection_frames <= -(-(len(frames) - 1) // tracker.detect_every)
+
+
+@pytest.mark.parametrize("blank", ["black", "grey"])
+def test_a_blank_frame_is_marked_and_the_pins_recovered_after(blank):
+    frames = _tap_frames(331)
+    tracker = PinTracker()
+    identity = _identity(tracker.start(frames[0].image), frames[0].centres)
+    for k, f in enumerate(frames[1:], start=1):
+        image = f.image
+        if k == 5:
+            image = np.zeros_like(image) if blank == "black" else np.random.default_rng(1).normal(
+                120, 4, image.shape).clip(0, 255).astype(np.uint8)
+        positions = tracker.update(image)
+        if k == 5:
+            # Marked blank: nothing trackable, every pin NaN and lost, none retired for it.
+            assert tracker.blank and np.isnan(positions).all() and tracker.lost.all()
+            assert not tracker.retired.any()
+        else:
+            # The next good frame recovers every pin (LK from the last good frame, then refinement).
+            assert not tracker.blank and not tracker.lost.any()
+            assert np.abs(positions - f.centres[identity]).max() < 0.3
+    assert tracker.blank_frames == 1
+
+
+def test_a_blank_rest_frame_is_refused():
+    f = frame(331)
+    with pytest.raises(PinsError, match="blank"):
+        PinTracker(disc=find_sensor_disc(f.image)).start(np.zeros_like(f.image), pins=f.centres)
+
+
+def test_rim_pins_leaving_view_are_retired_and_come_back_with_their_identity():
+    s = sensor(331)
+    rest = s.render()
+    radius = np.linalg.norm(rest.centres - np.asarray(s.disc[:2]), axis=1)
+    rim = radius > 0.85 * radius.max()
+    tracker = PinTracker(retire_after=3, check_every=4, detect_every=1000)
+    identity = _identity(tracker.start(rest.image), rest.centres)
+    gone = rim[identity]
+    contact = Contact(indentation_mm=2.0, gap_width_mm=2.0)
+    for k in range(1, 26):
+        f = s.render(contact, hidden=rim if 2 <= k < 14 else None)
+        positions = tracker.update(f.image)
+        if 2 <= k < 14:
+            assert tracker.lost[gone].all() and np.isnan(positions[gone]).all()
+            assert not tracker.lost[~gone].any()
+            # Lost for more than retire_after frames: retired (searched for only every check_every frames).
+            assert tracker.retired[gone].all() == (k - 1 > 3) and not tracker.retired[~gone].any()
+        if k >= 14 + 4:
+            # Back within check_every frames by windowed search, each on its own tip.
+            assert not tracker.lost.any() and not tracker.retired.any()
+            assert np.abs(positions - f.centres[identity]).max() < 0.3
+    # One blob detection at most (when the pins were first lost: at most one frame in detect_every).
+    assert tracker.detection_frames <= 1
+
+
+def test_blob_detection_runs_at_most_once_in_detect_every_frames():
+    s = sensor(331)
+    rng = np.random.default_rng(5)
+    tracker = PinTracker(detect_every=4, retire_after=1000)
+    tracker.start(s.render().image)
+    for k in range(1, 21):
+        # A different set of pins hidden in every frame: some pin is always missing.
+        hidden = np.zeros(s.n_pins, dtype=bool)
+        hidden[rng.choice(s.n_pins, 10, replace=False)] = True
+        before = tracker.detection_frames
+        tracker.update(s.render(hidden=hidden).image)
+        if tracker.detection_frames > before:
+            assert k == 1 or k - last >= 4
+            last = k
+    assert tracker.detection_frames == 5
