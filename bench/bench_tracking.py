@@ -6,7 +6,8 @@ preset exists), with the pins of the outer rings hidden and shown again over tim
 (``render(hidden=...)``): each rim pin is hidden for stretches of a few frames, about a third of
 them at any time, as on a real pad whose rim pins drift in and out of view.
 
-Printed, measured side by side in one run (best of several interleaved passes, one thread), so
+The tracker starts from the drawn pins' true rest centres, as from a calibration (detection is
+benchmarked in `bench/bench_pins.py`). Printed, measured side by side in one run (best of several interleaved passes, one thread), so
 that machine load cancels out in the ratio:
 
 - tracker:  ms per `PinTracker.update` (LK forward + windowed refinement, windowed search for
@@ -18,7 +19,7 @@ that machine load cancels out in the ratio:
 
 and, from one more tracker pass: frames that needed blob detection, blank frames, pins lost and
 retired per frame (median, max), RMSE against the renderer's ground truth over the visible pins
-tracked (px), pins reported while hidden, identity swaps, and the return to rest at the end of
+tracked (px), pins reported while not drawn (hidden), identity swaps, and the return to rest at the end of
 each tap (median and 95th percentile over pins of |position - rest|, px; bar: median <= 0.3).
 
 Run: .venv/bin/python bench/bench_tracking.py [--pins 331] [--taps 4] [--preset NAME]
@@ -33,7 +34,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-from pins import PinTracker
+from pins import DetectionParams, PinTracker, SensorDisc
 from tactip.synthetic import Contact, SyntheticTacTip
 
 PASSES = 5
@@ -83,16 +84,25 @@ def _tracker_pass(tracker: PinTracker, images: list[np.ndarray]) -> None:
         tracker.update(image)
 
 
-def timed(images: list[np.ndarray], passes: int = PASSES) -> dict[str, tuple[float, float]]:
+def _tracker(sensor: SyntheticTacTip, rest) -> tuple[PinTracker, np.ndarray]:
+    """A tracker started from the drawn pins' true rest centres (as from a calibration), and their indices."""
+    drawn = np.flatnonzero(rest.visible | getattr(rest, "partial", np.zeros_like(rest.visible)))
+    tracker = PinTracker(detection=DetectionParams(dark_pins=sensor.dark_pins), disc=SensorDisc(*sensor.disc))
+    tracker.start(rest.image, pins=rest.centres[drawn])
+    return tracker, drawn
+
+
+def timed(sensor: SyntheticTacTip, frames, passes: int = PASSES) -> dict[str, tuple[float, float]]:
     """(wall, cpu) ms per frame of the tracker and of plain LK: best of interleaved passes."""
-    tracker = PinTracker()
-    start = tracker.start(images[0])
+    tracker, drawn = _tracker(sensor, frames[0])
+    images = [f.image for f in frames]
+    start = tracker.rest_positions.copy()
     steps = len(images) - 1
     best = {"tracker": [np.inf, np.inf], "plain LK": [np.inf, np.inf]}
     for _ in range(passes):
         for name, run in (("tracker", lambda: _tracker_pass(tracker, images)),
                           ("plain LK", lambda: _plain_lk(images, start))):
-            tracker.start(images[0])  # not timed: once per video
+            tracker.start(images[0], pins=start)  # not timed: once per video
             wall, cpu = time.perf_counter(), time.thread_time()
             run()
             wall, cpu = time.perf_counter() - wall, time.thread_time() - cpu
@@ -100,22 +110,23 @@ def timed(images: list[np.ndarray], passes: int = PASSES) -> dict[str, tuple[flo
     return {name: tuple(values) for name, values in best.items()}
 
 
-def accuracy(frames, ends) -> dict[str, float | str]:
+def accuracy(sensor: SyntheticTacTip, frames, ends) -> dict[str, float | str]:
     """One tracker pass against ground truth."""
-    tracker = PinTracker()
-    start = tracker.start(frames[0].image)
-    distance, identity = cKDTree(frames[0].centres).query(start)
+    tracker, identity = _tracker(sensor, frames[0])
     errors, lost, retired, hidden_reported, swaps, rest_errors = [], [], [], 0, 0, []
     for k, f in enumerate(frames[1:], start=1):
         positions = tracker.update(f.image)
         lost.append(int(tracker.lost.sum()))
         retired.append(int(tracker.retired.sum()))
         visible = f.visible[identity]
+        drawn = f.visible | getattr(f, "partial", np.zeros_like(f.visible))
         found = np.isfinite(positions[:, 0])
         errors.append(positions[found & visible] - f.centres[identity][found & visible])
-        hidden_reported += int(np.count_nonzero(found & ~visible))
+        hidden_reported += int(np.count_nonzero(found & ~drawn[identity]))
         if found.any():
-            swaps += int(np.count_nonzero(cKDTree(f.centres).query(positions[found])[1] != identity[found]))
+            index = np.flatnonzero(drawn)
+            nearest = index[cKDTree(f.centres[index]).query(positions[found])[1]]
+            swaps += int(np.count_nonzero(nearest != identity[found]))
         if k in ends:
             rest_errors.append(np.linalg.norm(positions[found] - tracker.rest_positions[found], axis=1))
     errors = np.concatenate(errors)
@@ -125,7 +136,7 @@ def accuracy(frames, ends) -> dict[str, float | str]:
             "lost": f"{np.median(lost):.0f} / {max(lost)}", "retired": f"{np.median(retired):.0f} / {max(retired)}",
             "hidden reported": hidden_reported, "swaps": swaps,
             "rest": " ".join(f"{m:.3f}/{p:.3f}" for m, p in back), "worst rest median": max(m for m, _ in back),
-            "pins": len(start), "unmatched at start": int(np.count_nonzero(distance > 1.0))}
+            "pins": len(identity)}
 
 
 def main() -> None:
@@ -138,17 +149,16 @@ def main() -> None:
     cv2.setNumThreads(1)
     sensor, name = _sensor(args.preset, args.pins)
     frames, ends = video(sensor, args.taps)
-    images = [f.image for f in frames]
     hidden = np.mean([np.count_nonzero(~f.visible) for f in frames[1:]])
     print(f"tracking bench: {name}, {len(frames) - 1} frames ({args.taps} taps), {sensor.n_pins} pins, "
-          f"{hidden:.0f} hidden per frame on average; one thread, best of {PASSES} interleaved passes")
-    t = timed(images)
+          f"{hidden:.0f} not wholly visible per frame on average; one thread, best of {PASSES} interleaved passes")
+    t = timed(sensor, frames)
     ratio = t["tracker"][0] / t["plain LK"][0]
     print(f"  tracker update  {t['tracker'][0]:6.3f} ms wall ({t['tracker'][1]:6.3f} cpu)")
     print(f"  plain LK step   {t['plain LK'][0]:6.3f} ms wall ({t['plain LK'][1]:6.3f} cpu)  "
           f"(11x11, one pyramid level, same pins and frames)")
     print(f"  ratio           {ratio:6.2f} wall ({t['tracker'][1] / t['plain LK'][1]:.2f} cpu)   bar <= 1.5")
-    a = accuracy(frames, ends)
+    a = accuracy(sensor, frames, ends)
     print(f"  detection frames {a['detection']}, blank frames {a['blank']}, lost per frame median/max {a['lost']}, "
           f"retired {a['retired']}")
     print(f"  RMSE vs truth {a['rmse']:.3f} px (visible pins tracked), pins reported while hidden "
