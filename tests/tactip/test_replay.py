@@ -265,3 +265,21 @@ def test_a_full_disk_is_named_and_leaves_nothing(tmp_path, monkeypatch):
     with pytest.raises(OSError, match="disk full while writing"):
         replay_video(SAMPLE, out)
     assert out.read_bytes() == b"old result" and sorted(p.name for p in tmp_path.iterdir()) == ["r.h5"]
+
+
+def test_feature_pins_avoid_a_pin_lost_most_of_the_time(tmp_path):
+    sensor = SyntheticTacTip(pins=127, seed=6)
+    centre = int(np.argmin(np.linalg.norm(sensor.rest_centres - sensor.rest_centres.mean(axis=0), axis=1)))
+    hidden = np.zeros(127, dtype=bool)
+    hidden[centre] = True  # a dead pin at the centre: seen in the rest frame only
+    depths = [0.0] * 3 + [1.0, 2.5, 4.0, 4.0, 2.5, 1.0] + [0.0] * 4
+    frames = [sensor.render(Contact(d, 2.0), hidden=hidden if k else None).image for k, d in enumerate(depths)]
+    video = tmp_path / "dead.mp4"
+    _write_video(video, frames)
+    result = replay_video(video, tmp_path / "r.h5")
+    with h5py.File(tmp_path / "r.h5") as h5:
+        rest, lost = h5["rest_positions"][:], h5["lost"][:]
+    dead = int(np.argmin(np.linalg.norm(rest - sensor.rest_centres[centre], axis=1)))
+    assert lost[1:, dead].all()
+    assert dead not in result.selected_pins.tolist() and len(result.selected_pins) == 40
+    assert len(result.tap_bounds) == 1 and not result.invalid_taps
