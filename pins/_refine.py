@@ -1,20 +1,27 @@
-"""Refinement and recovery of tracked pins, for `pins.track.PinTracker` (paper 002, III-A.3).
+"""Windowed following, refinement, search and recovery of tracked pins, for `pins.track.PinTracker`
+(paper 002, III-A.3).
 
 Refinement. Lucas-Kanade errors add up from frame to frame, so each tracked pin is moved onto
-the intensity-weighted centroid of its tip in a small window around its LK estimate
-(`WindowCentroids`). All windows are gathered at once from the grey crop (a fancy index into its
+the intensity-weighted centroid of its tip in a small window around its estimate (its guess,
+`Refiner.follow`, or its LK estimate, `Refiner.refine`; `WindowCentroids`). All windows are gathered at once from the grey crop (a fancy index into its
 sliding-window view, as `numpy.lib.stride_tricks.sliding_window_view` makes) and processed as
 one (N, P) uint8 array, O(pins x window):
 
 1. the threshold of each window is its darkest pixel (the membrane, less the noise) plus
    `threshold_fraction` of the way up to the pin's top (the mean of the five pixels at the
-   window's centre), so that membrane noise never counts and the whole tip above its foot does;
+   window's centre), so that membrane noise never counts and the whole tip above its foot does,
+   and at least the window's mean, so that the texture of a coloured skin whose shadows make the
+   darkest pixel far darker than the membrane does not count either;
 2. each pixel is weighted by its grey level above the threshold (the positive part);
 3. a disc mask centred on the estimate (to a quarter pixel) keeps the pixels nearer to it than
-   0.55 of the distance to the nearest neighbouring pin: that disc lies inside the pin's own
+   0.55 of the distance to the nearest neighbouring pin, and no farther than 1.6 tip radii
+   (measured at rest) plus 1.5 px, less membrane: that disc lies inside the pin's own
    Voronoi cell but for a sliver that holds at most the neighbour's foot, below the threshold,
    so no neighbour's pixels count, even when contact pushes pins together;
 4. the weighted centroid (zeroth, first and second moments, one matrix product) is the centre.
+
+Following: windows at the constant-velocity guesses, re-centred once; a pin whose window moved by
+at most 0.01 spacings (0.1 px at least) and ended within 0.25 spacings of its guess needs no LK.
 
 A point-symmetric tip whose foot lies inside the mask gives its centre whatever the threshold;
 a tip cut by the mask (near the rim, seen obliquely; pushed against a neighbour) is cut
@@ -22,8 +29,8 @@ symmetrically when the estimate is good, as LK's is (a few hundredths of a px). 
 noise sigma 4, gradient and glare, at rest and under 5 mm contact, this gives 0.02-0.03 px RMSE
 against ground truth (blob detection: 0.03).
 
-Plausibility. A centroid is kept when it lies within 0.03 pin spacings of the LK estimate (half
-a px at 331 pins in 640x480), and the tip's area (mass over the threshold-to-top height, px),
+Plausibility. A centroid is kept when it lies within 0.03 pin spacings (0.4 px at least) of the
+LK estimate (half a px at 331 pins in 640x480), and the tip's area (mass over the threshold-to-top height, px),
 contrast (top minus darkest pixel) and compactness (area over 2 pi times the mean squared
 distance from the centroid: 1 for a disc) are like the pin's own at rest: a hidden pin has no
 contrast; a neighbour, glare or a speck in the window pulls the centroid, adds area and spreads
@@ -31,7 +38,13 @@ the mass. Limit: a small bright speck detached from a tip but inside its window 
 than that bound (up to 0.5 px in tests where blob detection would have kept them apart); a speck
 touching a tip fools blob detection as much.
 
-Recovery. Only in frames where some pin is lost or implausible, the frame's blobs are detected
+Search. A lost pin (or one whose centroid is implausible) is looked for in a window at its
+predicted position (its rest position moved by the median displacement of its tracked
+neighbours), re-centred once; it is found when that move is at most 0.1 spacings, its tip is like
+at rest, it lies within the gate (below half the spacing) of the prediction and no neighbour sits
+on the same tip (`Refiner._one_pin_per_tip`).
+
+Recovery (`Refiner.recover`, at a rate `PinTracker` bounds). The frame's blobs are detected
 (`pins.detect`): an implausible pin takes the blob it landed on, one blob per pin, inside a gate
 (`match_to_blobs`; no blob: lost), and blobs no pin claimed are assigned to lost pins one-to-one
 (Hungarian method, `scipy.optimize.linear_sum_assignment`) within the same gate around each lost

@@ -6,32 +6,40 @@ residual is small (the blob did not vanish), and tracking the result back to the
 lands within `fb_threshold_px` of where it started (forward-backward check). A pin that fails is
 *lost*: its position is NaN and `PinTracker.lost` says so; it is never frozen at an old place.
 
-`PinTracker` adds two things on top of the pure `track_pins` (`pins._refine` says how):
+`PinTracker` adds, on top of the pure `track_pins` (`pins._refine` says how):
 
-- refinement: LK errors add up from frame to frame, so each tracked pin is moved onto the
-  intensity-weighted centroid of its tip, measured in a small window around its LK estimate
-  that stays inside the pin's own Voronoi cell, for all pins at once; the centroid is kept when
-  it is plausible (near the LK estimate; tip area, contrast and compactness like at rest);
-- recovery: only in frames where some pin is lost or implausible, the frame's blobs are
-  detected (`pins.detect`); an implausible pin takes the blob it landed on, one blob per pin,
-  inside a gate of a fraction of the pin spacing (no blob: lost), and blobs no pin claimed are
-  assigned to lost pins one-to-one (Hungarian method) within the same gate around each lost
-  pin's predicted position (its rest position moved by the median displacement of its tracked
-  neighbours). Gates below half the pin spacing and one-to-one assignments keep identities: a
-  pin can only be given a blob that is nearer to its prediction than any neighbour could be.
+- following and refinement: each pin's position is the intensity-weighted centroid of its tip,
+  measured in a small window that stays inside the pin's own Voronoi cell, for all pins at once.
+  Each frame the windows start at the pins' constant-velocity guesses and are re-centred once
+  (`Refiner.follow`); a pin whose window settles within a few tenths of a px near its guess
+  needs nothing else. The others are moved by LK forward from the guess (full image; the pyramid
+  only when many fail), and LK's answer is checked by its windowed centroid instead of a backward
+  LK pass (`Refiner.refine`: near the LK estimate; tip area, contrast and compactness like at
+  rest). Displacements come from one estimator at rest and after, so they carry none of its bias,
+  and LK errors never add up: after a tap the pins are back at rest to a few hundredths of a px;
+- search: a lost pin is looked for in a window around its prediction (its rest position moved
+  by the median displacement of its tracked neighbours), re-centred once, and taken when it
+  settles on a tip like the pin's own at rest, inside a gate below half the pin spacing, with no
+  other pin on that tip: identities are kept without blob detection;
+- retirement: a pin lost for more than `retire_after` frames (a rim pin leaving view) is retired:
+  searched for only once in `check_every` frames, in turns, until it comes back with its identity;
+- recovery at a bounded rate: when a pin that is not retired is still missing, the frame's blobs
+  are detected (`pins.detect`, a few ms), at most once in `detect_every` frames: implausible pins
+  take the blob they landed on, and free blobs are assigned to lost pins one-to-one (Hungarian
+  method) within the gate around their predictions;
+- blank frames: a frame where fewer than a tenth of the expected pins are found (LEDs off, a
+  black or dropped USB frame, the disc gone) is marked (`blank`, all NaN) and does not replace
+  the last good frame as LK's reference, so the next good frame recovers the pins.
 
 Limit: frame-to-frame motion must stay below about half the pin spacing (8 px at 331 pins in a
 640x480 frame; a 250 ms tap rise at 20 frames/s moves pins at most ~7 px per frame). Beyond it
-the lattice of identical pins aliases: LK, its backward check and the refinement all agree on
-the neighbouring pin. Record faster taps at a higher frame rate.
+the lattice of identical pins aliases: LK and the windows agree on the neighbouring pin. Record
+faster taps at a higher frame rate.
 
-Speed: the tracker runs LK on the disc's crop only, starting each pin from a constant-velocity
-guess, on the full image alone (the pyramid only for pins that then fail a check or move more
-than a third of a window from the guess). OpenCV's Python binding cannot take the pyramids of
+Speed: everything runs on the disc's crop. OpenCV's Python binding cannot take the pyramids of
 `cv2.buildOpticalFlowPyramid` (opencv/opencv#4777), so they are not reused between frames.
-Windowed refinement costs about 0.2-0.3 ms per frame for 331-532 pins, against about 3 ms for
-blob detection, which a frame pays only when a pin is lost or implausible: a whole update takes
-about 1.4 ms at 331 pins and 1.6 ms at 532 on one core (`bench/bench_pins.py`).
+`bench/bench_tracking.py` measures one update against a plain 11x11 one-level LK step over the
+same pins on a video with rim pins coming and going (`bench/bench_pins.py`: clean taps).
 """
 
 from __future__ import annotations
