@@ -199,7 +199,7 @@ class ReplayResult:
         else:
             worst = np.flatnonzero(tracked)[np.argsort(-lost, kind="stable")[:3]]
             worst = [int(f) for f in worst if self.lost_per_frame[f] > 0]
-            text = (f"Lost pins per frame: median {np.median(lost):g}, max {lost.max()} of {self.pins}"
+            text = (f"Lost pins per frame (retired included): median {np.median(lost):g}, max {lost.max()} of {self.pins}"
                     + (f" (frames {', '.join(map(str, worst))})" if worst else "")
                     + f"; retired: median {np.median(retired):g}, max {retired.max()}")
         if self.blank_frames:

@@ -98,7 +98,7 @@ def test_annotated_video_and_summary(replayed):
     assert ok and image.shape == (480, 640, 3) and frames == 86
     text = result.summary()
     assert "86 frames" in text and "331 tracked" in text and "Taps: 3" in text and str(out) in text
-    assert "Lost pins per frame: median 0, max 0 of 331" in text and "mm/px (pin pitch" in text
+    assert "Lost pins per frame (retired included): median 0, max 0 of 331" in text and "mm/px (pin pitch" in text
     assert not list(out.parent.glob(".*part*"))
 
 
