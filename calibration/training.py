@@ -23,7 +23,7 @@ def train_station_model(train_path: str | Path, out: str | Path, *, n_locations:
     """Fit the histogram model on ``train_path`` and save it to ``out``; returns the model."""
     dataset = load_dataset(train_path)
     model = fit_model(dataset, n_locations=n_locations, bins=bins)
-    save_model(out, model)
+    save_model(out, model, inputs=[train_path])
     log(model.summary())
     return model
 
@@ -42,7 +42,7 @@ def recommend_fixation(model_path: str | Path, test_path: str | Path, *, runs: i
                            seed=seed, progress=progress)
     model = model.with_recommended(fixation_location=float(sweep.best_fixation),
                                    decision_threshold=float(sweep.best_threshold), policy="active")
-    save_model(model_path, model)
+    save_model(model_path, model, inputs=[test_path])
     log(f"fixation depth {sweep.best_fixation:g} {model.location_unit}: mean width error "
         f"{sweep.errors[sweep.best]:.3f} {model.identity_unit} in {sweep.taps[sweep.best]:.1f} taps "
         f"(decision threshold {sweep.best_threshold:g}); written to {model_path}")
