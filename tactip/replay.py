@@ -71,7 +71,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from pins import (DetectionParams, PadScale, PinSelection, PinsError, PinTracker, SensorDisc,
+from pins import (DetectionParams, NoSensorError, PadScale, PinSelection, PinsError, PinTracker, SensorDisc,
                   displacement_from_rest, feature_dim_names, find_pin_field, pad_scale, segment_taps,
                   select_feature_pins, tap_features, tap_signal)
 
@@ -473,7 +473,19 @@ def _start(image, *, params, expected_pins, calibration, warnings):
         return tracker, rest, len(rest), params, "the calibration's pins"
     # Default parameters are no hint: the field search finds its own (polarity apart).
     hint = None if params == DetectionParams(dark_pins=params.dark_pins) else params
-    field = find_pin_field(image, expected_pins=expected_pins, params=hint, dark_pins=params.dark_pins)
+    try:
+        field = find_pin_field(image, expected_pins=expected_pins, params=hint, dark_pins=params.dark_pins)
+    except NoSensorError as exc:
+        if params.dark_pins:
+            raise
+        # No dark membrane disc: perhaps dark markers on a light membrane.
+        try:
+            field = find_pin_field(image, expected_pins=expected_pins,
+                                   params=None if hint is None else hint.replace(dark_pins=True), dark_pins=True)
+        except NoSensorError:
+            raise NoSensorError(f"{exc} (nor with dark markers on a light membrane)") from None
+        warnings.append("no dark membrane with bright pins in the rest frame: dark markers on a light membrane "
+                        "assumed (--dark-pins)")
     tracker = PinTracker(detection=field.params, disc=field.disc)
     rest = tracker.start(image, field.centres)
     return tracker, rest, field.count, field.params, field.summary()

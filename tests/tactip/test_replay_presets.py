@@ -17,7 +17,6 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from pins import DetectionParams
 from tactip.replay import replay_video
 from tactip.synthetic import Contact, SyntheticTacTip, preset_names
 
@@ -45,7 +44,7 @@ def _video(name: str, folder: str):
 def test_replay_succeeds_on_every_preset(tmp_path, name):
     path, sensor, truth, depth = _video(name, str(tmp_path))
     out = tmp_path / "r.h5"
-    result = replay_video(path, out, sensor=name, params=DetectionParams(dark_pins=sensor.dark_pins))
+    result = replay_video(path, out, sensor=name)  # dark markers found without --dark-pins
     frames = len(truth)
     with h5py.File(out) as h5:
         positions, displacements = h5["positions"][:], h5["displacements"][:]
@@ -67,6 +66,7 @@ def test_replay_succeeds_on_every_preset(tmp_path, name):
     assert scale["mm_per_px"] == pytest.approx(sensor.mm_per_px, rel=0.05)
     # 40 pins at least 4 mm apart, or as far apart as the pad allows with a warning naming the separation.
     assert separation >= 4.0 or any(f"{separation:.2f} mm" in w for w in warnings)
+    assert any("dark markers" in w for w in warnings) == sensor.dark_pins
     # The first frame is at rest: no complaint about it.
     assert not [w for w in warnings if "--rest-frame" in w]
     # The tap is found, around the deepest frame.
