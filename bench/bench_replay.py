@@ -1,10 +1,10 @@
 """Replay against decoding alone, side by side on one real-like video (issue 8, outcome 4: ratio <= 2).
 
 Writes a real-like video to a temporary folder: a synthetic TacTip preset (default
-``rim-ring-331``: a black rim ring with LED glare on it, rim pins sliding behind it and back as the
-pad spreads) tapping a 2 mm gap at 3-5 mm indentation and a few offsets, rendered with sensor
-noise and written through ``cv2.VideoWriter`` as MPEG-4 part 2 (mp4v), as a camera recording would
-be. Then, alternating within each repeat so that machine load falls on both alike:
+``rim-ring-331``: a black rim ring with LED glare on it) tapping a 2 mm gap at 3-5 mm indentation
+and a few offsets, with rim pins coming and going (a sector of the outermost pins hidden, turning
+with time: each rim pin is lost for a few frames in every 40), rendered with sensor noise and
+written through ``cv2.VideoWriter`` as MPEG-4 part 2 (mp4v), as a camera recording would be. Then, alternating within each repeat so that machine load falls on both alike:
 
 - decode:  every frame read through the project's video source (`tactip.sources.open_source`, grey,
            as replay reads them) and nothing else;
@@ -36,25 +36,36 @@ import numpy as np
 from pins import PinTracker, find_pin_field
 from tactip.replay import replay_video
 from tactip.sources import open_source
-from tactip.synthetic import Contact, SyntheticTacTip
+from tactip.synthetic import Contact, SyntheticTacTip, tap_profile
 
 
 def write_video(path: pathlib.Path, preset: str, taps: int, *, frame_rate: float = 20.0) -> int:
-    """A tap sequence of `preset` as an mp4v video at `path`; returns the number of frames."""
+    """A tap sequence of `preset` as an mp4v video at `path`; returns the number of frames.
+
+    Rim pins come and go: the outermost pins inside a 70-degree sector are hidden (as behind a lip
+    of the casing or a patch of glare), and the sector turns by 9 degrees a frame, so every rim pin
+    is lost for about 8 frames in 40 and comes back.
+    """
     sensor = SyntheticTacTip.from_preset(preset, seed=1)
     rng = np.random.default_rng(0)
+    offset = sensor.rest_centres - np.array(sensor.disc[:2])
+    radius, azimuth = np.hypot(*offset.T), np.degrees(np.arctan2(offset[:, 1], offset[:, 0]))
+    rim = radius >= np.quantile(radius, 0.85)
     width, height = sensor.image_size
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), frame_rate, (width, height), True)
     if not writer.isOpened():
         raise SystemExit("no MPEG-4 encoder in this OpenCV build")
+    rest_s, phase_s = 0.2, 0.25
+    per_tap = int(round((2 * rest_s + 3 * phase_s) * frame_rate))
     frames = 0
     try:
         for _ in range(taps):
-            contact = Contact(indentation_mm=float(rng.uniform(3.0, 5.0)), gap_width_mm=2.0,
-                              gap_offset_mm=float(rng.uniform(-2.0, 2.0)))
-            for frame in sensor.tap(contact, frame_rate=frame_rate, rest_before_s=0.2, rest_after_s=0.2):
-                image = frame.image if frame.image.ndim == 3 else cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
-                writer.write(image)
+            depth, gap_offset = float(rng.uniform(3.0, 5.0)), float(rng.uniform(-2.0, 2.0))
+            for k in range(per_tap):
+                fraction = tap_profile(k / frame_rate - rest_s, rise_s=phase_s, plateau_s=phase_s, release_s=phase_s)
+                sector = (azimuth - 9.0 * frames) % 360.0 < 70.0
+                image = sensor.render(Contact(depth * fraction, 2.0, gap_offset), hidden=rim & sector).image
+                writer.write(image if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR))
                 frames += 1
     finally:
         writer.release()
