@@ -91,6 +91,9 @@ def run(args: argparse.Namespace) -> int:
                           f"({args.max_taps})")
     if args.deadline is not None and args.deadline > args.max_taps:
         raise TactipError(f"--deadline {args.deadline} is out of range: it must lie in 1..--max-taps ({args.max_taps})")
+    from tactip._output import refuse_overwriting_inputs, write_text_atomic
+
+    refuse_overwriting_inputs([args.json, args.plot], [args.model, args.test])  # issue 9: never over an input
     model = load_model(args.model)
     _check_fixation(model, args.fixation)
     test = load_dataset(args.test)
@@ -162,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
 
             plot_speed_accuracy(results, args.plot, units=model.identity_unit if model.n_identities > 1 else unit)
     if args.json:
-        pathlib.Path(args.json).write_text(json.dumps(rows, indent=1) + "\n")
+        write_text_atomic(args.json, json.dumps(rows, indent=1) + "\n", inputs=[args.model, args.test])
         print(f"wrote {args.json}")
     if args.plot:
         print(f"wrote {args.plot}")

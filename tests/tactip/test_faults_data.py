@@ -129,6 +129,17 @@ def test_results_export_and_plot_refuse_to_write_over_the_database(sim_station, 
     assert rows(db)[0][2] == "done"
 
 
+def test_validate_refuses_json_or_plot_over_its_model_or_test_set(sim_station, tmp_path):
+    model, test = tmp_path / "model.h5", tmp_path / "test.h5"
+    shutil.copy(sim_station.model, model)
+    shutil.copy(sim_station.test, test)
+    os.symlink(test, tmp_path / "curves.png")                         # a plot name that is the test set
+    for argv in (("--json", "model.h5"), ("--json", "test.h5"), ("--plot", "curves.png")):
+        result = run_tactip("validate", "model.h5", "test.h5", "--runs", "10", "--quiet", *argv, cwd=tmp_path,
+                            inputs=[model, test])
+        assert_refused(result, argv[1], "input")
+
+
 def test_replay_refuses_outputs_over_the_video_or_each_other(tmp_path):
     video = tmp_path / "v.mp4"
     shutil.copy(Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4", video)
