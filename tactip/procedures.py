@@ -37,7 +37,10 @@ def calibrate_station(config: StationConfig, *, rest_frames: int = 10, out: Path
     """
     from calibration import calibrate_sensor, save_calibration
 
+    from ._output import refuse_overwriting_inputs
+
     out = Path(out) if out is not None else calibration_path(config)
+    refuse_overwriting_inputs([out], [config.path, config.perception.model, config.results])
     with Station(config) as station:
         log(f"taking {rest_frames} rest frames off contact ...")
         frames = station.rest_frames(rest_frames)
@@ -98,6 +101,10 @@ def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = Tr
     """
     from calibration import collect_datasets, collection_plan
 
+    from ._output import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([Path(out_dir) / "train.h5", Path(out_dir) / "test.h5"],
+                              [config.path, calibration_path(config), config.perception.model, config.results])
     calibration = load_station_calibration(config)
     p = config.protocol
     plan = collection_plan(config.gaps, p.depths, repeats=p.repeats, lateral_jitter_mm=p.lateral_jitter_mm,

@@ -14,7 +14,7 @@ import os
 import pathlib
 from dataclasses import dataclass
 
-from ._output import claim_output
+from ._output import claim_output, refuse_overwriting_inputs
 from .errors import SourceError
 
 __all__ = ["RecordResult", "record_video"]
@@ -96,6 +96,7 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
         raise ValueError(f"frames must be >= 1, got {frames}")
     if frame_rate is not None and not (math.isfinite(frame_rate) and 0 < frame_rate <= 1000):
         raise ValueError(f"frame_rate must be in (0, 1000] frames/s, got {frame_rate}")
+    refuse_overwriting_inputs([out_path], [spec])  # issue 9: a video file source is an input
     part = claim_output(out_path)
     writer = None
     count, first_s, last_s, dropped = 0, None, None, 0

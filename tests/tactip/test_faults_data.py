@@ -140,6 +140,17 @@ def test_validate_refuses_json_or_plot_over_its_model_or_test_set(sim_station, t
         assert_refused(result, argv[1], "input")
 
 
+def test_record_and_calibrate_refuse_outputs_over_their_inputs(sim_station, tmp_path):
+    video = tmp_path / "v.mp4"
+    shutil.copy(Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4", video)
+    result = run_tactip("record", "v.mp4", "--out", "v.mp4", "--frames", "3", cwd=tmp_path, inputs=[video])
+    assert_refused(result, "v.mp4", "input")
+    toml = station_copy(sim_station, tmp_path / "station", datasets=False)
+    for out in (toml, tmp_path / "station" / "model.h5"):
+        result = run_tactip("calibrate", "--config", toml, "--out", out, cwd=tmp_path, inputs=[toml, out])
+        assert_refused(result, out.name, "input")
+
+
 def test_replay_refuses_outputs_over_the_video_or_each_other(tmp_path):
     video = tmp_path / "v.mp4"
     shutil.copy(Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4", video)
