@@ -48,7 +48,7 @@ _KEPT = -1
 # Possible pin pitches, as fractions of the disc radius (1000 pins on a hexagonal lattice filling
 # the disc: 0.06; 100 pins: 0.19; radial layouts and small pads between).
 _PITCH_FRACTIONS = (0.05, 0.075, 0.11, 0.165, 0.25)
-_BLOCK_PITCHES = (1.3, 2.2)
+_BLOCK_PITCHES = (1.0, 1.5, 2.2)
 _OFFSETS = (5.0, 9.0, 15.0, 25.0)
 _COARSE_BLOCK = (2.2,)
 _COARSE_OFFSETS = (9.0,)
@@ -56,9 +56,22 @@ _NEIGHBOURS = 6
 # Lattice consistency: fractions of the neighbours' medians and of the local pitch.
 _SIZE_RANGE = (0.4, 2.2)
 _MIN_FILL = 0.6
-_MIN_CONTRAST = 0.45
+_MIN_CONTRAST = 0.5
+_MIN_SHARPNESS = 0.8
+# Below this tip radius, px, the steepest slope depends on where the pixel grid cuts the tip.
+_SHARP_RADIUS = 2.0
 _TOO_CLOSE = 0.6
 _LINK = 1.3
+_MIRROR = 0.25
+_MIN_ANCHORS = 2
+_WEAK_CONTRAST = (0.7, 0.85)
+_WEAK_SIZE = (1.8, 1.4)
+_MIN_PINS = 4
+_AREA_SLACK = 3.0
+_MIN_GROUP = 0.1
+_HULL_MARGIN = 0.3
+# The search region of later frames reaches this many pitches beyond the outermost pin.
+_FIELD_MARGIN = 0.35
 # Area range of the final parameters around the kept pins' median area.
 _AREA_RANGE = (0.25, 2.5)
 
@@ -167,17 +180,18 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     grey = as_grey(frame)
     if disc is None:
         disc = find_sensor_disc(grey, dark_pins=start.dark_pins)
+    cache: dict = {}
     # Coarse: one permissive candidate set per possible pitch; the strongest lattice gives the pitch.
-    coarse = [_evaluate(grey, disc, candidate) for candidate in _candidates(disc.radius_px * np.array(_PITCH_FRACTIONS),
+    coarse = [_evaluate(grey, disc, candidate, cache) for candidate in _candidates(disc.radius_px * np.array(_PITCH_FRACTIONS),
                                                                             start, _COARSE_BLOCK, _COARSE_OFFSETS)]
-    first = max(coarse, key=lambda run: run[0][1])
+    first = max(coarse, key=lambda run: run[1])
     pitch = first[5] if np.isfinite(first[5]) else _PITCH_FRACTIONS[len(_PITCH_FRACTIONS) // 2] * disc.radius_px
     # Fine: blocks and offsets at the measured pitch; the most pins in the field wins (then the
     # most regular).
-    fine = [_evaluate(grey, disc, candidate) for candidate in _candidates(np.array([pitch]), start, _BLOCK_PITCHES,
+    fine = [_evaluate(grey, disc, candidate, cache) for candidate in _candidates(np.array([pitch]), start, _BLOCK_PITCHES,
                                                                           _OFFSETS)]
     if params is not None:
-        fine.append(_evaluate(grey, disc, start))
+        fine.append(_evaluate(grey, disc, start, cache))
     best = max(fine, key=lambda run: run[0])
     _, _, chosen, blobs, reason, pitch = best
     kept = reason == _KEPT
@@ -190,10 +204,10 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
                     expected_pins=None if expected_pins is None else int(expected_pins), count_error=count_error)
 
 
-def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams):
+def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict):
     """((pins kept, -irregularity), strength kept, params, blobs, reasons, pitch) of one candidate set."""
     blobs = _detect(grey, disc, params)
-    reason, pitch = _judge_lattice(blobs)
+    reason, pitch = _judge_lattice(blobs, _sharpness(grey, blobs, params, cache))
     kept = reason == _KEPT
     strength = float(np.sum(blobs.contrasts[kept] * blobs.areas[kept]))
     return (int(kept.sum()), -_irregularity(blobs, kept)), strength, params, blobs, reason, pitch
@@ -211,11 +225,41 @@ def _candidates(pitches: np.ndarray, start: DetectionParams, blocks, offsets):
                 yield start.replace(block_size_px=size, offset=offset, **loose)
 
 
-def _judge_lattice(blobs: Blobs) -> tuple[np.ndarray, float]:
+def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: dict | None = None) -> np.ndarray:
+    """Steepest grey-level slope near each blob over its contrast, 1/px.
+
+    A pin tip is a disc with a sharp edge; glare, light patches of skin and shadows are smooth. On
+    tips smaller than `_SHARP_RADIUS` the slope depends on where the pixel grid cuts the tip: all ones.
+    `cache` keeps the slope image per blur between candidate sets.
+    """
+    n = len(blobs.centres)
+    radius = float(np.sqrt(np.median(blobs.areas) / np.pi)) if n else 0.0
+    if radius < _SHARP_RADIUS:
+        return np.ones(n)
+    sigma = max(params.blur_sigma_px, 0.5)
+    cache = {} if cache is None else cache
+    if sigma not in cache:
+        smooth = cv2.GaussianBlur(grey, (0, 0), sigma).astype(np.float32)
+        gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3, scale=0.125)
+        gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3, scale=0.125)
+        cache[sigma] = cv2.magnitude(gx, gy)
+    slope = cache[sigma]
+    # The steepest slope within the tip radius (plus a pixel and a half) of each centre.
+    reach = int(np.ceil(radius + 1.5))
+    dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    inside = dx**2 + dy**2 <= (radius + 1.5) ** 2
+    x = np.rint(blobs.centres[:, 0]).astype(np.intp)[:, None] + dx[inside]
+    y = np.rint(blobs.centres[:, 1]).astype(np.intp)[:, None] + dy[inside]
+    steepest = slope[np.clip(y, 0, grey.shape[0] - 1), np.clip(x, 0, grey.shape[1] - 1)].max(axis=1)
+    return steepest / np.maximum(blobs.contrasts, 1e-6)
+
+
+def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, float]:
     """Which blobs form a lattice: (reason per blob, -1 for kept; median pitch of the kept, px)."""
     n = len(blobs.centres)
-    reason = np.full(n, _OFF, dtype=np.int64)
-    if n < 4:
+    reason = np.full(n, _KEPT, dtype=np.int64)
+    if n < _MIN_PINS:
+        reason[:] = _OFF
         return reason, np.nan
     centres = blobs.centres
     areas = blobs.areas.astype(np.float64)
@@ -223,64 +267,92 @@ def _judge_lattice(blobs: Blobs) -> tuple[np.ndarray, float]:
     contrasts = np.maximum(blobs.contrasts, 1e-6)
     strength = contrasts * areas
     active = np.ones(n, bool)
-    reason[:] = _KEPT
+    # Photometry and spacing, iterated: removing an impostor changes its neighbours' medians.
     for _ in range(8):
         index = np.flatnonzero(active)
-        if len(index) < 4:
-            reason[index] = _OFF
-            return reason, np.nan
-        k = min(_NEIGHBOURS + 1, len(index))
-        dist, near = cKDTree(centres[index]).query(centres[index], k)
-        near_global = index[near]
-        nn = dist[:, 1]
-        # Local pitch: median nearest-neighbour distance of the blob and its neighbours.
-        local_pitch = np.median(nn[near], axis=1)
-        area_ref = np.median(areas[near_global], axis=1)
-        contrast_ref = np.median(contrasts[near_global], axis=1)
+        if len(index) < _MIN_PINS:
+            break
+        hood = _Neighbourhood(centres[index])
+        near = index[hood.near]
+        # Areas compared with a little slack: a 1 px tip covers 3-7 px.
+        area_ref = np.median(areas[near], axis=1) + _AREA_SLACK
+        area = areas[index] + _AREA_SLACK
+        contrast_ref = np.median(contrasts[near], axis=1)
+        fill_ref = np.median(fills[near], axis=1)
         verdict = np.full(len(index), _KEPT)
-        fill_ref = np.median(fills[near_global], axis=1)
-        size_bad = ((areas[index] < _SIZE_RANGE[0] * area_ref) | (areas[index] > _SIZE_RANGE[1] * area_ref)
-                    | (fills[index] < _MIN_FILL * fill_ref))
-        contrast_bad = contrasts[index] < _MIN_CONTRAST * contrast_ref
-        # Too close to a stronger neighbour.
-        close = (dist[:, 1:] < _TOO_CLOSE * local_pitch[:, None]) & (strength[near_global[:, 1:]] > strength[index][:, None])
-        off = close.any(axis=1)
-        verdict[off] = _OFF
-        verdict[contrast_bad] = _CONTRAST
-        verdict[size_bad] = _SIZE
+        # Of two blobs much closer than the local pitch, the weaker is not a lattice site.
+        close = ((hood.dist[:, 1:] < _TOO_CLOSE * hood.pitch[:, None])
+                 & (strength[near[:, 1:]] > strength[index][:, None]))
+        verdict[close.any(axis=1)] = _OFF
+        sharp_ref = np.median(sharpness[near], axis=1)
+        verdict[(contrasts[index] < _MIN_CONTRAST * contrast_ref) | (sharpness[index] < _MIN_SHARPNESS * sharp_ref)] = _CONTRAST
+        verdict[(area < _SIZE_RANGE[0] * area_ref) | (area > _SIZE_RANGE[1] * area_ref)
+                | (fills[index] < _MIN_FILL * fill_ref)] = _SIZE
+        # Lattice sites: a blob on the lattice is a mirror image of a neighbour through another
+        # one (interior pins have six such pairs, rim pins and the ends of radial spokes at least
+        # one). A blob with fewer than two must look just like its neighbours to stay.
+        anchors = hood.anchors()
+        strict = np.clip(_MIN_ANCHORS - anchors, 0, _MIN_ANCHORS) / _MIN_ANCHORS
+        ratio = contrasts[index] / contrast_ref
+        unlike = ((ratio < _WEAK_CONTRAST[0] + strict * (_WEAK_CONTRAST[1] - _WEAK_CONTRAST[0]))
+                  | (np.abs(np.log(area / area_ref)) > np.log(_WEAK_SIZE[0]) + strict * np.log(_WEAK_SIZE[1] / _WEAK_SIZE[0])))
+        weak = anchors < _MIN_ANCHORS
+        verdict[weak & unlike & (verdict == _KEPT)] = _OFF
         if not (verdict != _KEPT).any():
             break
         reason[index] = verdict
         active[index[verdict != _KEPT]] = False
     index = np.flatnonzero(active)
-    if len(index) < 4:
+    if len(index) < _MIN_PINS:
         reason[index] = _OFF
         return reason, np.nan
-    # The field: groups of blobs joined by lattice links.
-    k = min(_NEIGHBOURS + 1, len(index))
-    dist, near = cKDTree(centres[index]).query(centres[index], k)
-    nn = dist[:, 1]
-    local_pitch = np.median(nn[near], axis=1)
-    limit = _LINK * np.maximum(local_pitch[:, None], local_pitch[near[:, 1:]])
-    link = dist[:, 1:] <= limit
-    rows = np.repeat(np.arange(len(index)), k - 1)[link.ravel()]
-    cols = near[:, 1:].ravel()[link.ravel()]
-    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(index), len(index)))
-    groups, label = connected_components(graph, directed=False)
+    # The field: groups of blobs joined by lattice links; blobs beyond their hull are outside.
+    hood = _Neighbourhood(centres[index])
+    groups, label = connected_components(hood.graph(), directed=False)
     sizes = np.bincount(label, minlength=groups)
-    big = sizes >= max(4, 0.1 * sizes.max())
-    core = big[label]
-    if core.sum() >= 3:
+    core = (sizes >= max(_MIN_PINS, _MIN_GROUP * sizes.max()))[label]
+    if core.sum() >= 3 and (~core).any():
         hull = cv2.convexHull(centres[index[core]].astype(np.float32))
-        margin = 0.3 * float(np.median(local_pitch[core]))
+        margin = _HULL_MARGIN * float(np.median(hood.pitch[core]))
         inside = np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), True) >= -margin
                            for x, y in centres[index[~core]]], dtype=bool)
-        outside = index[~core][~inside] if len(inside) else index[:0]
-    else:
-        outside = index[~core]
-    reason[outside] = _OUTSIDE
+        reason[index[~core][~inside]] = _OUTSIDE
+    elif core.sum() < 3:
+        reason[index[~core]] = _OUTSIDE
     kept = reason == _KEPT
     return reason, float(_median_nn(centres[kept]))
+
+
+class _Neighbourhood:
+    """Nearest neighbours of points (each point first), their local pitch, links and mirror anchors."""
+
+    def __init__(self, points: np.ndarray):
+        self.points = points
+        self.tree = cKDTree(points)
+        k = min(_NEIGHBOURS + 1, len(points))
+        self.dist, self.near = self.tree.query(points, k)
+        # Local pitch: median nearest-neighbour distance of the point and its neighbours. Links
+        # reach a little beyond the second-nearest distance instead: near the rim of a hemispherical
+        # pad the pins are foreshortened towards the centre, closer in the radial direction than
+        # along the rim.
+        self.pitch = np.median(self.dist[:, 1][self.near], axis=1)
+        reach = np.median(self.dist[:, min(2, k - 1)][self.near], axis=1)
+        self.link = self.dist[:, 1:] <= _LINK * np.maximum(reach[:, None], reach[self.near[:, 1:]])
+
+    def anchors(self) -> np.ndarray:
+        """Per point: linked neighbours j with a point at the mirror image through j, or beyond the point."""
+        points, others = self.points, self.points[self.near[:, 1:]]
+        tolerance = _MIRROR * self.dist[:, 1:]
+        through, _ = self.tree.query(2.0 * others - points[:, None, :], 1, distance_upper_bound=np.inf)
+        beyond, _ = self.tree.query(2.0 * points[:, None, :] - others, 1)
+        return np.sum(self.link & (through < tolerance), axis=1) + np.sum(self.link & (beyond < tolerance), axis=1)
+
+    def graph(self) -> coo_matrix:
+        """Sparse adjacency of the lattice links."""
+        n, k = self.near.shape
+        rows = np.repeat(np.arange(n), k - 1)[self.link.ravel()]
+        cols = self.near[:, 1:].ravel()[self.link.ravel()]
+        return coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
 
 
 def _irregularity(blobs: Blobs, kept: np.ndarray) -> float:
@@ -310,7 +382,7 @@ def _final_params(chosen: DetectionParams, blobs: Blobs, kept: np.ndarray, disc:
                             min_fill=0.4, max_aspect=3.0, split_radius_px=round(float(0.4 * radius), 2))
     centres = blobs.centres[kept]
     reach = float(np.max(np.hypot(centres[:, 0] - disc.cx, centres[:, 1] - disc.cy)))
-    field_radius = min(reach + 0.6 * pitch + params.rim_margin_px, disc.radius_px)
+    field_radius = min(reach + _FIELD_MARGIN * pitch + params.rim_margin_px, disc.radius_px)
     return params, SensorDisc(disc.cx, disc.cy, field_radius)
 
 
