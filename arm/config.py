@@ -69,6 +69,9 @@ _TAP_RANGES = {"approach_height": (0.0, 100.0, False, "mm"), "speed": (0.0, 250.
                "travel_speed": (0.0, 250.0, False, "mm/s")}
 _MIN_SPEED_MM_S = 0.1   # slower strokes and travels take minutes per tap
 _MAX_SEED = 2**32 - 1
+# [arm.sim] gaps: positions within a metre of the work frame origin, widths and lengths up to 100 / 1000 mm.
+_SIM_GAP_RANGES = {"x": (-1000.0, 1000.0), "y": (-1000.0, 1000.0), "width": (0.0, 100.0), "angle": (-360.0, 360.0),
+                   "length": (0.0, 1000.0)}
 _SIM_KEYS = ("realtime", "surface_z", "placement_noise", "seed", "home", "gaps")
 _GAP_KEYS = {"name": "name", "x": "x_mm", "y": "y_mm", "width": "width_mm", "angle": "angle_deg",
              "length": "length_mm"}
@@ -316,6 +319,9 @@ def _sim(table: Any) -> SimSettings:
     if not isinstance(gaps, list):
         raise ArmConfigError("[arm.sim] gaps must be a list of tables")
     names = [gap.get("name") for gap in gaps if isinstance(gap, Mapping)]
+    for index, name in enumerate(names):
+        if not isinstance(name, str) or not name.strip():
+            raise ArmConfigError(f"[arm.sim] gaps[{index}] name must be a non-empty string, got {name!r}")
     if len(set(names)) != len(names):
         raise ArmConfigError(f"[arm.sim] gaps: names must be unique, got {names}")
     surface_z = _number("sim.surface_z", table.get("surface_z", 0.0))
@@ -338,6 +344,15 @@ def _gap(index: int, table: Any) -> Gap:
     kwargs = {_GAP_KEYS[key]: value for key, value in table.items()}
     if not isinstance(kwargs["name"], str):
         raise ArmConfigError(f"{where} name must be a string")
+    for key, value in table.items():
+        if key == "name":
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ArmConfigError(f"{where} {key} must be a finite number, got {value!r}")
+        low, high = _SIM_GAP_RANGES[key]
+        if not low <= value <= high or (key in ("width", "length") and value == 0):
+            raise ArmConfigError(f"{where} {key} must be in {'(' if key in ('width', 'length') else '['}{low:g}, "
+                                 f"{high:g}] {'deg' if key == 'angle' else 'mm'}, got {value:g}")
     try:
         return Gap(**kwargs)
     except (TypeError, ValueError) as exc:

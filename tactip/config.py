@@ -61,6 +61,7 @@ MAX_LOCATIONS = 1000                     # depth classes
 MAX_BINS = 10_000                        # value bins per feature
 MAX_SEED = 2**32 - 1
 MAX_GAP_MM = 100.0                       # gap widths and tolerances, mm
+MAX_CAMERA_INDEX = 63                    # [sensor] source given as a whole number
 SIM_PRESET = Path(__file__).with_name("presets") / "station_sim.toml"
 
 
@@ -239,6 +240,12 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     names = [g.name for g in gaps]
     dupes = sorted({n for n in names if names.count(n) > 1})
     _check(not dupes, "gaps", f"duplicate gap names: {', '.join(dupes)}")
+    low, high = arm.workspace_min_mm, arm.workspace_max_mm
+    for k, g in enumerate(gaps):
+        for axis, value in ((0, g.x), (1, g.y)):
+            _check(low[axis] <= value <= high[axis], f"gaps[{k}].{'xy'[axis]}",
+                   f"{value:g} mm lies outside the arm workspace {'xy'[axis]} {low[axis]:g}..{high[axis]:g} mm "
+                   f"([arm] workspace)")
     taps = depths * protocol.repeats * len(gaps)
     _check(taps <= MAX_COLLECTION_TAPS, "protocol",
            f"asks for {taps} taps per collection ({depths} depths x repeats {protocol.repeats} x {len(gaps)} gaps); "
@@ -335,8 +342,8 @@ def _section(data: dict, name: str, cls, base_dir: Path, paths: set[str] = froze
     for key, value in table.items():
         default = fields[key].default
         if key in paths:
-            if not isinstance(value, str):
-                raise ConfigError(f"{name}.{key} must be a path string")
+            if not isinstance(value, str) or not value.strip():
+                raise ConfigError(f"{name}.{key} must be a path string, got {value!r}")
             values[key] = _path(value, base_dir)
         elif isinstance(default, bool):
             if not isinstance(value, bool):
@@ -351,8 +358,9 @@ def _section(data: dict, name: str, cls, base_dir: Path, paths: set[str] = froze
                 raise ConfigError(f"{name}.{key} must be a number, got {value!r}")
             values[key] = float(value)
         elif isinstance(default, str):
-            if isinstance(value, int) and not isinstance(value, bool) and key == "source" and value >= 0:
-                values[key] = str(value)  # a camera index
+            if isinstance(value, int) and not isinstance(value, bool) and key == "source":
+                _range(value, f"{name}.{key}", 0, MAX_CAMERA_INDEX, "(a camera index)")
+                values[key] = str(value)
             elif not isinstance(value, str) or not value.strip():
                 raise ConfigError(f"{name}.{key} must be a non-empty string, got {value!r}")
             else:

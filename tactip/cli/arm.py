@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import argparse
 
-from tactip.cli._types import positive_float
+from tactip.cli._types import finite_float, positive_float
 
 HELP = "check the arm of a station (status) and try one slow tap (tap)"
 
@@ -38,9 +38,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                          description="One slow tap to check a new set-up. The depth and the point are checked "
                                      "against the [arm] limits before anything moves.")
     tap.add_argument("--config", required=True, metavar="TOML", help="station configuration with an [arm] table")
-    tap.add_argument("--depth", required=True, type=float, metavar="MM",
+    tap.add_argument("--depth", required=True, type=finite_float, metavar="MM",
                      help="depth of the tap below the surface reference z = 0, mm (positive = into the part)")
-    tap.add_argument("--at", nargs=2, type=float, default=(0.0, 0.0), metavar=("X", "Y"),
+    tap.add_argument("--at", nargs=2, type=finite_float, default=(0.0, 0.0), metavar=("X", "Y"),
                      help="tap point in the work frame, mm (default: the origin)")
     tap.add_argument("--speed", type=positive_float, default=5.0, metavar="MM_S",
                      help="stroke speed, mm/s (default 5; capped by max_tap_speed)")

@@ -21,6 +21,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from tactip.cli._types import finite_float, seed
+
 HELP = "inspect the configured gaps (or --sim: the simulated station, no hardware)"
 
 
@@ -33,10 +35,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --sim: where the model, datasets and results live (default station_data/sim)")
     parser.add_argument("--policy", choices=("active", "stationary", "random"), default=None,
                         help="override [perception] policy")
-    parser.add_argument("--seed", type=int, default=None, help="seed of the random start depths")
+    parser.add_argument("--seed", type=seed, default=None, help="seed of the random start depths (>= 0)")
     parser.add_argument("--gap", action="append", default=None, metavar="NAME",
                         help="inspect only this gap (repeatable)")
-    parser.add_argument("--start-depth", type=float, default=None, metavar="MM",
+    parser.add_argument("--start-depth", type=finite_float, default=None, metavar="MM",
                         help="start every inspection at this depth instead of a random one")
     parser.add_argument("--quiet", action="store_true", help="print only the verdicts")
 

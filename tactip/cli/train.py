@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import argparse
 
-from tactip.cli._types import int_at_least, positive_float
+from tactip.cli._types import int_at_least, int_in_range, positive_float
 
 HELP = "train a perception model (histogram likelihood) from a tap dataset"
 
@@ -23,11 +23,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser of ``tactip train``."""
     parser.add_argument("dataset", metavar="DATASET.h5", help="training taps (tactip-dataset/1 HDF5)")
     parser.add_argument("--out", required=True, metavar="MODEL.h5", help="model file to write (tactip-model/1 HDF5)")
-    parser.add_argument("--locations", type=int_at_least(1), default=11, metavar="N",
-                        help="equal location classes over the training range (default 11; "
+    parser.add_argument("--locations", type=int_in_range(1, 1000), default=11, metavar="N",
+                        help="equal location classes over the training range, 1..1000 (default 11; "
                              "a dataset with one location gets one class)")
-    parser.add_argument("--bins", type=int_at_least(2), default=100, metavar="N",
-                        help="value bins per sensor dimension (default 100)")
+    parser.add_argument("--bins", type=int_in_range(2, 10_000), default=100, metavar="N",
+                        help="value bins per sensor dimension, 2..10000 (default 100)")
     parser.add_argument("--epsilon", type=positive_float, default=None,
                         help="count added to every histogram bin (default 1e-3)")
     parser.add_argument("--min-taps", type=int_at_least(1), default=1, metavar="N",
@@ -40,6 +40,7 @@ def run(args: argparse.Namespace) -> int:
 
     from perception import fit_model, load_dataset, save_model
     from tactip._output import refuse_overwriting_inputs
+    from tactip.cli._types import check_memory
     from tactip.errors import TactipError
 
     if args.epsilon is not None and not math.isfinite(args.epsilon):
@@ -47,6 +48,10 @@ def run(args: argparse.Namespace) -> int:
     refuse_overwriting_inputs([args.out], [args.dataset])
     dataset = load_dataset(args.dataset)
     print(dataset.describe())
+    identities = len(set(dataset.identity.tolist()))  # the histograms: dims x bins x classes, float32, and a copy
+    check_memory(8.0 * dataset.taps.shape[2] * args.bins * args.locations * identities,
+                 what=f"histograms of {args.locations} x {identities} classes x {args.bins} bins",
+                 hint="use fewer --locations or --bins")
     options = {} if args.epsilon is None else {"epsilon": args.epsilon}
     model = fit_model(dataset, n_locations=args.locations, bins=args.bins, min_taps_per_class=args.min_taps,
                       **options)

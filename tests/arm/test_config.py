@@ -67,7 +67,7 @@ def test_missing_key_is_named(key):
     (minimal(tap={"approach_height": 50}), "approach_height .* above the workspace top"),
     (minimal(tap={"sped": 1}), r"\[arm.tap\] has unknown key 'sped'"),
     (minimal(sim={"gaps": [{"name": "a", "x": 0, "y": 0}]}), r"gaps\[0\] is missing the key 'width'"),
-    (minimal(sim={"gaps": [{"name": "a", "x": 0, "y": 0, "width": -1}]}), r"gaps\[0\]: .*width_mm must be > 0"),
+    (minimal(sim={"gaps": [{"name": "a", "x": 0, "y": 0, "width": -1}]}), r"gaps\[0\] width must be in \(0, 100\] mm, got -1"),
     (minimal(sim={"placement_noise": -0.1}), "placement_noise must be in"),
     (minimal(sim={"realtime": "yes"}), "realtime must be true or false"),
 ])
