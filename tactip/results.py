@@ -255,6 +255,8 @@ class ResultsStore:
         return ResultsError(f"{self.path}: {exc}")
 
     def _write(self, sql: str, params=()) -> sqlite3.Cursor:
+        if self.read_only:
+            raise ResultsError(f"{self.path} was opened read-only (for reading results)")
         try:
             return self._db.execute(sql, params)
         except sqlite3.Error as exc:

@@ -189,3 +189,48 @@ def test_subset_keeps_metadata():
     part = ds.subset(ds.location > 2)
     assert len(part) == 3 and part.sensor == ds.sensor and part.dim_names == ds.dim_names
     np.testing.assert_array_equal(part.lateral, ds.lateral[3:])
+
+
+# -- issue 9: counted taps, protocol on resume, numbers only -------------------------------------------
+
+def test_only_counted_taps_are_read_or_resumed(tmp_path):
+    path = tmp_path / "d.h5"
+    with DatasetWriter(path, samples=5, dims=3, front_end="tactip") as writer:
+        for k in range(4):
+            writer.append(np.full((5, 3), k + 1.0), location=float(k), identity=1.0)
+    with h5py.File(path, "r+") as f:                   # the arrays grew, the data never landed (full disk)
+        assert f.attrs["complete_taps"] == 4
+        for name in ("taps", "location", "identity"):
+            f[name].resize(6, axis=0)
+    assert len(load_dataset(path)) == 4 and load_dataset(path).taps.min() == 1.0
+    with DatasetWriter(path, samples=5, dims=3, front_end="tactip") as writer:
+        assert writer.count == 4
+        writer.append(np.full((5, 3), 9.0), location=4.0, identity=1.0)
+    assert load_dataset(path).taps[:, 0, 0].tolist() == [1.0, 2.0, 3.0, 4.0, 9.0]
+
+
+def test_a_resume_with_another_protocol_names_the_setting(tmp_path):
+    path = tmp_path / "d.h5"
+    with DatasetWriter(path, samples=5, dims=3, front_end="tactip", protocol={"seed": 1, "repeats": 2}) as writer:
+        writer.append(np.ones((5, 3)), location=0.0, identity=1.0)
+    with pytest.raises(DatasetError, match="protocol seed = 1, not 2"):
+        DatasetWriter(path, samples=5, dims=3, front_end="tactip", protocol={"seed": 2, "repeats": 2})
+    with DatasetWriter(path, samples=5, dims=3, front_end="tactip", protocol={"seed": 1, "repeats": 2}) as writer:
+        assert writer.count == 1
+
+
+def test_taps_that_are_not_numbers_are_refused_naming_the_dataset(tmp_path):
+    save_dataset(tmp_path / "d.h5", make_dataset())
+    with h5py.File(tmp_path / "d.h5", "r+") as f:
+        del f["taps"]
+        f.create_dataset("taps", data=np.array([b"tap"] * 6))
+    with pytest.raises(DatasetError, match="dataset 'taps' holds .* not numbers"):
+        load_dataset(tmp_path / "d.h5")
+
+
+def test_save_dataset_refuses_to_overwrite_an_input(tmp_path):
+    save_dataset(tmp_path / "d.h5", make_dataset())
+    before = (tmp_path / "d.h5").read_bytes()
+    with pytest.raises(FileExistsError, match="is the input"):
+        save_dataset(tmp_path / "d.h5", make_dataset(n=2), inputs=[tmp_path / "d.h5"])
+    assert (tmp_path / "d.h5").read_bytes() == before

@@ -168,3 +168,31 @@ def test_load_refuses_other_files(tmp_path, small):
         load_model(tmp_path / "m.h5")
     with pytest.raises(ModelError, match="unknown recommended"):
         fit_model(small, n_locations=2).with_recommended(speed=3)
+
+
+# -- issue 9: a model's settings and numbers are checked like a station file -------------------------
+
+@pytest.mark.parametrize("settings, word", [
+    ({"decision_threshold": 0.0}, "decision_threshold"), ({"decision_threshold": float("nan")}, "decision_threshold"),
+    ({"decision_threshold": 1.01}, "decision_threshold"), ({"fixation_location": 1e3}, "fixation_location"),
+    ({"fixation_location": float("inf")}, "fixation_location"), ({"policy": "guess"}, "policy"),
+])
+def test_bad_recommended_settings_are_refused_naming_them(small, tmp_path, settings, word):
+    model = fit_model(small, n_locations=4)
+    with pytest.raises(ModelError, match=word):
+        model.with_recommended(**settings)
+    save_model(tmp_path / "m.h5", model)
+    with h5py.File(tmp_path / "m.h5", "r+") as f:
+        f.attrs["recommended"] = __import__("json").dumps(settings)
+    with pytest.raises(ModelError, match=f"m.h5: recommended {word}"):
+        load_model(tmp_path / "m.h5")
+
+
+def test_non_finite_epsilon_and_likelihoods_are_refused(small, tmp_path):
+    with pytest.raises(ValueError, match="epsilon must be a finite number"):
+        fit_model(small, epsilon=float("inf"))
+    save_model(tmp_path / "m.h5", fit_model(small, n_locations=4))
+    with h5py.File(tmp_path / "m.h5", "r+") as f:
+        f["log_probability"][0, 0, :] = np.nan
+    with pytest.raises(ModelError, match="NaN or infinite likelihoods"):
+        load_model(tmp_path / "m.h5")

@@ -70,3 +70,46 @@ def test_not_a_database_is_a_clear_error(tmp_path):
     bad.write_bytes(b"this is not sqlite" * 100)
     with pytest.raises(ResultsError, match="not a tactip results database"):
         ResultsStore(bad)
+
+
+# -- issue 9: foreign files untouched, read-only readers, stale rows ----------------------------------
+
+def test_another_sqlite_database_is_refused_unchanged(tmp_path):
+    path = tmp_path / "other.sqlite"
+    with sqlite3.connect(path) as con:
+        con.execute("CREATE TABLE invoices (id INTEGER PRIMARY KEY)")
+    before = path.read_bytes()
+    for read_only in (False, True):
+        with pytest.raises(ResultsError, match="another SQLite database .*invoices"):
+            ResultsStore(path, read_only=read_only)
+    assert path.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["other.sqlite"]
+    (tmp_path / "notes.txt").write_text("not a database")
+    with pytest.raises(ResultsError, match="not an SQLite file"):
+        ResultsStore(tmp_path / "notes.txt")
+
+
+def test_a_reader_changes_nothing(tmp_path):
+    path = tmp_path / "r.sqlite"
+    with ResultsStore(path) as store:
+        _inspect(store)
+    before = path.read_bytes()
+    with ResultsStore(path, read_only=True) as store:
+        assert len(store.inspections()) == 1
+        with pytest.raises(ResultsError, match="read-only"):
+            store.start_inspection("g1", nominal_width=1.0, tolerance=0.1, policy="active")
+    assert path.read_bytes() == before
+
+
+def test_stale_running_rows_of_dead_processes_are_closed(tmp_path, monkeypatch):
+    import tactip.results as results
+
+    with ResultsStore(tmp_path / "r.sqlite") as store:
+        mine = store.start_inspection("g1", nominal_width=1.0, tolerance=0.1, policy="active", station="line-1")
+        monkeypatch.setattr(results.os, "getpid", lambda: 2**22 + 11)        # a process that does not exist
+        dead = store.start_inspection("g2", nominal_width=1.0, tolerance=0.1, policy="active", station="line-1")
+        other = store.start_inspection("g3", nominal_width=1.0, tolerance=0.1, policy="active", station="line-2")
+        monkeypatch.undo()
+        assert store.close_stale_inspections("line-1") == [dead]
+        rows = {r.id: r for r in store.inspections()}
+    assert rows[dead].status == "aborted" and "stale" in rows[dead].reason
+    assert rows[mine].status == "running" and rows[other].status == "running"    # alive, or another station
