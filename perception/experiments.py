@@ -18,6 +18,7 @@ Example
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,6 +103,13 @@ class FixationSweep:
         return float(self.thresholds[self.best])
 
 
+def _check_budget(tap_budget) -> None:
+    """A mean-taps budget is a finite number >= 1 (every run takes at least one tap)."""
+    if isinstance(tap_budget, bool) or not isinstance(tap_budget, (int, float, np.number)) or \
+            not (math.isfinite(tap_budget) and tap_budget >= 1):
+        raise ValueError(f"tap_budget must be a finite number of mean taps >= 1, got {tap_budget!r}")
+
+
 def _budget_figures(results, tap_budget):
     picks = [r.best_within(tap_budget) for r in results]
     single = results[0].identity_error_map.shape[-1] == 1
@@ -133,6 +141,7 @@ def fixation_sweep(environment: VirtualEnvironment, *, fixation_classes=None, ta
     -------
     FixationSweep
     """
+    _check_budget(tap_budget)
     model = environment.model
     classes = np.arange(model.n_locations) if fixation_classes is None else np.asarray(fixation_classes, np.intp)
     if classes.ndim != 1 or classes.size == 0 or ((classes < 0) | (classes >= model.n_locations)).any():
@@ -188,6 +197,7 @@ def lateral_sweep(environment: VirtualEnvironment, policy: Policy, *, sigmas=(0.
     DatasetError
         The test set has no lateral offsets, or some class has no taps within a sigma.
     """
+    _check_budget(tap_budget)
     if environment.lateral is None:
         raise DatasetError("the test set has no lateral offsets; collect it with lateral placement noise")
     sigmas = np.sort(np.asarray(sigmas, dtype=np.float64))

@@ -83,3 +83,11 @@ def test_plots_write_images(tmp_path, env, lateral_env):
     for name in ("curves.png", "fixation.png", "lateral.png"):
         data = (tmp_path / name).read_bytes()
         assert data.startswith(b"\x89PNG") and len(data) > 5000
+
+
+@pytest.mark.parametrize("budget", [0, 0.5, float("nan"), float("inf"), -3, True, "12"])
+def test_sweeps_refuse_a_tap_budget_no_run_can_meet(env, lateral_env, budget):
+    with pytest.raises(ValueError, match="tap_budget must be a finite number of mean taps >= 1"):
+        fixation_sweep(env, runs=10, tap_budget=budget)
+    with pytest.raises(ValueError, match="tap_budget"):
+        lateral_sweep(lateral_env, StationaryPolicy(), sigmas=[0.0], runs=10, tap_budget=budget)
