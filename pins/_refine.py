@@ -69,6 +69,11 @@ _PHASES = 4
 _MOMENT_ROWS = 128
 _TIP_REACH = 1.6
 _TIP_MARGIN_PX = 1.5
+# A skin is textured when, in the median window at rest, the window's median lies more than this
+# fraction of the way from its darkest pixel to the tip's top (0.08 on plain membranes, 0.34 on
+# the brown skin preset); tips smaller than this radius, px, are small.
+_TEXTURE_GAP = 0.2
+_SMALL_TIP_PX = 3.0
 # A windowed centroid is plausible when it lies within this fraction of the pin spacing of the LK
 # estimate, and the tip's area, contrast and compactness are within these factors of the pin's own
 # at rest. On renders and the sample video (5-6 mm taps) centroids stay within 0.01 spacings of
@@ -91,7 +96,8 @@ _SEARCH_SETTLED_FRACTION = 0.1
 # centres it), and it ended within the second fraction of the spacing of its guess (farther, LK
 # with its pyramid decides: the identity limit is LK's).
 _GUESS_FRACTION = 0.03
-_FOLLOW_FRACTION = 0.25
+_FOLLOW_FRACTION = 0.4
+_FOLLOW_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
@@ -143,15 +149,18 @@ class WindowCentroids:
         Half side of the windows, px: about half the pin spacing (masks reach half_px + 0.5 at most).
     threshold_fraction : float
         Where the threshold sits between the darkest pixel of a window and the pin's top, in (0, 1).
+    above_mean : bool
+        Keep the threshold at least at the window's mean (textured skins, small tips).
     """
 
-    def __init__(self, half_px: int, *, threshold_fraction: float = 0.2) -> None:
+    def __init__(self, half_px: int, *, threshold_fraction: float = 0.2, above_mean: bool = False) -> None:
         if int(half_px) != half_px or half_px < 2:
             raise ValueError(f"half_px must be an integer >= 2, got {half_px}")
         if not 0.0 < threshold_fraction < 1.0:
             raise ValueError(f"threshold_fraction must be in (0, 1), got {threshold_fraction}")
         self.half_px = int(half_px)
         self.threshold_fraction = float(threshold_fraction)
+        self.above_mean = bool(above_mean)
         side = 2 * self.half_px + 1
         offsets = np.arange(-self.half_px, self.half_px + 1, dtype=np.float32)
         gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
@@ -170,7 +179,26 @@ class WindowCentroids:
         self._masks = masks.reshape(-1, gx.size).astype(np.uint8)  # (radius, phase y, phase x) -> P
 
     def __repr__(self) -> str:
-        return f"WindowCentroids(half_px={self.half_px}, threshold_fraction={self.threshold_fraction})"
+        return (f"WindowCentroids(half_px={self.half_px}, threshold_fraction={self.threshold_fraction}, "
+                f"above_mean={self.above_mean})")
+
+    def levels(self, image: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Darkest pixel, median and tip top (the mean of the five centre pixels) of each window, grey levels.
+
+        Windows at the finite `points` (N, 2), px, that fit in `image`; NaN elsewhere. (N,) each.
+        """
+        side = 2 * self.half_px + 1
+        image = np.ascontiguousarray(image)
+        height, width = image.shape
+        corner = np.rint(points).astype(np.intp) - self.half_px
+        fits = ((corner >= 0).all(axis=1) & (corner[:, 0] <= width - side) & (corner[:, 1] <= height - side))
+        out = np.full((3, len(points)), np.nan)
+        if fits.any():
+            view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0,
+                              image.strides * 2)
+            patches = view[corner[fits, 1], corner[fits, 0]].reshape(int(fits.sum()), -1)
+            out[:, fits] = (patches.min(axis=1), np.median(patches, axis=1), patches[:, self._top].mean(axis=1))
+        return out[0], out[1], out[2]
 
     def __call__(self, image: np.ndarray, points: np.ndarray,
                  radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -217,7 +245,9 @@ class WindowCentroids:
         contrast = top - low
         # Above the window's mean too: on a textured or shadowed skin the darkest pixel lies well
         # below the membrane, and a threshold near it would let the membrane's texture count.
-        level = np.maximum(low + self.threshold_fraction * np.maximum(contrast, 0.0), patches.mean(axis=1))
+        level = low + self.threshold_fraction * np.maximum(contrast, 0.0)
+        if self.above_mean:
+            level = np.maximum(level, patches.mean(axis=1))
         threshold = np.rint(np.minimum(level, top)).astype(np.uint8)
         # Positive part of (pixel - threshold), in place, without leaving uint8.
         np.maximum(patches, threshold[:, None], out=patches)
@@ -292,14 +322,23 @@ class Refiner:
         self._window_neighbours = np.ascontiguousarray(index[:, :_WINDOW_NEIGHBOURS].T)  # (k, N)
         self.windows = WindowCentroids(int(np.clip(np.ceil(0.5 * spacing_px), 2, 32)))
         self._radius_cap = np.inf
+        # On a textured skin the darkest pixel of a window lies far below the membrane (its median),
+        # and small tips are few pixels among many of the membrane's noise: there the threshold
+        # stays above the window's mean, else the membrane would pull the centroids.
+        low, median, top = self.windows.levels(rest_crop, rest_positions - origin)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            texture = (median - low) / (top - low)
+        texture = texture[np.isfinite(texture)]
+        self.windows.above_mean = bool(texture.size and np.median(texture) > _TEXTURE_GAP)
         centres, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
                                                             self.window_radius(rest_positions))
-        if _TIP_REACH:
-            # Windows no wider than the tip needs: less membrane (texture, shadows) in them.
-            tip = np.sqrt(np.where(area > 0, area, np.nan) / np.pi)
-            self._radius_cap = np.where(np.isfinite(tip), _TIP_REACH * tip + _TIP_MARGIN_PX, np.inf)
-            centres, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
-                                                                self.window_radius(rest_positions))
+        # Windows no wider than the tip needs: less membrane (texture, shadows) in them.
+        tip = np.sqrt(np.where(area > 0, area, np.nan) / np.pi)
+        self._radius_cap = np.where(np.isfinite(tip), _TIP_REACH * tip + _TIP_MARGIN_PX, np.inf)
+        tip_px = tip[np.isfinite(tip)]
+        self.windows.above_mean |= bool(tip_px.size and np.median(tip_px) < _SMALL_TIP_PX)
+        centres, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
+                                                            self.window_radius(rest_positions))
         # Fractions of the spacing, with floors in px for the smallest pads (tips of 1 px, 4 px apart,
         # whose centroids scatter by a few tenths of a px in camera noise).
         self._max_shift_px = max(_MAX_SHIFT_FRACTION * spacing_px, _MIN_SHIFT_PX)
@@ -408,28 +447,51 @@ class Refiner:
         step = first - start
         moved = np.einsum("nd,nd->n", step, step)
         like = self._like_at_rest(area, contrast, compactness, which)
-        fine = self._guess_px ** 2
+        fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
         done = (moved <= fine) & like
         done[n:] = False  # a lost pin's prediction is no guess: two passes
         positions = np.full_like(guess, np.nan)
         positions[which[done]] = first[done]
-        again = np.flatnonzero(~done & (moved <= (_FOLLOW_FRACTION * self.spacing_px) ** 2))
-        if again.size:
-            second, area, contrast, compactness = self.windows(crop, first[again] - self.origin, radius[again])
-            second += self.origin
-            step = second - first[again]
+        # Second and third passes: pins that moved but not far re-centred on their last centroid;
+        # a pin with a guess that found no tip near it searched for from its prediction from the
+        # pins just placed (its neighbours' guesses held: a lone pin that vanished, or that moved
+        # unlike its guess near a contact); lost pins re-centred on theirs.
+        again = ~done & np.isfinite(first[:, 0])
+        again[:n] &= moved[:n] <= reach
+        far = np.flatnonzero(~done[:n] & ~again[:n])
+        chain = np.concatenate([np.flatnonzero(again), far])
+        points = first[chain]
+        if far.size:
+            start[far] = points[-far.size:] = self._predict(positions, which[far], last_seen)
+            # Their neighbours' guesses were off too: windows bounded by where the pins now are.
+            now = np.where(np.isnan(positions), filled, positions)
+            now[which[far]] = start[far]
+            radius = self.window_radius(now)[which]
+        searched = chain >= n
+        searched[chain.size - far.size:] = True
+        fresh = np.zeros(chain.size, dtype=bool)
+        fresh[chain.size - far.size:] = True
+        placed = [np.flatnonzero(done)]
+        for _ in range(_FOLLOW_PASSES - 1):
+            if chain.size == 0:
+                break
+            centres, area, contrast, compactness = self.windows(crop, points - self.origin, radius[chain])
+            centres += self.origin
+            step, offset = centres - points, centres - start[chain]
             moved = np.einsum("nd,nd->n", step, step)
-            offset = second - start[again]
             error = np.einsum("nd,nd->n", offset, offset)
-            searched = again >= n
-            ok = (self._like_at_rest(area, contrast, compactness, which[again])
-                  & np.where(searched, (moved <= self._settled_px ** 2)
-                             & (error <= self.gate_px ** 2),
-                             (moved <= fine) & (error <= (_FOLLOW_FRACTION * self.spacing_px) ** 2)))
-            positions[which[again[ok]]] = second[ok]
-            placed = np.concatenate([np.flatnonzero(done), again[ok]])
-        else:
-            placed = np.flatnonzero(done)
+            # A search settles within its bound, inside the gate around the prediction; a pin
+            # followed from its guess settles to a few tenths of a px, near its guess.
+            like = self._like_at_rest(area, contrast, compactness, which[chain])
+            ok = like & np.where(searched, (moved <= self._settled_px ** 2) & (error <= self.gate_px ** 2),
+                                 (moved <= fine) & (error <= reach))
+            positions[which[chain[ok]]] = centres[ok]
+            placed.append(chain[ok])
+            # Go on while the window holds a tip like the pin's (or a search has just started).
+            going = ~ok & np.isfinite(centres[:, 0]) & (searched | (error <= reach)) & (like | fresh)
+            chain, points, searched = chain[going], centres[going], searched[going]
+            fresh = np.zeros(chain.size, dtype=bool)
+        placed = np.concatenate(placed)
         if placed.size:
             offset = positions[which[placed]] - start[placed]
             self._one_pin_per_tip(positions, which[placed], np.einsum("nd,nd->n", offset, offset))
@@ -609,19 +671,27 @@ class Refiner:
 
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
         """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
+        shift = self.neighbour_median(positions - self.rest_positions, which)
+        return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
+
+    def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.
+
+        Returns (L, 2), NaN for a pin none of whose neighbours has a finite value.
+        """
         index = self._neighbour_index[which]
-        shift = (positions[index] - self.rest_positions[index])  # (L, k, 2)
-        count = np.count_nonzero(np.isfinite(shift[..., 0]), axis=1)
-        predicted = last_seen[which].copy()
+        near = values[index]  # (L, k, 2)
+        count = np.count_nonzero(np.isfinite(near[..., 0]), axis=1)
+        median = np.full((len(index), 2), np.nan)
         seen = np.flatnonzero(count)
         if seen.size:
             # Median over the finite neighbours (sorting puts NaN last): mean of the middle one or two.
-            ordered = np.sort(shift[seen], axis=1)
+            ordered = np.sort(near[seen], axis=1)
             n = count[seen]
             low = np.take_along_axis(ordered, ((n - 1) // 2)[:, None, None], axis=1)[:, 0]
             high = np.take_along_axis(ordered, (n // 2)[:, None, None], axis=1)[:, 0]
-            predicted[seen] = self.rest_positions[which[seen]] + 0.5 * (low + high)
-        return predicted
+            median[seen] = 0.5 * (low + high)
+        return median
 
 
 def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:

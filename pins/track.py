@@ -450,8 +450,13 @@ class PinTracker:
             return positions.copy()
         self.detection_frames += detected
         self._since_detection = 0 if detected else self._since_detection + 1
-        # Constant-velocity guess for the next frame (zero for pins just recovered or lost).
-        self._velocity = np.nan_to_num((positions - self._reference) / self._since_good)
+        # Constant-velocity guess for the next frame; a pin just found moves like its neighbours.
+        velocity = (positions - self._reference) / self._since_good
+        if self.refine:
+            fresh = np.flatnonzero(np.isnan(velocity[:, 0]) & np.isfinite(positions[:, 0]))
+            if fresh.size:
+                velocity[fresh] = self._refiner.neighbour_median(velocity, fresh)
+        self._velocity = np.nan_to_num(velocity)
         self._since_good = 1
         self._previous = current
         self._reference = positions
@@ -471,8 +476,10 @@ class PinTracker:
         positions, filled = refiner.follow(crop, guess, self._last_seen, search)
         need = np.isnan(positions[:, 0]) & np.isfinite(guess[:, 0])
         tracked = positions
-        if need.any():
-            # LK for the pins whose windows did not settle near their guesses, checked by refinement.
+        # A few pins not found (searched for from their predictions too) have vanished; when many
+        # are not (a sudden change of motion), LK looks for them from the last good frame, each
+        # answer checked by its windowed centroid.
+        if np.count_nonzero(need) > _RETRY_FRACTION * len(need):
             start = np.where(need[:, None], self._reference, np.nan)
             moved, _ = _track(self._previous, current, start - origin, self.lk, guess=guess - origin, backward=False)
             tracked = np.where(need[:, None], moved + origin, positions)
