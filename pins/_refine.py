@@ -395,7 +395,7 @@ class Refiner:
         positions = self.refine(crop, tracked, last_seen)
         if not np.isnan(positions[:, 0]).any():
             return positions, False
-        return self.recover(grey, tracked, positions, last_seen), True
+        return self.recover(grey, tracked, positions, last_seen, crop), True
 
     def follow(self, crop: np.ndarray, guess: np.ndarray, last_seen: np.ndarray,
                search: np.ndarray | None = None) -> np.ndarray:
@@ -631,7 +631,7 @@ class Refiner:
                 & (contrast >= self._min_contrast[which]) & (compactness >= self._min_compactness[which]))
 
     def recover(self, grey: np.ndarray, tracked: np.ndarray, refined: np.ndarray,
-                last_seen: np.ndarray) -> np.ndarray:
+                last_seen: np.ndarray, crop: np.ndarray | None = None) -> np.ndarray:
         """Detected blobs for pins without a position; leftover blobs to lost pins (a blob detection).
 
         Parameters
@@ -644,6 +644,9 @@ class Refiner:
             Positions so far (refined or found), px; NaN where missing.
         last_seen : (N, 2) ndarray
             Each pin's last known position, px.
+        crop : (h, w) ndarray of uint8, optional
+            The frame's crop at `origin`, bright pins: when given, a pin keeps its blob only if the
+            blob's window holds a tip like the pin's at rest, and takes its windowed centroid.
 
         Returns
         -------
@@ -667,6 +670,18 @@ class Refiner:
             free_index = np.flatnonzero(free)
             pins, chosen = _assign(predicted, blobs[free_index], gate)
             positions[lost[pins]] = blobs[free_index[chosen]]
+        if crop is not None:
+            # A blob is a pin's only when its window holds a tip like the pin's own at rest (not LED
+            # glare or a speck), centred on it: the pin then takes the windowed centroid.
+            new = np.flatnonzero(np.isnan(refined[:, 0]) & np.isfinite(positions[:, 0]))
+            if new.size:
+                radius = self.window_radius(np.where(np.isnan(positions), last_seen, positions))[new]
+                centres, area, contrast, compactness = self.windows(crop, positions[new] - self.origin, radius)
+                centres += self.origin
+                step = centres - positions[new]
+                keep = ((np.einsum("nd,nd->n", step, step) <= self._settled_px ** 2)
+                        & self._like_at_rest(area, contrast, compactness, new))
+                positions[new] = np.where(keep[:, None], centres, np.nan)
         return positions
 
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:

@@ -279,7 +279,7 @@ class PinTracker:
 
     def __init__(self, *, lk: LKParams | None = None, detection: DetectionParams | None = None,
                  refine: bool = True, gate_fraction: float = 0.4, neighbours: int = 6,
-                 retire_after: int = 5, check_every: int = 5, detect_every: int = 20,
+                 retire_after: int = 5, check_every: int = 5, detect_every: int = 30,
                  disc: SensorDisc | None = None) -> None:
         if not 0.0 < gate_fraction < 0.5:
             raise ValueError(f"gate_fraction must be in (0, 0.5), got {gate_fraction}")
@@ -491,7 +491,7 @@ class PinTracker:
         if self._too_few(positions):
             return positions, True, False
         if (missing & ~self.retired).any() and self._since_detection + 1 >= self.detect_every:
-            return refiner.recover(grey, tracked, positions, self._last_seen), False, True
+            return refiner.recover(grey, tracked, positions, self._last_seen, crop), False, True
         return positions, False, False
 
     def _too_few(self, positions: np.ndarray) -> bool:
