@@ -419,17 +419,36 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, calibration,
     warnings: list[str] = []
     before = 0
     detected, field = 0, ""
+    failed: list[tuple[int, str]] = []  # frames the tracker raised on: (index, message)
+    frames = iter(source)
     with tqdm(total=total, unit="frame", disable=not progress, desc="replay", mininterval=0.5) as bar:
-        for frame in source:
+        while True:
+            try:
+                frame = next(frames)
+            except StopIteration:
+                break
+            except (SourceError, OSError) as exc:  # a damaged file: keep what was tracked before it
+                if tracker is None:
+                    raise
+                warnings.append(f"the video could not be read after frame {len(timestamps) - 1} ({exc}); the "
+                                f"frames before it are kept")
+                break
             timestamps.append(frame.timestamp_s)
             if tracker is not None:
-                positions.append(tracker.update(frame.image).astype(np.float32))
-                gone = getattr(tracker, "lost", None)
-                gone = np.isnan(positions[-1][:, 0]) if gone is None else np.array(gone, dtype=bool)
+                try:
+                    moved = tracker.update(frame.image).astype(np.float32)
+                except (PinsError, ValueError) as exc:  # the tracking so far is kept; this frame is lost
+                    failed.append((frame.index, f"{type(exc).__name__}: {exc}"))
+                    moved = np.full((len(tracker.rest_positions), 2), np.nan, np.float32)
+                    gone = np.ones(len(moved), dtype=bool)
+                else:
+                    gone = getattr(tracker, "lost", None)
+                    gone = np.isnan(moved[:, 0]) if gone is None else np.array(gone, dtype=bool)
+                positions.append(moved)
                 lost.append(gone)
                 away = getattr(tracker, "retired", None)
-                retired.append(np.zeros_like(gone) if away is None else np.array(away, dtype=bool))
-                blank.append(bool(getattr(tracker, "blank", gone.all())))
+                retired.append(np.zeros_like(gone) if away is None else np.array(away, dtype=bool) & gone)
+                blank.append(bool(getattr(tracker, "blank", gone.all())) and not (failed and failed[-1][0] == frame.index))
             elif frame.index == rest_frame:
                 tracker, rest, detected, params, field = _start(frame.image, params=params,
                                                                 expected_pins=expected_pins, calibration=calibration,
@@ -444,6 +463,9 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, calibration,
                 bar.update(1)
     if tracker is None:
         raise SourceError(f"the video has {len(timestamps)} frames, so there is no rest frame {rest_frame}")
+    if failed:
+        warnings.append(f"tracking failed in {len(failed)} frame(s), every pin lost there (first: frame "
+                        f"{failed[0][0]}, {failed[0][1]})")
     pins = tracker.rest_positions.shape[0]
     stacked = np.concatenate([np.full((before, pins, 2), np.nan, np.float32), np.stack(positions)])
     lost = np.concatenate([np.ones((before, pins), bool), np.stack(lost)])

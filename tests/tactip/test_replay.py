@@ -283,3 +283,43 @@ def test_feature_pins_avoid_a_pin_lost_most_of_the_time(tmp_path):
     assert lost[1:, dead].all()
     assert dead not in result.selected_pins.tolist() and len(result.selected_pins) == 40
     assert len(result.tap_bounds) == 1 and not result.invalid_taps
+
+
+def test_a_tracker_error_mid_video_loses_that_frame_not_the_replay(tmp_path, monkeypatch):
+    from pins import PinTracker
+
+    update = PinTracker.update
+    calls = []
+
+    def faulty(self, frame):
+        calls.append(None)
+        if len(calls) == 30:  # frame 30
+            raise ValueError("simulated tracker fault")
+        return update(self, frame)
+
+    monkeypatch.setattr(PinTracker, "update", faulty)
+    result = replay_video(SAMPLE, tmp_path / "r.h5")
+    with h5py.File(tmp_path / "r.h5") as h5:
+        positions, lost = h5["positions"][:], h5["lost"][:]
+    assert np.isnan(positions[30]).all() and lost[30].all()
+    assert result.lost_per_frame[30] == 331 and result.lost_per_frame[31:].max() < 331
+    assert any("tracking failed in 1 frame(s)" in w and "simulated tracker fault" in w for w in result.warnings)
+    assert len(result.tap_bounds) == 3
+
+
+def test_a_video_damaged_mid_way_keeps_the_frames_before(tmp_path, monkeypatch):
+    from tactip.sources.files import VideoSource
+
+    read = VideoSource._read
+
+    def damaged(self):
+        if self._index == 40:
+            raise SourceError("cannot decode frame 40 (damaged file)")
+        return read(self)
+
+    monkeypatch.setattr(VideoSource, "_read", damaged)
+    result = replay_video(SAMPLE, tmp_path / "r.h5")
+    with h5py.File(tmp_path / "r.h5") as h5:
+        assert h5["positions"].shape == (40, 331, 2) and np.isfinite(h5["positions"][:]).all()
+    assert result.frames == 40 and result.tap_bounds[0] == (11, 25)
+    assert any("could not be read after frame 39" in w and "damaged file" in w for w in result.warnings)
