@@ -440,15 +440,16 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, calibration,
                 except (PinsError, ValueError) as exc:  # the tracking so far is kept; this frame is lost
                     failed.append((frame.index, f"{type(exc).__name__}: {exc}"))
                     moved = np.full((len(tracker.rest_positions), 2), np.nan, np.float32)
-                    gone = np.ones(len(moved), dtype=bool)
+                    gone, away, dark = np.ones(len(moved), dtype=bool), None, False
                 else:
                     gone = getattr(tracker, "lost", None)
                     gone = np.isnan(moved[:, 0]) if gone is None else np.array(gone, dtype=bool)
+                    away = getattr(tracker, "retired", None)
+                    dark = bool(getattr(tracker, "blank", gone.all()))
                 positions.append(moved)
                 lost.append(gone)
-                away = getattr(tracker, "retired", None)
                 retired.append(np.zeros_like(gone) if away is None else np.array(away, dtype=bool) & gone)
-                blank.append(bool(getattr(tracker, "blank", gone.all())) and not (failed and failed[-1][0] == frame.index))
+                blank.append(dark)
             elif frame.index == rest_frame:
                 tracker, rest, detected, params, field = _start(frame.image, params=params,
                                                                 expected_pins=expected_pins, calibration=calibration,
