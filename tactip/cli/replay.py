@@ -64,8 +64,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--annotate", metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
     parser.add_argument("--expected-pins", type=_pin_count, metavar="N",
-                        help="pins expected in view on the rest frame: tune detection to N first and report how "
-                        "far off the count is")
+                        help="pins expected in view on the rest frame: confirms the pin field found there (the summary says "
+                        "how far off it is) and is the default of --pins-on-pad")
     parser.add_argument("--samples", type=positive_int, default=40, metavar="N",
                         help="samples per tap feature array (default: 40)")
     parser.add_argument("--pins", type=positive_int, default=40, metavar="N",
