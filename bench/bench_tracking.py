@@ -37,7 +37,7 @@ from scipy.spatial import cKDTree
 from pins import DetectionParams, PinTracker, SensorDisc
 from tactip.synthetic import Contact, SyntheticTacTip
 
-PASSES = 5
+PASSES = 7
 
 
 def _sensor(preset: str | None, pins: int) -> tuple[SyntheticTacTip, str]:

@@ -234,8 +234,7 @@ class WindowCentroids:
         height, width = image.shape
         anchor = np.rint(points).astype(np.intp)
         corner = anchor - half
-        fits = ((corner[:, 0] >= 0) & (corner[:, 1] >= 0) & (corner[:, 0] <= width - side)
-                & (corner[:, 1] <= height - side))
+        fits = (corner >= 0).all(axis=1) & (corner <= (width - side, height - side)).all(axis=1)
         corner[~fits] = 0
         # All windows at once: a (H - side + 1, W - side + 1, side, side) sliding view, fancy-indexed.
         view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0, image.strides * 2)
@@ -491,7 +490,9 @@ class Refiner:
             going = ~ok & np.isfinite(centres[:, 0]) & (searched | (error <= reach)) & (like | fresh)
             chain, points, searched = chain[going], centres[going], searched[going]
             fresh = np.zeros(chain.size, dtype=bool)
-        placed = np.concatenate(placed)
+        # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
+        # the others can have reached a neighbour's tip.
+        placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]
         if placed.size:
             offset = positions[which[placed]] - start[placed]
             self._one_pin_per_tip(positions, which[placed], np.einsum("nd,nd->n", offset, offset))
@@ -702,10 +703,8 @@ class Refiner:
         if seen.size:
             # Median over the finite neighbours (sorting puts NaN last): mean of the middle one or two.
             ordered = np.sort(near[seen], axis=1)
-            n = count[seen]
-            low = np.take_along_axis(ordered, ((n - 1) // 2)[:, None, None], axis=1)[:, 0]
-            high = np.take_along_axis(ordered, (n // 2)[:, None, None], axis=1)[:, 0]
-            median[seen] = 0.5 * (low + high)
+            n, rows = count[seen], np.arange(seen.size)
+            median[seen] = 0.5 * (ordered[rows, (n - 1) // 2] + ordered[rows, n // 2])
         return median
 
 
