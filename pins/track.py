@@ -205,24 +205,31 @@ def _forward_backward(prev_grey: np.ndarray, next_grey: np.ndarray, start: np.nd
 class PinTracker:
     """Track a fixed set of pins through a stream of frames, flagging, searching for and recovering lost pins.
 
-    Each `update` (with refinement, the default):
+    Each `update` (with refinement, the default; `pins._refine` says how):
 
-    1. LK forward from a constant-velocity guess, from the last good frame (`_track`; the
-       backward pass only for pins that need the pyramid);
-    2. refinement: every tracked pin onto its windowed centroid, kept when plausible (the check
-       of LK's answer);
-    3. windowed search for the pins still missing, in a window around each one's prediction
-       (`Refiner.refine`): every frame for a pin lost for at most `retire_after` frames; a pin
-       lost longer is *retired* and searched for only every `check_every` frames (pins take
-       turns, so a frame searches about 1/`check_every` of the retired pins);
+    1. following (`Refiner.follow`): windows at every pin's constant-velocity guess, re-centred
+       up to three times, all pins in one array per pass; a pin whose window settles on a tip like
+       its own at rest near its guess is placed. In the same passes the lost pins, and a pin whose
+       guess alone failed among neighbours whose guesses held (it vanished, or moved unlike its
+       guess near a contact), are searched for around their predictions (rest position moved by
+       the median displacement of their placed neighbours) and found inside a gate below half the
+       pin spacing, one pin per tip: identities are kept without blob detection;
+    2. only when more than a tenth of the pins are not placed (a sudden change of motion): LK
+       forward from the last good frame for them (`_track`, no backward pass: each answer is
+       checked by its windowed centroid, `Refiner.refine`), and a search for those that fail;
+    3. retirement: a pin lost for more than `retire_after` frames (a rim pin out of view) is
+       *retired*: searched for only once in `check_every` frames (pins take turns, so a frame
+       searches about 1/`check_every` of the retired pins) until it comes back with its identity;
     4. full blob detection with recovery (`Refiner.recover`), only when a pin that is not retired
        is still missing, and at most once every `detect_every` frames: blob detection (a few ms)
-       costs at most 1/`detect_every` of it per frame on average, whatever the video.
+       costs at most 1/`detect_every` of it per frame on average, whatever the video. A blob is
+       kept only when its window holds a tip like the pin's own at rest (not LED glare).
 
     A frame in which fewer than a tenth of the expected (not retired) pins are found is *blank*
     (LEDs off, a dropped or black USB frame, the disc gone): all positions are NaN, `blank` is
     True, nothing is detected, no pin counts as lost for longer, and the last good frame stays
-    the LK reference, so the next good frame recovers the pins by LK from it and by search.
+    the reference, so the next good frame recovers the pins from their last good positions (by
+    windows, LK from the last good frame, and search).
 
     Parameters
     ----------
