@@ -56,6 +56,7 @@ _NEIGHBOURS = 6
 # Lattice consistency: fractions of the neighbours' medians and of the local pitch.
 _SIZE_RANGE = (0.4, 2.2)
 _MIN_FILL = 0.6
+_FILL_AREA = 15.0
 _MIN_CONTRAST = 0.5
 _MIN_SHARPNESS = 0.8
 # Below this tip radius, px, the steepest slope depends on where the pixel grid cuts the tip.
@@ -64,16 +65,22 @@ _TOO_CLOSE = 0.6
 _LINK = 1.3
 _MIRROR = 0.25
 _MIN_ANCHORS = 2
-_WEAK_CONTRAST = (0.7, 0.85)
+_WEAK_CONTRAST = (0.6, 0.8)
 _WEAK_SIZE = (1.8, 1.4)
 _MIN_PINS = 4
 _AREA_SLACK = 3.0
 _MIN_GROUP = 0.1
 _HULL_MARGIN = 0.3
+# Rejected blobs this many pitches beyond the field's hull are reported as outside the field.
+_OUTSIDE_MARGIN = 0.5
 # The search region of later frames reaches this many pitches beyond the outermost pin.
 _FIELD_MARGIN = 0.35
 # Area range of the final parameters around the kept pins' median area.
 _AREA_RANGE = (0.25, 2.5)
+# Candidate sets: a pin matches within this many pitches; 'the same pins' within this fraction.
+_MATCH = 0.3
+_SAME_PINS = 0.005
+_VOTER = 0.97
 
 
 @dataclass(frozen=True)
@@ -182,35 +189,95 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
         disc = find_sensor_disc(grey, dark_pins=start.dark_pins)
     cache: dict = {}
     # Coarse: one permissive candidate set per possible pitch; the strongest lattice gives the pitch.
-    coarse = [_evaluate(grey, disc, candidate, cache) for candidate in _candidates(disc.radius_px * np.array(_PITCH_FRACTIONS),
-                                                                            start, _COARSE_BLOCK, _COARSE_OFFSETS)]
-    first = max(coarse, key=lambda run: run[1])
-    pitch = first[5] if np.isfinite(first[5]) else _PITCH_FRACTIONS[len(_PITCH_FRACTIONS) // 2] * disc.radius_px
-    # Fine: blocks and offsets at the measured pitch; the most pins in the field wins (then the
-    # most regular).
-    fine = [_evaluate(grey, disc, candidate, cache) for candidate in _candidates(np.array([pitch]), start, _BLOCK_PITCHES,
-                                                                          _OFFSETS)]
+    pitches = disc.radius_px * np.array(_PITCH_FRACTIONS)
+    coarse = [_evaluate(grey, disc, candidate, cache)
+              for candidate in _candidates(pitches, start, _COARSE_BLOCK, _COARSE_OFFSETS)]
+    first = max(coarse, key=lambda run: run.strength)
+    pitch = first.pitch if np.isfinite(first.pitch) else float(np.median(pitches))
+    # Fine: blocks and offsets at the measured pitch.
+    runs = [_evaluate(grey, disc, candidate, cache)
+            for candidate in _candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS)]
     if params is not None:
-        fine.append(_evaluate(grey, disc, start, cache))
-    best = max(fine, key=lambda run: run[0])
-    _, _, chosen, blobs, reason, pitch = best
-    kept = reason == _KEPT
-    final, field_disc = _final_params(chosen, blobs, kept, disc, pitch)
-    centres = blobs.centres[kept]
+        runs.append(_evaluate(grey, disc, start, cache))
+    # The pins are the blobs that most candidate sets agree on, where they agree on them: the run
+    # that keeps the most of those (and the fewest others), with centres nearest the consensus.
+    membership, deviation = _consensus(runs, pitch)
+    best = max(range(len(runs)), key=lambda r: (membership[r], -deviation[r]))
+    # Later frames: the highest threshold that keeps (nearly) the same pins, because it keeps pins
+    # pushed together by a contact apart.
+    close = membership >= membership[best] - max(1.0, _SAME_PINS * runs[best].kept.sum())
+    later = max(np.flatnonzero(close), key=lambda r: (runs[r].params.offset, -deviation[r]))
+    run = runs[best]
+    centres = run.blobs.centres[run.kept]
+    final, field_disc = _final_params(runs[later], centres, disc, run.pitch)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=field_disc,
-                    pitch_px=float(_median_nn(centres)), rejected=blobs.centres[~kept],
-                    rejected_reason=np.array(REJECTION_REASONS, dtype=object)[reason[~kept]].astype(str),
+                    pitch_px=float(_median_nn(centres)), rejected=run.blobs.centres[~run.kept],
+                    rejected_reason=np.array(REJECTION_REASONS, dtype=object)[run.reason[~run.kept]].astype(str),
                     expected_pins=None if expected_pins is None else int(expected_pins), count_error=count_error)
 
 
-def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict):
-    """((pins kept, -irregularity), strength kept, params, blobs, reasons, pitch) of one candidate set."""
+@dataclass(frozen=True)
+class _Run:
+    """One candidate parameter set: its blobs, the lattice verdict on each, and their pitch, px."""
+
+    params: DetectionParams
+    blobs: Blobs
+    reason: np.ndarray
+    pitch: float
+
+    @property
+    def kept(self) -> np.ndarray:
+        return self.reason == _KEPT
+
+    @property
+    def strength(self) -> float:
+        """Summed contrast x area of the kept blobs: the strongest lattice is the pins'."""
+        kept = self.kept
+        return float(np.sum(self.blobs.contrasts[kept] * self.blobs.areas[kept]))
+
+
+def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict) -> _Run:
+    """Detect with one candidate parameter set and judge the blobs."""
     blobs = _detect(grey, disc, params)
     reason, pitch = _judge_lattice(blobs, _sharpness(grey, blobs, params, cache))
-    kept = reason == _KEPT
-    strength = float(np.sum(blobs.contrasts[kept] * blobs.areas[kept]))
-    return (int(kept.sum()), -_irregularity(blobs, kept)), strength, params, blobs, reason, pitch
+    return _Run(params, blobs, reason, pitch)
+
+
+def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per run: kept pins most runs keep minus those they do not; median distance to the consensus, px.
+
+    Runs keeping fewer than `_VOTER` times the most pins kept neither vote nor win (-inf).
+
+    A kept pin is matched in another run by its nearest kept pin within `_MATCH` pitches; the
+    consensus position of a pin is the median of its matches.
+    """
+    kept = [run.blobs.centres[run.kept] for run in runs]
+    # Only runs that keep nearly as many pins as the best one vote (on a small pad most candidate
+    # sets lose pins, and pins that only the good ones find must not look like outliers).
+    counts = np.array([len(c) for c in kept])
+    voters = counts >= _VOTER * counts.max()
+    trees = [cKDTree(c) if len(c) and vote else None for c, vote in zip(kept, voters)]
+    gate = _MATCH * pitch if np.isfinite(pitch) else 1.0
+    membership = np.full(len(runs), -np.inf)
+    deviation = np.full(len(runs), np.inf)
+    for r, centres in enumerate(kept):
+        if len(centres) == 0 or not voters[r]:
+            continue
+        matches = np.full((len(runs), len(centres), 2), np.nan)
+        for s, tree in enumerate(trees):
+            if tree is None:
+                continue
+            distance, index = tree.query(centres, distance_upper_bound=gate)
+            found = np.isfinite(distance)
+            matches[s, found] = kept[s][index[found]]
+        support = np.isfinite(matches[:, :, 0]).sum(axis=0)
+        agreed = support > voters.sum() / 2
+        membership[r] = agreed.sum() - (~agreed).sum()
+        if agreed.any():
+            consensus = np.nanmedian(matches[:, agreed], axis=0)
+            deviation[r] = float(np.median(np.hypot(*(centres[agreed] - consensus).T)))
+    return membership, deviation
 
 
 def _candidates(pitches: np.ndarray, start: DetectionParams, blocks, offsets):
@@ -286,8 +353,9 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
         verdict[close.any(axis=1)] = _OFF
         sharp_ref = np.median(sharpness[near], axis=1)
         verdict[(contrasts[index] < _MIN_CONTRAST * contrast_ref) | (sharpness[index] < _MIN_SHARPNESS * sharp_ref)] = _CONTRAST
+        # (The fill of a blob of a few pixels says nothing of its shape.)
         verdict[(area < _SIZE_RANGE[0] * area_ref) | (area > _SIZE_RANGE[1] * area_ref)
-                | (fills[index] < _MIN_FILL * fill_ref)] = _SIZE
+                | ((fills[index] < _MIN_FILL * fill_ref) & (area_ref >= _FILL_AREA))] = _SIZE
         # Lattice sites: a blob on the lattice is a mirror image of a neighbour through another
         # one (interior pins have six such pairs, rim pins and the ends of radial spokes at least
         # one). A blob with fewer than two must look just like its neighbours to stay.
@@ -311,16 +379,24 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     groups, label = connected_components(hood.graph(), directed=False)
     sizes = np.bincount(label, minlength=groups)
     core = (sizes >= max(_MIN_PINS, _MIN_GROUP * sizes.max()))[label]
-    if core.sum() >= 3 and (~core).any():
-        hull = cv2.convexHull(centres[index[core]].astype(np.float32))
-        margin = _HULL_MARGIN * float(np.median(hood.pitch[core]))
-        inside = np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), True) >= -margin
-                           for x, y in centres[index[~core]]], dtype=bool)
-        reason[index[~core][~inside]] = _OUTSIDE
-    elif core.sum() < 3:
-        reason[index[~core]] = _OUTSIDE
+    if core.sum() < 3:
+        reason[index] = _OUTSIDE
+        return reason, np.nan
+    hull = cv2.convexHull(centres[index[core]].astype(np.float32))
+    pitch = float(np.median(hood.pitch[core]))
+    loose = index[~core]
+    reason[loose[_beyond(hull, centres[loose], _HULL_MARGIN * pitch)]] = _OUTSIDE
+    # Whatever else was rejected beyond the field (glare on a rim ring) is outside it, first of all.
     kept = reason == _KEPT
-    return reason, float(_median_nn(centres[kept]))
+    rejected = np.flatnonzero(~kept)
+    reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
+    return reason, float(_median_nn(centres[reason == _KEPT]))
+
+
+def _beyond(hull: np.ndarray, points: np.ndarray, margin: float) -> np.ndarray:
+    """Which points lie farther than `margin` (px) outside a convex hull."""
+    return np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), True) < -margin for x, y in points],
+                    dtype=bool)
 
 
 class _Neighbourhood:
@@ -355,14 +431,6 @@ class _Neighbourhood:
         return coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
 
 
-def _irregularity(blobs: Blobs, kept: np.ndarray) -> float:
-    if kept.sum() < 4:
-        return np.inf
-    areas = blobs.areas[kept]
-    q25, q50, q75 = np.percentile(areas, [25, 50, 75])
-    return float((q75 - q25) / q50 + (1.0 - np.median(blobs.fills[kept])))
-
-
 def _median_nn(centres: np.ndarray) -> float:
     if len(centres) < 2:
         return np.nan
@@ -370,17 +438,17 @@ def _median_nn(centres: np.ndarray) -> float:
     return float(np.median(dist[:, 1]))
 
 
-def _final_params(chosen: DetectionParams, blobs: Blobs, kept: np.ndarray, disc: SensorDisc,
+def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc,
                   pitch: float) -> tuple[DetectionParams, SensorDisc]:
-    """Parameters and search region for later frames, from the kept pins."""
-    if kept.sum() < 4 or not np.isfinite(pitch):
-        return chosen, disc
-    median_area = float(np.median(blobs.areas[kept]))
+    """Parameters (from `run`'s kept blobs) and search region (round `centres`) for later frames."""
+    kept = run.kept
+    if kept.sum() < _MIN_PINS or len(centres) < _MIN_PINS or not np.isfinite(pitch):
+        return run.params, disc
+    median_area = float(np.median(run.blobs.areas[kept]))
     radius = np.sqrt(median_area / np.pi)
-    params = chosen.replace(min_area_px=max(int(_AREA_RANGE[0] * median_area), 1),
-                            max_area_px=max(int(np.ceil(_AREA_RANGE[1] * median_area)), 2),
-                            min_fill=0.4, max_aspect=3.0, split_radius_px=round(float(0.4 * radius), 2))
-    centres = blobs.centres[kept]
+    params = run.params.replace(min_area_px=max(int(_AREA_RANGE[0] * median_area), 1),
+                                max_area_px=max(int(np.ceil(_AREA_RANGE[1] * median_area)), 2),
+                                min_fill=0.4, max_aspect=3.0, split_radius_px=round(float(0.4 * radius), 2))
     reach = float(np.max(np.hypot(centres[:, 0] - disc.cx, centres[:, 1] - disc.cy)))
     field_radius = min(reach + _FIELD_MARGIN * pitch + params.rim_margin_px, disc.radius_px)
     return params, SensorDisc(disc.cx, disc.cy, field_radius)

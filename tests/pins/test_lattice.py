@@ -1,0 +1,147 @@
+"""pins.lattice: the pin field is found without a count on every phenomenon preset, and a count only confirms it."""
+
+import functools
+
+import cv2
+import numpy as np
+import pytest
+from scipy.spatial import Delaunay, cKDTree
+
+from pins import (REJECTION_REASONS, DetectionParams, NoSensorError, PinField, detect_pins, draw_pin_field,
+                  find_pin_field)
+from tactip.synthetic import preset_names
+from tests.pins.conftest import TAP, preset_frame, preset_sensor, score
+
+CONTACTS = {"rest": None, "tap5mm": TAP}
+
+
+@functools.lru_cache(maxsize=None)
+def _field(name: str, contact: str, expected: bool = False) -> PinField:
+    f = preset_frame(name, CONTACTS[contact])
+    count = int(f.visible.sum() + f.partial.sum()) if expected else None
+    return find_pin_field(f.image, expected_pins=count, dark_pins=preset_sensor(name).dark_pins)
+
+
+def _gate_px(frame) -> float:
+    """Matching gate: 3 px, or 0.4 of the true pitch on dense or small pads."""
+    centres = frame.centres[frame.visible]
+    distance, _ = cKDTree(centres).query(centres, 2)
+    return min(3.0, 0.4 * float(np.median(distance[:, 1])))
+
+
+@pytest.mark.parametrize("contact", list(CONTACTS))
+@pytest.mark.parametrize("name", preset_names())
+def test_field_without_a_count_meets_the_bar(name, contact):
+    f = preset_frame(name, CONTACTS[contact])
+    field = _field(name, contact)
+    recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
+    assert recall >= 0.99 and precision >= 0.99, (recall, precision, field.summary())
+    assert rmse <= 0.1
+    assert field.expected_pins is None and field.count_error is None
+
+
+@pytest.mark.parametrize("contact", list(CONTACTS))
+@pytest.mark.parametrize("name", preset_names())
+def test_a_count_confirms_and_does_not_steer(name, contact):
+    f = preset_frame(name, CONTACTS[contact])
+    without, given = _field(name, contact), _field(name, contact, expected=True)
+    np.testing.assert_array_equal(given.centres, without.centres)
+    drawn = int(f.visible.sum() + f.partial.sum())
+    assert given.expected_pins == drawn
+    assert given.count_error == given.count - drawn
+    recall, precision, rmse = score(given.centres, f, gate_px=_gate_px(f))
+    assert recall >= 0.99 and precision >= 0.99 and rmse <= 0.1
+    assert f"expected {drawn}" in given.summary()
+
+
+@pytest.mark.parametrize("name", ["tactip-331", "rim-ring-331", "brown-127", "radial-120", "small-pad-100"])
+def test_later_frames_found_with_the_field_parameters(name):
+    """The fast path (`detect_pins` with the field's params and region) finds the pins of a tap frame."""
+    field = _field(name, "rest")
+    f = preset_frame(name, TAP)
+    pins = detect_pins(f.image, params=field.params, disc=field.disc)
+    recall, _, rmse = score(pins, f, gate_px=_gate_px(f))
+    assert recall >= 0.99 and rmse <= 0.1
+    assert isinstance(field.params, DetectionParams) and field.params.dark_pins == preset_sensor(name).dark_pins
+
+
+def test_rim_ring_glare_is_rejected_outside_the_field():
+    f = preset_frame("rim-ring-331")
+    field = _field("rim-ring-331", "rest")
+    outside = field.rejected[field.rejected_reason == "outside field"]
+    # The 18 glare blobs on the ring (and pins it cuts) lie beyond every kept pin.
+    assert len(outside) >= 18
+    cx, cy = preset_sensor("rim-ring-331").disc[:2]
+    reach = np.hypot(*(field.centres - [cx, cy]).T).max()
+    assert np.all(np.hypot(*(outside - [cx, cy]).T) > reach)
+    assert field.disc.radius_px < reach + field.pitch_px
+    # Nothing was kept on the ring.
+    assert score(field.centres, f)[1] == 1.0
+
+
+def test_painted_specks_and_faint_blobs_between_pins_are_rejected(rng):
+    """Clutter painted between the pins (specks, faint pin-sized blobs) never joins the lattice."""
+    f = preset_frame("tactip-331")
+    image = f.image.copy()
+    centres = f.centres[f.visible]
+    # Interstices: centroids of the lattice's triangles, about 0.58 pitch from three pins.
+    triangles = centres[Delaunay(centres).simplices]
+    edges = np.linalg.norm(triangles - np.roll(triangles, 1, axis=1), axis=2).max(axis=1)
+    spots = triangles[edges < 1.3 * np.median(edges)].mean(axis=1)
+    spots = spots[rng.choice(len(spots), 40, replace=False)]
+    level = np.median(image[np.rint(centres[:, 1]).astype(int), np.rint(centres[:, 0]).astype(int)])
+    membrane = np.median(image[f.image < level / 2])
+    for k, (x, y) in enumerate(spots):
+        point = (int(round(x * 16)), int(round(y * 16)))
+        radius, grey = [(1.0, level), (2.0, level), (3.0, membrane + 40)][k % 3]  # speck, small blob, faint blob
+        cv2.circle(image, point, int(radius * 16), int(grey), -1, cv2.LINE_AA, 4)
+    # Plain detection keeps some of the clutter; the lattice does not.
+    assert score(detect_pins(image), f)[1] < 0.99
+    field = find_pin_field(image)
+    recall, precision, rmse = score(field.centres, f)
+    assert recall >= 0.99 and precision == 1.0 and rmse <= 0.1
+    assert set(field.rejected_reason) <= set(REJECTION_REASONS) and len(field.rejected) >= 20
+
+
+def test_no_pins_is_an_empty_field():
+    sensor = preset_sensor("tactip-331")
+    blank = sensor.render(hidden=np.ones(sensor.n_pins, dtype=bool)).image
+    field = find_pin_field(blank, expected_pins=331)
+    assert field.centres.shape == (0, 2) and field.centres.dtype == np.float64
+    assert field.count == 0 and field.count_error == -331 and np.isnan(field.pitch_px)
+    assert field.rejected.shape == (len(field.rejected_reason), 2)
+    assert "0 pins" in field.summary()
+
+
+def test_no_disc_raises():
+    with pytest.raises(NoSensorError):
+        find_pin_field(np.full((480, 640), 25, np.uint8))
+
+
+@pytest.mark.parametrize("expected", [0, -3, 2.5, True])
+def test_expected_pins_validated_by_name(expected):
+    with pytest.raises(ValueError, match="expected_pins"):
+        find_pin_field(preset_frame("tactip-127").image, expected_pins=expected)
+
+
+def test_summary_and_counts_agree():
+    field = _field("brown-127", "rest", expected=True)
+    counts = field.rejected_counts()
+    assert list(counts) == list(REJECTION_REASONS)
+    assert sum(counts.values()) == len(field.rejected) == len(field.rejected_reason)
+    assert field.summary().startswith(f"{field.count} pins, pitch {field.pitch_px:.1f} px; rejected {len(field.rejected)}")
+
+
+def test_drawing_shows_kept_and_rejected_without_touching_the_frame():
+    f = preset_frame("rim-ring-331")
+    before = f.image.copy()
+    field = _field("rim-ring-331", "rest")
+    picture = draw_pin_field(f.image, field)
+    assert picture.shape == f.image.shape + (3,) and picture.dtype == np.uint8
+    np.testing.assert_array_equal(f.image, before)
+    # Green rings round the kept pins, magenta crosses on the rim ring.
+    green = (picture[:, :, 1] > 150) & (picture[:, :, 0] < 60) & (picture[:, :, 2] < 60)
+    magenta = (picture[:, :, 0] > 200) & (picture[:, :, 2] > 200) & (picture[:, :, 1] < 120)
+    assert green.sum() > 10 * field.count and magenta.sum() > 0
+    x, y = np.rint(field.rejected[field.rejected_reason == "outside field"][0]).astype(int)
+    assert magenta[y - 3:y + 4, x - 3:x + 4].any()
