@@ -81,7 +81,7 @@ an option (all off by default, so the default frames are unchanged byte for byte
   camera's focal length follows from it (the casing edge at 86 degrees lands on the disc edge), so
   a small pad is a wide-angle view of the same pad: everything, pins included, shrinks with it. A pin
   is never smaller than 1 px in radius, so on the smallest pads (``small-pad-100``: 60 px across at
-  320x240, pitch about 4 px) ``pin_fraction`` must drop to keep neighbouring tips apart. The six LED
+  320x240, pitch 3.7-4.4 px) ``pin_fraction`` must drop to keep neighbouring tips apart. The six LED
   glare spots scale with a pad whose size is given (at the default they keep their historical size).
 - Black rim ring ``rim_polar_deg``, ``ring_glare``: on many TacTips the casing lip in front of the
   membrane's edge is matt or glossy black plastic. It is drawn as an opaque ring (level 8) from the
@@ -110,7 +110,7 @@ an option (all off by default, so the default frames are unchanged byte for byte
   bright surround (an open, white-lit casing near saturation) with LED glare made stronger, and a
   veil of scattered light that brightens the disc edge (grey levels ``veil`` at the edge, fading
   inward over a tenth of the radius). Pins near the edge lose contrast.
-- Pin count 100-1000: any count works (``dense-1000``: 1000 pins at 1280x720, 5 px tips about 18 px
+- Pin count 100-1000: any count works (``dense-1000``: 1000 pins at 1280x720, 5 px tips about 16 px
   apart); rendering stays vectorised: about 3x the default 331-pin frame for 1000 pins at 1280x720
   (15-20 ms), 4x for a textured colour frame at 640x480 (20-30 ms; ``bench/bench_render.py``).
 
