@@ -68,13 +68,15 @@ _MIN_ANCHORS = 2
 _WEAK_CONTRAST = (0.6, 0.8)
 _WEAK_SIZE = (1.8, 1.4)
 _MIN_PINS = 4
+# Fewest pins that make a pin field (TacTips have 100-1000).
+_MIN_FIELD = 10
 _AREA_SLACK = 3.0
 _MIN_GROUP = 0.1
 _HULL_MARGIN = 0.3
 # Rejected blobs this many pitches beyond the field's hull are reported as outside the field.
 _OUTSIDE_MARGIN = 0.5
 # The search region of later frames reaches this many pitches beyond the outermost pin.
-_FIELD_MARGIN = 0.35
+_FIELD_MARGIN = 0.5
 # Area range of the final parameters around the kept pins' median area.
 _AREA_RANGE = (0.25, 2.5)
 # Candidate sets: a pin matches within this many pitches; 'the same pins' within this fraction.
@@ -93,10 +95,10 @@ class PinField:
         Kept pins (x, y), px, sorted by y then x; (0, 2) when there are none.
     params : DetectionParams
         Detection parameters for later frames of this sensor (`pins.detect_pins` with
-        ``disc=field.disc``): tuned to the kept pins' blur, threshold and area range.
+        ``disc=field.disc``): the kept pins' blur, threshold and area range, and a rim margin that
+        leaves out the membrane beyond the pin field (a rim ring and its glare).
     disc : SensorDisc
-        The region that later frames should search: the pin field's circle (inside the membrane
-        disc, clear of a rim ring's glare).
+        The membrane disc searched, px.
     pitch_px : float
         Median nearest-neighbour distance of the kept pins, px (nan with fewer than two).
     rejected : (M, 2) ndarray of float64
@@ -126,6 +128,11 @@ class PinField:
         """Number of pins kept."""
         return int(len(self.centres))
 
+    @property
+    def field_disc(self) -> SensorDisc:
+        """The pin field's circle: `disc` less the rim margin of `params`, px."""
+        return SensorDisc(self.disc.cx, self.disc.cy, max(self.disc.radius_px - self.params.rim_margin_px, 0.0))
+
     def rejected_counts(self) -> dict[str, int]:
         """How many blobs were rejected for each reason (every reason listed, zeros included)."""
         return {reason: int(np.count_nonzero(self.rejected_reason == reason)) for reason in REJECTION_REASONS}
@@ -154,7 +161,8 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
         The sensor's pin count: checked against the result (`PinField.count_error`), never used
         to steer the search.
     params : DetectionParams, optional
-        Starting parameters: tried among the candidates; their polarity and rim margin are kept.
+        Starting parameters: tried among the candidates; their polarity is kept, and their rim
+        margin at least (`PinField.params` widens it to leave out the membrane beyond the field).
     disc : SensorDisc, optional
         The membrane disc, found with `find_sensor_disc` when not given.
     dark_pins : bool
@@ -194,6 +202,7 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
               for candidate in _candidates(pitches, start, _COARSE_BLOCK, _COARSE_OFFSETS)]
     first = max(coarse, key=lambda run: run.strength)
     pitch = first.pitch if np.isfinite(first.pitch) else float(np.median(pitches))
+    pitch = float(np.clip(pitch, 0.5 * pitches.min(), 1.5 * pitches.max()))
     # Fine: blocks and offsets at the measured pitch.
     runs = [_evaluate(grey, disc, candidate, cache)
             for candidate in _candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS)]
@@ -209,9 +218,9 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     later = max(np.flatnonzero(close), key=lambda r: (runs[r].params.offset, -deviation[r]))
     run = runs[best]
     centres = run.blobs.centres[run.kept]
-    final, field_disc = _final_params(runs[later], centres, disc, run.pitch)
+    final = _final_params(runs[later], centres, disc, run.pitch)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
-    return PinField(centres=centres, params=final, disc=field_disc,
+    return PinField(centres=centres, params=final, disc=disc,
                     pitch_px=float(_median_nn(centres)), rejected=run.blobs.centres[~run.kept],
                     rejected_reason=np.array(REJECTION_REASONS, dtype=object)[run.reason[~run.kept]].astype(str),
                     expected_pins=None if expected_pins is None else int(expected_pins), count_error=count_error)
@@ -285,7 +294,7 @@ def _candidates(pitches: np.ndarray, start: DetectionParams, blocks, offsets):
     for pitch in pitches:
         blur = float(np.clip(0.07 * pitch, 0.6, 2.5))
         loose = dict(blur_sigma_px=round(blur, 2), min_area_px=2, max_area_px=max(int(1.2 * pitch**2), 8),
-                     min_fill=0.3, max_aspect=4.0, split_radius_px=round(0.12 * pitch, 2))
+                     min_fill=0.3, max_aspect=4.0, split_radius_px=round(min(0.12 * pitch, 20.0), 2))
         for block in blocks:
             size = max(2 * int(round(block * pitch / 2.0)) + 1, 3)
             for offset in offsets:
@@ -379,8 +388,9 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     groups, label = connected_components(hood.graph(), directed=False)
     sizes = np.bincount(label, minlength=groups)
     core = (sizes >= max(_MIN_PINS, _MIN_GROUP * sizes.max()))[label]
-    if core.sum() < 3:
-        reason[index] = _OUTSIDE
+    if core.sum() < _MIN_FIELD:
+        # A handful of blobs (glare round the rim of a pad without pins) is no pin field.
+        reason[index] = _OFF
         return reason, np.nan
     hull = cv2.convexHull(centres[index[core]].astype(np.float32))
     pitch = float(np.median(hood.pitch[core]))
@@ -438,20 +448,20 @@ def _median_nn(centres: np.ndarray) -> float:
     return float(np.median(dist[:, 1]))
 
 
-def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc,
-                  pitch: float) -> tuple[DetectionParams, SensorDisc]:
-    """Parameters (from `run`'s kept blobs) and search region (round `centres`) for later frames."""
+def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float) -> DetectionParams:
+    """Parameters for later frames: `run`'s, with the area range of its kept blobs and a rim margin
+    that leaves out the membrane beyond `centres` (the pins, px)."""
     kept = run.kept
     if kept.sum() < _MIN_PINS or len(centres) < _MIN_PINS or not np.isfinite(pitch):
-        return run.params, disc
+        return run.params
     median_area = float(np.median(run.blobs.areas[kept]))
     radius = np.sqrt(median_area / np.pi)
     params = run.params.replace(min_area_px=max(int(_AREA_RANGE[0] * median_area), 1),
                                 max_area_px=max(int(np.ceil(_AREA_RANGE[1] * median_area)), 2),
-                                min_fill=0.4, max_aspect=3.0, split_radius_px=round(float(0.4 * radius), 2))
+                                min_fill=0.4, max_aspect=3.0, split_radius_px=round(float(min(0.4 * radius, 20.0)), 2))
     reach = float(np.max(np.hypot(centres[:, 0] - disc.cx, centres[:, 1] - disc.cy)))
-    field_radius = min(reach + _FIELD_MARGIN * pitch + params.rim_margin_px, disc.radius_px)
-    return params, SensorDisc(disc.cx, disc.cy, field_radius)
+    margin = disc.radius_px - (reach + _FIELD_MARGIN * pitch)
+    return params.replace(rim_margin_px=round(float(max(params.rim_margin_px, margin)), 2))
 
 
 #: Colours (B, G, R) of `draw_pin_field`: kept pins, then each rejection reason.
@@ -463,7 +473,7 @@ def draw_pin_field(frame: np.ndarray, field: PinField, *, legend: bool = True) -
     """A colour picture of what `find_pin_field` kept and rejected, and why.
 
     Kept pins are green circles; rejected blobs are crosses coloured by reason (`COLOURS`); the
-    search region (`PinField.disc`) is a thin yellow circle; a legend with the counts sits top left.
+    pin field's circle (`PinField.field_disc`) is a thin yellow circle; a legend with the counts sits top left.
 
     Parameters
     ----------
@@ -487,7 +497,7 @@ def draw_pin_field(frame: np.ndarray, field: PinField, *, legend: bool = True) -
     radius = max(int(round(0.3 * pitch)), 2)
     thick = max(int(round(scale)), 1)
     shift = 4
-    d = field.disc
+    d = field.field_disc
     cv2.circle(picture, (int(round(d.cx * 16)), int(round(d.cy * 16))), int(round(d.radius_px * 16)), (0, 230, 230),
                thick, cv2.LINE_AA, shift)
     for x, y in field.centres:

@@ -53,8 +53,8 @@ def tune_detection(frame: np.ndarray, expected_pins: int, *, start: DetectionPar
     expected_pins : int
         Number of pins the sensor has.
     start : DetectionParams, optional
-        Starting parameters: tried among the candidates; their polarity (`dark_pins`) and
-        `rim_margin_px` are kept.
+        Starting parameters: tried among the candidates; their polarity (`dark_pins`) is kept, and
+        their `rim_margin_px` at least (widened to leave out the membrane beyond the pin field).
     tolerance : float
         Largest accepted relative difference between the pins found and `expected_pins` (0.1:
         10 %; rim pins hidden by a rim ring or the image edge are usually a few %).

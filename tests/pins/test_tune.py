@@ -53,3 +53,23 @@ def test_expected_spacing_scales_with_pin_count():
 def test_arguments_validated_by_name(kwargs, name):
     with pytest.raises(ValueError, match=name):
         tune_detection(np.zeros((48, 64), np.uint8), **kwargs)
+
+
+def test_a_count_confirms_where_pins_are_hidden():
+    """A rim ring hides 6 of 331 pins: the count confirms the field (it used to make tuning fail)."""
+    from tests.pins.conftest import preset_frame, score
+
+    f = preset_frame("rim-ring-331")
+    params = tune_detection(f.image, 331)
+    recall, precision, rmse = score(detect_pins(f.image, params=params), f)
+    assert recall >= 0.99 and precision >= 0.97 and rmse <= 0.1
+    # A tolerance tighter than the hidden pins refuses, saying how far off the field is.
+    with pytest.raises(PinsError, match=r"325 pins \(-6, -2%"):
+        tune_detection(f.image, 331, tolerance=0.01)
+
+
+@pytest.mark.parametrize("count", [1, 2, 5])
+def test_a_tiny_count_is_refused_in_one_line(count):
+    with pytest.raises(PinsError, match=f"to {count} pins: the pin lattice has 331 pins") as info:
+        tune_detection(frame(331).image, count)
+    assert "\n" not in str(info.value) and "count right" in str(info.value)
