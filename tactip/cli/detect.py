@@ -1,59 +1,110 @@
-"""Detect the pins in one TacTip image and print them.
+"""Find the pins in one TacTip image and print them.
 
-Finds the sensor disc, then the pin tips inside it (Gaussian blur, adaptive threshold,
-connected components, intensity-weighted centroids). With --expected-pins the detection is first
-tuned to find that many pins. With --json the output is exactly
-{"count": n, "pins": [[x, y], ...]} in px (x to the right, y down).
+Finds the sensor disc, then the pin field inside it: the blobs that form the pin lattice
+(neighbours at the lattice pitch, size, contrast and sharpness like their neighbours'), without
+being told the pin count. The other blobs are rejected and counted by reason: "outside field"
+(beyond the lattice: glare on a rim ring), "off lattice" (specks, light patches of skin between
+pins), "size" and "contrast" (unlike their neighbours). With --expected-pins the count only
+confirms the result: the summary says how far off it is (a warning when more than 10 % off).
 
-Example:
-  tactip detect samples/synthetic_frame.png --expected-pins 331 --json
+With --json the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
+"rejected": [[x, y, "reason"], ...]} in px (x to the right, y down), plus "expected_pins" and
+"count_error" (found minus expected) with --expected-pins.
+
+With --annotate OUT.png a picture is written: kept pins in green, rejected blobs as crosses
+coloured by reason, the pin field's circle in yellow and a legend. It never overwrites IMAGE.
+
+Examples:
+  tactip detect samples/synthetic_frame.png
+  tactip detect frame.png --expected-pins 331 --annotate out/frame_pins.png
+  tactip detect frame.png --dark-pins --json
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 
 from tactip.cli._types import positive_int
-import json
 
-HELP = "detect the pins in one image (optionally auto-tuned to an expected count)"
+HELP = "find the pin field in one image (pins kept, blobs rejected and why; optional count check)"
+
+# More than this relative difference from --expected-pins earns a warning.
+_COUNT_WARNING = 0.1
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``tactip detect``."""
     parser.add_argument("image", metavar="IMAGE", help="image file (png, jpg, bmp, tif)")
     parser.add_argument("--expected-pins", type=positive_int, metavar="N",
-                        help="tune detection to N pins first (127, 331, 532 ...)")
+                        help="the sensor's pin count (127, 331, 532 ...): confirms the pins found and says how "
+                             "far off they are; does not change what is found")
     parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
-    parser.add_argument("--json", action="store_true", help='print {"count": n, "pins": [[x, y], ...]}')
+    parser.add_argument("--json", action="store_true",
+                        help='print {"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": '
+                             '[[x, y, "reason"], ...]} (px)')
+    parser.add_argument("--annotate", metavar="OUT.png",
+                        help="also write a picture: kept pins green, rejected blobs coloured by reason, legend")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Read the image, tune if asked, detect and print."""
-    from pins import DetectionParams, detect_pins, find_sensor_disc, median_spacing_px, tune_detection
+    """Read the image, find the pin field, print it (and draw it)."""
+    from pins import draw_pin_field, find_pin_field
+    from tactip._output import atomic_output, refuse_overwriting_inputs
     from tactip.errors import SourceError
     from tactip.sources import ImageFolderSource
 
-    with ImageFolderSource(args.image, grey=True) as source:
+    if args.annotate:
+        refuse_overwriting_inputs([args.annotate], [args.image])
+    with ImageFolderSource(args.image) as source:
         if len(source) != 1:
             raise SourceError(f"{args.image!r} is a folder of {len(source)} images; give one image file")
         image = source.read().image
-    params = DetectionParams(dark_pins=args.dark_pins)
-    disc = find_sensor_disc(image, dark_pins=params.dark_pins)
-    if args.expected_pins:
-        params = tune_detection(image, args.expected_pins, start=params, disc=disc)
-    pins = detect_pins(image, params=params, disc=disc)
+    field = find_pin_field(image, expected_pins=args.expected_pins, dark_pins=args.dark_pins)
+    if args.annotate:
+        import cv2
+
+        picture = draw_pin_field(image, field)
+        with atomic_output(args.annotate, inputs=[args.image]) as tmp:
+            try:
+                written = cv2.imwrite(str(tmp), picture)
+            except cv2.error:
+                written = False
+            if not written:
+                raise SourceError(f"cannot write the picture {args.annotate!r}: use a .png, .jpg, .bmp or .tif name")
     if args.json:
-        print(json.dumps({"count": len(pins), "pins": [[round(x, 3), round(y, 3)] for x, y in pins.tolist()]}))
-        return 0
-    print(f"{len(pins)} pins in {args.image} (disc centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
-          f"radius {disc.radius_px:.1f} px)")
-    if len(pins):
-        spacing = median_spacing_px(pins)
-        low, high = pins.min(axis=0), pins.max(axis=0)
-        print(f"x {low[0]:.1f}..{high[0]:.1f} px, y {low[1]:.1f}..{high[1]:.1f} px, median spacing {spacing:.1f} px")
-    print(f"parameters{' (tuned)' if args.expected_pins else ''}: blur {params.blur_sigma_px:g} px, "
-          f"block {params.block_size_px} px, offset {params.offset:g}, "
-          f"area {params.min_area_px}-{params.max_area_px} px")
+        data = {"count": field.count, "pins": [[round(x, 3), round(y, 3)] for x, y in field.centres.tolist()],
+                "pitch_px": None if field.count < 2 else round(field.pitch_px, 3),
+                "rejected": [[round(float(x), 3), round(float(y), 3), str(reason)]
+                             for (x, y), reason in zip(field.rejected, field.rejected_reason)]}
+        if args.expected_pins:
+            data.update(expected_pins=field.expected_pins, count_error=field.count_error)
+        print(json.dumps(data))
+    else:
+        _print_summary(args, field)
+    if args.expected_pins and abs(field.count_error) > _COUNT_WARNING * args.expected_pins:
+        why = ("pins hidden or out of focus, something touching the pad, or a wrong count?" if field.count_error < 0
+               else "is the count right?")
+        print(f"tactip detect: warning: {field.count} pins found, {args.expected_pins} expected "
+              f"({field.count_error:+d}, {field.count_error / args.expected_pins:+.0%}): {why}", file=sys.stderr)
     return 0
 
+
+def _print_summary(args: argparse.Namespace, field) -> None:
+    disc, params = field.field_disc, field.params
+    print(f"{field.count} pins in {args.image} (pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
+          f"radius {disc.radius_px:.1f} px)")
+    if field.count:
+        low, high = field.centres.min(axis=0), field.centres.max(axis=0)
+        pitch = f", pitch {field.pitch_px:.1f} px" if field.count > 1 else ""
+        print(f"x {low[0]:.1f}..{high[0]:.1f} px, y {low[1]:.1f}..{high[1]:.1f} px{pitch}")
+    counts = field.rejected_counts()
+    detail = ", ".join(f"{n} {reason}" for reason, n in counts.items() if n)
+    print(f"rejected {len(field.rejected)} blobs" + (f": {detail}" if detail else ""))
+    if args.expected_pins:
+        error = field.count_error
+        off = "exactly as expected" if error == 0 else f"{error:+d} ({error / args.expected_pins:+.1%})"
+        print(f"expected {args.expected_pins} pins: {off}")
+    print(f"parameters for later frames: blur {params.blur_sigma_px:g} px, block {params.block_size_px} px, "
+          f"offset {params.offset:g}, area {params.min_area_px}-{params.max_area_px} px")

@@ -72,6 +72,21 @@ def test_other_presets_calibrate_to_their_count(pins):
     assert cKDTree(calibration.reference_pins).query(truth[visible])[0].max() < 0.2
 
 
+@pytest.mark.parametrize("name", ["rim-ring-331", "brown-127"])
+def test_rim_glare_and_skin_texture_stay_out_of_the_reference_pins(name):
+    """A rim ring hides some pins and carries glare; brown skin has light patches: the count confirms."""
+    sensor = SyntheticTacTip.from_preset(name, seed=0)
+    frames = [sensor.render() for _ in range(3)]
+    expected = {"rim-ring-331": 331, "brown-127": 127}[name]
+    calibration = calibrate_sensor([f.image for f in frames], expected_pins=expected)
+    truth = frames[0].centres
+    visible, drawn = frames[0].visible, frames[0].visible | frames[0].partial
+    distance = cKDTree(truth[drawn]).query(calibration.reference_pins)[0]
+    assert distance.max() < 3.0                                   # no glare, no skin kept
+    assert cKDTree(calibration.reference_pins).query(truth[visible])[0].max() < 0.3   # every whole pin
+    assert "expected" in calibration.describe()
+
+
 @pytest.mark.parametrize("frame", [
     np.full((480, 640), 128, np.uint8),                                          # uniform grey
     np.random.default_rng(0).integers(0, 256, (480, 640), dtype=np.uint8),      # noise
