@@ -17,7 +17,15 @@ Prints ms/frame at 331 and 532 pins (wall time of the best pass, and CPU time) f
 Frames are a 5 mm tap (peak displacement ~14 px), so LK sees real motion. Goals: tracking all
 331 pins at >= 500 frames/s (2 ms/frame), detection <= 3 ms.
 
-Run: .venv/bin/python bench/bench_pins.py
+A second table, per synthetic preset (`tactip.synthetic.PRESETS`, rest and a 5 mm tap), times the
+one-off `find_pin_field` (the pin field without a count: candidate detections at a few parameter
+sets, lattice consistency) beside the per-frame fast path it sets up (`detect_pins` with the
+field's params and disc) and prints their ratio, and scores the field against the renderer's
+ground truth without and with the count: recall over visible pins, precision (detections on
+visible or partial pins are correct), centroid RMSE, px. Bars (issue 8): recall and precision
+>= 99 %, RMSE <= 0.1 px.
+
+Run: .venv/bin/python bench/bench_pins.py [--presets-only]
 """
 
 from __future__ import annotations
@@ -29,8 +37,10 @@ import numpy as np
 
 from scipy.spatial import cKDTree
 
-from pins import PinTracker, detect_pins, find_sensor_disc
-from tactip.synthetic import Contact, SyntheticTacTip
+from scipy.optimize import linear_sum_assignment
+
+from pins import PinTracker, detect_pins, find_pin_field, find_sensor_disc
+from tactip.synthetic import Contact, SyntheticTacTip, preset_names
 
 REPEATS = 5
 
@@ -73,9 +83,62 @@ def bench(pins: int) -> dict[str, float]:
     return results
 
 
+def score(detected: np.ndarray, frame, gate_px: float = 3.0) -> tuple[float, float, float]:
+    """(recall over visible pins, precision counting visible or partial pins, RMSE px over visible ones)."""
+    drawn = frame.visible | frame.partial
+    truth, is_visible = frame.centres[drawn], frame.visible[drawn]
+    if len(detected) == 0:
+        return 0.0, 1.0, float("nan")
+    distance = np.hypot(*(truth[:, None, :] - detected[None, :, :]).transpose(2, 0, 1))
+    rows, cols = linear_sum_assignment(np.where(distance <= gate_px, distance, 1e6))
+    ok = distance[rows, cols] <= gate_px
+    rows, cols = rows[ok], cols[ok]
+    on_visible = is_visible[rows]
+    errors = detected[cols[on_visible]] - truth[rows[on_visible]]
+    return (on_visible.sum() / is_visible.sum(), ok.sum() / len(detected),
+            float(np.sqrt(np.mean(np.sum(errors**2, axis=1)))))
+
+
+def bench_field(name: str) -> list[str]:
+    """Rows of the preset table for one preset: rest and tap."""
+    sensor = SyntheticTacTip.from_preset(name, seed=0)
+    rows = []
+    for label, contact in (("rest", None), ("tap", Contact(indentation_mm=5.0, gap_width_mm=2.0))):
+        f = sensor.render(contact)
+        drawn = int((f.visible | f.partial).sum())
+        centres = f.centres[f.visible]
+        nearest = cKDTree(centres).query(centres, 2)[0][:, 1]
+        gate = min(3.0, 0.4 * float(np.median(nearest)))
+        cost = _per_frame_ms(lambda image: find_pin_field(image, dark_pins=sensor.dark_pins), [f.image], repeats=3)
+        field = find_pin_field(f.image, dark_pins=sensor.dark_pins)
+        given = find_pin_field(f.image, expected_pins=drawn, dark_pins=sensor.dark_pins)
+        fast = _per_frame_ms(lambda image: detect_pins(image, params=field.params, disc=field.disc), [f.image] * 10)
+        r0, p0, e0 = score(field.centres, f, gate)
+        r1, p1, e1 = score(given.centres, f, gate)
+        rows.append(f"{name:>14} {label:>4} {int(f.visible.sum()):>4} {f.image.shape[1]}x{f.image.shape[0]:<4} "
+                    f"{field.count:>5} {r0:7.1%} {p0:7.1%} {e0:6.3f}  {given.count_error:+4d} {r1:7.1%} {p1:7.1%} "
+                    f"{e1:6.3f} {cost[0]:8.0f} ({cost[1]:4.0f}) {fast[0]:6.2f} ({fast[1]:5.2f}) {cost[0] / fast[0]:7.0f}")
+    return rows
+
+
 def main() -> None:
-    """Print the table."""
+    """Print the tables."""
+    import sys
+
     cv2.setNumThreads(1)
+    if "--presets-only" not in sys.argv[1:]:
+        _tracking_table()
+    print(f"\npin field per preset (one thread): find_pin_field once (ms wall (cpu), best of 3), then "
+          f"detect_pins per frame with its params and disc (ms, best of {REPEATS}); scores without / with the count")
+    print(f"{'preset':>14} {'':>4} {'vis':>4} {'size':<9} {'found':>5} {'recall':>7} {'precis':>7} {'RMSE':>6}  "
+          f"{'err':>4} {'recall':>7} {'precis':>7} {'RMSE':>6} {'field ms':>15} {'detect ms':>14} {'ratio':>7}")
+    for name in preset_names():
+        for row in bench_field(name):
+            print(row, flush=True)
+
+
+def _tracking_table() -> None:
+    """The tracking table at 331 and 532 pins."""
     print(f"pins bench: ms/frame on one thread (cv2.setNumThreads(1)), 640x480, best of {REPEATS} passes, "
           "wall (cpu)")
     print(f"{'pins':>5} {'disc':>14} {'detect':>14} {'LK+checks':>14} {'tracker':>14} {'tracker fps':>12} "
