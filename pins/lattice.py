@@ -2,27 +2,42 @@
 
 A TacTip frame shows more bright blobs than pins: LED glare and its reflections on a black rim
 ring, specks of dust, light patches of skin between the shadows of the pins, skin texture. What
-makes a pin a pin is that it belongs to the lattice: it has neighbours at the lattice pitch, and its
-size and contrast are like its neighbours'. `find_pin_field` finds that lattice without being told
-the pin count:
+makes a pin a pin is that it belongs to the lattice: it sits at a lattice site, with neighbours at
+the lattice pitch, and its size, contrast and sharpness are like its neighbours'. `find_pin_field`
+finds that lattice without being told the pin count:
 
-1. candidates: blobs detected permissively (`pins.detect`) at a few parameter sets scaled to the
-   possible pin pitches of the disc (from a tenth to a fifth of its radius, 100 to 1000 pins);
-2. lattice consistency, per candidate set, iterated until nothing changes (removing an impostor
-   changes its neighbours' statistics): a blob much smaller or larger than the median of its
-   neighbours is rejected for its ``size``, one much fainter for its ``contrast``; of two blobs much
-   closer than the local pitch (the median nearest-neighbour distance around them, so that radial
-   layouts whose spacing grows with the radius work) the weaker is ``off lattice``;
-3. the field: blobs joined by lattice links (two blobs at most 1.45 local pitches apart) form
-   connected groups; the large groups are the pin field, and a blob outside their convex hull
-   (glare on the rim ring) is ``outside field``; an isolated blob inside it (the centre pin of a
-   radial layout) stays;
-4. the candidate set with the most pins in its field wins (ties: the most regular);
-5. the detection parameters for later frames (`PinField.params`, `PinField.disc`) keep the area
-   range of the kept pins and search only the field's circle, so the per-frame fast path
-   `pins.detect_pins` does not detect the rim and the glare again.
+1. pitch: blobs detected permissively (`pins.detect`) at parameters scaled to each possible pitch
+   of the disc (a twentieth to a quarter of its radius: 1000 to 100 pins, radial layouts, small
+   pads); the strongest lattice (most contrast x area kept) gives the pitch, measured as the median
+   nearest-neighbour distance of its blobs;
+2. candidates: a dozen parameter sets at that pitch (neighbourhood blocks of 1-2.2 pitches,
+   offsets of 5-25 grey levels);
+3. lattice consistency, per candidate set, iterated until nothing changes (removing an impostor
+   changes its neighbours' statistics), each blob against the medians of its six nearest
+   neighbours: ``size`` when its area is below 0.4 or above 2.2 of theirs (or its box poorly
+   filled); ``contrast`` when fainter than half of theirs, or with edges much softer (glare and
+   patches of skin are smooth, pin tips are discs with a sharp edge); ``off lattice`` when within
+   0.6 local pitches of a stronger blob (a speck, a light patch between pins), or when it sits at no
+   lattice site and does not look just like its neighbours. A lattice site is found by mirror
+   images: a pin is the mirror of a neighbour through another neighbour (six times for interior
+   pins, at least once at the rim or at the end of a radial spoke). The local pitch is the median
+   nearest-neighbour distance around a blob, so radial layouts, whose spacing grows with the
+   radius, and foreshortened rim pins work;
+4. the field: blobs joined by lattice links (at most 1.3 times the local second-neighbour distance)
+   form connected groups; the large groups are the pin field, a blob beyond their convex hull is
+   ``outside field`` (so is every rejected blob half a pitch beyond it: glare on a rim ring), and
+   an isolated blob inside it (the centre pin of a radial layout) stays; fewer than 10 pins make
+   no field;
+5. the winner: the candidate set that keeps the most pins that most good sets (those keeping
+   97 % of the most pins) also keep, and the fewest others, its centres nearest their consensus;
+6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
+   pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
+   rim margin that leaves out the membrane half a pitch beyond the outermost pin, so that the
+   per-frame fast path `pins.detect_pins(frame, params=field.params, disc=field.disc)` does not
+   detect the rim ring and its glare again.
 
 A known pin count does not steer the search: it is compared with the result (`count_error`).
+`draw_pin_field` pictures what was kept and what was rejected, coloured by reason.
 """
 
 from __future__ import annotations
@@ -53,7 +68,8 @@ _OFFSETS = (5.0, 9.0, 15.0, 25.0)
 _COARSE_BLOCK = (2.2,)
 _COARSE_OFFSETS = (9.0,)
 _NEIGHBOURS = 6
-# Lattice consistency: fractions of the neighbours' medians and of the local pitch.
+# Lattice consistency: fractions of the neighbours' medians (areas compared with `_AREA_SLACK` px
+# added, fills only for areas of `_FILL_AREA` px or more) and of the local pitch.
 _SIZE_RANGE = (0.4, 2.2)
 _MIN_FILL = 0.6
 _FILL_AREA = 15.0
@@ -63,6 +79,9 @@ _MIN_SHARPNESS = 0.8
 _SHARP_RADIUS = 2.0
 _TOO_CLOSE = 0.6
 _LINK = 1.3
+# Lattice sites: a mirror image within this fraction of the link length anchors a blob; a blob with
+# fewer than `_MIN_ANCHORS` must have at least these contrast ratios and at most these area ratios
+# to its neighbours' medians (with one anchor, with none).
 _MIRROR = 0.25
 _MIN_ANCHORS = 2
 _WEAK_CONTRAST = (0.6, 0.8)
@@ -71,6 +90,8 @@ _MIN_PINS = 4
 # Fewest pins that make a pin field (TacTips have 100-1000).
 _MIN_FIELD = 10
 _AREA_SLACK = 3.0
+# Linked groups of at least this fraction of the largest make the field; isolated blobs within
+# `_HULL_MARGIN` pitches of its hull stay.
 _MIN_GROUP = 0.1
 _HULL_MARGIN = 0.3
 # Rejected blobs this many pitches beyond the field's hull are reported as outside the field.
@@ -105,9 +126,10 @@ class PinField:
         Centres of the candidate blobs rejected, px.
     rejected_reason : (M,) ndarray of str
         Why each was rejected: one of `REJECTION_REASONS` ("outside field": beyond the lattice, such
-        as glare on a rim ring; "off lattice": too close to a stronger pin, such as a speck or a
-        light patch of skin between pins; "size": much smaller or larger than its neighbours;
-        "contrast": much fainter than its neighbours).
+        as glare on a rim ring or pins the ring cuts; "off lattice": too close to a stronger pin,
+        such as a speck or a light patch of skin between pins, or at no lattice site and unlike its
+        neighbours; "size": much smaller or larger than its neighbours; "contrast": much fainter
+        than its neighbours, or with a much softer edge).
     expected_pins : int or None
         The pin count given, if any.
     count_error : int or None

@@ -60,3 +60,14 @@ def test_as_grey_converts_once_and_rejects_bad_shapes():
     assert as_grey(grey.astype(np.float64) + 0.2).dtype == np.uint8
     with pytest.raises(ShapeError, match="shape"):
         as_grey(np.zeros((4, 4, 4, 4), np.uint8))
+
+
+@pytest.mark.parametrize("name", ["small-pad-100", "radial-120", "dense-1000"])
+def test_small_and_large_pads_are_found(name):
+    """Pads from a quarter to nine tenths of the frame height, 320x240 to 1280x720."""
+    from tests.pins.conftest import preset_frame, preset_sensor
+
+    disc = find_sensor_disc(preset_frame(name).image)
+    cx, cy, radius = preset_sensor(name).disc
+    assert abs(disc.cx - cx) < 0.5 and abs(disc.cy - cy) < 0.5
+    assert abs(disc.radius_px - radius) < 1.0
