@@ -33,7 +33,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from tactip.cli._types import fraction, non_negative_float, non_negative_int, positive_float, positive_int
+from tactip.cli._types import float_in_range, fraction, int_in_range, non_negative_float, non_negative_int
 
 HELP = "track the pins of a recorded video, find the taps and write positions and tap features to HDF5"
 
@@ -49,10 +49,8 @@ def _finite(parse):
 
 
 def _pin_count(text: str) -> int:
-    """An argparse type: a pin count of at least one ring (>= 7)."""
-    from tactip.cli._types import int_at_least
-
-    return int_at_least(7)(text)
+    """An argparse type: a pin count of at least one ring and at most a dense pad (7..2000)."""
+    return int_in_range(7, 2000)(text)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -66,9 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--expected-pins", type=_pin_count, metavar="N",
                         help="pins expected in view on the rest frame: confirms the pin field found there (the summary says "
                         "how far off it is) and is the default of --pins-on-pad")
-    parser.add_argument("--samples", type=positive_int, default=40, metavar="N",
+    parser.add_argument("--samples", type=int_in_range(1, 1000), default=40, metavar="N",
                         help="samples per tap feature array (default: 40)")
-    parser.add_argument("--pins", type=positive_int, default=40, metavar="N",
+    parser.add_argument("--pins", type=int_in_range(1, 2000), default=40, metavar="N",
                         help="tactile pins to select (default: 40)")
     parser.add_argument("--min-separation-mm", type=_finite(non_negative_float), default=4.0, metavar="MM",
                         help="preferred distance between selected pins, mm; a pad without room for --pins pins "
@@ -80,10 +78,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pins-on-pad", type=_pin_count, metavar="N",
                         help="pins on the whole pad, in view or not, for the pin pitch (default: the sensor's, "
                         "else --expected-pins, else the pins detected)")
-    parser.add_argument("--pad-diameter-mm", type=_finite(positive_float), metavar="MM",
+    parser.add_argument("--pad-diameter-mm", type=float_in_range(0, 500, low_open=True, unit="mm"), metavar="MM",
                         help="diameter of the hemispherical pad, mm, for the pin pitch (default: the sensor's, "
                         "else 40)")
-    parser.add_argument("--mm-per-px", type=_finite(positive_float), metavar="MM",
+    parser.add_argument("--mm-per-px", type=float_in_range(0, 10, low_open=True, unit="mm/px"), metavar="MM",
                         help="image scale at the pad, mm per px, instead of the one from the pin pitch")
     parser.add_argument("--rest-frame", type=non_negative_int, default=0, metavar="N",
                         help="index of the rest frame, off contact (default: 0, the first frame); one that looks "

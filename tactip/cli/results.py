@@ -17,7 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from tactip.cli._types import int_at_least
+from tactip.cli._types import image_file, int_at_least
 
 HELP = "list or export stored inspection results (SQLite)"
 
@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             p.add_argument("--limit", type=int_at_least(1), default=None, metavar="N",
                            help="show only the newest N inspections (N >= 1)")
         elif name == "plot":
-            p.add_argument("--out", type=Path, required=True, help="image file (.png, .pdf, .svg)")
+            p.add_argument("--out", type=image_file, required=True, help="image file (.png, .pdf, .svg)")
             p.add_argument("--last", type=int_at_least(1), default=None, metavar="N",
                            help="only the newest N inspections (N >= 1)")
         else:

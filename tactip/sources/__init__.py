@@ -22,6 +22,9 @@ from .threaded import ThreadedReader
 __all__ = ["Frame", "FrameSource", "FrameSourceBase", "CameraSource", "VideoSource", "ImageFolderSource",
            "SyntheticSource", "ThreadedReader", "open_source", "DEFAULT_TAPS", "IMAGE_SUFFIXES"]
 
+# Options of a live camera that no recorded or synthetic source has.
+_CAMERA_OPTIONS = {"exposure"}
+
 _CHOICES = ("a camera index (0) or /dev/videoN, a video file, an image file or folder, "
             "or 'synthetic' / 'synthetic:PINS' / 'synthetic:PRESET'")
 
@@ -58,6 +61,9 @@ def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
         return CameraSource(int(text), **options)
     if re.fullmatch(r"/dev/video\d+", text):
         return CameraSource(text, **options)
+    camera_only = sorted(set(options) & _CAMERA_OPTIONS)
+    if camera_only:
+        raise SourceError(f"{', '.join(camera_only)} applies to a camera only, not to {text!r}")
     match = re.fullmatch(r"synthetic(?::([\w.-]+))?", text)
     if match:
         if match.group(1) and match.group(1).isdigit():
