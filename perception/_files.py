@@ -56,7 +56,7 @@ def write_error(exc: BaseException, path) -> OSError:
             code = errno.ENOSPC
         elif "permission denied" in lowered or "errno = 13" in lowered or "readonly" in lowered:
             code = errno.EACCES
-        elif "errno = 27" in lowered:
+        elif "errno = 27" in lowered or "file too large" in lowered:
             code = errno.EFBIG
     what = _WHAT.get(code)
     if what is None:

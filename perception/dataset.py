@@ -32,9 +32,11 @@ Example
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import pathlib
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -269,6 +271,18 @@ def _open_hdf5(path: pathlib.Path, mode: str, **kwargs):
         return h5py.File(path, mode, **kwargs)
     except OSError as exc:
         text = str(exc).lower()
+        cut = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", text)
+        if cut and int(cut.group(2)) > int(cut.group(1)):
+            if mode == "r":
+                raise DatasetError(f"{path} was cut short by a failed write (disk full or a file size limit): "
+                                   f"rerun the collection to repair it and resume") from None
+            # A write that failed for lack of space left the file shorter than its header says: give it
+            # back its length (zeros); the taps counted before the failure were on the disk already.
+            try:
+                os.truncate(path, int(cut.group(2)))
+                return h5py.File(path, mode, **kwargs)
+            except OSError as again:
+                raise write_error(again, path) from None
         if "permission denied" in text or "errno = 13" in text:
             raise PermissionError(13, f"permission denied opening {str(path)!r}") from None
         if "unable to lock" in text or "resource temporarily unavailable" in text:
@@ -492,7 +506,8 @@ class DatasetWriter:
             self._count = n + 1
         except OSError as exc:
             error = write_error(exc, self.path)
-            self.close()
+            with contextlib.suppress(OSError, RuntimeError):  # the file is closed; the first error is the one
+                self.close()
             raise error from None
 
     def close(self) -> None:
@@ -502,7 +517,7 @@ class DatasetWriter:
         self._arrays = {}
         try:
             self._file.close()
-        except OSError as exc:
+        except (OSError, RuntimeError) as exc:  # h5py reports a failed flush at close as a RuntimeError
             raise write_error(exc, self.path) from None
 
     def __enter__(self) -> DatasetWriter:
