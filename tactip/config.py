@@ -299,10 +299,14 @@ def _read_toml(path: Path, what: str) -> dict:
     except OSError as exc:
         raise ConfigError(f"{what} {path}: cannot read ({exc.strerror or exc})") from None
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte-order mark, as some Windows editors write, is dropped
     except UnicodeDecodeError as exc:
-        binary = b"\0" in raw
-        kind = "a binary file" if binary else "not UTF-8 text (saved as Latin-1 or another encoding?)"
+        if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+            kind = "UTF-16 text"
+        elif b"\0" in raw:
+            kind = "a binary file"
+        else:
+            kind = "not UTF-8 text (saved as Latin-1 or another encoding?)"
         raise ConfigError(f"{path}: {kind}: byte 0x{raw[exc.start]:02x} at offset {exc.start}; a TOML file "
                           f"must be UTF-8 text") from None
     try:

@@ -70,3 +70,45 @@ def test_relative_paths_resolve_against_the_file(tmp_path):
     (tmp_path / "s.toml").write_text(text)
     cfg = load_station_config(tmp_path / "s.toml")
     assert cfg.perception.model == tmp_path / "../station_data/sim/model.h5"
+
+
+@pytest.mark.parametrize("encode, words", [
+    (lambda text: text.encode("latin-1"), ["not UTF-8 text", "Latin-1", "0xe9"]),
+    (lambda text: text.encode("utf-16"), ["UTF-16 text"]),
+    (lambda text: b"\x00\xff" + text.encode(), ["a binary file"]),
+])
+def test_files_in_other_encodings_are_named(tmp_path, encode, words):
+    text = (SAMPLES / "station_sim.toml").read_text().replace('"sim-line-1"', '"ligne-é"')
+    path = tmp_path / "s.toml"
+    path.write_bytes(encode(text))
+    with pytest.raises(ConfigError) as err:
+        load_station_config(path)
+    assert all(w in str(err.value) for w in words) and str(path) in str(err.value), str(err.value)
+
+
+def test_a_byte_order_mark_is_dropped_and_folders_are_named(tmp_path):
+    text = (SAMPLES / "station_sim.toml").read_text().replace('"sim-line-1"', '"ligne-é"')
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert load_station_config(tmp_path / "bom.toml").name == "ligne-é"
+    with pytest.raises(ConfigError, match="is a folder, not a TOML file"):
+        load_station_config(tmp_path)
+
+
+@pytest.mark.parametrize("mutate, message", [
+    (lambda d: d["protocol"].update(depth_step=1e-7), "55000001 depths"),
+    (lambda d: d["protocol"].update(repeats=1000), "taps per collection"),
+    (lambda d: d["sensor"].update(pins=5, selected_pins=5), "sensor.pins must be in 7..2000 pins, got 5"),
+    (lambda d: d["sim"].update(seed=-1), "sim.seed must be in 0..4294967295, got -1"),
+    (lambda d: d["station"].update(data_dir=5), "station.data_dir must be a path string, got 5"),
+    (lambda d: d["arm"]["tap"].update(dwell=100000), "[arm.tap] dwell: must be in [0, 10] s, got 100000"),
+    (lambda d: d["gaps"][2].update(x=1e30), "gaps[2].x 1e+30 mm lies outside the arm workspace x -20..600 mm"),
+    (lambda d: d["gaps"][0].update(true_width=float("inf")), "gaps[0].true_width must be a number"),
+    (lambda d: d["sensor"].update(source=10**6), "sensor.source must be in 0..63"),
+    (lambda d: d["perception"].update(model=""), "perception.model must be a path string"),
+])
+def test_ranges_name_the_key_and_the_range(mutate, message):
+    data = _sim_table()
+    mutate(data)
+    with pytest.raises(ConfigError) as err:
+        parse_station_config(data, base_dir=SAMPLES)
+    assert message in str(err.value)
