@@ -84,7 +84,7 @@ _LINK = 1.3
 # to its neighbours' medians (with one anchor, with none).
 _MIRROR = 0.25
 _MIN_ANCHORS = 2
-_WEAK_CONTRAST = (0.6, 0.8)
+_WEAK_CONTRAST = (0.5, 0.8)
 _WEAK_SIZE = (1.8, 1.4)
 _MIN_PINS = 4
 # Fewest pins that make a pin field (TacTips have 100-1000).
@@ -281,7 +281,7 @@ def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
     Runs keeping fewer than `_VOTER` times the most pins kept neither vote nor win (-inf).
 
     A kept pin is matched in another run by its nearest kept pin within `_MATCH` pitches; the
-    consensus position of a pin is the median of its matches.
+    consensus position of a pin is the mean of its matches.
     """
     kept = [run.blobs.centres[run.kept] for run in runs]
     # Only runs that keep nearly as many pins as the best one vote (on a small pad most candidate
@@ -306,7 +306,7 @@ def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
         agreed = support > voters.sum() / 2
         membership[r] = agreed.sum() - (~agreed).sum()
         if agreed.any():
-            consensus = np.nanmedian(matches[:, agreed], axis=0)
+            consensus = np.nanmean(matches[:, agreed], axis=0)
             deviation[r] = float(np.median(np.hypot(*(centres[agreed] - consensus).T)))
     return membership, deviation
 
@@ -451,8 +451,10 @@ class _Neighbourhood:
         """Per point: linked neighbours j with a point at the mirror image through j, or beyond the point."""
         points, others = self.points, self.points[self.near[:, 1:]]
         tolerance = _MIRROR * self.dist[:, 1:]
-        through, _ = self.tree.query(2.0 * others - points[:, None, :], 1, distance_upper_bound=np.inf)
-        beyond, _ = self.tree.query(2.0 * points[:, None, :] - others, 1)
+        bound = float(tolerance.max()) if tolerance.size else 0.0
+        through, _ = self.tree.query((2.0 * others - points[:, None, :]).reshape(-1, 2), distance_upper_bound=bound)
+        beyond, _ = self.tree.query((2.0 * points[:, None, :] - others).reshape(-1, 2), distance_upper_bound=bound)
+        through, beyond = through.reshape(tolerance.shape), beyond.reshape(tolerance.shape)
         return np.sum(self.link & (through < tolerance), axis=1) + np.sum(self.link & (beyond < tolerance), axis=1)
 
     def graph(self) -> coo_matrix:
