@@ -760,8 +760,9 @@ def _write_annotated(video, path, track, bounds, selected, decisions=None) -> No
                 seen = np.isfinite(positions[:, 0])
                 # Arrows from the rest position to rest + ARROW_SCALE x displacement; a cross on the pin.
                 tail = np.rint(rest * 16).astype(np.int32)
-                tip = np.rint((rest + ARROW_SCALE * displacement) * 16).astype(np.int32)
-                base = np.rint(positions * 16).astype(np.int32)
+                # Lost pins (NaN) are drawn at rest, then masked out: no NaN reaches the integer cast.
+                tip = np.rint((rest + ARROW_SCALE * np.nan_to_num(displacement)) * 16).astype(np.int32)
+                base = np.rint(np.where(np.isfinite(positions), positions, rest) * 16).astype(np.int32)
                 for mask, colour in ((seen & ~is_selected, (0, 200, 0)), (seen & is_selected, (0, 0, 255))):
                     centre = base[mask]
                     # One polyline call per colour: arrow shafts and the two bars of each cross.

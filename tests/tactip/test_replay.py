@@ -3,6 +3,7 @@
 import functools
 import json
 import pathlib
+import warnings
 
 import cv2
 import h5py
@@ -177,7 +178,11 @@ def test_black_frame_is_marked_and_pins_recovered_after(tmp_path):
     sensor = SyntheticTacTip(pins=331, seed=3)
     video = tmp_path / "black.mp4"
     truth = _tap_video(video, sensor, black_at=8)  # mid-rise: the pins move while the LEDs are off
-    result = replay_video(video, tmp_path / "r.h5", sensor="tactip-331")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = replay_video(video, tmp_path / "r.h5", sensor="tactip-331", annotate_path=tmp_path / "a.mp4")
+    assert not [w for w in caught if w.filename.endswith("replay.py")]  # no NaN cast while drawing
+    assert cv2.VideoCapture(str(tmp_path / "a.mp4")).get(cv2.CAP_PROP_FRAME_COUNT) == len(truth)
     with h5py.File(tmp_path / "r.h5") as h5:
         positions, blank, lost_count = h5["positions"][:], h5["blank"][:], h5["lost_count"][:]
         assert list(h5.attrs["blank_frames"]) == [8]
