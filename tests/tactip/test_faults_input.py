@@ -420,3 +420,26 @@ def test_taxel_library_refuses_too_many_taps(tmp_path):
     with pytest.raises(ValueError, match="locations x taps_per_location"):
         simulate_taxel_datasets(tmp_path / "tx", locations=10**6)
     assert not (tmp_path / "tx").exists()
+
+
+def test_a_job_larger_than_memory_is_refused_with_the_estimate(monkeypatch):
+    from tactip.cli import _types
+    from tactip.errors import TactipError
+
+    monkeypatch.setattr(_types, "available_memory_bytes", lambda: 10 * 2**30)
+    _types.check_memory(7 * 2**30, what="runs", hint="use fewer --runs")  # within 80 %: accepted
+    with pytest.raises(TactipError) as err:
+        _types.check_memory(9 * 2**30, what="5000000 Monte Carlo runs", hint="use fewer --runs")
+    assert str(err.value) == ("5000000 Monte Carlo runs need about 9.0 GiB of memory, more than the 8.0 GiB usable "
+                              "(80% of the 10.0 GiB available): use fewer --runs")
+    monkeypatch.setattr(_types, "available_memory_bytes", lambda: None)
+    _types.check_memory(2**60, what="runs", hint="")  # unknown memory: no guess, no refusal
+
+
+def test_validate_estimates_the_memory_of_its_runs(files, monkeypatch, capsys):
+    from tactip.cli import _types, main
+
+    monkeypatch.setattr(_types, "available_memory_bytes", lambda: 2**20)  # 1 MiB: 5000 runs do not fit
+    assert main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "5000 Monte Carlo runs of 12 classes need about" in err and "use fewer --runs" in err
