@@ -162,7 +162,8 @@ class PinField:
     def summary(self) -> str:
         """One line for a person: pins kept, pitch, blobs rejected by reason, the count check."""
         rejected = ", ".join(f"{n} {reason}" for reason, n in self.rejected_counts().items() if n)
-        line = f"{self.count} pins, pitch {self.pitch_px:.1f} px; rejected {len(self.rejected)}"
+        pitch = f", pitch {self.pitch_px:.1f} px" if np.isfinite(self.pitch_px) else ""
+        line = f"{self.count} pins{pitch}; rejected {len(self.rejected)}"
         line += f" ({rejected})" if rejected else ""
         if self.expected_pins is not None:
             error = self.count_error
