@@ -12,7 +12,8 @@ With --json the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
 "count_error" (found minus expected) with --expected-pins.
 
 With --annotate OUT.png a picture is written: kept pins in green, rejected blobs as crosses
-coloured by reason, the pin field's circle in yellow and a legend. It never overwrites IMAGE.
+coloured by reason, the pin field's circle in yellow and a legend (images under 480 px enlarged
+by a whole factor). It never overwrites IMAGE.
 
 Examples:
   tactip detect samples/synthetic_frame.png

@@ -147,3 +147,14 @@ def test_drawing_shows_kept_and_rejected_without_touching_the_frame():
     assert green.sum() > 10 * field.count and magenta.sum() > 0
     x, y = np.rint(field.rejected[field.rejected_reason == "outside field"][0]).astype(int)
     assert magenta[y - 3:y + 4, x - 3:x + 4].any()
+
+
+def test_small_frames_are_drawn_enlarged():
+    f = preset_frame("small-pad-100")
+    field = _field("small-pad-100", "rest")
+    picture = draw_pin_field(f.image, field)
+    assert picture.shape == (480, 640, 3)
+    # Each kept pin is ringed in green at twice its coordinates.
+    green = (picture[:, :, 1] > 150) & (picture[:, :, 0] < 60) & (picture[:, :, 2] < 60)
+    x, y = np.rint(2 * field.centres[0] + 0.5).astype(int)
+    assert green[y - 4:y + 5, x - 4:x + 5].any()
