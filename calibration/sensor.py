@@ -140,9 +140,9 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
     field = find_pin_field(mean, expected_pins=expected_pins, disc=disc, dark_pins=dark_pins)
     if abs(field.count_error) > count_tolerance * expected_pins:
         raise CalibrationError(
-            f"found {field.count} pins in the pin lattice, expected {expected_pins} pins ({field.count_error:+d}, "
-            f"{field.count_error / expected_pins:+.0%}, more than {count_tolerance:.0%} off): is the pad touching "
-            f"something, the count ([sensor] pins) wrong, or the image out of focus?")
+            f"pin detection cannot be tuned to {expected_pins} pins: the pin lattice has {field.count} pins "
+            f"({field.count_error:+d}, {field.count_error / expected_pins:+.0%}, more than {count_tolerance:.0%} off); "
+            f"is the pad touching something, the count ([sensor] pins) wrong, or the image out of focus?")
     params, reference = field.params, field.centres
     scale = float(mm_per_px) if mm_per_px is not None else pad_diameter_mm / (2.0 * disc.radius_px)
     try:
