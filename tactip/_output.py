@@ -7,18 +7,23 @@ the lowest package that writes files, so that calibration and perception share i
 - `atomic_output`: a context manager yielding the temporary name, renamed over the output on success;
 - `write_text_atomic`: a whole text file at once;
 - `refuse_overwriting_inputs`: no output may be one of the command's inputs (resolved paths, samefile);
-- `write_error`: a write error named for what it is ("disk full while writing X").
+- `write_error`: a write error named for what it is ("disk full while writing X");
+- `check_video_written`, `out_of_space`: OpenCV's video writer ignores write errors, so a video is
+  watched while written (free space, size limit) and read back, its frames counted, before it is
+  renamed into place.
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import pathlib
 
 from perception._files import atomic_path as atomic_output
 from perception._files import refuse_overwriting_inputs, temporary_name, write_error
 
-__all__ = ["claim_output", "atomic_output", "write_text_atomic", "refuse_overwriting_inputs", "write_error"]
+__all__ = ["claim_output", "atomic_output", "write_text_atomic", "refuse_overwriting_inputs", "write_error",
+           "check_video_written", "out_of_space"]
 
 
 def claim_output(path: pathlib.Path, suffix: str | None = None) -> pathlib.Path:
@@ -60,3 +65,54 @@ def write_text_atomic(path, text: str, *, inputs=()) -> pathlib.Path:
             f.flush()
             os.fsync(f.fileno())
     return path
+
+
+def check_video_written(part: pathlib.Path, final: pathlib.Path, frames: int) -> None:
+    """Raise a write error unless the video ``part`` (closed) holds its ``frames`` frames.
+
+    ``cv2.VideoWriter.write`` reports nothing when the disk fills or the file size limit is reached:
+    it prints a warning and goes on, and the file is cut short. The file is read back instead (its
+    frame count, from the container) and a short one is named for the likely cause.
+
+    Parameters
+    ----------
+    part : pathlib.Path
+        The temporary video just written and released.
+    final : pathlib.Path
+        Its final name (named in the error).
+    frames : int
+        The number of frames written to it.
+
+    Raises
+    ------
+    OSError
+        ``"disk full while writing 'out.mp4'"``, ``"file size limit reached while writing ..."``, or
+        ``"cannot write 'out.mp4': the video encoder stored N of M frames"``.
+    """
+    import cv2
+
+    capture = cv2.VideoCapture(str(part))
+    try:
+        stored = int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) if capture.isOpened() else 0
+    finally:
+        capture.release()
+    if stored == frames:
+        return
+    raise write_error(OSError(out_of_space(part), f"the video encoder stored {stored} of {frames} frames"), final)
+
+
+def out_of_space(path: pathlib.Path) -> int | None:
+    """Whether the file ``path`` being written has run out of room: ENOSPC (under 1 MiB free on its file
+    system), EFBIG (within 64 kB of the process's file size limit), or None."""
+    import resource
+
+    try:
+        stat = os.statvfs(path.parent if str(path.parent) else ".")
+        if stat.f_bavail * stat.f_frsize < 1024 * 1024:
+            return errno.ENOSPC
+        limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+        if limit != resource.RLIM_INFINITY and path.stat().st_size >= limit - 64 * 1024:
+            return errno.EFBIG
+    except OSError:
+        pass
+    return None

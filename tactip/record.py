@@ -14,7 +14,7 @@ import os
 import pathlib
 from dataclasses import dataclass
 
-from ._output import claim_output, refuse_overwriting_inputs
+from ._output import check_video_written, claim_output, out_of_space, refuse_overwriting_inputs, write_error
 from .errors import SourceError
 
 __all__ = ["RecordResult", "record_video"]
@@ -123,6 +123,8 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
                     break
                 image = frame.image if frame.image.ndim == 3 else cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
                 writer.write(image)
+                if count % 32 == 31 and out_of_space(part):  # the writer itself reports nothing
+                    raise write_error(OSError(out_of_space(part), "no room"), out_path)
                 first_s = frame.timestamp_s if first_s is None else first_s
                 last_s = frame.timestamp_s
                 count += 1
@@ -132,6 +134,9 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
             raise SourceError(f"{spec!r} delivered no frames")
         writer.release()
         writer = None
+        check_video_written(part, out_path, count)  # OpenCV's writer says nothing of a full disk
+        with open(part, "rb+") as written:
+            os.fsync(written.fileno())
         os.replace(part, out_path)
     finally:
         if writer is not None:

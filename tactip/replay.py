@@ -75,7 +75,7 @@ from pins import (DetectionParams, NoSensorError, PadScale, PinSelection, PinsEr
                   displacement_from_rest, feature_dim_names, find_pin_field, pad_scale, segment_taps,
                   select_feature_pins, tap_features, tap_signal)
 
-from ._output import claim_output, refuse_overwriting_inputs, write_error
+from ._output import check_video_written, claim_output, refuse_overwriting_inputs, write_error
 from .errors import ConfigError, SourceError
 
 __all__ = ["ReplayResult", "replay_video", "FORMAT", "check_rest_frame"]
@@ -358,6 +358,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                     os.fsync(written.fileno())
             except (OSError, RuntimeError) as exc:
                 raise write_error(exc, final) from None
+            if final is annotate:  # OpenCV's writer says nothing of a full disk: count the frames stored
+                check_video_written(part, final, len(track["timestamps"]))
         for part, final in zip(temporary, [out_path, annotate]):
             os.replace(part, final)
     finally:

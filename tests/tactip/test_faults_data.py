@@ -216,6 +216,58 @@ def test_replay_on_a_full_disk_reports_it_and_leaves_nothing(tmp_path):
         assert not (out / "o.h5").exists() and not leftover_temporaries(out)
 
 
+def test_record_and_annotated_replay_on_a_full_disk_report_it(tmp_path):
+    """OpenCV's video writer says nothing when the disk fills: the video must not be kept, cut short, as done."""
+    video = tmp_path / "v.mp4"
+    shutil.copy(Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4", video)
+    out = tmp_path / "small"
+    with small_filesystem(out, 96) as mounted:
+        FULL_DISK_MODE["record, replay --annotate"] = "tmpfs 96 kB" if mounted else "RLIMIT_FSIZE 600 kB"
+        # The fake limit lets replay's 0.5 MB HDF5 output through and stops its 2 MB annotated video.
+        extra = {} if mounted else {"preexec_fn": file_size_limit(600 * 1024)}
+        recorded = run_tactip("record", video, "--out", out / "r.mp4", "--quiet", cwd=tmp_path, inputs=[video],
+                              **({} if mounted else {"preexec_fn": file_size_limit(96 * 1024)}))
+        assert_refused(recorded, *disk_full_words(mounted), "r.mp4")
+        replayed = run_tactip("replay", video, "--out", tmp_path / "o.h5", "--annotate", out / "a.mp4", "--quiet",
+                              cwd=tmp_path, inputs=[video], **extra)
+        assert_refused(replayed, *disk_full_words(mounted), "a.mp4")
+        assert not (out / "r.mp4").exists() and not (out / "a.mp4").exists() and not (tmp_path / "o.h5").exists()
+        assert not leftover_temporaries(out)
+
+
+def test_an_output_in_a_read_only_folder_is_refused_before_any_work(sim_station, inspected, tmp_path, capsys):
+    """Every output flag checks its folder can be written while parsing: no work is done and then lost."""
+    from tactip.cli import main
+
+    root = tmp_path / "ro"
+    with small_filesystem(root, 64) as mounted:
+        if mounted:
+            subprocess.run(["mount", "-o", "remount,ro", str(root)], check=True)
+            words = "read-only file system"
+        elif os.geteuid() == 0:
+            pytest.skip("root without mount permission: file modes cannot make a folder read-only")
+        else:
+            root.chmod(0o555)
+            words = "permission denied"
+        image = Path(__file__).resolve().parents[2] / "samples" / "synthetic_frame.png"
+        try:
+            for argv in (["train", sim_station.train, "--out", root / "m.h5"],
+                         ["validate", sim_station.model, sim_station.test, "--json", root / "v.json"],
+                         ["validate", sim_station.model, sim_station.test, "--plot", root / "v.png"],
+                         ["results", "export", "--db", inspected, "--csv", "--out", root / "r.csv"],
+                         ["results", "plot", "--db", inspected, "--out", root / "r.png"],
+                         ["detect", image, "--annotate", root / "d.png"],
+                         ["record", "synthetic", "--out", root / "r.mp4"],
+                         ["calibrate", "--config", sim_station.toml, "--out", root / "sub" / "cal.h5"]):
+                with pytest.raises(SystemExit) as exit_:
+                    main([str(a) for a in argv])
+                err = capsys.readouterr().err
+                assert exit_.value.code == 2 and words in err and "cannot write" in err, (argv, err)
+        finally:
+            if not mounted:
+                root.chmod(0o755)
+
+
 def test_results_export_on_a_full_disk_keeps_the_old_file(inspected, tmp_path):
     db = tmp_path / "results.sqlite"
     shutil.copy(inspected, db)
