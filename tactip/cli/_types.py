@@ -2,8 +2,8 @@
 
 Every number is finite (``nan`` and ``inf`` are refused: they say nothing and poison what follows),
 whole numbers have an upper bound where a huge value would exhaust memory or time, and output files
-are checked before any work starts (an existing folder, a missing parent folder, an image format
-the plotting library cannot write). `check_memory` refuses a job whose arrays cannot fit in memory.
+are checked before any work starts (an existing folder, a missing parent folder, a folder on a
+read-only file system or without write permission, an image format the plotting library cannot write). `check_memory` refuses a job whose arrays cannot fit in memory.
 """
 
 from __future__ import annotations
@@ -103,6 +103,7 @@ def output_file(text: str) -> Path:
     path = creatable_file(text)
     if not path.parent.is_dir():
         raise argparse.ArgumentTypeError(f"the folder {str(path.parent)!r} of {text!r} does not exist")
+    _writable(path.parent, text)
     return path
 
 
@@ -114,7 +115,7 @@ def creatable_file(text: str) -> Path:
     path = Path(text)
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
-    _folders_or_missing(path.parent, text)
+    _writable(_folders_or_missing(path.parent, text), text)
     return path
 
 
@@ -129,12 +130,27 @@ def output_folder(text: str) -> Path:
     return path
 
 
-def _folders_or_missing(folder: Path, text: str) -> None:
+def _folders_or_missing(folder: Path, text: str) -> Path:
+    """The nearest existing folder of ``folder`` (itself or a parent); refused when that is a file."""
     for parent in (folder, *folder.parents):
         if parent.exists():
             if not parent.is_dir():
                 raise argparse.ArgumentTypeError(f"{str(parent)!r} (in {text!r}) is a file, not a folder")
-            return
+            return parent
+    return Path(".")
+
+
+def _writable(folder: Path, text: str) -> None:
+    """Refuse ``text`` when its existing ``folder`` cannot be written (read-only file system, no permission)."""
+    try:
+        read_only = bool(os.statvfs(folder).f_flag & os.ST_RDONLY)
+    except (OSError, AttributeError):
+        read_only = False
+    if read_only:
+        raise argparse.ArgumentTypeError(f"cannot write {text!r}: the folder {str(folder)!r} is on a read-only "
+                                         f"file system")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"cannot write {text!r}: permission denied in the folder {str(folder)!r}")
 
 
 def image_file(text: str) -> Path:

@@ -27,9 +27,12 @@ import argparse
 import json
 import sys
 
-from tactip.cli._types import positive_int
+from tactip.cli._types import output_file, positive_int
 
 HELP = "find the pin field in one image (pins kept, blobs rejected and why; optional count check)"
+
+# Picture formats --annotate writes (OpenCV's encoders).
+_PICTURE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 
 # More than this relative difference from --expected-pins earns a warning.
 _COUNT_WARNING = 0.1
@@ -45,7 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help='print {"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": '
                              '[[x, y, "reason"], ...]} (px)')
-    parser.add_argument("--annotate", metavar="OUT.png",
+    parser.add_argument("--annotate", type=output_file, metavar="OUT.png",
                         help="also write a picture: kept pins green, rejected blobs coloured by reason, legend")
 
 
@@ -58,6 +61,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.annotate:
         refuse_overwriting_inputs([args.annotate], [args.image])
+        if args.annotate.suffix.lower() not in _PICTURE_SUFFIXES:
+            raise SourceError(f"cannot write the picture {str(args.annotate)!r}: use a .png, .jpg, .bmp or .tif name")
     with ImageFolderSource(args.image) as source:
         if len(source) != 1:
             raise SourceError(f"{args.image!r} is a folder of {len(source)} images; give one image file")
@@ -67,13 +72,14 @@ def run(args: argparse.Namespace) -> int:
         import cv2
 
         picture = draw_pin_field(image, field)
+        # Encoded in memory and written by Python: a full disk or a lost permission is an OSError named
+        # as such (cv2.imwrite only returns False).
+        encoded, data = cv2.imencode(args.annotate.suffix.lower(), picture)
+        if not encoded:
+            raise SourceError(f"cannot encode the picture {str(args.annotate)!r}")
         with atomic_output(args.annotate, inputs=[args.image]) as tmp:
-            try:
-                written = cv2.imwrite(str(tmp), picture)
-            except cv2.error:
-                written = False
-            if not written:
-                raise SourceError(f"cannot write the picture {args.annotate!r}: use a .png, .jpg, .bmp or .tif name")
+            with open(tmp, "wb") as f:
+                f.write(data.tobytes())
     if args.json:
         data = {"count": field.count, "pins": [[round(x, 3), round(y, 3)] for x, y in field.centres.tolist()],
                 "pitch_px": None if field.count < 2 else round(field.pitch_px, 3),

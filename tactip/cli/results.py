@@ -17,7 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from tactip.cli._types import image_file, int_at_least
+from tactip.cli._types import image_file, int_at_least, output_file
 
 HELP = "list or export stored inspection results (SQLite)"
 
@@ -44,7 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             fmt = p.add_mutually_exclusive_group(required=True)
             fmt.add_argument("--csv", action="store_true", help="comma-separated values with a header")
             fmt.add_argument("--json", action="store_true", help="a JSON list of objects")
-            p.add_argument("--out", type=Path, default=None, help="output file (default: standard output)")
+            p.add_argument("--out", type=output_file, default=None, help="output file (default: standard output)")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import argparse
 
-from tactip.cli._types import int_at_least, int_in_range, positive_float
+from tactip.cli._types import int_at_least, int_in_range, output_file, positive_float
 
 HELP = "train a perception model (histogram likelihood) from a tap dataset"
 
@@ -22,7 +22,7 @@ HELP = "train a perception model (histogram likelihood) from a tap dataset"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser of ``tactip train``."""
     parser.add_argument("dataset", metavar="DATASET.h5", help="training taps (tactip-dataset/1 HDF5)")
-    parser.add_argument("--out", required=True, metavar="MODEL.h5", help="model file to write (tactip-model/1 HDF5)")
+    parser.add_argument("--out", type=output_file, required=True, metavar="MODEL.h5", help="model file to write (tactip-model/1 HDF5)")
     parser.add_argument("--locations", type=int_in_range(1, 1000), default=11, metavar="N",
                         help="equal location classes over the training range, 1..1000 (default 11; "
                              "a dataset with one location gets one class)")
