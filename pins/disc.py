@@ -100,8 +100,10 @@ def as_grey(frame: np.ndarray) -> np.ndarray:
     if image.ndim == 3 and image.shape[2] in (3, 4):
         code = cv2.COLOR_BGR2GRAY if image.shape[2] == 3 else cv2.COLOR_BGRA2GRAY
         image = cv2.cvtColor(_as_uint8(image), code)
-    if image.ndim != 2 or min(image.shape) < 8:
+    if image.ndim != 2:
         raise ShapeError(f"frame must be a grey (H, W) or BGR (H, W, 3) image, got shape {image.shape}")
+    if min(image.shape) < 8:
+        raise ShapeError(f"frame of {image.shape[1]}x{image.shape[0]} px is too small: at least 8x8 px")
     return _as_uint8(image)
 
 

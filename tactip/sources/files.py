@@ -123,6 +123,16 @@ class ImageFolderSource(FrameSourceBase):
         elif self.path.is_dir():
             self.files = sorted((p for p in self.path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES
                                  and p.is_file()), key=_natural_key)
+        elif self.path.is_file():
+            head = _read_head(self.path, "image")
+            names = ", ".join(IMAGE_SUFFIXES)
+            if any(magic in head[:12] for magic in _VIDEO_MAGIC):
+                why = f"a video, not an image (videos go to 'tactip replay'; images are {names} files)"
+            elif any(head.startswith(magic) for magic in _IMAGE_MAGIC):
+                why = f"an image under another name: give it one of {names}"
+            else:
+                why = f"not an image (images are {names} files)"
+            raise SourceError(f"cannot open image {str(self.path)!r}: {why}")
         else:
             raise SourceError(f"cannot open {self.name}: no such folder or image file")
         if not self.files:
@@ -160,6 +170,8 @@ class ImageFolderSource(FrameSourceBase):
 
 # File signatures: what a file claims to be, to tell "not a video" from "a corrupt video".
 _IMAGE_MAGIC = (b"\x89PNG", b"\xff\xd8\xff", b"BM", b"II*\x00", b"MM\x00*")
+# Container signatures of videos (MP4/MOV "ftyp", AVI "RIFF", Matroska/WebM), found in the first 12 bytes.
+_VIDEO_MAGIC = (b"ftyp", b"RIFF", b"\x1a\x45\xdf\xa3")
 
 
 def _read_head(path: pathlib.Path, what: str, size: int = 512) -> bytes:

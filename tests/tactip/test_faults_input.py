@@ -75,6 +75,11 @@ def files(tmp_path_factory):
     (root / "latin1.toml").write_bytes(toml.read_text().replace('"sim-line-1"', '"ligne-é"').encode("latin-1"))
     (root / "folder").mkdir()
     (root / "text.txt").write_text("a file\n")
+    import cv2
+
+    cv2.imwrite(str(root / "tiny.png"), np.zeros((1, 1), np.uint8))
+    model_bytes = (root / "model.h5").read_bytes()
+    (root / "model_cut.h5").write_bytes(model_bytes[:len(model_bytes) // 2])   # a copy that did not finish
 
     def variant(name, section, **values):
         changed = tomllib.loads(toml.read_text())
@@ -196,6 +201,19 @@ CASES = [
     ("collect: out is a file", ["collect", "--config", "{root}/station.toml", "--out", "{root}/text.txt"],
      ["--out", "not a folder"]),
     ("simulate: out under a file", ["simulate", "taxel", "--out", "{root}/text.txt/sub"], ["--out", "not a folder"]),
+    # a careful user's further tries (beyond the list)
+    ("detect a text file", ["detect", "{root}/text.txt"], ["text.txt", "not an image"]),
+    ("detect a video", ["detect", "{root}/video.mp4"], ["video.mp4", "a video", "tactip replay"]),
+    ("detect a 1x1 image", ["detect", "{root}/tiny.png"], ["1x1 px", "too small"]),
+    ("detect --annotate in a missing folder", ["detect", str(IMAGE), "--annotate", "no/x.png"],
+     ["--annotate", "does not exist"]),
+    ("train --out in a missing folder", ["train", "{root}/train.h5", "--out", "no/m.h5"], ["--out", "does not exist"]),
+    ("results export --out in a missing folder", ["results", "export", "--db", "{root}/missing.sqlite", "--csv",
+                                                  "--out", "no/x.csv"], ["--out", "does not exist"]),
+    ("validate a model cut short", ["validate", "{root}/model_cut.h5", "{root}/test.h5"],
+     ["model_cut.h5", "cut short", "did not finish"]),
+    ("replay --rest-frame beyond the end", ["replay", "{root}/video.mp4", "--out", "r.h5", "--rest-frame", "86",
+                                            "--quiet"], ["86 frames", "no rest frame 86"]),
 ]
 
 # Every file of the fixture folder is an input of every case: none may change.
