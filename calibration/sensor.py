@@ -24,6 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
+from perception._files import cut_short
 from pins import (DetectionParams, NoSensorError, PinsError, SensorDisc, as_grey, detect_pins, find_pin_field,
                   find_sensor_disc, match_to_blobs, median_spacing_px, select_pins)
 
@@ -194,23 +195,65 @@ def load_calibration(path: str | Path) -> SensorCalibration:
             if schema != SCHEMA:
                 raise CalibrationError(f"{path} is not a TacTip calibration file (schema {schema!r}, "
                                        f"expected {SCHEMA!r})")
-            cx, cy, r = (float(v) for v in f.attrs["disc"])
-            return SensorCalibration(
-                detection=DetectionParams(**json.loads(f.attrs["detection"])),
-                disc=SensorDisc(cx, cy, r),
-                reference_pins=np.asarray(f["reference_pins"][()], dtype=np.float64),
-                selected_pins=np.asarray(f["selected_pins"][()], dtype=np.intp),
-                mm_per_px=float(f.attrs["mm_per_px"]),
-                expected_pins=int(f.attrs["expected_pins"]),
-                frame_size=tuple(int(v) for v in f.attrs["frame_size"]),
-                min_separation_mm=float(f.attrs["min_separation_mm"]),
-                rest_frames=int(f.attrs["rest_frames"]),
-                sensor=json.loads(f.attrs["sensor"]),
-            )
+            missing = [n for n in ("reference_pins", "selected_pins") if n not in f] + \
+                [n for n in _ATTRIBUTES if n not in f.attrs]
+            if missing:
+                raise CalibrationError(f"{path} misses {', '.join(missing)} (a damaged calibration file: run "
+                                       f"'tactip calibrate' again)")
+            try:
+                cx, cy, r = (float(v) for v in f.attrs["disc"])
+                calibration = SensorCalibration(
+                    detection=DetectionParams(**json.loads(f.attrs["detection"])),
+                    disc=SensorDisc(cx, cy, r),
+                    reference_pins=np.asarray(f["reference_pins"][()], dtype=np.float64),
+                    selected_pins=np.asarray(f["selected_pins"][()], dtype=np.intp),
+                    mm_per_px=float(f.attrs["mm_per_px"]),
+                    expected_pins=int(f.attrs["expected_pins"]),
+                    frame_size=tuple(int(v) for v in f.attrs["frame_size"]),
+                    min_separation_mm=float(f.attrs["min_separation_mm"]),
+                    rest_frames=int(f.attrs["rest_frames"]),
+                    sensor=json.loads(f.attrs["sensor"]),
+                )
+            except (TypeError, ValueError) as exc:  # JSON, numbers or shapes that are not what was written
+                raise CalibrationError(f"{path} holds unreadable settings ({' '.join(str(exc).split())}): a damaged "
+                                       f"calibration file: run 'tactip calibrate' again") from None
     except OSError as exc:
+        cut = cut_short(exc)
+        if cut:
+            raise CalibrationError(f"{path} is cut short ({cut[0]} of its {cut[1]} bytes: a copy or a write that did "
+                                   f"not finish); copy it again or run 'tactip calibrate' again") from None
         raise CalibrationError(f"{path} cannot be read as a calibration file ({exc})") from None
-    except KeyError as exc:
-        raise CalibrationError(f"{path} lacks {exc} (damaged calibration file?)") from None
+    _check_calibration(path, calibration)
+    return calibration
+
+
+# The attributes every calibration file holds (besides its schema).
+_ATTRIBUTES = ("detection", "disc", "mm_per_px", "expected_pins", "frame_size", "min_separation_mm", "rest_frames",
+               "sensor")
+
+
+def _check_calibration(path, calibration: SensorCalibration) -> None:
+    """Refuse a calibration whose numbers cannot be right, as a station file's keys would be refused."""
+    def bad(what: str) -> CalibrationError:
+        return CalibrationError(f"{path}: {what} (a damaged calibration file: run 'tactip calibrate' again)")
+
+    pins, chosen = calibration.reference_pins, calibration.selected_pins
+    if not (np.isfinite(calibration.mm_per_px) and 0 < calibration.mm_per_px <= 10):
+        raise bad(f"mm_per_px must be in (0, 10] mm/px, got {calibration.mm_per_px}")
+    if len(calibration.frame_size) != 2 or min(calibration.frame_size) < 8:
+        raise bad(f"frame_size must be (width, height) of at least 8 px, got {calibration.frame_size}")
+    disc = calibration.disc
+    if not (np.isfinite([disc.cx, disc.cy, disc.radius_px]).all() and disc.radius_px > 0):
+        raise bad(f"the disc must have a finite centre and a radius > 0 px, got {disc}")
+    if pins.ndim != 2 or pins.shape[1:] != (2,) or len(pins) < 2 or not np.isfinite(pins).all():
+        raise bad(f"reference_pins must be an (N >= 2, 2) array of finite px, got shape {pins.shape}")
+    if chosen.ndim != 1 or len(chosen) == 0 or chosen.min() < 0 or chosen.max() >= len(pins):
+        raise bad(f"selected_pins must index the {len(pins)} reference pins")
+    if not (np.isfinite(calibration.min_separation_mm) and calibration.min_separation_mm >= 0):
+        raise bad(f"min_separation_mm must be a finite number >= 0, got {calibration.min_separation_mm}")
+    if calibration.expected_pins < 2 or calibration.rest_frames < 1:
+        raise bad(f"expected_pins must be >= 2 and rest_frames >= 1, got {calibration.expected_pins} and "
+                  f"{calibration.rest_frames}")
 
 
 def place_reference_pins(calibration: SensorCalibration, image: np.ndarray) -> np.ndarray:

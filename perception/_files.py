@@ -9,6 +9,8 @@ tactip import these helpers from here (calibration cannot import tactip), so the
 - `refuse_overwriting_inputs`: raises before any work when an output is one of the command's inputs.
 - `write_error`: an `OSError` raised while writing, re-raised as what it is ("disk full while
   writing X", "permission denied writing X").
+- `cut_short`: whether an HDF5 file failed to open because it is shorter than its header says (an
+  interrupted copy or write), so readers say that rather than "not an HDF5 file".
 """
 
 from __future__ import annotations
@@ -17,9 +19,10 @@ import contextlib
 import errno
 import os
 import pathlib
+import re
 from typing import Iterable, Iterator
 
-__all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name"]
+__all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name", "cut_short"]
 
 _WHAT = {
     errno.ENOSPC: "disk full while writing",
@@ -63,6 +66,25 @@ def write_error(exc: BaseException, path) -> OSError:
         strerror = getattr(exc, "strerror", None) or " ".join(text.split()) or type(exc).__name__
         return OSError(code or errno.EIO, f"cannot write {str(path)!r}: {strerror}")
     return OSError(code, f"{what} {str(path)!r}")
+
+
+def cut_short(exc: BaseException) -> tuple[int, int] | None:
+    """``(size, expected)`` in bytes when ``exc``, raised opening an HDF5 file, says the file is truncated.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The error of ``h5py.File(...)``.
+
+    Returns
+    -------
+    tuple of int or None
+        The file's size and the size its header records, or None for any other error.
+    """
+    found = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc).lower())
+    if found and int(found.group(2)) > int(found.group(1)):
+        return int(found.group(1)), int(found.group(2))
+    return None
 
 
 def temporary_name(path: pathlib.Path, suffix: str | None = None) -> pathlib.Path:

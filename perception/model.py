@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._files import atomic_path
+from ._files import atomic_path, cut_short
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 
@@ -447,6 +447,10 @@ def load_model(path) -> HistogramModel:
     except OSError as exc:
         if "permission denied" in str(exc).lower():
             raise PermissionError(13, f"permission denied reading {str(path)!r}") from None
+        cut = cut_short(exc)
+        if cut:
+            raise ModelError(f"{path} is cut short ({cut[0]} of its {cut[1]} bytes: a copy or a write that did not "
+                             f"finish); copy it again or train it again") from None
         raise ModelError(f"{path} is not an HDF5 file") from None
     with f:
         schema = f.attrs.get("schema")

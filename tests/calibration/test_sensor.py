@@ -152,3 +152,40 @@ def test_a_damaged_or_foreign_file_is_refused(tmp_path, calibration):
         load_calibration(damaged)
     with pytest.raises(CalibrationError, match="run 'tactip calibrate' first"):
         load_calibration(tmp_path / "missing.h5")
+
+
+@pytest.mark.parametrize("name, value, words", [
+    ("detection", "{not json", "unreadable settings"),
+    ("mm_per_px", float("nan"), "mm_per_px must be in (0, 10]"),
+    ("mm_per_px", 0.0, "mm_per_px must be in (0, 10]"),
+    ("disc", np.array([320.0, 240.0, -5.0]), "radius > 0"),
+    ("frame_size", np.array([0, 0]), "frame_size"),
+])
+def test_a_calibration_with_impossible_settings_is_refused_on_load(tmp_path, calibration, name, value, words):
+    """Issue 9: the stored numbers are checked on load like a station file's keys, not used as they are."""
+    path = tmp_path / "calibration.h5"
+    save_calibration(path, calibration)
+    with h5py.File(path, "r+") as f:
+        f.attrs[name] = value
+    with pytest.raises(CalibrationError) as info:
+        load_calibration(path)
+    assert words in str(info.value) and "run 'tactip calibrate' again" in str(info.value)
+
+
+def test_a_calibration_with_selected_pins_out_of_range_is_refused(tmp_path, calibration):
+    path = tmp_path / "calibration.h5"
+    save_calibration(path, calibration)
+    with h5py.File(path, "r+") as f:
+        f["selected_pins"][0] = len(calibration.reference_pins)
+    with pytest.raises(CalibrationError, match="selected_pins must index"):
+        load_calibration(path)
+
+
+def test_a_calibration_cut_short_says_so(tmp_path, calibration):
+    path = tmp_path / "calibration.h5"
+    save_calibration(path, calibration)
+    size = path.stat().st_size
+    with open(path, "r+b") as f:
+        f.truncate(size // 3)
+    with pytest.raises(CalibrationError, match=rf"cut short \({size // 3} of its {size} bytes"):
+        load_calibration(path)
