@@ -59,7 +59,9 @@ def run(args: argparse.Namespace) -> int:
     event = check_tap(config, depth_mm=args.depth, x_mm=x, y_mm=y, speed_mm_s=args.speed,
                       on_contact=lambda e: print(f"contact  t={e.time_s:.3f} s  z={e.pose.z:.3f} mm", flush=True))
     print(f"release  t={event.time_s:.3f} s  z={event.pose.z:.3f} mm")
-    if event.contact is not None:
+    if event.contact is not None and not event.contact.in_contact:
+        print(f"simulated contact: none, the pad stopped {-event.contact.indentation_mm:.3f} mm above the surface")
+    elif event.contact is not None:
         c = event.contact
         gap = f"gap {c.gap_name} width {c.gap_width_mm:g} mm offset {c.gap_offset_mm:.3f} mm" if c.gap_name else "no gap"
         print(f"simulated contact: indentation {c.indentation_mm:.3f} mm, {gap}")

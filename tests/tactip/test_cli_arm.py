@@ -24,6 +24,13 @@ def test_tap_reports_the_simulated_contact(capsys):
     assert "indentation 1.500 mm, gap w1.00 width 1 mm offset 1.000 mm" in out
 
 
+def test_a_tap_above_the_surface_reports_no_contact(capsys):
+    """A negative depth stops the pad above the part (a dry run): no contact, not a negative indentation."""
+    assert main(["arm", "tap", "--config", SIM, "--depth", "-1", "--at", "31", "0"]) == 0
+    out = capsys.readouterr().out
+    assert "simulated contact: none, the pad stopped 1.000 mm above the surface" in out and "indentation" not in out
+
+
 @pytest.mark.parametrize("argv, message", [
     (["--depth", "7"], "deeper than max_tap_depth 6 mm"),
     (["--depth", "1", "--at", "500", "0"], "x = 500 mm is above the maximum 200 mm"),
