@@ -3,7 +3,8 @@
 Every number is finite (``nan`` and ``inf`` are refused: they say nothing and poison what follows),
 whole numbers have an upper bound where a huge value would exhaust memory or time, and output files
 are checked before any work starts (an existing folder, a missing parent folder, a folder on a
-read-only file system or without write permission, an image format the plotting library cannot write). `check_memory` refuses a job whose arrays cannot fit in memory.
+read-only file system or without write permission, an image format the plotting library cannot write,
+a file holding collected taps or inspection results, which no output may replace). `check_memory` refuses a job whose arrays cannot fit in memory.
 """
 
 from __future__ import annotations
@@ -107,15 +108,44 @@ def output_file(text: str) -> Path:
     return path
 
 
+def _not_recorded_data(path: Path, text: str) -> None:
+    """Refuse an output over collected taps (a tactip-dataset file) or a results database: records that
+    took hours of collecting or inspecting, which no command of the project writes over."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(16)
+    except OSError:
+        return  # missing (the usual case) or unreadable: the writer reports what it meets
+    what = None
+    if head.startswith(b"SQLite format 3\0"):
+        what = "an SQLite database (inspection results?)"
+    elif head.startswith(b"\x89HDF\r\n\x1a\n"):
+        import h5py
+
+        try:
+            with h5py.File(path, "r") as f:
+                schema = f.attrs.get("schema")
+            schema = schema.decode() if isinstance(schema, bytes) else schema
+        except (OSError, ValueError):
+            schema = None
+        if schema == "tactip-dataset/1":
+            what = "collected taps (a tactip-dataset/1 file)"
+    if what:
+        raise argparse.ArgumentTypeError(f"{text!r} holds {what}; writing over it would destroy them: choose "
+                                         f"another name")
+
+
 def creatable_file(text: str) -> Path:
     """An argparse type: a file to write whose missing folders the writer creates; refused when it names a
-    folder or when one of its folders is a file."""
+    folder, when one of its folders is a file or cannot be written, or when it holds collected taps or
+    inspection results."""
     if not text.strip():
         raise argparse.ArgumentTypeError("must name a file, got ''")
     path = Path(text)
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
     _writable(_folders_or_missing(path.parent, text), text)
+    _not_recorded_data(path, text)
     return path
 
 

@@ -33,7 +33,8 @@ from __future__ import annotations
 import argparse
 import math
 
-from tactip.cli._types import float_in_range, fraction, int_in_range, non_negative_float, non_negative_int
+from tactip.cli._types import (float_in_range, fraction, int_in_range, non_negative_float, non_negative_int,
+                               output_file)
 
 HELP = "track the pins of a recorded video, find the taps and write positions and tap features to HDF5"
 
@@ -58,8 +59,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from pins import SENSOR_PRESETS
 
     parser.add_argument("video", metavar="VIDEO", help="video file (or folder of frames) to replay")
-    parser.add_argument("--out", required=True, metavar="RESULT.h5", help="HDF5 file to write")
-    parser.add_argument("--annotate", metavar="OUT.mp4", help="also write a video with pins, displacement "
+    parser.add_argument("--out", type=output_file, required=True, metavar="RESULT.h5", help="HDF5 file to write")
+    parser.add_argument("--annotate", type=output_file, metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
     parser.add_argument("--expected-pins", type=_pin_count, metavar="N",
                         help="pins expected in view on the rest frame: confirms the pin field found there (the summary says "

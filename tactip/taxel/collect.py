@@ -105,8 +105,10 @@ def simulate_taxel_datasets(out_dir, *, sensor: str = "fingertip", seed: int = 0
 
     simulator, where = _plan(sensor, seed, locations, taps_per_location)
     out = pathlib.Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     paths = TaxelDatasetPaths(out / "train.h5", out / "test.h5")
+    for path in (paths.train, paths.test):
+        _refuse_replacing_other_data(path)
+    out.mkdir(parents=True, exist_ok=True)
     for index, (name, path) in enumerate((("train", paths.train), ("test", paths.test))):
         with tqdm(total=len(where), unit="tap", desc=f"{sensor} {name}", disable=quiet, leave=False) as bar:
             def advance(done, bar=bar):
@@ -115,6 +117,31 @@ def simulate_taxel_datasets(out_dir, *, sensor: str = "fingertip", seed: int = 0
                                              progress=advance)
         save_dataset(path, dataset)
     return paths
+
+
+def _refuse_replacing_other_data(path: pathlib.Path) -> None:
+    """`TactipError` when ``path`` exists and is not an earlier taxel simulation (collected data is never replaced)."""
+    import json
+
+    import h5py
+
+    from tactip.errors import TactipError
+
+    if not path.exists():
+        return
+    what = "a file that is not a dataset"
+    try:
+        with h5py.File(path, "r") as f:
+            front_end = f.attrs.get("front_end")
+            front_end = front_end.decode() if isinstance(front_end, bytes) else front_end
+            sensor = json.loads(f.attrs.get("sensor", "{}"))
+            if front_end == "taxel" and isinstance(sensor, dict) and "simulator_seed" in sensor:
+                return  # an earlier simulation: simulating again replaces it
+            what = f"a {front_end!r} dataset" if front_end else what
+    except (OSError, ValueError, TypeError):
+        pass
+    raise TactipError(f"{path} already holds {what}, not a taxel simulation: simulating would replace it; "
+                      f"choose another --out folder")
 
 
 def write_taxel_test_stream(path, *, sensor: str = "fingertip", seed: int = 0, locations: int | None = None,

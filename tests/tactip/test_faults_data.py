@@ -109,13 +109,19 @@ def rows(db: Path) -> list[tuple]:
 def test_train_refuses_to_write_the_model_over_its_dataset(sim_station, tmp_path):
     data = tmp_path / "train.h5"
     shutil.copy(sim_station.train, data)
+    # Refused while parsing: the output holds collected taps (whoever's input they are).
     result = run_tactip("train", "train.h5", "--out", "train.h5", cwd=tmp_path, inputs=[data])
-    assert_refused(result, "train.h5", "input")
+    assert_refused(result, "train.h5", "collected taps", "destroy")
     os.link(data, tmp_path / "hardlink.h5")       # the same file under another name
     os.symlink(data, tmp_path / "symlink.h5")
     for alias in ("hardlink.h5", "symlink.h5"):
         result = run_tactip("train", "train.h5", "--out", alias, cwd=tmp_path, inputs=[data])
-        assert_refused(result, "input")
+        assert_refused(result, alias, "destroy")
+    # Another kind of input (a model trained earlier, given as the dataset) is refused as the input.
+    model = tmp_path / "model.h5"
+    shutil.copy(sim_station.model, model)
+    result = run_tactip("train", "model.h5", "--out", "model.h5", cwd=tmp_path, inputs=[model])
+    assert_refused(result, "model.h5", "input")
     assert len(load_dataset(data)) == len(load_dataset(sim_station.train))
 
 
@@ -127,7 +133,7 @@ def test_results_export_and_plot_refuse_to_write_over_the_database(sim_station, 
     for argv in (("export", "--db", db, "--csv", "--out", db), ("export", "--db", db, "--json", "--out", "results.sqlite"),
                  ("plot", "--db", db, "--out", "widths.png"), ("export", "--config", toml, "--csv", "--out", toml)):
         result = run_tactip("results", *argv, cwd=tmp_path, inputs=[db, toml])
-        assert_refused(result, "input")
+        assert_refused(result, "destroy")
     assert rows(db)[0][2] == "done"
 
 
@@ -139,7 +145,21 @@ def test_validate_refuses_json_or_plot_over_its_model_or_test_set(sim_station, t
     for argv in (("--json", "model.h5"), ("--json", "test.h5"), ("--plot", "curves.png")):
         result = run_tactip("validate", "model.h5", "test.h5", "--runs", "10", "--quiet", *argv, cwd=tmp_path,
                             inputs=[model, test])
-        assert_refused(result, argv[1], "input")
+        assert_refused(result, argv[1], "destroy")
+
+
+def test_an_output_over_collected_taps_or_results_is_refused(sim_station, inspected, tmp_path):
+    """Nothing overwritten: a typo naming a collection or the results database as an output is refused
+    (they are not the command's inputs, but hours of collecting or inspecting)."""
+    data, db = tmp_path / "test.h5", tmp_path / "results.sqlite"
+    shutil.copy(sim_station.test, data)
+    shutil.copy(inspected, db)
+    video = Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4"
+    for argv, flag in ((("train", sim_station.train, "--out", data), "--out"),
+                       (("replay", video, "--out", data, "--quiet"), "--out"),
+                       (("results", "export", "--db", inspected, "--csv", "--out", db), "--out")):
+        result = run_tactip(*argv, cwd=tmp_path, inputs=[data, db])
+        assert_refused(result, flag, "destroy", "collected taps" if argv[0] != "results" else "SQLite database")
 
 
 def test_record_and_calibrate_refuse_outputs_over_their_inputs(sim_station, tmp_path):

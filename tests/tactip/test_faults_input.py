@@ -212,6 +212,8 @@ CASES = [
                                                   "--out", "no/x.csv"], ["--out", "does not exist"]),
     ("validate a model cut short", ["validate", "{root}/model_cut.h5", "{root}/test.h5"],
      ["model_cut.h5", "cut short", "did not finish"]),
+    ("simulate over a TacTip collection", ["simulate", "taxel", "--out", "{root}", "--locations", "10", "--quiet"],
+     ["train.h5", "'tactip' dataset", "another --out"]),
     ("replay --rest-frame beyond the end", ["replay", "{root}/video.mp4", "--out", "r.h5", "--rest-frame", "86",
                                             "--quiet"], ["86 frames", "no rest frame 86"]),
 ]
