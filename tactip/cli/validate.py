@@ -38,6 +38,10 @@ MAX_TAPS = 1000
 HELP = "Monte Carlo validation of a model on a test dataset (speed-accuracy, fixation sweep)"
 
 
+#: Mean taps within which --sweep-fixation and --sweep-lateral take the best error, unless --tap-budget says.
+DEFAULT_TAP_BUDGET = 12
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser of ``tactip validate``."""
     parser.add_argument("model", metavar="MODEL.h5", help="model from tactip train (tactip-model/1)")
@@ -66,9 +70,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="robustness to lateral placement noise (paper 002 Fig. 11): errors with test taps "
                             "whose lateral offset is within [-SIGMA, SIGMA] mm, e.g. 0 0.25 0.5 1 2 (the test set "
                             "must be collected with [protocol] lateral_jitter_mm)")
-    parser.add_argument("--tap-budget", type=float_in_range(1, MAX_TAPS), default=12, metavar="TAPS",
+    parser.add_argument("--tap-budget", type=float_in_range(1, MAX_TAPS), default=None, metavar="TAPS",
                         help="mean taps within which --sweep-fixation takes the best error, 1..--max-taps "
-                             "(default 12)")
+                             f"(default {DEFAULT_TAP_BUDGET}, or --max-taps if fewer)")
     parser.add_argument("--json", type=output_file, metavar="OUT.json", help="write one entry per policy and threshold")
     parser.add_argument("--plot", type=image_file, metavar="OUT.png",
                         help="plot error against mean taps (or against fixation); .png, .pdf, .svg ...")
@@ -86,7 +90,9 @@ def run(args: argparse.Namespace) -> int:
     from tactip.cli._types import check_memory
     from tactip.errors import TactipError
 
-    if args.tap_budget > args.max_taps:
+    if args.tap_budget is None:  # the default follows a smaller --max-taps rather than refusing it
+        args.tap_budget = float(min(DEFAULT_TAP_BUDGET, args.max_taps))
+    elif args.tap_budget > args.max_taps:
         raise TactipError(f"--tap-budget {args.tap_budget:g} is out of range: mean taps must lie in 1..--max-taps "
                           f"({args.max_taps})")
     if args.deadline is not None and args.deadline > args.max_taps:

@@ -463,3 +463,12 @@ def test_validate_estimates_the_memory_of_its_runs(files, monkeypatch, capsys):
     assert main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--quiet"]) == 1
     err = capsys.readouterr().err
     assert "5000 Monte Carlo runs of 12 classes need about" in err and "use fewer --runs" in err
+
+
+def test_a_small_max_taps_is_not_refused_for_the_default_tap_budget(files, capsys):
+    """--max-taps 10 alone is valid: the default --tap-budget (12) follows it instead of being blamed."""
+    from tactip.cli import main
+
+    assert main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--max-taps", "10", "--runs", "10",
+                 "--quiet"]) == 0
+    assert "--tap-budget" not in capsys.readouterr().err
