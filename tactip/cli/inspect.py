@@ -49,9 +49,15 @@ def run(args: argparse.Namespace) -> int:
 
     from tactip.config import load_station_config, simulated_station_config
     from tactip.inspection import inspect_station
+    from tactip.errors import TactipError
     from tactip.procedures import model_is_prepared, prepare_model
 
     config = simulated_station_config(args.data_dir) if args.sim else load_station_config(args.config)
+    protocol = config.protocol
+    if args.start_depth is not None and not protocol.depth_min - 1e-9 <= args.start_depth <= protocol.depth_max + 1e-9:
+        # Refused before anything starts: no inspection row is opened for a depth the station cannot tap.
+        raise TactipError(f"--start-depth {args.start_depth:g} mm is outside the protocol range "
+                          f"{protocol.depth_min:g}..{protocol.depth_max:g} mm")
     if args.sim and not model_is_prepared(config.perception.model):
         if config.perception.model.exists():
             print(f"The model in {config.data_dir} has no recommended settings (an earlier preparation was "

@@ -33,7 +33,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from tactip.cli._types import (float_in_range, fraction, int_in_range, non_negative_float, non_negative_int,
+from tactip.cli._types import (float_in_range, int_in_range, non_negative_float, non_negative_int,
                                output_file)
 
 HELP = "track the pins of a recorded video, find the taps and write positions and tap features to HDF5"
@@ -92,8 +92,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "detection, pins, feature pins and scale (instead of --expected-pins, --mm-per-px, ...)")
     parser.add_argument("--model", metavar="MODEL.h5", help="the station's model (needs --calibration): "
                         "decide the gap width from the taps")
-    parser.add_argument("--decision-threshold", type=fraction, metavar="P",
-                        help="decision threshold on the width belief (default: the model's recommended, else 0.9)")
+    parser.add_argument("--decision-threshold", type=float_in_range(0, 1, low_open=True), metavar="P",
+                        help="decision threshold on the width belief, (0, 1] (default: the model's recommended, "
+                             "else 0.9)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
 

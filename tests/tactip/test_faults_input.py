@@ -214,6 +214,10 @@ CASES = [
      ["model_cut.h5", "cut short", "did not finish"]),
     ("simulate over a TacTip collection", ["simulate", "taxel", "--out", "{root}", "--locations", "10", "--quiet"],
      ["train.h5", "'tactip' dataset", "another --out"]),
+    ("replay --decision-threshold 0", ["replay", "{root}/video.mp4", "--out", "r.h5", "--decision-threshold", "0"],
+     ["--decision-threshold", "(0, 1]"]),
+    ("inspect --start-depth outside the protocol", ["inspect", "--config", "{root}/station.toml", "--start-depth",
+                                                    "100"], ["--start-depth", "100 mm", "0..5.5 mm"]),
     ("replay --rest-frame beyond the end", ["replay", "{root}/video.mp4", "--out", "r.h5", "--rest-frame", "86",
                                             "--quiet"], ["86 frames", "no rest frame 86"]),
 ]
