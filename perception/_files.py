@@ -90,7 +90,12 @@ def cut_short(exc: BaseException) -> tuple[int, int] | None:
 def temporary_name(path: pathlib.Path, suffix: str | None = None) -> pathlib.Path:
     """``.STEM.PID.partSUFFIX`` beside ``path`` (hidden, per process, keeping a suffix writers need)."""
     path = pathlib.Path(path)
-    return path.with_name(f".{path.stem}.{os.getpid()}.part{path.suffix if suffix is None else suffix}")
+    tail = f".{os.getpid()}.part{path.suffix if suffix is None else suffix}"
+    stem = path.stem
+    # A name near the file system's 255-byte limit leaves no room for the temporary's: shorten its stem.
+    while len(f".{stem}{tail}".encode()) > 255 and stem:
+        stem = stem[:-1]
+    return path.with_name(f".{stem}{tail}")
 
 
 def fsync_path(path: pathlib.Path, *, folder: bool = False) -> None:

@@ -258,6 +258,7 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
            "puts the bottom of the tap above arm.tap.approach_height")
 
     data_dir = _path(station.get("data_dir", "station_data"), base_dir)
+    _check(not data_dir.exists() or data_dir.is_dir(), "station.data_dir", f"'{data_dir}' is a file, not a folder")
     return StationConfig(
         name=str(station.get("name", path.stem if path else "station")),
         results=_path(station.get("results", data_dir / "results.sqlite"), base_dir),

@@ -10,6 +10,7 @@ a file holding collected taps or inspection results, which no output may replace
 from __future__ import annotations
 
 import argparse
+import errno
 import math
 import os
 from pathlib import Path
@@ -142,6 +143,7 @@ def creatable_file(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError("must name a file, got ''")
     path = Path(text)
+    _name_fits(path, text)
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
     _writable(_folders_or_missing(path.parent, text), text)
@@ -154,10 +156,21 @@ def output_folder(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError("must name a folder, got ''")
     path = Path(text)
+    _name_fits(path, text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a file, not a folder")
     _folders_or_missing(path.parent, text)
     return path
+
+
+def _name_fits(path: Path, text: str) -> None:
+    """Refuse a path whose file name or whole length the system cannot take (ENAMETOOLONG)."""
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            raise argparse.ArgumentTypeError(f"the name {text[:40]!r}... is too long for the file system "
+                                             f"({len(path.name.encode())} bytes; at most 255 per name)") from None
 
 
 def _folders_or_missing(folder: Path, text: str) -> Path:

@@ -90,6 +90,7 @@ def files(tmp_path_factory):
         return write_station(root, changed, name)
 
     variant("data_dir_5.toml", "station", data_dir=5)
+    variant("data_dir_file.toml", "station", data_dir=str(root / "text.txt"))
     variant("results_5.toml", "station", results=5)
     variant("sim_seed.toml", "sim", seed=-1)
     variant("protocol_seed.toml", "protocol", seed=-3)
@@ -218,6 +219,10 @@ CASES = [
      ["--decision-threshold", "(0, 1]"]),
     ("inspect --start-depth outside the protocol", ["inspect", "--config", "{root}/station.toml", "--start-depth",
                                                     "100"], ["--start-depth", "100 mm", "0..5.5 mm"]),
+    ("an output name too long", ["train", "{root}/train.h5", "--out", "b" * 260 + ".h5"],
+     ["--out", "too long for the file system", "at most 255"]),
+    ("data_dir is a file", ["calibrate", "--config", "{root}/data_dir_file.toml"],
+     ["station.data_dir", "text.txt", "is a file, not a folder"]),
     ("replay --rest-frame beyond the end", ["replay", "{root}/video.mp4", "--out", "r.h5", "--rest-frame", "86",
                                             "--quiet"], ["86 frames", "no rest frame 86"]),
 ]
@@ -476,3 +481,14 @@ def test_a_small_max_taps_is_not_refused_for_the_default_tap_budget(files, capsy
     assert main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--max-taps", "10", "--runs", "10",
                  "--quiet"]) == 0
     assert "--tap-budget" not in capsys.readouterr().err
+
+
+def test_an_output_name_near_the_length_limit_is_written(files, tmp_path, monkeypatch, capsys):
+    """A 250-byte name is valid: its temporary (``.NAME.PID.part.h5``) is shortened, not refused by the system."""
+    from tactip.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    name = "a" * 247 + ".h5"
+    assert main(["train", str(files / "train.h5"), "--out", name, "--locations", "6", "--bins", "10"]) == 0, \
+        capsys.readouterr().err
+    assert [p.name for p in tmp_path.iterdir()] == [name]
