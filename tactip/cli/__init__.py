@@ -8,14 +8,15 @@ Each subcommand lives in its own module of this package and exposes:
 
 Heavy imports (OpenCV, h5py, torch) belong inside ``run`` so that ``tactip --help`` stays fast.
 Errors from any package become one line on stderr and a non-zero exit; Ctrl-C prints "Stopped."
-and exits 1; SIGTERM is handled like Ctrl-C (work in progress is closed as aborted, reason
-"terminated") and exits 143. Output piped into ``head`` stops quietly; any other broken pipe (a
+and exits 1; SIGTERM and SIGHUP (the terminal closed) are handled like Ctrl-C (work in progress is
+closed as aborted, reason "terminated (SIGTERM)", temporary files removed) and exit 143 and 129. Output piped into ``head`` stops quietly; any other broken pipe (a
 worker pool, a robot socket) is an error like the others.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import importlib
 import os
@@ -81,9 +82,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with terminate_like_ctrl_c():
             return int(args._run(args) or 0)
-    except Terminated:
-        print("Stopped (terminated).", file=sys.stderr)
-        return 128 + signal.SIGTERM
+    except Terminated as exc:
+        with contextlib.suppress(OSError):  # after a hang-up the terminal may be gone
+            print("Stopped (terminated)." if exc.signum == signal.SIGTERM else
+                  f"Stopped ({exc.signal_name}: the terminal closed).", file=sys.stderr)
+        return 128 + exc.signum
     except KeyboardInterrupt:
         print("Stopped.", file=sys.stderr)
         return 1

@@ -534,17 +534,21 @@ def _wait_for_a_tap(db: Path, process: subprocess.Popen, timeout_s: float = 60) 
     pytest.fail("the inspection never reached its first tap")
 
 
-def test_sigterm_during_inspect_stores_the_inspection_as_aborted(sim_station, tmp_path):
+@pytest.mark.parametrize("signum, said", [(signal.SIGTERM, "Stopped (terminated)"),
+                                           (signal.SIGHUP, "Stopped (SIGHUP: the terminal closed)")])
+def test_sigterm_or_a_hang_up_during_inspect_stores_the_inspection_as_aborted(sim_station, tmp_path, signum, said):
+    """SIGTERM (kill, a service manager) and SIGHUP (the terminal or SSH session closed) act as Ctrl-C."""
     toml = station_copy(sim_station, tmp_path, datasets=False)
     db = tmp_path / "results.sqlite"
     process = _start_inspect(toml, tmp_path)
     _wait_for_a_tap(db, process)
-    process.send_signal(signal.SIGTERM)
+    process.send_signal(signum)
     out, err = process.communicate(timeout=60)
     assert "Traceback" not in err, err
-    assert process.returncode == 128 + signal.SIGTERM and "Stopped (terminated)" in err
+    assert process.returncode == 128 + signum and said in err
     statuses = [(r[2], r[3]) for r in rows(db)]
-    assert statuses[-1] == ("aborted", "terminated (SIGTERM)") and "running" not in [s for s, _ in statuses]
+    name = signal.Signals(signum).name
+    assert statuses[-1] == ("aborted", f"terminated ({name})") and "running" not in [s for s, _ in statuses]
     assert not leftover_temporaries(tmp_path)
 
 
