@@ -1,6 +1,7 @@
 """Record frames from a camera (or the synthetic TacTip) to a video file, to replay it later.
 
-A live camera needs --seconds or --frames. The recording can then be replayed:
+A live camera needs --seconds or --frames; an existing --out file is replaced only with --overwrite.
+The recording can then be replayed:
 tactip replay REC.mp4 --out REC.h5 --annotate REC_annotated.mp4.
 
 Examples:
@@ -26,17 +27,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="video to write: .mp4 or .avi (Motion-JPEG)")
     parser.add_argument("--seconds", type=positive_float, default=None, help="stop after this long")
     parser.add_argument("--frames", type=positive_int, default=None, help="stop after this many frames")
-    parser.add_argument("--frame-rate", type=float_in_range(0, 1000, low_open=True, unit="frames/s"), default=None,
-                        help="frames/s in the file header, up to 1000 (default: the source's)")
+    parser.add_argument("--frame-rate", type=float_in_range(0.01, 1000, unit="frames/s"), default=None,
+                        help="frames/s in the file header, 0.01..1000 (default: the source's)")
     parser.add_argument("--exposure", type=finite_float, default=None,
                         help="fixed camera exposure, where the driver allows")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace an existing --out file (without it an earlier recording is never replaced)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip record`."""
+    from tactip.errors import TactipError
     from tactip.record import record_video
 
+    from tactip._output import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([args.out], [args.source])  # the video recorded from is never replaced
+    if args.out.exists() and not args.overwrite:
+        # A recording cannot be made again: replacing one takes an explicit --overwrite.
+        raise TactipError(f"--out {str(args.out)!r} exists (an earlier recording?): give another name, or "
+                          f"--overwrite to replace it")
     options = {} if args.exposure is None else {"exposure": args.exposure}
     result = record_video(args.source, args.out, seconds=args.seconds, frames=args.frames,
                           frame_rate=args.frame_rate, progress=not args.quiet, **options)

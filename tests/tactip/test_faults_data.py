@@ -165,8 +165,14 @@ def test_an_output_over_collected_taps_or_results_is_refused(sim_station, inspec
 def test_record_and_calibrate_refuse_outputs_over_their_inputs(sim_station, tmp_path):
     video = tmp_path / "v.mp4"
     shutil.copy(Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4", video)
-    result = run_tactip("record", "v.mp4", "--out", "v.mp4", "--frames", "3", cwd=tmp_path, inputs=[video])
+    result = run_tactip("record", "v.mp4", "--out", "v.mp4", "--frames", "3", "--overwrite", cwd=tmp_path,
+                        inputs=[video])
     assert_refused(result, "v.mp4", "input")
+    # An earlier recording (not this command's input) is replaced only when asked.
+    earlier = tmp_path / "earlier.mp4"
+    shutil.copy(video, earlier)
+    result = run_tactip("record", "synthetic", "--out", earlier, "--frames", "3", cwd=tmp_path, inputs=[earlier])
+    assert_refused(result, "earlier.mp4", "exists", "--overwrite")
     toml = station_copy(sim_station, tmp_path / "station", datasets=False)
     for out in (toml, tmp_path / "station" / "model.h5"):
         result = run_tactip("calibrate", "--config", toml, "--out", out, cwd=tmp_path, inputs=[toml, out])
