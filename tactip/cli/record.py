@@ -22,7 +22,7 @@ HELP = "record a camera (or the synthetic TacTip) to a video file for replay"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser for `tactip record`."""
     parser.add_argument("source", metavar="SOURCE",
-                        help="camera index (0) or /dev/videoN, 'synthetic' or 'synthetic:PINS', or a video")
+                        help="camera index (0) or /dev/videoN, 'synthetic', 'synthetic:PINS' or 'synthetic:PRESET' (tactip-331, rim-ring-331, brown-127, radial-120 ...), or a video")
     parser.add_argument("--out", type=output_file, required=True, metavar="FILE",
                         help="video to write: .mp4 or .avi (Motion-JPEG)")
     parser.add_argument("--seconds", type=positive_float, default=None, help="stop after this long")
