@@ -494,3 +494,29 @@ def test_an_output_name_near_the_length_limit_is_written(files, tmp_path, monkey
     assert main(["train", str(files / "train.h5"), "--out", name, "--locations", "6", "--bins", "10"]) == 0, \
         capsys.readouterr().err
     assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+def test_warned_cases_of_the_issue_run_to_the_end_through_the_real_cli(files, tmp_path):
+    """Issue 9's cases that are not refusals: a count far off (--expected-pins 1..5 was a traceback), one black
+    frame in a video (every pin lost at once was a ValueError), and a rest frame taken during a tap (silent)."""
+    import cv2
+
+    detected = run_tactip("detect", IMAGE, "--expected-pins", "1", cwd=tmp_path, inputs=[IMAGE])
+    assert detected.returncode == 0 and "331 pins found, 1 expected" in detected.stderr, detected.stderr
+    # The sample video with frame 30 (mid-tap) black, as when the LEDs flicker off.
+    capture = cv2.VideoCapture(str(VIDEO))
+    frames = []
+    while (read := capture.read())[0]:
+        frames.append(read[1])
+    capture.release()
+    black = tmp_path / "black.mp4"
+    writer = cv2.VideoWriter(str(black), cv2.VideoWriter_fourcc(*"mp4v"), 20.0, frames[0].shape[1::-1], True)
+    for k, frame in enumerate(frames):
+        writer.write(frame * 0 if k == 30 else frame)
+    writer.release()
+    replayed = run_tactip("replay", black, "--out", "b.h5", cwd=tmp_path, inputs=[black])
+    assert replayed.returncode == 0 and "1 blank frame(s)" in replayed.stdout, replayed.stdout + replayed.stderr
+    during = run_tactip("replay", files / "video.mp4", "--out", "r.h5", "--rest-frame", "40", cwd=tmp_path,
+                        inputs=[files / "video.mp4"])
+    assert during.returncode == 0 and "rest frame 40 looks taken during a tap" in during.stdout, during.stdout
+    assert (tmp_path / "b.h5").exists() and (tmp_path / "r.h5").exists()
