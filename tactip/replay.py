@@ -453,9 +453,13 @@ def _track_video(source, *, rest_frame: int, expected_pins, params, calibration,
                 retired.append(np.zeros_like(gone) if away is None else np.array(away, dtype=bool) & gone)
                 blank.append(dark)
             elif frame.index == rest_frame:
-                tracker, rest, detected, params, field = _start(frame.image, params=params,
-                                                                expected_pins=expected_pins, calibration=calibration,
-                                                                warnings=warnings)
+                try:
+                    tracker, rest, detected, params, field = _start(frame.image, params=params,
+                                                                    expected_pins=expected_pins,
+                                                                    calibration=calibration, warnings=warnings)
+                except PinsError as exc:  # say which frame, and how to choose another (a black first frame)
+                    raise type(exc)(f"rest frame {rest_frame}: {exc}; give --rest-frame of a frame off contact "
+                                    f"with the pad lit and in view") from None
                 positions.append(rest.astype(np.float32))
                 lost.append(np.zeros(len(rest), dtype=bool))
                 retired.append(np.zeros(len(rest), dtype=bool))
