@@ -258,10 +258,15 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
            "puts the bottom of the tap above arm.tap.approach_height")
 
     data_dir = _path(station.get("data_dir", "station_data"), base_dir)
+    results = _path(station.get("results", data_dir / "results.sqlite"), base_dir)
     _check(not data_dir.exists() or data_dir.is_dir(), "station.data_dir", f"'{data_dir}' is a file, not a folder")
+    for folder in results.parents:  # the results folder is created if missing: a file in the way cannot be
+        if folder.exists():
+            _check(folder.is_dir(), "station.results", f"'{results}': '{folder}' is a file, not a folder")
+            break
     return StationConfig(
         name=str(station.get("name", path.stem if path else "station")),
-        results=_path(station.get("results", data_dir / "results.sqlite"), base_dir),
+        results=results,
         data_dir=data_dir, sensor=sensor, arm=arm, gaps=gaps, protocol=protocol,
         perception=perception, sim=sim, path=path, raw=data,
     )

@@ -91,6 +91,7 @@ def files(tmp_path_factory):
 
     variant("data_dir_5.toml", "station", data_dir=5)
     variant("data_dir_file.toml", "station", data_dir=str(root / "text.txt"))
+    variant("results_under_file.toml", "station", results=str(root / "text.txt" / "results.sqlite"))
     variant("results_5.toml", "station", results=5)
     variant("sim_seed.toml", "sim", seed=-1)
     variant("protocol_seed.toml", "protocol", seed=-3)
@@ -225,6 +226,8 @@ CASES = [
      ["--out", "too long for the file system", "at most 255"]),
     ("data_dir is a file", ["calibrate", "--config", "{root}/data_dir_file.toml"],
      ["station.data_dir", "text.txt", "is a file, not a folder"]),
+    ("results under a file", ["inspect", "--config", "{root}/results_under_file.toml"],
+     ["station.results", "text.txt' is a file, not a folder"]),
     ("replay --rest-frame beyond the end", ["replay", "{root}/video.mp4", "--out", "r.h5", "--rest-frame", "86",
                                             "--quiet"], ["86 frames", "no rest frame 86"]),
 ]
