@@ -3,7 +3,8 @@
 Tables (see ``samples/station_sim.toml`` for a documented example):
 
 ``[station]``
-    ``name``; ``results`` (SQLite path); ``data_dir`` (where calibration, datasets and models go).
+    ``name``; ``results`` (an SQLite file path, or a ``postgresql://user@host:port/db`` URL: one
+    database for a line of stations); ``data_dir`` (where calibration, datasets and models go).
 ``[sensor]``
     ``source`` (``"synthetic"``, a camera index such as ``0``, ``/dev/videoN``, or a video file);
     ``pins`` (expected pin count / synthetic preset); ``pad_diameter_mm``; ``frame_rate`` (frames/s);
@@ -141,7 +142,7 @@ class StationConfig:
     """A whole station, as loaded from its TOML file."""
 
     name: str
-    results: Path
+    results: Path | str  # an SQLite file, or a postgresql:// URL (str)
     data_dir: Path
     sensor: SensorConfig
     arm: Any  # arm.config.ArmConfig
@@ -260,7 +261,7 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     data_dir = _path(station.get("data_dir", "station_data"), base_dir)
     return StationConfig(
         name=str(station.get("name", path.stem if path else "station")),
-        results=_path(station.get("results", data_dir / "results.sqlite"), base_dir),
+        results=_results_location(station.get("results", data_dir / "results.sqlite"), base_dir),
         data_dir=data_dir, sensor=sensor, arm=arm, gaps=gaps, protocol=protocol,
         perception=perception, sim=sim, path=path, raw=data,
     )
@@ -330,6 +331,16 @@ def _table(data: dict, name: str, required: bool = False) -> dict:
     if not isinstance(data[name], dict):
         raise ConfigError(f"{name} must be a table [{name}]")
     return data[name]
+
+
+def _results_location(value, base_dir: Path) -> Path | str:
+    """A ``postgresql://`` URL as given (str), otherwise an SQLite path against ``base_dir``."""
+    text = str(value)
+    if text.lower().startswith(("postgresql://", "postgres://")):
+        return text
+    if "://" in text:
+        raise ConfigError(f"station.results must be a file path or a postgresql:// URL, got {text.split('://')[0]}://...")
+    return _path(value, base_dir)
 
 
 def _path(value, base_dir: Path) -> Path:

@@ -26,7 +26,7 @@ import numpy as np
 
 from .config import GapConfig, StationConfig
 from .errors import TactipError
-from .results import ResultsError, ResultsStore
+from .results import ResultsError, ResultsStoreBase, open_results
 
 __all__ = ["InspectionOutcome", "inspect_gap", "inspect_station", "load_station_model", "make_perceiver"]
 
@@ -102,7 +102,7 @@ def make_perceiver(config: StationConfig, model, *, policy: str | None = None, s
                      decision_threshold=threshold, max_taps=p.max_taps, rng=seed)
 
 
-def inspect_gap(station, perceiver, gap: GapConfig, store: ResultsStore, *, start_depth: float, policy: str,
+def inspect_gap(station, perceiver, gap: GapConfig, store: ResultsStoreBase, *, start_depth: float, policy: str,
                 seed: int | None = None, log: Callable[[str], None] = print) -> InspectionOutcome:
     """Inspect one gap (see the module docstring); returns the outcome, stored in ``store``.
 
@@ -194,7 +194,7 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
         f"decision threshold {perceiver.decision_threshold:g}, at most {perceiver.max_taps} taps")
     outcomes = []
     with (station if station is not None else Station(config, calibration=calibration)) as open_station:
-        store = ResultsStore(config.results)
+        store = open_results(config.results)
         try:
             stale = store.close_stale_inspections(config.name)
             if stale:
