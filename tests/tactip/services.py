@@ -102,3 +102,14 @@ class PostgresCluster:
             self._run([self.bin_dir / "pg_ctl", "-D", self.data, "-m", "immediate", "-w", "stop"])
         finally:
             shutil.rmtree(self.root, ignore_errors=True)
+
+
+def artefacts_dir(name: str) -> Path:
+    """A folder for a test's artefacts (screenshots, measured figures), kept after the run.
+
+    ``$TACTIP_TEST_ARTEFACTS/name``, by default ``out/test-artefacts/name`` in the repository.
+    """
+    root = os.environ.get("TACTIP_TEST_ARTEFACTS") or Path(__file__).resolve().parents[2] / "out" / "test-artefacts"
+    folder = Path(root) / name
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
