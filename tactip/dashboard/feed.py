@@ -34,7 +34,8 @@ class FeedState:
 
     def __init__(self, store):
         self.cursor = store.last_tap_id()
-        self.sent: set[int] = set()
+        # The taps within the look-back are history too: not to be sent again by the first poll.
+        self.sent: set[int] = {t["id"] for t in store.taps_after(max(0, self.cursor - LOOKBACK_IDS))}
         self.inspections = {r.id: (r.status, r.taps) for r in store.inspections(limit=WATCHED_INSPECTIONS)}
 
     def poll(self, store) -> list[tuple[str, dict]]:

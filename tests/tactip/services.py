@@ -92,7 +92,7 @@ class PostgresCluster:
         import psycopg
 
         with psycopg.connect(self.url(), autocommit=True) as db:
-            db.execute(f'DROP DATABASE IF EXISTS "{name}"')
+            db.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
             db.execute(f'CREATE DATABASE "{name}"')
         return self.url(name)
 

@@ -155,8 +155,8 @@ def test_a_token_guards_every_route(tmp_path):
 
 def test_taps_and_verdicts_stream_as_server_sent_events(tmp_path):
     db = tmp_path / "r.sqlite"
-    with open_results(db):
-        pass
+    with open_results(db) as store:
+        _verdict(store, "hood", 2.0)                                 # history: not streamed again
     events = []
 
     def listen(url):
