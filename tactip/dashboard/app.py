@@ -7,7 +7,7 @@ Routes (all GET; the app never writes):
 ``/api/state?window=N&verdicts=M``
     `tactip.dashboard.summary.dashboard_state` as JSON (history: works with the station stopped).
 ``/api/events``
-    Server-sent events from the `LiveFeed`: ``tap`` and ``inspection`` (JSON rows), a comment
+    Server-sent events from the `LiveFeed`: ``tap``, ``inspection`` and ``station`` (JSON rows), a comment
     every `KEEPALIVE_S`.
 ``/healthz``
     ``ok`` and the feed's status.

@@ -37,13 +37,17 @@ class FeedState:
         # The taps within the look-back are history too: not to be sent again by the first poll.
         self.sent: set[int] = {t["id"] for t in store.taps_after(max(0, self.cursor - LOOKBACK_IDS))}
         self.inspections = {r.id: (r.status, r.taps) for r in store.inspections(limit=WATCHED_INSPECTIONS)}
+        self.stations = {s["name"]: s for s in store.stations()}
 
     def poll(self, store) -> list[tuple[str, dict]]:
-        """New taps and new or changed inspections since the last poll, as (event, data) in store order.
-
-        Inspection events come first, so that a page knows an inspection before its taps.
+        """News since the last poll, as (event, data): ``station`` (a changed status row), ``inspection``
+        (new or changed), ``tap`` (new), in that order, so that a page knows an inspection before its taps.
         """
         events = []
+        for s in store.stations():
+            if self.stations.get(s["name"]) != s:
+                self.stations[s["name"]] = s
+                events.append(("station", s))
         for r in store.inspections(limit=WATCHED_INSPECTIONS):
             key = (r.status, r.taps)
             if self.inspections.get(r.id) != key:

@@ -54,8 +54,21 @@ def gap_trends(rows: Sequence[InspectionRow], *, window: int = 50) -> list[dict]
     return out
 
 
-def station_status(rows: Sequence[InspectionRow], *, now: _dt.datetime | None = None) -> list[dict]:
-    """Per station: inspecting (which gap) or idle, its model, counts and last activity (from the rows)."""
+def station_status(rows: Sequence[InspectionRow], *, heartbeats: Sequence[dict] = (),
+                   now: _dt.datetime | None = None) -> list[dict]:
+    """Per station: inspecting (which gap) or idle, its model, counts and last activity, arm and camera.
+
+    Parameters
+    ----------
+    rows : sequence of InspectionRow
+        Stored inspections, oldest first.
+    heartbeats : sequence of dict
+        The stations' own status rows (`ResultsStoreBase.stations`): ``state``, ``arm``,
+        ``frame_rate`` (frames/s), ``updated_at``; a station that wrote one but inspected nothing
+        is listed too.
+    now : datetime, optional
+        For ``idle_s`` (default the current UTC time).
+    """
     now = now or _dt.datetime.now(_dt.timezone.utc)
     stations: dict[str, dict] = {}
     for r in rows:
@@ -69,9 +82,21 @@ def station_status(rows: Sequence[InspectionRow], *, now: _dt.datetime | None = 
         s.update(model=r.model, last_inspection=r.id, last_activity=r.finished_at or r.started_at,
                  state="inspecting" if r.status == "running" else "idle",
                  gap=r.gap if r.status == "running" else None)
+    for beat in heartbeats:
+        s = stations.setdefault(beat["name"], dict(name=beat["name"], inspections=0, passed=0, failed=0, undecided=0,
+                                                   aborted=0, model=beat["model"], last_inspection=None,
+                                                   last_activity=beat["updated_at"], state="idle", gap=None))
+        s.update(station_state=beat["state"], arm=beat["arm"], frame_rate=beat["frame_rate"],
+                 heartbeat_at=beat["updated_at"])
+        if beat["model"]:
+            s["model"] = beat["model"]
+        if s["state"] != "inspecting" and beat["updated_at"] > s["last_activity"]:
+            s["last_activity"] = beat["updated_at"]
     for s in stations.values():
         last = _dt.datetime.fromisoformat(s["last_activity"])
         s["idle_s"] = None if s["state"] == "inspecting" else max(0.0, (now - last).total_seconds())
+        for key in ("station_state", "arm", "frame_rate", "heartbeat_at"):
+            s.setdefault(key, None)
     return sorted(stations.values(), key=lambda s: s["name"])
 
 
@@ -98,11 +123,12 @@ def dashboard_state(store: ResultsStoreBase, *, verdicts: int = 20, window: int 
         (of the newest model, when it can be read), ``last_tap_id``, ``station_info``, ``window``.
     """
     rows = store.inspections(limit=HISTORY_ROWS)
-    stations = station_status(rows)
+    stations = station_status(rows, heartbeats=store.stations())
     current = []
     for s in stations:
-        row = next(r for r in reversed(rows) if (r.station or "(unnamed)") == s["name"])
-        current.append(dict(row.as_dict(), tap_rows=store.taps(row.id)))
+        row = next((r for r in reversed(rows) if (r.station or "(unnamed)") == s["name"]), None)
+        if row is not None:
+            current.append(dict(row.as_dict(), tap_rows=store.taps(row.id)))
     finished = [r.as_dict() for r in reversed(rows) if r.status != "running"][:verdicts]
     model = next((r.model for r in reversed(rows) if r.model), None)
     return dict(stations=stations, current=current, verdicts=finished, gaps=gap_trends(rows, window=window),

@@ -21,13 +21,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._store import EXPORT_FIELDS, TAP_FIELDS, InspectionRow, ResultsError, ResultsStoreBase
+from ._store import EXPORT_FIELDS, STATION_FIELDS, TAP_FIELDS, InspectionRow, ResultsError, ResultsStoreBase
 from .capability import process_capability
 from .plot import plot_inspections
 from .sqlite import ResultsStore
 
 __all__ = ["ResultsStore", "ResultsStoreBase", "PostgresResultsStore", "InspectionRow", "EXPORT_FIELDS",
-           "TAP_FIELDS", "ResultsError", "plot_inspections", "open_results", "is_database_url",
+           "TAP_FIELDS", "STATION_FIELDS", "ResultsError", "plot_inspections", "open_results", "is_database_url",
            "describe_location", "process_capability"]
 
 _URL_SCHEMES = ("postgresql://", "postgres://")

@@ -33,6 +33,8 @@ EXPORT_FIELDS = (
 #: Columns of one tap as `ResultsStoreBase.taps` and `ResultsStoreBase.taps_after` return them.
 TAP_FIELDS = ("tap", "depth_mm", "location_estimate", "identity_estimate", "belief", "what_belief",
               "where_belief", "at")
+#: Columns of a station's status row (`ResultsStoreBase.update_station`, `ResultsStoreBase.stations`).
+STATION_FIELDS = ("name", "state", "arm", "frame_rate", "model", "host", "pid", "updated_at")
 
 
 class ResultsError(TactipError):
@@ -193,7 +195,39 @@ class ResultsStoreBase:
             (reason, finished, _seconds(started, finished), inspection_id),
         )
 
+    def update_station(self, name: str, *, state: str, arm: str | None = None, frame_rate: float | None = None,
+                       model: str | None = None) -> None:
+        """Store the status of station ``name`` (one row per station, replaced at each call).
+
+        Parameters
+        ----------
+        name : str
+            The station (``[station] name``).
+        state : str
+            ``ready``, ``inspecting``, ``stopped`` or ``stopped: REASON``.
+        arm : str, optional
+            The arm as its controller reports it: ``"BACKEND: ready"`` or ``"BACKEND: PROBLEM"``.
+        frame_rate : float, optional
+            The camera's frame rate, frames/s.
+        model : str, optional
+            The perception model file in use.
+        """
+        self._refuse_if_read_only()
+        self._write(
+            f"INSERT INTO stations ({', '.join(STATION_FIELDS)}) VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (name) "
+            f"DO UPDATE SET {', '.join(f'{k} = excluded.{k}' for k in STATION_FIELDS[1:])}",
+            (name, state, arm, _opt(frame_rate), model, _HOST, os.getpid(), _now()),
+        )
+
     # -- reading -----------------------------------------------------------------------------
+    def stations(self) -> list[dict]:
+        """The stations' status rows (keys `STATION_FIELDS`), by name; [] for a database from before them."""
+        try:
+            rows = self._query(f"SELECT {', '.join(STATION_FIELDS)} FROM stations ORDER BY name")
+        except ResultsError:  # no stations table: written by an earlier version, opened read-only
+            return []
+        return [dict(zip(STATION_FIELDS, r)) for r in rows]
+
     def inspections(self, *, limit: int | None = None, station: str | None = None) -> list[InspectionRow]:
         """Stored inspections, oldest first (the newest ``limit`` when given; of one ``station`` if given)."""
         where, params = ("", ()) if station is None else (" WHERE station = ?", (station,))

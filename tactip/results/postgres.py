@@ -66,6 +66,16 @@ CREATE TABLE IF NOT EXISTS {SCHEMA_NAME}.taps (
     UNIQUE (inspection_id, tap)
 );
 CREATE INDEX IF NOT EXISTS inspections_by_station ON {SCHEMA_NAME}.inspections(station, id);
+CREATE TABLE IF NOT EXISTS {SCHEMA_NAME}.stations (
+    name TEXT PRIMARY KEY,
+    state TEXT NOT NULL,
+    arm TEXT,
+    frame_rate DOUBLE PRECISION,
+    model TEXT,
+    host TEXT,
+    pid INTEGER,
+    updated_at TEXT NOT NULL
+);
 """
 
 

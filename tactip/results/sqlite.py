@@ -24,6 +24,10 @@ taps
     ``inspection_id``, ``tap`` (1-based), ``depth_mm`` (commanded depth of the tap),
     ``location_estimate`` (mm), ``identity_estimate`` (mm), ``belief``, ``what_belief`` and
     ``where_belief`` (JSON lists: the marginal beliefs after the tap), ``at`` (ISO time).
+stations
+    one row per station, replaced as it works: ``name``, ``state`` (ready, inspecting, stopped[: reason]),
+    ``arm`` (``BACKEND: ready`` or what stops it), ``frame_rate`` (camera, frames/s), ``model``,
+    ``host``, ``pid``, ``updated_at``.
 """
 
 from __future__ import annotations
@@ -79,6 +83,16 @@ CREATE TABLE IF NOT EXISTS taps (
     at TEXT NOT NULL
 );
 CREATE INDEX IF NOT EXISTS taps_by_inspection ON taps(inspection_id, tap);
+CREATE TABLE IF NOT EXISTS stations (
+    name TEXT PRIMARY KEY,
+    state TEXT NOT NULL,
+    arm TEXT,
+    frame_rate REAL,
+    model TEXT,
+    host TEXT,
+    pid INTEGER,
+    updated_at TEXT NOT NULL
+);
 """
 
 
@@ -176,7 +190,7 @@ class ResultsStore(ResultsStoreBase):
                 raise self._error(exc, "reading") from None
             # A database whose creation was cut short (disk full) holds some of our tables and no schema yet.
             ours = (schema is not None and str(schema).startswith("tactip-results/")) or \
-                tables <= {"meta", "inspections", "taps", "sqlite_sequence"}
+                tables <= {"meta", "inspections", "taps", "stations", "sqlite_sequence"}
             if tables - {"sqlite_sequence"} and not ours:
                 names = ", ".join(sorted(tables - {"sqlite_sequence"})[:5])
                 raise ResultsError(f"{path} is another SQLite database (tables {names}), not tactip results; "

@@ -110,6 +110,8 @@ def test_the_state_shows_the_history_with_the_station_stopped(tmp_path):
             _verdict(store, "door", w)
         running = store.start_inspection("hood", nominal_width=2.0, tolerance=0.2, policy="active", station="cell-2")
         store.record_tap(running, tap=1, depth_mm=3.0, identity_estimate=2.1, belief=0.4, what_belief=[0.4, 0.6])
+        store.update_station("cell-2", state="inspecting", arm="ur: ready", frame_rate=29.97, model="m.h5")
+        store.update_station("cell-3", state="stopped: protective stop", arm="ur: protective stop")
     app = make_app(lambda: open_results(db, read_only=True), results_name=str(db))
     with DashboardServer(app, port=0) as server:
         client = Client(server)
@@ -119,8 +121,10 @@ def test_the_state_shows_the_history_with_the_station_stopped(tmp_path):
         assert client.get("/api/state", method="POST")[0] == 405                # read-only: GET only
     assert page[0] == 200 and "EventSource" in page[1]
     assert [v["estimated_width"] for v in state["verdicts"]] == [0.9, 1.1, 1.0]   # newest first, no running row
-    assert [(s["name"], s["state"], s["gap"]) for s in state["stations"]] == [("cell-1", "idle", None),
-                                                                          ("cell-2", "inspecting", "hood")]
+    assert [(s["name"], s["state"], s["gap"], s["arm"], s["frame_rate"]) for s in state["stations"]] == [
+        ("cell-1", "idle", None, None, None), ("cell-2", "inspecting", "hood", "ur: ready", 29.97),
+        ("cell-3", "idle", None, "ur: protective stop", None)]                 # a status row, no inspections yet
+    assert state["stations"][2]["station_state"] == "stopped: protective stop"
     cell2 = next(c for c in state["current"] if c["station"] == "cell-2")
     assert cell2["tap_rows"][0]["what_belief"] == [0.4, 0.6] and state["results"] == str(db)
     assert state["gaps"][0]["capability"] == process_capability([1.1, 0.9], nominal_mm=1.0,
@@ -179,10 +183,12 @@ def test_taps_and_verdicts_stream_as_server_sent_events(tmp_path):
         while not events:                                           # the stream said hello
             time.sleep(0.02)
         with open_results(db) as store:
+            store.update_station("cell-1", state="ready", arm="sim: ready", frame_rate=20.0)
             i = _verdict(store, "door", 1.05)
         listener.join(20)
     kinds = [name for name, _ in events]
-    assert kinds[:2] == ["hello", "inspection"] and kinds.count("tap") == 1      # the inspection before its tap
+    assert kinds[:3] == ["hello", "station", "inspection"] and kinds.count("tap") == 1   # an inspection before its tap
+    assert events[1][1]["arm"] == "sim: ready" and events[1][1]["state"] == "ready"
     tap = events[kinds.index("tap")][1]
     assert (tap["inspection_id"], tap["tap"], tap["gap"], tap["station"], tap["what_belief"]) == \
         (i, 1, "door", "cell-1", [0.1, 0.9])

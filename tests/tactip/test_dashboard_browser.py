@@ -83,6 +83,11 @@ def test_a_simulated_inspection_shows_live_in_the_browser(browser, sim_station, 
                                f".length === {len(stored_taps)}", timeout=20_000)
         expected = {True: "PASS", False: "FAIL", None: "UNDECIDED"}[live.passed]
         assert page.locator(f"{verdict} .verdict").inner_text() == expected
+        station = page.locator("#stations tr[data-station='cell-1']")     # its status row: arm, camera
+        page.wait_for_function("document.querySelector(\"#stations tr[data-station='cell-1'] .state\")"
+                               ".textContent === 'stopped'", timeout=20_000)
+        assert station.locator(".arm").inner_text() == "sim: ready"
+        assert station.locator(".rate").inner_text() == f"{sim_station.config.sensor.frame_rate:.1f}"
         assert card.locator(".current-verdict .verdict").inner_text() == expected
         shown = [[c.inner_text() for c in r.locator("td").all()][:4] for r in card.locator(".tap-table tbody tr").all()]
         assert shown == [[str(t["tap"]), f"{t['depth_mm']:.2f}", f"{t['identity_estimate']:.2f}", f"{t['belief']:.3f}"]

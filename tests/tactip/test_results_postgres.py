@@ -49,13 +49,22 @@ def test_the_same_writes_give_the_same_rows_in_sqlite_and_postgresql(tmp_path, p
             store.record_tap(aborted, tap=1, depth_mm=2.0, what_belief=[0.3, 0.7])
             store.abort_inspection(aborted, "protective stop")
             assert verdicts == [True, False, None]
-            stored[str(where)] = _comparable(store)
+            store.update_station("line-1", state="ready", arm="sim: ready", frame_rate=20.0, model="m.h5")
+            store.update_station("line-2", state="inspecting", arm="ur: ready", frame_rate=29.97)
+            store.update_station("line-1", state="stopped: protective stop", arm="sim: protective stop",
+                                 frame_rate=20.0, model="m.h5")             # one row per station, replaced
+            stations = [{k: v for k, v in s.items() if k not in ("updated_at", "host", "pid")}
+                        for s in store.stations()]
+            stored[str(where)] = (*_comparable(store), stations)
             assert [r.station for r in store.inspections(station="line-2")] == ["line-2"]
             assert [r.gap for r in store.inspections(limit=2)] == ["g3", "g4"]
             assert [t["tap"] for t in store.taps_after(0)] == [1, 2, 1, 2, 1, 2, 1]
     sqlite_rows, postgres_rows = stored.values()
     assert postgres_rows == sqlite_rows
-    rows, taps = postgres_rows
+    rows, taps, stations = postgres_rows
+    assert stations == [dict(name="line-1", state="stopped: protective stop", arm="sim: protective stop",
+                             frame_rate=20.0, model="m.h5"),
+                        dict(name="line-2", state="inspecting", arm="ur: ready", frame_rate=29.97, model=None)]
     assert rows[3]["status"] == "aborted" and rows[3]["reason"] == "protective stop" and rows[3]["taps"] == 1
     assert taps[0]["what_belief"] == [0.4, 0.6] and taps[0]["location_estimate"] == 1.5
 
@@ -185,6 +194,9 @@ def test_two_simulated_stations_inspecting_at_once_store_every_tap_and_verdict_o
             assert set(printed_verdicts) == set(gaps) and len(printed_taps) >= len(gaps)
             assert stored_taps == printed_taps                       # every tap, once, with its values
             assert stored_verdicts == printed_verdicts
+        assert [(s["name"], s["state"], s["arm"], s["frame_rate"], s["model"]) for s in store.stations()] == \
+            [(name, "stopped", "sim: ready", sim_station.config.sensor.frame_rate, str(sim_station.model))
+             for name in names]
     # tactip results reads the shared database, all of it or one station's rows
     code, out, err = run_cli(["results", "list", "--db", results, "--station", "cell-2"])
     assert code == 0, err
