@@ -57,6 +57,7 @@ class DashboardServer:
         self._socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             self._socket.bind((host, int(port)))
+            self._socket.listen(128)  # connections wait from now on, until the server takes them
         except OSError as exc:
             self._socket.close()
             raise DashboardError(f"cannot serve on {host}:{port} ({exc.strerror or exc}): is another "

@@ -203,3 +203,30 @@ def test_serve_help_names_the_guard(capsys):
         main(["serve", "--help"])
     text = capsys.readouterr().out
     assert done.value.code == 0 and "--token" in text and "127.0.0.1" in text and "read-only" in text
+
+
+def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path):
+    import signal
+    import subprocess
+    import sys
+
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        _verdict(store, "door", 1.05)
+    serve = subprocess.Popen([sys.executable, "-m", "tactip.cli", "serve", "--db", str(db), "--port", "0"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        first = serve.stdout.readline()                              # "dashboard of DB on http://127.0.0.1:PORT/ ..."
+        assert first.startswith(f"dashboard of {db} on http://127.0.0.1:"), first + serve.stderr.read()
+        url = first.split(" on ")[1].split()[0]
+        state = json.loads(urllib.request.urlopen(url + "api/state", timeout=20).read())
+        assert [v["gap"] for v in state["verdicts"]] == ["door"]
+        stream = urllib.request.urlopen(url + "api/events", timeout=20)  # an open event stream...
+        assert stream.readline().startswith(b"event: hello")
+        serve.send_signal(signal.SIGINT)                             # ...does not hold Ctrl-C up
+        out, err = serve.communicate(timeout=20)
+        stream.close()
+    finally:
+        if serve.poll() is None:
+            serve.kill()
+    assert serve.returncode == 1 and err == "Stopped.\n"
