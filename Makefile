@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench clean services
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -17,8 +17,28 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/tactip inspect --sim
 
-test: $(STAMP)
+test: $(STAMP) services
 	$(BIN)/python -m pytest -q
+
+# The real services some tests use: PostgreSQL (the tests make throwaway clusters of their own on a
+# local socket) and headless Chromium with its driver (the dashboard's browser test). Installed from
+# Debian's packages when missing (as root); otherwise their tests skip and say why. Idempotent, quiet.
+services:
+	@missing=""; \
+	ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1 || missing="$$missing postgresql"; \
+	command -v chromium >/dev/null 2>&1 || missing="$$missing chromium"; \
+	command -v chromedriver >/dev/null 2>&1 || missing="$$missing chromium-driver"; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "make services: installing$$missing (apt-get)"; \
+	    export DEBIAN_FRONTEND=noninteractive; \
+	    apt-get install -y -qq -o DPkg::Lock::Timeout=300 --no-install-recommends $$missing >/dev/null 2>&1 || \
+	    { apt-get update -qq >/dev/null 2>&1 && apt-get install -y -qq -o DPkg::Lock::Timeout=300 --no-install-recommends $$missing >/dev/null 2>&1; } || \
+	    echo "make services: could not install$$missing; the tests that need them will be skipped"; \
+	  else \
+	    echo "make services:$$missing missing and not root: the tests that need them will be skipped"; \
+	  fi; \
+	fi
 
 bench: $(STAMP)
 	for script in bench/*.py; do $(BIN)/python $$script || exit 1; done

@@ -3,7 +3,8 @@
 Tables (see ``samples/station_sim.toml`` for a documented example):
 
 ``[station]``
-    ``name``; ``results`` (SQLite path); ``data_dir`` (where calibration, datasets and models go).
+    ``name``; ``results`` (an SQLite file path, or a ``postgresql://user@host:port/db`` URL: one
+    database for a line of stations); ``data_dir`` (where calibration, datasets and models go).
 ``[sensor]``
     ``source`` (``"synthetic"``, a camera index such as ``0``, ``/dev/videoN``, or a video file);
     ``pins`` (expected pin count / synthetic preset); ``pad_diameter_mm``; ``frame_rate`` (frames/s);
@@ -141,7 +142,7 @@ class StationConfig:
     """A whole station, as loaded from its TOML file."""
 
     name: str
-    results: Path
+    results: Path | str  # an SQLite file, or a postgresql:// URL (str)
     data_dir: Path
     sensor: SensorConfig
     arm: Any  # arm.config.ArmConfig
@@ -258,9 +259,9 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
            "puts the bottom of the tap above arm.tap.approach_height")
 
     data_dir = _path(station.get("data_dir", "station_data"), base_dir)
-    results = _path(station.get("results", data_dir / "results.sqlite"), base_dir)
+    results = _results_location(station.get("results", data_dir / "results.sqlite"), base_dir)
     _check(not data_dir.exists() or data_dir.is_dir(), "station.data_dir", f"'{data_dir}' is a file, not a folder")
-    for folder in results.parents:  # the results folder is created if missing: a file in the way cannot be
+    for folder in (results.parents if isinstance(results, Path) else ()):  # created if missing: a file in the way cannot be
         if folder.exists():
             _check(folder.is_dir(), "station.results", f"'{results}': '{folder}' is a file, not a folder")
             break
@@ -336,6 +337,16 @@ def _table(data: dict, name: str, required: bool = False) -> dict:
     if not isinstance(data[name], dict):
         raise ConfigError(f"{name} must be a table [{name}]")
     return data[name]
+
+
+def _results_location(value, base_dir: Path) -> Path | str:
+    """A ``postgresql://`` URL as given (str), otherwise an SQLite path against ``base_dir``."""
+    text = str(value)
+    if text.lower().startswith(("postgresql://", "postgres://")):
+        return text
+    if "://" in text:
+        raise ConfigError(f"station.results must be a file path or a postgresql:// URL, got {text.split('://')[0]}://...")
+    return _path(value, base_dir)
 
 
 def _path(value, base_dir: Path) -> Path:

@@ -26,7 +26,7 @@ import numpy as np
 
 from .config import GapConfig, StationConfig
 from .errors import TactipError
-from .results import ResultsError, ResultsStore
+from .results import ResultsError, ResultsStoreBase, open_results
 
 __all__ = ["InspectionOutcome", "inspect_gap", "inspect_station", "load_station_model", "make_perceiver"]
 
@@ -102,7 +102,7 @@ def make_perceiver(config: StationConfig, model, *, policy: str | None = None, s
                      decision_threshold=threshold, max_taps=p.max_taps, rng=seed)
 
 
-def inspect_gap(station, perceiver, gap: GapConfig, store: ResultsStore, *, start_depth: float, policy: str,
+def inspect_gap(station, perceiver, gap: GapConfig, store: ResultsStoreBase, *, start_depth: float, policy: str,
                 seed: int | None = None, log: Callable[[str], None] = print) -> InspectionOutcome:
     """Inspect one gap (see the module docstring); returns the outcome, stored in ``store``.
 
@@ -194,8 +194,11 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
         f"decision threshold {perceiver.decision_threshold:g}, at most {perceiver.max_taps} taps")
     outcomes = []
     with (station if station is not None else Station(config, calibration=calibration)) as open_station:
-        store = ResultsStore(config.results)
+        store = open_results(config.results)
+        model_name = str(config.perception.model)
+        state = "stopped"
         try:
+            store.update_station(config.name, state="ready", model=model_name, **station_status(open_station))
             stale = store.close_stale_inspections(config.name)
             if stale:
                 log(f"closed {len(stale)} inspection(s) left 'running' by a process that ended without closing "
@@ -204,12 +207,42 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
                 start = start_depth if start_depth is not None else config.perception.start_depth
                 start = float(rng.choice(depths)) if start is None else float(start)
                 gap_seed = None if seed is None else int(rng.integers(2**62))
+                store.update_station(config.name, state="inspecting", model=model_name,
+                                     **station_status(open_station))
                 outcome = inspect_gap(open_station, perceiver, gap, store, start_depth=start, policy=name,
                                       seed=gap_seed, log=log)
                 log(f"{gap.name}: width {outcome.estimated_width:.2f} mm (nominal {gap.nominal_width:.2f} "
                     f"+- {gap.tolerance:.2f}), belief {outcome.belief:.3f}, {outcome.taps} taps, "
                     f"{outcome.duration_s:.1f} s -> {outcome.verdict}")
                 outcomes.append(outcome)
+        except BaseException as exc:
+            from ._signals import interruption_reason
+
+            state = f"stopped: {interruption_reason(exc)}"
+            raise
         finally:
+            try:  # the station's last word; never in the way of the error being reported
+                store.update_station(config.name, state=state, model=model_name, **station_status(open_station))
+            except (OSError, ResultsError):
+                pass
             store.close()
     return outcomes
+
+
+def station_status(station) -> dict:
+    """The arm and camera of an open station as the results store's station row holds them.
+
+    Returns
+    -------
+    dict
+        ``arm``: ``"BACKEND: ready"`` or ``"BACKEND: PROBLEM"`` (as the controller reports it);
+        ``frame_rate``: the camera's frame rate, frames/s (None when unknown).
+    """
+    backend = station.config.arm.backend
+    try:
+        state = station.arm.state()
+        arm = f"{backend}: ready" if state.ready else f"{backend}: {state.problem}"
+    except Exception as exc:  # a controller that does not answer is a status too
+        arm = f"{backend}: no state ({' '.join(str(exc).split()) or type(exc).__name__})"
+    rate = getattr(station.camera, "frame_rate", None)
+    return dict(arm=arm, frame_rate=None if rate is None else float(rate))

@@ -34,6 +34,7 @@ COMMANDS: dict[str, str] = {
     "validate": "tactip.cli.validate",
     "inspect": "tactip.cli.inspect",
     "results": "tactip.cli.results",
+    "serve": "tactip.cli.serve",
     "arm": "tactip.cli.arm",
     "simulate": "tactip.cli.simulate",
 }

@@ -3,7 +3,7 @@
 For each [[gaps]] entry: move over the gap, tap, update the (depth, width) beliefs, move in depth
 as the policy asks, until the width belief crosses the decision threshold or max_taps is reached
 (then the result is 'undecided'); judge the width against nominal +- tolerance. Every tap and
-verdict goes to the SQLite results database as it happens ('tactip results list').
+verdict goes to the results database (SQLite, or PostgreSQL for a line) as it happens ('tactip results list').
 An arm fault stops the arm, records the inspection as aborted with the reason, and exits 1.
 
 --sim runs the packaged simulated station (synthetic TacTip on a simulated arm over a plate of
@@ -19,6 +19,7 @@ Examples:
 from __future__ import annotations
 
 import argparse
+import shlex
 from pathlib import Path
 
 from tactip.cli._types import finite_float, seed
@@ -73,7 +74,10 @@ def run(args: argparse.Namespace) -> int:
     outcomes = inspect_station(config, policy=args.policy, seed=args.seed, gaps=args.gap,
                                start_depth=args.start_depth, log=log)
     print(summary(outcomes, time.monotonic() - started))
-    print(f"results: {config.results}  (tactip results list --db {config.results})")
+    from tactip.results import describe_location
+
+    where = describe_location(config.results)
+    print(f"results: {where}  (tactip results list --db {shlex.quote(where)})")
     return 0
 
 

@@ -1,7 +1,9 @@
 """List and export stored inspection results.
 
-The station writes every inspection (and every tap, with its beliefs) to an SQLite database as it
-happens. Name the database with --config (the station's [station] results) or --db.
+The station writes every inspection (and every tap, with its beliefs) to its results database as it
+happens: an SQLite file, or a PostgreSQL database shared by a line of stations. Name the database
+with --config (the station's [station] results) or --db (a file, or a postgresql:// URL); --station
+keeps one station's rows.
 
 Examples:
   tactip results list --config samples/station_sim.toml
@@ -9,6 +11,7 @@ Examples:
   tactip results export --config samples/station_sim.toml --csv --out results.csv
   tactip results export --db results.sqlite --json
   tactip results plot --config samples/station_sim.toml --out widths.png --last 20
+  tactip results list --db postgresql://tactip@db.plant/line3 --station cell-2
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from pathlib import Path
 
 from tactip.cli._types import image_file, int_at_least, output_file
 
-HELP = "list or export stored inspection results (SQLite)"
+HELP = "list or export stored inspection results (SQLite or PostgreSQL)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,7 +35,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         p = sub.add_parser(name, help=text, description=text)
         where = p.add_mutually_exclusive_group(required=True)
         where.add_argument("--config", type=Path, help="station TOML file (its [station] results database)")
-        where.add_argument("--db", type=Path, help="results database file")
+        where.add_argument("--db", type=_location, metavar="FILE|URL",
+                           help="results database: an SQLite file or a postgresql:// URL")
+        p.add_argument("--station", default=None, metavar="NAME", help="only this station's inspections")
         if name == "list":
             p.add_argument("--limit", type=int_at_least(1), default=None, metavar="N",
                            help="show only the newest N inspections (N >= 1)")
@@ -49,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip results list|export`."""
-    from tactip.results import ResultsStore
+    from tactip.results import is_database_url, open_results
 
     path = args.db
     if args.config is not None:
@@ -61,31 +66,42 @@ def run(args: argparse.Namespace) -> int:
         from tactip._output import refuse_overwriting_inputs
 
         # The database and its WAL companions are inputs: an output over one of them would destroy it.
-        refuse_overwriting_inputs([out], [path, Path(f"{path}-wal"), Path(f"{path}-shm"), args.config])
-    with ResultsStore(path, read_only=True) as store:
+        files = [] if is_database_url(path) else [path, Path(f"{path}-wal"), Path(f"{path}-shm")]
+        refuse_overwriting_inputs([out], [*files, args.config])
+    inputs = [] if is_database_url(path) else [path]
+    with open_results(path, read_only=True) as store:
         if args.action == "list":
-            print(format_table(store.inspections(limit=args.limit)))
+            print(format_table(store.inspections(limit=args.limit, station=args.station)))
             return 0
         if args.action == "plot":
             from tactip.results import plot_inspections
 
-            plot_inspections(store.inspections(limit=args.last), args.out, inputs=[path])
+            plot_inspections(store.inspections(limit=args.last, station=args.station), args.out, inputs=inputs)
             print(f"wrote {args.out}")
             return 0
-        text = store.export_csv() if args.csv else store.export_json() + "\n"
+        rows = store.inspections(station=args.station)
+        text = store.export_csv(rows) if args.csv else store.export_json(rows) + "\n"
     if args.out is None:
         sys.stdout.write(text)
     else:
         from tactip._output import write_text_atomic
 
-        write_text_atomic(args.out, text, inputs=[path])
+        write_text_atomic(args.out, text, inputs=inputs)
         print(f"wrote {args.out}", file=sys.stderr)
     return 0
 
 
+def _location(text: str) -> Path | str:
+    """--db: a postgresql:// URL as given, else a file path."""
+    from tactip.results import is_database_url
+
+    return text if is_database_url(text) else Path(text)
+
+
 def format_table(rows) -> str:
     """Inspections as a fixed-width text table (mm, belief 0-1)."""
-    head = f"{'id':>4}  {'gap':<12} {'nominal':>7} {'estimate':>8} {'belief':>6} {'taps':>4}  {'result':<9} {'policy':<10} started"
+    head = (f"{'id':>4}  {'station':<10} {'gap':<12} {'nominal':>7} {'estimate':>8} {'belief':>6} {'taps':>4}  "
+            f"{'result':<9} {'policy':<10} started")
     lines = [head, "-" * len(head)]
     for r in rows:
         if r.status == "aborted":
@@ -96,7 +112,7 @@ def format_table(rows) -> str:
             result = {True: "pass", False: "FAIL", None: "undecided"}[r.passed]
         est = "" if r.estimated_width is None else f"{r.estimated_width:.2f}"
         belief = "" if r.belief is None else f"{r.belief:.3f}"
-        lines.append(f"{r.id:>4}  {r.gap:<12} {r.nominal_width:>7.2f} {est:>8} {belief:>6} {r.taps:>4}  "
+        lines.append(f"{r.id:>4}  {r.station or '':<10} {r.gap:<12} {r.nominal_width:>7.2f} {est:>8} {belief:>6} {r.taps:>4}  "
                      f"{result:<9} {r.policy:<10} {r.started_at[:19].replace('T', ' ')}")
     if len(lines) == 2:
         lines.append("(no inspections)")

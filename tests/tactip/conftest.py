@@ -160,3 +160,26 @@ def sim_station(tmp_path_factory):
     return SimpleNamespace(root=root, toml=toml, config=config, calibration=load_calibration(root / "calibration.h5"),
                            train=datasets / "train.h5", test=datasets / "test.h5", model=model,
                            validation=validation, runs=runs)
+
+
+# -- real services (issue 12): a throwaway PostgreSQL server -------------------------------------------
+
+@pytest.fixture(scope="session")
+def postgres_cluster():
+    """A PostgreSQL server of the test session on 127.0.0.1 (skips, saying why, when not installed)."""
+    from tests.tactip.services import SKIP_POSTGRES, PostgresCluster, find_postgres_bin
+
+    pytest.importorskip("psycopg", reason="psycopg 3 is not installed (pip install -e '.[test]')")
+    bin_dir = find_postgres_bin()
+    if bin_dir is None:
+        pytest.skip(SKIP_POSTGRES)
+    cluster = PostgresCluster(bin_dir)
+    yield cluster
+    cluster.stop()
+
+
+@pytest.fixture
+def postgres_url(postgres_cluster, request):
+    """The URL of a new, empty database of its own for one test."""
+    name = "t_" + "".join(c if c.isalnum() else "_" for c in request.node.name.lower())[:50]
+    return postgres_cluster.create_database(name)

@@ -192,6 +192,9 @@ def test_inspect_exits_1_with_one_line_on_an_arm_fault(sim_station, tmp_path, mo
     assert "g02: width" in out and "g06" not in out
     with ResultsStore(results) as store:
         assert [(r.gap, r.status, r.taps) for r in store.inspections()] == [("g02", "done", 3), ("g06", "aborted", 1)]
+        (station,) = store.stations()                                # its status row says why it stopped
+    assert station["state"].startswith("stopped: ArmFault: protective stop during the move to")
+    assert station["arm"].startswith("sim: the controller reports a protective stop")
     assert not arms[0].connected
 
 

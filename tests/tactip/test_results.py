@@ -3,6 +3,7 @@
 import csv
 import io
 import json
+import os
 import sqlite3
 
 import pytest
@@ -101,11 +102,9 @@ def test_a_reader_changes_nothing(tmp_path):
 
 
 def test_stale_running_rows_of_dead_processes_are_closed(tmp_path, monkeypatch):
-    import tactip.results as results
-
     with ResultsStore(tmp_path / "r.sqlite") as store:
         mine = store.start_inspection("g1", nominal_width=1.0, tolerance=0.1, policy="active", station="line-1")
-        monkeypatch.setattr(results.os, "getpid", lambda: 2**22 + 11)        # a process that does not exist
+        monkeypatch.setattr(os, "getpid", lambda: 2**22 + 11)        # a process that does not exist
         dead = store.start_inspection("g2", nominal_width=1.0, tolerance=0.1, policy="active", station="line-1")
         other = store.start_inspection("g3", nominal_width=1.0, tolerance=0.1, policy="active", station="line-2")
         monkeypatch.undo()

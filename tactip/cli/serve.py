@@ -1,0 +1,73 @@
+"""Serve the station's live dashboard: a read-only web page over its results database.
+
+The page shows, live while 'tactip inspect' runs (here, or on any station writing to the same
+PostgreSQL database), each tap as it is stored (depth, width estimate, belief), the belief over
+widths, each verdict; the last verdicts; per-gap trend charts of the estimate against nominal with
+the tolerance band, and Cp/Cpk per gap over a chosen window. With the station stopped it shows the
+history. It never writes. It binds to 127.0.0.1 unless told otherwise; any other address needs
+--token (or TACTIP_SERVE_TOKEN), and then every request must carry it (open /?token=TOKEN).
+
+Examples:
+  tactip serve --sim
+  tactip serve --config station.toml --port 8050
+  tactip serve --db postgresql://tactip@db.plant/line3
+  TACTIP_SERVE_TOKEN=s3cret tactip serve --config station.toml --host 0.0.0.0
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from tactip.cli._types import int_in_range
+
+HELP = "serve the live dashboard of the results (browser page; read-only)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the parser for `tactip serve`."""
+    where = parser.add_mutually_exclusive_group(required=True)
+    where.add_argument("--config", type=Path, help="station TOML file (its [station] results database)")
+    where.add_argument("--sim", action="store_true", help="the simulated station's results (in --data-dir)")
+    where.add_argument("--db", metavar="FILE|URL", help="results database: an SQLite file or a postgresql:// URL")
+    parser.add_argument("--data-dir", type=Path, default=Path("station_data/sim"),
+                        help="with --sim: the simulated station's folder (default station_data/sim)")
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="address to listen on (default 127.0.0.1; any other needs --token)")
+    parser.add_argument("--port", type=int_in_range(0, 65535), default=8050,
+                        help="TCP port (0-65535, default 8050; 0 picks a free one)")
+    parser.add_argument("--token", default=None,
+                        help="require this token on every request (default: $TACTIP_SERVE_TOKEN)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run `tactip serve` until Ctrl-C."""
+    from tactip.dashboard import DashboardServer, check_bind, make_app
+    from tactip.results import describe_location, is_database_url, open_results
+
+    token = args.token or os.environ.get("TACTIP_SERVE_TOKEN") or None
+    check_bind(args.host, token)
+    info = None
+    if args.db is not None:
+        location = args.db if is_database_url(args.db) else Path(args.db)
+    else:
+        from tactip.config import load_station_config, simulated_station_config
+
+        config = simulated_station_config(args.data_dir) if args.sim else load_station_config(args.config)
+        location, info = config.results, station_info(config)
+    name = describe_location(location)
+    app = make_app(lambda: open_results(location, read_only=True), token=token, station_info=info,
+                   results_name=name)
+    server = DashboardServer(app, host=args.host, port=args.port)
+    print(f"dashboard of {name} on {server.url}{'?token=...' if token else ''}  (Ctrl-C stops)", flush=True)
+    server.serve_forever()
+    return 0
+
+
+def station_info(config) -> dict:
+    """What the configuration says of the station, for the page: arm, camera, model."""
+    arm = config.arm.backend + (f" {config.arm.host}" if getattr(config.arm, "host", None) else "")
+    model = config.perception.model
+    return {"station": config.name, "arm": arm, "camera": f"{config.sensor.source}, {config.sensor.frame_rate:g} frames/s",
+            "model": f"{model}{'' if model is not None and Path(model).exists() else ' (not trained yet)'}"}
