@@ -29,7 +29,7 @@ import numpy as np
 from .dataset import Dataset
 from .errors import ModelError
 from .model import DEFAULT_EPSILON, HistogramModel, fit_model, histogram_log_probability
-from .tempering import cross_validation_folds, fit_tempering
+from .tempering import check_tempering, cross_validation_folds, fit_tempering
 
 __all__ = ["CalibratedHistogramModel", "fit_calibrated_histogram", "held_out_log_likelihood"]
 
@@ -168,5 +168,6 @@ def fit_calibrated_histogram(dataset: Dataset, *, n_locations: int = 11, bins: i
     truth = base.identity_class(dataset.identity[kept]) if base.n_identities > 1 \
         else base.location_class(dataset.location[kept])
     beta = fit_tempering(log_likelihood, truth)
+    check_tempering(beta)
     fields = {f.name: getattr(base, f.name) for f in dataclasses.fields(base)}
     return CalibratedHistogramModel(**fields, tempering=beta, folds=int(folds))

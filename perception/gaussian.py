@@ -34,7 +34,7 @@ from .dataset import Dataset
 from .errors import DatasetError, ModelError
 from .likelihood import LikelihoodModel
 from .model import fit_model
-from .tempering import cross_validation_folds, decision_log_loss, fit_tempering
+from .tempering import check_tempering, cross_validation_folds, decision_log_loss, fit_tempering
 
 __all__ = ["GaussianModel", "fit_gaussian", "COMPONENT_CHOICES", "SHRINKAGE_CHOICES"]
 
@@ -147,10 +147,17 @@ class GaussianModel(LikelihoodModel):
 
 
 def _principal_components(x, n_components: int):
-    """Mean (values,) and the leading principal directions (values, K) of the rows of x."""
+    """Mean (values,) and the leading principal directions (values, K) of the rows of x.
+
+    From the eigenvectors u of the taps' Gram matrix (N x N, fewer taps than values): a direction is
+    x_c^T u / sqrt(lambda), the same as the SVD's right singular vector, at a fraction of its cost.
+    """
     mean = x.mean(axis=0)
-    _, _, vt = np.linalg.svd(x - mean, full_matrices=False)
-    return mean, vt[:n_components].T
+    centred = x - mean
+    eigenvalues, eigenvectors = np.linalg.eigh(centred @ centred.T)
+    order = np.argsort(eigenvalues)[::-1]
+    keep = order[eigenvalues[order] > 1e-9 * max(eigenvalues.max(), 1e-300)][:n_components]
+    return mean, (centred.T @ eigenvectors[:, keep]) / np.sqrt(eigenvalues[keep])
 
 
 def _whitened(y, tap_class, n_classes: int, shrinkage: float):
@@ -249,6 +256,7 @@ def fit_gaussian(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class:
         if best is None or loss < best[0]:
             best = (loss, k, shrinkage, beta)
     _, k, shrinkage, beta = best
+    check_tempering(beta)
     mean, directions = _principal_components(x, k)
     whiten, class_means, _ = _whitened((x - mean) @ directions, cls, grid.n_classes, shrinkage)
     transform = directions @ whiten

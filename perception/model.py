@@ -44,7 +44,7 @@ MODEL_SCHEMA = "tactip-model/1"
 #: Regularising count added to every histogram bin (paper 000: epsilon << 1).
 DEFAULT_EPSILON = 1e-3
 #: Kinds of likelihood model (``tactip train --model NAME``); the first is the papers' model.
-MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian")
+MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian", "torch")
 _BATCH = 256  # taps per chunk in the batch likelihood (counts of 256 taps x 8000 bins: 8 MB)
 
 

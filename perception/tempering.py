@@ -26,7 +26,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.special import logsumexp
 
-__all__ = ["cross_validation_folds", "fit_tempering", "decision_log_loss", "tap_sequences"]
+__all__ = ["cross_validation_folds", "fit_tempering", "decision_log_loss", "tap_sequences", "check_tempering"]
 
 #: Range searched for beta (log10): the paper's geometric mean (1) to a naive Bayes over 3200 values and beyond.
 _LOG10_BETA = (-4.0, 4.0)
@@ -60,6 +60,17 @@ def cross_validation_folds(tap_class, folds: int, *, order=None) -> np.ndarray:
     fold = np.empty(len(cls), np.intp)
     fold[sort] = (rank + offset) % folds
     return fold
+
+
+def check_tempering(beta: float) -> None:
+    """Raise DatasetError when beta sits at the bottom of its range: held-out taps were told apart no
+    better than chance, so no tempering makes the beliefs useful (too few taps per class)."""
+    from .errors import DatasetError
+
+    if beta <= 1.01 * 10.0 ** _LOG10_BETA[0]:
+        raise DatasetError("held-out training taps are told apart no better than chance, so the tempering cannot "
+                           "be fitted: collect more taps per class, repeated at the same locations ([protocol] "
+                           "repeats = 2), or train the papers' histogram model")
 
 
 def decision_log_loss(log_likelihood, truth, beta: float = 1.0) -> float:

@@ -29,7 +29,7 @@ import argparse
 from tactip.cli._types import int_at_least, int_in_range, positive_float
 
 #: The kinds of ``--model`` (perception.MODEL_KINDS, listed here so that --help needs no import of perception).
-MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian")
+MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian", "torch")
 
 HELP = "train a perception model (histogram, calibrated histogram, gaussian, torch) from a tap dataset"
 
