@@ -165,3 +165,14 @@ def test_sweep_fixation_for_a_target_accuracy_writes_the_threshold(files, capsys
     assert "is not reached at any fixation" in capsys.readouterr().err
     assert main(["validate", str(model), str(files / "test.h5"), "--target-accuracy", "0.9"]) == 1
     assert "--target-accuracy needs --sweep-fixation" in capsys.readouterr().err
+
+
+def test_train_torch_without_torch_is_one_line(files, capsys, monkeypatch):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "torch" else real(name, *a))
+    assert main(["train", str(files / "train.h5"), "--out", str(files / "t.h5"), "--model", "torch"]) == 1
+    err = capsys.readouterr().err
+    assert "pip install torch==2.13.0" in err and len(err.strip().splitlines()) == 1
+    assert not (files / "t.h5").exists()
