@@ -1,7 +1,8 @@
 """Perception: likelihood model, sequential Bayes, policies and Monte Carlo validation.
 
 The dataset (`Dataset`, `DatasetWriter`, schema ``tactip-dataset/1``) is the contract with the
-front ends; `fit_model` trains the histogram likelihood; `Perceiver` classifies tap by tap;
+front ends; `fit_model` trains the papers' histogram likelihood and `train_model` any kind of
+likelihood model (`LikelihoodModel`: histogram, calibrated histogram, Gaussian, torch); `Perceiver` classifies tap by tap;
 `monte_carlo` and the experiments validate a model on an independent test set.
 """
 
@@ -9,18 +10,26 @@ from .bayes import adaptive_prior, flat_prior, marginals, normalize, shift, upda
 from .dataset import SCHEMA, Dataset, DatasetWriter, load_dataset, save_dataset
 from .errors import DatasetError, ModelError, PerceptionError
 from .experiments import FixationSweep, LateralSweep, compare_policies, fixation_sweep, lateral_sweep
-from .model import MODEL_SCHEMA, HistogramModel, fit_model, load_model, save_model
+from .calibrated import CalibratedHistogramModel, fit_calibrated_histogram
+from .gaussian import GaussianModel, fit_gaussian
+from .likelihood import LikelihoodModel
+from .model import MODEL_KINDS, MODEL_SCHEMA, HistogramModel, fit_model, load_model, save_model, train_model
 from .montecarlo import DEFAULT_THRESHOLDS, MonteCarloResult, VirtualEnvironment, monte_carlo
 from .perceiver import Perceiver, Step
 from .policies import POLICIES, FixationPolicy, Policy, RandomPolicy, StationaryPolicy, make_policy
+from .reliability import (CALIBRATION_TAPS, BeliefTrace, expected_calibration_error, reliability_bins,
+                          fixation_for_accuracy, threshold_for_accuracy, trace_beliefs)
 
 __all__ = [
     "PerceptionError", "DatasetError", "ModelError",
     "SCHEMA", "Dataset", "DatasetWriter", "load_dataset", "save_dataset",
-    "MODEL_SCHEMA", "HistogramModel", "fit_model", "load_model", "save_model",
+    "MODEL_SCHEMA", "MODEL_KINDS", "LikelihoodModel", "HistogramModel", "fit_model", "load_model", "save_model",
+    "train_model", "CalibratedHistogramModel", "fit_calibrated_histogram", "GaussianModel", "fit_gaussian",
     "normalize", "update", "shift", "marginals", "flat_prior", "adaptive_prior",
     "Perceiver", "Step",
     "POLICIES", "Policy", "FixationPolicy", "StationaryPolicy", "RandomPolicy", "make_policy",
     "DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo",
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
+    "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
+    "threshold_for_accuracy", "fixation_for_accuracy",
 ]

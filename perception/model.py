@@ -35,19 +35,21 @@ import numpy as np
 from ._files import atomic_path, cut_short
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
+from .likelihood import RECOMMENDED_KEYS, LikelihoodModel
 
-__all__ = ["MODEL_SCHEMA", "DEFAULT_EPSILON", "HistogramModel", "fit_model", "save_model", "load_model"]
+__all__ = ["MODEL_SCHEMA", "DEFAULT_EPSILON", "MODEL_KINDS", "HistogramModel", "fit_model", "train_model",
+           "save_model", "load_model", "model_class"]
 
 MODEL_SCHEMA = "tactip-model/1"
 #: Regularising count added to every histogram bin (paper 000: epsilon << 1).
 DEFAULT_EPSILON = 1e-3
-#: Recommended settings a model may carry (written by ``tactip validate --sweep-fixation``).
-RECOMMENDED_KEYS = ("decision_threshold", "fixation_location", "policy")
+#: Kinds of likelihood model (``tactip train --model NAME``); the first is the papers' model.
+MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian", "torch")
 _BATCH = 256  # taps per chunk in the batch likelihood (counts of 256 taps x 8000 bins: 8 MB)
 
 
 @dataclass(frozen=True)
-class HistogramModel:
+class HistogramModel(LikelihoodModel):
     """A trained histogram likelihood model (build it with `fit_model`, or `load_model`).
 
     Attributes
@@ -98,35 +100,14 @@ class HistogramModel:
                              f"{self.n_identities} identities")
         if self.bin_lower.shape != (dims,) or self.bin_width.shape != (dims,) or len(self.dim_names) != dims:
             raise ModelError(f"bin_lower, bin_width and dim_names must have {dims} entries")
-        unknown = set(self.recommended) - set(RECOMMENDED_KEYS)
-        if unknown:
-            raise ModelError(f"unknown recommended settings {sorted(unknown)}; choose from {RECOMMENDED_KEYS}")
         if not (isinstance(self.epsilon, (int, float, np.floating)) and np.isfinite(self.epsilon) and self.epsilon > 0):
             raise ModelError(f"epsilon must be a finite number > 0, got {self.epsilon!r}")
         self._check_recommended()
 
-    def _check_recommended(self) -> None:
-        """Each recommended setting is a number in its range, as a station file's key would be."""
-        lo, hi = float(self.location_edges[0]), float(self.location_edges[-1])
-        checks = {
-            "decision_threshold": (lambda v: 0.0 < v <= 1.0, "a number in (0, 1]"),
-            "fixation_location": (lambda v: lo - 1e-9 <= v <= hi + 1e-9,
-                                  f"a location inside the model's range {lo:g}..{hi:g} {self.location_unit}"),
-        }
-        for key, (inside, accepted) in checks.items():
-            if key not in self.recommended:
-                continue
-            value = self.recommended[key]
-            number = isinstance(value, (int, float)) and not isinstance(value, bool)
-            if not (number and np.isfinite(value) and inside(float(value))):
-                raise ModelError(f"recommended {key} must be {accepted}, got {value!r} (run 'tactip validate "
-                                 f"--sweep-fixation' again)")
-        policy = self.recommended.get("policy")
-        if policy is not None and policy not in ("active", "stationary", "random"):
-            raise ModelError(f"recommended policy must be one of active, stationary, random, got {policy!r}")
+    KIND = "histogram"
 
     def __repr__(self) -> str:
-        return f"<HistogramModel {self.summary()}>"
+        return f"<{type(self).__name__} {self.summary()}>"
 
     @property
     def dims(self) -> int:
@@ -138,117 +119,24 @@ class HistogramModel:
         """Value bins per dimension."""
         return self.log_probability.shape[1]
 
-    @property
-    def n_locations(self) -> int:
-        """Number of location classes L."""
-        return len(self.location_edges) - 1
-
-    @property
-    def n_identities(self) -> int:
-        """Number of identity classes I."""
-        return len(self.identities)
-
-    @property
-    def n_classes(self) -> int:
-        """Number of joint classes L * I."""
-        return self.n_locations * self.n_identities
-
-    @property
-    def location_centres(self) -> np.ndarray:
-        """(L,) centre of each location class, in ``location_unit``."""
-        return 0.5 * (self.location_edges[:-1] + self.location_edges[1:])
-
-    @property
-    def class_width(self) -> float:
-        """Width of one location class, in ``location_unit`` (0 for a single-location model)."""
-        return float(self.location_edges[1] - self.location_edges[0]) if self.n_locations > 1 else 0.0
-
     def summary(self) -> str:
         """One line: front end, class grid, tap shape, bins."""
-        lo, hi = self.location_edges[0], self.location_edges[-1]
-        return (f"{self.front_end} model: {self.n_classes} classes = {self.n_locations} locations "
-                f"({lo:g}..{hi:g} {self.location_unit}) x {self.n_identities} identities "
-                f"({self.identities.min():g}..{self.identities.max():g} {self.identity_unit}); "
-                f"taps of {self.samples} samples x {self.dims} dims; {self.bins} bins")
+        return f"{self._grid_summary()}; {self.bins} bins"
 
-    def with_recommended(self, **settings) -> HistogramModel:
-        """A copy of the model with some recommended settings replaced.
+    # -- storage ----------------------------------------------------------------------------
+    _ARRAYS = ("log_probability", "bin_lower", "bin_width")
+    _ATTRS = ("epsilon",)
 
-        Parameters
-        ----------
-        **settings
-            ``decision_threshold`` (float), ``fixation_location`` (float, location units), ``policy`` (str).
-        """
-        return dataclasses.replace(self, recommended={**self.recommended, **settings})
+    def _stored(self) -> tuple[dict, dict]:
+        return {name: getattr(self, name) for name in self._ARRAYS}, {"epsilon": self.epsilon}
 
-    # -- class grid -------------------------------------------------------------------------
-    def location_class(self, location) -> np.ndarray:
-        """Location class index of each location (values outside the range go to the edge classes).
-
-        Parameters
-        ----------
-        location : float or (N,) array, location units
-
-        Returns
-        -------
-        int ndarray of the same shape, in [0, n_locations)
-        """
-        return np.searchsorted(self.location_edges[1:-1], np.asarray(location, dtype=np.float64), side="right")
-
-    def fixation_class(self, fixation: float | None = None) -> int:
-        """Location class to fixate on: of `fixation` (location units) if given, else of the
-        recommended ``fixation_location``, else the middle class of the range."""
-        if fixation is None:
-            fixation = self.recommended.get("fixation_location")
-        if fixation is None:
-            return self.n_locations // 2
-        return int(self.location_class(float(fixation)))
-
-    def identity_class(self, identity) -> np.ndarray:
-        """Identity class index of each identity value.
-
-        Parameters
-        ----------
-        identity : float or (N,) array, identity units
-
-        Raises
-        ------
-        DatasetError
-            A value matches none of the model's identities.
-        """
-        identity = np.asarray(identity, dtype=np.float64)
-        scale = max(1.0, float(np.abs(self.identities).max()))
-        distance = np.abs(identity[..., None] - self.identities)
-        index = distance.argmin(axis=-1)
-        unknown = distance.min(axis=-1) > 1e-9 * scale
-        if unknown.any():
-            raise DatasetError(f"identity {np.unique(identity[unknown])[:5].tolist()} {self.identity_unit} is not one "
-                               f"of the model's identities {self.identities.tolist()}")
-        return index
-
-    # -- compatibility ----------------------------------------------------------------------
-    def check_dataset(self, dataset: Dataset) -> None:
-        """Raise ModelError if the dataset's taps are not the kind this model was trained on.
-
-        Parameters
-        ----------
-        dataset : Dataset
-        """
-        if (dataset.front_end, dataset.dims, dataset.samples) != (self.front_end, self.dims, self.samples):
-            raise ModelError(f"model trained for {self.front_end} ({self.dims} dims, {self.samples} samples), "
-                             f"got {dataset.front_end} taps ({dataset.dims} dims, {dataset.samples} samples)")
-        for name in ("location_unit", "identity_unit"):
-            if getattr(dataset, name) != getattr(self, name):
-                raise ModelError(f"model trained with {name} {getattr(self, name)!r}, got {getattr(dataset, name)!r}")
-
-    def _check_taps(self, taps: np.ndarray, batch: bool) -> np.ndarray:
-        taps = np.asarray(taps)
-        shape = taps.shape[1:] if batch else taps.shape
-        if taps.ndim != (3 if batch else 2) or shape != (self.samples, self.dims):
-            expected = "(N, samples, dims)" if batch else "(samples, dims)"
-            raise ModelError(f"model trained for {self.front_end} taps of {self.samples} samples x {self.dims} "
-                             f"dims; expected {expected}, got shape {taps.shape}")
-        return taps
+    @classmethod
+    def _from_stored(cls, common: dict, arrays: dict, attrs: dict):
+        try:
+            epsilon = float(attrs["epsilon"])
+        except (TypeError, ValueError):
+            raise ModelError(f"unreadable epsilon {attrs['epsilon']!r}") from None
+        return cls(**arrays, **common, epsilon=epsilon)
 
     # -- likelihood -------------------------------------------------------------------------
     def bin_index(self, taps) -> np.ndarray:
@@ -371,26 +259,125 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
                            f"taps, e.g. location {grid.location_centres[l]:g} {dataset.location_unit}, identity "
                            f"{identities[i]:g} {dataset.identity_unit} has {taps_per_class[few[0]]}; "
                            f"use fewer location classes")
-    # h(b, k, c): sample counts per class, dimension and bin, in one bincount.
-    counts = np.zeros((grid.n_classes, dims, bins))
-    for start in range(0, len(dataset), 4096):  # bounded memory for large datasets
-        b = grid.bin_index(dataset.taps[start:start + 4096])
-        flat = (cls[start:start + 4096, None, None] * dims + np.arange(dims)) * bins + b
-        counts += np.bincount(flat.ravel(), minlength=counts.size).reshape(counts.shape)
-    # P_k(b|c) = (h(b,k,c) + eps) / sum_b (h(b,k,c) + eps)
-    regularised = counts + epsilon
-    log_p = np.log(regularised) - np.log(regularised.sum(axis=2, keepdims=True))
-    return dataclasses.replace(grid, log_probability=np.ascontiguousarray(log_p.transpose(1, 2, 0), np.float32),
+    return dataclasses.replace(grid, log_probability=histogram_log_probability(grid, dataset.taps, cls),
                                taps_per_class=taps_per_class.reshape(n_locations, len(identities)))
 
 
-def save_model(path, model: HistogramModel, *, inputs=()) -> None:
+def histogram_log_probability(grid: HistogramModel, taps, tap_class) -> np.ndarray:
+    """The regularised histograms log P_k(b | c) of taps on a model's bins and classes (paper 002 eq. 3).
+
+    Parameters
+    ----------
+    grid : HistogramModel
+        Gives the value bins, the classes and epsilon.
+    taps : (N, samples, dims) array
+    tap_class : (N,) int array
+        Joint class l * n_identities + i of each tap.
+
+    Returns
+    -------
+    (dims, bins, classes) float32 ndarray
+    """
+    dims, bins, n_classes = grid.dims, grid.bins, grid.n_classes
+    tap_class = np.asarray(tap_class, dtype=np.intp)
+    # h(b, k, c): sample counts per class, dimension and bin, in one bincount.
+    counts = np.zeros((n_classes, dims, bins))
+    for start in range(0, len(taps), 4096):  # bounded memory for large datasets
+        b = grid.bin_index(taps[start:start + 4096])
+        flat = (tap_class[start:start + 4096, None, None] * dims + np.arange(dims)) * bins + b
+        counts += np.bincount(flat.ravel(), minlength=counts.size).reshape(counts.shape)
+    # P_k(b|c) = (h(b,k,c) + eps) / sum_b (h(b,k,c) + eps)
+    regularised = counts + grid.epsilon
+    log_p = np.log(regularised) - np.log(regularised.sum(axis=2, keepdims=True))
+    return np.ascontiguousarray(log_p.transpose(1, 2, 0), np.float32)
+
+
+def train_model(dataset: Dataset, *, kind: str = "histogram", n_locations: int = 11, bins: int = 100,
+                epsilon: float = DEFAULT_EPSILON, min_taps_per_class: int = 1, seed: int = 0) -> LikelihoodModel:
+    """Train a likelihood model of any kind on a dataset.
+
+    Parameters
+    ----------
+    dataset : Dataset
+    kind : str
+        One of `MODEL_KINDS`: ``histogram`` (the papers' model, `fit_model`), ``calibrated-histogram``
+        (`perception.calibrated.fit_calibrated_histogram`), ``gaussian``
+        (`perception.gaussian.fit_gaussian`), ``torch`` (`perception.learned.fit_torch`, needs torch).
+    n_locations : int
+        Equal location classes over the training locations.
+    bins, epsilon : int, float
+        Histogram bins and regularising count (histogram kinds).
+    min_taps_per_class : int
+    seed : int
+        Seed of the torch model's initialisation and batches.
+
+    Returns
+    -------
+    LikelihoodModel
+    """
+    model_class(kind)  # an unknown kind fails before any work
+    common = dict(n_locations=n_locations, min_taps_per_class=min_taps_per_class)
+    if kind == "histogram":
+        return fit_model(dataset, bins=bins, epsilon=epsilon, **common)
+    if kind == "calibrated-histogram":
+        from .calibrated import fit_calibrated_histogram
+
+        return fit_calibrated_histogram(dataset, bins=bins, epsilon=epsilon, **common)
+    if kind == "gaussian":
+        from .gaussian import fit_gaussian
+
+        return fit_gaussian(dataset, **common)
+    from .learned import fit_torch
+
+    return fit_torch(dataset, seed=seed, **common)
+
+
+def model_class(kind: str) -> type:
+    """The class of a kind of likelihood model.
+
+    Parameters
+    ----------
+    kind : str
+        One of `MODEL_KINDS`.
+
+    Raises
+    ------
+    ModelError
+        An unknown kind (the message lists the kinds).
+    """
+    if kind == "histogram":
+        return HistogramModel
+    if kind == "calibrated-histogram":
+        from .calibrated import CalibratedHistogramModel
+
+        return CalibratedHistogramModel
+    if kind == "gaussian":
+        from .gaussian import GaussianModel
+
+        return GaussianModel
+    if kind == "torch":
+        from .learned import TorchModel
+
+        return TorchModel
+    raise ModelError(f"unknown model kind {kind!r}; choose from {', '.join(MODEL_KINDS)}")
+
+
+#: Fields every kind stores: arrays, then attributes.
+_COMMON_ARRAYS = ("location_edges", "identities", "taps_per_class")
+_COMMON_ATTRS = ("front_end", "location_unit", "identity_unit", "samples", "dim_names", "sensor", "recommended")
+
+
+def save_model(path, model: LikelihoodModel, *, inputs=()) -> None:
     """Write a model to an HDF5 file of schema ``tactip-model/1`` atomically (temporary file, fsync, rename).
+
+    The file holds the class grid, the tap description and the recommended settings, the model's
+    ``kind`` and the kind's own parameters (a histogram model's file is the one earlier versions wrote,
+    plus ``kind``).
 
     Parameters
     ----------
     path : str or os.PathLike
-    model : HistogramModel
+    model : LikelihoodModel
     inputs : iterable of path
         Files the caller read (e.g. the training dataset): ``path`` must not be one of them.
 
@@ -403,24 +390,30 @@ def save_model(path, model: HistogramModel, *, inputs=()) -> None:
     """
     import h5py
 
+    if not isinstance(model, LikelihoodModel):
+        raise TypeError(f"model must be a LikelihoodModel, got {type(model).__name__}")
+    arrays, attrs = model._stored()
     path = pathlib.Path(path)
     with atomic_path(path, inputs=inputs) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["schema"] = MODEL_SCHEMA
-            for name in ("log_probability", "bin_lower", "bin_width", "location_edges", "identities",
-                         "taps_per_class"):
+            f.attrs["kind"] = model.KIND
+            for name in _COMMON_ARRAYS:
                 f.create_dataset(name, data=getattr(model, name))
+            for name, value in arrays.items():
+                f.create_dataset(name, data=value)
             for name in ("front_end", "location_unit", "identity_unit"):
                 f.attrs[name] = getattr(model, name)
             f.attrs["samples"] = model.samples
-            f.attrs["epsilon"] = model.epsilon
             f.attrs["dim_names"] = list(model.dim_names)
             f.attrs["sensor"] = json.dumps(model.sensor, sort_keys=True)
             f.attrs["recommended"] = json.dumps(model.recommended, sort_keys=True)
+            for name, value in attrs.items():
+                f.attrs[name] = value
 
 
-def load_model(path) -> HistogramModel:
-    """Read a ``tactip-model/1`` file.
+def load_model(path) -> LikelihoodModel:
+    """Read a ``tactip-model/1`` file; the model is of the class its ``kind`` names (histogram if none).
 
     Parameters
     ----------
@@ -429,7 +422,7 @@ def load_model(path) -> HistogramModel:
     Raises
     ------
     ModelError
-        Not HDF5, another schema, or a missing field.
+        Not HDF5, another schema, an unknown kind, or a missing field.
     FileNotFoundError
         No such file.
     """
@@ -457,34 +450,46 @@ def load_model(path) -> HistogramModel:
         schema = schema.decode() if isinstance(schema, bytes) else schema
         if schema != MODEL_SCHEMA:
             raise ModelError(f"{path} is not a {MODEL_SCHEMA} file (schema {schema!r})")
-        names = ("log_probability", "bin_lower", "bin_width", "location_edges", "identities", "taps_per_class")
-        attr_names = ("front_end", "location_unit", "identity_unit", "samples", "epsilon", "dim_names", "sensor",
-                      "recommended")
+        kind = str(f.attrs.get("kind", "histogram"))
+        try:
+            cls = model_class(kind)
+        except ModelError as exc:
+            raise ModelError(f"{path}: {exc}") from None
+        names = _COMMON_ARRAYS + cls._ARRAYS
+        attr_names = _COMMON_ATTRS + cls._ATTRS
         missing = [n for n in names if n not in f] + [n for n in attr_names if n not in f.attrs]
         if missing:
-            raise ModelError(f"{path} misses {', '.join(missing)} (required by {MODEL_SCHEMA})")
+            raise ModelError(f"{path} misses {', '.join(missing)} (required by {MODEL_SCHEMA} {kind})")
         for name in names:
             if not hasattr(f[name], "dtype") or f[name].dtype.kind not in "fiu":
                 raise ModelError(f"{path}: {name!r} does not hold numbers")
         arrays = {name: f[name][()] for name in names}
-        attrs = {name: str(f.attrs[name]) for name in ("front_end", "location_unit", "identity_unit")}
+        common = {name: str(f.attrs[name]) for name in ("front_end", "location_unit", "identity_unit")}
         try:
-            settings = dict(samples=int(f.attrs["samples"]), epsilon=float(f.attrs["epsilon"]),
-                            sensor=json.loads(f.attrs["sensor"]), recommended=json.loads(f.attrs["recommended"]))
+            common.update(samples=int(f.attrs["samples"]), sensor=json.loads(f.attrs["sensor"]),
+                          recommended=json.loads(f.attrs["recommended"]))
+            own = {name: f.attrs[name] for name in cls._ATTRS}
         except (TypeError, ValueError) as exc:
             raise ModelError(f"{path}: unreadable settings ({exc})") from None
-        dim_names = tuple(str(n) for n in np.atleast_1d(f.attrs["dim_names"]))
+        common["dim_names"] = tuple(str(n) for n in np.atleast_1d(f.attrs["dim_names"]))
     _check_model_arrays(path, arrays)
-    if not isinstance(settings["recommended"], dict):
+    if not isinstance(common["recommended"], dict):
         raise ModelError(f"{path}: recommended settings are not a table")
+    common.update({name: arrays.pop(name) for name in _COMMON_ARRAYS})
     try:
-        return HistogramModel(**arrays, **attrs, dim_names=dim_names, **settings)
+        return cls._from_stored(common, arrays, own)
     except ModelError as exc:
         raise ModelError(f"{path}: {exc}") from None
 
 
 def _check_model_arrays(path, arrays: dict) -> None:
     """Refuse a model whose numbers cannot be right (NaN or infinite likelihoods, empty or reversed grids)."""
+    if "log_probability" not in arrays:
+        for name, value in arrays.items():
+            if np.asarray(value).dtype.kind == "f" and not np.isfinite(value).all():
+                raise ModelError(f"{path}: {name} holds NaN or infinite numbers; train the model again")
+        _check_grid(path, arrays)
+        return
     log_p = arrays["log_probability"]
     if log_p.ndim != 3 or 0 in log_p.shape:
         raise ModelError(f"{path}: log_probability must be a non-empty (dims, bins, classes) array, got {log_p.shape}")
@@ -500,6 +505,11 @@ def _check_model_arrays(path, arrays: dict) -> None:
             raise ModelError(f"{path}: {name} must be a 1-d array of finite numbers")
     if not (arrays["bin_width"] > 0).all():
         raise ModelError(f"{path}: bin_width must be > 0")
+    _check_grid(path, arrays)
+
+
+def _check_grid(path, arrays: dict) -> None:
+    """Refuse empty or reversed location classes."""
     edges = arrays["location_edges"]
     if len(edges) < 2 or (len(edges) > 2 and not (np.diff(edges) > 0).all()):
         raise ModelError(f"{path}: location_edges must increase (at least 2 edges)")

@@ -34,6 +34,7 @@ import numpy as np
 
 from . import bayes
 from .errors import PerceptionError
+from .likelihood import LikelihoodModel
 from .model import HistogramModel
 from .policies import Policy, RandomPolicy, StationaryPolicy
 
@@ -138,8 +139,8 @@ class Perceiver:
     def __init__(self, model: HistogramModel, policy: Policy | None = None, *, decision_threshold: float = 0.9,
                  move_threshold: float = 0.0, max_taps: int = 20, deadline: int | None = None,
                  shift_mode: str = "edge", adaptive_prior: bool = False, alpha: float = 0.5, rng=None):
-        if not isinstance(model, HistogramModel):
-            raise TypeError(f"model must be a HistogramModel, got {type(model).__name__}")
+        if not isinstance(model, LikelihoodModel):
+            raise TypeError(f"model must be a LikelihoodModel, got {type(model).__name__}")
         for name, value in (("decision_threshold", decision_threshold), ("move_threshold", move_threshold),
                             ("alpha", alpha)):
             if not 0.0 <= value <= 1.0:

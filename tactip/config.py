@@ -25,7 +25,10 @@ Tables (see ``samples/station_sim.toml`` for a documented example):
     ``model`` (file), ``decision_threshold`` and ``fixation_depth`` (mm) (each omitted: the model's
     recommendation from ``tactip validate --sweep-fixation``), ``start_depth`` (mm: where each
     inspection starts; omitted: a random protocol depth, the paper's unknown start), ``policy`` (active|stationary|random), ``max_taps``, ``locations`` (depth
-    classes), ``bins``.
+    classes), ``bins``, ``likelihood`` (the kind of model the station trains: ``gaussian``, the
+    default, ``calibrated-histogram`` or the papers' ``histogram``), ``target_accuracy`` (fraction
+    of decisions within the gaps' tolerance the chosen threshold must reach; omitted: 0.95 for the
+    calibrated kinds, and the papers' lowest error within 12 taps for ``histogram``).
 ``[sim]``
     the simulated station only: ``noise_sigma`` (camera noise, grey levels) and ``seed`` of the
     synthetic TacTip. The simulated arm's own settings (placement noise, realtime) are ``[arm.sim]``;
@@ -58,6 +61,8 @@ MAX_SAMPLES = 1000                       # samples per tap feature array
 MAX_REPEATS = 1000                       # taps per depth and gap
 MAX_COLLECTION_TAPS = 200_000            # taps per collection, all gaps
 MAX_TAPS = 1000                          # [perception] max_taps
+#: [perception] likelihood: the kinds of model `prepare_model` trains (perception.MODEL_KINDS).
+LIKELIHOODS = ("histogram", "calibrated-histogram", "gaussian")
 MAX_LOCATIONS = 1000                     # depth classes
 MAX_BINS = 10_000                        # value bins per feature
 MAX_SEED = 2**32 - 1
@@ -127,6 +132,8 @@ class PerceptionConfig:
     max_taps: int = 20
     locations: int = 11
     bins: int = 100
+    likelihood: str = "gaussian"
+    target_accuracy: float | None = None
 
 
 @dataclass(frozen=True)
@@ -226,6 +233,12 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     _range(perception.max_taps, "perception.max_taps", 1, MAX_TAPS, "taps")
     _range(perception.locations, "perception.locations", 1, MAX_LOCATIONS, "depth classes")
     _range(perception.bins, "perception.bins", 2, MAX_BINS, "bins")
+    _check(perception.likelihood in LIKELIHOODS, "perception.likelihood",
+           f"must be one of {', '.join(LIKELIHOODS)}, got {perception.likelihood!r}")
+    if perception.target_accuracy is not None:
+        _check(not isinstance(perception.target_accuracy, bool) and isinstance(perception.target_accuracy, (int, float))
+               and 0 < perception.target_accuracy <= 1, "perception.target_accuracy",
+               f"must be a fraction in (0, 1], got {perception.target_accuracy!r}")
     if perception.start_depth is not None:
         _check(protocol.depth_min <= perception.start_depth <= protocol.depth_max, "perception.start_depth",
                f"must lie in the protocol's depth range {protocol.depth_min}..{protocol.depth_max} mm, "

@@ -129,6 +129,10 @@ def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = Tr
                                 plan, out_dir, **common)
 
 
+#: Fraction of decisions within the gaps' tolerance a calibrated model's threshold is chosen for.
+DEFAULT_TARGET_ACCURACY = 0.95
+
+
 # -- the simulated station on several processes ---------------------------------------------------
 
 _worker_station: Station | None = None
@@ -191,11 +195,16 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
         calibrate_station(config, log=log)
     paths = collect_station(config, config.data_dir / "datasets", progress=progress, log=log)
     with atomic_output(model_path, inputs=list(paths.values())) as partial:
-        log("training the model ...")
-        train_station_model(paths["train"], partial, n_locations=config.perception.locations,
-                            bins=config.perception.bins, log=log)
+        p = config.perception
+        log(f"training the model ({p.likelihood} likelihood) ...")
+        train_station_model(paths["train"], partial, n_locations=p.locations, bins=p.bins, kind=p.likelihood, log=log)
         log("choosing the fixation depth on the test collection ...")
-        recommend_fixation(partial, paths["test"], log=lambda line: log(line.replace(str(partial), str(model_path))))
+        target = p.target_accuracy
+        if target is None and p.likelihood != "histogram":
+            target = DEFAULT_TARGET_ACCURACY
+        tolerance = min(g.tolerance for g in config.gaps)
+        recommend_fixation(partial, paths["test"], log=lambda line: log(line.replace(str(partial), str(model_path))),
+                           target_accuracy=target, tolerance=tolerance, max_taps=p.max_taps)
     return model_path
 
 

@@ -1,13 +1,25 @@
 """Train a perception model from a tap dataset.
 
-The model is a histogram likelihood over joint (location, identity) classes: the taps'
-locations (e.g. depth, mm) are split into --locations equal classes over their range, each
-distinct identity (e.g. gap width, mm) is a class, and each sensor dimension is binned into
---bins equal intervals over its training range (papers 000 and 002). Use a dataset collected
-separately from the one you validate with (tactip validate).
+The model gives the likelihood of a tap for every joint (location, identity) class: the taps'
+locations (e.g. depth, mm) are split into --locations equal classes over their range, and each
+distinct identity (e.g. gap width, mm) is a class (papers 000 and 002). --model picks the kind:
 
-Example:
+  histogram             the papers' model: each sensor dimension binned into --bins intervals,
+                        mean log probability over samples and dimensions (reproduces the papers)
+  calibrated-histogram  the same counts, tempered by a factor fitted by cross-validation over the
+                        training taps so that a one-tap belief is calibrated
+  gaussian              class-conditional Gaussians with a shared covariance on whitened principal
+                        components of the tap (correlations between pins and samples), tempered
+                        the same way; the station's default
+  torch                 a small network over the tap (optional: pip install torch==2.13.0)
+
+The calibrated kinds need at least two taps per class, ideally repeated at the same locations
+([protocol] repeats = 2). Use a dataset collected separately from the one you validate with
+(tactip validate).
+
+Examples:
   tactip train data/train.h5 --out models/gaps.h5 --locations 11
+  tactip train data/train.h5 --out models/gaps.h5 --model gaussian
 """
 
 from __future__ import annotations
@@ -16,13 +28,18 @@ import argparse
 
 from tactip.cli._types import int_at_least, int_in_range, output_file, positive_float
 
-HELP = "train a perception model (histogram likelihood) from a tap dataset"
+#: The kinds of ``--model`` (perception.MODEL_KINDS, listed here so that --help needs no import of perception).
+MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian", "torch")
+
+HELP = "train a perception model (histogram, calibrated histogram, gaussian, torch) from a tap dataset"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser of ``tactip train``."""
     parser.add_argument("dataset", metavar="DATASET.h5", help="training taps (tactip-dataset/1 HDF5)")
     parser.add_argument("--out", type=output_file, required=True, metavar="MODEL.h5", help="model file to write (tactip-model/1 HDF5)")
+    parser.add_argument("--model", choices=MODEL_KINDS, default="histogram",
+                        help="kind of likelihood model (default histogram, the papers' model)")
     parser.add_argument("--locations", type=int_in_range(1, 1000), default=11, metavar="N",
                         help="equal location classes over the training range, 1..1000 (default 11; "
                              "a dataset with one location gets one class)")
@@ -38,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     """Load the dataset, fit the model, write it and print a summary."""
     import math
 
-    from perception import fit_model, load_dataset, save_model
+    from perception import load_dataset, save_model, train_model
     from tactip._output import refuse_overwriting_inputs
     from tactip.cli._types import check_memory
     from tactip.errors import TactipError
@@ -53,8 +70,10 @@ def run(args: argparse.Namespace) -> int:
                  what=f"histograms of {args.locations} x {identities} classes x {args.bins} bins",
                  hint="use fewer --locations or --bins")
     options = {} if args.epsilon is None else {"epsilon": args.epsilon}
-    model = fit_model(dataset, n_locations=args.locations, bins=args.bins, min_taps_per_class=args.min_taps,
-                      **options)
+    if args.model == "torch":
+        _require_torch()
+    model = train_model(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
+                        min_taps_per_class=args.min_taps, **options)
     save_model(args.out, model, inputs=[args.dataset])
     counts = model.taps_per_class
     print(model.summary())
@@ -62,3 +81,14 @@ def run(args: argparse.Namespace) -> int:
           f"{model.class_width:g} {model.location_unit}")
     print(f"wrote {args.out}")
     return 0
+
+
+def _require_torch() -> None:
+    """Refuse --model torch, in one line, when torch is not installed."""
+    import importlib.util
+
+    from tactip.errors import TactipError
+
+    if importlib.util.find_spec("torch") is None:
+        raise TactipError("--model torch needs torch: pip install torch==2.13.0 (the CPU build; an unpinned torch "
+                          "pulls gigabytes)")

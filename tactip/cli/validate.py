@@ -13,12 +13,21 @@ uniformly over the range). Without --policy all three run on the same starting c
 lowest error within --tap-budget mean taps, and writes it with its threshold into the model's
 recommended settings (used by the station). --sweep-lateral gives the error when the test taps'
 lateral placement is within [-SIGMA, SIGMA] mm, relative to the smallest SIGMA (paper 002 Fig. 11).
+With --target-accuracy P, --sweep-fixation instead picks the fixation and threshold whose decisions
+are within --tolerance of the true identity in a fraction P of runs in the fewest mean taps.
+
+Calibration: for the active policy, the expected calibration error (ECE) of the identity belief
+after 1, 3 and 5 taps (a belief of 0.9 should be right 90 % of the time: ECE 0), and with --plot a
+reliability diagram (OUT_reliability.png). --compare adds other models (e.g. trained with other
+--model kinds) on the same runs: same seed, same true classes and starting locations.
 
 Examples:
   tactip validate models/gaps.h5 data/test.h5 --plot out/curves.png --json out/curves.json
   tactip validate models/gaps.h5 data/test.h5 --policy active --fixation 4.75 --thresholds 0.9 0.99
   tactip validate models/gaps.h5 data/test.h5 --sweep-fixation --plot out/fixation.png
   tactip validate models/gaps.h5 data/test_jitter.h5 --sweep-lateral 0.25 0.5 1 2 --plot out/lateral.png
+  tactip validate models/gaussian.h5 data/test.h5 --compare models/histogram.h5 --policy active --plot out/models.png
+  tactip validate models/gaussian.h5 data/test.h5 --sweep-fixation --target-accuracy 0.95 --tolerance 0.25
 """
 
 from __future__ import annotations
@@ -73,6 +82,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tap-budget", type=float_in_range(1, MAX_TAPS), default=None, metavar="TAPS",
                         help="mean taps within which --sweep-fixation takes the best error, 1..--max-taps "
                              f"(default {DEFAULT_TAP_BUDGET}, or --max-taps if fewer)")
+    parser.add_argument("--target-accuracy", type=fraction, metavar="P",
+                        help="with --sweep-fixation: pick the fixation and threshold reaching this fraction of "
+                             "decisions within --tolerance in the fewest mean taps (e.g. 0.95)")
+    parser.add_argument("--tolerance", type=non_negative_float, default=0.0, metavar="MM",
+                        help="with --target-accuracy: largest |decided - true| identity that counts as right, "
+                             "identity units (default 0: the exact class)")
+    parser.add_argument("--compare", nargs="+", metavar="MODEL.h5", default=[],
+                        help="other models validated on the same runs (speed-accuracy and calibration side by side)")
     parser.add_argument("--json", type=output_file, metavar="OUT.json", help="write one entry per policy and threshold")
     parser.add_argument("--plot", type=image_file, metavar="OUT.png",
                         help="plot error against mean taps (or against fixation); .png, .pdf, .svg ...")
@@ -99,7 +116,15 @@ def run(args: argparse.Namespace) -> int:
         raise TactipError(f"--deadline {args.deadline} is out of range: it must lie in 1..--max-taps ({args.max_taps})")
     from tactip._output import refuse_overwriting_inputs, write_text_atomic
 
-    refuse_overwriting_inputs([args.json, args.plot], [args.model, args.test])  # issue 9: never over an input
+    if args.target_accuracy is not None and not args.sweep_fixation:
+        raise TactipError("--target-accuracy needs --sweep-fixation")
+    if args.target_accuracy == 0:
+        raise TactipError("--target-accuracy must be in (0, 1], got 0")
+    if args.compare and (args.sweep_fixation or args.sweep_lateral):
+        raise TactipError("--compare works with the policy comparison only (not with --sweep-fixation or "
+                          "--sweep-lateral)")
+    refuse_overwriting_inputs([args.json, args.plot, _reliability_path(args.plot)],
+                              [args.model, args.test, *args.compare])  # issue 9: never over an input
     model = load_model(args.model)
     _check_fixation(model, args.fixation)
     test = load_dataset(args.test)
@@ -115,7 +140,9 @@ def run(args: argparse.Namespace) -> int:
     unit = model.location_unit
     print(model.summary())
     print(f"test: {len(test)} taps; {args.runs} runs per curve")
-    if args.sweep_fixation:
+    if args.sweep_fixation and args.target_accuracy is not None:
+        rows = _sweep_for_accuracy(args, model, environment, tqdm)
+    elif args.sweep_fixation:
         progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
         sweep = fixation_sweep(environment, tap_budget=args.tap_budget, progress=progress, **options)
         if sweep.taps[sweep.best] > args.tap_budget:
@@ -154,28 +181,134 @@ def run(args: argparse.Namespace) -> int:
 
             plot_lateral_sweep(sweep, args.plot)
     else:
-        fixation_class = model.fixation_class(args.fixation)
-        names = [args.policy] if args.policy else ["active", "random", "stationary"]
-        if "active" in names:
-            print(f"active fixation: {model.location_centres[fixation_class]:g} {unit}")
-        policies = [make_policy(name, fixation_class=fixation_class) for name in names]
-        progress = functools.partial(tqdm, desc="policies", unit="policy", disable=args.quiet)
-        results = compare_policies(environment, policies, progress=progress, **options)
-        rows = [row for result in results.values() for row in result.rows()]
-        print(f"{'policy':<11} {'threshold':>9} {'taps':>6} {'id error':>8} {'accuracy':>8} {'loc error':>9}")
-        for row in rows:
-            print(f"{row['policy']:<11} {row['threshold']:>9.4g} {row['mean_taps']:>6.2f} "
-                  f"{row['mean_identity_error']:>8.3f} {row['accuracy']:>8.3f} {row['mean_location_error']:>9.3f}")
-        if args.plot:
-            from perception.plots import plot_speed_accuracy
-
-            plot_speed_accuracy(results, args.plot, units=model.identity_unit if model.n_identities > 1 else unit)
+        rows = _compare(args, model, environment, options, test, tqdm)
     if args.json:
         write_text_atomic(args.json, json.dumps(rows, indent=1) + "\n", inputs=[args.model, args.test])
         print(f"wrote {args.json}")
     if args.plot:
         print(f"wrote {args.plot}")
     return 0
+
+
+def _reliability_path(plot):
+    """Where the reliability diagram goes: beside --plot, ``NAME_reliability.SUFFIX``."""
+    if plot is None:
+        return None
+    plot = pathlib.Path(plot)
+    return plot.with_name(f"{plot.stem}_reliability{plot.suffix}")
+
+
+def _compare(args, model, environment, options, test, tqdm) -> list[dict]:
+    """Speed-accuracy of each policy and the calibration of the active policy, for each model; returns JSON rows."""
+    from perception import (CALIBRATION_TAPS, VirtualEnvironment, compare_policies, load_model, make_policy,
+                            trace_beliefs)
+
+    unit = model.location_unit
+    models = {args.model: model}
+    environments = {args.model: environment}
+    for path in args.compare:
+        other = load_model(path)
+        _check_same_classes(model, other, path)
+        models[path] = other
+        environments[path] = VirtualEnvironment(other, test)
+    names = {path: _model_name(path, m, models) for path, m in models.items()}
+    policy_names = [args.policy] if args.policy else ["active", "random", "stationary"]
+    fixation_class = model.fixation_class(args.fixation)
+    if "active" in policy_names:
+        print(f"active fixation: {model.location_centres[fixation_class]:g} {unit}")
+    rows, curves, traces = [], {}, {}
+    for path, m in models.items():
+        policies = [make_policy(name, fixation_class=fixation_class) for name in policy_names]
+        progress = functools.partial(tqdm, desc="policies", unit="policy", disable=args.quiet)
+        results = compare_policies(environments[path], policies, progress=progress, **options)
+        if len(models) > 1:
+            print(f"model {names[path]}: {m.summary()}")
+        model_rows = [{**row, "model": names[path]} for result in results.values() for row in result.rows()]
+        _print_rows(model_rows)
+        rows += model_rows
+        for policy, result in results.items():
+            curves[f"{names[path]} {policy}" if len(models) > 1 else policy] = result
+        traces[names[path]] = trace_beliefs(environments[path], make_policy("active", fixation_class=fixation_class),
+                                            runs=options["runs"], max_taps=options["max_taps"], seed=options["seed"],
+                                            move_threshold=options["move_threshold"], shift_mode=options["shift_mode"])
+    taps = [t for t in CALIBRATION_TAPS if t <= args.max_taps]
+    what = "identity" if model.n_identities > 1 else "location"
+    print(f"calibration of the {what} belief, active policy ({options['runs']} runs): expected calibration error "
+          f"(0 = a belief of p is right a fraction p of the time)")
+    print(f"{'model':<24} " + " ".join(f"{f'{t} tap' + ('s' if t > 1 else ''):>8}" for t in taps))
+    for name, trace in traces.items():
+        print(f"{name:<24} " + " ".join(f"{trace.calibration_error(t):>8.3f}" for t in taps))
+    for row in rows:
+        trace = traces[row["model"]]
+        row.update({f"ece_{t}_taps": trace.calibration_error(t) for t in taps})
+    if args.plot:
+        from perception.plots import plot_reliability, plot_speed_accuracy
+
+        plot_speed_accuracy(curves, args.plot, units=model.identity_unit if model.n_identities > 1 else unit)
+        plot_reliability(traces, _reliability_path(args.plot), taps=taps)
+        print(f"wrote {_reliability_path(args.plot)}")
+    return rows
+
+
+def _print_rows(rows) -> None:
+    print(f"{'policy':<11} {'threshold':>9} {'taps':>6} {'id error':>8} {'accuracy':>8} {'loc error':>9}")
+    for row in rows:
+        print(f"{row['policy']:<11} {row['threshold']:>9.4g} {row['mean_taps']:>6.2f} "
+              f"{row['mean_identity_error']:>8.3f} {row['accuracy']:>8.3f} {row['mean_location_error']:>9.3f}")
+
+
+def _model_name(path, model, models) -> str:
+    """The model's kind, or its file name when two models share a kind."""
+    kinds = [m.KIND for m in models.values()]
+    return model.KIND if kinds.count(model.KIND) == 1 else pathlib.Path(path).name
+
+
+def _check_same_classes(model, other, path) -> None:
+    """--compare models must share the class grid, so the runs are the same."""
+    import numpy as np
+
+    from tactip.errors import TactipError
+
+    if other.n_locations != model.n_locations or not np.allclose(other.identities, model.identities) or \
+            not np.allclose(other.location_edges, model.location_edges):
+        raise TactipError(f"--compare {path}: its classes ({other.n_locations} locations x {other.n_identities} "
+                          f"identities) differ from {model.n_locations} x {model.n_identities}; train it on the same "
+                          f"collection with the same --locations")
+
+
+def _sweep_for_accuracy(args, model, environment, tqdm) -> list[dict]:
+    """--sweep-fixation --target-accuracy: the fixation and threshold reaching the target in the fewest taps."""
+    from perception import fixation_for_accuracy, save_model
+
+    from tactip.errors import TactipError
+
+    progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
+    sweep = fixation_for_accuracy(environment, target=args.target_accuracy, tolerance=args.tolerance, runs=args.runs,
+                                  max_taps=args.max_taps, seed=args.seed, move_threshold=args.move_threshold,
+                                  shift_mode=args.shift, progress=progress)
+    unit, identity_unit = model.location_unit, model.identity_unit
+    print(f"decisions within {args.tolerance:g} {identity_unit} in {100 * args.target_accuracy:g} % of runs:")
+    print(f"{'fixation':>10} {'threshold':>9} {'taps':>6} {'accuracy':>8}")
+    for fixation, threshold, taps, accuracy in zip(sweep.fixations, sweep.thresholds, sweep.taps, sweep.accuracy):
+        shown = "-" if not threshold == threshold else f"{threshold:.4g}"
+        print(f"{fixation:>10.3f} {shown:>9} {taps:>6.2f} {accuracy:>8.3f}")
+    if sweep.best is None:
+        raise TactipError(f"--target-accuracy {args.target_accuracy:g} is not reached at any fixation within "
+                          f"{args.max_taps} taps (best {sweep.accuracy.max():.3f}); lower it, raise --tolerance or "
+                          f"--max-taps; nothing written")
+    best = sweep.best
+    fixation, threshold = float(sweep.fixations[best]), float(sweep.thresholds[best])
+    save_model(args.model, model.with_recommended(fixation_location=fixation, decision_threshold=threshold,
+                                                  policy="active"))
+    print(f"best fixation {fixation:g} {unit} (threshold {threshold:g}: {sweep.accuracy[best]:.3f} within "
+          f"{args.tolerance:g} {identity_unit} in {sweep.taps[best]:.1f} taps); written to {args.model}")
+    if args.plot:
+        from perception.plots import plot_accuracy_sweep
+
+        plot_accuracy_sweep(sweep, args.plot, units=unit)
+    return [{"fixation": float(f), "threshold": float(t), "mean_taps": float(n), "accuracy_within_tolerance": float(a),
+             "tolerance": args.tolerance, "target_accuracy": args.target_accuracy}
+            for f, t, n, a in zip(sweep.fixations, sweep.thresholds, sweep.taps, sweep.accuracy)]
 
 
 def _check_fixation(model, fixation) -> None:

@@ -119,3 +119,60 @@ def test_sweep_lateral_shows_errors_growing_with_placement_noise(files, capsys, 
 def test_sweep_lateral_needs_lateral_offsets(files, capsys):
     assert main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--sweep-lateral", "1", "--quiet"]) == 1
     assert "no lateral offsets" in capsys.readouterr().err
+
+
+def test_train_each_model_kind_and_validate_them_side_by_side(files, capsys):
+    for kind in ("calibrated-histogram", "gaussian"):
+        assert main(["train", str(files / "train.h5"), "--out", str(files / f"{kind}.h5"), "--locations", "6",
+                     "--model", kind]) == 0
+        assert kind.split("-")[0] in capsys.readouterr().out
+        assert load_model(files / f"{kind}.h5").KIND == kind
+    out_json, out_png = files / "models.json", files / "models.png"
+    code = main(["validate", str(files / "gaussian.h5"), str(files / "test.h5"), "--compare", str(files / "model.h5"),
+                 str(files / "calibrated-histogram.h5"), "--policy", "active", "--fixation", "5", "--runs", "800",
+                 "--thresholds", "0.9", "--json", str(out_json), "--plot", str(out_png), "--quiet"])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "expected calibration error" in out
+    table = {line.split()[0]: [float(v) for v in line.split()[1:]] for line in out.splitlines()
+             if line.split() and line.split()[0] in ("gaussian", "histogram", "calibrated-histogram")
+             and len(line.split()) == 4}
+    assert set(table) == {"gaussian", "histogram", "calibrated-histogram"}
+    rows = json.loads(out_json.read_text())
+    assert {r["model"] for r in rows} == set(table)
+    for row in rows:  # the JSON holds the printed ECE after 1, 3 and 5 taps
+        assert [round(row[f"ece_{t}_taps"], 3) for t in (1, 3, 5)] == table[row["model"]]
+    assert table["gaussian"][0] < table["histogram"][0]
+    assert (files / "models_reliability.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_sweep_fixation_for_a_target_accuracy_writes_the_threshold(files, capsys, tmp_path):
+    import shutil
+
+    model = tmp_path / "g.h5"
+    assert main(["train", str(files / "train.h5"), "--out", str(model), "--locations", "6", "--model", "gaussian"]) == 0
+    code = main(["validate", str(model), str(files / "test.h5"), "--sweep-fixation", "--target-accuracy", "0.9",
+                 "--tolerance", "1", "--runs", "500", "--quiet"])
+    assert code == 0
+    out = capsys.readouterr().out
+    recommended = load_model(model).recommended
+    assert f"best fixation {recommended['fixation_location']:g} mm (threshold {recommended['decision_threshold']:g}" \
+        in out
+    assert recommended["fixation_location"] > 2.5  # the width is legible deep only (legible_from=0.5)
+    shutil.copy(model, tmp_path / "g2.h5")
+    assert main(["validate", str(tmp_path / "g2.h5"), str(files / "test.h5"), "--sweep-fixation", "--target-accuracy",
+                 "1", "--runs", "300", "--max-taps", "1", "--tap-budget", "1", "--quiet"]) == 1
+    assert "is not reached at any fixation" in capsys.readouterr().err
+    assert main(["validate", str(model), str(files / "test.h5"), "--target-accuracy", "0.9"]) == 1
+    assert "--target-accuracy needs --sweep-fixation" in capsys.readouterr().err
+
+
+def test_train_torch_without_torch_is_one_line(files, capsys, monkeypatch):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "torch" else real(name, *a))
+    assert main(["train", str(files / "train.h5"), "--out", str(files / "t.h5"), "--model", "torch"]) == 1
+    err = capsys.readouterr().err
+    assert "pip install torch==2.13.0" in err and len(err.strip().splitlines()) == 1
+    assert not (files / "t.h5").exists()

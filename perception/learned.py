@@ -1,0 +1,225 @@
+"""A small learned likelihood (kind ``torch``): a network over the tap, early-stopped and temperature-scaled.
+
+The tap (samples x dims) is flattened, standardised with the training taps' mean and spread per value,
+and mapped by one hidden layer of ``hidden`` ReLU units to one score per joint class:
+
+    s_c(z) = W2 relu(W1 (x - mu) / sigma + b1) + b2,    log P(z | c) = beta s_c(z) + const
+
+Trained with torch (Adam, learning rate 3e-3, weight decay, cross-entropy over the joint classes) on the training taps of
+every fold but one; the epoch with the lowest held-out loss is kept (early stopping), beta is fitted on
+the held-out taps' decision posteriors (temperature scaling, `perception.tempering`), and the network is
+trained again on every training tap for that many epochs. With a balanced training set the scores are
+log posteriors under a flat prior, i.e. log likelihoods up to a constant shared by all classes.
+
+Torch is needed to train only (``pip install torch==2.13.0``, the optional extra ``learned``): the
+weights are stored as arrays and the likelihood is computed with numpy, so a station runs the model
+without torch.
+
+Example
+-------
+>>> model = fit_torch(train, n_locations=11)       # doctest: +SKIP
+>>> model.log_likelihood(tap).shape                # doctest: +SKIP
+(11, 20)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .dataset import Dataset
+from .errors import DatasetError, ModelError
+from .likelihood import LikelihoodModel
+from .model import fit_model
+from .tempering import check_tempering, cross_validation_folds, fit_tempering
+
+__all__ = ["TorchModel", "fit_torch"]
+
+_BATCH = 1024
+
+
+@dataclass(frozen=True, repr=False)
+class TorchModel(LikelihoodModel):
+    """One-hidden-layer network scores as tempered log likelihoods (build with `fit_torch`).
+
+    Attributes
+    ----------
+    mean, scale : (samples * dims,) float64 ndarray
+        Standardisation of the flattened tap (sensor units).
+    hidden_weight : (samples * dims, H) float32 ndarray
+    hidden_bias : (H,) float32 ndarray
+    output_weight : (H, classes) float32 ndarray
+    output_bias : (classes,) float32 ndarray
+    tempering : float
+        beta > 0 (1 / temperature), fitted on held-out taps.
+    epochs : int
+        Training epochs (chosen by early stopping).
+    location_edges, identities, front_end, samples, dim_names, sensor, location_unit, identity_unit,
+    taps_per_class, recommended
+        As for `perception.HistogramModel`.
+    """
+
+    mean: np.ndarray
+    scale: np.ndarray
+    hidden_weight: np.ndarray
+    hidden_bias: np.ndarray
+    output_weight: np.ndarray
+    output_bias: np.ndarray
+    tempering: float
+    epochs: int
+    location_edges: np.ndarray
+    identities: np.ndarray
+    front_end: str
+    samples: int
+    dim_names: tuple[str, ...]
+    sensor: dict
+    location_unit: str
+    identity_unit: str
+    taps_per_class: np.ndarray
+    recommended: dict = field(default_factory=dict)
+
+    KIND = "torch"
+    _ARRAYS = ("mean", "scale", "hidden_weight", "hidden_bias", "output_weight", "output_bias")
+    _ATTRS = ("tempering", "epochs")
+
+    def __post_init__(self):
+        values = self.samples * len(self.dim_names)
+        hidden = self.hidden_bias.shape[0] if self.hidden_bias.ndim == 1 else -1
+        shapes = {"mean": (values,), "scale": (values,), "hidden_weight": (values, hidden),
+                  "output_weight": (hidden, self.n_classes), "output_bias": (self.n_classes,)}
+        for name, shape in shapes.items():
+            if getattr(self, name).shape != shape:
+                raise ModelError(f"{name} must have shape {shape}, got {getattr(self, name).shape}")
+        if not (np.isfinite(self.tempering) and self.tempering > 0):
+            raise ModelError(f"tempering must be a finite number > 0, got {self.tempering!r}")
+        self._check_recommended()
+
+    def summary(self) -> str:
+        """One line: front end, class grid, tap shape, hidden units, tempering."""
+        return (f"{self._grid_summary()}; torch network, {self.hidden_bias.size} hidden units, {self.epochs} epochs, "
+                f"tempering {self.tempering:.4g}")
+
+    def scores(self, taps) -> np.ndarray:
+        """Untempered network scores s_c(z), (N, classes) float64, with numpy."""
+        x = (np.asarray(taps, dtype=np.float64).reshape(len(taps), -1) - self.mean) / self.scale
+        hidden = np.maximum(x @ self.hidden_weight + self.hidden_bias, 0.0)
+        return hidden @ self.output_weight + self.output_bias
+
+    def log_likelihood_batch(self, taps) -> np.ndarray:
+        """beta x the network's scores of many taps against every class.
+
+        Parameters
+        ----------
+        taps : (N, samples, dims) array
+
+        Returns
+        -------
+        (N, n_locations, n_identities) float64 ndarray
+        """
+        taps = self._check_taps(taps, batch=True)
+        out = np.empty((len(taps), self.n_classes))
+        for start in range(0, len(taps), _BATCH):
+            out[start:start + _BATCH] = self.tempering * self.scores(taps[start:start + _BATCH])
+        return out.reshape(len(taps), self.n_locations, self.n_identities)
+
+    def _stored(self) -> tuple[dict, dict]:
+        return ({name: getattr(self, name) for name in self._ARRAYS},
+                {"tempering": self.tempering, "epochs": self.epochs})
+
+    @classmethod
+    def _from_stored(cls, common: dict, arrays: dict, attrs: dict):
+        try:
+            settings = dict(tempering=float(attrs["tempering"]), epochs=int(attrs["epochs"]))
+        except (TypeError, ValueError):
+            raise ModelError(f"unreadable torch model settings {dict(attrs)!r}") from None
+        return cls(**{k: np.asarray(v) for k, v in arrays.items()}, **common, **settings)
+
+
+def _train(x, tap_class, n_classes, *, hidden, epochs, weight_decay, seed, held=None):
+    """Train the network; returns (weights, held-out loss per epoch) (losses only when ``held`` is given)."""
+    import torch
+
+    torch.manual_seed(seed)
+    net = torch.nn.Sequential(torch.nn.Linear(x.shape[1], hidden), torch.nn.ReLU(), torch.nn.Linear(hidden, n_classes))
+    optimiser = torch.optim.Adam(net.parameters(), lr=3e-3, weight_decay=weight_decay)
+    inputs, targets = torch.as_tensor(x, dtype=torch.float32), torch.as_tensor(tap_class, dtype=torch.long)
+    generator = torch.Generator().manual_seed(seed)
+    losses, snapshots = [], []
+    for _ in range(epochs):
+        net.train()
+        for batch in torch.randperm(len(inputs), generator=generator).split(64):
+            optimiser.zero_grad()
+            loss = torch.nn.functional.cross_entropy(net(inputs[batch]), targets[batch])
+            loss.backward()
+            optimiser.step()
+        if held is not None:
+            net.eval()
+            with torch.no_grad():
+                held_x, held_class = held
+                logits = net(torch.as_tensor(held_x, dtype=torch.float32))
+                losses.append(float(torch.nn.functional.cross_entropy(logits, torch.as_tensor(held_class)).item()))
+                snapshots.append(logits.numpy().astype(np.float64))
+    weights = [p.detach().numpy().copy() for p in net.parameters()]
+    return weights, losses, snapshots
+
+
+def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: int = 1, hidden: int = 64,
+              max_epochs: int = 100, weight_decay: float = 1e-3, folds: int = 2, seed: int = 0) -> TorchModel:
+    """Train the network likelihood: early stopping and temperature on held-out taps, then all taps.
+
+    Parameters
+    ----------
+    dataset : Dataset
+    n_locations : int
+        Equal location classes over the training locations.
+    min_taps_per_class : int
+    hidden : int
+        Hidden ReLU units.
+    max_epochs : int
+        Most epochs tried by early stopping.
+    weight_decay : float
+        L2 penalty of Adam.
+    folds : int
+        Cross-validation folds; fold 0 is held out for early stopping and the temperature.
+    seed : int
+        Seed of the initialisation and batch order.
+
+    Returns
+    -------
+    TorchModel
+
+    Raises
+    ------
+    ImportError
+        torch is not installed (``pip install torch==2.13.0``).
+    """
+    try:
+        import torch  # noqa: F401
+    except ImportError:
+        raise ImportError("the torch model needs torch: pip install torch==2.13.0") from None
+    grid = fit_model(dataset, n_locations=n_locations, bins=2, min_taps_per_class=min_taps_per_class)
+    x = dataset.taps.reshape(len(dataset), -1).astype(np.float64)
+    mean, scale = x.mean(axis=0), x.std(axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+    x = (x - mean) / scale
+    cls = grid.tap_class(dataset)
+    fold = cross_validation_folds(cls, folds, order=dataset.location)
+    train, held = fold != 0, fold == 0
+    seen = np.bincount(cls[train], minlength=grid.n_classes) > 0
+    held &= seen[cls]
+    if not held.any():
+        raise DatasetError("no class has training taps in two folds: collect at least two taps per class")
+    _, losses, snapshots = _train(x[train], cls[train], grid.n_classes, hidden=hidden, epochs=max_epochs,
+                                  weight_decay=weight_decay, seed=seed, held=(x[held], cls[held]))
+    best = int(np.argmin(losses))
+    truth = grid.identity_class(dataset.identity[held]) if grid.n_identities > 1 \
+        else grid.location_class(dataset.location[held])
+    beta = fit_tempering(snapshots[best].reshape(-1, grid.n_locations, grid.n_identities), truth)
+    check_tempering(beta)
+    (w1, b1, w2, b2), _, _ = _train(x, cls, grid.n_classes, hidden=hidden, epochs=best + 1,
+                                    weight_decay=weight_decay, seed=seed)
+    return TorchModel(mean, scale, w1.T.astype(np.float32), b1.astype(np.float32), w2.T.astype(np.float32),
+                      b2.astype(np.float32), float(beta), best + 1, grid.location_edges, grid.identities,
+                      grid.front_end, grid.samples, grid.dim_names, grid.sensor, grid.location_unit,
+                      grid.identity_unit, grid.taps_per_class)

@@ -1,0 +1,244 @@
+"""The likelihood interface every measurement model implements, and the class grid they share.
+
+A measurement model gives, for a tap z (samples x dims sensor values), the log likelihood
+log P(z | x_l, w_i) of every joint class c = (location l, identity i), c = l * n_identities + i
+(papers 000 and 002 eqs. 2-3). The perceiver, the Monte Carlo, the station and replay call only:
+
+- ``log_likelihood(tap)`` -> (n_locations, n_identities) and ``log_likelihood_batch(taps)``;
+- the class grid: ``n_locations``, ``n_identities``, ``n_classes``, ``location_edges``,
+  ``location_centres``, ``class_width``, ``identities``, ``location_class``, ``identity_class``,
+  ``fixation_class``;
+- what the taps must be: ``front_end``, ``samples``, ``dims``, ``dim_names``, ``sensor``, units,
+  ``check_dataset``;
+- the recommended station settings: ``recommended``, ``with_recommended``; and ``summary``.
+
+`LikelihoodModel` implements everything but the likelihood itself once, for frozen dataclasses
+holding the fields ``location_edges, identities, front_end, samples, dim_names, sensor,
+location_unit, identity_unit, taps_per_class, recommended``. Each kind of model (``KIND``) adds
+its parameters and how they are stored (`perception.model.save_model` / `load_model`).
+
+Kinds: ``histogram`` (the papers' model, `perception.model`), ``calibrated-histogram``
+(`perception.calibrated`), ``gaussian`` (`perception.gaussian`), ``torch`` (`perception.learned`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .dataset import Dataset
+from .errors import DatasetError, ModelError
+
+__all__ = ["LikelihoodModel", "RECOMMENDED_KEYS"]
+
+#: Recommended settings a model may carry (written by ``tactip validate --sweep-fixation``).
+RECOMMENDED_KEYS = ("decision_threshold", "fixation_location", "policy")
+
+
+class LikelihoodModel:
+    """Base of every measurement model: the class grid, tap checks and recommended settings.
+
+    Subclasses are frozen dataclasses; they implement `log_likelihood_batch` and set ``KIND``.
+    """
+
+    #: Name of the kind of model, stored in the model file (``tactip train --model NAME``).
+    KIND = ""
+
+    # -- the likelihood (subclasses) -------------------------------------------------------
+    def log_likelihood_batch(self, taps) -> np.ndarray:
+        """log P(z | x_l, w_i) of many taps against every class.
+
+        Parameters
+        ----------
+        taps : (N, samples, dims) array
+
+        Returns
+        -------
+        (N, n_locations, n_identities) float64 ndarray
+        """
+        raise NotImplementedError
+
+    def log_likelihood(self, tap) -> np.ndarray:
+        """log P(z | x_l, w_i) of one tap against every class.
+
+        Parameters
+        ----------
+        tap : (samples, dims) array
+
+        Returns
+        -------
+        (n_locations, n_identities) float64 ndarray
+        """
+        tap = self._check_taps(tap, batch=False)
+        return self.log_likelihood_batch(tap[None])[0]
+
+    # -- description -----------------------------------------------------------------------
+    @property
+    def dims(self) -> int:
+        """Data dimensions per sample."""
+        return len(self.dim_names)
+
+    @property
+    def n_locations(self) -> int:
+        """Number of location classes L."""
+        return len(self.location_edges) - 1
+
+    @property
+    def n_identities(self) -> int:
+        """Number of identity classes I."""
+        return len(self.identities)
+
+    @property
+    def n_classes(self) -> int:
+        """Number of joint classes L * I."""
+        return self.n_locations * self.n_identities
+
+    @property
+    def location_centres(self) -> np.ndarray:
+        """(L,) centre of each location class, in ``location_unit``."""
+        return 0.5 * (self.location_edges[:-1] + self.location_edges[1:])
+
+    @property
+    def class_width(self) -> float:
+        """Width of one location class, in ``location_unit`` (0 for a single-location model)."""
+        return float(self.location_edges[1] - self.location_edges[0]) if self.n_locations > 1 else 0.0
+
+    def _grid_summary(self) -> str:
+        lo, hi = self.location_edges[0], self.location_edges[-1]
+        return (f"{self.front_end} model: {self.n_classes} classes = {self.n_locations} locations "
+                f"({lo:g}..{hi:g} {self.location_unit}) x {self.n_identities} identities "
+                f"({self.identities.min():g}..{self.identities.max():g} {self.identity_unit}); "
+                f"taps of {self.samples} samples x {self.dims} dims")
+
+    def summary(self) -> str:
+        """One line: kind, front end, class grid, tap shape."""
+        return f"{self._grid_summary()}; {self.KIND} likelihood"
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.summary()}>"
+
+    def with_recommended(self, **settings):
+        """A copy of the model with some recommended settings replaced.
+
+        Parameters
+        ----------
+        **settings
+            ``decision_threshold`` (float), ``fixation_location`` (float, location units), ``policy`` (str).
+        """
+        return dataclasses.replace(self, recommended={**self.recommended, **settings})
+
+    def _check_recommended(self) -> None:
+        """Each recommended setting is a number in its range, as a station file's key would be."""
+        unknown = set(self.recommended) - set(RECOMMENDED_KEYS)
+        if unknown:
+            raise ModelError(f"unknown recommended settings {sorted(unknown)}; choose from {RECOMMENDED_KEYS}")
+        lo, hi = float(self.location_edges[0]), float(self.location_edges[-1])
+        checks = {
+            "decision_threshold": (lambda v: 0.0 < v <= 1.0, "a number in (0, 1]"),
+            "fixation_location": (lambda v: lo - 1e-9 <= v <= hi + 1e-9,
+                                  f"a location inside the model's range {lo:g}..{hi:g} {self.location_unit}"),
+        }
+        for key, (inside, accepted) in checks.items():
+            if key not in self.recommended:
+                continue
+            value = self.recommended[key]
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not (number and np.isfinite(value) and inside(float(value))):
+                raise ModelError(f"recommended {key} must be {accepted}, got {value!r} (run 'tactip validate "
+                                 f"--sweep-fixation' again)")
+        policy = self.recommended.get("policy")
+        if policy is not None and policy not in ("active", "stationary", "random"):
+            raise ModelError(f"recommended policy must be one of active, stationary, random, got {policy!r}")
+
+    # -- class grid ------------------------------------------------------------------------
+    def location_class(self, location) -> np.ndarray:
+        """Location class index of each location (values outside the range go to the edge classes).
+
+        Parameters
+        ----------
+        location : float or (N,) array, location units
+
+        Returns
+        -------
+        int ndarray of the same shape, in [0, n_locations)
+        """
+        return np.searchsorted(self.location_edges[1:-1], np.asarray(location, dtype=np.float64), side="right")
+
+    def fixation_class(self, fixation: float | None = None) -> int:
+        """Location class to fixate on: of `fixation` (location units) if given, else of the
+        recommended ``fixation_location``, else the middle class of the range."""
+        if fixation is None:
+            fixation = self.recommended.get("fixation_location")
+        if fixation is None:
+            return self.n_locations // 2
+        return int(self.location_class(float(fixation)))
+
+    def identity_class(self, identity) -> np.ndarray:
+        """Identity class index of each identity value.
+
+        Parameters
+        ----------
+        identity : float or (N,) array, identity units
+
+        Raises
+        ------
+        DatasetError
+            A value matches none of the model's identities.
+        """
+        identity = np.asarray(identity, dtype=np.float64)
+        scale = max(1.0, float(np.abs(self.identities).max()))
+        distance = np.abs(identity[..., None] - self.identities)
+        index = distance.argmin(axis=-1)
+        unknown = distance.min(axis=-1) > 1e-9 * scale
+        if unknown.any():
+            raise DatasetError(f"identity {np.unique(identity[unknown])[:5].tolist()} {self.identity_unit} is not one "
+                               f"of the model's identities {self.identities.tolist()}")
+        return index
+
+    def tap_class(self, dataset: Dataset) -> np.ndarray:
+        """Joint class l * n_identities + i of every tap of a dataset.
+
+        Parameters
+        ----------
+        dataset : Dataset
+
+        Returns
+        -------
+        (N,) intp ndarray
+        """
+        return self.location_class(dataset.location) * self.n_identities + self.identity_class(dataset.identity)
+
+    # -- compatibility ---------------------------------------------------------------------
+    def check_dataset(self, dataset: Dataset) -> None:
+        """Raise ModelError if the dataset's taps are not the kind this model was trained on.
+
+        Parameters
+        ----------
+        dataset : Dataset
+        """
+        if (dataset.front_end, dataset.dims, dataset.samples) != (self.front_end, self.dims, self.samples):
+            raise ModelError(f"model trained for {self.front_end} ({self.dims} dims, {self.samples} samples), "
+                             f"got {dataset.front_end} taps ({dataset.dims} dims, {dataset.samples} samples)")
+        for name in ("location_unit", "identity_unit"):
+            if getattr(dataset, name) != getattr(self, name):
+                raise ModelError(f"model trained with {name} {getattr(self, name)!r}, got {getattr(dataset, name)!r}")
+
+    def _check_taps(self, taps, batch: bool) -> np.ndarray:
+        taps = np.asarray(taps)
+        shape = taps.shape[1:] if batch else taps.shape
+        if taps.ndim != (3 if batch else 2) or shape != (self.samples, self.dims):
+            expected = "(N, samples, dims)" if batch else "(samples, dims)"
+            raise ModelError(f"model trained for {self.front_end} taps of {self.samples} samples x {self.dims} "
+                             f"dims; expected {expected}, got shape {taps.shape}")
+        return taps
+
+    # -- storage (subclasses) --------------------------------------------------------------
+    def _stored(self) -> tuple[dict, dict]:
+        """(arrays, attributes) of the kind's own parameters, for the model file."""
+        return {}, {}
+
+    @classmethod
+    def _from_stored(cls, common: dict, arrays: dict, attrs: dict):
+        """The model from the common grid fields and the kind's stored parameters."""
+        raise NotImplementedError

@@ -1,0 +1,349 @@
+"""Do beliefs mean what they say? Calibration of the identity belief over Monte Carlo runs.
+
+`trace_beliefs` runs the virtual environment like `perception.monte_carlo` (same rules: update, the
+policy's move from the MAP location, clamped, the belief shifted), but never stops before
+``max_taps`` and keeps every tap's decision belief. Without a deadline a run's trajectory does not
+depend on the decision threshold, so one trace gives:
+
+- the calibration after t taps: the expected calibration error (ECE) of the decision belief, i.e.
+  the mean over equal confidence bins of |accuracy - mean belief| weighted by the bin's share of
+  runs, and the reliability diagram (`reliability_bins`);
+- the decision at any threshold (`BeliefTrace.decisions`): taps, decided identity, error, and the
+  fraction of decisions within a tolerance;
+- the threshold that reaches a target accuracy in the fewest taps (`threshold_for_accuracy`).
+
+Example
+-------
+>>> trace = trace_beliefs(env, FixationPolicy(9), runs=5000, seed=0)       # doctest: +SKIP
+>>> [round(trace.calibration_error(t), 3) for t in (1, 3, 5)]             # doctest: +SKIP
+[0.021, 0.034, 0.029]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import bayes
+from .montecarlo import VirtualEnvironment
+from .perceiver import clamp_move
+from .policies import Policy
+
+__all__ = ["BeliefTrace", "Decisions", "AccuracySweep", "trace_beliefs", "expected_calibration_error", "reliability_bins",
+           "threshold_for_accuracy", "fixation_for_accuracy", "CALIBRATION_TAPS"]
+
+#: Taps after which the calibration of the identity belief is reported (issue 11: 1, 3 and 5).
+CALIBRATION_TAPS = (1, 3, 5)
+
+
+def reliability_bins(confidence, correct, *, bins: int = 10):
+    """Equal-width confidence bins: mean confidence, accuracy and count of each.
+
+    Parameters
+    ----------
+    confidence : (N,) array in [0, 1]
+        Belief in the decided class.
+    correct : (N,) bool array
+        Whether the decided class was right.
+    bins : int
+        Number of equal bins over [0, 1].
+
+    Returns
+    -------
+    mean_confidence, accuracy : (bins,) float64 ndarray
+        NaN for empty bins.
+    counts : (bins,) int ndarray
+    """
+    confidence = np.asarray(confidence, dtype=np.float64).ravel()
+    correct = np.asarray(correct, dtype=np.float64).ravel()
+    if confidence.shape != correct.shape:
+        raise ValueError(f"confidence and correct must have the same length, got {confidence.size} and "
+                         f"{correct.size}")
+    if int(bins) != bins or bins < 1:
+        raise ValueError(f"bins must be an integer >= 1, got {bins}")
+    index = np.clip((confidence * bins).astype(np.intp), 0, bins - 1)
+    counts = np.bincount(index, minlength=bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_confidence = np.bincount(index, weights=confidence, minlength=bins) / counts
+        accuracy = np.bincount(index, weights=correct, minlength=bins) / counts
+    return mean_confidence, accuracy, counts
+
+
+def expected_calibration_error(confidence, correct, *, bins: int = 10) -> float:
+    """ECE = sum over bins of (share of samples) x |accuracy - mean confidence|.
+
+    Parameters
+    ----------
+    confidence : (N,) array in [0, 1]
+    correct : (N,) bool array
+    bins : int
+
+    Returns
+    -------
+    float in [0, 1]
+
+    Examples
+    --------
+    >>> round(expected_calibration_error([0.9] * 10, [1] * 9 + [0]), 12)    # 90 % sure, 90 % right
+    0.0
+    >>> round(expected_calibration_error([0.95, 0.95], [1, 0]), 3)
+    0.45
+    """
+    mean_confidence, accuracy, counts = reliability_bins(confidence, correct, bins=bins)
+    full = counts > 0
+    if not full.any():
+        raise ValueError("no beliefs to measure")
+    return float((counts[full] * np.abs(accuracy[full] - mean_confidence[full])).sum() / counts.sum())
+
+
+@dataclass(frozen=True)
+class Decisions:
+    """The decisions of a trace at one threshold (arrays over runs).
+
+    Attributes
+    ----------
+    threshold : float
+    taps : (R,) int ndarray
+        Taps to the decision (``max_taps`` when forced).
+    identity : (R,) int ndarray
+        Decided identity class.
+    belief : (R,) float ndarray
+        Belief in it at the decision.
+    forced : (R,) bool ndarray
+        The belief never crossed the threshold.
+    error : (R,) float ndarray
+        |decided - true identity|, identity units.
+    """
+
+    threshold: float
+    taps: np.ndarray
+    identity: np.ndarray
+    belief: np.ndarray
+    forced: np.ndarray
+    error: np.ndarray
+
+    def within(self, tolerance: float) -> np.ndarray:
+        """(R,) bool: the decided identity lies within ``tolerance`` (identity units) of the truth."""
+        return self.error <= tolerance + 1e-9
+
+
+@dataclass(frozen=True)
+class BeliefTrace:
+    """Every tap's decision belief in a set of Monte Carlo runs (arrays over R runs and T taps).
+
+    Attributes
+    ----------
+    policy : str
+    belief : (R, T) float64 ndarray
+        Largest belief of the decision marginal (identity; location for a single-identity model).
+    estimate : (R, T) int ndarray
+        MAP class of the decision marginal.
+    truth : (R, T) int ndarray
+        True class of the decision marginal at that tap (identity, or the current location class).
+    values : (n,) float64 ndarray
+        Value of each decision class (identities, or location class centres), for errors.
+    """
+
+    policy: str
+    belief: np.ndarray
+    estimate: np.ndarray
+    truth: np.ndarray
+    values: np.ndarray
+
+    @property
+    def runs(self) -> int:
+        """Number of runs R."""
+        return self.belief.shape[0]
+
+    @property
+    def max_taps(self) -> int:
+        """Taps per run T."""
+        return self.belief.shape[1]
+
+    def _column(self, taps: int) -> int:
+        if int(taps) != taps or not 1 <= taps <= self.max_taps:
+            raise ValueError(f"taps must be an integer in 1..{self.max_taps}, got {taps}")
+        return int(taps) - 1
+
+    def calibration_error(self, taps: int, *, bins: int = 10) -> float:
+        """ECE of the decision belief after ``taps`` taps (every run, none stopped)."""
+        t = self._column(taps)
+        return expected_calibration_error(self.belief[:, t], self.estimate[:, t] == self.truth[:, t], bins=bins)
+
+    def reliability(self, taps: int, *, bins: int = 10):
+        """`reliability_bins` of the decision belief after ``taps`` taps."""
+        t = self._column(taps)
+        return reliability_bins(self.belief[:, t], self.estimate[:, t] == self.truth[:, t], bins=bins)
+
+    def decisions(self, threshold: float) -> Decisions:
+        """Each run's decision at ``threshold``: the first tap whose belief exceeds it, else the last tap."""
+        if not 0.0 <= threshold <= 1.0:
+            raise ValueError(f"threshold must be in [0, 1], got {threshold}")
+        crossed = self.belief > threshold
+        forced = ~crossed.any(axis=1)
+        column = np.where(forced, self.max_taps - 1, crossed.argmax(axis=1))
+        rows = np.arange(self.runs)
+        identity = self.estimate[rows, column]
+        error = np.abs(self.values[identity] - self.values[self.truth[rows, column]])
+        return Decisions(float(threshold), column + 1, identity, self.belief[rows, column], forced, error)
+
+
+def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int = 5000, max_taps: int = 20,
+                  seed=None, move_threshold: float = 0.0, shift_mode: str = "edge") -> BeliefTrace:
+    """Monte Carlo runs of ``max_taps`` taps each, keeping every tap's decision belief.
+
+    The runs follow `perception.monte_carlo` without a deadline: the same seed draws the same true
+    classes and starting locations.
+
+    Parameters
+    ----------
+    environment : VirtualEnvironment
+    policy : Policy
+    runs : int
+    max_taps : int
+    seed : int or numpy.random.Generator, optional
+    move_threshold : float
+        theta_est on the 'where' belief (0: always move).
+    shift_mode : {"edge", "uniform"}
+
+    Returns
+    -------
+    BeliefTrace
+    """
+    if int(runs) != runs or runs < 1:
+        raise ValueError(f"runs must be an integer >= 1, got {runs}")
+    if int(max_taps) != max_taps or max_taps < 1:
+        raise ValueError(f"max_taps must be an integer >= 1, got {max_taps}")
+    model = environment.model
+    n_loc, n_id = model.n_locations, model.n_identities
+    rng = np.random.default_rng(seed)
+    runs, max_taps = int(runs), int(max_taps)
+    location = rng.integers(0, n_loc, runs)
+    identity = rng.integers(0, n_id, runs)
+    log_belief = np.broadcast_to(bayes.flat_prior(n_loc, n_id), (runs, n_loc, n_id)).copy()
+    table = environment.log_likelihood.reshape(-1, n_loc, n_id)
+    belief = np.empty((runs, max_taps))
+    estimate = np.empty((runs, max_taps), np.intp)
+    truth = np.empty((runs, max_taps), np.intp)
+    for tap in range(max_taps):
+        log_belief = bayes.update(table[environment.draw(location * n_id + identity, rng)], log_belief)
+        where, what = bayes.marginals(log_belief)
+        decision = what if n_id > 1 else where
+        belief[:, tap] = decision.max(axis=1)
+        estimate[:, tap] = decision.argmax(axis=1)
+        truth[:, tap] = identity if n_id > 1 else location
+        where_estimate = where.argmax(axis=1)
+        offset = np.where(where.max(axis=1) > move_threshold, policy.move(where, where_estimate, rng), 0)
+        offset = clamp_move(where_estimate, offset, n_loc)
+        location = np.clip(location + offset, 0, n_loc - 1)
+        log_belief = bayes.shift(log_belief, offset, mode=shift_mode)
+    values = model.identities if n_id > 1 else model.location_centres
+    return BeliefTrace(policy.name, belief, estimate, truth, np.asarray(values, dtype=np.float64))
+
+
+def threshold_for_accuracy(trace: BeliefTrace, target: float, *, tolerance: float = 0.0, thresholds=None):
+    """The threshold whose decisions reach ``target`` accuracy within ``tolerance`` in the fewest mean taps.
+
+    Parameters
+    ----------
+    trace : BeliefTrace
+    target : float in (0, 1]
+        Fraction of decisions that must lie within ``tolerance`` of the truth.
+    tolerance : float
+        Identity units (0: the exact class).
+    thresholds : sequence of float, optional
+        Candidates; default 0.5..0.9999 in 0.005 steps and the 0.999x tail.
+
+    Returns
+    -------
+    (Decisions, float) or (None, float)
+        The decisions at the chosen threshold, and the best accuracy any candidate reached (None if
+        none reaches the target).
+    """
+    if not 0.0 < target <= 1.0:
+        raise ValueError(f"target must be in (0, 1], got {target}")
+    if not (np.isfinite(tolerance) and tolerance >= 0):
+        raise ValueError(f"tolerance must be a number >= 0, got {tolerance}")
+    if thresholds is None:
+        thresholds = np.concatenate([np.arange(0.5, 0.995, 0.005), [0.995, 0.998, 0.999, 0.9995, 0.9999]])
+    best, best_accuracy = None, 0.0
+    for threshold in thresholds:
+        decisions = trace.decisions(float(threshold))
+        accuracy = float(decisions.within(tolerance).mean())
+        best_accuracy = max(best_accuracy, accuracy)
+        if accuracy >= target and (best is None or decisions.taps.mean() < best.taps.mean()):
+            best = decisions
+    return best, best_accuracy
+
+
+@dataclass(frozen=True)
+class AccuracySweep:
+    """Active perception at each fixation location, with the threshold reaching a target accuracy.
+
+    Attributes
+    ----------
+    fixations : (F,) ndarray
+        Fixation locations, location units (class centres).
+    thresholds : (F,) ndarray
+        Decision threshold reaching the target in the fewest taps (NaN where none does).
+    taps : (F,) ndarray
+        Mean decision taps there (NaN where none does).
+    accuracy : (F,) ndarray
+        Fraction of decisions within the tolerance there (else the best any threshold reached).
+    target, tolerance : float
+    best : int or None
+        Index of the fixation reaching the target in the fewest mean taps (None: no fixation does).
+    """
+
+    fixations: np.ndarray
+    thresholds: np.ndarray
+    taps: np.ndarray
+    accuracy: np.ndarray
+    target: float
+    tolerance: float
+    best: int | None
+
+
+def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tolerance: float = 0.0,
+                          fixation_classes=None, runs: int = 2000, max_taps: int = 20, seed=0,
+                          progress=None, **options) -> AccuracySweep:
+    """For each fixation location, the threshold whose decisions reach ``target`` accuracy in the fewest taps.
+
+    Parameters
+    ----------
+    environment : VirtualEnvironment
+    target : float in (0, 1]
+        Fraction of decisions within ``tolerance`` of the true identity.
+    tolerance : float
+        Identity units (0: the exact class).
+    fixation_classes : sequence of int, optional
+        Location classes to try; default all.
+    runs, max_taps, seed
+        As `trace_beliefs` (the same seed for every fixation).
+    progress : callable, optional
+        Wraps the iterable of fixations (e.g. ``tqdm``).
+    **options
+        ``move_threshold``, ``shift_mode`` for `trace_beliefs`.
+
+    Returns
+    -------
+    AccuracySweep
+    """
+    from .policies import FixationPolicy
+
+    model = environment.model
+    classes = np.arange(model.n_locations) if fixation_classes is None else np.asarray(fixation_classes, np.intp)
+    rows = []
+    for c in (progress or (lambda x: x))(classes.tolist()):
+        trace = trace_beliefs(environment, FixationPolicy(int(c)), runs=runs, max_taps=max_taps, seed=seed, **options)
+        decisions, best_accuracy = threshold_for_accuracy(trace, target, tolerance=tolerance)
+        if decisions is None:
+            rows.append((np.nan, np.nan, best_accuracy))
+        else:
+            rows.append((decisions.threshold, float(decisions.taps.mean()), float(decisions.within(tolerance).mean())))
+    thresholds, taps, accuracy = (np.array(column, dtype=np.float64) for column in zip(*rows))
+    reached = np.isfinite(taps)
+    best = int(np.nanargmin(taps)) if reached.any() else None
+    return AccuracySweep(model.location_centres[classes], thresholds, taps, accuracy, float(target), float(tolerance),
+                         best)

@@ -1,0 +1,48 @@
+"""The torch likelihood (optional extra): numpy inference equals torch's, storage, calibration; skipped without torch."""
+
+import numpy as np
+import pytest
+from scipy.special import logsumexp
+
+from perception import load_model, save_model, train_model
+from tests.perception.synthetic import gap_dataset
+
+torch = pytest.importorskip("torch")
+
+GRID = dict(depths=3, widths=4, samples=6, dims=6, contact_floor=1.0, noise=0.1)
+
+
+@pytest.fixture(scope="module")
+def model():
+    from perception.learned import fit_torch
+
+    return fit_torch(gap_dataset(seed=1, taps_per_class=8, **GRID), n_locations=3, seed=0, max_epochs=40)
+
+
+def test_train_model_makes_a_torch_model():
+    model = train_model(gap_dataset(seed=1, taps_per_class=2, **GRID), kind="torch", n_locations=3)
+    assert model.KIND == "torch" and model.summary().endswith(f"tempering {model.tempering:.4g}")
+
+
+def test_numpy_scores_equal_the_torch_network(model):
+    taps = gap_dataset(seed=2, taps_per_class=2, **GRID).taps
+    net = torch.nn.Sequential(torch.nn.Linear(model.mean.size, model.hidden_bias.size), torch.nn.ReLU(),
+                              torch.nn.Linear(model.hidden_bias.size, model.n_classes))
+    with torch.no_grad():
+        net[0].weight.copy_(torch.as_tensor(model.hidden_weight.T))
+        net[0].bias.copy_(torch.as_tensor(model.hidden_bias))
+        net[2].weight.copy_(torch.as_tensor(model.output_weight.T))
+        net[2].bias.copy_(torch.as_tensor(model.output_bias))
+        x = (taps.reshape(len(taps), -1) - model.mean) / model.scale
+        expected = model.tempering * net(torch.as_tensor(x, dtype=torch.float32)).numpy()
+    np.testing.assert_allclose(model.log_likelihood_batch(taps).reshape(len(taps), -1), expected, rtol=1e-4, atol=1e-4)
+
+
+def test_the_network_tells_the_widths_apart_and_survives_a_round_trip(model, tmp_path):
+    test = gap_dataset(seed=3, taps_per_class=10, **GRID)
+    what = logsumexp(model.log_likelihood_batch(test.taps), axis=1)
+    assert np.mean(what.argmax(axis=1) == model.identity_class(test.identity)) > 0.8
+    save_model(tmp_path / "t.h5", model)
+    loaded = load_model(tmp_path / "t.h5")
+    assert loaded.KIND == "torch" and 1 <= loaded.epochs
+    np.testing.assert_allclose(loaded.log_likelihood_batch(test.taps[:5]), model.log_likelihood_batch(test.taps[:5]))

@@ -1,0 +1,91 @@
+"""Calibration measures: ECE against a plain computation, traces against the Monte Carlo, accuracy targets."""
+
+import doctest
+
+import numpy as np
+import pytest
+
+import perception.reliability
+import perception.tempering
+from perception import (FixationPolicy, RandomPolicy, VirtualEnvironment, expected_calibration_error, fit_model,
+                        monte_carlo, reliability_bins, threshold_for_accuracy, trace_beliefs, train_model)
+from perception.reliability import fixation_for_accuracy
+from tests.perception.synthetic import gap_dataset
+
+GRID = dict(depths=5, widths=4, samples=8, dims=6, legible_from=0.4, noise=0.1)
+
+
+@pytest.fixture(scope="module")
+def environment():
+    model = fit_model(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=5, bins=20)
+    return VirtualEnvironment(model, gap_dataset(seed=2, taps_per_class=6, **GRID))
+
+
+@pytest.mark.parametrize("module", [perception.reliability, perception.tempering])
+def test_docstring_examples(module):
+    result = doctest.testmod(module)
+    assert result.attempted > 0 and result.failed == 0
+
+
+def test_ece_equals_a_plain_loop():
+    rng = np.random.default_rng(0)
+    confidence = rng.random(500)
+    correct = rng.random(500) < confidence ** 2
+    expected = 0.0
+    for b in range(10):
+        inside = [i for i in range(500) if min(int(confidence[i] * 10), 9) == b]
+        if inside:
+            expected += len(inside) / 500 * abs(np.mean(correct[inside]) - np.mean(confidence[inside]))
+    assert expected_calibration_error(confidence, correct) == pytest.approx(expected, rel=1e-12)
+    _, accuracy, counts = reliability_bins(confidence, correct)
+    assert counts.sum() == 500 and np.nanmax(accuracy) <= 1
+
+
+def test_a_calibrated_belief_has_a_small_ece():
+    rng = np.random.default_rng(1)
+    confidence = rng.uniform(0.2, 1.0, 50000)
+    assert expected_calibration_error(confidence, rng.random(50000) < confidence) < 0.01
+    assert expected_calibration_error(confidence, rng.random(50000) < confidence / 2) > 0.25
+
+
+@pytest.mark.parametrize("policy", [FixationPolicy(4), RandomPolicy()])
+def test_trace_decisions_are_the_monte_carlo_decisions(environment, policy):
+    thresholds = (0.3, 0.6, 0.9, 0.99)
+    result = monte_carlo(environment, policy, runs=700, seed=5, thresholds=thresholds, max_taps=12)
+    trace = trace_beliefs(environment, policy, runs=700, seed=5, max_taps=12)
+    for k, threshold in enumerate(thresholds):
+        decisions = trace.decisions(threshold)
+        assert decisions.taps.mean() == pytest.approx(result.mean_taps[k], abs=1e-12)
+        assert decisions.error.mean() == pytest.approx(result.mean_identity_error[k], abs=1e-12)
+        assert decisions.forced.mean() == pytest.approx(result.forced[k], abs=1e-12)
+
+
+def test_threshold_for_accuracy_reaches_the_target_in_the_fewest_taps(environment):
+    trace = trace_beliefs(environment, FixationPolicy(4), runs=1000, seed=2, max_taps=15)
+    decisions, best = threshold_for_accuracy(trace, 0.8, tolerance=1.0)
+    assert decisions is not None and decisions.within(1.0).mean() >= 0.8
+    for threshold in np.arange(0.5, decisions.threshold, 0.005):  # every cheaper threshold misses the target
+        cheaper = trace.decisions(threshold)
+        if cheaper.taps.mean() < decisions.taps.mean():
+            assert cheaper.within(1.0).mean() < 0.8
+    none, best = threshold_for_accuracy(trace, 1.0, tolerance=0.0)
+    assert (none is None) == (best < 1.0)
+
+
+def test_fixation_for_accuracy_prefers_the_legible_end(environment):
+    sweep = fixation_for_accuracy(environment, target=0.8, tolerance=1.0, runs=600, max_taps=15, seed=0)
+    assert sweep.best is not None and sweep.fixations[sweep.best] >= 2.5  # widths are legible deep only
+    assert np.nanmin(sweep.taps) == sweep.taps[sweep.best]
+
+
+def test_calibrated_models_have_smaller_multi_tap_ece_than_the_papers_model():
+    grid = dict(depths=3, widths=4, samples=8, dims=6, contact_floor=1.0, noise=0.2)
+    train, test = gap_dataset(seed=1, taps_per_class=6, **grid), gap_dataset(seed=2, taps_per_class=20, **grid)
+    ece = {}
+    for kind in ("histogram", "gaussian"):
+        model = train_model(train, kind=kind, n_locations=3, bins=20)
+        trace = trace_beliefs(VirtualEnvironment(model, test), FixationPolicy(2), runs=2000, seed=0, max_taps=5)
+        ece[kind] = [trace.calibration_error(t) for t in (1, 3, 5)]
+    # The papers' mean log likelihood is timid: far from calibrated until many taps have piled up.
+    assert max(ece["gaussian"]) < 0.1 < 0.2 < ece["histogram"][0]
+    assert np.mean(ece["gaussian"]) < np.mean(ece["histogram"]) / 3
