@@ -5,7 +5,8 @@ front ends; `fit_model` trains the histogram likelihood; `Perceiver` classifies 
 `monte_carlo` and the experiments validate a model on an independent test set.
 """
 
-from .bayes import adaptive_prior, flat_prior, marginals, normalize, shift, update
+from .adaptive import ShiftLearner
+from .bayes import DECISION_RULES, adaptive_prior, decide, flat_prior, marginals, normalize, shift, shift_identity, update
 from .dataset import SCHEMA, Dataset, DatasetWriter, load_dataset, save_dataset
 from .errors import DatasetError, ModelError, PerceptionError
 from .experiments import FixationSweep, LateralSweep, compare_policies, fixation_sweep, lateral_sweep
@@ -13,14 +14,17 @@ from .model import MODEL_SCHEMA, HistogramModel, fit_model, load_model, save_mod
 from .montecarlo import DEFAULT_THRESHOLDS, MonteCarloResult, VirtualEnvironment, monte_carlo
 from .perceiver import Perceiver, Step
 from .policies import POLICIES, FixationPolicy, Policy, RandomPolicy, StationaryPolicy, make_policy
+from .sequence import SequenceResult, identity_distance, monte_carlo_sequence
 
 __all__ = [
     "PerceptionError", "DatasetError", "ModelError",
     "SCHEMA", "Dataset", "DatasetWriter", "load_dataset", "save_dataset",
     "MODEL_SCHEMA", "HistogramModel", "fit_model", "load_model", "save_model",
-    "normalize", "update", "shift", "marginals", "flat_prior", "adaptive_prior",
+    "normalize", "update", "shift", "shift_identity", "marginals", "decide", "DECISION_RULES", "flat_prior",
+    "adaptive_prior", "ShiftLearner",
     "Perceiver", "Step",
     "POLICIES", "Policy", "FixationPolicy", "StationaryPolicy", "RandomPolicy", "make_policy",
     "DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo",
+    "SequenceResult", "monte_carlo_sequence", "identity_distance",
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
 ]
