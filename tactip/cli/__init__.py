@@ -35,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "results": "tactip.cli.results",
     "arm": "tactip.cli.arm",
     "simulate": "tactip.cli.simulate",
+    "reproduce": "tactip.cli.reproduce",
 }
 
 
