@@ -6,7 +6,8 @@ likelihood model (`LikelihoodModel`: histogram, calibrated histogram, Gaussian, 
 `monte_carlo` and the experiments validate a model on an independent test set.
 """
 
-from .bayes import adaptive_prior, flat_prior, marginals, normalize, shift, update
+from .adaptive import ShiftLearner
+from .bayes import DECISION_RULES, adaptive_prior, decide, flat_prior, marginals, normalize, shift, shift_identity, update
 from .dataset import SCHEMA, Dataset, DatasetWriter, load_dataset, save_dataset
 from .errors import DatasetError, ModelError, PerceptionError
 from .experiments import FixationSweep, LateralSweep, compare_policies, fixation_sweep, lateral_sweep
@@ -19,16 +20,19 @@ from .perceiver import Perceiver, Step
 from .policies import POLICIES, FixationPolicy, Policy, RandomPolicy, StationaryPolicy, make_policy
 from .reliability import (CALIBRATION_TAPS, BeliefTrace, expected_calibration_error, reliability_bins,
                           fixation_for_accuracy, threshold_for_accuracy, trace_beliefs)
+from .sequence import SequenceResult, identity_distance, monte_carlo_sequence
 
 __all__ = [
     "PerceptionError", "DatasetError", "ModelError",
     "SCHEMA", "Dataset", "DatasetWriter", "load_dataset", "save_dataset",
     "MODEL_SCHEMA", "MODEL_KINDS", "LikelihoodModel", "HistogramModel", "fit_model", "load_model", "save_model",
     "train_model", "CalibratedHistogramModel", "fit_calibrated_histogram", "GaussianModel", "fit_gaussian",
-    "normalize", "update", "shift", "marginals", "flat_prior", "adaptive_prior",
+    "normalize", "update", "shift", "shift_identity", "marginals", "decide", "DECISION_RULES", "flat_prior",
+    "adaptive_prior", "ShiftLearner",
     "Perceiver", "Step",
     "POLICIES", "Policy", "FixationPolicy", "StationaryPolicy", "RandomPolicy", "make_policy",
     "DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo",
+    "SequenceResult", "monte_carlo_sequence", "identity_distance",
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
     "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
     "threshold_for_accuracy", "fixation_for_accuracy",

@@ -21,10 +21,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import logsumexp
 
-__all__ = ["SHIFT_MODES", "normalize", "update", "shift", "marginals", "flat_prior", "adaptive_prior"]
+__all__ = ["SHIFT_MODES", "DECISION_RULES", "normalize", "update", "shift", "shift_identity", "marginals",
+           "decide", "flat_prior", "adaptive_prior"]
 
 #: Belief shift boundary conventions: replicate the edge class (paper 002) or fill uniformly (paper 000 eq. 8).
 SHIFT_MODES = ("edge", "uniform")
+#: Stop rules: a 'what' marginal crosses theta (papers 002, 003, 004) or any joint class does (paper 001 eq. 3).
+DECISION_RULES = ("marginal", "joint")
 _CLASSES = (-2, -1)
 
 
@@ -100,6 +103,66 @@ def shift(log_belief, offset_classes, *, mode: str = "edge") -> np.ndarray:
     return normalize(np.where(inside[..., None], shifted, fill[..., None, :]))
 
 
+def shift_identity(log_belief, offset_classes, *, circular: bool = False) -> np.ndarray:
+    """Shift beliefs along the identity axis: P(x_l, w_i) <- P(x_l, w_(i - offset)) (paper 004 eq. 7).
+
+    Parameters
+    ----------
+    log_belief : (..., L, I) array
+    offset_classes : int or (...) int array
+        Shift in identity classes; one per belief of the batch.
+    circular : bool
+        The identity classes cover a full turn (e.g. edge angles over 360 deg): classes shifted
+        out at one end come back at the other. Otherwise the belief shifted out is spread evenly
+        over the classes shifted in, separately for each location (uniform fill, as `shift`).
+
+    Returns
+    -------
+    (..., L, I) float64 ndarray
+    """
+    log_belief = np.asarray(log_belief, dtype=np.float64)
+    n_id = log_belief.shape[-1]
+    offset = np.asarray(offset_classes, dtype=np.intp)[..., None, None]
+    source = np.arange(n_id) - offset                                       # (..., 1, I)
+    if circular:
+        index = np.broadcast_to(source % n_id, log_belief.shape)
+        return normalize(np.take_along_axis(log_belief, index, axis=-1))
+    swapped = np.swapaxes(log_belief, -1, -2)
+    return np.swapaxes(shift(swapped, offset_classes, mode="uniform"), -1, -2)
+
+
+def decide(log_belief, *, rule: str = "marginal") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The decision belief and the MAP classes under a stop rule.
+
+    Parameters
+    ----------
+    log_belief : (..., L, I) array of normalised log probabilities
+    rule : {"marginal", "joint"}
+        ``"marginal"``: the largest 'what' marginal P(w_i | z) (the 'where' marginal for a single
+        identity; papers 002-004), with the MAP of each marginal. ``"joint"``: the largest joint
+        belief P(x_l, w_i | z) and its class (paper 001 eq. 3: "if any P(c_n | z_t) > theta then
+        c = argmax P(c_n | z_t)").
+
+    Returns
+    -------
+    belief : (...) float64 ndarray
+        Compared with the decision threshold.
+    location_class, identity_class : (...) intp ndarrays
+        MAP classes under the rule.
+    """
+    if rule not in DECISION_RULES:
+        raise ValueError(f"rule must be one of {DECISION_RULES}, got {rule!r}")
+    belief = np.exp(np.asarray(log_belief, dtype=np.float64))
+    n_loc, n_id = belief.shape[-2:]
+    if rule == "joint":
+        flat = belief.reshape(belief.shape[:-2] + (n_loc * n_id,))
+        best = flat.argmax(axis=-1)
+        return np.take_along_axis(flat, best[..., None], axis=-1)[..., 0], best // n_id, best % n_id
+    where, what = belief.sum(axis=-1), belief.sum(axis=-2)
+    decision = what if n_id > 1 else where
+    return decision.max(axis=-1), where.argmax(axis=-1), what.argmax(axis=-1)
+
+
 def marginals(log_belief) -> tuple[np.ndarray, np.ndarray]:
     """The 'where' and 'what' marginal beliefs (paper 003 eqs. 5-6; 002 eqs. 6, 9).
 
@@ -123,15 +186,20 @@ def flat_prior(n_locations: int, n_identities: int) -> np.ndarray:
     return np.full((n_locations, n_identities), -np.log(n_locations * n_identities))
 
 
-def adaptive_prior(log_posterior, *, alpha: float = 0.5) -> np.ndarray:
-    """Prior for the next decision mixing the last decision's posterior with a flat prior (paper 004 eq. 12).
+def adaptive_prior(log_posterior, *, alpha: float = 0.5, shift_classes=0, circular: bool = False) -> np.ndarray:
+    """Prior for the next decision mixing the predicted distribution with a flat prior (paper 004 eqs. 7, 12).
 
     Parameters
     ----------
     log_posterior : (..., L, I) array
-        The posterior at the previous decision (the predicted distribution).
+        The posterior at the previous decision.
     alpha : float in [0, 1]
-        Weight of the previous posterior (paper 004: 0.5); 0 gives the flat prior.
+        Weight of the predicted distribution (paper 004: 0.5); 0 gives the flat prior.
+    shift_classes : int or (...) int array
+        Delta: the predicted distribution is the posterior shifted by Delta identity classes,
+        P_predicted(x_l, w_i) = P(x_l, w_(i - Delta) | z) (eq. 7; see `shift_identity`).
+    circular : bool
+        The identity classes are angles over a full turn.
 
     Returns
     -------
@@ -139,7 +207,7 @@ def adaptive_prior(log_posterior, *, alpha: float = 0.5) -> np.ndarray:
     """
     if not 0.0 <= alpha <= 1.0:
         raise ValueError(f"alpha must be in [0, 1], got {alpha}")
-    log_posterior = normalize(log_posterior)
+    log_posterior = shift_identity(log_posterior, shift_classes, circular=circular)
     log_flat = -np.log(log_posterior.shape[-2] * log_posterior.shape[-1])
     # P(c|z_0) = alpha P_predicted(c) + (1 - alpha) P_flat(c)
     with np.errstate(divide="ignore"):

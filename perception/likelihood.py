@@ -104,6 +104,16 @@ class LikelihoodModel:
         """Width of one location class, in ``location_unit`` (0 for a single-location model)."""
         return float(self.location_edges[1] - self.location_edges[0]) if self.n_locations > 1 else 0.0
 
+    @property
+    def shift_mode(self) -> str:
+        """The belief-shift convention of the model's front end (see `perception.bayes.shift`).
+
+        ``"uniform"`` for the taxel front end (paper 000 eq. 8: the classes shifted in from outside
+        the range are filled uniformly), ``"edge"`` for the TacTip (paper 002: the edge class is
+        replicated).
+        """
+        return "uniform" if self.front_end == "taxel" else "edge"
+
     def _grid_summary(self) -> str:
         lo, hi = self.location_edges[0], self.location_edges[-1]
         return (f"{self.front_end} model: {self.n_classes} classes = {self.n_locations} locations "

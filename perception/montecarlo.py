@@ -29,9 +29,12 @@ from .dataset import Dataset
 from .errors import DatasetError
 from .model import HistogramModel
 from .perceiver import clamp_move
-from .policies import Policy, RandomPolicy
+from .policies import Policy
 
 __all__ = ["DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo"]
+
+#: Taps after which a run without a cap (``max_taps=None``) is stopped all the same and counted as forced.
+SAFETY_TAPS = 2000
 
 #: Decision thresholds of a speed-accuracy curve (20 values over 0-0.9999).
 DEFAULT_THRESHOLDS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.925, 0.95, 0.97, 0.98, 0.99,
@@ -135,19 +138,23 @@ class MonteCarloResult:
     mean_taps: np.ndarray             # (K,)
     forced: np.ndarray                # (K,) fraction of runs that reached max_taps below the threshold
     null_decisions: np.ndarray        # (K,) mean null decisions per run (deadline)
+    null_fraction: np.ndarray         # (K,) null decisions / attempts (paper 001 Fig. 6: a proportion)
+    decided_identity_error: np.ndarray  # (K,) mean identity error over runs decided by the threshold (NaN: none)
+    decided_location_error: np.ndarray  # (K,) the same for the location
     identity_error_map: np.ndarray    # (K, L, I)
     location_error_map: np.ndarray    # (K, L, I)
     taps_map: np.ndarray              # (K, L, I)
     runs: int
+    final_location: np.ndarray | None = None  # (K, runs) true location class of each run at its decision
 
     def rows(self) -> list[dict]:
-        """One JSON-ready dict per threshold: policy, threshold, errors, accuracy, mean taps."""
+        """One JSON-ready dict per threshold: policy, threshold, errors, accuracy, mean taps, forced and null."""
         return [{"policy": self.policy, "threshold": float(t), "mean_identity_error": float(e),
                  "accuracy": float(a), "mean_location_error": float(le), "mean_taps": float(n),
-                 "forced": float(f), "null_decisions": float(z)}
-                for t, e, a, le, n, f, z in zip(self.thresholds, self.mean_identity_error, self.accuracy,
-                                                self.mean_location_error, self.mean_taps, self.forced,
-                                                self.null_decisions)]
+                 "forced": float(f), "null_decisions": float(z), "null_fraction": float(zf)}
+                for t, e, a, le, n, f, z, zf in zip(self.thresholds, self.mean_identity_error, self.accuracy,
+                                                    self.mean_location_error, self.mean_taps, self.forced,
+                                                    self.null_decisions, self.null_fraction)]
 
     def best_within(self, tap_budget: float) -> int:
         """Index of the threshold with the lowest identity error among those with mean taps <= budget.
@@ -164,9 +171,9 @@ class MonteCarloResult:
 
 
 def monte_carlo(environment: VirtualEnvironment, policy: Policy, *, thresholds=DEFAULT_THRESHOLDS,
-                runs: int = 5000, seed=None, move_threshold: float = 0.0, max_taps: int = 20,
-                deadline: int | None = None, shift_mode: str = "edge", start_location=None,
-                true_identity=None) -> MonteCarloResult:
+                runs: int = 5000, seed=None, move_threshold: float = 0.0, max_taps: int | None = 20,
+                deadline: int | None = None, shift_mode: str = "edge", decision_rule: str = "marginal",
+                start_location=None, true_identity=None) -> MonteCarloResult:
     """Run the Monte Carlo validation of one policy over decision thresholds.
 
     Parameters
@@ -180,12 +187,17 @@ def monte_carlo(environment: VirtualEnvironment, policy: Policy, *, thresholds=D
     seed : int or numpy.random.Generator, optional
     move_threshold : float
         theta_est on the 'where' belief (0: always move).
-    max_taps : int
-        Taps at which a decision is forced.
+    max_taps : int or None
+        Taps at which a decision is forced (reported in ``forced``, apart from the threshold
+        decisions in ``decided_*_error``); None: no cap, as in the papers (a run still undecided
+        after `SAFETY_TAPS` taps is stopped and counted as forced).
     deadline : int, optional
-        Taps per attempt before a null decision and random relocation (paper 001). Runs then
+        Taps per attempt before a null decision (paper 001): the beliefs restart from the flat
+        prior and the sensor moves to a location class drawn uniformly over the range. Runs then
         depend on the threshold, so each threshold gets its own runs.
     shift_mode : {"edge", "uniform"}
+    decision_rule : {"marginal", "joint"}
+        Stop on the 'what' marginal (papers 002-004) or the joint class (paper 001 eq. 3).
     start_location, true_identity : (runs,) int arrays, optional
         Starting location class and true identity class of each run (default: uniform random).
 
@@ -199,8 +211,10 @@ def monte_carlo(environment: VirtualEnvironment, policy: Policy, *, thresholds=D
         raise ValueError(f"thresholds must be values in [0, 1], got {thresholds}")
     if int(runs) != runs or runs < 1:
         raise ValueError(f"runs must be an integer >= 1, got {runs}")
-    if int(max_taps) != max_taps or max_taps < 1:
-        raise ValueError(f"max_taps must be an integer >= 1, got {max_taps}")
+    if max_taps is not None and (int(max_taps) != max_taps or max_taps < 1):
+        raise ValueError(f"max_taps must be an integer >= 1 or None, got {max_taps}")
+    if decision_rule not in bayes.DECISION_RULES:
+        raise ValueError(f"decision_rule must be one of {bayes.DECISION_RULES}, got {decision_rule!r}")
     if deadline is not None and (int(deadline) != deadline or deadline < 1):
         raise ValueError(f"deadline must be an integer >= 1 or None, got {deadline}")
     if not 0.0 <= move_threshold <= 1.0:
@@ -213,7 +227,8 @@ def monte_carlo(environment: VirtualEnvironment, policy: Policy, *, thresholds=D
     identity = rng.integers(0, model.n_identities, runs) if true_identity is None else np.asarray(true_identity)
     if start.shape != (runs,) or identity.shape != (runs,):
         raise ValueError(f"start_location and true_identity must have shape ({runs},)")
-    settings = dict(move_threshold=move_threshold, max_taps=int(max_taps), deadline=deadline, shift_mode=shift_mode)
+    settings = dict(move_threshold=move_threshold, max_taps=SAFETY_TAPS if max_taps is None else int(max_taps),
+                    deadline=deadline, shift_mode=shift_mode, decision_rule=decision_rule)
     if deadline is None:
         outcome = _simulate(environment, policy, thresholds, start, identity, rng, **settings)
     else:
@@ -223,7 +238,8 @@ def monte_carlo(environment: VirtualEnvironment, policy: Policy, *, thresholds=D
     return _summarise(model, policy.name, thresholds, start, identity, outcome)
 
 
-def _simulate(env, policy, thresholds, start, identity, rng, *, move_threshold, max_taps, deadline, shift_mode):
+def _simulate(env, policy, thresholds, start, identity, rng, *, move_threshold, max_taps, deadline, shift_mode,
+              decision_rule="marginal"):
     """All runs step together; returns per-(threshold, run) decisions."""
     model = env.model
     n_loc, n_id = model.n_locations, model.n_identities
@@ -242,12 +258,11 @@ def _simulate(env, policy, thresholds, start, identity, rng, *, move_threshold, 
         log_belief = bayes.update(table[env.draw(location * n_id + identity, rng)], log_belief)
         attempt += 1
         where, what = bayes.marginals(log_belief)
-        decision = what if n_id > 1 else where
-        belief = decision.max(axis=1)
+        belief, decided_location, decided_identity = bayes.decide(log_belief, rule=decision_rule)
         estimate = where.argmax(axis=1)
         crossed = belief > thresholds[:, None]
         new = ~done & (crossed | (tap == max_taps))
-        for name, value in (("identity_class", what.argmax(axis=1)), ("location_class", estimate),
+        for name, value in (("identity_class", decided_identity), ("location_class", decided_location),
                             ("true_location", location), ("nulls", nulls)):
             out[name] = np.where(new, value, out[name])
         out["taps"][new] = tap
@@ -256,16 +271,16 @@ def _simulate(env, policy, thresholds, start, identity, rng, *, move_threshold, 
         if done.all():
             break
         offset = np.where(where.max(axis=1) > move_threshold, policy.move(where, estimate, rng), 0)
-        if deadline is not None:
-            # Null decision (paper 001): restart from the prior and relocate randomly.
-            null = ~done[0] & (attempt >= deadline)
-            offset = np.where(null, RandomPolicy().move(where, estimate, rng), offset)
-            log_belief[null] = flat
-            attempt[null] = 0
-            nulls += null
         offset = clamp_move(estimate, offset, n_loc)
         location = np.clip(location + offset, 0, n_loc - 1)
         log_belief = bayes.shift(log_belief, offset, mode=shift_mode)
+        if deadline is not None:
+            # Null decision (paper 001): restart from the prior, move to a place drawn uniformly over the range.
+            null = ~done[0] & (attempt >= deadline)
+            location = np.where(null, rng.integers(0, n_loc, runs), location)
+            log_belief[null] = flat
+            attempt[null] = 0
+            nulls += null
     return out
 
 
@@ -277,6 +292,12 @@ def _summarise(model, name, thresholds, start, identity, out) -> MonteCarloResul
     location_error = np.abs(centres[out["location_class"]] - centres[out["true_location"]])
     right = out["identity_class"] == identity if n_id > 1 else out["location_class"] == out["true_location"]
     k = len(thresholds)
+    decided = ~out["forced"]
+    with np.errstate(invalid="ignore"):
+        decided_identity = np.where(decided, identity_error, 0).sum(axis=1) / decided.sum(axis=1)
+        decided_location = np.where(decided, location_error, 0).sum(axis=1) / decided.sum(axis=1)
+    # attempts: every null decision plus the run's final decision (forced ones included)
+    null_fraction = out["nulls"].sum(axis=1) / (out["nulls"].sum(axis=1) + len(start))
     start_class = start * n_id + identity
     runs_per_class = np.bincount(start_class, minlength=n_loc * n_id)
 
@@ -290,5 +311,8 @@ def _summarise(model, name, thresholds, start, identity, out) -> MonteCarloResul
         policy=name, thresholds=thresholds, mean_identity_error=identity_error.mean(axis=1),
         accuracy=right.mean(axis=1), mean_location_error=location_error.mean(axis=1),
         mean_taps=out["taps"].mean(axis=1), forced=out["forced"].mean(axis=1),
-        null_decisions=out["nulls"].mean(axis=1), identity_error_map=per_class(identity_error),
-        location_error_map=per_class(location_error), taps_map=per_class(out["taps"]), runs=len(start))
+        null_decisions=out["nulls"].mean(axis=1), null_fraction=null_fraction,
+        decided_identity_error=decided_identity, decided_location_error=decided_location,
+        identity_error_map=per_class(identity_error),
+        location_error_map=per_class(location_error), taps_map=per_class(out["taps"]), runs=len(start),
+        final_location=out["true_location"])

@@ -37,6 +37,7 @@ COMMANDS: dict[str, str] = {
     "serve": "tactip.cli.serve",
     "arm": "tactip.cli.arm",
     "simulate": "tactip.cli.simulate",
+    "reproduce": "tactip.cli.reproduce",
 }
 
 

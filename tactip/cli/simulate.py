@@ -9,6 +9,14 @@
       (tactip-dataset/1, front end "taxel", location in mm, one identity). With --csv the raw
       readings of the test collection are also written to DIR/test_stream.csv.
 
+  tactip simulate taxel --stimulus rods|textures|edge --out DIR [--seed S]
+      The fingertip taps the stimulus of paper 001 (rods of 4-12 mm across a 16 mm sweep, 320
+      taps per rod), 003 (ten abrasive papers over 0-3 mm of depth, 150 taps per texture) or
+      004 (an edge at 72 angles over 18 mm, 90 taps per angle) in two sessions (train, test)
+      that differ as the papers' collections did (tactip.taxel.stimuli documents the physics).
+      The identity is the rod diameter (mm), the texture class (0 = p60 .. 9 = p800) or the
+      edge angle (deg). --locations sets the taps per identity.
+
 Example:
   tactip simulate taxel --sensor fingertip --out data/fingertip --seed 1
   tactip train data/fingertip/train.h5 --out data/fingertip/model.h5 --locations 300
@@ -53,6 +61,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     taxel.add_argument("--taps-per-location", type=int_in_range(1, MAX_TAPS // 2), default=1, metavar="N",
                        help="taps at each location (default 1); locations x taps at most "
                             f"{MAX_TAPS} per collection")
+    taxel.add_argument("--stimulus", choices=("rod", "rods", "textures", "edge"), default="rod",
+                       help="rod: paper 000's 8 mm rod or sphere (default); rods: paper 001; textures: 003; edge: 004")
     taxel.add_argument("--csv", action="store_true", help="also write the raw test stream to DIR/test_stream.csv")
     taxel.add_argument("--quiet", action="store_true", help="no progress bars")
 
@@ -64,6 +74,8 @@ def run(args: argparse.Namespace) -> int:
     from tactip.taxel import simulate_taxel_datasets, write_taxel_test_stream
     from tactip.taxel.collect import DEFAULT_TAPS
 
+    if args.stimulus != "rod":
+        return _run_stimulus(args)
     locations = DEFAULT_TAPS[args.sensor] if args.locations is None else args.locations
     if locations * args.taps_per_location > MAX_TAPS:
         raise TactipError(f"--locations {locations} x --taps-per-location {args.taps_per_location} = "
@@ -77,4 +89,31 @@ def run(args: argparse.Namespace) -> int:
         csv = write_taxel_test_stream(paths.test.parent / "test_stream.csv", sensor=args.sensor, seed=args.seed,
                                       locations=args.locations, taps_per_location=args.taps_per_location)
         print(f"wrote {csv}: raw 8-bit readings of the test collection")
+    return 0
+
+
+#: Taps per identity of each paper's collection (001: 320 per rod; 003: 150 per texture; 004: 90 per angle).
+STIMULUS_TAPS = {"rods": 320, "textures": 150, "edge": 90}
+
+
+def _run_stimulus(args: argparse.Namespace) -> int:
+    """``tactip simulate taxel --stimulus rods|textures|edge``: the two sessions of papers 001, 003, 004."""
+    from perception import save_dataset
+    from tactip.errors import TactipError
+    from tactip.taxel.collect import simulate_stimulus_dataset
+    from tactip.taxel.stimuli import make_stimulus
+
+    if args.sensor != "fingertip" or args.csv or args.taps_per_location != 1:
+        raise TactipError(f"--stimulus {args.stimulus} is tapped by the fingertip, one tap per location: "
+                          "drop --sensor skin, --csv and --taps-per-location")
+    stimulus = make_stimulus(args.stimulus)
+    taps = STIMULUS_TAPS[args.stimulus] if args.locations is None else args.locations
+    if taps * len(stimulus.identities) > MAX_TAPS:
+        raise TactipError(f"--locations {taps} x {len(stimulus.identities)} identities is more than {MAX_TAPS} taps")
+    args.out.mkdir(parents=True, exist_ok=True)
+    for name in ("train", "test"):
+        dataset = simulate_stimulus_dataset(stimulus, seed=args.seed, collection=name, taps_per_identity=taps)
+        path = args.out / f"{name}.h5"
+        save_dataset(path, dataset)
+        print(f"wrote {path}: {dataset.describe()}")
     return 0

@@ -70,8 +70,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="null decision and random relocation after N taps without a decision")
     parser.add_argument("--move-threshold", type=fraction, default=0.0, metavar="P",
                         help="location belief needed before moving (0 always moves, 1 never; default 0)")
-    parser.add_argument("--shift", choices=("edge", "uniform"), default="edge",
-                        help="belief shift at the range boundary after a move (default edge)")
+    parser.add_argument("--shift", choices=("edge", "uniform"), default=None,
+                        help="belief shift at the range boundary after a move (default: the model's front-end "
+                             "convention, uniform for taxel (paper 000), edge for tactip (paper 002))")
     sweep = parser.add_mutually_exclusive_group()
     sweep.add_argument("--sweep-fixation", action="store_true",
                        help="try every fixation location, write the best into the model's recommended settings")
@@ -136,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
                  what=f"{args.runs} Monte Carlo runs of {model.n_classes} classes", hint="use fewer --runs")
     environment = VirtualEnvironment(model, test)
     options = dict(thresholds=thresholds, runs=args.runs, max_taps=args.max_taps, deadline=args.deadline,
-                   move_threshold=args.move_threshold, shift_mode=args.shift, seed=args.seed)
+                   move_threshold=args.move_threshold, shift_mode=args.shift or model.shift_mode, seed=args.seed)
     unit = model.location_unit
     print(model.summary())
     print(f"test: {len(test)} taps; {args.runs} runs per curve")

@@ -20,7 +20,7 @@ from .sim import TaxelSimulator, sweep_locations
 from .sources import write_taxel_csv
 
 __all__ = ["DEFAULT_TAPS", "MAX_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
-           "write_taxel_test_stream"]
+           "write_taxel_test_stream", "simulate_stimulus_dataset"]
 
 #: Taps per collection in paper 000 (0.01 mm steps over the sensor's range).
 DEFAULT_TAPS = {"fingertip": 3000, "skin": 5000}
@@ -174,3 +174,50 @@ def _plan(sensor: str, seed: int, locations: int | None, taps_per_location: int)
 
 def _noise_seed(seed: int, collection: str) -> tuple[int, int]:
     return (int(seed), {"train": 2, "test": 3}[collection])
+
+
+def simulate_stimulus_dataset(stimulus, *, seed: int = 0, collection: str = "train", taps_per_identity: int,
+                              identities=None, progress=None) -> Dataset:
+    """Collect one session of a paper's stimulus (`tactip.taxel.stimuli`): a sweep per identity.
+
+    For each identity the fingertip taps at ``taps_per_identity`` evenly spaced locations over the
+    stimulus's range (paper 001: 320 taps over 16 mm per rod; 003: 150 over 3 mm per texture; 004:
+    90 over 18 mm per edge angle). The training and test collections are separate sessions: each
+    draws its own session constants (rod placement and indentation, `Stimulus.session`) and noise.
+
+    Parameters
+    ----------
+    stimulus : tactip.taxel.stimuli.Stimulus
+    seed : int
+        Seed of the simulated sensor (gains, rest levels); the session and noise seeds follow from
+        it and ``collection``.
+    collection : {"train", "test"}
+    taps_per_identity : int
+    identities : sequence of float, optional
+        A subset of the stimulus's identities (default all).
+    progress : callable, optional
+
+    Returns
+    -------
+    Dataset
+        ``front_end="taxel"``, location in mm, identity in the stimulus's unit.
+    """
+    identities = np.asarray(stimulus.identities if identities is None else identities, dtype=np.float64)
+    if int(taps_per_identity) < 2 or len(identities) * int(taps_per_identity) > MAX_TAPS:
+        raise ValueError(f"taps_per_identity must be >= 2 with at most {MAX_TAPS} taps in all, got {taps_per_identity}")
+    simulator = TaxelSimulator(stimulus.sensor, seed=seed, **stimulus.tap)
+    lo, hi = stimulus.location_range_mm
+    step = (hi - lo) / int(taps_per_identity)
+    sweep = lo + step * (np.arange(int(taps_per_identity)) + 0.5)
+    location = np.tile(sweep, len(identities))
+    identity = np.repeat(identities, len(sweep))
+    session = stimulus.session(np.random.default_rng([int(seed), _noise_seed(seed, collection)[1], 7]))
+
+    def field(x, rows):
+        return stimulus.field(x, identity[rows], session), stimulus.contact_delay_s(x, identity[rows])
+
+    taps = simulator.taps(location, seed=_noise_seed(seed, collection), progress=progress, field=field)
+    description = {**stimulus.sensor.describe(), **stimulus.describe(), "simulated": True, "simulator_seed": seed,
+                   "collection": collection, "units": "pressure, fraction of 8-bit full scale"}
+    return Dataset(taps, location, identity, None, "taxel", location_unit="mm", identity_unit=stimulus.identity_unit,
+                   dim_names=stimulus.sensor.dim_names, sensor=description)

@@ -224,7 +224,7 @@ class TaxelSimulator:
         )
 
     def taps(self, locations_mm, *, seed=None, cutoff_hz: float = 0.02, baseline_samples: int = BASELINE_SAMPLES,
-             progress: Callable[[int], None] | None = None) -> np.ndarray:
+             progress: Callable[[int], None] | None = None, field=None) -> np.ndarray:
         """Record one collection and cut it into pre-processed taps.
 
         The raw stream goes through `tactip.taxel.preprocess` (high-pass, sign, normalisation, cut at
@@ -236,6 +236,11 @@ class TaxelSimulator:
             Commanded location of each tap, mm.
         seed, progress
             As `stream`.
+        field : callable, optional
+            ``field(location_mm (n,), taps slice) -> ((n, K), delay_s)``: the fraction of its peak
+            each taxel reads for the taps of a block (e.g. `tactip.taxel.stimuli.Stimulus.field` of
+            each tap's identity) and the contact's delay past ``contact_delay_s`` (s, scalar or
+            (n,)); default the sensor's own object (`receptive_field_response`), no delay.
         cutoff_hz : float
             High-pass cut-off, Hz.
         baseline_samples : int
@@ -248,13 +253,13 @@ class TaxelSimulator:
         """
         hp = HighPassFilter(self.sensor.n_taxels, sample_rate_hz=self.sample_rate_hz, cutoff_hz=cutoff_hz)
         out = []
-        for t, raw, starts in self._blocks(locations_mm, seed, progress):
+        for t, raw, starts in self._blocks(locations_mm, seed, progress, field=field):
             pressure = hp(raw) * (-1.0 / FULL_SCALE_COUNTS)
             taps = resample_taps(t, pressure, starts, duration_s=self.tap_duration_s, samples=self.samples)
             out.append(remove_tap_baseline(taps, baseline_samples=baseline_samples).astype(np.float32))
         return np.concatenate(out) if out else np.zeros((0, self.samples, self.sensor.n_taxels), np.float32)
 
-    def _blocks(self, locations_mm, seed, progress, block_taps: int = 250) -> Iterator[tuple]:
+    def _blocks(self, locations_mm, seed, progress, block_taps: int = 250, field=None) -> Iterator[tuple]:
         """Yield ``(timestamps (T,), readings (T, K) uint8, tap_starts (n,))`` for consecutive blocks of taps."""
         locations = np.asarray(locations_mm, dtype=np.float64).reshape(-1)
         if not np.all(np.isfinite(locations)):
@@ -272,9 +277,11 @@ class TaxelSimulator:
         for first in range(0, len(locations), block_taps):
             x = locations[first:first + block_taps]
             n = len(x)
-            field_ = receptive_field_response(self.sensor, x + self.position_noise_mm * rng.standard_normal(n))
+            placed = x + self.position_noise_mm * rng.standard_normal(n)
+            field_, delay = ((receptive_field_response(self.sensor, placed), 0.0) if field is None
+                             else field(placed, slice(first, first + n)))
             amplitude = np.exp(self.amplitude_jitter * rng.standard_normal(n))
-            onset = self.contact_delay_s + self.onset_jitter_s * rng.standard_normal(n)
+            onset = self.contact_delay_s + delay + self.onset_jitter_s * rng.standard_normal(n)
             profile = contact_profile(t_in_period[None, :] - onset[:, None], **self.profile)       # (n, period)
             # visco-elastic recovery of the foam: first-order lag y[i] = relax * y[i-1] + (1 - relax) * p[i]
             profile = signal.lfilter([1.0 - relax], [1.0, -relax], profile, axis=1)

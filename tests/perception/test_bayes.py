@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from perception import adaptive_prior, flat_prior, marginals, normalize, shift, update
+from perception.bayes import decide, shift_identity
 
 # A 3-location x 2-identity belief whose shifts are easy to compute by hand.
 P = np.array([[0.1, 0.2],
@@ -108,3 +109,38 @@ def test_adaptive_prior_mixes_posterior_and_flat():
 
 def test_flat_prior():
     np.testing.assert_allclose(np.exp(flat_prior(4, 5)), np.full((4, 5), 0.05))
+
+
+def test_shift_identity_by_hand():
+    belief = np.log(np.array([[0.1, 0.2, 0.3], [0.1, 0.2, 0.1]]))
+    # circular (angles over a full turn): what leaves at one end comes back at the other
+    np.testing.assert_allclose(np.exp(shift_identity(belief, 1, circular=True)),
+                               [[0.3, 0.1, 0.2], [0.1, 0.1, 0.2]], atol=1e-15)
+    np.testing.assert_allclose(np.exp(shift_identity(belief, -4, circular=True)),
+                               np.exp(shift_identity(belief, -1, circular=True)), atol=1e-15)
+    # not circular: the belief shifted out is spread over the classes shifted in, per location
+    np.testing.assert_allclose(np.exp(shift_identity(belief, 1)), [[0.3, 0.1, 0.2], [0.1, 0.1, 0.2]], atol=1e-15)
+    np.testing.assert_allclose(np.exp(shift_identity(belief, 2)), [[0.25, 0.25, 0.1], [0.15, 0.15, 0.1]],
+                               atol=1e-15)
+    batch = shift_identity(np.stack([belief, belief]), np.array([1, 2]), circular=True)
+    np.testing.assert_allclose(batch[1], shift_identity(belief, 2, circular=True))
+
+
+def test_adaptive_prior_shifts_the_posterior_by_delta():
+    # P(c|z_0) = alpha P(x_l, w_(i - Delta)) + (1 - alpha) / N (paper 004 eqs. 7, 12)
+    expected = 0.5 * np.roll(P, 1, axis=1) + 0.5 / 6
+    np.testing.assert_allclose(np.exp(adaptive_prior(np.log(P), shift_classes=1, circular=True)), expected, atol=1e-15)
+
+
+def test_decision_rules():
+    belief = np.array([[0.30, 0.05], [0.05, 0.30], [0.25, 0.05]])
+    # marginal: 'what' = [0.6, 0.4]; MAP location from the 'where' marginal [0.35, 0.35, 0.3]
+    value, location, identity = decide(np.log(belief))
+    assert value == pytest.approx(0.6) and (location, identity) == (0, 0)
+    # joint (paper 001 eq. 3): the largest joint class, 0.30 at (0, 0) (ties: the first)
+    value, location, identity = decide(np.log(belief), rule="joint")
+    assert value == pytest.approx(0.30) and (location, identity) == (0, 0)
+    value, location, identity = decide(np.log(np.stack([belief, belief[::-1]])), rule="joint")
+    assert location.tolist() == [0, 1] and identity.tolist() == [0, 1] and value.tolist() == pytest.approx([0.3, 0.3])
+    with pytest.raises(ValueError, match="rule"):
+        decide(np.log(belief), rule="any")

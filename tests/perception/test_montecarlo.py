@@ -124,3 +124,67 @@ def test_environment_refuses_incompatible_test_sets(deep_only):
 def test_bad_options_name_the_parameter(deep_only, option, value):
     with pytest.raises(ValueError, match=option):
         monte_carlo(deep_only, StationaryPolicy(), **{option: value})
+
+
+def test_null_decisions_relocate_uniformly_on_the_simulated_fingertip():
+    """The pile-up of issue 10: 30 classes, deadline 5, every run starting in the end class 0.
+
+    Contacts at the ends of the range give no response, so the estimate there is poor; a
+    relocation drawn relative to it and clipped to the range put 59 % of the sensors back into
+    class 0. Paper 001 moves the finger to a random place: each class gets 1/30 of them.
+    """
+    from tactip.taxel import TaxelSimulator, simulate_taxel_dataset, sweep_locations
+
+    simulator = TaxelSimulator("fingertip", seed=0)
+    where = sweep_locations(simulator.sensor, 900)
+    train = simulate_taxel_dataset(simulator, where, seed=(0, 2), collection="train")
+    test = simulate_taxel_dataset(simulator, where, seed=(0, 3), collection="test")
+    env = VirtualEnvironment(fit_model(train, n_locations=30), test)
+    runs = 6000
+    # threshold 1 never decides: tap 6 is forced at the place the first null decision moved to
+    result = monte_carlo(env, StationaryPolicy(), thresholds=[1.0], runs=runs, seed=1, deadline=5, max_taps=6,
+                         start_location=np.zeros(runs, int), true_identity=np.zeros(runs, int))
+    landed = np.bincount(result.final_location[0], minlength=30) / runs
+    assert landed[0] < 0.05                                     # 59 % before the fix
+    np.testing.assert_allclose(landed, 1 / 30, atol=0.012)
+    assert result.null_fraction.tolist() == [0.5]              # one null, then one (forced) decision per run
+
+
+def test_null_fraction_is_a_proportion_and_forced_runs_are_apart(deep_only):
+    options = dict(thresholds=[0.5, 0.8], runs=1500, seed=7, max_taps=300)
+    short = monte_carlo(deep_only, StationaryPolicy(), deadline=6, **options)
+    long = monte_carlo(deep_only, StationaryPolicy(), deadline=8, **options)
+    for result in (short, long):
+        assert ((0 < result.null_fraction) & (result.null_fraction < 1)).all()
+        assert (np.diff(result.null_fraction) > 0).all()        # paper 001 Fig. 6: rises with theta
+        assert (result.forced == 0).all()                       # every run decides by the threshold
+        np.testing.assert_allclose(result.decided_identity_error, result.mean_identity_error)
+    assert (short.null_fraction > long.null_fraction).all()     # ... and with shorter deadlines
+    capped = monte_carlo(deep_only, StationaryPolicy(), thresholds=[0.9], runs=1500, seed=7, max_taps=8)
+    assert 0 < capped.forced[0] < 1
+    # the threshold decisions alone are better than the mix with the forced ones
+    assert capped.decided_identity_error[0] < capped.mean_identity_error[0]
+    assert capped.rows()[0]["null_fraction"] == 0.0
+
+
+def test_joint_rule_agrees_with_the_perceiver_and_is_never_sooner(deep_only):
+    env = environment(test_taps=1, legible_from=0.4, noise=0.1)
+    model = env.model
+    start, identity = np.divmod(np.arange(model.n_classes), model.n_identities)
+    result = monte_carlo(env, FixationPolicy(4), thresholds=[0.6], runs=len(start), seed=0, start_location=start,
+                         true_identity=identity, max_taps=12, decision_rule="joint")
+    for l, i in zip(start, identity):
+        perceiver = Perceiver(model, FixationPolicy(4), decision_threshold=0.6, max_taps=12, decision_rule="joint")
+        location = l
+        while True:
+            step = perceiver.observe(env.test.taps[env.draw([location * model.n_identities + i],
+                                                            np.random.default_rng(0))[0]])
+            if step.decided:
+                break
+            perceiver.moved(step.move)
+            location = int(np.clip(location + step.move_classes, 0, model.n_locations - 1))
+        assert result.taps_map[0, l, i] == step.taps
+        assert result.identity_error_map[0, l, i] == abs(step.identity_estimate - model.identities[i])
+    marginal = monte_carlo(deep_only, StationaryPolicy(), thresholds=[0.3, 0.9], runs=1000, seed=8)
+    joint = monte_carlo(deep_only, StationaryPolicy(), thresholds=[0.3, 0.9], runs=1000, seed=8, decision_rule="joint")
+    assert (joint.mean_taps >= marginal.mean_taps).all() and joint.mean_taps[0] > marginal.mean_taps[0]

@@ -99,7 +99,11 @@ def test_deadline_gives_null_decisions_and_relocates(model, taps):
         steps.append(step)
         if step.null:
             np.testing.assert_allclose(perceiver.posterior, 1 / 18)  # the evidence is discarded
-            assert 0 <= step.location_class + step.move_classes < 6
+            assert step.move_classes == 0 and step.relocate_to in model.location_centres
+            with pytest.raises(PerceptionError, match="moved"):
+                perceiver.observe(taps.taps[0])   # the relocation must be reported first
+        else:
+            assert step.relocate_to is None
         perceiver.moved(step.move)
     assert [s.null for s in steps] == [False, False, True] * 3 + [False]
     assert [s.taps for s in steps] == list(range(1, 11))
@@ -151,3 +155,63 @@ def test_bad_taps_and_knobs(model):
     with pytest.raises(PerceptionError, match="prior"):
         perceiver.reset(prior=np.ones((2, 2)))
     assert "RandomPolicy" in repr(Perceiver(model, RandomPolicy()))
+
+
+def test_null_decisions_relocate_uniformly_over_the_range_whatever_the_estimate(model, taps):
+    """Paper 001: the finger moves to another position at random, not relative to a poor estimate."""
+    perceiver = Perceiver(model, decision_threshold=1.0, deadline=1, max_taps=None, rng=1)
+    end_tap = taps.taps[(taps.location == 0) & (taps.identity == 1)][0]
+    places = []
+    for _ in range(3000):
+        step = perceiver.observe(end_tap)
+        assert step.null and not step.decided
+        places.append(step.relocate_to)
+        perceiver.moved(step.relocate_to - step.location_estimate)   # beliefs restarted: no shift
+        np.testing.assert_allclose(perceiver.posterior, 1 / 18)
+    counts = np.array([places.count(c) for c in model.location_centres])
+    np.testing.assert_allclose(counts / 3000, 1 / 6, atol=0.03)
+
+
+def test_joint_rule_stops_when_a_joint_class_crosses(model, taps):
+    for rule in ("joint", "marginal"):
+        perceiver = Perceiver(model, decision_threshold=0.7, max_taps=None, decision_rule=rule)
+        for tap in taps.taps[::5]:
+            step = perceiver.observe(tap)
+            joint = step.posterior.max()
+            marginal = step.what_belief.max()
+            assert step.belief == pytest.approx(joint if rule == "joint" else marginal)
+            assert step.decided == (step.belief > 0.7) and not step.forced
+            if rule == "joint":
+                assert step.posterior[step.location_class, step.identity_class] == joint
+            if step.decided:
+                break
+            perceiver.moved(step.move)
+        assert step.decided
+    with pytest.raises(ValueError, match="decision_rule"):
+        Perceiver(model, decision_rule="any")
+
+
+def test_adaptive_prior_learns_the_shift_between_decisions():
+    """Identities move by one class between decisions; the perceiver learns Delta = 1 (paper 004)."""
+    data = gap_dataset(depths=2, widths=6, taps_per_class=6, samples=10, dims=8, seed=1, noise=0.1, contact_floor=1.0)
+    model = fit_model(data, n_locations=2)
+    test = gap_dataset(depths=2, widths=6, taps_per_class=6, samples=10, dims=8, seed=2, noise=0.1, contact_floor=1.0)
+    perceiver = Perceiver(model, decision_threshold=0.95, adaptive_prior=True, identity_period=6.0, rng=0)
+    fixed = Perceiver(model, decision_threshold=0.95, adaptive_prior=True, prior_shift=2, identity_period=6.0)
+    assert fixed.delta == 2
+    rng = np.random.default_rng(0)
+    width = 0
+    for decision in range(12):
+        pool = test.taps[(test.identity == width + 1) & (test.location == 1)]
+        perceiver.reset()
+        if decision >= 1:   # the prior is the last posterior turned by Delta, mixed half and half with flat
+            expected = 0.5 * np.roll(last, perceiver.delta, axis=1) + 0.5 / 12
+            np.testing.assert_allclose(perceiver.posterior, expected, atol=1e-12)
+        while True:
+            step = perceiver.observe(pool[rng.integers(len(pool))])
+            if step.decided:
+                break
+            perceiver.moved(0.0)
+        last = step.posterior
+        width = (width + 1) % 6
+    assert perceiver.delta == 1

@@ -1,0 +1,55 @@
+"""`tactip reproduce PAPER --quick` end to end: JSON rows and the bars of issue 10."""
+
+import json
+
+import numpy as np
+import pytest
+
+from tactip.cli import main
+
+
+def _rows(tmp_path, paper, capsys):
+    out = tmp_path / f"{paper}.json"
+    assert main(["reproduce", paper, "--quick", "--quiet", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"paper {paper}:" in text and "paper " in text.splitlines()[1]
+    return json.loads(out.read_text()), text
+
+
+def test_001_deadline_and_relocation(tmp_path, capsys):
+    rows, _ = _rows(tmp_path, "001", capsys)
+    keys = {"deadline", "threshold", "shape_error_mm", "position_error_mm", "reaction_taps", "null_fraction",
+            "forced_fraction"}
+    assert all(set(r) == keys for r in rows)
+    by = {d: sorted((r for r in rows if r["deadline"] == d), key=lambda r: r["threshold"]) for d in (None, 5, 10)}
+    assert all(r["position_error_mm"] < 1.0 for r in rows)                     # hyperacuity: < 1 mm
+    assert all(r["forced_fraction"] < 0.05 for r in rows)
+    assert all(r["null_fraction"] == 0 for r in by[None])
+    for d in (5, 10):                                                          # Fig. 6: rises with theta ...
+        assert np.all(np.diff([r["null_fraction"] for r in by[d]]) > 0)
+    for short, long in zip(by[5], by[10]):                                     # ... and with shorter deadlines
+        assert short["null_fraction"] >= long["null_fraction"]
+    assert by[5][-1]["null_fraction"] > by[10][-1]["null_fraction"]
+    # Fig. 5: at a matched mean reaction time, deadline 5 lowers both errors
+    fixed_taps = [r["reaction_taps"] for r in by[None]]
+    matched = [r for r in by[5] if r["null_fraction"] > 0.1 and fixed_taps[0] <= r["reaction_taps"] <= fixed_taps[-1]]
+    assert matched
+    for r in matched:
+        for error in ("shape_error_mm", "position_error_mm"):
+            assert r[error] < np.interp(r["reaction_taps"], fixed_taps, [f[error] for f in by[None]])
+
+
+def test_003_active_touch_beats_passive(tmp_path, capsys):
+    rows, text = _rows(tmp_path, "003", capsys)
+    error = {r["move_threshold"]: r["texture_error_classes"] for r in rows}
+    assert set(error) == {1.5, 0.999, 0.05} and all("mean_taps" in r for r in rows)
+    assert error[0.05] <= 0.5 * error[1.5]                                     # paper: 0.4 against 1.4
+    assert error[0.05] < error[0.999] <= error[1.5]
+    assert "Fig. 5" in text and "Fig. 6B" in text
+
+
+def test_unknown_and_bench_only_papers(capsys):
+    assert main(["reproduce", "002", "--quick"]) == 1
+    assert "bench/bench_station.py" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["reproduce", "005"])
