@@ -245,6 +245,9 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     pitches = disc.radius_px * np.array(_PITCH_FRACTIONS)
     ring = _rim_ring_inner_px(grey, disc, start.dark_pins)
     search = disc if not np.isfinite(ring) else SensorDisc(disc.cx, disc.cy, max(ring - _RING_INSET_PX, 1.0))
+    # The rim margin is measured from the sensor disc's rim (the ring's inner edge is sharp: the
+    # pins next to it are whole).
+    start = start.replace(rim_margin_px=max(start.rim_margin_px - (disc.radius_px - search.radius_px), 0.0))
     cache: dict = {}
     # Coarse: one permissive candidate set per possible pitch; the strongest lattice gives the pitch.
     coarse = [_evaluate(grey, search, candidate, cache)

@@ -9,7 +9,7 @@ from scipy.spatial import Delaunay, cKDTree
 
 from pins import (REJECTION_REASONS, DetectionParams, NoSensorError, PinField, detect_pins, draw_pin_field,
                   find_pin_field)
-from tactip.synthetic import preset_names
+from tactip.synthetic import SyntheticTacTip, preset_names
 from tests.pins.conftest import TAP, preset_frame, preset_sensor, score
 
 CONTACTS = {"rest": None, "tap5mm": TAP}
@@ -88,6 +88,32 @@ def test_without_a_rim_ring_the_search_reaches_the_disc_rim(name):
     cx, cy, radius = preset_sensor(name).disc
     assert field.disc.radius_px == pytest.approx(radius, abs=2.0)
     assert np.hypot(*(field.centres - [cx, cy]).T).max() > radius - 1.5 * field.pitch_px
+
+
+# Mixes of the phenomena no preset shows (bench/bench_pin_field_sweep.py draws them at random): a
+# black rim ring with LED glare, on radial and hexagonal layouts, brown skin and a bright surround.
+RIM = dict(rim_polar_deg=77.0, ring_glare=18, glare=False)
+BROWN = dict(colour=True, skin_tint="brown", membrane_level=70.0, pin_level=140.0, skin_texture=12.0, pin_shadows=22.0)
+BRIGHT = dict(surround_level=240.0, glare_gain=1.6, veil=40.0)
+RING_MIXES = {
+    "radial+brown": dict(pins=127, image_size=(640, 480), pad_fraction=0.7, layout="radial", **RIM, **BROWN),
+    "radial+bright": dict(pins=200, image_size=(640, 480), pad_fraction=0.66, layout="radial", **RIM, **BRIGHT),
+    "hex+bright, small pad": dict(pins=100, image_size=(320, 240), pad_fraction=0.45, **RIM, **BRIGHT),
+    "hex+brown": dict(pins=127, image_size=(320, 240), pad_fraction=0.79, **RIM, **BROWN),
+}
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.parametrize("mix", list(RING_MIXES))
+def test_rim_ring_mixes_meet_the_bar(mix, seed):
+    """Glare on the ring (in a radial layout one pitch beyond the outermost ring of pins) is not
+    kept, nor the membrane along the ring's edge."""
+    sensor = SyntheticTacTip(**RING_MIXES[mix], seed=seed)
+    for contact in (None, TAP):
+        f = sensor.render(contact)
+        field = find_pin_field(f.image)
+        recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
+        assert recall >= 0.99 and precision >= 0.99 and rmse <= 0.1, (mix, contact, recall, precision, rmse)
 
 
 def test_painted_specks_and_faint_blobs_between_pins_are_rejected(rng):
