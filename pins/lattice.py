@@ -6,6 +6,12 @@ makes a pin a pin is that it belongs to the lattice: it sits at a lattice site, 
 the lattice pitch, and its size, contrast and sharpness are like its neighbours'. `find_pin_field`
 finds that lattice without being told the pin count:
 
+0. the search region: the sensor disc, or, when a black rim ring (the casing lip) lies between
+   the pin field and the disc edge, the disc inside the ring's inner edge: an outer annulus whose
+   dark grey level over nearly all azimuths is at most half the membrane's just inside it. Like
+   the surround, the ring neither makes candidate blobs (its LED glare, which in a radial layout
+   sits where one more ring of pins would) nor darkens the threshold's neighbourhood means (the
+   membrane along its edge would pass for pins);
 1. pitch: blobs detected permissively (`pins.detect`) at parameters scaled to each possible pitch
    of the disc (a twentieth to a quarter of its radius: 1000 to 100 pins, radial layouts, small
    pads); the strongest lattice (most contrast x area kept) gives the pitch, measured as the median
@@ -32,9 +38,9 @@ finds that lattice without being told the pin count:
    97 % of the most pins) also keep, and the fewest others, its centres nearest their consensus;
 6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
    pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
-   rim margin that leaves out the membrane half a pitch beyond the outermost pin, so that the
-   per-frame fast path `pins.detect_pins(frame, params=field.params, disc=field.disc)` does not
-   detect the rim ring and its glare again.
+   rim margin that leaves out the membrane half a pitch beyond the outermost pin and the rim
+   ring, so that the per-frame fast path `pins.detect_pins(frame, params=field.params,
+   disc=field.disc)` does not detect the rim ring and its glare again.
 
 A known pin count does not steer the search: it is compared with the result (`count_error`).
 `draw_pin_field` pictures what was kept and what was rejected, coloured by reason.
@@ -100,6 +106,20 @@ _OUTSIDE_MARGIN = 0.5
 _FIELD_MARGIN = 0.5
 # Area range of the final parameters around the kept pins' median area.
 _AREA_RANGE = (0.25, 2.5)
+# A black rim ring (the casing lip) between the pin field and the disc edge: an annulus reaching the
+# disc edge (less `_RING_EDGE_PX`, its anti-aliased rim) at least `_RING_MIN_PX` wide, in which the
+# dark grey level of nearly every azimuth (`_RING_PERCENTILE`, so that LED glare on the ring and
+# pins on the membrane do not count) is at most `_RING_DARK` of the membrane's just inside it (over
+# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge). The pins are searched inside its inner
+# edge less `_RING_INSET_PX` (its anti-aliased edge).
+_RING_PERCENTILE = 10.0
+_RING_DARK = 0.5
+_RING_EDGE_PX = 2
+_RING_MIN_PX = 3
+_RING_STEP_PX = 2
+_RING_INSIDE_PX = 4
+_RING_AZIMUTHS = 720
+_RING_INSET_PX = 1.0
 # Candidate sets: a pin matches within this many pitches; 'the same pins' within this fraction.
 _MATCH = 0.3
 _SAME_PINS = 0.005
@@ -119,7 +139,8 @@ class PinField:
         ``disc=field.disc``): the kept pins' blur, threshold and area range, and a rim margin that
         leaves out the membrane beyond the pin field (a rim ring and its glare).
     disc : SensorDisc
-        The membrane disc searched, px.
+        The sensor disc, px (the pins were searched inside it, or inside a black rim ring's inner
+        edge when there is one).
     pitch_px : float
         Median nearest-neighbour distance of the kept pins, px (nan with fewer than two).
     rejected : (M, 2) ndarray of float64
@@ -218,19 +239,27 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     grey = as_grey(frame)
     if disc is None:
         disc = find_sensor_disc(grey, dark_pins=start.dark_pins)
+    # The possible pitches scale with the sensor disc; the search stops at a black rim ring, which,
+    # like the surround, must neither make blobs (its glare) nor darken the threshold's
+    # neighbourhood means (the membrane along its edge would pass for pins).
+    pitches = disc.radius_px * np.array(_PITCH_FRACTIONS)
+    ring = _rim_ring_inner_px(grey, disc, start.dark_pins)
+    search = disc if not np.isfinite(ring) else SensorDisc(disc.cx, disc.cy, max(ring - _RING_INSET_PX, 1.0))
+    # The rim margin is measured from the sensor disc's rim (the ring's inner edge is sharp: the
+    # pins next to it are whole).
+    start = start.replace(rim_margin_px=max(start.rim_margin_px - (disc.radius_px - search.radius_px), 0.0))
     cache: dict = {}
     # Coarse: one permissive candidate set per possible pitch; the strongest lattice gives the pitch.
-    pitches = disc.radius_px * np.array(_PITCH_FRACTIONS)
-    coarse = [_evaluate(grey, disc, candidate, cache)
+    coarse = [_evaluate(grey, search, candidate, cache)
               for candidate in _candidates(pitches, start, _COARSE_BLOCK, _COARSE_OFFSETS)]
     first = max(coarse, key=lambda run: run.strength)
     pitch = first.pitch if np.isfinite(first.pitch) else float(np.median(pitches))
     pitch = float(np.clip(pitch, 0.5 * pitches.min(), 1.5 * pitches.max()))
     # Fine: blocks and offsets at the measured pitch.
-    runs = [_evaluate(grey, disc, candidate, cache)
+    runs = [_evaluate(grey, search, candidate, cache)
             for candidate in _candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS)]
     if params is not None:
-        runs.append(_evaluate(grey, disc, start, cache))
+        runs.append(_evaluate(grey, search, start, cache))
     # The pins are the blobs that most candidate sets agree on, where they agree on them: the run
     # that keeps the most of those (and the fewest others), with centres nearest the consensus.
     membership, deviation = _consensus(runs, pitch)
@@ -241,7 +270,7 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     later = max(np.flatnonzero(close), key=lambda r: (runs[r].params.offset, -deviation[r]))
     run = runs[best]
     centres = run.blobs.centres[run.kept]
-    final = _final_params(runs[later], centres, disc, run.pitch)
+    final = _final_params(runs[later], centres, disc, run.pitch, search.radius_px)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=disc,
                     pitch_px=float(_median_nn(centres)), rejected=run.blobs.centres[~run.kept],
@@ -426,6 +455,37 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     return reason, float(_median_nn(centres[reason == _KEPT]))
 
 
+def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> float:
+    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre (inf without one).
+
+    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each) give a dark level per radius, a low percentile over the azimuths, which neither the
+    pins nor glare covering most of the ring raise. The ring is the widest outer annulus whose dark
+    level stays at most `_RING_DARK` of the membrane's just inside its edge, out to the disc's rim.
+    Only bright pins are looked for on such a ring.
+    """
+    if dark_pins:
+        # A black ring has the polarity of dark pins: neither its glare nor the pins it hides make
+        # candidate blobs.
+        return np.inf
+    steps = int(np.ceil(disc.radius_px))
+    image = grey
+    polar = cv2.warpPolar(image, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
+                          cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
+    dark = np.percentile(polar, _RING_PERCENTILE, axis=0)
+    end = steps - 1 - _RING_EDGE_PX
+    first = max(steps // 2, _RING_STEP_PX + _RING_INSIDE_PX)
+    if end - _RING_MIN_PX + 1 < first:
+        return np.inf
+    # Brightest dark level from each radius out to the rim, and the membrane's just inside it.
+    outward = np.maximum.accumulate(dark[::-1])[::-1]
+    radii = np.arange(first, end - _RING_MIN_PX + 2)
+    inside = np.stack([dark[radii - _RING_STEP_PX - k] for k in range(1, _RING_INSIDE_PX + 1)])
+    ring = outward[radii] <= _RING_DARK * np.median(inside, axis=0)
+    if not ring.any():
+        return np.inf
+    return float(radii[np.argmax(ring)] * disc.radius_px / steps)
+
+
 def _beyond(hull: np.ndarray, points: np.ndarray, margin: float) -> np.ndarray:
     """Which points lie farther than `margin` (px) outside a convex hull."""
     return np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), True) < -margin for x, y in points],
@@ -473,9 +533,10 @@ def _median_nn(centres: np.ndarray) -> float:
     return float(np.median(dist[:, 1]))
 
 
-def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float) -> DetectionParams:
+def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float, reach_px: float) -> DetectionParams:
     """Parameters for later frames: `run`'s, with the area range of its kept blobs and a rim margin
-    that leaves out the membrane beyond `centres` (the pins, px)."""
+    that leaves out the membrane beyond `centres` (the pins, px) and whatever lies beyond `reach_px`
+    from the disc centre (a rim ring)."""
     kept = run.kept
     if kept.sum() < _MIN_PINS or len(centres) < _MIN_PINS or not np.isfinite(pitch):
         return run.params
@@ -485,7 +546,7 @@ def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float
                                 max_area_px=max(int(np.ceil(_AREA_RANGE[1] * median_area)), 2),
                                 min_fill=0.4, max_aspect=3.0, split_radius_px=round(float(min(0.4 * radius, 20.0)), 2))
     reach = float(np.max(np.hypot(centres[:, 0] - disc.cx, centres[:, 1] - disc.cy)))
-    margin = disc.radius_px - (reach + _FIELD_MARGIN * pitch)
+    margin = disc.radius_px - min(reach + _FIELD_MARGIN * pitch, reach_px)
     return params.replace(rim_margin_px=round(float(max(params.rim_margin_px, margin)), 2))
 
 

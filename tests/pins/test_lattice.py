@@ -9,7 +9,7 @@ from scipy.spatial import Delaunay, cKDTree
 
 from pins import (REJECTION_REASONS, DetectionParams, NoSensorError, PinField, detect_pins, draw_pin_field,
                   find_pin_field)
-from tactip.synthetic import preset_names
+from tactip.synthetic import SyntheticTacTip, preset_names
 from tests.pins.conftest import TAP, preset_frame, preset_sensor, score
 
 CONTACTS = {"rest": None, "tap5mm": TAP}
@@ -65,20 +65,55 @@ def test_later_frames_found_with_the_field_parameters(name):
     assert isinstance(field.params, DetectionParams) and field.params.dark_pins == preset_sensor(name).dark_pins
 
 
-def test_rim_ring_glare_is_rejected_outside_the_field():
-    f = preset_frame("rim-ring-331")
+def test_rim_ring_is_the_field_boundary():
+    """The search stops at the black rim ring's inner edge: its glare never becomes a candidate."""
+    sensor, f = preset_sensor("rim-ring-331"), preset_frame("rim-ring-331")
     field = _field("rim-ring-331", "rest")
-    outside = field.rejected[field.rejected_reason == "outside field"]
-    # Every blob outside the field lies beyond the hull of the kept pins; the 18 glare blobs on the
-    # ring lie beyond every kept pin, by half a pitch at least.
-    hull = cv2.convexHull(field.centres.astype(np.float32))
-    assert all(cv2.pointPolygonTest(hull, (float(x), float(y)), False) < 0 for x, y in outside)
-    cx, cy = preset_sensor("rim-ring-331").disc[:2]
+    cx, cy = sensor.disc[:2]
+    assert field.disc.radius_px == pytest.approx(sensor.disc[2], abs=1.0)
+    everything = np.vstack([field.centres, field.rejected])
+    assert np.hypot(*(everything - [cx, cy]).T).max() < sensor.rim_radius_px
+    # Later frames look no farther: the field's circle ends at the ring, short of its glare.
     reach = np.hypot(*(field.centres - [cx, cy]).T).max()
-    assert np.sum(np.hypot(*(outside - [cx, cy]).T) > reach + 0.5 * field.pitch_px) >= 18
-    assert field.field_disc.radius_px < reach + field.pitch_px < field.disc.radius_px
-    # Nothing was kept on the ring.
+    assert reach < field.field_disc.radius_px <= sensor.rim_radius_px
+    assert (np.hypot(*(sensor.ring_glare_centres - [cx, cy]).T) > field.field_disc.radius_px + 2.0).all()
     assert score(field.centres, f)[1] == 1.0
+    assert score(detect_pins(f.image, params=field.params), f)[1] == 1.0
+
+
+@pytest.mark.parametrize("name", ["tactip-331", "brown-127", "dark-331"])
+def test_without_a_rim_ring_the_search_reaches_the_disc_rim(name):
+    """Only a rim ring stops the search: without one, a pin field filling the disc is whole."""
+    field = _field(name, "rest")
+    cx, cy, radius = preset_sensor(name).disc
+    assert field.disc.radius_px == pytest.approx(radius, abs=2.0)
+    assert np.hypot(*(field.centres - [cx, cy]).T).max() > radius - 1.5 * field.pitch_px
+
+
+# Mixes of the phenomena no preset shows (bench/bench_pin_field_sweep.py draws them at random): a
+# black rim ring with LED glare, on radial and hexagonal layouts, brown skin and a bright surround.
+RIM = dict(rim_polar_deg=77.0, ring_glare=18, glare=False)
+BROWN = dict(colour=True, skin_tint="brown", membrane_level=70.0, pin_level=140.0, skin_texture=12.0, pin_shadows=22.0)
+BRIGHT = dict(surround_level=240.0, glare_gain=1.6, veil=40.0)
+RING_MIXES = {
+    "radial+brown": dict(pins=127, image_size=(640, 480), pad_fraction=0.7, layout="radial", **RIM, **BROWN),
+    "radial+bright": dict(pins=200, image_size=(640, 480), pad_fraction=0.66, layout="radial", **RIM, **BRIGHT),
+    "hex+bright, small pad": dict(pins=100, image_size=(320, 240), pad_fraction=0.45, **RIM, **BRIGHT),
+    "hex+brown": dict(pins=127, image_size=(320, 240), pad_fraction=0.79, **RIM, **BROWN),
+}
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.parametrize("mix", list(RING_MIXES))
+def test_rim_ring_mixes_meet_the_bar(mix, seed):
+    """Glare on the ring (in a radial layout one pitch beyond the outermost ring of pins) is not
+    kept, nor the membrane along the ring's edge."""
+    sensor = SyntheticTacTip(**RING_MIXES[mix], seed=seed)
+    for contact in (None, TAP):
+        f = sensor.render(contact)
+        field = find_pin_field(f.image)
+        recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
+        assert recall >= 0.99 and precision >= 0.99 and rmse <= 0.1, (mix, contact, recall, precision, rmse)
 
 
 def test_painted_specks_and_faint_blobs_between_pins_are_rejected(rng):
@@ -135,13 +170,13 @@ def test_summary_and_counts_agree():
 
 
 def test_drawing_shows_kept_and_rejected_without_touching_the_frame():
-    f = preset_frame("rim-ring-331")
+    f = preset_frame("brown-127")
     before = f.image.copy()
-    field = _field("rim-ring-331", "rest")
+    field = _field("brown-127", "rest")
     picture = draw_pin_field(f.image, field)
-    assert picture.shape == f.image.shape + (3,) and picture.dtype == np.uint8
+    assert picture.shape == f.image.shape[:2] + (3,) and picture.dtype == np.uint8
     np.testing.assert_array_equal(f.image, before)
-    # Green rings round the kept pins, magenta crosses on the rim ring.
+    # Green rings round the kept pins, magenta crosses on the glare round the rim.
     green = (picture[:, :, 1] > 150) & (picture[:, :, 0] < 60) & (picture[:, :, 2] < 60)
     magenta = (picture[:, :, 0] > 200) & (picture[:, :, 2] > 200) & (picture[:, :, 1] < 120)
     assert green.sum() > 10 * field.count and magenta.sum() > 0

