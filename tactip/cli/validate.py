@@ -286,7 +286,7 @@ def _sweep_for_accuracy(args, model, environment, tqdm) -> list[dict]:
     progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
     sweep = fixation_for_accuracy(environment, target=args.target_accuracy, tolerance=args.tolerance, runs=args.runs,
                                   max_taps=args.max_taps, seed=args.seed, move_threshold=args.move_threshold,
-                                  shift_mode=args.shift, progress=progress)
+                                  shift_mode=args.shift or model.shift_mode, progress=progress)
     unit, identity_unit = model.location_unit, model.identity_unit
     print(f"decisions within {args.tolerance:g} {identity_unit} in {100 * args.target_accuracy:g} % of runs:")
     print(f"{'fixation':>10} {'threshold':>9} {'taps':>6} {'accuracy':>8}")
