@@ -607,3 +607,20 @@ def test_only_a_broken_stdout_is_the_quiet_broken_pipe(sim_station, inspected, t
     assert main(["train", str(sim_station.train), "--out", str(tmp_path / "m.h5")]) == 1
     assert "broken pipe" in capsys.readouterr().err.lower()
 
+
+
+def test_temporaries_of_killed_writers_are_removed_by_the_next_write(sim_station, tmp_path):
+    """SIGKILL or a power cut leaves ``.NAME.PID.part*``; the next write of NAME removes it, not a live writer's."""
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    stale = tmp_path / f".m.{dead.pid}.part.h5"
+    live = tmp_path / f".m.{os.getpid()}.part.h5"                          # this test's process: alive
+    other = tmp_path / f".m2.{dead.pid}.part.h5"                           # another output's: not ours to remove
+    for path in (stale, live, other):
+        path.write_bytes(b"half a model")
+    result = subprocess.run([sys.executable, "-m", "tactip.cli", "train", str(sim_station.train), "--out",
+                             str(tmp_path / "m.h5"), "--locations", str(LOCATIONS)], capture_output=True, text=True,
+                            cwd=tmp_path, stdin=subprocess.DEVNULL, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert not stale.exists() and live.exists() and other.exists()
+    assert load_model(tmp_path / "m.h5").n_classes == load_model(sim_station.model).n_classes
