@@ -11,6 +11,8 @@ tactip import these helpers from here (calibration cannot import tactip), so the
   writing X", "permission denied writing X").
 - `remove_stale_temporaries`: the temporaries of an output left by killed writers (SIGKILL, power
   cut) are removed when the output is next written.
+- `hdf5_in_memory`: an HDF5 file built in memory and written by Python, so a full disk is an
+  `OSError` rather than a crash inside HDF5.
 - `cut_short`: whether an HDF5 file failed to open because it is shorter than its header says (an
   interrupted copy or write), so readers say that rather than "not an HDF5 file".
 """
@@ -26,7 +28,7 @@ import re
 from typing import Iterable, Iterator
 
 __all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name", "cut_short",
-           "remove_stale_temporaries"]
+           "remove_stale_temporaries", "hdf5_in_memory"]
 
 _WHAT = {
     errno.ENOSPC: "disk full while writing",
@@ -143,6 +145,36 @@ def _process_alive(pid: int) -> bool:
     except (PermissionError, OSError):
         return True
     return True
+
+
+@contextlib.contextmanager
+def hdf5_in_memory(path) -> Iterator:
+    """An HDF5 file built in memory and written to ``path`` by Python when the block ends.
+
+    HDF5 that meets a full disk while flushing at close can crash the process (a segfault in
+    h5py's cleanup): building the file in memory and writing its bytes with Python makes a full
+    disk an ordinary `OSError` (ENOSPC) that `atomic_path` names. For files written whole
+    (models, calibrations, datasets, replays), which are in memory anyway.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (usually `atomic_path`'s temporary name).
+
+    Yields
+    ------
+    h5py.File
+        Open for writing.
+    """
+    import io
+
+    import h5py
+
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        yield f
+    with open(path, "wb") as out:
+        out.write(buffer.getbuffer())
 
 
 def fsync_path(path: pathlib.Path, *, folder: bool = False) -> None:

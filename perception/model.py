@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._files import atomic_path, cut_short
+from ._files import atomic_path, cut_short, hdf5_in_memory
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 
@@ -401,11 +401,9 @@ def save_model(path, model: HistogramModel, *, inputs=()) -> None:
     FileExistsError
         ``path`` is one of ``inputs``.
     """
-    import h5py
-
     path = pathlib.Path(path)
     with atomic_path(path, inputs=inputs) as tmp:
-        with h5py.File(tmp, "w") as f:
+        with hdf5_in_memory(tmp) as f:  # a full disk is an OSError, not a crash inside HDF5
             f.attrs["schema"] = MODEL_SCHEMA
             for name in ("log_probability", "bin_lower", "bin_width", "location_edges", "identities",
                          "taps_per_class"):

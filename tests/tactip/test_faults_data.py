@@ -261,6 +261,17 @@ def test_record_and_annotated_replay_on_a_full_disk_report_it(tmp_path):
         assert not leftover_temporaries(out)
 
 
+def test_simulate_on_a_full_disk_reports_it_without_crashing(tmp_path):
+    """HDF5 meeting a full disk at close crashed the process (segfault, a traceback from h5py's cleanup)."""
+    out = tmp_path / "small"
+    with small_filesystem(out, 300) as mounted:
+        FULL_DISK_MODE["simulate taxel"] = "tmpfs 300 kB" if mounted else "RLIMIT_FSIZE 300 kB"
+        extra = {} if mounted else {"preexec_fn": file_size_limit(300 * 1024)}
+        result = run_tactip("simulate", "taxel", "--out", out, "--locations", "300", "--quiet", cwd=tmp_path, **extra)
+        assert_refused(result, *disk_full_words(mounted), "train.h5")
+        assert result.returncode == 1 and not (out / "train.h5").exists() and not leftover_temporaries(out)
+
+
 def test_an_output_in_a_read_only_folder_is_refused_before_any_work(sim_station, inspected, tmp_path, capsys):
     """Every output flag checks its folder can be written while parsing: no work is done and then lost."""
     from tactip.cli import main
