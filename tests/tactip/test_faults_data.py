@@ -148,18 +148,27 @@ def test_validate_refuses_json_or_plot_over_its_model_or_test_set(sim_station, t
         assert_refused(result, argv[1], "destroy")
 
 
-def test_an_output_over_collected_taps_or_results_is_refused(sim_station, inspected, tmp_path):
+def test_an_output_over_collected_taps_or_results_is_refused(sim_station, inspected, tmp_path, capsys):
     """Nothing overwritten: a typo naming a collection or the results database as an output is refused
-    (they are not the command's inputs, but hours of collecting or inspecting)."""
+    while parsing (they are not the command's inputs, but hours of collecting or inspecting); in-process,
+    as the refusal is argparse's (the subprocess case is `test_train_refuses_to_write_the_model_over_its_dataset`)."""
+    from tactip.cli import main
+
     data, db = tmp_path / "test.h5", tmp_path / "results.sqlite"
     shutil.copy(sim_station.test, data)
     shutil.copy(inspected, db)
+    before = {p: digest(p) for p in (data, db)}
     video = Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4"
-    for argv, flag in ((("train", sim_station.train, "--out", data), "--out"),
-                       (("replay", video, "--out", data, "--quiet"), "--out"),
-                       (("results", "export", "--db", inspected, "--csv", "--out", db), "--out")):
-        result = run_tactip(*argv, cwd=tmp_path, inputs=[data, db])
-        assert_refused(result, flag, "destroy", "collected taps" if argv[0] != "results" else "SQLite database")
+    for argv, what in ((("train", sim_station.train, "--out", data), "collected taps"),
+                       (("replay", video, "--out", data, "--quiet"), "collected taps"),
+                       (("calibrate", "--config", sim_station.toml, "--out", data), "collected taps"),
+                       (("validate", sim_station.model, sim_station.test, "--json", data), "collected taps"),
+                       (("results", "export", "--db", inspected, "--csv", "--out", db), "SQLite database")):
+        with pytest.raises(SystemExit) as exit_:
+            main([str(a) for a in argv])
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and "destroy" in err and what in err and "Traceback" not in err, (argv, err)
+    assert {p: digest(p) for p in (data, db)} == before and not leftover_temporaries(tmp_path)
 
 
 def test_record_and_calibrate_refuse_outputs_over_their_inputs(sim_station, tmp_path):
