@@ -284,7 +284,7 @@ def _open_hdf5(path: pathlib.Path, mode: str, **kwargs):
         if "permission denied" in text or "errno = 13" in text:
             raise PermissionError(13, f"permission denied opening {str(path)!r}") from None
         if "unable to lock" in text or "resource temporarily unavailable" in text:
-            raise DatasetError(f"{path} is open in another process (collect running twice?)") from None
+            raise DatasetError(f"{path} is open in another process (a collection still running into it?)") from None
         raise DatasetError(f"{path} is not an HDF5 file") from None
 
 
