@@ -160,13 +160,11 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
 
 def save_calibration(path: str | Path, calibration: SensorCalibration) -> None:
     """Write a calibration file (HDF5, ``tactip-calibration/1``), atomically."""
-    import h5py
-
-    from perception._files import atomic_path
+    from perception._files import atomic_path, hdf5_in_memory
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:  # temporary name, fsync, rename
+    with atomic_path(path) as tmp, hdf5_in_memory(tmp) as f:  # temporary name, fsync, rename; a full disk an OSError
         f.attrs["schema"] = SCHEMA
         f.create_dataset("reference_pins", data=np.asarray(calibration.reference_pins, dtype=np.float64))
         f.create_dataset("selected_pins", data=np.asarray(calibration.selected_pins, dtype=np.int64))

@@ -9,6 +9,10 @@ tactip import these helpers from here (calibration cannot import tactip), so the
 - `refuse_overwriting_inputs`: raises before any work when an output is one of the command's inputs.
 - `write_error`: an `OSError` raised while writing, re-raised as what it is ("disk full while
   writing X", "permission denied writing X").
+- `remove_stale_temporaries`: the temporaries of an output left by killed writers (SIGKILL, power
+  cut) are removed when the output is next written.
+- `hdf5_in_memory`: an HDF5 file built in memory and written by Python, so a full disk is an
+  `OSError` rather than a crash inside HDF5.
 - `cut_short`: whether an HDF5 file failed to open because it is shorter than its header says (an
   interrupted copy or write), so readers say that rather than "not an HDF5 file".
 """
@@ -17,12 +21,14 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import glob
 import os
 import pathlib
 import re
 from typing import Iterable, Iterator
 
-__all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name", "cut_short"]
+__all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name", "cut_short",
+           "remove_stale_temporaries", "hdf5_in_memory"]
 
 _WHAT = {
     errno.ENOSPC: "disk full while writing",
@@ -98,6 +104,79 @@ def temporary_name(path: pathlib.Path, suffix: str | None = None) -> pathlib.Pat
     return path.with_name(f".{stem}{tail}")
 
 
+def remove_stale_temporaries(path) -> list[pathlib.Path]:
+    """Remove the temporaries of ``path`` left by writers that were killed (SIGKILL, a power cut).
+
+    A temporary ``.STEM.PID.part*`` whose process no longer runs on this machine can never be renamed
+    into place; the next write of ``path`` removes it. Temporaries of live processes are kept.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output about to be written.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The temporaries removed.
+    """
+    path = pathlib.Path(path)
+    prefix = temporary_name(path, "").name.rsplit(".", 2)[0] + "."      # ".STEM."
+    removed = []
+    try:
+        candidates = list(path.parent.glob(f"{glob.escape(prefix)}*.part*"))
+    except OSError:
+        return removed
+    for candidate in candidates:
+        pid = candidate.name[len(prefix):].split(".", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid() or _process_alive(int(pid)):
+            continue
+        with contextlib.suppress(OSError):
+            candidate.unlink()
+            removed.append(candidate)
+    return removed
+
+
+def _process_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True
+    return True
+
+
+@contextlib.contextmanager
+def hdf5_in_memory(path) -> Iterator:
+    """An HDF5 file built in memory and written to ``path`` by Python when the block ends.
+
+    HDF5 that meets a full disk while flushing at close can crash the process (a segfault in
+    h5py's cleanup): building the file in memory and writing its bytes with Python makes a full
+    disk an ordinary `OSError` (ENOSPC) that `atomic_path` names. For files written whole
+    (models, calibrations, datasets, replays), which are in memory anyway.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (usually `atomic_path`'s temporary name).
+
+    Yields
+    ------
+    h5py.File
+        Open for writing.
+    """
+    import io
+
+    import h5py
+
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        yield f
+    with open(path, "wb") as out:
+        out.write(buffer.getbuffer())
+
+
 def fsync_path(path: pathlib.Path, *, folder: bool = False) -> None:
     """Flush a file (or, with ``folder``, a folder's entries) to the disk."""
     fd = os.open(path, os.O_RDONLY | (getattr(os, "O_DIRECTORY", 0) if folder else 0))
@@ -139,6 +218,7 @@ def atomic_path(path, *, suffix: str | None = None, inputs: Iterable = ()) -> It
     if path.is_dir():
         raise IsADirectoryError(errno.EISDIR, f"output path {str(path)!r} is a directory")
     tmp = temporary_name(path, suffix)
+    remove_stale_temporaries(path)
     try:
         try:
             yield tmp

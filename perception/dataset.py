@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._files import atomic_path, write_error
+from ._files import atomic_path, hdf5_in_memory, write_error
 from .errors import DatasetError
 
 __all__ = ["SCHEMA", "FRONT_ENDS", "Dataset", "save_dataset", "load_dataset", "DatasetWriter"]
@@ -187,13 +187,11 @@ def save_dataset(path, dataset: Dataset, *, inputs=()) -> None:
     FileExistsError
         ``path`` is one of ``inputs``.
     """
-    import h5py
-
     if not isinstance(dataset, Dataset):
         raise DatasetError(f"dataset must be a Dataset, got {type(dataset).__name__}")
     path = pathlib.Path(path)
     with atomic_path(path, inputs=inputs) as tmp:
-        with h5py.File(tmp, "w") as f:
+        with hdf5_in_memory(tmp) as f:  # a full disk is an OSError, not a crash inside HDF5
             _write_attributes(f, dataset.front_end, dataset.location_unit, dataset.identity_unit,
                               dataset.dim_names, dataset.sensor)
             f.create_dataset("taps", data=dataset.taps, chunks=_taps_chunks(dataset.samples, dataset.dims),
@@ -286,7 +284,7 @@ def _open_hdf5(path: pathlib.Path, mode: str, **kwargs):
         if "permission denied" in text or "errno = 13" in text:
             raise PermissionError(13, f"permission denied opening {str(path)!r}") from None
         if "unable to lock" in text or "resource temporarily unavailable" in text:
-            raise DatasetError(f"{path} is open in another process (collect running twice?)") from None
+            raise DatasetError(f"{path} is open in another process (a collection still running into it?)") from None
         raise DatasetError(f"{path} is not an HDF5 file") from None
 
 

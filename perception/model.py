@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._files import atomic_path, cut_short
+from ._files import atomic_path, cut_short, hdf5_in_memory
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 from .likelihood import RECOMMENDED_KEYS, LikelihoodModel
@@ -388,14 +388,12 @@ def save_model(path, model: LikelihoodModel, *, inputs=()) -> None:
     FileExistsError
         ``path`` is one of ``inputs``.
     """
-    import h5py
-
     if not isinstance(model, LikelihoodModel):
         raise TypeError(f"model must be a LikelihoodModel, got {type(model).__name__}")
     arrays, attrs = model._stored()
     path = pathlib.Path(path)
     with atomic_path(path, inputs=inputs) as tmp:
-        with h5py.File(tmp, "w") as f:
+        with hdf5_in_memory(tmp) as f:  # a full disk is an OSError, not a crash inside HDF5
             f.attrs["schema"] = MODEL_SCHEMA
             f.attrs["kind"] = model.KIND
             for name in _COMMON_ARRAYS:

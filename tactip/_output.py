@@ -20,7 +20,7 @@ import os
 import pathlib
 
 from perception._files import atomic_path as atomic_output
-from perception._files import refuse_overwriting_inputs, temporary_name, write_error
+from perception._files import refuse_overwriting_inputs, remove_stale_temporaries, temporary_name, write_error
 
 __all__ = ["claim_output", "atomic_output", "write_text_atomic", "refuse_overwriting_inputs", "write_error",
            "check_video_written", "out_of_space"]
@@ -45,6 +45,7 @@ def claim_output(path: pathlib.Path, suffix: str | None = None) -> pathlib.Path:
     if path.is_dir():
         raise IsADirectoryError(21, "output path is a directory", str(path))
     part = temporary_name(path, suffix)
+    remove_stale_temporaries(path)  # left by a writer that was killed
     try:
         with open(part, "wb"):
             pass

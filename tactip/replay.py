@@ -311,6 +311,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
     out_path = pathlib.Path(out_path)
     annotate = None if annotate_path is None else pathlib.Path(annotate_path)
     refuse_overwriting_inputs([out_path, annotate], [video, calibration, model])  # issue 9: never over an input
+    if annotate is not None and annotate.suffix.lower() != ".mp4":
+        raise SourceError(f"cannot write the annotated video {str(annotate)!r}: it is MPEG-4, give a .mp4 name")
     temporary: list[pathlib.Path] = []
     try:
         temporary.append(claim_output(out_path, ".h5"))
@@ -676,8 +678,7 @@ def _features(displacements, timestamps, bounds, selected, n_samples):
 
 def _write_hdf5(path, track, analysis, settings, decisions=None) -> None:
     """The replay file (see the module docstring for its layout)."""
-    import h5py
-
+    from perception._files import hdf5_in_memory
     from tactip import __version__
 
     tracker = track["tracker"]
@@ -685,7 +686,7 @@ def _write_hdf5(path, track, analysis, settings, decisions=None) -> None:
     # Positions are sub-pixel floats with sensor noise: gzip saves a third of their size for about
     # 10 % of the decoding time, so they are stored plain; the masks shrink to almost nothing.
     packed = dict(compression="gzip", compression_opts=1)
-    with h5py.File(path, "w") as h5:
+    with hdf5_in_memory(path) as h5:  # a full disk is an OSError, not a crash inside HDF5
         for name in ("positions", "displacements"):
             h5.create_dataset(name, data=track[name])
         for name in ("lost", "retired"):

@@ -148,18 +148,27 @@ def test_validate_refuses_json_or_plot_over_its_model_or_test_set(sim_station, t
         assert_refused(result, argv[1], "destroy")
 
 
-def test_an_output_over_collected_taps_or_results_is_refused(sim_station, inspected, tmp_path):
+def test_an_output_over_collected_taps_or_results_is_refused(sim_station, inspected, tmp_path, capsys):
     """Nothing overwritten: a typo naming a collection or the results database as an output is refused
-    (they are not the command's inputs, but hours of collecting or inspecting)."""
+    while parsing (they are not the command's inputs, but hours of collecting or inspecting); in-process,
+    as the refusal is argparse's (the subprocess case is `test_train_refuses_to_write_the_model_over_its_dataset`)."""
+    from tactip.cli import main
+
     data, db = tmp_path / "test.h5", tmp_path / "results.sqlite"
     shutil.copy(sim_station.test, data)
     shutil.copy(inspected, db)
+    before = {p: digest(p) for p in (data, db)}
     video = Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4"
-    for argv, flag in ((("train", sim_station.train, "--out", data), "--out"),
-                       (("replay", video, "--out", data, "--quiet"), "--out"),
-                       (("results", "export", "--db", inspected, "--csv", "--out", db), "--out")):
-        result = run_tactip(*argv, cwd=tmp_path, inputs=[data, db])
-        assert_refused(result, flag, "destroy", "collected taps" if argv[0] != "results" else "SQLite database")
+    for argv, what in ((("train", sim_station.train, "--out", data), "collected taps"),
+                       (("replay", video, "--out", data, "--quiet"), "collected taps"),
+                       (("calibrate", "--config", sim_station.toml, "--out", data), "collected taps"),
+                       (("validate", sim_station.model, sim_station.test, "--json", data), "collected taps"),
+                       (("results", "export", "--db", inspected, "--csv", "--out", db), "SQLite database")):
+        with pytest.raises(SystemExit) as exit_:
+            main([str(a) for a in argv])
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and "destroy" in err and what in err and "Traceback" not in err, (argv, err)
+    assert {p: digest(p) for p in (data, db)} == before and not leftover_temporaries(tmp_path)
 
 
 def test_record_and_calibrate_refuse_outputs_over_their_inputs(sim_station, tmp_path):
@@ -259,6 +268,17 @@ def test_record_and_annotated_replay_on_a_full_disk_report_it(tmp_path):
         assert_refused(replayed, *disk_full_words(mounted), "a.mp4")
         assert not (out / "r.mp4").exists() and not (out / "a.mp4").exists() and not (tmp_path / "o.h5").exists()
         assert not leftover_temporaries(out)
+
+
+def test_simulate_on_a_full_disk_reports_it_without_crashing(tmp_path):
+    """HDF5 meeting a full disk at close crashed the process (segfault, a traceback from h5py's cleanup)."""
+    out = tmp_path / "small"
+    with small_filesystem(out, 300) as mounted:
+        FULL_DISK_MODE["simulate taxel"] = "tmpfs 300 kB" if mounted else "RLIMIT_FSIZE 300 kB"
+        extra = {} if mounted else {"preexec_fn": file_size_limit(300 * 1024)}
+        result = run_tactip("simulate", "taxel", "--out", out, "--locations", "300", "--quiet", cwd=tmp_path, **extra)
+        assert_refused(result, *disk_full_words(mounted), "train.h5")
+        assert result.returncode == 1 and not (out / "train.h5").exists() and not leftover_temporaries(out)
 
 
 def test_an_output_in_a_read_only_folder_is_refused_before_any_work(sim_station, inspected, tmp_path, capsys):
@@ -607,3 +627,20 @@ def test_only_a_broken_stdout_is_the_quiet_broken_pipe(sim_station, inspected, t
     assert main(["train", str(sim_station.train), "--out", str(tmp_path / "m.h5")]) == 1
     assert "broken pipe" in capsys.readouterr().err.lower()
 
+
+
+def test_temporaries_of_killed_writers_are_removed_by_the_next_write(sim_station, tmp_path):
+    """SIGKILL or a power cut leaves ``.NAME.PID.part*``; the next write of NAME removes it, not a live writer's."""
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    stale = tmp_path / f".m.{dead.pid}.part.h5"
+    live = tmp_path / f".m.{os.getpid()}.part.h5"                          # this test's process: alive
+    other = tmp_path / f".m2.{dead.pid}.part.h5"                           # another output's: not ours to remove
+    for path in (stale, live, other):
+        path.write_bytes(b"half a model")
+    result = subprocess.run([sys.executable, "-m", "tactip.cli", "train", str(sim_station.train), "--out",
+                             str(tmp_path / "m.h5"), "--locations", str(LOCATIONS)], capture_output=True, text=True,
+                            cwd=tmp_path, stdin=subprocess.DEVNULL, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert not stale.exists() and live.exists() and other.exists()
+    assert load_model(tmp_path / "m.h5").n_classes == load_model(sim_station.model).n_classes

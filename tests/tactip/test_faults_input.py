@@ -228,6 +228,8 @@ CASES = [
      ["station.data_dir", "text.txt", "is a file, not a folder"]),
     ("results under a file", ["inspect", "--config", "{root}/results_under_file.toml"],
      ["station.results", "text.txt' is a file, not a folder"]),
+    ("replay --annotate not .mp4", ["replay", "{root}/video.mp4", "--out", "r.h5", "--annotate", "a.txt"],
+     ["a.txt", "MPEG-4", ".mp4"]),
     ("replay --rest-frame beyond the end", ["replay", "{root}/video.mp4", "--out", "r.h5", "--rest-frame", "86",
                                             "--quiet"], ["86 frames", "no rest frame 86"]),
 ]
