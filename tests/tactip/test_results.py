@@ -112,3 +112,16 @@ def test_stale_running_rows_of_dead_processes_are_closed(tmp_path, monkeypatch):
         rows = {r.id: r for r in store.inspections()}
     assert rows[dead].status == "aborted" and "stale" in rows[dead].reason
     assert rows[mine].status == "running" and rows[other].status == "running"    # alive, or another station
+
+
+def test_a_database_from_before_the_station_rows_still_reads(tmp_path):
+    path = tmp_path / "r.sqlite"
+    with ResultsStore(path) as store:
+        _inspect(store)
+    with sqlite3.connect(path) as con:                          # as an earlier version left it
+        con.execute("DROP TABLE stations")
+    with ResultsStore(path, read_only=True) as store:
+        assert store.stations() == [] and len(store.inspections()) == 1
+    with ResultsStore(path) as store:                           # a writer adds the table
+        store.update_station("line-1", state="ready", arm="sim: ready", frame_rate=20.0)
+        assert [(s["name"], s["state"]) for s in store.stations()] == [("line-1", "ready")]
