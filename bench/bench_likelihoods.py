@@ -98,7 +98,7 @@ def inspect_live(config, seed: int) -> None:
               f"mean belief {belief:.3f} (bar: >= belief - 0.05: {'met' if within >= belief - 0.05 else 'not met'})")
 
 
-def density(runs: int, seed: int, root: Path) -> None:
+def density(runs: int, seed: int, root: Path, main_config) -> None:
     """Part 3: collection size against taps per decision."""
     from perception import VirtualEnvironment, load_dataset, load_model
     from perception.reliability import fixation_for_accuracy
@@ -107,10 +107,13 @@ def density(runs: int, seed: int, root: Path) -> None:
     print("\ndata density: collection protocol against mean taps to 95 % of decisions within 0.25 mm "
           "(gaussian model, best fixation):")
     print(f"{'step mm':>8} {'repeats':>7} {'taps/collection':>15} {'prepare s':>9} {'mean taps':>9} {'accuracy':>8}")
-    for step, repeats in ((0.5, 2), (0.25, 2), (0.25, 3), (0.125, 2)):
-        folder = root / f"density_{step:g}_{repeats}"
-        folder.mkdir(parents=True, exist_ok=True)
-        config = station_config(folder, depth_step=step, repeats=repeats)
+    for step, repeats in ((0.5, 2), (0.25, 2), (0.25, 3)):
+        if (step, repeats) == (main_config.protocol.depth_step, main_config.protocol.repeats):
+            folder, config = root, main_config  # the station prepared above
+        else:
+            folder = root / f"density_{step:g}_{repeats}"
+            folder.mkdir(parents=True, exist_ok=True)
+            config = station_config(folder, depth_step=step, repeats=repeats)
         started = time.monotonic()
         if not config.perception.model.exists():
             prepare_model(config, progress=False, log=lambda line: None)
@@ -149,7 +152,7 @@ def main() -> None:
     compare_models(config, args.runs, args.seed)
     inspect_live(config, args.seed)
     if args.density:
-        density(min(args.runs, 2000), args.seed, data_dir)
+        density(min(args.runs, 2000), args.seed, data_dir, config)
 
 
 if __name__ == "__main__":

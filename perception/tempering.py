@@ -26,7 +26,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.special import logsumexp
 
-__all__ = ["cross_validation_folds", "fit_tempering", "decision_log_loss", "tap_sequences", "check_tempering"]
+__all__ = ["cross_validation_folds", "fit_tempering", "decision_log_loss", "check_tempering"]
 
 #: Range searched for beta (log10): the paper's geometric mean (1) to a naive Bayes over 3200 values and beyond.
 _LOG10_BETA = (-4.0, 4.0)
@@ -118,41 +118,3 @@ def fit_tempering(log_likelihood, truth) -> float:
                              method="bounded", options={"xatol": 1e-3})
     return float(10.0 ** result.x)
 
-
-def tap_sequences(log_likelihood, truth, tap_class, taps: int, *, sequences: int = 4000, seed=0):
-    """Summed log likelihoods of sequences of ``taps`` held-out taps drawn within one class.
-
-    Each sequence starts at a random tap and adds ``taps - 1`` taps drawn with replacement among
-    the taps of the same joint class, as a Monte Carlo run that stays at one location does; the
-    beliefs after several taps are calibrated by fitting beta on such sequences.
-
-    Parameters
-    ----------
-    log_likelihood : (N, L, I) array
-    truth : (N,) int array
-        Decision class of each tap.
-    tap_class : (N,) int array
-        Joint class of each tap.
-    taps : int
-        Taps per sequence, >= 1.
-    sequences : int
-    seed : int
-
-    Returns
-    -------
-    log_likelihood : (sequences, L, I) float64 ndarray
-    truth : (sequences,) intp ndarray
-    """
-    log_likelihood = np.asarray(log_likelihood, dtype=np.float64)
-    tap_class = np.asarray(tap_class, dtype=np.intp)
-    rng = np.random.default_rng(seed)
-    order = np.argsort(tap_class, kind="stable")
-    counts = np.bincount(tap_class)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    first = rng.integers(0, len(tap_class), sequences)
-    cls = tap_class[first]
-    total = log_likelihood[first].copy()
-    for _ in range(int(taps) - 1):
-        pick = order[starts[cls] + (rng.random(sequences) * counts[cls]).astype(np.intp)]
-        total += log_likelihood[pick]
-    return total, np.asarray(truth, dtype=np.intp)[first]

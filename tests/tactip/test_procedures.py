@@ -82,6 +82,9 @@ def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station
     assert model.n_locations == config.perception.locations and model.n_identities == 4
     assert {"fixation_location", "decision_threshold"} <= set(model.recommended)
     assert 0.0 <= model.recommended["fixation_location"] <= 5.5
+    # The station's default likelihood, its threshold chosen for 95 % of decisions within the gaps' tolerance.
+    assert model.KIND == config.perception.likelihood == "gaussian"
+    assert any("of decisions within 0.25 mm" in line or "no fixation depth reaches 0.95" in line for line in lines)
 
 
 def test_prepare_model_needs_a_model_path(tmp_path):
