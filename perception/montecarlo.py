@@ -258,8 +258,12 @@ def _simulate(env, policy, thresholds, start, identity, rng, *, move_threshold, 
         log_belief = bayes.update(table[env.draw(location * n_id + identity, rng)], log_belief)
         attempt += 1
         where, what = bayes.marginals(log_belief)
-        belief, decided_location, decided_identity = bayes.decide(log_belief, rule=decision_rule)
         estimate = where.argmax(axis=1)
+        if decision_rule == "joint":
+            belief, decided_location, decided_identity = bayes.decide(log_belief, rule="joint")
+        else:   # the marginal rule from the marginals already at hand (one exp per step)
+            belief, decided_location, decided_identity = (what if n_id > 1 else where).max(axis=1), estimate, \
+                what.argmax(axis=1)
         crossed = belief > thresholds[:, None]
         new = ~done & (crossed | (tap == max_taps))
         for name, value in (("identity_class", decided_identity), ("location_class", decided_location),
