@@ -197,7 +197,9 @@ class Edge(Stimulus):
     """Paper 004: a straight edge at 72 angles under the fingertip pad, 18 positions (module docstring)."""
 
     pad_radius_mm: float = 6.0
-    ridge: float = 0.5
+    ridge: float = 1.0
+    edge_mm: float = 0.25
+    ridge_mm: float = 0.5
 
     def field(self, location_mm, identity, session):
         """(N, K) taxel responses to an edge at angle ``identity`` (deg), pad centre ``location_mm`` past it."""
@@ -207,9 +209,9 @@ class Edge(Stimulus):
         # signed distance of each plate past the edge (positive: over air)
         s = np.cos(theta)[:, None] * p[None, :, 0] + np.sin(theta)[:, None] * p[None, :, 1] \
             + np.asarray(location_mm, dtype=np.float64)[:, None]
-        on_plate = expit(-s / 0.5)
+        on_plate = expit(-s / self.edge_mm)
         in_pad = expit((self.pad_radius_mm - np.hypot(p[:, 0], p[:, 1])) / 0.7)[None, :]
-        return in_pad * on_plate * (1.0 + self.ridge * np.exp(-s**2 / (2 * 0.8**2)))
+        return in_pad * on_plate * (1.0 + self.ridge * np.exp(-s**2 / (2 * self.ridge_mm**2)))
 
 
 def make_stimulus(name: str) -> Stimulus:
@@ -228,5 +230,5 @@ def make_stimulus(name: str) -> Stimulus:
                         (0.0, 3.0), 15, tap={"hold_s": 0.4, "contact_delay_s": 0.15})
     if name == "edge":
         return Edge("edge", _fingertip((-9.0, 9.0), 0.0), np.arange(0.0, 360.0, 5.0), "deg", (-9.0, 9.0), 18,
-                    identity_period=360.0)
+                    identity_period=360.0, tap={"hold_s": 0.55, "contact_delay_s": 0.15})
     raise ValueError(f"unknown stimulus {name!r}; choose from rods, textures, edge")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from perception import (DatasetError, FixationPolicy, ModelError, Perceiver, RandomPolicy, StationaryPolicy,
+from perception import (Dataset, DatasetError, FixationPolicy, ModelError, Perceiver, RandomPolicy, StationaryPolicy,
                         VirtualEnvironment, compare_policies, fit_model, monte_carlo)
 from tests.perception.synthetic import gap_dataset
 
@@ -188,3 +188,22 @@ def test_joint_rule_agrees_with_the_perceiver_and_is_never_sooner(deep_only):
     marginal = monte_carlo(deep_only, StationaryPolicy(), thresholds=[0.3, 0.9], runs=1000, seed=8)
     joint = monte_carlo(deep_only, StationaryPolicy(), thresholds=[0.3, 0.9], runs=1000, seed=8, decision_rule="joint")
     assert (joint.mean_taps >= marginal.mean_taps).all() and joint.mean_taps[0] > marginal.mean_taps[0]
+
+
+def test_circular_identities_count_errors_the_shorter_way_round():
+    """Edge angles (paper 004): deciding 355 deg for 0 deg is a 5 deg error, not 355."""
+    rng = np.random.default_rng(0)
+    angles = np.arange(0.0, 360.0, 45.0)
+    # taps that tell nothing: every decision is a guess, spread over all angles
+    taps = rng.normal(size=(8 * 2 * 6, 5, 3))
+    location, identity = np.repeat([0.0, 1.0], 8 * 6), np.tile(np.repeat(angles, 6), 2)
+    data = Dataset(taps, location, identity, None, "taxel", identity_unit="deg")
+    test = Dataset(rng.normal(size=taps.shape), location, identity, None, "taxel", identity_unit="deg")
+    env = VirtualEnvironment(fit_model(data, n_locations=2), test)
+    plain = monte_carlo(env, StationaryPolicy(), thresholds=[0.0], runs=4000, seed=1)
+    circular = monte_carlo(env, StationaryPolicy(), thresholds=[0.0], runs=4000, seed=1, identity_period=360.0)
+    assert circular.accuracy[0] == plain.accuracy[0]
+    assert circular.mean_identity_error[0] < plain.mean_identity_error[0]
+    assert circular.mean_identity_error[0] <= 180.0 and plain.mean_identity_error[0] > 100.0
+    with pytest.raises(ValueError, match="identity_period"):
+        monte_carlo(env, StationaryPolicy(), identity_period=0.0)

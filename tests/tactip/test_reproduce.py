@@ -53,3 +53,23 @@ def test_unknown_and_bench_only_papers(capsys):
     assert "bench/bench_station.py" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["reproduce", "005"])
+
+
+def test_004_contour_following_and_the_adaptive_prior(tmp_path, capsys):
+    rows, _ = _rows(tmp_path, "004", capsys)
+    keys = {"method", "threshold", "angle_error_deg", "position_error_mm", "taps_per_decision", "closed_contour",
+            "delta_error_classes"}
+    assert all(set(r) == keys for r in rows)
+    r = {(row["method"], row["threshold"]): row for row in rows}
+    low, high = sorted({row["threshold"] for row in rows})
+    # Fig. 6: only active perception at a high threshold traces the circle
+    assert r["active", high]["closed_contour"] >= 0.9
+    assert all(r[m, t]["closed_contour"] <= 0.1 for m, t in (("passive", low), ("passive", high), ("active", low)))
+    # Fig. 7: the adaptive prior is no worse at fewer taps (>= 20 % better at full size, bench/bench_reproduce.py)
+    assert r["adaptive", high]["angle_error_deg"] <= r["active", high]["angle_error_deg"]
+    assert r["adaptive", high]["taps_per_decision"] < r["active", high]["taps_per_decision"]
+    # Fig. 8: the learned shift converges on the true turn (2 classes per decision)
+    assert r["adaptive", high]["delta_error_classes"] < 0.5
+    # without the shift the prior is a handicap, not a gain
+    assert r["adaptive_shift0", high]["angle_error_deg"] > r["active", high]["angle_error_deg"]
+    assert r["active", high]["delta_error_classes"] is None

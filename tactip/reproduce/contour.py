@@ -1,0 +1,174 @@
+"""Contour following around a circular plate (paper 004 Sec. III): the circle world and its runs.
+
+The plate is a disc of radius ``radius_mm`` centred at the origin; the sensor, at P (mm, world
+frame, never rotated), perceives the edge at angle phi = atan2(P) (the outward normal; 72 classes
+of 5 deg) and the position x = |P| - radius (mm past the edge, 18 classes of 1 mm over -9..9).
+Every tap is drawn from the test taps of the class nearest to the true (x, phi) (the virtual
+environment of the edge stimulus). One decision (the angle marginal crossing the threshold, eq.
+4) is followed by a step of ``step_mm`` along the perceived tangent (counter-clockwise), so that
+on a perfect run the true angle turns by ``turn_classes`` angle classes per decision. Active
+perception moves the sensor to the target position (eqs. 5-6) after each undecided tap, along the
+normal of the last decided angle (the robot is placed facing the edge for the first decision); passive perception does not move between decisions. The adaptive prior
+(eq. 12) starts each decision from alpha x the last angle belief turned by Delta angle classes
+(the forward model predicts angles only, eq. 7; positions stay flat) + (1 - alpha) x flat, Delta learned by predicted information gain (`perception.ShiftLearner`) or
+fixed.
+
+A run closes the contour when its true angle has gone once round (360 deg) within ``decisions``
+decisions, every decision was taken on the edge (|x| <= ``lost_mm``, 6 mm: beyond it the pad no
+longer reaches the edge) and every traced point, the edge point the decision perceives (sensor
+place minus the decided position along the decided normal; Fig. 6), lies within ``trace_mm``
+(2 mm) of the circle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from perception import ShiftLearner, VirtualEnvironment, bayes
+
+__all__ = ["ContourResult", "follow_contour"]
+
+
+@dataclass(frozen=True)
+class ContourResult:
+    """Means over runs and decisions (after the first ``warmup`` decisions) of one method.
+
+    Attributes
+    ----------
+    angle_error_deg, position_error_mm, taps_per_decision : float
+    closed_contour : float
+        Fraction of runs that went once round without losing the edge.
+    delta_error_classes : float
+        Mean |Delta - turn_classes| at the last decision, angle classes (NaN without a learned Delta).
+    delta_error_by_decision : (D,) ndarray
+        The same at every decision (Fig. 8).
+    """
+
+    angle_error_deg: float
+    position_error_mm: float
+    taps_per_decision: float
+    closed_contour: float
+    delta_error_classes: float
+    delta_error_by_decision: np.ndarray
+
+
+def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, adaptive: bool = False,
+                   prior_shift: int | None = None, runs: int = 200, decisions: int = 80, seed: int = 0,
+                   radius_mm: float = 30.0, target_mm: float = 0.0, alpha: float = 0.5, max_taps: int = 50,
+                   lost_mm: float = 6.0, warmup: int = 10, turn_classes: int = 2,
+                   trace_mm: float = 2.0) -> ContourResult:
+    """Follow the circle with passive, active or adaptive perception (see the module docstring).
+
+    Parameters
+    ----------
+    env : VirtualEnvironment
+        Edge stimulus: locations -9..9 mm (18 classes), identities 0..355 deg (72 classes).
+    threshold : float
+        Decision threshold on the angle marginal.
+    active : bool
+        Move to ``target_mm`` along the perceived normal after each undecided tap.
+    adaptive : bool
+        Start decisions from the adaptive prior; ``prior_shift`` fixes Delta (default: learned).
+    trace_mm : float
+        Largest distance of a traced edge point from the circle for a closed contour, mm.
+    runs, decisions, seed, radius_mm, target_mm, alpha, max_taps, lost_mm, warmup, turn_classes
+        Runs side by side, decisions per run, randomness, plate radius (mm), target position (mm),
+        weight of the prediction, taps at which a decision is forced, edge-lost distance (mm),
+        decisions left out of the means while the adaptive prior learns, angle classes turned per
+        decision on a perfect run (the step is radius x that angle).
+
+    Returns
+    -------
+    ContourResult
+    """
+    model = env.model
+    n_loc, n_id = model.n_locations, model.n_identities
+    width, angle_step = model.class_width, 360.0 / n_id
+    rng = np.random.default_rng(seed)
+    step_mm = radius_mm * np.radians(angle_step * turn_classes)
+    start = rng.uniform(0, 2 * np.pi, runs)
+    p = (radius_mm + rng.uniform(-2.0, 2.0, runs))[:, None] * np.stack([np.cos(start), np.sin(start)], axis=1)
+    table = env.log_likelihood.reshape(-1, n_loc, n_id)
+    flat = np.broadcast_to(bayes.flat_prior(n_loc, n_id), (runs, n_loc, n_id))
+    learner = ShiftLearner(n_id, alpha=alpha, circular=True, runs=runs)
+    heading = np.degrees(start)         # normal the active moves follow: the last decided angle, deg
+    turned = np.zeros(runs)
+    lost = np.zeros(runs, bool)
+    last = last_evidence = None
+    errors = {"angle": [], "position": [], "taps": []}
+    delta_error = np.full(decisions, np.nan)
+    edges = model.location_edges
+
+    def truth(p):
+        x = np.hypot(p[:, 0], p[:, 1]) - radius_mm
+        phi = np.degrees(np.arctan2(p[:, 1], p[:, 0])) % 360.0
+        location = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, n_loc - 1)
+        return x, phi, location, np.rint(phi / angle_step).astype(np.intp) % n_id
+
+    for d in range(decisions):
+        delta = learner.delta if prior_shift is None else np.full(runs, int(prior_shift))
+        if adaptive and last is not None:
+            # the forward model predicts the angle only (paper 004: "predictions ... are for angle
+            # classes only"): the last angle marginal, spread evenly over the positions
+            angle_only = np.log(np.exp(last).sum(axis=1, keepdims=True) / n_loc)
+            log_belief = bayes.adaptive_prior(np.broadcast_to(angle_only, last.shape), alpha=alpha,
+                                              shift_classes=delta, circular=True)
+            if prior_shift is None:
+                delta_error[d] = np.abs(delta - turn_classes).mean()
+        else:
+            log_belief = flat.copy()
+        evidence = flat.copy()
+        done = np.zeros(runs, bool)
+        decided = np.zeros((runs, 2), np.intp)
+        posterior, final_evidence = log_belief.copy(), evidence.copy()
+        x_true = np.zeros(runs)
+        p_decided = p.copy()
+        phi_true = np.zeros(runs)
+        taps = np.zeros(runs)
+        for tap in range(1, max_taps + 1):
+            x, phi, location, angle = truth(p)
+            likelihood = table[env.draw(location * n_id + angle, rng)]
+            log_belief = bayes.update(likelihood, log_belief)
+            evidence = bayes.update(likelihood, evidence)
+            belief, map_location, map_angle = bayes.decide(log_belief)
+            new = ~done & ((belief > threshold) | (tap == max_taps))
+            decided[new] = np.stack([map_location, map_angle], axis=1)[new]
+            posterior[new], final_evidence[new] = log_belief[new], evidence[new]
+            x_true[new], phi_true[new], taps[new], p_decided[new] = x[new], phi[new], tap, p[new]
+            done |= new
+            if done.all():
+                break
+            if active:
+                # move along the perceived normal to the target: x <- x + (x_target - x_MAP)   (eq. 6)
+                centres = model.location_centres[map_location]
+                offset = np.where(done, 0, np.rint((target_mm - centres) / width).astype(np.intp))
+                offset = np.clip(map_location + offset, 0, n_loc - 1) - map_location
+                normal = np.radians(heading)
+                p = p + (offset * width)[:, None] * np.stack([np.cos(normal), np.sin(normal)], axis=1)
+                log_belief = bayes.shift(log_belief, offset, mode="uniform")
+                evidence = bayes.shift(evidence, offset, mode="uniform")
+        # the traced contour: the edge point each decision perceives, P - x_decided n(angle_decided)
+        normal = np.radians(decided[:, 1] * angle_step)
+        traced = p_decided - model.location_centres[decided[:, 0]][:, None] * np.stack([np.cos(normal),
+                                                                                         np.sin(normal)], axis=1)
+        lost |= (np.abs(x_true) > lost_mm) | (np.abs(np.hypot(traced[:, 0], traced[:, 1]) - radius_mm) > trace_mm)
+        angle_error = np.abs((decided[:, 1] * angle_step - phi_true + 180.0) % 360.0 - 180.0)
+        if d >= warmup:
+            errors["angle"].append(angle_error.mean())
+            errors["position"].append(np.abs(model.location_centres[decided[:, 0]] - x_true).mean())
+            errors["taps"].append(taps.mean())
+        if adaptive and prior_shift is None and last_evidence is not None:
+            learner.observe(np.exp(last_evidence).sum(axis=1), np.exp(final_evidence).sum(axis=1))
+        last, last_evidence = posterior, final_evidence
+        # step along the perceived tangent (counter-clockwise)
+        heading = decided[:, 1] * angle_step
+        tangent = np.radians(heading + 90.0)
+        before = np.arctan2(p[:, 1], p[:, 0])
+        p = p + step_mm * np.stack([np.cos(tangent), np.sin(tangent)], axis=1)
+        turned += (np.arctan2(p[:, 1], p[:, 0]) - before + np.pi) % (2 * np.pi) - np.pi
+    closed = (turned >= 2 * np.pi - 1e-9) & ~lost
+    final = np.abs(learner.delta - turn_classes).mean() if adaptive and prior_shift is None else np.nan
+    return ContourResult(float(np.mean(errors["angle"])), float(np.mean(errors["position"])),
+                         float(np.mean(errors["taps"])), float(closed.mean()), float(final), delta_error)
