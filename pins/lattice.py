@@ -31,7 +31,7 @@ finds that lattice without being told the pin count:
    radius, and foreshortened rim pins work;
 4. the field: blobs joined by lattice links (at most 1.3 times the local second-neighbour distance)
    form connected groups; the large groups are the pin field, a blob beyond their convex hull is
-   ``outside field`` (so is every rejected blob half a pitch beyond it: glare on a rim ring), and
+   ``outside field`` (so is every rejected blob half a pitch beyond it: glare round the rim), and
    an isolated blob inside it (the centre pin of a radial layout) stays; fewer than 10 pins make
    no field;
 5. the winner: the candidate set that keeps the most pins that most good sets (those keeping
@@ -147,7 +147,7 @@ class PinField:
         Centres of the candidate blobs rejected, px.
     rejected_reason : (M,) ndarray of str
         Why each was rejected: one of `REJECTION_REASONS` ("outside field": beyond the lattice, such
-        as glare on a rim ring or pins the ring cuts; "off lattice": too close to a stronger pin,
+        as glare round the rim or pins a rim ring cuts; "off lattice": too close to a stronger pin,
         such as a speck or a light patch of skin between pins, or at no lattice site and unlike its
         neighbours; "size": much smaller or larger than its neighbours; "contrast": much fainter
         than its neighbours, or with a much softer edge).
@@ -448,7 +448,7 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     pitch = float(np.median(hood.pitch[core]))
     loose = index[~core]
     reason[loose[_beyond(hull, centres[loose], _HULL_MARGIN * pitch)]] = _OUTSIDE
-    # Whatever else was rejected beyond the field (glare on a rim ring) is outside it, first of all.
+    # Whatever else was rejected beyond the field (glare round the rim) is outside it, first of all.
     kept = reason == _KEPT
     rejected = np.flatnonzero(~kept)
     reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
