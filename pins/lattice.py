@@ -112,7 +112,7 @@ _AREA_RANGE = (0.25, 2.5)
 # pins on the membrane do not count) is at most `_RING_DARK` of the membrane's just inside it (over
 # `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge). The pins are searched inside its inner
 # edge less `_RING_INSET_PX` (its anti-aliased edge).
-_RING_PERCENTILE = 10.0
+_RING_PERCENTILE = 5.0
 _RING_DARK = 0.5
 _RING_EDGE_PX = 2
 _RING_MIN_PX = 3
@@ -460,7 +460,8 @@ def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> f
 
     The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each) give a dark level per radius, a low percentile over the azimuths, which neither the
     pins nor glare covering most of the ring raise. The ring is the widest outer annulus whose dark
-    level stays at most `_RING_DARK` of the membrane's just inside its edge, out to the disc's rim.
+    level stays at most `_RING_DARK` of the membrane's just inside its edge, and below the dark
+    level of the inner half of the disc, out to the disc's rim.
     Only bright pins are looked for on such a ring.
     """
     if dark_pins:
@@ -477,10 +478,14 @@ def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> f
     if end - _RING_MIN_PX + 1 < first:
         return np.inf
     # Brightest dark level from each radius out to the rim, and the membrane's just inside it.
-    outward = np.maximum.accumulate(dark[::-1])[::-1]
+    outward = np.maximum.accumulate(dark[end::-1])[::-1]
     radii = np.arange(first, end - _RING_MIN_PX + 2)
     inside = np.stack([dark[radii - _RING_STEP_PX - k] for k in range(1, _RING_INSIDE_PX + 1)])
-    ring = outward[radii] <= _RING_DARK * np.median(inside, axis=0)
+    # At most half as bright as the membrane next to it, and darker than the darkest membrane of
+    # the inner half of the disc (the same percentile of all its pixels): a black lip, not the
+    # membrane beyond a dense cluster of pins.
+    inner = np.percentile(polar[:, :steps // 2], _RING_PERCENTILE)
+    ring = (outward[radii] <= _RING_DARK * np.median(inside, axis=0)) & (outward[radii] <= inner)
     if not ring.any():
         return np.inf
     return float(radii[np.argmax(ring)] * disc.radius_px / steps)
