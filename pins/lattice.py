@@ -8,7 +8,8 @@ finds that lattice without being told the pin count:
 
 0. the search region: the sensor disc, or, when a black rim ring (the casing lip) lies between
    the pin field and the disc edge, the disc inside the ring's inner edge: an outer annulus whose
-   dark grey level over nearly all azimuths is at most half the membrane's just inside it. Like
+   dark grey level over nearly all azimuths is at most half the membrane's just inside it, and
+   darker than the membrane's of the inner half of the disc. Like
    the surround, the ring neither makes candidate blobs (its LED glare, which in a radial layout
    sits where one more ring of pins would) nor darkens the threshold's neighbourhood means (the
    membrane along its edge would pass for pins);
@@ -110,8 +111,9 @@ _AREA_RANGE = (0.25, 2.5)
 # disc edge (less `_RING_EDGE_PX`, its anti-aliased rim) at least `_RING_MIN_PX` wide, in which the
 # dark grey level of nearly every azimuth (`_RING_PERCENTILE`, so that LED glare on the ring and
 # pins on the membrane do not count) is at most `_RING_DARK` of the membrane's just inside it (over
-# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge). The pins are searched inside its inner
-# edge less `_RING_INSET_PX` (its anti-aliased edge).
+# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge) and below the same percentile of the inner
+# half of the disc. The pins are searched inside its inner edge less `_RING_INSET_PX` (its
+# anti-aliased edge).
 _RING_PERCENTILE = 5.0
 _RING_DARK = 0.5
 _RING_EDGE_PX = 2
@@ -456,21 +458,21 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
 
 
 def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> float:
-    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre (inf without one).
+    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre.
 
-    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each) give a dark level per radius, a low percentile over the azimuths, which neither the
-    pins nor glare covering most of the ring raise. The ring is the widest outer annulus whose dark
-    level stays at most `_RING_DARK` of the membrane's just inside its edge, and below the dark
-    level of the inner half of the disc, out to the disc's rim.
-    Only bright pins are looked for on such a ring.
+    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each)
+    give a dark level per radius, a low percentile over the azimuths, which neither the pins nor
+    glare covering most of the ring raise. The ring is the widest outer annulus whose dark level
+    stays at most `_RING_DARK` of the membrane's just inside its edge, and below the dark level of
+    the inner half of the disc, out to the disc's rim. Only bright pins are looked for on such a
+    ring (inf for dark pins, and when there is none).
     """
     if dark_pins:
         # A black ring has the polarity of dark pins: neither its glare nor the pins it hides make
         # candidate blobs.
         return np.inf
     steps = int(np.ceil(disc.radius_px))
-    image = grey
-    polar = cv2.warpPolar(image, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
+    polar = cv2.warpPolar(grey, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
                           cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
     dark = np.percentile(polar, _RING_PERCENTILE, axis=0)
     end = steps - 1 - _RING_EDGE_PX
