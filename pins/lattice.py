@@ -8,7 +8,8 @@ finds that lattice without being told the pin count:
 
 0. the search region: the sensor disc, or, when a black rim ring (the casing lip) lies between
    the pin field and the disc edge, the disc inside the ring's inner edge: an outer annulus whose
-   dark grey level over nearly all azimuths is at most half the membrane's just inside it. Like
+   dark grey level over nearly all azimuths is at most half the membrane's just inside it, and
+   darker than the membrane's of the inner half of the disc. Like
    the surround, the ring neither makes candidate blobs (its LED glare, which in a radial layout
    sits where one more ring of pins would) nor darkens the threshold's neighbourhood means (the
    membrane along its edge would pass for pins);
@@ -31,7 +32,7 @@ finds that lattice without being told the pin count:
    radius, and foreshortened rim pins work;
 4. the field: blobs joined by lattice links (at most 1.3 times the local second-neighbour distance)
    form connected groups; the large groups are the pin field, a blob beyond their convex hull is
-   ``outside field`` (so is every rejected blob half a pitch beyond it: glare on a rim ring), and
+   ``outside field`` (so is every rejected blob half a pitch beyond it: glare round the rim), and
    an isolated blob inside it (the centre pin of a radial layout) stays; fewer than 10 pins make
    no field;
 5. the winner: the candidate set that keeps the most pins that most good sets (those keeping
@@ -110,9 +111,10 @@ _AREA_RANGE = (0.25, 2.5)
 # disc edge (less `_RING_EDGE_PX`, its anti-aliased rim) at least `_RING_MIN_PX` wide, in which the
 # dark grey level of nearly every azimuth (`_RING_PERCENTILE`, so that LED glare on the ring and
 # pins on the membrane do not count) is at most `_RING_DARK` of the membrane's just inside it (over
-# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge). The pins are searched inside its inner
-# edge less `_RING_INSET_PX` (its anti-aliased edge).
-_RING_PERCENTILE = 10.0
+# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge) and below the same percentile of the inner
+# half of the disc. The pins are searched inside its inner edge less `_RING_INSET_PX` (its
+# anti-aliased edge).
+_RING_PERCENTILE = 5.0
 _RING_DARK = 0.5
 _RING_EDGE_PX = 2
 _RING_MIN_PX = 3
@@ -147,7 +149,7 @@ class PinField:
         Centres of the candidate blobs rejected, px.
     rejected_reason : (M,) ndarray of str
         Why each was rejected: one of `REJECTION_REASONS` ("outside field": beyond the lattice, such
-        as glare on a rim ring or pins the ring cuts; "off lattice": too close to a stronger pin,
+        as glare round the rim or pins a rim ring cuts; "off lattice": too close to a stronger pin,
         such as a speck or a light patch of skin between pins, or at no lattice site and unlike its
         neighbours; "size": much smaller or larger than its neighbours; "contrast": much fainter
         than its neighbours, or with a much softer edge).
@@ -448,7 +450,7 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     pitch = float(np.median(hood.pitch[core]))
     loose = index[~core]
     reason[loose[_beyond(hull, centres[loose], _HULL_MARGIN * pitch)]] = _OUTSIDE
-    # Whatever else was rejected beyond the field (glare on a rim ring) is outside it, first of all.
+    # Whatever else was rejected beyond the field (glare round the rim) is outside it, first of all.
     kept = reason == _KEPT
     rejected = np.flatnonzero(~kept)
     reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
@@ -456,20 +458,21 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
 
 
 def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> float:
-    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre (inf without one).
+    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre.
 
-    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each) give a dark level per radius, a low percentile over the azimuths, which neither the
-    pins nor glare covering most of the ring raise. The ring is the widest outer annulus whose dark
-    level stays at most `_RING_DARK` of the membrane's just inside its edge, out to the disc's rim.
-    Only bright pins are looked for on such a ring.
+    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each)
+    give a dark level per radius, a low percentile over the azimuths, which neither the pins nor
+    glare covering most of the ring raise. The ring is the widest outer annulus whose dark level
+    stays at most `_RING_DARK` of the membrane's just inside its edge, and below the dark level of
+    the inner half of the disc, out to the disc's rim. Only bright pins are looked for on such a
+    ring (inf for dark pins, and when there is none).
     """
     if dark_pins:
         # A black ring has the polarity of dark pins: neither its glare nor the pins it hides make
         # candidate blobs.
         return np.inf
     steps = int(np.ceil(disc.radius_px))
-    image = grey
-    polar = cv2.warpPolar(image, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
+    polar = cv2.warpPolar(grey, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
                           cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
     dark = np.percentile(polar, _RING_PERCENTILE, axis=0)
     end = steps - 1 - _RING_EDGE_PX
@@ -477,10 +480,14 @@ def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> f
     if end - _RING_MIN_PX + 1 < first:
         return np.inf
     # Brightest dark level from each radius out to the rim, and the membrane's just inside it.
-    outward = np.maximum.accumulate(dark[::-1])[::-1]
+    outward = np.maximum.accumulate(dark[end::-1])[::-1]
     radii = np.arange(first, end - _RING_MIN_PX + 2)
     inside = np.stack([dark[radii - _RING_STEP_PX - k] for k in range(1, _RING_INSIDE_PX + 1)])
-    ring = outward[radii] <= _RING_DARK * np.median(inside, axis=0)
+    # At most half as bright as the membrane next to it, and darker than the darkest membrane of
+    # the inner half of the disc (the same percentile of all its pixels): a black lip, not the
+    # membrane beyond a dense cluster of pins.
+    inner = np.percentile(polar[:, :steps // 2], _RING_PERCENTILE)
+    ring = (outward[radii] <= _RING_DARK * np.median(inside, axis=0)) & (outward[radii] <= inner)
     if not ring.any():
         return np.inf
     return float(radii[np.argmax(ring)] * disc.radius_px / steps)

@@ -8,7 +8,7 @@ import pytest
 from scipy.spatial import Delaunay, cKDTree
 
 from pins import (REJECTION_REASONS, DetectionParams, NoSensorError, PinField, detect_pins, draw_pin_field,
-                  find_pin_field)
+                  find_pin_field, find_sensor_disc)
 from tactip.synthetic import SyntheticTacTip, preset_names
 from tests.pins.conftest import TAP, preset_frame, preset_sensor, score
 
@@ -114,6 +114,26 @@ def test_rim_ring_mixes_meet_the_bar(mix, seed):
         field = find_pin_field(f.image)
         recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
         assert recall >= 0.99 and precision >= 0.99 and rmse <= 0.1, (mix, contact, recall, precision, rmse)
+
+
+@pytest.mark.parametrize("extra", [{}, BROWN, BRIGHT, dict(dark_pins=True), dict(layout="radial", **BRIGHT)])
+@pytest.mark.parametrize("size, pad", [((320, 240), 0.3), ((640, 480), 0.85)])
+def test_a_rim_ring_is_found_only_where_there_is_one(extra, size, pad):
+    """The ring's inner edge within a pixel and a half when there is one, with glare covering much of
+    it; no ring on a membrane without one (bright surround, veil, brown skin, dark pins)."""
+    from pins.disc import as_grey
+    from pins.lattice import _rim_ring_inner_px
+
+    for ring in (False, True):
+        if ring and extra.get("dark_pins"):
+            continue
+        sensor = SyntheticTacTip(pins=100, image_size=size, pad_fraction=pad, seed=3, **(RIM if ring else {}), **extra)
+        grey = as_grey(sensor.render().image)
+        found = _rim_ring_inner_px(grey, find_sensor_disc(grey, dark_pins=sensor.dark_pins), sensor.dark_pins)
+        if ring:
+            assert found == pytest.approx(sensor.rim_radius_px, abs=1.5)
+        else:
+            assert found == np.inf
 
 
 def test_painted_specks_and_faint_blobs_between_pins_are_rejected(rng):

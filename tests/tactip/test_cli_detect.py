@@ -68,7 +68,12 @@ def test_rejected_blobs_are_counted_by_reason(tmp_path, capsys):
     cv2.imwrite(str(image), preset_frame("rim-ring-331").image)
     assert main(["detect", str(image), "--expected-pins", "331"]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("325 pins in") and "outside field" in out and "expected 331 pins: -6 (-1.8%)" in out
+    assert out.startswith("325 pins in") and "expected 331 pins: -6 (-1.8%)" in out
+    # A rim ring bounds the search (its glare is no candidate); the glare round a brown pad's rim is rejected.
+    image = tmp_path / "brown.png"
+    cv2.imwrite(str(image), preset_frame("brown-127").image)
+    assert main(["detect", str(image)]) == 0
+    assert "outside field" in capsys.readouterr().out
 
 
 def test_annotate_draws_kept_and_rejected(tmp_path, capsys):
