@@ -60,6 +60,7 @@ never leaves a half-written result; the output paths are checked before any proc
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -208,6 +209,19 @@ class ReplayResult:
         return text
 
 
+@contextlib.contextmanager
+def _opencv_threads(count: int):
+    """OpenCV's worker pool at ``count`` threads inside the block, restored after it."""
+    import cv2
+
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(count)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(before)
+
+
 def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                  annotate_path: str | os.PathLike | None = None, expected_pins: int | None = None,
                  params: DetectionParams | None = None, n_samples: int = 40, n_pins: int = 40,
@@ -326,8 +340,11 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
 
                 raise CalibrationError(f"the calibration was made for {cal.frame_size[0]}x{cal.frame_size[1]} px "
                                        f"frames, the video's are {source.frame_size[0]}x{source.frame_size[1]} px")
-            # Decode on a thread while this one tracks; blocking, so that no frame is dropped.
-            with ThreadedReader(source, maxsize=8, when_full="block", close_source=False) as reader:
+            # Decode on a thread while this one tracks; blocking, so that no frame is dropped. OpenCV's
+            # own worker pool stays at one thread meanwhile: the two threads already fill a 2-core
+            # machine, and the pool's workers only contend with them.
+            with _opencv_threads(1), ThreadedReader(source, maxsize=8, when_full="block",
+                                                    close_source=False) as reader:
                 track = _track_video(reader, rest_frame=int(rest_frame), expected_pins=expected_pins,
                                      params=params, calibration=cal, progress=progress,
                                      total=getattr(source, "frame_count", None))
