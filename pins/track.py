@@ -27,6 +27,9 @@ lands within `fb_threshold_px` of where it started (forward-backward check). A p
   are detected (`pins.detect`, a few ms), at most once in `detect_every` frames: implausible pins
   take the blob they landed on, and free blobs are assigned to lost pins one-to-one (Hungarian
   method) within the gate around their predictions;
+- the surround: pixels of the crop beyond the sensor disc (less its blurred rim, `_DISC_EDGE_PX`)
+  that a pin's window can reach take the membrane's grey level, so a bright surround next to the
+  pins at the rim of a small pad neither pulls their centroids nor makes them look unlike at rest;
 - blank frames: a frame where fewer than a tenth of the expected pins are found (LEDs off, a
   black or dropped USB frame, the disc gone) is marked (`blank`, all NaN) and does not replace
   the last good frame as LK's reference, so the next good frame recovers the pins.
@@ -62,6 +65,9 @@ _BLANK_FRACTION = 0.1
 # Without the backward check, failed pins are tracked again with the pyramid only when more than
 # this fraction of them failed on the full image alone; fewer are left to the windowed search.
 _RETRY_FRACTION = 0.1
+# The sensor disc's rim is blurred over this many px inside its fitted radius: the surround's light
+# reaches that far (the crop's surround is replaced up to here, where pins' windows reach it).
+_DISC_EDGE_PX = 2.0
 
 
 @dataclass(frozen=True)
@@ -323,6 +329,7 @@ class PinTracker:
         self._crop = (slice(None), slice(None))
         self._last_seen: np.ndarray | None = None
         self._refiner: Refiner | None = None
+        self._surround = None                         # (flat indices, membrane level) in the crop
 
     def __repr__(self) -> str:
         state = "not started" if self.positions is None else (
@@ -378,6 +385,9 @@ class PinTracker:
             self.lk = LKParams(window_px=int(np.clip(2 * round(0.3 * self.spacing_px) + 1, 7, 31)))
         self._set_crop(grey.shape, pins)
         self._previous = grey[self._crop].copy()
+        self._surround = None
+        if self.refine and self.disc is not None:
+            self._surround = self._surround_pixels(self._previous, pins)
         if self.refine:
             refiner = Refiner(self._bright(self._previous), pins, self._origin,
                               spacing_px=self.spacing_px, gate_px=self.gate_px, neighbours=self.neighbours,
@@ -508,5 +518,31 @@ class PinTracker:
         return found < max(1, _BLANK_FRACTION * expected)
 
     def _bright(self, crop: np.ndarray) -> np.ndarray:
-        """The crop with bright pins (dark markers inverted)."""
-        return cv2.bitwise_not(crop) if self.detection.dark_pins else crop
+        """The crop with bright pins (dark markers inverted) and the surround near pins at the membrane's level.
+
+        In place for bright pins: LK then sees the same surround in every frame.
+        """
+        bright = cv2.bitwise_not(crop) if self.detection.dark_pins else crop
+        if self._surround is not None:
+            bright.put(*self._surround)
+        return bright
+
+    def _surround_pixels(self, rest_crop: np.ndarray, pins: np.ndarray):
+        """(flat indices, grey level): the rest crop's pixels beyond the disc (less its rim) within a pin's reach.
+
+        A pin's reach: a window (half the spacing) plus a spacing of motion. The level is the
+        median inside the disc (the membrane's, bright-pin polarity). None when no pin reaches
+        beyond the disc.
+        """
+        disc, (x0, y0) = self.disc, self._origin
+        reach = 1.5 * self.spacing_px + 2.0
+        yy, xx = np.mgrid[0:rest_crop.shape[0], 0:rest_crop.shape[1]]
+        beyond = np.hypot(xx + x0 - disc.cx, yy + y0 - disc.cy) > disc.radius_px - _DISC_EDGE_PX
+        if not beyond.any() or beyond.all():
+            return None
+        near = cKDTree(pins - self._origin).query(np.column_stack([xx[beyond], yy[beyond]]),
+                                                   distance_upper_bound=reach)[0] <= reach
+        if not near.any():
+            return None
+        bright = cv2.bitwise_not(rest_crop) if self.detection.dark_pins else rest_crop
+        return np.flatnonzero(beyond)[near], np.uint8(np.median(bright[~beyond]))
