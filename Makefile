@@ -21,13 +21,13 @@ test: $(STAMP) services
 	$(BIN)/python -m pytest -q
 
 # The real services some tests use: PostgreSQL (the tests make throwaway clusters of their own on a
-# local socket) and headless Chromium with its driver (the dashboard's browser test). Installed from
-# Debian's packages when missing (as root); otherwise their tests skip and say why. Idempotent, quiet.
+# local socket) and headless Chromium (the dashboard's browser test; Playwright drives it over its own
+# protocol, so no chromedriver). Installed from Debian's packages when missing (as root); otherwise
+# their tests skip and say why. Idempotent, quiet.
 services:
 	@missing=""; \
 	ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1 || missing="$$missing postgresql"; \
 	command -v chromium >/dev/null 2>&1 || missing="$$missing chromium"; \
-	command -v chromedriver >/dev/null 2>&1 || missing="$$missing chromium-driver"; \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	    echo "make services: installing$$missing (apt-get)"; \

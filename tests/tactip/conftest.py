@@ -12,6 +12,7 @@ them to change them).
 import contextlib
 import io
 import json
+import re
 import tomllib
 from pathlib import Path
 from types import SimpleNamespace
@@ -128,6 +129,37 @@ def run_cli(argv) -> tuple[int, str, str]:
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main([str(a) for a in argv])
     return code, out.getvalue(), err.getvalue()
+
+
+# `tactip inspect`'s lines: "  g02 tap  1  depth 1.75 mm  width 1.25 mm (belief 0.102) ..." and
+# "g02: width 0.25 mm (nominal ...) ... -> PASS".
+TAP_LINE = re.compile(r"^\s+(\S+) tap\s+(\d+)\s+depth\s+([\d.]+) mm\s+width\s+([\d.]+) mm \(belief ([\d.]+)\)")
+VERDICT_LINE = re.compile(r"^(\S+): width ([\d.]+) mm .* -> (PASS|FAIL|UNDECIDED)$")
+
+
+def printed_inspections(out: str):
+    """Taps and verdicts as `tactip inspect` printed them: {(gap, tap): (depth, width, belief)}, {gap: verdict}."""
+    taps, verdicts = {}, {}
+    for line in out.splitlines():
+        if m := TAP_LINE.match(line):
+            key = (m[1], int(m[2]))
+            assert key not in taps
+            taps[key] = (float(m[3]), float(m[4]), float(m[5]))
+        elif m := VERDICT_LINE.match(line):
+            verdicts[m[1]] = m[3]
+    return taps, verdicts
+
+
+def stored_inspections(store, station: str | None = None):
+    """The same from the results store (rounded as printed; of one ``station`` if given); each tap once."""
+    taps, verdicts = {}, {}
+    for r in store.inspections(station=station):
+        verdicts[r.gap] = {True: "PASS", False: "FAIL", None: "UNDECIDED"}[r.passed]
+        for t in store.taps(r.id):
+            assert (r.gap, t["tap"]) not in taps
+            taps[(r.gap, t["tap"])] = (round(t["depth_mm"], 2), round(t["identity_estimate"], 2),
+                                       round(t["belief"], 3))
+    return taps, verdicts
 
 
 @pytest.fixture(scope="session")

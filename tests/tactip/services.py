@@ -1,8 +1,8 @@
 """Real services for the tests: a throwaway PostgreSQL cluster, and Debian's headless Chromium.
 
-`make services` installs Debian's ``postgresql``, ``chromium`` and ``chromium-driver`` when they are
-missing; where that was not possible the tests that need them skip and say so (`find_postgres_bin`,
-`find_chromium` return None).
+`make services` installs Debian's ``postgresql`` and ``chromium`` when they are missing (Playwright
+drives Chromium over its own protocol: no chromedriver); where that was not possible the tests that
+need them skip and say so (`find_postgres_bin`, `find_chromium` return None).
 
 `PostgresCluster` is a cluster of its own: ``initdb`` into a temporary folder, ``pg_ctl`` start on a
 free port of 127.0.0.1 (and a socket in that folder), trust authentication for its one user, no
@@ -24,7 +24,7 @@ from pathlib import Path
 SKIP_POSTGRES = ("PostgreSQL is not installed (Debian's postgresql package: run `make services` as root, "
                  "or apt-get install postgresql)")
 SKIP_CHROMIUM = ("Chromium is not installed (Debian's chromium package: run `make services` as root, "
-                 "or apt-get install chromium chromium-driver)")
+                 "or apt-get install chromium)")
 
 
 def find_postgres_bin() -> Path | None:

@@ -25,8 +25,8 @@ from tactip.config import load_station_config
 from tactip.procedures import collect_station, sensor_description
 from tactip.results import ResultsStore
 from tactip.station import SimulatedCamera
-from tests.tactip.conftest import (LOCATIONS, SMALL_GAPS, THRESHOLDS, FaultyArm, run_cli, sim_arm,
-                                   small_station_table, write_station)
+from tests.tactip.conftest import (LOCATIONS, SMALL_GAPS, THRESHOLDS, FaultyArm, printed_inspections, run_cli,
+                                   sim_arm, small_station_table, stored_inspections, write_station)
 
 EXPORTED = {"gap", "nominal_width", "estimated_width", "belief", "taps", "decided", "passed", "policy", "started_at"}
 
@@ -69,11 +69,15 @@ def test_calibrate_collect_train_validate_wrote_real_files(sim_station):
 def test_inspect_then_export_the_results(sim_station, tmp_path):
     results = tmp_path / "results.sqlite"
     toml = write_station(tmp_path, small_station_table(sim_station.root, station={"results": str(results)}))
-    code, out, err = run_cli(["inspect", "--config", toml, "--seed", "0", "--quiet"])
+    code, out, err = run_cli(["inspect", "--config", toml, "--seed", "0"])
     assert code == 0, err
     assert "4 gap(s) in" in out and f"results: {results}" in out
     with ResultsStore(results) as store:
         rows = store.inspections()
+        # every tap and verdict printed is stored, once (the line's bar for one station on SQLite)
+        printed_taps, printed_verdicts = printed_inspections(out)
+        assert set(printed_verdicts) == set(SMALL_GAPS) and len(printed_taps) >= len(SMALL_GAPS)
+        assert stored_inspections(store) == (printed_taps, printed_verdicts)
         assert [r.gap for r in rows] == list(SMALL_GAPS) and {r.status for r in rows} == {"done"}
         for r in rows:
             taps = store.taps(r.id)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-import re
 import subprocess
 import sys
 from collections import Counter
@@ -17,7 +16,8 @@ from collections import Counter
 import pytest
 
 from tactip.results import ResultsError, ResultsStore, open_results
-from tests.tactip.conftest import run_cli, small_station_table, write_station
+from tests.tactip.conftest import (printed_inspections, run_cli, small_station_table, stored_inspections,
+                                   write_station)
 
 
 def _inspect(store, gap="g1", nominal=2.0, estimate=2.25, decided=True, station="line-1"):
@@ -141,39 +141,12 @@ def test_concurrent_writers_store_every_tap_once(backend, postgres_url, tmp_path
 
 # -- two simulated stations on one line --------------------------------------------------------------
 
-_TAP_LINE = re.compile(r"^\s+(\S+) tap\s+(\d+)\s+depth\s+([\d.]+) mm\s+width\s+([\d.]+) mm \(belief ([\d.]+)\)")
-_VERDICT_LINE = re.compile(r"^(\S+): width ([\d.]+) mm .* -> (PASS|FAIL|UNDECIDED)$")
-
-
-def _printed(out: str):
-    """Taps and verdicts as `tactip inspect` printed them: {(gap, tap): (depth, width, belief)}, {gap: verdict}."""
-    taps, verdicts = {}, {}
-    for line in out.splitlines():
-        if m := _TAP_LINE.match(line):
-            key = (m[1], int(m[2]))
-            assert key not in taps
-            taps[key] = (float(m[3]), float(m[4]), float(m[5]))
-        elif m := _VERDICT_LINE.match(line):
-            verdicts[m[1]] = m[3]
-    return taps, verdicts
-
-
-def _stored(store, station: str):
-    taps, verdicts = {}, {}
-    for r in store.inspections(station=station):
-        verdicts[r.gap] = {True: "PASS", False: "FAIL", None: "UNDECIDED"}[r.passed]
-        for t in store.taps(r.id):
-            assert (r.gap, t["tap"]) not in taps
-            taps[(r.gap, t["tap"])] = (round(t["depth_mm"], 2), round(t["identity_estimate"], 2),
-                                       round(t["belief"], 3))
-    return taps, verdicts
-
 
 def test_two_simulated_stations_inspecting_at_once_store_every_tap_and_verdict_once(
         sim_station, postgres_url, tmp_path):
     """Two `tactip inspect` processes, one database: what each printed is what is stored, once.
 
-    (One station into SQLite: `test_cli_station.test_inspect_then_export_the_results`.)
+    (One station into SQLite, checked the same way: `test_cli_station.test_inspect_then_export_the_results`.)
     """
     results, gaps = postgres_url, ("g02", "g14")
     names = ["cell-1", "cell-2"]
@@ -189,8 +162,8 @@ def test_two_simulated_stations_inspecting_at_once_store_every_tap_and_verdict_o
         assert Counter(r.station for r in rows) == {name: len(gaps) for name in names}
         assert all(r.status == "done" for r in rows)
         for name, (out, _) in zip(names, outputs):
-            printed_taps, printed_verdicts = _printed(out)
-            stored_taps, stored_verdicts = _stored(store, name)
+            printed_taps, printed_verdicts = printed_inspections(out)
+            stored_taps, stored_verdicts = stored_inspections(store, name)
             assert set(printed_verdicts) == set(gaps) and len(printed_taps) >= len(gaps)
             assert stored_taps == printed_taps                       # every tap, once, with its values
             assert stored_verdicts == printed_verdicts
