@@ -5,7 +5,8 @@ small pad in a bright surround, dense pad ...) taps once at 4 mm over a 2 mm gap
 through MPEG-4 (mp4v) like a camera recording. The replay must write positions, displacements,
 lost and retired masks, blank marks and time stamps; find the tap; select 40 feature pins (closer
 than 4 mm only with a warning saying so); and, given the sensor's name, find the renderer's scale
-within 5 %.
+within 5 %; and track the pins drawn whole on their true centres (RMSE < 0.2 px through the codec),
+losing fewer than 1 % of them.
 """
 
 import functools
@@ -25,24 +26,26 @@ TAP = Contact(indentation_mm=4.0, gap_width_mm=2.0)
 
 @functools.lru_cache(maxsize=None)
 def _video(name: str, folder: str):
-    """The preset's tap as an mp4v file in ``folder``: (path, sensor, true centres (T, N, 2), indentation (T,))."""
+    """The preset's tap as an mp4v file in ``folder``: (path, sensor, true centres (T, N, 2), indentation (T,),
+    pins drawn whole (T, N))."""
     sensor = SyntheticTacTip.from_preset(name, seed=7)
     width, height = sensor.image_size
     path = f"{folder}/{name}.mp4"
     writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*"mp4v"), 20.0, (width, height), True)
-    centres, depth = [], []
+    centres, depth, whole = [], [], []
     for frame in sensor.tap(TAP, frame_rate=20.0, rest_before_s=0.1, rest_after_s=0.2):
         image = frame.image if frame.image.ndim == 3 else cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
         writer.write(image)
         centres.append(frame.centres)
         depth.append(frame.contact.indentation_mm)
+        whole.append(frame.visible)
     writer.release()
-    return path, sensor, np.array(centres), np.array(depth)
+    return path, sensor, np.array(centres), np.array(depth), np.array(whole)
 
 
 @pytest.mark.parametrize("name", preset_names())
 def test_replay_succeeds_on_every_preset(tmp_path, name):
-    path, sensor, truth, depth = _video(name, str(tmp_path))
+    path, sensor, truth, depth, whole = _video(name, str(tmp_path))
     out = tmp_path / "r.h5"
     result = replay_video(path, out, sensor=name)  # dark markers found without --dark-pins
     frames = len(truth)
@@ -72,9 +75,16 @@ def test_replay_succeeds_on_every_preset(tmp_path, name):
     # The tap is found, around the deepest frame.
     deepest = int(np.argmax(depth))
     assert any(start <= deepest < stop for start, stop in result.tap_bounds)
-    # The pins found at rest are the renderer's pins, and most are still tracked after the tap
-    # (how close to their true centres is the tracker's bar, tests/pins/test_track.py).
-    distance, _ = cKDTree(truth[0]).query(positions[0])
+    # The pins found at rest are the renderer's pins, one each, and most are still tracked after the tap.
+    distance, identity = cKDTree(truth[0]).query(positions[0])
     real = distance < 1.0
-    assert real.sum() >= 0.9 * pins
+    assert real.sum() >= 0.9 * pins and len(set(identity[real].tolist())) == real.sum()
     assert np.isfinite(positions[-1, real, 0]).mean() >= 0.9
+    # Those drawn whole (a rim ring cuts others: no true centre in view) are tracked in every frame
+    # but 1 % and lie on their true centres. (The tracker's own bar, on raw renders, is in
+    # tests/pins/test_track.py; the codec adds its blur and blocks here.)
+    whole = whole[:, identity] & real
+    error = positions - truth[:, identity]
+    tracked = whole & np.isfinite(error[..., 0])
+    assert tracked.sum() >= 0.99 * whole.sum()
+    assert np.sqrt(np.mean(np.sum(error[tracked] ** 2, axis=1))) < 0.2
