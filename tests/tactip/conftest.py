@@ -13,6 +13,7 @@ import contextlib
 import io
 import json
 import re
+import signal
 import tomllib
 from pathlib import Path
 from types import SimpleNamespace
@@ -28,6 +29,12 @@ DEPTH_STEP_MM = 0.5
 REPEATS = 2
 LOCATIONS = 11
 THRESHOLDS = (0.5, 0.9, 0.99)
+
+# The CLI processes these tests stop with Ctrl-C must feel it: a shell running the suite in the
+# background (a non-interactive `make test &`) starts it with SIGINT ignored, which children inherit
+# (a signal Python handles is reset to the default in a child, an ignored one stays ignored).
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def dump_toml(table: dict) -> str:
