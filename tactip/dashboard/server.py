@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ipaddress
 import socket
+import signal
 import threading
 
 from ..errors import TactipError
@@ -68,7 +69,10 @@ class DashboardServer:
         feed = getattr(getattr(app, "state", None), "feed", None)
 
         class Server(uvicorn.Server):
+            stopped_by: int | None = None
+
             def handle_exit(self, sig, frame):  # Ctrl-C, SIGTERM: end the event streams, then stop
+                self.stopped_by = self.stopped_by or sig
                 if feed is not None:
                     feed.stop()
                 super().handle_exit(sig, frame)
@@ -83,9 +87,20 @@ class DashboardServer:
         return f"http://{host}:{self.port}/"
 
     def serve_forever(self) -> None:
-        """Serve in this thread until Ctrl-C / SIGTERM."""
+        """Serve in this thread until Ctrl-C / SIGTERM, then raise `KeyboardInterrupt` / `Terminated`.
+
+        uvicorn raises the signal again once it has stopped; that does nothing where the signal was
+        ignored when the process started (SIGINT in a job a script put in the background), so the
+        stop is raised here too.
+        """
+        from tactip._signals import Terminated
+
         self._server.run(sockets=[self._socket])
         self._socket.close()
+        if self._server.stopped_by == signal.SIGINT:
+            raise KeyboardInterrupt
+        if self._server.stopped_by is not None:
+            raise Terminated(self._server.stopped_by)
 
     def start(self) -> "DashboardServer":
         """Serve in a background thread; returns once the server accepts requests."""

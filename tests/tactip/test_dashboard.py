@@ -205,7 +205,10 @@ def test_serve_help_names_the_guard(capsys):
     assert done.value.code == 0 and "--token" in text and "127.0.0.1" in text and "read-only" in text
 
 
-def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path):
+@pytest.mark.parametrize("sigint", ["default", "ignored"])
+def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path, sigint):
+    # "ignored": started as a background job by a script (SIGINT ignored from the start), where
+    # uvicorn's re-raised SIGINT does nothing: still "Stopped." and exit 1.
     import signal
     import subprocess
     import sys
@@ -213,8 +216,10 @@ def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path):
     db = tmp_path / "r.sqlite"
     with open_results(db) as store:
         _verdict(store, "door", 1.05)
+    start = signal.SIG_IGN if sigint == "ignored" else signal.SIG_DFL
     serve = subprocess.Popen([sys.executable, "-m", "tactip.cli", "serve", "--db", str(db), "--port", "0"],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, start))
     try:
         first = serve.stdout.readline()                              # "dashboard of DB on http://127.0.0.1:PORT/ ..."
         assert first.startswith(f"dashboard of {db} on http://127.0.0.1:"), first + serve.stderr.read()
