@@ -29,7 +29,7 @@ import numpy as np
 import pytest
 
 from perception import load_dataset, load_model
-from tests.tactip.conftest import LOCATIONS, small_station_table, write_station
+from tests.tactip.conftest import LOCATIONS, run_cli, small_station_table, write_station
 from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip
 
 FULL_DISK_MODE: dict[str, str] = {}
@@ -213,6 +213,7 @@ def test_collect_on_a_full_disk_keeps_only_complete_taps_and_resumes(sim_station
                             cwd=tmp_path, inputs=[toml, tmp_path / "station" / "calibration.h5"], **extra)
         assert_refused(result, *disk_full_words(mounted), "train.h5")
         assert result.returncode == 1                                      # not a segfault (139)
+        assert not leftover_temporaries(out)
         if mounted:
             stored = load_dataset(out / "train.h5")
             assert 0 < len(stored) < len(depths)
@@ -361,33 +362,46 @@ def test_inspect_on_a_full_disk_reports_it_and_keeps_the_stored_rows(sim_station
 
 # -- half-prepared, bad or mixed inputs ------------------------------------------------------------------
 
-def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, tmp_path, monkeypatch):
-    """inspect --sim's preparation: interrupted in the fixation sweep, then resumed (in-process: the
-    real preparation of the packaged simulated station takes minutes)."""
+def _sim_is(config, monkeypatch):
+    """``tactip inspect --sim`` runs the station ``config`` (the small one: its preparation takes seconds)."""
+    import tactip.config
+
+    monkeypatch.setattr(tactip.config, "simulated_station_config", lambda data_dir: config)
+
+
+def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, tmp_path, monkeypatch, capsys):
+    """inspect --sim's first preparation, interrupted in the fixation sweep, then resumed by the next
+    ``inspect --sim`` (in-process, on the small station: the packaged one's preparation takes minutes)."""
     import calibration
+    from tactip.cli import main
     from tactip.config import load_station_config
-    from tactip.procedures import model_is_prepared, prepare_model
+    from tactip.procedures import model_is_prepared
 
     toml = station_copy(sim_station, tmp_path, model=False)
     config = load_station_config(toml)
+    _sim_is(config, monkeypatch)
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
     sweep = calibration.recommend_fixation
     monkeypatch.setattr(calibration, "recommend_fixation", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        prepare_model(config, progress=False, log=lambda line: None)
+    assert main(["inspect", "--sim", "--gap", "g02", "--quiet"]) == 1           # Ctrl-C in the sweep
+    assert "Stopped." in capsys.readouterr().err
     assert not config.perception.model.exists() and not model_is_prepared(config.perception.model)
-    assert not leftover_temporaries(tmp_path)
+    assert not leftover_temporaries(tmp_path) and not (tmp_path / "results.sqlite").exists()
     monkeypatch.setattr(calibration, "recommend_fixation",
                         lambda *a, **k: sweep(*a, **{**k, "runs": 100}))
-    prepare_model(config, progress=False, log=lambda line: None)
+    assert main(["inspect", "--sim", "--gap", "g02", "--seed", "1", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "No trained model" in out and "model ready" in out and "1 gap(s)" in out
     assert model_is_prepared(config.perception.model)
 
 
-def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tmp_path):
+def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tmp_path, monkeypatch, capsys):
     from perception import save_model
+    from tactip.cli import main
+    from tactip.config import load_station_config
     from tactip.procedures import model_is_prepared
 
     bare = load_model(sim_station.model)
@@ -396,10 +410,26 @@ def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tm
     assert not model_is_prepared(tmp_path / "model.h5") and model_is_prepared(sim_station.model)
     toml = station_copy(sim_station, tmp_path / "station", datasets=False)
     shutil.copy(tmp_path / "model.h5", tmp_path / "station" / "model.h5")
-    result = run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", cwd=tmp_path,
-                        inputs=[tmp_path / "station" / "model.h5"])
-    assert result.returncode == 0, result.stderr
-    assert "no recommended decision_threshold or fixation_location" in result.stdout
+    # A station of one's own: inspected with the model as it is, and warned about (in-process, as below).
+    before = digest(tmp_path / "station" / "model.h5")
+    code, out, err = run_cli(["inspect", "--config", toml, "--gap", "g02", "--seed", "1"])
+    assert code == 0, err
+    assert "no recommended decision_threshold or fixation_location" in out
+    assert digest(tmp_path / "station" / "model.h5") == before
+    # inspect --sim (a model left by a version that trained in place): its preparation is resumed first.
+    _sim_is(load_station_config(toml), monkeypatch)
+    import tactip.procedures
+
+    def prepare(config, **kwargs):
+        shutil.copy(sim_station.model, config.perception.model)                # as the preparation ends
+        return config.perception.model
+
+    monkeypatch.setattr(tactip.procedures, "prepare_model", prepare)
+    assert main(["inspect", "--sim", "--gap", "g02", "--seed", "1", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "has no recommended settings (an earlier preparation was interrupted): resuming" in out
+    assert "no recommended" not in out.split("model ready")[1]                  # inspected with the prepared model
+    assert model_is_prepared(tmp_path / "station" / "model.h5")
 
 
 @pytest.mark.parametrize("key, value, command, words", [
@@ -433,6 +463,12 @@ def test_a_model_with_nan_likelihoods_is_refused_and_train_refuses_inf_epsilon(s
     result = run_tactip("validate", model, sim_station.test, "--runs", "10", "--quiet", cwd=tmp_path,
                         inputs=[model, sim_station.test])
     assert_refused(result, "model.h5", "log_probability", "nan")
+    # Replay refuses it as well, before reading the video (in-process: the same loader, no second start).
+    video = Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4"
+    code, _, err = run_cli(["replay", video, "--out", tmp_path / "o.h5", "--calibration",
+                            sim_station.root / "calibration.h5", "--model", model, "--quiet"])
+    assert code == 1 and "log_probability holds 1 NaN" in err and "Traceback" not in err, err
+    assert not (tmp_path / "o.h5").exists() and not leftover_temporaries(tmp_path)
     result = run_tactip("train", sim_station.train, "--out", "inf.h5", "--epsilon", "inf", cwd=tmp_path,
                         inputs=[sim_station.train])
     assert_refused(result, "--epsilon", "finite")

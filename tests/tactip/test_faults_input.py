@@ -163,6 +163,8 @@ CASES = [
      ["--mm-per-px", "(0, 10] mm/px"]),
     ("replay --samples huge", ["replay", "{root}/video.mp4", "--out", "r.h5", "--samples", "1000000000000"],
      ["--samples", "1..1000"]),
+    ("replay --expected-pins 1..5", ["replay", "{root}/video.mp4", "--out", "r.h5", "--expected-pins", "3"],
+     ["--expected-pins", "7..2000", "got 3"]),
     ("replay --pins-on-pad huge", ["replay", "{root}/video.mp4", "--out", "r.h5", "--pins-on-pad", "1000000"],
      ["--pins-on-pad", "7..2000"]),
     ("record --exposure of a synthetic source", ["record", "synthetic", "--out", "r.mp4", "--exposure", "5"],
