@@ -41,15 +41,20 @@ COMMANDS: dict[str, str] = {
 }
 
 
-def _known_errors() -> tuple[type[BaseException], ...]:
-    """The error families whose message is meant for the user (no traceback)."""
-    from arm.errors import ArmError
-    from calibration.errors import CalibrationError
-    from perception.errors import PerceptionError
-    from pins.errors import PinsError
-    from tactip.errors import TactipError
+# The error families whose message is meant for the user (no traceback): (module, base class).
+_ERROR_FAMILIES = (("tactip.errors", "TactipError"), ("pins.errors", "PinsError"),
+                   ("perception.errors", "PerceptionError"), ("arm.errors", "ArmError"),
+                   ("calibration.errors", "CalibrationError"))
 
-    return (TactipError, PinsError, PerceptionError, ArmError, CalibrationError, OSError)
+
+def _known_errors() -> tuple[type[BaseException], ...]:
+    """The error families whose message is meant for the user (no traceback), and `OSError`.
+
+    Only the families already imported: an error of a package never imported cannot have been raised,
+    and importing one (``arm``, ``calibration``) for its error class cost a second per failed command.
+    """
+    loaded = (sys.modules.get(module) for module, _ in _ERROR_FAMILIES)
+    return (*(getattr(m, name) for m, (_, name) in zip(loaded, _ERROR_FAMILIES) if m is not None), OSError)
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
