@@ -33,7 +33,7 @@ from tactip.cli import build_parser
 from tactip.config import parse_station_config
 from tactip.errors import ConfigError
 from tests.tactip.conftest import small_station_table, write_station
-from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip
+from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip, run_tactip_in_process
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 VIDEO = SAMPLES / "synthetic_tap.mp4"
@@ -293,8 +293,9 @@ def test_the_sweep_recommends_within_a_workable_budget(files, tmp_path):
 
     model = tmp_path / "model.h5"
     shutil.copy(files / "model.h5", model)
-    result = run_tactip("validate", model, files / "test.h5", "--sweep-fixation", "--runs", "200", "--thresholds",
-                        "0.2", "0.9", "0.99", "--tap-budget", "6", "--quiet", cwd=tmp_path, inputs=[files / "test.h5"])
+    result = run_tactip_in_process("validate", model, files / "test.h5", "--sweep-fixation", "--runs", "200",
+                                   "--thresholds", "0.2", "0.9", "0.99", "--tap-budget", "6", "--quiet", cwd=tmp_path,
+                                   inputs=[files / "test.h5"])
     assert result.returncode == 0, result.stderr
     recommended = load_model(model).recommended
     assert recommended["decision_threshold"] in (0.9, 0.99)  # 0.2 < 1/2 decides after the first tap: never chosen
