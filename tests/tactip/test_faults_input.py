@@ -420,11 +420,8 @@ def _named(message: str, path) -> bool:
     return names[-1] in message
 
 
-@pytest.mark.parametrize("sample, path, value", SAMPLE_KEYS,
-                         ids=[f"{s.split('.')[0]}:{'.'.join(map(str, p))}" for s, p, _ in SAMPLE_KEYS])
-def test_every_station_key_refuses_wrong_types(sample, path, value):
-    """Each key of the sample stations, set to a value of another type (and a number to nan, inf, 1e30),
-    is refused with a `ConfigError` naming it; the sample itself loads."""
+def wrong_values(path, value) -> list:
+    """Values of another type for the key ``path`` whose sample value is ``value`` (numbers: also nan, inf, 1e30)."""
     wrong = [{"a": 1}, [1, 2]] if not isinstance(value, list) else [{"a": 1}, "x"]
     if isinstance(value, bool):
         wrong += [1, "yes"]
@@ -432,7 +429,15 @@ def test_every_station_key_refuses_wrong_types(sample, path, value):
         wrong += ["1", True, math.nan, math.inf, -math.inf, 1e30]
     elif isinstance(value, str):
         wrong += [True, 3.5] if path[-1] != "source" else [True, 3.5, -1, 10**6]
-    for bad in wrong:
+    return wrong
+
+
+@pytest.mark.parametrize("sample, path, value", SAMPLE_KEYS,
+                         ids=[f"{s.split('.')[0]}:{'.'.join(map(str, p))}" for s, p, _ in SAMPLE_KEYS])
+def test_every_station_key_refuses_wrong_types(sample, path, value):
+    """Each key of the sample stations, set to a value of another type (and a number to nan, inf, 1e30),
+    is refused with a `ConfigError` naming it; the sample itself loads."""
+    for bad in wrong_values(path, value):
         with pytest.raises(ConfigError) as err:
             parse_station_config(_with(sample, path, bad), base_dir=SAMPLES)
         assert _named(str(err.value), path), (bad, str(err.value))
