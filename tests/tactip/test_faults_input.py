@@ -533,7 +533,8 @@ def test_warned_cases_of_the_issue_run_to_the_end_through_the_real_cli(files, tm
                         inputs=[files / "video.mp4"])
     assert during.returncode == 0 and "rest frame 40 looks taken during a tap" in during.stdout, during.stdout
     assert (tmp_path / "b.h5").exists() and (tmp_path / "r.h5").exists()
-    # The black frame taken as the rest frame: refused, naming the frame and the way out.
-    refused = run_tactip("replay", black, "--out", "c.h5", "--rest-frame", "30", cwd=tmp_path, inputs=[black])
+    # The black frame taken as the rest frame: refused, naming the frame and the way out (in-process: a variant).
+    refused = run_tactip_in_process("replay", black, "--out", "c.h5", "--rest-frame", "30", cwd=tmp_path,
+                                    inputs=[black])
     assert_refused(refused, "rest frame 30", "no sensor disc", "--rest-frame")
     assert not (tmp_path / "c.h5").exists()
