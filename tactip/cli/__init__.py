@@ -41,19 +41,30 @@ COMMANDS: dict[str, str] = {
 }
 
 
+# The error families whose message is meant for the user (no traceback): (module, base class).
+_ERROR_FAMILIES = (("tactip.errors", "TactipError"), ("pins.errors", "PinsError"),
+                   ("perception.errors", "PerceptionError"), ("arm.errors", "ArmError"),
+                   ("calibration.errors", "CalibrationError"))
+
+
 def _known_errors() -> tuple[type[BaseException], ...]:
-    """The error families whose message is meant for the user (no traceback)."""
-    from arm.errors import ArmError
-    from calibration.errors import CalibrationError
-    from perception.errors import PerceptionError
-    from pins.errors import PinsError
-    from tactip.errors import TactipError
+    """The error families whose message is meant for the user (no traceback), and `OSError`.
 
-    return (TactipError, PinsError, PerceptionError, ArmError, CalibrationError, OSError)
+    Only the families already imported: an error of a package never imported cannot have been raised,
+    and importing one (``arm``, ``calibration``) for its error class cost a second per failed command.
+    """
+    loaded = (sys.modules.get(module) for module, _ in _ERROR_FAMILIES)
+    return (*(getattr(m, name) for m, (_, name) in zip(loaded, _ERROR_FAMILIES) if m is not None), OSError)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser, one subparser per entry of `COMMANDS`."""
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser, one subparser per entry of `COMMANDS`.
+
+    With ``only`` (a command name, or ``""`` for none), only that command's arguments are added (the
+    others keep their one-line help): `main` parses one command, and some commands' arguments import
+    heavy packages (``replay``'s sensor list needs `pins`), which ``tactip --help`` or a refusal of
+    another command should not wait for.
+    """
     from tactip import __version__
 
     parser = argparse.ArgumentParser(
@@ -70,7 +81,8 @@ def build_parser() -> argparse.ArgumentParser:
         doc = (module.__doc__ or "").strip()
         cmd = sub.add_parser(name, help=module.HELP, description=doc or module.HELP,
                              formatter_class=argparse.RawDescriptionHelpFormatter)
-        module.add_arguments(cmd)
+        if only is None or name == only:
+            module.add_arguments(cmd)
         cmd.set_defaults(_run=module.run)
     return parser
 
@@ -79,7 +91,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the `tactip` console script; returns the process exit code."""
     from tactip._signals import Terminated, terminate_like_ctrl_c
 
-    parser = build_parser()
+    words = sys.argv[1:] if argv is None else argv
+    command = next((str(w) for w in words if not str(w).startswith("-")), None)
+    parser = build_parser(only=command if command in COMMANDS else "")
     args = parser.parse_args(argv)
     try:
         with terminate_like_ctrl_c():

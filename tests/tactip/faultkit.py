@@ -1,10 +1,13 @@
 """A small harness for fault-injection tests of the real `tactip` CLI (issue 9).
 
-Two helpers, shared by ``test_faults_data.py`` and ``test_faults_input.py``:
+Helpers shared by ``test_faults_data.py`` and ``test_faults_input.py``:
 
 - `run_tactip` runs ``python -m tactip.cli ARGS`` in a subprocess and checks what every case must
   satisfy whatever its outcome: no Python traceback on stderr, every path in ``inputs`` byte-identical
   afterwards, and no temporary file (``.*.part*``, ``*.tmp``, ``*~``) left beside the inputs or in ``cwd``.
+- `run_tactip_in_process` does the same through `tactip.cli.main` in this process (an exception that
+  escapes it fails the test, as a traceback would), for variants of a case whose subprocess start is
+  not the point (a start costs about a second);
 - `assert_refused` checks that a command was refused: non-zero exit and a message naming the problem.
 
 Example
@@ -15,13 +18,15 @@ Example
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import io
 import os
 import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["run_tactip", "assert_refused", "leftover_temporaries", "digest"]
+__all__ = ["run_tactip", "run_tactip_in_process", "assert_refused", "leftover_temporaries", "digest"]
 
 # Names of the temporary files writers use before renaming them into place.
 _TEMPORARY_PATTERNS = (".*.part*", "*.part", "*.tmp", ".*.tmp*", "*~")
@@ -90,12 +95,38 @@ def run_tactip(*args, cwd, inputs=(), timeout: float = 120, env: dict | None = N
     argv = [sys.executable, "-m", "tactip.cli", *map(str, args)]
     result = subprocess.run(argv, cwd=cwd, capture_output=True, text=True, timeout=timeout, env=full_env,
                             input=stdin, stdin=None if stdin is not None else subprocess.DEVNULL, **popen)
+    _check_after(args, result, paths, before, cwd)
+    return result
+
+
+def _check_after(args, result, paths, before, cwd) -> None:
+    """The invariants of every case, after the command: no traceback, inputs unchanged, no temporaries."""
     where = f"`tactip {' '.join(map(str, args))}` (exit {result.returncode})"
     assert "Traceback" not in result.stderr, f"{where} printed a traceback:\n{result.stderr}"
     changed = [str(p) for p in paths if digest(p) != before[p]]
     assert not changed, f"{where} changed its inputs {changed}\nstderr: {result.stderr}"
     left = leftover_temporaries(cwd, *{p.parent for p in paths}, *[p for p in paths if p.is_dir()])
     assert not left, f"{where} left temporary files {[str(p) for p in left]}\nstderr: {result.stderr}"
+
+
+def run_tactip_in_process(*args, cwd, inputs=()) -> subprocess.CompletedProcess:
+    """`run_tactip` through `tactip.cli.main` in this process: the same checks, no process start.
+
+    An exception escaping `main` (a traceback in the real command) propagates and fails the test.
+    """
+    from tactip.cli import main
+
+    cwd = Path(cwd)
+    paths = [p if Path(p).is_absolute() else cwd / p for p in map(Path, inputs)]
+    before = {p: digest(p) for p in paths}
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main([str(a) for a in args])
+        except SystemExit as exit_:                    # argparse's refusals
+            code = exit_.code
+    result = subprocess.CompletedProcess(["tactip", *map(str, args)], code, out.getvalue(), err.getvalue())
+    _check_after(args, result, paths, before, cwd)
     return result
 
 

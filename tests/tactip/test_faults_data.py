@@ -29,8 +29,8 @@ import numpy as np
 import pytest
 
 from perception import load_dataset, load_model
-from tests.tactip.conftest import LOCATIONS, small_station_table, write_station
-from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip
+from tests.tactip.conftest import LOCATIONS, run_cli, small_station_table, write_station
+from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip, run_tactip_in_process
 
 FULL_DISK_MODE: dict[str, str] = {}
 
@@ -114,13 +114,13 @@ def test_train_refuses_to_write_the_model_over_its_dataset(sim_station, tmp_path
     assert_refused(result, "train.h5", "collected taps", "destroy")
     os.link(data, tmp_path / "hardlink.h5")       # the same file under another name
     os.symlink(data, tmp_path / "symlink.h5")
-    for alias in ("hardlink.h5", "symlink.h5"):
-        result = run_tactip("train", "train.h5", "--out", alias, cwd=tmp_path, inputs=[data])
+    for alias in ("hardlink.h5", "symlink.h5"):                    # variants in-process (no second start)
+        result = run_tactip_in_process("train", "train.h5", "--out", alias, cwd=tmp_path, inputs=[data])
         assert_refused(result, alias, "destroy")
     # Another kind of input (a model trained earlier, given as the dataset) is refused as the input.
     model = tmp_path / "model.h5"
     shutil.copy(sim_station.model, model)
-    result = run_tactip("train", "model.h5", "--out", "model.h5", cwd=tmp_path, inputs=[model])
+    result = run_tactip_in_process("train", "model.h5", "--out", "model.h5", cwd=tmp_path, inputs=[model])
     assert_refused(result, "model.h5", "input")
     assert len(load_dataset(data)) == len(load_dataset(sim_station.train))
 
@@ -130,9 +130,12 @@ def test_results_export_and_plot_refuse_to_write_over_the_database(sim_station, 
     db = tmp_path / "results.sqlite"
     shutil.copy(inspected, db)
     os.symlink(db, tmp_path / "widths.png")                            # an image name that is the database
-    for argv in (("export", "--db", db, "--csv", "--out", db), ("export", "--db", db, "--json", "--out", "results.sqlite"),
-                 ("plot", "--db", db, "--out", "widths.png"), ("export", "--config", toml, "--csv", "--out", toml)):
-        result = run_tactip("results", *argv, cwd=tmp_path, inputs=[db, toml])
+    for k, argv in enumerate((("export", "--db", db, "--csv", "--out", db),
+                              ("export", "--db", db, "--json", "--out", "results.sqlite"),
+                              ("plot", "--db", db, "--out", "widths.png"),
+                              ("export", "--config", toml, "--csv", "--out", toml))):
+        run = run_tactip if k == 0 else run_tactip_in_process          # the issue's case as a real process
+        result = run("results", *argv, cwd=tmp_path, inputs=[db, toml])
         assert_refused(result, "destroy")
     assert rows(db)[0][2] == "done"
 
@@ -142,9 +145,10 @@ def test_validate_refuses_json_or_plot_over_its_model_or_test_set(sim_station, t
     shutil.copy(sim_station.model, model)
     shutil.copy(sim_station.test, test)
     os.symlink(test, tmp_path / "curves.png")                         # a plot name that is the test set
-    for argv in (("--json", "model.h5"), ("--json", "test.h5"), ("--plot", "curves.png")):
-        result = run_tactip("validate", "model.h5", "test.h5", "--runs", "10", "--quiet", *argv, cwd=tmp_path,
-                            inputs=[model, test])
+    for k, argv in enumerate((("--json", "model.h5"), ("--json", "test.h5"), ("--plot", "curves.png"))):
+        run = run_tactip if k == 0 else run_tactip_in_process
+        result = run("validate", "model.h5", "test.h5", "--runs", "10", "--quiet", *argv, cwd=tmp_path,
+                     inputs=[model, test])
         assert_refused(result, argv[1], "destroy")
 
 
@@ -180,19 +184,23 @@ def test_record_and_calibrate_refuse_outputs_over_their_inputs(sim_station, tmp_
     # An earlier recording (not this command's input) is replaced only when asked.
     earlier = tmp_path / "earlier.mp4"
     shutil.copy(video, earlier)
-    result = run_tactip("record", "synthetic", "--out", earlier, "--frames", "3", cwd=tmp_path, inputs=[earlier])
+    result = run_tactip_in_process("record", "synthetic", "--out", earlier, "--frames", "3", cwd=tmp_path,
+                                   inputs=[earlier])
     assert_refused(result, "earlier.mp4", "exists", "--overwrite")
     toml = station_copy(sim_station, tmp_path / "station", datasets=False)
-    for out in (toml, tmp_path / "station" / "model.h5"):
-        result = run_tactip("calibrate", "--config", toml, "--out", out, cwd=tmp_path, inputs=[toml, out])
+    for k, out in enumerate((toml, tmp_path / "station" / "model.h5")):
+        run = run_tactip if k == 0 else run_tactip_in_process
+        result = run("calibrate", "--config", toml, "--out", out, cwd=tmp_path, inputs=[toml, out])
         assert_refused(result, out.name, "input")
 
 
 def test_replay_refuses_outputs_over_the_video_or_each_other(tmp_path):
     video = tmp_path / "v.mp4"
     shutil.copy(Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4", video)
-    for argv in (("--out", "o.h5", "--annotate", "v.mp4"), ("--out", "v.mp4"), ("--out", "o.h5", "--annotate", "o.h5")):
-        result = run_tactip("replay", "v.mp4", *argv, "--quiet", cwd=tmp_path, inputs=[video])
+    for k, argv in enumerate((("--out", "o.h5", "--annotate", "v.mp4"), ("--out", "v.mp4"),
+                              ("--out", "o.h5", "--annotate", "o.h5"))):
+        run = run_tactip if k == 0 else run_tactip_in_process           # the issue's case as a real process
+        result = run("replay", "v.mp4", *argv, "--quiet", cwd=tmp_path, inputs=[video])
         assert_refused(result, "v.mp4" if "v.mp4" in argv else "same file")
     assert not (tmp_path / "o.h5").exists()
 
@@ -213,6 +221,7 @@ def test_collect_on_a_full_disk_keeps_only_complete_taps_and_resumes(sim_station
                             cwd=tmp_path, inputs=[toml, tmp_path / "station" / "calibration.h5"], **extra)
         assert_refused(result, *disk_full_words(mounted), "train.h5")
         assert result.returncode == 1                                      # not a segfault (139)
+        assert not leftover_temporaries(out)
         if mounted:
             stored = load_dataset(out / "train.h5")
             assert 0 < len(stored) < len(depths)
@@ -338,7 +347,7 @@ def test_results_export_on_a_full_disk_keeps_the_old_file(inspected, tmp_path):
         assert old.read_text() == '["the export of yesterday"]\n'
 
 
-def test_inspect_on_a_full_disk_reports_it_and_keeps_the_stored_rows(sim_station, tmp_path):
+def test_inspect_on_a_full_disk_reports_it_and_keeps_the_stored_rows(sim_station, inspected, tmp_path):
     small = tmp_path / "small"
     with small_filesystem(small, 400) as mounted:
         if not mounted:
@@ -346,9 +355,9 @@ def test_inspect_on_a_full_disk_reports_it_and_keeps_the_stored_rows(sim_station
         FULL_DISK_MODE["inspect"] = "tmpfs 400 kB"
         toml = station_copy(sim_station, tmp_path / "station", datasets=False,
                             station={"results": str(small / "results.sqlite")})
-        first = run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", "--quiet", cwd=tmp_path)
-        assert first.returncode == 0, first.stderr
+        shutil.copy(inspected, small / "results.sqlite")                 # an earlier inspection, stored
         before = rows(small / "results.sqlite")
+        assert [r[2] for r in before] == ["done"]
         filler = fill(small, 40 * 1024)
         result = run_tactip("inspect", "--config", toml, "--seed", "2", "--quiet", cwd=tmp_path, inputs=[toml])
         assert_refused(result, "disk full while writing", "results.sqlite")
@@ -361,33 +370,46 @@ def test_inspect_on_a_full_disk_reports_it_and_keeps_the_stored_rows(sim_station
 
 # -- half-prepared, bad or mixed inputs ------------------------------------------------------------------
 
-def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, tmp_path, monkeypatch):
-    """inspect --sim's preparation: interrupted in the fixation sweep, then resumed (in-process: the
-    real preparation of the packaged simulated station takes minutes)."""
+def _sim_is(config, monkeypatch):
+    """``tactip inspect --sim`` runs the station ``config`` (the small one: its preparation takes seconds)."""
+    import tactip.config
+
+    monkeypatch.setattr(tactip.config, "simulated_station_config", lambda data_dir: config)
+
+
+def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, tmp_path, monkeypatch, capsys):
+    """inspect --sim's first preparation, interrupted in the fixation sweep, then resumed by the next
+    ``inspect --sim`` (in-process, on the small station: the packaged one's preparation takes minutes)."""
     import calibration
+    from tactip.cli import main
     from tactip.config import load_station_config
-    from tactip.procedures import model_is_prepared, prepare_model
+    from tactip.procedures import model_is_prepared
 
     toml = station_copy(sim_station, tmp_path, model=False)
     config = load_station_config(toml)
+    _sim_is(config, monkeypatch)
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
     sweep = calibration.recommend_fixation
     monkeypatch.setattr(calibration, "recommend_fixation", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        prepare_model(config, progress=False, log=lambda line: None)
+    assert main(["inspect", "--sim", "--gap", "g02", "--quiet"]) == 1           # Ctrl-C in the sweep
+    assert "Stopped." in capsys.readouterr().err
     assert not config.perception.model.exists() and not model_is_prepared(config.perception.model)
-    assert not leftover_temporaries(tmp_path)
+    assert not leftover_temporaries(tmp_path) and not (tmp_path / "results.sqlite").exists()
     monkeypatch.setattr(calibration, "recommend_fixation",
                         lambda *a, **k: sweep(*a, **{**k, "runs": 100}))
-    prepare_model(config, progress=False, log=lambda line: None)
+    assert main(["inspect", "--sim", "--gap", "g02", "--seed", "1", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "No trained model" in out and "model ready" in out and "1 gap(s)" in out
     assert model_is_prepared(config.perception.model)
 
 
-def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tmp_path):
+def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tmp_path, monkeypatch, capsys):
     from perception import save_model
+    from tactip.cli import main
+    from tactip.config import load_station_config
     from tactip.procedures import model_is_prepared
 
     bare = load_model(sim_station.model)
@@ -396,19 +418,36 @@ def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tm
     assert not model_is_prepared(tmp_path / "model.h5") and model_is_prepared(sim_station.model)
     toml = station_copy(sim_station, tmp_path / "station", datasets=False)
     shutil.copy(tmp_path / "model.h5", tmp_path / "station" / "model.h5")
-    result = run_tactip("inspect", "--config", toml, "--gap", "g02", "--seed", "1", cwd=tmp_path,
-                        inputs=[tmp_path / "station" / "model.h5"])
-    assert result.returncode == 0, result.stderr
-    assert "no recommended decision_threshold or fixation_location" in result.stdout
+    # A station of one's own: inspected with the model as it is, and warned about (in-process, as below).
+    before = digest(tmp_path / "station" / "model.h5")
+    code, out, err = run_cli(["inspect", "--config", toml, "--gap", "g02", "--seed", "1"])
+    assert code == 0, err
+    assert "no recommended decision_threshold or fixation_location" in out
+    assert digest(tmp_path / "station" / "model.h5") == before
+    # inspect --sim (a model left by a version that trained in place): its preparation is resumed first.
+    _sim_is(load_station_config(toml), monkeypatch)
+    import tactip.procedures
+
+    def prepare(config, **kwargs):
+        shutil.copy(sim_station.model, config.perception.model)                # as the preparation ends
+        return config.perception.model
+
+    monkeypatch.setattr(tactip.procedures, "prepare_model", prepare)
+    assert main(["inspect", "--sim", "--gap", "g02", "--seed", "1", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "has no recommended settings (an earlier preparation was interrupted): resuming" in out
+    assert "no recommended" not in out.split("model ready")[1]                  # inspected with the prepared model
+    assert model_is_prepared(tmp_path / "station" / "model.h5")
 
 
-@pytest.mark.parametrize("key, value, command, words", [
-    ("decision_threshold", 0.0, "inspect", ("decision_threshold", "(0, 1]")),
-    ("decision_threshold", float("nan"), "validate", ("decision_threshold",)),
-    ("decision_threshold", 1.5, "replay", ("decision_threshold",)),
-    ("fixation_location", 40.0, "inspect", ("fixation_location", "range")),
+# The issue's case (threshold 0 stored by a bad sweep) runs as a real process, the others in-process.
+@pytest.mark.parametrize("key, value, command, words, real", [
+    ("decision_threshold", 0.0, "inspect", ("decision_threshold", "(0, 1]"), True),
+    ("decision_threshold", float("nan"), "validate", ("decision_threshold",), False),
+    ("decision_threshold", 1.5, "replay", ("decision_threshold",), False),
+    ("fixation_location", 40.0, "inspect", ("fixation_location", "range"), False),
 ])
-def test_a_model_with_bad_recommended_settings_is_refused(sim_station, tmp_path, key, value, command, words):
+def test_a_model_with_bad_recommended_settings_is_refused(sim_station, tmp_path, key, value, command, words, real):
     toml = station_copy(sim_station, tmp_path, datasets=False)
     model = tmp_path / "model.h5"
     with h5py.File(model, "r+") as f:
@@ -419,7 +458,7 @@ def test_a_model_with_bad_recommended_settings_is_refused(sim_station, tmp_path,
             "validate": ("validate", model, sim_station.test, "--runs", "10", "--quiet"),
             "replay": ("replay", video, "--out", "o.h5", "--calibration", tmp_path / "calibration.h5", "--model",
                        model, "--quiet")}[command]
-    result = run_tactip(*argv, cwd=tmp_path, inputs=[model, toml])
+    result = (run_tactip if real else run_tactip_in_process)(*argv, cwd=tmp_path, inputs=[model, toml])
     assert_refused(result, "model.h5", *words)
     assert not (tmp_path / "results.sqlite").exists() or rows(tmp_path / "results.sqlite") == []
     assert not (tmp_path / "o.h5").exists()
@@ -433,6 +472,12 @@ def test_a_model_with_nan_likelihoods_is_refused_and_train_refuses_inf_epsilon(s
     result = run_tactip("validate", model, sim_station.test, "--runs", "10", "--quiet", cwd=tmp_path,
                         inputs=[model, sim_station.test])
     assert_refused(result, "model.h5", "log_probability", "nan")
+    # Replay refuses it as well, before reading the video (in-process: the same loader, no second start).
+    video = Path(__file__).resolve().parents[2] / "samples" / "synthetic_tap.mp4"
+    code, _, err = run_cli(["replay", video, "--out", tmp_path / "o.h5", "--calibration",
+                            sim_station.root / "calibration.h5", "--model", model, "--quiet"])
+    assert code == 1 and "log_probability holds 1 NaN" in err and "Traceback" not in err, err
+    assert not (tmp_path / "o.h5").exists() and not leftover_temporaries(tmp_path)
     result = run_tactip("train", sim_station.train, "--out", "inf.h5", "--epsilon", "inf", cwd=tmp_path,
                         inputs=[sim_station.train])
     assert_refused(result, "--epsilon", "finite")
@@ -464,12 +509,13 @@ def test_a_partly_written_tap_is_never_read(sim_station, tmp_path):
     assert np.array_equal(load_model(tmp_path / "m.h5").log_probability, load_model(sim_station.model).log_probability)
 
 
-@pytest.mark.parametrize("section, change, word", [
-    ("protocol", {"seed": 7}, "seed"),
-    ("protocol", {"repeats": 1}, "repeats"),
-    ("protocol", {"lateral_jitter_mm": 0.3}, "lateral_jitter_mm"),
+# The issue's case (another seed) runs as a real process, the others in-process.
+@pytest.mark.parametrize("section, change, word, real", [
+    ("protocol", {"seed": 7}, "seed", True),
+    ("protocol", {"repeats": 1}, "repeats", False),
+    ("protocol", {"lateral_jitter_mm": 0.3}, "lateral_jitter_mm", False),
 ])
-def test_a_resumed_collection_with_another_protocol_is_refused(sim_station, tmp_path, section, change, word):
+def test_a_resumed_collection_with_another_protocol_is_refused(sim_station, tmp_path, section, change, word, real):
     toml = station_copy(sim_station, tmp_path, model=False, **{section: change})
     datasets = tmp_path / "datasets"
     with h5py.File(datasets / "train.h5", "r+") as f:                   # an interrupted collection
@@ -477,8 +523,8 @@ def test_a_resumed_collection_with_another_protocol_is_refused(sim_station, tmp_
     with h5py.File(datasets / "test.h5", "r+") as f:
         f.attrs["complete_taps"] = 0
     before = {p: digest(p) for p in datasets.iterdir()}
-    result = run_tactip("collect", "--config", toml, "--out", datasets, "--workers", "1", "--quiet", cwd=tmp_path,
-                        inputs=[toml])
+    result = (run_tactip if real else run_tactip_in_process)("collect", "--config", toml, "--out", datasets,
+                                                             "--workers", "1", "--quiet", cwd=tmp_path, inputs=[toml])
     assert_refused(result, "train.h5", word)
     assert {p: digest(p) for p in datasets.iterdir()} == before
 
@@ -492,9 +538,10 @@ def test_results_refuse_another_sqlite_database_unchanged(sim_station, tmp_path)
         con.execute("INSERT INTO invoices (amount) VALUES (12.5)")
         con.commit()
     toml = station_copy(sim_station, tmp_path / "station", datasets=False, station={"results": str(other)})
-    for argv in (("results", "list", "--db", other), ("results", "export", "--db", other, "--csv"),
-                 ("inspect", "--config", toml, "--gap", "g02", "--quiet")):
-        result = run_tactip(*argv, cwd=tmp_path, inputs=[other])
+    for run, argv in ((run_tactip_in_process, ("results", "list", "--db", other)),
+                      (run_tactip_in_process, ("results", "export", "--db", other, "--csv")),
+                      (run_tactip, ("inspect", "--config", toml, "--gap", "g02", "--quiet"))):
+        result = run(*argv, cwd=tmp_path, inputs=[other])
         assert_refused(result, "other.sqlite", "another SQLite database", "invoices")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["other.sqlite", "station"]   # no -wal, no -shm
 
@@ -502,8 +549,8 @@ def test_results_refuse_another_sqlite_database_unchanged(sim_station, tmp_path)
 def test_results_list_refuses_a_limit_below_one(inspected, tmp_path):
     db = tmp_path / "results.sqlite"
     shutil.copy(inspected, db)
-    for limit in ("-1", "0"):
-        result = run_tactip("results", "list", "--db", db, "--limit", limit, cwd=tmp_path, inputs=[db])
+    for run, limit in ((run_tactip, "-1"), (run_tactip_in_process, "0")):
+        result = run("results", "list", "--db", db, "--limit", limit, cwd=tmp_path, inputs=[db])
         assert_refused(result, "--limit")
         assert "(no inspections)" not in result.stdout
 
@@ -524,17 +571,19 @@ def test_a_read_only_data_folder_is_reported_as_permission_denied(sim_station, i
                 path.chmod(0o555 if path.is_dir() else 0o444)
         try:
             inputs = [station / "results.sqlite", station / "datasets"]
-            listed = run_tactip("results", "list", "--db", station / "results.sqlite", cwd=tmp_path, inputs=inputs)
+            listed = run_tactip_in_process("results", "list", "--db", station / "results.sqlite", cwd=tmp_path,
+                                           inputs=inputs)
             assert listed.returncode == 0, listed.stderr                   # reading needs no write access
             assert "g02" in listed.stdout
-            for argv, words in ((("inspect", "--config", toml, "--gap", "g02", "--quiet"),
-                                 ("permission denied", "results")),
-                                (("collect", "--config", toml, "--out", station / "datasets", "--quiet",
-                                  "--workers", "1"),
-                                 ("permission denied", "train.h5")),
-                                (("train", station / "datasets" / "train.h5", "--out", station / "m.h5"),
-                                 ("m.h5",))):
-                result = run_tactip(*argv, cwd=tmp_path, inputs=inputs)
+            # The issue's cases (a results database, an HDF5 dataset) as real processes; train in-process.
+            for run, argv, words in ((run_tactip, ("inspect", "--config", toml, "--gap", "g02", "--quiet"),
+                                      ("permission denied", "results")),
+                                     (run_tactip, ("collect", "--config", toml, "--out", station / "datasets",
+                                                   "--quiet", "--workers", "1"),
+                                      ("permission denied", "train.h5")),
+                                     (run_tactip_in_process, ("train", station / "datasets" / "train.h5", "--out",
+                                                              station / "m.h5"), ("m.h5",))):
+                result = run(*argv, cwd=tmp_path, inputs=inputs)
                 assert_refused(result, *words)
                 assert "not a results database" not in result.stderr and "not an HDF5 file" not in result.stderr
         finally:

@@ -33,7 +33,7 @@ from tactip.cli import build_parser
 from tactip.config import parse_station_config
 from tactip.errors import ConfigError
 from tests.tactip.conftest import small_station_table, write_station
-from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip
+from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip, run_tactip_in_process
 
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 VIDEO = SAMPLES / "synthetic_tap.mp4"
@@ -163,6 +163,8 @@ CASES = [
      ["--mm-per-px", "(0, 10] mm/px"]),
     ("replay --samples huge", ["replay", "{root}/video.mp4", "--out", "r.h5", "--samples", "1000000000000"],
      ["--samples", "1..1000"]),
+    ("replay --expected-pins 1..5", ["replay", "{root}/video.mp4", "--out", "r.h5", "--expected-pins", "3"],
+     ["--expected-pins", "7..2000", "got 3"]),
     ("replay --pins-on-pad huge", ["replay", "{root}/video.mp4", "--out", "r.h5", "--pins-on-pad", "1000000"],
      ["--pins-on-pad", "7..2000"]),
     ("record --exposure of a synthetic source", ["record", "synthetic", "--out", "r.mp4", "--exposure", "5"],
@@ -291,8 +293,9 @@ def test_the_sweep_recommends_within_a_workable_budget(files, tmp_path):
 
     model = tmp_path / "model.h5"
     shutil.copy(files / "model.h5", model)
-    result = run_tactip("validate", model, files / "test.h5", "--sweep-fixation", "--runs", "200", "--thresholds",
-                        "0.2", "0.9", "0.99", "--tap-budget", "6", "--quiet", cwd=tmp_path, inputs=[files / "test.h5"])
+    result = run_tactip_in_process("validate", model, files / "test.h5", "--sweep-fixation", "--runs", "200",
+                                   "--thresholds", "0.2", "0.9", "0.99", "--tap-budget", "6", "--quiet", cwd=tmp_path,
+                                   inputs=[files / "test.h5"])
     assert result.returncode == 0, result.stderr
     recommended = load_model(model).recommended
     assert recommended["decision_threshold"] in (0.9, 0.99)  # 0.2 < 1/2 decides after the first tap: never chosen
@@ -417,11 +420,8 @@ def _named(message: str, path) -> bool:
     return names[-1] in message
 
 
-@pytest.mark.parametrize("sample, path, value", SAMPLE_KEYS,
-                         ids=[f"{s.split('.')[0]}:{'.'.join(map(str, p))}" for s, p, _ in SAMPLE_KEYS])
-def test_every_station_key_refuses_wrong_types(sample, path, value):
-    """Each key of the sample stations, set to a value of another type (and a number to nan, inf, 1e30),
-    is refused with a `ConfigError` naming it; the sample itself loads."""
+def wrong_values(path, value) -> list:
+    """Values of another type for the key ``path`` whose sample value is ``value`` (numbers: also nan, inf, 1e30)."""
     wrong = [{"a": 1}, [1, 2]] if not isinstance(value, list) else [{"a": 1}, "x"]
     if isinstance(value, bool):
         wrong += [1, "yes"]
@@ -429,7 +429,15 @@ def test_every_station_key_refuses_wrong_types(sample, path, value):
         wrong += ["1", True, math.nan, math.inf, -math.inf, 1e30]
     elif isinstance(value, str):
         wrong += [True, 3.5] if path[-1] != "source" else [True, 3.5, -1, 10**6]
-    for bad in wrong:
+    return wrong
+
+
+@pytest.mark.parametrize("sample, path, value", SAMPLE_KEYS,
+                         ids=[f"{s.split('.')[0]}:{'.'.join(map(str, p))}" for s, p, _ in SAMPLE_KEYS])
+def test_every_station_key_refuses_wrong_types(sample, path, value):
+    """Each key of the sample stations, set to a value of another type (and a number to nan, inf, 1e30),
+    is refused with a `ConfigError` naming it; the sample itself loads."""
+    for bad in wrong_values(path, value):
         with pytest.raises(ConfigError) as err:
             parse_station_config(_with(sample, path, bad), base_dir=SAMPLES)
         assert _named(str(err.value), path), (bad, str(err.value))
@@ -525,7 +533,8 @@ def test_warned_cases_of_the_issue_run_to_the_end_through_the_real_cli(files, tm
                         inputs=[files / "video.mp4"])
     assert during.returncode == 0 and "rest frame 40 looks taken during a tap" in during.stdout, during.stdout
     assert (tmp_path / "b.h5").exists() and (tmp_path / "r.h5").exists()
-    # The black frame taken as the rest frame: refused, naming the frame and the way out.
-    refused = run_tactip("replay", black, "--out", "c.h5", "--rest-frame", "30", cwd=tmp_path, inputs=[black])
+    # The black frame taken as the rest frame: refused, naming the frame and the way out (in-process: a variant).
+    refused = run_tactip_in_process("replay", black, "--out", "c.h5", "--rest-frame", "30", cwd=tmp_path,
+                                    inputs=[black])
     assert_refused(refused, "rest frame 30", "no sensor disc", "--rest-frame")
     assert not (tmp_path / "c.h5").exists()
