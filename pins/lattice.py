@@ -38,8 +38,9 @@ finds that lattice without being told the pin count:
    ``outside field`` (so is every rejected blob half a pitch beyond it: glare round the rim), and
    an isolated blob inside it (the centre pin of a radial layout) stays; fewer than 10 pins make
    no field;
-5. the winner: the candidate set that keeps the most pins that most good sets (those keeping
-   97 % of the most pins) also keep, and the fewest others, its centres nearest their consensus;
+5. the winner: the candidate set that keeps the most pins that at least half of the good sets
+   (those keeping 97 % of the most pins; both when there are two) also keep, and the fewest
+   others, its centres nearest their consensus;
 6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
    pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
    rim margin that leaves out the membrane half a pitch beyond the outermost pin and the rim
@@ -320,9 +321,10 @@ def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache
 
 
 def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per run: kept pins most runs keep minus those they do not; median distance to the consensus, px.
+    """Per run: kept pins the voters agree on minus the others; median distance to the consensus, px.
 
-    Runs keeping fewer than `_VOTER` times the most pins kept neither vote nor win (-inf).
+    Runs keeping fewer than `_VOTER` times the most pins kept neither vote nor win (-inf). The
+    voters agree on a pin that at least half of them keep (both, when two vote).
 
     A kept pin is matched in another run by its nearest kept pin within `_MATCH` pitches; the
     consensus position of a pin is the mean of its matches.
@@ -347,7 +349,10 @@ def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
             found = np.isfinite(distance)
             matches[s, found] = kept[s][index[found]]
         support = np.isfinite(matches[:, :, 0]).sum(axis=0)
-        agreed = support > voters.sum() / 2
+        # At least half: a strict majority of four voters would let the two least complete
+        # veto the pins only the two most complete find. Two voters must both keep a pin (one
+        # run's own blobs are no agreement).
+        agreed = (2 * support >= voters.sum()) & (support >= min(2, voters.sum()))
         membership[r] = agreed.sum() - (~agreed).sum()
         if agreed.any():
             consensus = np.nanmean(matches[:, agreed], axis=0)
