@@ -31,8 +31,8 @@ finds that lattice without being told the pin count:
    nearest-neighbour distance around a blob, so radial layouts, whose spacing grows with the
    radius, and foreshortened rim pins work. Then the blobs rejected are judged again against the
    blobs kept, and those that pass rejoin (once each) and the iteration runs again: a pin first
-   judged among impostors (skin specks crowding round the lone centre pin of a radial layout or
-   round its rim pins make it look too large) comes back once they are gone;
+   judged among impostors (skin highlights and specks round the spoke ends or the lone centre pin
+   of a radial layout make it look unlike its neighbours) comes back once they are gone;
 4. the field: blobs joined by lattice links (at most 1.3 times the local second-neighbour distance)
    form connected groups; the large groups are the pin field, a blob beyond their convex hull is
    ``outside field`` (so is every rejected blob half a pitch beyond it: glare round the rim), and
@@ -410,9 +410,10 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
         return reason, np.nan
     # Photometry and spacing, iterated: removing an impostor changes its neighbours' medians. Then
     # the blobs rejected are judged again against the blobs kept, because a pin first judged among
-    # impostors (skin specks crowding round the lone centre pin of a radial layout, or round its rim
-    # pins) must come back once they are gone; those that pass rejoin and the iteration runs again,
-    # each blob rejoining at most once (else pairs of blobs could take turns).
+    # impostors (skin highlights and specks round the spoke ends or the lone centre pin of a radial
+    # layout make it look unlike its neighbours) must come back once they are gone; those that pass
+    # rejoin and the iteration runs again, each blob rejoining at most once (else pairs of blobs
+    # could take turns).
     centres = blobs.centres
     active = np.ones(n, bool)
     rejoined = np.zeros(n, bool)
