@@ -29,14 +29,18 @@ finds that lattice without being told the pin count:
    images: a pin is the mirror of a neighbour through another neighbour (six times for interior
    pins, at least once at the rim or at the end of a radial spoke). The local pitch is the median
    nearest-neighbour distance around a blob, so radial layouts, whose spacing grows with the
-   radius, and foreshortened rim pins work;
+   radius, and foreshortened rim pins work. Then the blobs rejected are judged again against the
+   blobs kept, and those that pass rejoin (once each) and the iteration runs again: a pin first
+   judged among impostors (skin highlights and specks round the spoke ends or the lone centre pin
+   of a radial layout make it look unlike its neighbours) comes back once they are gone;
 4. the field: blobs joined by lattice links (at most 1.3 times the local second-neighbour distance)
    form connected groups; the large groups are the pin field, a blob beyond their convex hull is
    ``outside field`` (so is every rejected blob half a pitch beyond it: glare round the rim), and
    an isolated blob inside it (the centre pin of a radial layout) stays; fewer than 10 pins make
    no field;
-5. the winner: the candidate set that keeps the most pins that most good sets (those keeping
-   97 % of the most pins) also keep, and the fewest others, its centres nearest their consensus;
+5. the winner: the candidate set that keeps the most pins that at least half of the good sets
+   (those keeping 97 % of the most pins; both when there are two) also keep, and the fewest
+   others, its centres nearest their consensus;
 6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
    pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
    rim margin that leaves out the membrane half a pitch beyond the outermost pin and the rim
@@ -317,9 +321,10 @@ def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache
 
 
 def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per run: kept pins most runs keep minus those they do not; median distance to the consensus, px.
+    """Per run: kept pins the voters agree on minus the others; median distance to the consensus, px.
 
-    Runs keeping fewer than `_VOTER` times the most pins kept neither vote nor win (-inf).
+    Runs keeping fewer than `_VOTER` times the most pins kept neither vote nor win (-inf). The
+    voters agree on a pin that at least half of them keep (both, when two vote).
 
     A kept pin is matched in another run by its nearest kept pin within `_MATCH` pitches; the
     consensus position of a pin is the mean of its matches.
@@ -344,7 +349,10 @@ def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
             found = np.isfinite(distance)
             matches[s, found] = kept[s][index[found]]
         support = np.isfinite(matches[:, :, 0]).sum(axis=0)
-        agreed = support > voters.sum() / 2
+        # At least half: a strict majority of four voters would let the two least complete
+        # veto the pins only the two most complete find. Two voters must both keep a pin (one
+        # run's own blobs are no agreement).
+        agreed = (2 * support >= voters.sum()) & (support >= min(2, voters.sum()))
         membership[r] = agreed.sum() - (~agreed).sum()
         if agreed.any():
             consensus = np.nanmean(matches[:, agreed], axis=0)
@@ -400,48 +408,35 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     if n < _MIN_PINS:
         reason[:] = _OFF
         return reason, np.nan
+    # Photometry and spacing, iterated: removing an impostor changes its neighbours' medians. Then
+    # the blobs rejected are judged again against the blobs kept, because a pin first judged among
+    # impostors (skin highlights and specks round the spoke ends or the lone centre pin of a radial
+    # layout make it look unlike its neighbours) must come back once they are gone; those that pass
+    # rejoin and the iteration runs again, each blob rejoining at most once (else pairs of blobs
+    # could take turns).
     centres = blobs.centres
-    areas = blobs.areas.astype(np.float64)
-    fills = blobs.fills
-    contrasts = np.maximum(blobs.contrasts, 1e-6)
-    strength = contrasts * areas
     active = np.ones(n, bool)
-    # Photometry and spacing, iterated: removing an impostor changes its neighbours' medians.
-    for _ in range(8):
-        index = np.flatnonzero(active)
-        if len(index) < _MIN_PINS:
+    rejoined = np.zeros(n, bool)
+    while True:
+        for _ in range(8):
+            if active.sum() < _MIN_PINS:
+                break
+            verdict = _verdicts(blobs, sharpness, active)
+            out = active & (verdict != _KEPT)
+            if not out.any():
+                break
+            reason[out] = verdict[out]
+            active &= ~out
+        else:
+            verdict = _verdicts(blobs, sharpness, active)
+        if active.sum() < _MIN_PINS:
             break
-        hood = _Neighbourhood(centres[index])
-        near = index[hood.near]
-        # Areas compared with a little slack: a 1 px tip covers 3-7 px.
-        area_ref = np.median(areas[near], axis=1) + _AREA_SLACK
-        area = areas[index] + _AREA_SLACK
-        contrast_ref = np.median(contrasts[near], axis=1)
-        fill_ref = np.median(fills[near], axis=1)
-        verdict = np.full(len(index), _KEPT)
-        # Of two blobs much closer than the local pitch, the weaker is not a lattice site.
-        close = ((hood.dist[:, 1:] < _TOO_CLOSE * hood.pitch[:, None])
-                 & (strength[near[:, 1:]] > strength[index][:, None]))
-        verdict[close.any(axis=1)] = _OFF
-        sharp_ref = np.median(sharpness[near], axis=1)
-        verdict[(contrasts[index] < _MIN_CONTRAST * contrast_ref) | (sharpness[index] < _MIN_SHARPNESS * sharp_ref)] = _CONTRAST
-        # (The fill of a blob of a few pixels says nothing of its shape.)
-        verdict[(area < _SIZE_RANGE[0] * area_ref) | (area > _SIZE_RANGE[1] * area_ref)
-                | ((fills[index] < _MIN_FILL * fill_ref) & (area_ref >= _FILL_AREA))] = _SIZE
-        # Lattice sites: a blob on the lattice is a mirror image of a neighbour through another
-        # one (interior pins have six such pairs, rim pins and the ends of radial spokes at least
-        # one). A blob with fewer than two must look just like its neighbours to stay.
-        anchors = hood.anchors()
-        strict = np.clip(_MIN_ANCHORS - anchors, 0, _MIN_ANCHORS) / _MIN_ANCHORS
-        ratio = contrasts[index] / contrast_ref
-        unlike = ((ratio < _WEAK_CONTRAST[0] + strict * (_WEAK_CONTRAST[1] - _WEAK_CONTRAST[0]))
-                  | (np.abs(np.log(area / area_ref)) > np.log(_WEAK_SIZE[0]) + strict * np.log(_WEAK_SIZE[1] / _WEAK_SIZE[0])))
-        weak = anchors < _MIN_ANCHORS
-        verdict[weak & unlike & (verdict == _KEPT)] = _OFF
-        if not (verdict != _KEPT).any():
+        back = ~active & ~rejoined & (verdict == _KEPT)
+        if not back.any():
             break
-        reason[index] = verdict
-        active[index[verdict != _KEPT]] = False
+        reason[back] = _KEPT
+        active |= back
+        rejoined |= back
     index = np.flatnonzero(active)
     if len(index) < _MIN_PINS:
         reason[index] = _OFF
@@ -464,6 +459,42 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     rejected = np.flatnonzero(~kept)
     reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
     return reason, float(_median_nn(centres[reason == _KEPT]))
+
+
+def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray) -> np.ndarray:
+    """Each blob judged against its nearest `members` (bool per blob): -1 (a lattice site) or why not."""
+    n = len(blobs.centres)
+    areas = blobs.areas.astype(np.float64)
+    fills = blobs.fills
+    contrasts = np.maximum(blobs.contrasts, 1e-6)
+    strength = contrasts * areas
+    hood = _Neighbourhood(blobs.centres, members)
+    # Medians over the blob and its neighbours. Areas compared with a little slack: a 1 px tip
+    # covers 3-7 px.
+    near = hood.near
+    area_ref = np.median(areas[near], axis=1) + _AREA_SLACK
+    area = areas + _AREA_SLACK
+    contrast_ref = np.median(contrasts[near], axis=1)
+    fill_ref = np.median(fills[near], axis=1)
+    sharp_ref = np.median(sharpness[near], axis=1)
+    verdict = np.full(n, _KEPT)
+    # Of two blobs much closer than the local pitch, the weaker is not a lattice site.
+    close = (hood.dist[:, 1:] < _TOO_CLOSE * hood.pitch[:, None]) & (strength[near[:, 1:]] > strength[:, None])
+    verdict[close.any(axis=1)] = _OFF
+    verdict[(contrasts < _MIN_CONTRAST * contrast_ref) | (sharpness < _MIN_SHARPNESS * sharp_ref)] = _CONTRAST
+    # (The fill of a blob of a few pixels says nothing of its shape.)
+    verdict[(area < _SIZE_RANGE[0] * area_ref) | (area > _SIZE_RANGE[1] * area_ref)
+            | ((fills < _MIN_FILL * fill_ref) & (area_ref >= _FILL_AREA))] = _SIZE
+    # Lattice sites: a blob on the lattice is a mirror image of a neighbour through another one
+    # (interior pins have six such pairs, rim pins and the ends of radial spokes at least one). A
+    # blob with fewer than two must look just like its neighbours to stay.
+    anchors = hood.anchors()
+    strict = np.clip(_MIN_ANCHORS - anchors, 0, _MIN_ANCHORS) / _MIN_ANCHORS
+    ratio = contrasts / contrast_ref
+    unlike = ((ratio < _WEAK_CONTRAST[0] + strict * (_WEAK_CONTRAST[1] - _WEAK_CONTRAST[0]))
+              | (np.abs(np.log(area / area_ref)) > np.log(_WEAK_SIZE[0]) + strict * np.log(_WEAK_SIZE[1] / _WEAK_SIZE[0])))
+    verdict[(anchors < _MIN_ANCHORS) & unlike & (verdict == _KEPT)] = _OFF
+    return verdict
 
 
 def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> float:
@@ -509,13 +540,25 @@ def _beyond(hull: np.ndarray, points: np.ndarray, margin: float) -> np.ndarray:
 
 
 class _Neighbourhood:
-    """Nearest neighbours of points (each point first), their local pitch, links and mirror anchors."""
+    """Nearest neighbours among member points (each point first), local pitch, links and mirror anchors.
 
-    def __init__(self, points: np.ndarray):
+    Every point, member or not, gets its nearest members as neighbours (a point is never its own
+    neighbour), so that blobs rejected so far can be judged against the blobs kept.
+    """
+
+    def __init__(self, points: np.ndarray, members: np.ndarray | None = None):
         self.points = points
-        self.tree = cKDTree(points)
-        k = min(_NEIGHBOURS + 1, len(points))
-        self.dist, self.near = self.tree.query(points, k)
+        index = np.arange(len(points)) if members is None else np.flatnonzero(members)
+        self.tree = cKDTree(points[index])
+        k = min(_NEIGHBOURS + 1, len(index))
+        dist, near = self.tree.query(points, k)
+        dist, near = dist.reshape(len(points), k), index[near.reshape(len(points), k)]
+        if members is not None and not members.all():
+            # A point outside the members is not found first: put it first, before its k - 1 nearest.
+            outside = ~members
+            dist[outside] = np.column_stack([np.zeros(outside.sum()), dist[outside, :-1]])
+            near[outside] = np.column_stack([np.flatnonzero(outside), near[outside, :-1]])
+        self.dist, self.near = dist, near
         # Local pitch: median nearest-neighbour distance of the point and its neighbours. Links
         # reach a little beyond the second-nearest distance instead: near the rim of a hemispherical
         # pad the pins are foreshortened towards the centre, closer in the radial direction than
