@@ -31,6 +31,13 @@ import numpy as np
 KINDS = ("histogram", "calibrated-histogram", "gaussian")
 
 
+def kinds() -> tuple[str, ...]:
+    """The kinds compared: torch's too when it is installed (the optional extra 'learned')."""
+    import importlib.util
+
+    return KINDS + (("torch",) if importlib.util.find_spec("torch") else ())
+
+
 def station_config(data_dir: Path, **protocol):
     """The packaged simulated station in ``data_dir``, with some ``[protocol]`` keys replaced."""
     from tactip.config import SIM_PRESET, parse_station_config
@@ -65,7 +72,7 @@ def compare_models(config, runs: int, seed: int) -> None:
           f"{station_model.location_centres[fixation]:g} mm, {runs} runs, seed {seed}:")
     print(f"{'model':<22} {'fit s':>6} {'ECE 1':>6} {'ECE 3':>6} {'ECE 5':>6}   {'error <= 3 taps':>22}   "
           f"{'error <= 6 taps':>22}")
-    for kind in (*KINDS, "station"):
+    for kind in (*kinds(), "station"):
         started = time.monotonic()
         if kind == "station":  # the station's own model: its tempering refitted for 1-5 taps when it was prepared
             model, kind = station_model, f"station ({station_model.KIND})"

@@ -43,7 +43,8 @@ CALIBRATION_TAPS = (1, 3, 5)
 #: Thresholds `threshold_for_accuracy` chooses from: 0.3..0.99 in 0.005 steps and the 0.999x tail. With
 #: calibrated beliefs a decision within a tolerance of one class needs no majority belief in the exact class
 #: (a belief of 0.45 in 4.25 mm may be within 0.25 mm 95 % of the time); below 0.3 one tap decides too often.
-DECISION_THRESHOLDS = np.concatenate([np.arange(0.3, 0.99, 0.005), [0.99, 0.995, 0.998, 0.999, 0.9995, 0.9999]])
+DECISION_THRESHOLDS = np.concatenate([np.round(np.arange(0.3, 0.99, 0.005), 3),
+                                      [0.99, 0.995, 0.998, 0.999, 0.9995, 0.9999]])
 
 
 def reliability_bins(confidence, correct, *, bins: int = 10):
