@@ -5,8 +5,9 @@ Prepares the packaged simulated station in a data folder as a first `tactip insp
 
 1. trains every kind of likelihood model on the same training collection and, on the same test
    collection, runs the active policy at the station model's fixation depth (same seed: the same
-   true widths and start depths), reporting per model the expected calibration error (ECE) of the
-   width belief after 1, 3 and 5 taps and the lowest mean width error within 3 and within 6 mean
+   true widths and start depths), reporting per model, and for the station's own model (whose
+   tempering its preparation refitted on the test taps for the beliefs after 1-5 taps), the expected
+   calibration error (ECE) of the width belief after 1, 3 and 5 taps and the lowest mean width error within 3 and within 6 mean
    taps over decision thresholds (bars: <= 0.35 mm within 3, <= 0.2 mm within 6, ECE <= 0.05);
 2. inspects every gap live on the simulated station with the station's model and settings
    (bars: mean taps <= 4, mean |estimate - nominal| <= 0.2 mm, fraction of decided gaps within
@@ -28,6 +29,13 @@ from pathlib import Path
 import numpy as np
 
 KINDS = ("histogram", "calibrated-histogram", "gaussian")
+
+
+def kinds() -> tuple[str, ...]:
+    """The kinds compared: torch's too when it is installed (the optional extra 'learned')."""
+    import importlib.util
+
+    return KINDS + (("torch",) if importlib.util.find_spec("torch") else ())
 
 
 def station_config(data_dir: Path, **protocol):
@@ -64,9 +72,12 @@ def compare_models(config, runs: int, seed: int) -> None:
           f"{station_model.location_centres[fixation]:g} mm, {runs} runs, seed {seed}:")
     print(f"{'model':<22} {'fit s':>6} {'ECE 1':>6} {'ECE 3':>6} {'ECE 5':>6}   {'error <= 3 taps':>22}   "
           f"{'error <= 6 taps':>22}")
-    for kind in KINDS:
+    for kind in (*kinds(), "station"):
         started = time.monotonic()
-        model = train_model(train, kind=kind, n_locations=config.perception.locations, bins=config.perception.bins)
+        if kind == "station":  # the station's own model: its tempering refitted for 1-5 taps when it was prepared
+            model, kind = station_model, f"station ({station_model.KIND})"
+        else:
+            model = train_model(train, kind=kind, n_locations=config.perception.locations, bins=config.perception.bins)
         fit_s = time.monotonic() - started
         trace = trace_beliefs(VirtualEnvironment(model, test), make_policy("active", fixation_class=fixation),
                               runs=runs, seed=seed, max_taps=config.perception.max_taps)

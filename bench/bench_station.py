@@ -9,7 +9,12 @@ sweep: timed, as a first `tactip inspect --sim` would), then reports:
 3. live inspections of the 20 gaps on the simulated station, once per policy, from the same
    random start depths: mean absolute width error and mean taps.
 
-    python bench/bench_station.py [--data-dir DIR] [--depth-step MM] [--runs N] [--seed S]
+The station is trained as in the figure, with the papers' histogram likelihood on one tap per depth,
+unless --likelihood and --repeats say otherwise (as tests/tactip/test_station_bar.py does); the
+preset's own default (gaussian, two repeats) decides in a few taps: bench_likelihoods.py measures it.
+
+    python bench/bench_station.py [--data-dir DIR] [--depth-step MM] [--runs N] [--seed S] [--likelihood KIND]
+                                  [--repeats N]
 """
 
 from __future__ import annotations
@@ -30,6 +35,10 @@ def main() -> None:
     parser.add_argument("--depth-step", type=float, default=None, help="override [protocol] depth_step, mm")
     parser.add_argument("--runs", type=int, default=5000, help="Monte Carlo runs per threshold")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--likelihood", default="histogram",
+                        choices=("histogram", "calibrated-histogram", "gaussian", "torch"),
+                        help="[perception] likelihood of the station (default histogram: paper 002's model)")
+    parser.add_argument("--repeats", type=int, default=1, help="[protocol] repeats, taps per depth (default 1)")
     args = parser.parse_args()
 
     import cv2
@@ -45,10 +54,12 @@ def main() -> None:
     data = tomllib.loads(SIM_PRESET.read_text())
     data["station"].update(data_dir=str(data_dir), results=str(data_dir / "results.sqlite"))
     data["perception"]["model"] = str(data_dir / "model.h5")
+    data["perception"]["likelihood"] = args.likelihood
+    data["protocol"]["repeats"] = args.repeats
     if args.depth_step:
         data["protocol"]["depth_step"] = args.depth_step
     config = parse_station_config(data, base_dir=data_dir)
-    print(f"station folder: {data_dir}")
+    print(f"station folder: {data_dir} ({args.likelihood} likelihood, {args.repeats} tap(s) per depth)")
 
     started = time.monotonic()
     if not config.perception.model.exists():

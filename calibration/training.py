@@ -8,7 +8,9 @@ with the decision threshold that reaches it; or, given a target accuracy, the de
 whose decisions are within a tolerance of the true width in that fraction of runs in the fewest
 taps (a calibrated model's belief means what it says, so its threshold is an accuracy). Both are
 written into the model's recommended settings, which the station uses unless its configuration
-overrides them.
+overrides them. With a target accuracy, a calibrated kind's tempering is refitted at the chosen depth
+for the beliefs after 1 to 5 taps of active perception (`perception.fit_policy_tempering`): the taps
+of one inspection repeat each other's evidence, which a tempering fitted on single taps ignores.
 """
 
 from __future__ import annotations
@@ -40,7 +42,8 @@ def recommend_fixation(model_path: str | Path, test_path: str | Path, *, runs: i
     Without ``target_accuracy``: the lowest mean width error within ``tap_budget`` mean taps (paper 002).
     With it: the fewest mean taps whose decisions are within ``tolerance`` (identity units) of the
     true width in a fraction ``target_accuracy`` of runs (falling back to the tap budget when no
-    fixation reaches it within ``max_taps``).
+    fixation reaches it within ``max_taps``), with the tempering of a calibrated kind refitted there
+    for the beliefs after 1 to 5 taps (the model written is tempered accordingly).
 
     Returns
     -------
@@ -51,15 +54,19 @@ def recommend_fixation(model_path: str | Path, test_path: str | Path, *, runs: i
     if target_accuracy is not None:
         sweep = fixation_for_accuracy(VirtualEnvironment(model, load_dataset(test_path)), target=target_accuracy,
                                       tolerance=tolerance, runs=runs, max_taps=max_taps, seed=seed,
-                                      progress=progress)
+                                      progress=progress, temper=model.temperable)
         if sweep.best is not None:
             best = sweep.best
+            tempering = ""
+            if model.temperable:
+                tempering = f", tempering {model.tempering:.4g} x {sweep.tempering:.3g} for 1-5 taps"
+                model = model.tempered(sweep.tempering)
             model = model.with_recommended(fixation_location=float(sweep.fixations[best]),
                                            decision_threshold=float(sweep.thresholds[best]), policy="active")
             save_model(model_path, model, inputs=[test_path])
             log(f"fixation depth {sweep.fixations[best]:g} {model.location_unit}: {sweep.accuracy[best]:.3f} of "
                 f"decisions within {tolerance:g} {model.identity_unit} in {sweep.taps[best]:.1f} taps (decision "
-                f"threshold {sweep.thresholds[best]:g}); written to {model_path}")
+                f"threshold {sweep.thresholds[best]:g}{tempering}); written to {model_path}")
             return model, sweep
         log(f"no fixation depth reaches {target_accuracy:g} of decisions within {tolerance:g} "
             f"{model.identity_unit}; choosing the lowest error within {tap_budget:g} taps instead")

@@ -18,8 +18,8 @@ from .model import MODEL_KINDS, MODEL_SCHEMA, HistogramModel, fit_model, load_mo
 from .montecarlo import DEFAULT_THRESHOLDS, MonteCarloResult, VirtualEnvironment, monte_carlo
 from .perceiver import Perceiver, Step
 from .policies import POLICIES, FixationPolicy, Policy, RandomPolicy, StationaryPolicy, make_policy
-from .reliability import (CALIBRATION_TAPS, BeliefTrace, expected_calibration_error, reliability_bins,
-                          fixation_for_accuracy, threshold_for_accuracy, trace_beliefs)
+from .reliability import (CALIBRATION_TAPS, BeliefTrace, expected_calibration_error, fit_policy_tempering,
+                          fixation_for_accuracy, reliability_bins, threshold_for_accuracy, trace_beliefs)
 from .sequence import SequenceResult, identity_distance, monte_carlo_sequence
 
 __all__ = [
@@ -35,5 +35,5 @@ __all__ = [
     "SequenceResult", "monte_carlo_sequence", "identity_distance",
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
     "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
-    "threshold_for_accuracy", "fixation_for_accuracy",
+    "threshold_for_accuracy", "fixation_for_accuracy", "fit_policy_tempering",
 ]

@@ -128,6 +128,30 @@ class LikelihoodModel:
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.summary()}>"
 
+    @property
+    def temperable(self) -> bool:
+        """Whether the kind has a fitted tempering beta (every kind but the papers' histogram model)."""
+        return any(f.name == "tempering" for f in dataclasses.fields(self))
+
+    def tempered(self, factor: float):
+        """A copy whose log likelihood is ``factor`` times this one's (its tempering beta times ``factor``).
+
+        Parameters
+        ----------
+        factor : float > 0
+
+        Raises
+        ------
+        ModelError
+            The kind has no tempering (the papers' histogram model is kept as it is).
+        """
+        if not self.temperable:
+            raise ModelError(f"a {self.KIND} model has no tempering to refit; train a calibrated kind "
+                             f"(tactip train --model gaussian)")
+        if not (np.isfinite(factor) and factor > 0):
+            raise ValueError(f"factor must be a finite number > 0, got {factor!r}")
+        return dataclasses.replace(self, tempering=float(self.tempering * factor))
+
     def with_recommended(self, **settings):
         """A copy of the model with some recommended settings replaced.
 

@@ -102,6 +102,15 @@ class VirtualEnvironment:
         keep = np.asarray(keep, dtype=bool)
         return VirtualEnvironment(self.model, self.test.subset(keep), _log_likelihood=self.log_likelihood[keep])
 
+    def tempered(self, factor: float) -> VirtualEnvironment:
+        """The environment of ``model.tempered(factor)``: the same test taps, log likelihoods times ``factor``.
+
+        Parameters
+        ----------
+        factor : float > 0
+        """
+        return VirtualEnvironment(self.model.tempered(factor), self.test, _log_likelihood=factor * self.log_likelihood)
+
     def draw(self, tap_class, rng: np.random.Generator) -> np.ndarray:
         """Indices of test taps drawn uniformly within each requested class.
 

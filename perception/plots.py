@@ -119,21 +119,26 @@ def plot_reliability(traces, path, *, taps=(1, 3, 5), bins: int = 10) -> None:
     import matplotlib.pyplot as plt
 
     taps = [t for t in taps if all(t <= trace.max_taps for trace in traces.values())]
-    fig, axes = plt.subplots(1, len(taps), figsize=(4 * len(taps), 4), layout="constrained", squeeze=False)
+    fig, axes = plt.subplots(1, len(taps), figsize=(4 * len(taps), 4.3), layout="constrained", squeeze=False)
     for ax, t in zip(axes[0], taps):
         ax.plot([0, 1], [0, 1], color="grey", ls="--", lw=1, label="calibrated")
         for name, trace in traces.items():
             confidence, accuracy, counts = trace.reliability(t, bins=bins)
             full = counts > 0
-            ax.plot(confidence[full], accuracy[full], "o-", ms=3,
-                    label=f"{name} (ECE {trace.calibration_error(t, bins=bins):.3f})")
+            line, = ax.plot(confidence[full], accuracy[full], "-", lw=1,
+                            label=f"{name} (ECE {trace.calibration_error(t, bins=bins):.3f})")
+            # marker area: the bin's share of runs, so that a bin of a few runs does not look like a verdict
+            ax.scatter(confidence[full], accuracy[full], s=4 + 200 * counts[full] / counts.sum(),
+                       color=line.get_color(), alpha=0.8, zorder=3)
         ax.set_xlim(0, 1)
         ax.set_ylim(0, 1)
         ax.set_xlabel("belief in the decided class")
         ax.set_ylabel("fraction right")
         ax.set_title(f"after {t} tap{'s' if t > 1 else ''}")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
+        ax.legend(fontsize=7, loc="best")
+    fig.suptitle("above the diagonal: underconfident, below: overconfident; marker area: share of runs",
+                 fontsize=8)
     _save(plt, fig, path)
 
 

@@ -10,7 +10,11 @@ depend on the decision threshold, so one trace gives:
   runs, and the reliability diagram (`reliability_bins`);
 - the decision at any threshold (`BeliefTrace.decisions`): taps, decided identity, error, and the
   fraction of decisions within a tolerance;
-- the threshold that reaches a target accuracy in the fewest taps (`threshold_for_accuracy`).
+- the threshold that reaches a target accuracy in the fewest taps (`threshold_for_accuracy`);
+- the tempering that calibrates the beliefs of a policy's runs after 1 to 5 taps
+  (`fit_policy_tempering`): a model's tempering is fitted on single held-out taps, but the taps of
+  one run are not independent evidence (the same depth of the same gap gives nearly the same tap),
+  so their product is overconfident after a few taps unless the tempering allows for it.
 
 Example
 -------
@@ -31,10 +35,16 @@ from .perceiver import clamp_move
 from .policies import Policy
 
 __all__ = ["BeliefTrace", "Decisions", "AccuracySweep", "trace_beliefs", "expected_calibration_error", "reliability_bins",
-           "threshold_for_accuracy", "fixation_for_accuracy", "CALIBRATION_TAPS"]
+           "threshold_for_accuracy", "fixation_for_accuracy", "fit_policy_tempering", "CALIBRATION_TAPS"]
 
 #: Taps after which the calibration of the identity belief is reported (issue 11: 1, 3 and 5).
 CALIBRATION_TAPS = (1, 3, 5)
+
+#: Thresholds `threshold_for_accuracy` chooses from: 0.3..0.99 in 0.005 steps and the 0.999x tail. With
+#: calibrated beliefs a decision within a tolerance of one class needs no majority belief in the exact class
+#: (a belief of 0.45 in 4.25 mm may be within 0.25 mm 95 % of the time); below 0.3 one tap decides too often.
+DECISION_THRESHOLDS = np.concatenate([np.round(np.arange(0.3, 0.99, 0.005), 3),
+                                      [0.99, 0.995, 0.998, 0.999, 0.9995, 0.9999]])
 
 
 def reliability_bins(confidence, correct, *, bins: int = 10):
@@ -143,6 +153,8 @@ class BeliefTrace:
         True class of the decision marginal at that tap (identity, or the current location class).
     values : (n,) float64 ndarray
         Value of each decision class (identities, or location class centres), for errors.
+    truth_belief : (R, T) float64 ndarray
+        Belief in the true class of the decision marginal.
     """
 
     policy: str
@@ -150,6 +162,7 @@ class BeliefTrace:
     estimate: np.ndarray
     truth: np.ndarray
     values: np.ndarray
+    truth_belief: np.ndarray
 
     @property
     def runs(self) -> int:
@@ -175,6 +188,18 @@ class BeliefTrace:
         """`reliability_bins` of the decision belief after ``taps`` taps."""
         t = self._column(taps)
         return reliability_bins(self.belief[:, t], self.estimate[:, t] == self.truth[:, t], bins=bins)
+
+    def log_loss(self, taps: int) -> float:
+        """Mean -log belief in the true class over the first ``taps`` taps of every run, nats."""
+        t = self._column(taps)
+        return float(-np.log(np.maximum(self.truth_belief[:, :t + 1], 1e-300)).mean())
+
+    def brier_score(self, taps: int) -> float:
+        """Mean (belief in the decided class - 1 if it is right else 0)^2 over the first ``taps`` taps of
+        every run: the Brier score of the decision's confidence, what a reliability diagram shows."""
+        t = self._column(taps)
+        right = self.estimate[:, :t + 1] == self.truth[:, :t + 1]
+        return float(((self.belief[:, :t + 1] - right) ** 2).mean())
 
     def decisions(self, threshold: float) -> Decisions:
         """Each run's decision at ``threshold``: the first tap whose belief exceeds it, else the last tap."""
@@ -226,6 +251,8 @@ def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int 
     belief = np.empty((runs, max_taps))
     estimate = np.empty((runs, max_taps), np.intp)
     truth = np.empty((runs, max_taps), np.intp)
+    truth_belief = np.empty((runs, max_taps))
+    rows = np.arange(runs)
     for tap in range(max_taps):
         log_belief = bayes.update(table[environment.draw(location * n_id + identity, rng)], log_belief)
         where, what = bayes.marginals(log_belief)
@@ -233,13 +260,55 @@ def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int 
         belief[:, tap] = decision.max(axis=1)
         estimate[:, tap] = decision.argmax(axis=1)
         truth[:, tap] = identity if n_id > 1 else location
+        truth_belief[:, tap] = decision[rows, truth[:, tap]]
         where_estimate = where.argmax(axis=1)
         offset = np.where(where.max(axis=1) > move_threshold, policy.move(where, where_estimate, rng), 0)
         offset = clamp_move(where_estimate, offset, n_loc)
         location = np.clip(location + offset, 0, n_loc - 1)
         log_belief = bayes.shift(log_belief, offset, mode=shift_mode)
     values = model.identities if n_id > 1 else model.location_centres
-    return BeliefTrace(policy.name, belief, estimate, truth, np.asarray(values, dtype=np.float64))
+    return BeliefTrace(policy.name, belief, estimate, truth, np.asarray(values, dtype=np.float64), truth_belief)
+
+
+def fit_policy_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: int = CALIBRATION_TAPS[-1],
+                         runs: int = 2000, seed=0, **options) -> float:
+    """The factor on the model's log likelihood that calibrates the beliefs of this policy's runs.
+
+    Temperature scaling (Guo et al. 2017) on the test taps of ``environment``, for the beliefs the
+    perceiver holds after 1 to ``taps`` taps rather than after one: the factor f minimises the Brier
+    score of the decision's confidence (`BeliefTrace.brier_score`) over t = 1..taps of Monte Carlo runs
+    (`trace_beliefs`, the same seed for every f) in which every log likelihood is multiplied by f.
+    f < 1 when a run's taps repeat each other's evidence. (The log loss is ruled by the few runs
+    confidently wrong, and its f leaves the common beliefs underconfident.)
+
+    Parameters
+    ----------
+    environment : VirtualEnvironment
+        Its model must have a tempering (`LikelihoodModel.temperable`).
+    policy : Policy
+    taps : int
+        Last tap whose belief counts, >= 1.
+    runs : int
+    seed : int
+    **options
+        ``move_threshold``, ``shift_mode`` for `trace_beliefs`.
+
+    Returns
+    -------
+    float > 0; ``environment.model.tempered(f)`` is the calibrated model
+    """
+    from scipy.optimize import minimize_scalar
+
+    if not environment.model.temperable:
+        environment.model.tempered(1.0)  # raises the ModelError naming the kind
+
+    def loss(log10_factor: float) -> float:
+        trace = trace_beliefs(environment.tempered(10.0 ** log10_factor), policy, runs=runs, max_taps=taps,
+                              seed=seed, **options)
+        return trace.brier_score(taps)
+
+    result = minimize_scalar(loss, bounds=(-2.0, 2.0), method="bounded", options={"xatol": 2e-3})
+    return float(10.0 ** result.x)
 
 
 def threshold_for_accuracy(trace: BeliefTrace, target: float, *, tolerance: float = 0.0, thresholds=None):
@@ -253,7 +322,7 @@ def threshold_for_accuracy(trace: BeliefTrace, target: float, *, tolerance: floa
     tolerance : float
         Identity units (0: the exact class).
     thresholds : sequence of float, optional
-        Candidates; default 0.5..0.9999 in 0.005 steps and the 0.999x tail.
+        Candidates; default `DECISION_THRESHOLDS` (0.3..0.9999).
 
     Returns
     -------
@@ -266,7 +335,7 @@ def threshold_for_accuracy(trace: BeliefTrace, target: float, *, tolerance: floa
     if not (np.isfinite(tolerance) and tolerance >= 0):
         raise ValueError(f"tolerance must be a number >= 0, got {tolerance}")
     if thresholds is None:
-        thresholds = np.concatenate([np.arange(0.5, 0.995, 0.005), [0.995, 0.998, 0.999, 0.9995, 0.9999]])
+        thresholds = DECISION_THRESHOLDS
     best, best_accuracy = None, 0.0
     for threshold in thresholds:
         decisions = trace.decisions(float(threshold))
@@ -294,6 +363,9 @@ class AccuracySweep:
     target, tolerance : float
     best : int or None
         Index of the fixation reaching the target in the fewest mean taps (None: no fixation does).
+    tempering : float
+        Factor on the model's log likelihood at the best fixation, whose threshold, taps and accuracy
+        are those of the tempered model (`fit_policy_tempering`; 1: not refitted).
     """
 
     fixations: np.ndarray
@@ -303,11 +375,12 @@ class AccuracySweep:
     target: float
     tolerance: float
     best: int | None
+    tempering: float = 1.0
 
 
 def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tolerance: float = 0.0,
                           fixation_classes=None, runs: int = 2000, max_taps: int = 20, seed=0,
-                          progress=None, **options) -> AccuracySweep:
+                          progress=None, temper: bool = False, **options) -> AccuracySweep:
     """For each fixation location, the threshold whose decisions reach ``target`` accuracy in the fewest taps.
 
     Parameters
@@ -323,6 +396,10 @@ def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tol
         As `trace_beliefs` (the same seed for every fixation).
     progress : callable, optional
         Wraps the iterable of fixations (e.g. ``tqdm``).
+    temper : bool
+        Refit the tempering at the best fixation (`fit_policy_tempering`: beliefs after 1 to 5 taps) and
+        choose its threshold again on the calibrated beliefs; the model must be `temperable`. (Tempering
+        relabels the beliefs rather than reorders the runs' decisions, so the fixation is chosen before.)
     **options
         ``move_threshold``, ``shift_mode`` for `trace_beliefs`.
 
@@ -334,16 +411,24 @@ def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tol
 
     model = environment.model
     classes = np.arange(model.n_locations) if fixation_classes is None else np.asarray(fixation_classes, np.intp)
-    rows = []
-    for c in (progress or (lambda x: x))(classes.tolist()):
-        trace = trace_beliefs(environment, FixationPolicy(int(c)), runs=runs, max_taps=max_taps, seed=seed, **options)
+
+    def row(env, c):
+        trace = trace_beliefs(env, FixationPolicy(int(c)), runs=runs, max_taps=max_taps, seed=seed, **options)
         decisions, best_accuracy = threshold_for_accuracy(trace, target, tolerance=tolerance)
         if decisions is None:
-            rows.append((np.nan, np.nan, best_accuracy))
-        else:
-            rows.append((decisions.threshold, float(decisions.taps.mean()), float(decisions.within(tolerance).mean())))
+            return np.nan, np.nan, best_accuracy
+        return decisions.threshold, float(decisions.taps.mean()), float(decisions.within(tolerance).mean())
+
+    rows = [row(environment, c) for c in (progress or (lambda x: x))(classes.tolist())]
     thresholds, taps, accuracy = (np.array(column, dtype=np.float64) for column in zip(*rows))
     reached = np.isfinite(taps)
     best = int(np.nanargmin(taps)) if reached.any() else None
+    factor = 1.0
+    if temper and best is not None:
+        fitted = fit_policy_tempering(environment, FixationPolicy(int(classes[best])), runs=runs, seed=seed, **options)
+        tempered = row(environment.tempered(fitted), classes[best])
+        if np.isfinite(tempered[1]):  # the target is still reached (else keep the untempered model)
+            factor = fitted
+            thresholds[best], taps[best], accuracy[best] = tempered
     return AccuracySweep(model.location_centres[classes], thresholds, taps, accuracy, float(target), float(tolerance),
-                         best)
+                         best, factor)

@@ -43,10 +43,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--locations", type=int_in_range(1, 1000), default=11, metavar="N",
                         help="equal location classes over the training range, 1..1000 (default 11; "
                              "a dataset with one location gets one class)")
-    parser.add_argument("--bins", type=int_in_range(2, 10_000), default=100, metavar="N",
-                        help="value bins per sensor dimension, 2..10000 (default 100)")
+    parser.add_argument("--bins", type=int_in_range(2, 10_000), default=None, metavar="N",
+                        help="value bins per sensor dimension, 2..10000, histogram kinds (default 100)")
     parser.add_argument("--epsilon", type=positive_float, default=None,
-                        help="count added to every histogram bin (default 1e-3)")
+                        help="count added to every histogram bin, histogram kinds (default 1e-3)")
     parser.add_argument("--min-taps", type=int_at_least(1), default=1, metavar="N",
                         help="fewest training taps a class may have (default 1)")
 
@@ -62,6 +62,12 @@ def run(args: argparse.Namespace) -> int:
 
     if args.epsilon is not None and not math.isfinite(args.epsilon):
         raise TactipError(f"--epsilon must be a finite number > 0, got {args.epsilon}")
+    if "histogram" not in args.model:
+        given = [flag for flag, value in (("--bins", args.bins), ("--epsilon", args.epsilon)) if value is not None]
+        if given:
+            raise TactipError(f"{' and '.join(given)} set{'s' if len(given) == 1 else ''} the histograms of the "
+                              f"histogram kinds; a {args.model} model has none (leave {' and '.join(given)} out)")
+    args.bins = 100 if args.bins is None else args.bins
     refuse_overwriting_inputs([args.out], [args.dataset])
     dataset = load_dataset(args.dataset)
     print(dataset.describe())

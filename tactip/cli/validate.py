@@ -14,7 +14,9 @@ lowest error within --tap-budget mean taps, and writes it with its threshold int
 recommended settings (used by the station). --sweep-lateral gives the error when the test taps'
 lateral placement is within [-SIGMA, SIGMA] mm, relative to the smallest SIGMA (paper 002 Fig. 11).
 With --target-accuracy P, --sweep-fixation instead picks the fixation and threshold whose decisions
-are within --tolerance of the true identity in a fraction P of runs in the fewest mean taps.
+are within --tolerance of the true identity in a fraction P of runs in the fewest mean taps; a
+calibrated model's tempering is then refitted at the best fixation, so that its beliefs after 1 to 5
+taps mean what they say (the taps of one run repeat each other's evidence), and written with them.
 
 Calibration: for the active policy, the expected calibration error (ECE) of the identity belief
 after 1, 3 and 5 taps (a belief of 0.9 should be right 90 % of the time: ECE 0), and with --plot a
@@ -286,30 +288,38 @@ def _sweep_for_accuracy(args, model, environment, tqdm) -> list[dict]:
     progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
     sweep = fixation_for_accuracy(environment, target=args.target_accuracy, tolerance=args.tolerance, runs=args.runs,
                                   max_taps=args.max_taps, seed=args.seed, move_threshold=args.move_threshold,
-                                  shift_mode=args.shift or model.shift_mode, progress=progress)
+                                  shift_mode=args.shift or model.shift_mode, progress=progress,
+                                  temper=model.temperable)
     unit, identity_unit = model.location_unit, model.identity_unit
     print(f"decisions within {args.tolerance:g} {identity_unit} in {100 * args.target_accuracy:g} % of runs:")
     print(f"{'fixation':>10} {'threshold':>9} {'taps':>6} {'accuracy':>8}")
-    for fixation, threshold, taps, accuracy in zip(sweep.fixations, sweep.thresholds, sweep.taps, sweep.accuracy):
+    for k, (fixation, threshold, taps, accuracy) in enumerate(zip(sweep.fixations, sweep.thresholds, sweep.taps,
+                                                                  sweep.accuracy)):
         shown = "-" if not threshold == threshold else f"{threshold:.4g}"
-        print(f"{fixation:>10.3f} {shown:>9} {taps:>6.2f} {accuracy:>8.3f}")
+        tempered = f"  (tempering x {sweep.tempering:.3g})" if k == sweep.best and sweep.tempering != 1.0 else ""
+        print(f"{fixation:>10.3f} {shown:>9} {taps:>6.2f} {accuracy:>8.3f}{tempered}")
     if sweep.best is None:
         raise TactipError(f"--target-accuracy {args.target_accuracy:g} is not reached at any fixation within "
                           f"{args.max_taps} taps (best {sweep.accuracy.max():.3f}); lower it, raise --tolerance or "
                           f"--max-taps; nothing written")
     best = sweep.best
     fixation, threshold = float(sweep.fixations[best]), float(sweep.thresholds[best])
+    tempering = ""
+    if model.temperable:
+        tempering = f", tempering {model.tempering:.4g} x {sweep.tempering:.3g} for the beliefs after 1-5 taps"
+        model = model.tempered(sweep.tempering)
     save_model(args.model, model.with_recommended(fixation_location=fixation, decision_threshold=threshold,
                                                   policy="active"))
     print(f"best fixation {fixation:g} {unit} (threshold {threshold:g}: {sweep.accuracy[best]:.3f} within "
-          f"{args.tolerance:g} {identity_unit} in {sweep.taps[best]:.1f} taps); written to {args.model}")
+          f"{args.tolerance:g} {identity_unit} in {sweep.taps[best]:.1f} taps{tempering}); written to {args.model}")
     if args.plot:
         from perception.plots import plot_accuracy_sweep
 
         plot_accuracy_sweep(sweep, args.plot, units=unit)
     return [{"fixation": float(f), "threshold": float(t), "mean_taps": float(n), "accuracy_within_tolerance": float(a),
-             "tolerance": args.tolerance, "target_accuracy": args.target_accuracy}
-            for f, t, n, a in zip(sweep.fixations, sweep.thresholds, sweep.taps, sweep.accuracy)]
+             "tempering_factor": sweep.tempering if i == sweep.best else 1.0, "tolerance": args.tolerance,
+             "target_accuracy": args.target_accuracy}
+            for i, (f, t, n, a) in enumerate(zip(sweep.fixations, sweep.thresholds, sweep.taps, sweep.accuracy))]
 
 
 def _check_fixation(model, fixation) -> None:

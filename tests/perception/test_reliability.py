@@ -58,6 +58,10 @@ def test_trace_decisions_are_the_monte_carlo_decisions(environment, policy):
         assert decisions.taps.mean() == pytest.approx(result.mean_taps[k], abs=1e-12)
         assert decisions.error.mean() == pytest.approx(result.mean_identity_error[k], abs=1e-12)
         assert decisions.forced.mean() == pytest.approx(result.forced[k], abs=1e-12)
+    # the belief in the true class is the decision belief when the decision is right, and no more otherwise
+    right = trace.estimate == trace.truth
+    np.testing.assert_array_equal(trace.truth_belief[right], trace.belief[right])
+    assert np.all(trace.truth_belief[~right] <= trace.belief[~right])
 
 
 def test_threshold_for_accuracy_reaches_the_target_in_the_fewest_taps(environment):
@@ -89,3 +93,22 @@ def test_calibrated_models_have_smaller_multi_tap_ece_than_the_papers_model():
     # The papers' mean log likelihood is timid: far from calibrated until many taps have piled up.
     assert max(ece["gaussian"]) < 0.1 < 0.2 < ece["histogram"][0]
     assert np.mean(ece["gaussian"]) < np.mean(ece["histogram"]) / 3
+
+
+def test_policy_tempering_calibrates_an_overconfident_model_whatever_its_tempering():
+    grid = dict(depths=4, widths=5, samples=8, dims=6, contact_floor=1.0, noise=0.4)
+    model = train_model(gap_dataset(seed=1, taps_per_class=6, **grid), kind="gaussian", n_locations=4)
+    environment = VirtualEnvironment(model, gap_dataset(seed=2, taps_per_class=30, **grid))
+    overconfident = environment.tempered(4.0)
+    assert overconfident.model.tempering == pytest.approx(4.0 * model.tempering)
+    policy = FixationPolicy(3)
+    factor = perception.reliability.fit_policy_tempering(overconfident, policy, runs=500, seed=0)
+    # about the same calibrated beliefs from either starting point (500 runs: the Brier score is noisy in f)
+    assert 4.0 * factor == pytest.approx(perception.reliability.fit_policy_tempering(environment, policy, runs=500,
+                                                                                     seed=0), rel=0.2)
+    before = trace_beliefs(overconfident, policy, runs=2000, seed=1, max_taps=5)
+    after = trace_beliefs(overconfident.tempered(factor), policy, runs=2000, seed=1, max_taps=5)
+    for taps in (3, 5):
+        assert before.calibration_error(taps) > 0.2 and after.calibration_error(taps) < 0.06
+    with pytest.raises(perception.ModelError, match="no tempering"):
+        fit_model(gap_dataset(seed=1, taps_per_class=2, **grid), n_locations=4, bins=10).tempered(2.0)

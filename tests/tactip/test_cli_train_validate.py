@@ -95,6 +95,10 @@ def test_user_errors_are_one_line(files, capsys, tmp_path):
     with pytest.raises(SystemExit):
         main(["validate", str(files / "model.h5"), str(files / "test.h5"), "--thresholds", "1.5"])
     assert "thresholds must be in [0, 1]" in capsys.readouterr().err
+    assert main(["train", str(files / "train.h5"), "--out", str(tmp_path / "g.h5"), "--model", "gaussian",
+                 "--bins", "50"]) == 1
+    assert "a gaussian model has none (leave --bins out)" in capsys.readouterr().err
+    assert not (tmp_path / "g.h5").exists()
 
 
 def test_sweep_lateral_shows_errors_growing_with_placement_noise(files, capsys, tmp_path):
@@ -151,11 +155,15 @@ def test_sweep_fixation_for_a_target_accuracy_writes_the_threshold(files, capsys
 
     model = tmp_path / "g.h5"
     assert main(["train", str(files / "train.h5"), "--out", str(model), "--locations", "6", "--model", "gaussian"]) == 0
+    trained = load_model(model).tempering
     code = main(["validate", str(model), str(files / "test.h5"), "--sweep-fixation", "--target-accuracy", "0.9",
                  "--tolerance", "1", "--runs", "500", "--quiet"])
     assert code == 0
     out = capsys.readouterr().out
     recommended = load_model(model).recommended
+    # the tempering refitted for the beliefs after 1-5 taps is the one written
+    factor = float(out.split(f"tempering {trained:.4g} x ")[1].split()[0])
+    assert load_model(model).tempering == pytest.approx(trained * factor, rel=1e-2)  # printed to 3 figures
     assert f"best fixation {recommended['fixation_location']:g} mm (threshold {recommended['decision_threshold']:g}" \
         in out
     assert recommended["fixation_location"] > 2.5  # the width is legible deep only (legible_from=0.5)
