@@ -18,7 +18,9 @@ written through ``cv2.VideoWriter`` as MPEG-4 part 2 (mp4v), as a camera recordi
            cost without overlapping decoding and tracking.
 
 Prints seconds, ms/frame, and the ratios replay / decode (the bar) and tracker / decode, from
-the best of the repeats (the run least disturbed by other processes).
+the best of the repeats (the run least disturbed by other processes); then replay / decode of each
+repeat on its own (decode and replay run back to back): median and range, since on a shared or
+virtual machine single runs of a two-thread replay vary by +-20 %.
 
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N]
 """
@@ -96,7 +98,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--preset", default="rim-ring-331")
     parser.add_argument("--taps", type=int, default=24)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         video = pathlib.Path(folder) / "taps.mp4"
@@ -124,6 +126,9 @@ def main() -> None:
     print(f"replay / decode = {best['replay'] / best['decode']:.2f} (bar <= 2); without the one-off pin field "
           f"{per_frame / best['decode']:.2f}; tracker / decode = {best['tracker'] / best['decode']:.2f}; "
           f"decode + field + tracker = {(best['decode'] + best['field'] + best['tracker']) / best['decode']:.2f}")
+    paired = np.array(times["replay"]) / np.array(times["decode"])
+    print(f"replay / decode per repeat: median {np.median(paired):.2f}, range {paired.min():.2f}-{paired.max():.2f} "
+          f"({args.repeats} repeats)")
 
 
 if __name__ == "__main__":

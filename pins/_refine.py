@@ -657,7 +657,9 @@ class Refiner:
             `refined` with blobs for missing pins (an LK estimate's own blob, else one assigned
             one-to-one within the gate around the pin's prediction), px; NaN where still lost.
         """
-        blobs = _detect(grey, self.disc, self.detection).centres
+        blobs = self._detect_near(grey, np.concatenate([tracked[np.isnan(refined[:, 0]) & np.isfinite(tracked[:, 0])],
+                                                        self._predict(refined, np.flatnonzero(np.isnan(refined[:, 0])),
+                                                                      last_seen)]))
         gate = self.gate_px
         # Placed pins claim their blobs too, so that no other pin takes them.
         claim = match_to_blobs(np.where(np.isfinite(refined), refined, tracked), blobs, gate_px=gate)
@@ -686,6 +688,27 @@ class Refiner:
                         & self._like_at_rest(area, contrast, compactness, new))
                 positions[new] = np.where(keep[:, None], centres, np.nan)
         return positions
+
+    def _detect_near(self, grey: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Blob centres (M, 2), px, detected in the part of the disc around `points` (the missing pins).
+
+        The box around them reaches a spacing and a gate beyond (the blobs of their placed neighbours,
+        which claim theirs) and a threshold block beyond that (the neighbourhood means); the image
+        outside the box counts as outside the disc, as the surround does. The whole disc when the
+        box covers most of it.
+        """
+        disc = self.disc
+        points = points[np.isfinite(points[:, 0])]
+        if len(points) == 0:
+            return np.empty((0, 2))
+        reach = self.spacing_px + self.gate_px + self.detection.block_size_px
+        low = np.maximum(np.floor(points.min(axis=0) - reach).astype(int), 0)
+        high = np.minimum(np.ceil(points.max(axis=0) + reach).astype(int) + 1, grey.shape[::-1])
+        if np.prod(high - low) > 0.5 * np.pi * disc.radius_px ** 2:
+            return _detect(grey, disc, self.detection).centres
+        (x0, y0), (x1, y1) = low, high
+        part = SensorDisc(disc.cx - x0, disc.cy - y0, disc.radius_px)
+        return _detect(grey[y0:y1, x0:x1], part, self.detection).centres + (x0, y0)
 
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
         """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""

@@ -118,7 +118,7 @@ def segment_taps(displacements: np.ndarray, *, high_px: float = 1.5, low_px: flo
 
 
 def converging_frames(displacements: np.ndarray, rest_positions: np.ndarray, *, high_px: float = 1.5,
-                      cosine: float = -0.5, percentile: float = 90.0) -> np.ndarray:
+                      cosine: float = -0.5, percentile: float = 90.0, signal: np.ndarray | None = None) -> np.ndarray:
     """Frames whose displaced pins move *towards* the centre of their displacement: a pressed reference.
 
     A TacTip pressed by an object spreads its pins away from the contact, so displacements
@@ -144,6 +144,8 @@ def converging_frames(displacements: np.ndarray, rest_positions: np.ndarray, *, 
         Largest score of a converging frame, in [-1, 1].
     percentile : float
         Percentile of the tap signal.
+    signal : (T,) ndarray, optional
+        The tap signal when already computed (`tap_signal` at `percentile`), px.
 
     Returns
     -------
@@ -168,5 +170,8 @@ def converging_frames(displacements: np.ndarray, rest_positions: np.ndarray, *, 
     norms = np.hypot(offset[..., 0], offset[..., 1]) * magnitude
     cosines = np.divide(along, norms, out=np.zeros_like(along), where=norms > 0)
     score = (weight * cosines).sum(axis=1) / total
-    signal = tap_signal(displacements, percentile=percentile)
+    if signal is None:
+        signal = tap_signal(displacements, percentile=percentile)
+    elif np.shape(signal) != (len(data),):
+        raise ShapeError(f"signal must have shape ({len(data)},), got {np.shape(signal)}")
     return np.flatnonzero((score < cosine) & (signal > high_px))

@@ -536,6 +536,8 @@ class PinTracker:
         """
         disc, (x0, y0) = self.disc, self._origin
         reach = 1.5 * self.spacing_px + 2.0
+        if np.hypot(*(pins - (disc.cx, disc.cy)).T).max() + reach <= disc.radius_px - _DISC_EDGE_PX:
+            return None  # no pin reaches the rim (most pads): no need to look at every pixel
         yy, xx = np.mgrid[0:rest_crop.shape[0], 0:rest_crop.shape[1]]
         beyond = np.hypot(xx + x0 - disc.cx, yy + y0 - disc.cy) > disc.radius_px - _DISC_EDGE_PX
         if not beyond.any() or beyond.all():

@@ -540,7 +540,7 @@ def _start(image, *, params, expected_pins, calibration, warnings):
 
 
 def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, rest_frame: int,
-                     high_px: float = 1.5) -> str:
+                     high_px: float = 1.5, signal: np.ndarray | None = None) -> str:
     """A warning when the rest frame looks taken during a tap (`pins.converging_frames`), else "".
 
     Parameters
@@ -553,6 +553,8 @@ def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, r
         The rest frame's index (named in the warning).
     high_px : float
         Smallest tap signal of a frame that counts, px.
+    signal : (T,) ndarray, optional
+        The tap signal (`pins.tap_signal`) when already computed, px.
 
     Returns
     -------
@@ -564,12 +566,13 @@ def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, r
     """
     from pins import converging_frames
 
-    frames = converging_frames(displacements, rest_positions, high_px=high_px)
+    if signal is None:
+        signal = tap_signal(displacements)
+    frames = converging_frames(displacements, rest_positions, high_px=high_px, signal=signal)
     tracked = int(np.isfinite(displacements[:, :, 0]).any(axis=1).sum())
     if len(frames) < max(3, 0.05 * tracked):
         return ""
-    signal = np.zeros(len(displacements))
-    signal[frames] = tap_signal(displacements[frames])
+    signal = np.where(np.isin(np.arange(len(displacements)), frames), signal, 0.0)
     # The pad at rest: the middle of the longest run of frames drawn together about the most.
     runs, count = ndimage.label(signal >= 0.9 * signal.max())
     longest = np.argmax(np.bincount(runs.ravel())[1:]) + 1
@@ -615,9 +618,10 @@ def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float,
                 warnings.append(f"feature pins: {selection.warning}")
         except (PinsError, ValueError) as exc:
             warnings.append(f"no feature pins ({exc})")
+    signal = tap_signal(displacements)  # per frame, px: for the rest-frame check, the thresholds and the taps
     try:
         spacing = track["tracker"].spacing_px
-        check = check_rest_frame(displacements, rest, rest_frame=rest_frame,
+        check = check_rest_frame(displacements, rest, rest_frame=rest_frame, signal=signal,
                                  high_px=1.5 * min(1.0, spacing / REFERENCE_PITCH_PX) if spacing > 0 else 1.5)
         if check:
             warnings.append(check)
@@ -625,9 +629,9 @@ def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float,
         warnings.append(f"the rest frame could not be checked ({exc})")
     bounds, taps, valid = [], None, np.zeros(0, dtype=bool)
     high_px, low_px = tap_thresholds_px(displacements, track["tracker"].spacing_px,
-                                        usable=track["tracked"] & ~track["blank"])
+                                        usable=track["tracked"] & ~track["blank"], signal=signal)
     try:
-        bounds = segment_taps(displacements, high_px=high_px, low_px=low_px)
+        bounds = segment_taps(signal, high_px=high_px, low_px=low_px)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")
@@ -641,8 +645,8 @@ def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float,
                 bounds=bounds, taps=taps, valid=valid, warnings=warnings, tap_thresholds_px=(high_px, low_px))
 
 
-def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None
-                      ) -> tuple[float, float]:
+def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None,
+                      signal: np.ndarray | None = None) -> tuple[float, float]:
     """The hysteresis thresholds of `pins.segment_taps` for this sensor, px: (high, low).
 
     The defaults (1.5 and 0.5 px) fit a pad whose pins are about `REFERENCE_PITCH_PX` apart in the
@@ -658,9 +662,14 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
         Median nearest-neighbour pin spacing at rest, px.
     usable : (T,) ndarray of bool, optional
         Frames to measure the noise on (tracked, not blank); all by default.
+    signal : (T,) ndarray, optional
+        The tap signal of every frame (`pins.tap_signal`) when already computed, px.
     """
     factor = min(1.0, spacing_px / REFERENCE_PITCH_PX) if np.isfinite(spacing_px) and spacing_px > 0 else 1.0
-    signal = tap_signal(displacements if usable is None else displacements[usable])
+    if signal is None:
+        signal = tap_signal(displacements)
+    if usable is not None:
+        signal = signal[usable]
     floor = float(np.percentile(signal, 10)) if signal.size else 0.0
     low = max(0.5 * factor, 2.0 * floor)
     return max(1.5 * factor, 2.0 * low), low

@@ -12,6 +12,7 @@ them to change them).
 import contextlib
 import io
 import json
+import os
 import re
 import signal
 import tomllib
@@ -169,16 +170,58 @@ def stored_inspections(store, station: str | None = None):
     return taps, verdicts
 
 
+@contextlib.contextmanager
+def built_once(tmp_path_factory, name: str):
+    """A folder ``name`` of the test session, and whether it still has to be built (then build it in the block).
+
+    Under pytest-xdist the workers share it: the first to get here builds it while the others wait
+    on a lock, then they read what it built (``done`` marks a finished build).
+    """
+    import fcntl
+
+    shared = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        shared = shared.parent  # the session's folder, above each worker's own
+    root = shared / name
+    with open(shared / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        done = root / ".done"
+        if done.exists():
+            yield root, False
+            return
+        root.mkdir(exist_ok=True)
+        yield root, True
+        done.touch()
+
+
 @pytest.fixture(scope="session")
 def sim_station(tmp_path_factory):
     """The small simulated station after ``tactip calibrate``, ``collect``, ``train`` and ``validate``.
 
     Attributes: ``root``, ``toml``, ``config``, ``calibration``, ``train``, ``test`` (dataset paths),
     ``model``, ``validation`` (validate's JSON), ``runs`` (command name -> (code, out, err)).
+    Built once per test session, also when pytest-xdist runs it on several workers.
     """
+    with built_once(tmp_path_factory, "station") as (root, build):
+        if build:
+            station = _build_sim_station(root)
+            (root / "runs.json").write_text(json.dumps({k: list(v) for k, v in station.runs.items()}))
+            return station
+    return _sim_station_files(root, {k: tuple(v) for k, v in json.loads((root / "runs.json").read_text()).items()})
+
+
+def _sim_station_files(root: Path, runs: dict) -> SimpleNamespace:
     from calibration import load_calibration
 
-    root = tmp_path_factory.mktemp("station")
+    datasets = root / "datasets"
+    toml = root / "station.toml"
+    return SimpleNamespace(root=root, toml=toml, config=load_station_config(toml),
+                           calibration=load_calibration(root / "calibration.h5"), train=datasets / "train.h5",
+                           test=datasets / "test.h5", model=root / "model.h5", validation=root / "validation.json",
+                           runs=runs)
+
+
+def _build_sim_station(root: Path) -> SimpleNamespace:
     toml = write_station(root, small_station_table(root))
     datasets = root / "datasets"
     model = root / "model.h5"
@@ -195,10 +238,8 @@ def sim_station(tmp_path_factory):
     }
     failed = {name: run for name, run in runs.items() if run[0] != 0}
     assert not failed, f"the station pipeline failed: {failed}"
-    config = load_station_config(toml)
-    return SimpleNamespace(root=root, toml=toml, config=config, calibration=load_calibration(root / "calibration.h5"),
-                           train=datasets / "train.h5", test=datasets / "test.h5", model=model,
-                           validation=validation, runs=runs)
+    assert Path(toml) == root / "station.toml"
+    return _sim_station_files(root, runs)
 
 
 # -- real services (issue 12): a throwaway PostgreSQL server -------------------------------------------
