@@ -17,8 +17,9 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/tactip inspect --sim
 
+# On every core (pytest-xdist; at most 4 workers): the simulated station the tests share is built once.
 test: $(STAMP) services
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4
 
 # The real services some tests use: PostgreSQL (the tests make throwaway clusters of their own on a
 # local socket) and headless Chromium (the dashboard's browser test; Playwright drives it over its own
