@@ -82,6 +82,20 @@ def test_fixation_for_accuracy_prefers_the_legible_end(environment):
     assert np.nanmin(sweep.taps) == sweep.taps[sweep.best]
 
 
+def test_the_chosen_threshold_is_confirmed_on_runs_that_did_not_choose_it(environment):
+    options = dict(target=0.8, tolerance=1.0, max_taps=15, seed=0)
+    sweep = fixation_for_accuracy(environment, runs=300, confirm_runs=2000, **options)
+    unconfirmed = fixation_for_accuracy(environment, runs=300, confirm_runs=0, **options)
+    assert sweep.best == unconfirmed.best and np.array_equal(np.delete(sweep.thresholds, sweep.best),
+                                                             np.delete(unconfirmed.thresholds, sweep.best), equal_nan=True)
+    # The best fixation's threshold and figures are those of 2000 runs drawn from another seed.
+    other = np.random.SeedSequence(0).spawn(1)[0]
+    trace = trace_beliefs(environment, FixationPolicy(sweep.best), runs=2000, max_taps=15, seed=other)
+    decisions, _ = threshold_for_accuracy(trace, 0.8, tolerance=1.0)
+    assert sweep.thresholds[sweep.best] == decisions.threshold
+    assert sweep.taps[sweep.best] == pytest.approx(decisions.taps.mean())
+
+
 def test_calibrated_models_have_smaller_multi_tap_ece_than_the_papers_model():
     grid = dict(depths=3, widths=4, samples=8, dims=6, contact_floor=1.0, noise=0.2)
     train, test = gap_dataset(seed=1, taps_per_class=6, **grid), gap_dataset(seed=2, taps_per_class=20, **grid)
