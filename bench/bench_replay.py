@@ -4,7 +4,10 @@ Writes a real-like video to a temporary folder: a synthetic TacTip preset (defau
 ``rim-ring-331``: a black rim ring with LED glare on it) tapping a 2 mm gap at 3-5 mm indentation
 and a few offsets, with rim pins coming and going (a sector of the outermost pins hidden, turning
 with time: each rim pin is lost for a few frames in every 40), rendered with sensor noise and
-written through ``cv2.VideoWriter`` as MPEG-4 part 2 (mp4v), as a camera recording would be. Then, alternating within each repeat so that machine load falls on both alike:
+written through ``cv2.VideoWriter`` as `tactip record` writes a camera: MPEG-4 part 2 (mp4v,
+``.mp4``: the cheapest to decode, so the hardest for the ratio) or Motion-JPEG (``--codec MJPG``,
+``.avi``: a USB webcam's own stream, what the README records a camera to). Then, alternating within
+each repeat so that machine load falls on both alike:
 
 - decode:  every frame read through the project's video source (`tactip.sources.open_source`, grey,
            as replay reads them) and nothing else;
@@ -22,7 +25,7 @@ the best of the repeats (the run least disturbed by other processes); then repla
 repeat on its own (decode and replay run back to back): median and range, since on a shared or
 virtual machine single runs of a two-thread replay vary by +-20 %.
 
-Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N]
+Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
 """
 
 from __future__ import annotations
@@ -41,8 +44,8 @@ from tactip.sources import open_source
 from tactip.synthetic import Contact, SyntheticTacTip, tap_profile
 
 
-def write_video(path: pathlib.Path, preset: str, taps: int, *, frame_rate: float = 20.0) -> int:
-    """A tap sequence of `preset` as an mp4v video at `path`; returns the number of frames.
+def write_video(path: pathlib.Path, preset: str, taps: int, *, frame_rate: float = 20.0, codec: str = "mp4v") -> int:
+    """A tap sequence of `preset` as a video at `path` (`codec`: mp4v or MJPG); returns the number of frames.
 
     Rim pins come and go: the outermost pins inside a 70-degree sector are hidden (as behind a lip
     of the casing or a patch of glare), and the sector turns by 9 degrees a frame, so every rim pin
@@ -54,7 +57,7 @@ def write_video(path: pathlib.Path, preset: str, taps: int, *, frame_rate: float
     radius, azimuth = np.hypot(*offset.T), np.degrees(np.arctan2(offset[:, 1], offset[:, 0]))
     rim = radius >= np.quantile(radius, 0.85)
     width, height = sensor.image_size
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), frame_rate, (width, height), True)
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*codec), frame_rate, (width, height), True)
     if not writer.isOpened():
         raise SystemExit("no MPEG-4 encoder in this OpenCV build")
     rest_s, phase_s = 0.2, 0.25
@@ -99,10 +102,11 @@ def main() -> None:
     parser.add_argument("--preset", default="rim-ring-331")
     parser.add_argument("--taps", type=int, default=24)
     parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--codec", choices=("mp4v", "MJPG"), default="mp4v")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
-        video = pathlib.Path(folder) / "taps.mp4"
-        frames = write_video(video, args.preset, args.taps)
+        video = pathlib.Path(folder) / ("taps.avi" if args.codec == "MJPG" else "taps.mp4")
+        frames = write_video(video, args.preset, args.taps, codec=args.codec)
         times: dict[str, list[float]] = {"decode": [], "replay": [], "field": [], "tracker": []}
         for repeat in range(args.repeats):
             start = time.perf_counter()
@@ -116,7 +120,7 @@ def main() -> None:
             times["tracker"].append(tracked)
         best = {name: min(values) for name, values in times.items()}
     width, height = SyntheticTacTip.from_preset(args.preset).image_size
-    print(f"{args.preset}: {frames} frames {width}x{height} mp4v, {result.pins} pins; "
+    print(f"{args.preset}: {frames} frames {width}x{height} {args.codec}, {result.pins} pins; "
           f"lost per frame median {np.median(result.lost_per_frame):g}, max {result.lost_per_frame.max()}; "
           f"{len(result.tap_bounds)} taps; best of {args.repeats}")
     print(f"{'':10s}{'s':>8s}{'ms/frame':>10s}{'/ decode':>10s}")
