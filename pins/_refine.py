@@ -657,9 +657,9 @@ class Refiner:
             `refined` with blobs for missing pins (an LK estimate's own blob, else one assigned
             one-to-one within the gate around the pin's prediction), px; NaN where still lost.
         """
-        blobs = self._detect_near(grey, np.concatenate([tracked[np.isnan(refined[:, 0]) & np.isfinite(tracked[:, 0])],
-                                                        self._predict(refined, np.flatnonzero(np.isnan(refined[:, 0])),
-                                                                      last_seen)]))
+        # Only blobs near the missing pins matter: at their LK estimates or their predictions.
+        missing = np.flatnonzero(np.isnan(refined[:, 0]))
+        blobs = self._detect_near(grey, np.concatenate([tracked[missing], self._predict(refined, missing, last_seen)]))
         gate = self.gate_px
         # Placed pins claim their blobs too, so that no other pin takes them.
         claim = match_to_blobs(np.where(np.isfinite(refined), refined, tracked), blobs, gate_px=gate)
