@@ -175,7 +175,7 @@ def built_once(tmp_path_factory, name: str):
     """A folder ``name`` of the test session, and whether it still has to be built (then build it in the block).
 
     Under pytest-xdist the workers share it: the first to get here builds it while the others wait
-    on a lock, then they read what it built (``done`` marks a finished build).
+    on a lock, then they read what it built (a file ``.done`` in it marks a finished build).
     """
     import fcntl
 
