@@ -153,8 +153,6 @@ class BeliefTrace:
         True class of the decision marginal at that tap (identity, or the current location class).
     values : (n,) float64 ndarray
         Value of each decision class (identities, or location class centres), for errors.
-    truth_belief : (R, T) float64 ndarray
-        Belief in the true class of the decision marginal.
     """
 
     policy: str
@@ -162,7 +160,6 @@ class BeliefTrace:
     estimate: np.ndarray
     truth: np.ndarray
     values: np.ndarray
-    truth_belief: np.ndarray
 
     @property
     def runs(self) -> int:
@@ -188,11 +185,6 @@ class BeliefTrace:
         """`reliability_bins` of the decision belief after ``taps`` taps."""
         t = self._column(taps)
         return reliability_bins(self.belief[:, t], self.estimate[:, t] == self.truth[:, t], bins=bins)
-
-    def log_loss(self, taps: int) -> float:
-        """Mean -log belief in the true class over the first ``taps`` taps of every run, nats."""
-        t = self._column(taps)
-        return float(-np.log(np.maximum(self.truth_belief[:, :t + 1], 1e-300)).mean())
 
     def brier_score(self, taps: int) -> float:
         """Mean (belief in the decided class - 1 if it is right else 0)^2 over the first ``taps`` taps of
@@ -251,8 +243,6 @@ def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int 
     belief = np.empty((runs, max_taps))
     estimate = np.empty((runs, max_taps), np.intp)
     truth = np.empty((runs, max_taps), np.intp)
-    truth_belief = np.empty((runs, max_taps))
-    rows = np.arange(runs)
     for tap in range(max_taps):
         log_belief = bayes.update(table[environment.draw(location * n_id + identity, rng)], log_belief)
         where, what = bayes.marginals(log_belief)
@@ -260,14 +250,13 @@ def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int 
         belief[:, tap] = decision.max(axis=1)
         estimate[:, tap] = decision.argmax(axis=1)
         truth[:, tap] = identity if n_id > 1 else location
-        truth_belief[:, tap] = decision[rows, truth[:, tap]]
         where_estimate = where.argmax(axis=1)
         offset = np.where(where.max(axis=1) > move_threshold, policy.move(where, where_estimate, rng), 0)
         offset = clamp_move(where_estimate, offset, n_loc)
         location = np.clip(location + offset, 0, n_loc - 1)
         log_belief = bayes.shift(log_belief, offset, mode=shift_mode)
     values = model.identities if n_id > 1 else model.location_centres
-    return BeliefTrace(policy.name, belief, estimate, truth, np.asarray(values, dtype=np.float64), truth_belief)
+    return BeliefTrace(policy.name, belief, estimate, truth, np.asarray(values, dtype=np.float64))
 
 
 def fit_policy_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: int = CALIBRATION_TAPS[-1],

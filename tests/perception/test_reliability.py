@@ -58,10 +58,6 @@ def test_trace_decisions_are_the_monte_carlo_decisions(environment, policy):
         assert decisions.taps.mean() == pytest.approx(result.mean_taps[k], abs=1e-12)
         assert decisions.error.mean() == pytest.approx(result.mean_identity_error[k], abs=1e-12)
         assert decisions.forced.mean() == pytest.approx(result.forced[k], abs=1e-12)
-    # the belief in the true class is the decision belief when the decision is right, and no more otherwise
-    right = trace.estimate == trace.truth
-    np.testing.assert_array_equal(trace.truth_belief[right], trace.belief[right])
-    assert np.all(trace.truth_belief[~right] <= trace.belief[~right])
 
 
 def test_threshold_for_accuracy_reaches_the_target_in_the_fewest_taps(environment):
