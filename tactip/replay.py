@@ -209,6 +209,15 @@ class ReplayResult:
         return text
 
 
+def _decode_threads() -> int:
+    """Threads for the video decoder in replay: every core but the one that tracks (at least one)."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 2
+    return max(1, cores - 1)
+
+
 @contextlib.contextmanager
 def _opencv_threads(count: int):
     """OpenCV's worker pool at ``count`` threads inside the block, restored after it."""
@@ -332,7 +341,9 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         temporary.append(claim_output(out_path, ".h5"))
         if annotate:
             temporary.append(claim_output(annotate, ".mp4"))
-        with open_source(video, grey=True) as source:
+        # The decoder on one thread fewer than the cores: this thread tracks on the last one, and
+        # FFmpeg's second thread on a 2-core machine only adds its own overhead to the contention.
+        with open_source(video, grey=True, decode_threads=_decode_threads()) as source:
             if source.live:
                 raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
             if cal is not None and tuple(source.frame_size) != tuple(cal.frame_size):

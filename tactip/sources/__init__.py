@@ -42,6 +42,8 @@ def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
         - any other existing file: a video (`VideoSource`).
     **options
         Passed to the source's constructor (for example ``grey=True``, ``exposure=50``, ``taps=[...]``).
+        ``decode_threads`` (threads of a video file's decoder, `VideoSource`) is dropped for the
+        other sources, which decode no video stream.
 
     Returns
     -------
@@ -54,6 +56,7 @@ def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
     """
     if isinstance(spec, bool):
         raise SourceError(f"cannot open source {spec!r}; choose {_CHOICES}")
+    decode_threads = options.pop("decode_threads", None)
     if isinstance(spec, int):
         return CameraSource(spec, **options)
     text = str(spec)
@@ -75,5 +78,5 @@ def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
     if path.is_dir() or (path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES):
         return ImageFolderSource(path, **options)
     if path.is_file():
-        return VideoSource(path, **options)
+        return VideoSource(path, decode_threads=decode_threads, **options)
     raise SourceError(f"cannot open source {text!r}: no such file, folder or camera; choose {_CHOICES}")

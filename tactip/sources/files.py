@@ -25,6 +25,10 @@ class VideoSource(FrameSourceBase):
     path : str or path-like
     grey : bool
         Convert frames to grey (once, on read); decoded videos are BGR even when written grey.
+    decode_threads : int, optional
+        Threads of the FFmpeg decoder (default: FFmpeg's choice, about one per core). One leaves
+        the other cores to whatever consumes the frames (`tactip replay` tracks on the main thread
+        while a thread decodes).
 
     Raises
     ------
@@ -37,8 +41,10 @@ class VideoSource(FrameSourceBase):
     ...     frames = list(video)
     """
 
-    def __init__(self, path, *, grey: bool = False):
+    def __init__(self, path, *, grey: bool = False, decode_threads: int | None = None):
         super().__init__(grey=grey)
+        if decode_threads is not None and (int(decode_threads) != decode_threads or decode_threads < 1):
+            raise ValueError(f"decode_threads must be a positive integer, got {decode_threads!r}")
         import cv2
 
         self._cv2 = cv2
@@ -49,7 +55,8 @@ class VideoSource(FrameSourceBase):
             what = "a folder, not a video file" if self.path.is_dir() else "no such file"
             raise SourceError(f"cannot open video {str(self.path)!r}: {what}")
         container = _sniff_video(self.path)  # permission denied and empty files are told apart here
-        self._capture = cv2.VideoCapture(str(self.path))
+        options = [] if decode_threads is None else [cv2.CAP_PROP_N_THREADS, int(decode_threads)]
+        self._capture = cv2.VideoCapture(str(self.path), cv2.CAP_ANY, options)
         if not self._capture.isOpened():
             self._closed = True
             raise SourceError(f"cannot open video {str(self.path)!r}: " + (

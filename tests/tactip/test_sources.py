@@ -193,6 +193,21 @@ def test_video_seek_and_grey(tmp_path):
     assert frame.image.ndim == 2 and abs(frame.image.mean() - levels[7]) < 3.0
 
 
+def test_video_on_one_decoder_thread_reads_the_same_frames(tmp_path):
+    # Replay decodes on one thread fewer than the cores; the frames must not depend on it.
+    write_video(tmp_path / "clip.mp4")
+    with open_source(tmp_path / "clip.mp4", grey=True) as default, \
+            open_source(tmp_path / "clip.mp4", grey=True, decode_threads=1) as single:
+        assert single._capture.get(cv2.CAP_PROP_N_THREADS) == 1
+        pairs = list(zip(default, single, strict=True))
+    assert len(pairs) == 12 and all(np.array_equal(a.image, b.image) for a, b in pairs)
+    with pytest.raises(ValueError, match="decode_threads"):
+        VideoSource(tmp_path / "clip.mp4", decode_threads=0)
+    cv2.imwrite(str(tmp_path / "frame.png"), np.zeros((8, 8), np.uint8))
+    with open_source(tmp_path / "frame.png", decode_threads=1) as image:  # no decoder: the option is dropped
+        assert image.read().image.shape[:2] == (8, 8)
+
+
 def test_missing_video_names_the_path(tmp_path):
     with pytest.raises(SourceError, match="missing.mp4"):
         VideoSource(tmp_path / "missing.mp4")
