@@ -507,8 +507,11 @@ class PinTracker:
             return positions, False, False
         if self._too_few(positions):
             return positions, True, False
-        if (missing & ~self.retired).any() and self._since_detection + 1 >= self.detect_every:
-            return refiner.recover(grey, tracked, positions, self._last_seen, crop), False, True
+        wanted = missing & ~self.retired
+        if wanted.any() and self._since_detection + 1 >= self.detect_every:
+            # Blobs only around the pins that asked for them: retired pins, spread along the rim,
+            # would widen the detection to most of the disc; they come back by their own search.
+            return refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted), False, True
         return positions, False, False
 
     def _too_few(self, positions: np.ndarray) -> bool:

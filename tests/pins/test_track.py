@@ -336,3 +336,32 @@ def test_blob_detection_runs_at_most_once_in_detect_every_frames():
             assert k == 1 or k - last >= 4
             last = k
     assert tracker.detection_frames == 5
+
+
+def test_blob_detection_looks_only_around_the_missing_pins_that_are_not_retired(monkeypatch):
+    # Retired pins (a rim sector out of view) are searched for in turns; detection, when another
+    # pin goes missing, covers the part of the disc around that pin only, not the retired ones too.
+    import pins._refine as refine_module
+
+    s = sensor(331)
+    rest = s.render()
+    offset = rest.centres - np.asarray(s.disc[:2])
+    radius = np.hypot(*offset.T)
+    sector = (radius > 0.8 * radius.max()) & (offset[:, 0] < -0.5 * radius.max())
+    inner = np.flatnonzero((radius < 0.3 * radius.max()) & (offset[:, 0] > 0))[:1]
+    tracker = PinTracker(retire_after=2, check_every=1000, detect_every=1)
+    identity = _identity(tracker.start(rest.image), rest.centres)
+    to_truth = np.argsort(identity)  # tracked index of each true pin
+    sizes = []
+    real_detect = refine_module._detect
+    monkeypatch.setattr(refine_module, "_detect", lambda grey, *a, **k: sizes.append(grey.size) or real_detect(grey, *a, **k))
+    for _ in range(4):  # the sector's pins lost for longer than retire_after: retired
+        tracker.update(s.render(hidden=sector).image)
+    assert tracker.retired[to_truth[sector]].all()
+    sizes.clear()
+    hidden = sector.copy()
+    hidden[inner] = True
+    tracker.update(s.render(hidden=hidden).image)
+    assert tracker.lost[to_truth[inner]].all() and not tracker.retired[to_truth[inner]].any()
+    disc_area = np.pi * s.disc[2] ** 2
+    assert len(sizes) == 1 and sizes[0] < 0.25 * disc_area  # around the inner pin alone
