@@ -52,7 +52,8 @@ identities), NaN for taps that did not enter the belief (invalid, or after the d
 
 Speed: frames are decoded on a thread (`tactip.sources.ThreadedReader`, blocking, so no frame is
 dropped) while the main thread tracks, so a replay costs about the larger of decoding and
-tracking rather than their sum (`bench/bench_replay.py`).
+tracking rather than their sum (`bench/bench_replay.py`). The decoder gets one thread fewer than
+the cores (one on a 2-core machine): its extra threads would only contend with the tracking.
 
 The file is written to a temporary name next to the target and renamed at the end, so a failure
 never leaves a half-written result; the output paths are checked before any processing.
