@@ -194,24 +194,39 @@ def detect_blobs(frame: np.ndarray, *, params: DetectionParams | None = None, di
     return _detect(grey, disc, params)
 
 
-def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams) -> Blobs:
-    """Detection on a grey uint8 image with a known disc (no validation: internal fast path)."""
+def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict | None = None) -> Blobs:
+    """Detection on a grey uint8 image with a known disc (no validation: internal fast path).
+
+    `cache` (one per image and disc) keeps the blurred disc and its neighbourhood means between
+    parameter sets that share the blur, polarity and block (`pins.find_pin_field`'s candidates).
+    """
     x0, y0, roi_mask = _roi(disc, grey.shape)
     height, width = roi_mask.shape
-    image = grey[y0:y0 + height, x0:x0 + width]
-    if params.dark_pins:
-        image = 255 - image
-    # Only the disc counts: the surround is zeroed and left out of the neighbourhood means
-    # (normalised box filter), so it neither makes pins nor hides the pins near the rim.
-    image = cv2.copyTo(image, roi_mask, np.zeros_like(image))
-    if params.blur_sigma_px > 0:
-        k = 2 * int(np.ceil(2.5 * params.blur_sigma_px)) + 1
-        smooth = cv2.GaussianBlur(image, (k, k), params.blur_sigma_px)
+    key = (params.dark_pins, params.blur_sigma_px)
+    if cache is not None and key in cache:
+        image, smooth = cache[key]
     else:
-        smooth = image
-    block = (params.block_size_px, params.block_size_px)
-    mean = cv2.boxFilter(smooth, cv2.CV_32F, block, borderType=cv2.BORDER_CONSTANT)
-    mean *= _inverse_coverage(disc, grey.shape, params.block_size_px)
+        image = grey[y0:y0 + height, x0:x0 + width]
+        if params.dark_pins:
+            image = 255 - image
+        # Only the disc counts: the surround is zeroed and left out of the neighbourhood means
+        # (normalised box filter), so it neither makes pins nor hides the pins near the rim.
+        image = cv2.copyTo(image, roi_mask, np.zeros_like(image))
+        if params.blur_sigma_px > 0:
+            k = 2 * int(np.ceil(2.5 * params.blur_sigma_px)) + 1
+            smooth = cv2.GaussianBlur(image, (k, k), params.blur_sigma_px)
+        else:
+            smooth = image
+        if cache is not None:
+            cache[key] = image, smooth
+    if cache is not None and key + (params.block_size_px,) in cache:
+        mean = cache[key + (params.block_size_px,)]
+    else:
+        block = (params.block_size_px, params.block_size_px)
+        mean = cv2.boxFilter(smooth, cv2.CV_32F, block, borderType=cv2.BORDER_CONSTANT)
+        mean *= _inverse_coverage(disc, grey.shape, params.block_size_px)
+        if cache is not None:
+            cache[key + (params.block_size_px,)] = mean
     foreground = smooth > mean + np.float32(params.offset)
     binary = foreground.view(np.uint8)
     count, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(binary, 8, cv2.CV_32S, cv2.CCL_GRANA)

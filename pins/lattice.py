@@ -315,7 +315,7 @@ def _evaluate_all(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: d
 
 def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict) -> _Run:
     """Detect with one candidate parameter set and judge the blobs."""
-    blobs = _detect(grey, disc, params)
+    blobs = _detect(grey, disc, params, cache)
     reason, pitch = _judge_lattice(blobs, _sharpness(grey, blobs, params, cache))
     return _Run(params, blobs, reason, pitch)
 
@@ -340,25 +340,39 @@ def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
     voting = [r for r in range(len(runs)) if voters[r] and len(kept[r])]
     if not voting:
         return membership, deviation
-    # Every voter's kept centres matched in every voter's at once: one query per voter (not per pair).
+    # Every voter's kept centres matched in every voter's at once: the nearest centres of all of
+    # them (one k-d tree), nearest first, so that a voter's first among them is its nearest.
     bounds = np.cumsum([0] + [len(kept[r]) for r in voting])
     every = np.concatenate([kept[r] for r in voting])
-    matches = np.full((len(voting), len(every), 2), np.nan)
+    voter_of = np.append(np.repeat(np.arange(len(voting)), np.diff(bounds)), -1)  # -1: no neighbour
+    tree = cKDTree(every)
+    reach = min(len(voting) + 2, len(every))
+    distance, index = tree.query(every, k=reach, distance_upper_bound=gate)
+    distance, index = distance.reshape(len(every), reach), index.reshape(len(every), reach)
+    rows = np.arange(len(every))
+    matched = np.full((len(voting) + 1, len(every)), -1)  # the extra row takes "no neighbour"
+    for column in range(reach - 1, -1, -1):  # nearest last: it stays
+        matched[voter_of[index[:, column]], rows] = index[:, column]
+    crowded = np.flatnonzero(np.isfinite(distance[:, -1]))  # all of them within the gate: maybe more
     for s, r in enumerate(voting):
-        distance, index = cKDTree(kept[r]).query(every, distance_upper_bound=gate)
-        found = np.isfinite(distance)
-        matches[s, found] = kept[r][index[found]]
-    support = np.isfinite(matches[:, :, 0]).sum(axis=0)
+        if crowded.size:
+            found, nearest = cKDTree(kept[r]).query(every[crowded], distance_upper_bound=gate)
+            matched[s, crowded] = np.where(np.isfinite(found), bounds[s] + np.minimum(nearest, len(kept[r]) - 1), -1)
+    matched = matched[:-1]
+    support = (matched >= 0).sum(axis=0)
     # At least half: a strict majority of four voters would let the two least complete veto the
     # pins only the two most complete find. Two voters must both keep a pin (one run's own blobs
     # are no agreement).
     agreed = (2 * support >= voters.sum()) & (support >= min(2, voters.sum()))
+    # The mean of each centre's matches (the row past the end of `every` is zeros: no match).
+    with np.errstate(invalid="ignore"):  # centres no voter matched: averaged, never used
+        consensus = np.append(every, [[0.0, 0.0]], axis=0)[matched].sum(axis=0) / support[:, None]
     for s, r in enumerate(voting):
         mine = slice(bounds[s], bounds[s + 1])
         membership[r] = agreed[mine].sum() - (~agreed[mine]).sum()
         if agreed[mine].any():
-            consensus = np.nanmean(matches[:, mine][:, agreed[mine]], axis=0)
-            deviation[r] = float(np.median(np.hypot(*(kept[r][agreed[mine]] - consensus).T)))
+            offset = kept[r][agreed[mine]] - consensus[mine][agreed[mine]]
+            deviation[r] = float(np.median(np.hypot(*offset.T)))
     return membership, deviation
 
 
@@ -397,9 +411,15 @@ def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: d
     reach = int(np.ceil(radius + 1.5))
     dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
     inside = dx**2 + dy**2 <= (radius + 1.5) ** 2
-    x = np.rint(blobs.centres[:, 0]).astype(np.intp)[:, None] + dx[inside]
-    y = np.rint(blobs.centres[:, 1]).astype(np.intp)[:, None] + dy[inside]
-    steepest = slope[np.clip(y, 0, grey.shape[0] - 1), np.clip(x, 0, grey.shape[1] - 1)].max(axis=1)
+    x = np.rint(blobs.centres[:, 0]).astype(np.intp)
+    y = np.rint(blobs.centres[:, 1]).astype(np.intp)
+    height, width = grey.shape
+    if n and x.min() >= reach and y.min() >= reach and x.max() < width - reach and y.max() < height - reach:
+        # Every disc of pixels inside the image: one flat gather (no clipping).
+        steepest = slope.ravel().take((y * width + x)[:, None] + (dy * width + dx)[inside]).max(axis=1)
+    else:
+        steepest = slope[np.clip(y[:, None] + dy[inside], 0, height - 1),
+                         np.clip(x[:, None] + dx[inside], 0, width - 1)].max(axis=1)
     return steepest / np.maximum(blobs.contrasts, 1e-6)
 
 
