@@ -354,8 +354,8 @@ def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
     for column in range(reach - 1, -1, -1):  # nearest last: it stays
         matched[voter_of[index[:, column]], rows] = index[:, column]
     crowded = np.flatnonzero(np.isfinite(distance[:, -1]))  # all of them within the gate: maybe more
-    for s, r in enumerate(voting):
-        if crowded.size:
+    if crowded.size:
+        for s, r in enumerate(voting):  # asked of each voter, as one at a time
             found, nearest = cKDTree(kept[r]).query(every[crowded], distance_upper_bound=gate)
             matched[s, crowded] = np.where(np.isfinite(found), bounds[s] + np.minimum(nearest, len(kept[r]) - 1), -1)
     matched = matched[:-1]
