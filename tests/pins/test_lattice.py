@@ -153,6 +153,62 @@ def test_consensus_agrees_on_pins_half_the_voters_keep_and_never_on_one_sets_own
     assert np.isfinite(membership).all() and np.argmax(membership) == 1
 
 
+def test_consensus_matches_every_centre_with_each_voters_nearest_even_among_crowded_blobs():
+    """The one-tree consensus equals asking each voter's own tree for each centre's nearest within the
+    gate, also where a centre has more blobs inside the gate than its k nearest (split blobs)."""
+    from pins.detect import Blobs
+    from pins.lattice import _KEPT, _MATCH, _VOTER, _Run, _consensus
+
+    rng = np.random.default_rng(3)
+    pitch = 10.0
+    grid = pitch * np.stack(np.meshgrid(np.arange(8.0), np.arange(8.0)), axis=-1).reshape(-1, 2)
+    runs = []
+    for r in range(6):
+        centres = grid + rng.normal(0, 0.4, grid.shape)
+        # Every set splits the first pins into several blobs: crowded inside the gate.
+        centres = np.vstack([centres, grid[:4].repeat(3, axis=0) + rng.normal(0, 0.5, (12, 2))])
+        n = len(centres)
+        blobs = Blobs(centres=centres, areas=np.full(n, 20), fills=np.full(n, 0.8), candidates=n,
+                      contrasts=np.full(n, 40.0))
+        reason = np.full(n, _KEPT)
+        runs.append(_Run(DetectionParams(), blobs, reason, pitch))
+    membership, deviation = _consensus(runs, pitch)
+
+    # Reference: pair by pair, as the consensus was first written.
+    kept = [run.blobs.centres[run.kept] for run in runs]
+    voters = np.array([len(c) for c in kept]) >= _VOTER * max(len(c) for c in kept)
+    for r, centres in enumerate(kept):
+        matches = np.full((len(runs), len(centres), 2), np.nan)
+        for v, other in enumerate(kept):
+            distance, index = cKDTree(other).query(centres, distance_upper_bound=_MATCH * pitch)
+            found = np.isfinite(distance)
+            matches[v, found] = other[index[found]]
+        support = np.isfinite(matches[:, :, 0]).sum(axis=0)
+        agreed = (2 * support >= voters.sum()) & (support >= 2)
+        assert membership[r] == agreed.sum() - (~agreed).sum()
+        consensus = np.nanmean(matches[:, agreed], axis=0)
+        assert deviation[r] == pytest.approx(np.median(np.hypot(*(centres[agreed] - consensus).T)), abs=1e-12)
+
+
+def test_detection_with_the_field_searchs_cache_gives_the_same_blobs():
+    """Candidate sets sharing the blurred disc and block means through the cache detect exactly as alone."""
+    from pins.detect import _detect
+    from pins.disc import find_sensor_disc
+
+    image = preset_frame("rim-ring-331").image
+    grey = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+    disc = find_sensor_disc(grey)
+    cache: dict = {}
+    for blur in (1.2, 0.8):
+        for block in (19, 31):
+            for offset in (5.0, 15.0):
+                params = DetectionParams(blur_sigma_px=blur, block_size_px=block, offset=offset)
+                shared, alone = _detect(grey, disc, params, cache), _detect(grey, disc, params)
+                for name in ("centres", "areas", "fills", "contrasts"):
+                    np.testing.assert_array_equal(getattr(shared, name), getattr(alone, name))
+    assert len(cache) == 2 + 4  # two blurs, and their block means
+
+
 @pytest.mark.parametrize("extra", [{}, BROWN, BRIGHT, dict(dark_pins=True), dict(layout="radial", **BRIGHT)])
 @pytest.mark.parametrize("size, pad", [((320, 240), 0.3), ((640, 480), 0.85)])
 def test_a_rim_ring_is_found_only_where_there_is_one(extra, size, pad):
