@@ -227,44 +227,58 @@ class WindowCentroids:
             uniform disc, more for a domed tip, less for an elongated one or one with a speck.
         """
         half, side = self.half_px, 2 * self.half_px + 1
-        if len(points) == 0:
+        n = len(points)
+        if n == 0:
             empty = np.empty(0)
             return np.empty((0, 2)), empty, empty.copy(), empty.copy()
+        # Called a few times a frame, mostly on a few dozen windows: each NumPy call's own cost
+        # counts, so ufuncs and their reductions are called directly (not through array methods).
         image = np.ascontiguousarray(image)
         height, width = image.shape
-        anchor = np.rint(points).astype(np.intp)
-        corner = anchor - half
-        # Per column: one (N, 2) comparison with a tuple costs more than the four of them.
-        fits = ((corner[:, 0] >= 0) & (corner[:, 1] >= 0) & (corner[:, 0] <= width - side)
-                & (corner[:, 1] <= height - side))
-        corner[~fits] = 0
+        anchor = np.rint(points)
+        corner = anchor.astype(np.intp)
+        corner -= half
+        # A negative corner, read as unsigned, lies beyond either bound: one comparison a side.
+        inside = corner.view(np.uintp) <= np.array((width - side, height - side), np.uintp)
+        fits = inside[:, 0] & inside[:, 1]
+        corner *= fits[:, None]
         # All windows at once: a (H - side + 1, W - side + 1, side, side) sliding view, fancy-indexed.
         view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0, image.strides * 2)
-        patches = view[corner[:, 1], corner[:, 0]].reshape(len(points), -1)  # (N, P) copy
-        low = patches.min(axis=1)
+        patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)  # (N, P) copy
+        low = np.minimum.reduce(patches, axis=1)
         top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)  # their mean
-        contrast = top - low
-        # Above the window's mean too: on a textured or shadowed skin the darkest pixel lies well
-        # below the membrane, and a threshold near it would let the membrane's texture count.
-        level = low + self.threshold_fraction * np.maximum(contrast, 0.0)
+        contrast = top - low  # >= 0: the darkest pixel is no brighter than the five's mean
+        level = low + self.threshold_fraction * contrast  # <= top
         if self.above_mean:
-            level = np.maximum(level, patches.mean(axis=1))
-        threshold = np.rint(np.minimum(level, top)).astype(np.uint8)
+            # Above the window's mean too: on a textured or shadowed skin the darkest pixel lies
+            # well below the membrane, and a threshold near it would let the membrane's texture count.
+            level = np.minimum(np.maximum(level, np.add.reduce(patches, axis=1, dtype=np.float64) / patches.shape[1]),
+                               top)
+        threshold = np.rint(level).astype(np.uint8)
         # Positive part of (pixel - threshold), in place, without leaving uint8.
-        np.maximum(patches, threshold[:, None], out=patches)
-        patches -= threshold[:, None]
-        # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius.
-        phase = np.rint((points - anchor) * _PHASES).astype(np.intp) + _PHASES // 2
-        radius = np.rint(np.asarray(radius_px) * _PHASES).astype(np.intp) - 1
-        np.minimum(np.maximum(radius, 0, out=radius), len(self._radii) - 1, out=radius)
-        patches *= self._masks[(radius * self._n_phases + phase[:, 1]) * self._n_phases + phase[:, 0]]
+        below = threshold[:, None]
+        np.maximum(patches, below, out=patches)
+        np.subtract(patches, below, out=patches)
+        # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
+        # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x).
+        phase = np.rint((points - anchor) * _PHASES)
+        radius = np.rint(np.asarray(radius_px, dtype=np.float64) * _PHASES)
+        np.fmin(np.maximum(radius, 1.0, out=radius), float(len(self._radii)), out=radius)  # NaN: the widest
+        phases = self._n_phases
+        mask = (radius * phases + phase[:, 1]) * phases + phase[:, 0]
+        mask += (_PHASES // 2) * (phases + 1) - phases * phases
+        np.multiply(patches, self._masks[mask.astype(np.intp)], out=patches)
         # (N, 4): mass, sum x, sum y, sum r^2. In blocks of rows small enough that OpenBLAS keeps
         # to one thread: threaded, this tiny product costs 20 ms on a busy machine instead of 0.2.
         weights = patches.astype(np.float32)
-        moments = np.empty((len(points), 4), np.float32)
-        for row in range(0, len(points), _MOMENT_ROWS):
-            np.matmul(weights[row:row + _MOMENT_ROWS], self._moments, out=moments[row:row + _MOMENT_ROWS])
-        mass = moments[:, 0].astype(np.float64)
+        if n <= _MOMENT_ROWS:
+            moments = np.matmul(weights, self._moments)
+        else:
+            moments = np.empty((n, 4), np.float32)
+            for row in range(0, n, _MOMENT_ROWS):
+                np.matmul(weights[row:row + _MOMENT_ROWS], self._moments, out=moments[row:row + _MOMENT_ROWS])
+        moments = moments.astype(np.float64)
+        mass = moments[:, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             offset = moments[:, 1:3] / mass[:, None]
             area = mass / (top - threshold)
@@ -726,15 +740,13 @@ class Refiner:
         Returns (L, 2), NaN for a pin none of whose neighbours has a finite value.
         """
         index = self._neighbour_index[which]
-        near = values[index]  # (L, k, 2)
-        count = np.count_nonzero(np.isfinite(near[..., 0]), axis=1)
-        median = np.full((len(index), 2), np.nan)
-        seen = np.flatnonzero(count)
-        if seen.size:
-            # Median over the finite neighbours (sorting puts NaN last): mean of the middle one or two.
-            ordered = np.sort(near[seen], axis=1)
-            n, rows = count[seen], np.arange(seen.size)
-            median[seen] = 0.5 * (ordered[rows, (n - 1) // 2] + ordered[rows, n // 2])
+        near = values[index]  # (L, k, 2), a copy
+        count = np.add.reduce(np.isfinite(near[..., 0]), axis=1)
+        # Median over the finite neighbours (sorting puts NaN last): mean of the middle one or two;
+        # NaN where there are none (the middle index is then -1, a NaN too).
+        near.sort(axis=1)
+        rows = np.arange(len(index))
+        median = 0.5 * (near[rows, (count - 1) // 2] + near[rows, count // 2])
         return median
 
 
