@@ -379,7 +379,12 @@ class Refiner:
         x, y = points[:, 0], points[:, 1]
         dx = x.take(self._window_neighbours) - x  # (k, N): a minimum over rows is fast
         dy = y.take(self._window_neighbours) - y
-        return np.minimum(_WINDOW_REACH * np.sqrt(np.min(dx * dx + dy * dy, axis=0)), self._radius_cap)
+        dx *= dx
+        dy *= dy
+        dx += dy
+        nearest = np.sqrt(np.minimum.reduce(dx, axis=0))
+        nearest *= _WINDOW_REACH
+        return np.minimum(nearest, self._radius_cap, out=nearest)
 
     def __call__(self, grey: np.ndarray, crop: np.ndarray, tracked: np.ndarray,
                  last_seen: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -446,14 +451,14 @@ class Refiner:
             `guess` with lost pins at their predictions, px (for `refine`).
         """
         missing = np.isnan(guess[:, 0])
-        lost = np.flatnonzero(missing)
+        lost = missing.nonzero()[0]
         if lost.size == 0:
             filled, which, n = guess, np.arange(len(guess)), len(guess)
         else:
             filled = guess.copy()
             filled[lost] = self._predict(guess, lost, last_seen)
             look = lost if search is None else lost[search[lost]]
-            live = np.flatnonzero(~missing)
+            live = (~missing).nonzero()[0]
             which, n = np.concatenate([live, look]), live.size
         radius = self.window_radius(filled)[which]
         start = filled[which]
@@ -465,7 +470,7 @@ class Refiner:
         fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
         done = (moved <= fine) & like
         done[n:] = False  # a lost pin's prediction is no guess: two passes
-        positions = np.full_like(guess, np.nan)
+        positions = np.full(guess.shape, np.nan)
         positions[which[done]] = first[done]
         # Second and third passes: pins that moved but not far re-centred on their last centroid;
         # a pin with a guess that found no tip near it searched for from its prediction from the
@@ -473,8 +478,8 @@ class Refiner:
         # unlike its guess near a contact); lost pins re-centred on theirs.
         again = ~done & np.isfinite(first[:, 0])
         again[:n] &= moved[:n] <= reach
-        far = np.flatnonzero(~done[:n] & ~again[:n])
-        chain = np.concatenate([np.flatnonzero(again), far])
+        far = (~done[:n] & ~again[:n]).nonzero()[0]
+        chain = np.concatenate([again.nonzero()[0], far])
         points = first[chain]
         if far.size:
             start[far] = points[-far.size:] = self._predict(positions, which[far], last_seen)
@@ -486,7 +491,7 @@ class Refiner:
         searched[chain.size - far.size:] = True
         fresh = np.zeros(chain.size, dtype=bool)
         fresh[chain.size - far.size:] = True
-        placed = [np.flatnonzero(done)]
+        placed = [done.nonzero()[0]]
         for _ in range(_FOLLOW_PASSES - 1):
             if chain.size == 0:
                 break
