@@ -66,7 +66,7 @@ __all__ = ["match_to_blobs", "WindowCentroids", "Refiner"]
 
 # Sub-pixel steps per px of the window masks' centres and radii.
 _PHASES = 4
-_MOMENT_ROWS = 128
+_SINGLE_THREAD_MACS = 262_143
 _TIP_REACH = 1.6
 _TIP_MARGIN_PX = 1.5
 # A skin is textured when, in the median window at rest, the window's median lies more than this
@@ -177,6 +177,10 @@ class WindowCentroids:
         masks = d2[None] <= (self._radii ** 2)[:, None, None, None]
         self._n_phases = len(phases)
         self._masks = masks.reshape(-1, gx.size).astype(np.uint8)  # (radius, phase y, phase x) -> P
+        # Rows of the moment product per call: OpenBLAS keeps to one thread below 2^18 multiply-adds
+        # (4 moments of P pixels a row). Threaded, this tiny product costs 20 ms on a busy machine
+        # instead of 0.2.
+        self._moment_rows = max(1, _SINGLE_THREAD_MACS // (4 * gx.size))
 
     def __repr__(self) -> str:
         return (f"WindowCentroids(half_px={self.half_px}, threshold_fraction={self.threshold_fraction}, "
@@ -226,11 +230,15 @@ class WindowCentroids:
             Area over 2 pi times the weights' mean squared distance from the centroid: 1 for a
             uniform disc, more for a domed tip, less for an elongated one or one with a speck.
         """
+        centres, measures = self.measure(image, points, radius_px)
+        return centres, measures[0], measures[1], measures[2]
+
+    def measure(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """As `__call__`: the centroids (N, 2), px, and (area, contrast, compactness) stacked (3, N)."""
         half, side = self.half_px, 2 * self.half_px + 1
         n = len(points)
         if n == 0:
-            empty = np.empty(0)
-            return np.empty((0, 2)), empty, empty.copy(), empty.copy()
+            return np.empty((0, 2)), np.empty((3, 0))
         # Called a few times a frame, mostly on a few dozen windows: each NumPy call's own cost
         # counts, so ufuncs and their reductions are called directly (not through array methods).
         image = np.ascontiguousarray(image)
@@ -247,7 +255,9 @@ class WindowCentroids:
         patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)  # (N, P) copy
         low = np.minimum.reduce(patches, axis=1)
         top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)  # their mean
-        contrast = top - low  # >= 0: the darkest pixel is no brighter than the five's mean
+        measures = np.empty((3, n))  # area, contrast, compactness
+        area, contrast, compactness = measures
+        np.subtract(top, low, out=contrast)  # >= 0: the darkest pixel is no brighter than the five's mean
         level = low + self.threshold_fraction * contrast  # <= top
         if self.above_mean:
             # Above the window's mean too: on a textured or shadowed skin the darkest pixel lies
@@ -268,26 +278,27 @@ class WindowCentroids:
         mask = (radius * phases + phase[:, 1]) * phases + phase[:, 0]
         mask += (_PHASES // 2) * (phases + 1) - phases * phases
         np.multiply(patches, self._masks[mask.astype(np.intp)], out=patches)
-        # (N, 4): mass, sum x, sum y, sum r^2. In blocks of rows small enough that OpenBLAS keeps
-        # to one thread: threaded, this tiny product costs 20 ms on a busy machine instead of 0.2.
+        # (N, 4): mass, sum x, sum y, sum r^2; in blocks of rows that keep OpenBLAS on one thread.
         weights = patches.astype(np.float32)
-        if n <= _MOMENT_ROWS:
+        rows = self._moment_rows
+        if n <= rows:
             moments = np.matmul(weights, self._moments)
         else:
             moments = np.empty((n, 4), np.float32)
-            for row in range(0, n, _MOMENT_ROWS):
-                np.matmul(weights[row:row + _MOMENT_ROWS], self._moments, out=moments[row:row + _MOMENT_ROWS])
+            for row in range(0, n, rows):
+                np.matmul(weights[row:row + rows], self._moments, out=moments[row:row + rows])
         moments = moments.astype(np.float64)
         mass = moments[:, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
-            offset = moments[:, 1:3] / mass[:, None]
-            area = mass / (top - threshold)
+            moments[:, 1:] /= mass[:, None]  # centroid offset (x, y) and mean r^2
+            offset = moments[:, 1:3]
+            np.divide(mass, top - threshold, out=area)
             # Mean squared distance from the centroid; a disc of area A has A / (2 pi).
-            spread = moments[:, 3] / mass - _squared_norm(offset)
-            compactness = area / (2 * np.pi * spread)
+            spread = moments[:, 3] - _squared_norm(offset)
+            np.divide(area, 2 * np.pi * spread, out=compactness)
         centres = anchor + offset
         centres[~fits | (mass <= 0)] = np.nan
-        return centres, area, contrast, compactness
+        return centres, measures
 
 
 class Refiner:
@@ -363,9 +374,10 @@ class Refiner:
         settled = _squared_norm(step) <= self._max_shift_px ** 2
         self.rest_positions = np.where(settled[:, None], centres + origin, rest_positions)
         self.settled_share = float(np.mean(settled & (contrast > 0)))
-        self._area_range = (_AREA_RATIO[0] * area, _AREA_RATIO[1] * area)
-        self._min_contrast = _MIN_CONTRAST_RATIO * contrast
-        self._min_compactness = _MIN_COMPACTNESS_RATIO * compactness
+        # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above.
+        self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
+                                   _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
+        self._area_at_most = _AREA_RATIO[1] * area
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
@@ -462,11 +474,11 @@ class Refiner:
             which, n = np.concatenate([live, look]), live.size
         radius = self.window_radius(filled)[which]
         start = filled[which]
-        first, area, contrast, compactness = self.windows(crop, start - self.origin, radius)
+        first, measures = self.windows.measure(crop, start - self.origin, radius)
         first += self.origin
         step = first - start
         moved = _squared_norm(step)
-        like = self._like_at_rest(area, contrast, compactness, which)
+        like = self._like_at_rest(measures, which)
         fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
         done = (moved <= fine) & like
         done[n:] = False  # a lost pin's prediction is no guess: two passes
@@ -495,14 +507,14 @@ class Refiner:
         for _ in range(_FOLLOW_PASSES - 1):
             if chain.size == 0:
                 break
-            centres, area, contrast, compactness = self.windows(crop, points - self.origin, radius[chain])
+            centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
             centres += self.origin
             step, offset = centres - points, centres - start[chain]
             moved = _squared_norm(step)
             error = _squared_norm(offset)
             # A search settles within its bound, inside the gate around the prediction; a pin
             # followed from its guess settles to a few tenths of a px, near its guess.
-            like = self._like_at_rest(area, contrast, compactness, which[chain])
+            like = self._like_at_rest(measures, which[chain])
             ok = like & np.where(searched, (moved <= self._settled_px ** 2) & (error <= self.gate_px ** 2),
                                  (moved <= fine) & (error <= reach))
             positions[which[chain[ok]]] = centres[ok]
@@ -560,9 +572,9 @@ class Refiner:
         lost = np.flatnonzero(missing)
         if lost.size == 0 and settled is None:
             radius = self.window_radius(tracked)
-            centres, area, contrast, compactness = self.windows(crop, tracked - self.origin, radius)
+            centres, measures = self.windows.measure(crop, tracked - self.origin, radius)
             centres += self.origin
-            plausible = self._plausible(centres, tracked, area, contrast, compactness, slice(None))
+            plausible = self._plausible(centres, tracked, measures, slice(None))
             if plausible.all():
                 return centres
             positions = centres
@@ -584,10 +596,10 @@ class Refiner:
             live = np.flatnonzero(live)
             look = lost if search is None else lost[search[lost]]
             which = np.concatenate([live, look])
-            centres, area, contrast, compactness = self.windows(crop, filled[which] - self.origin, radius[which])
+            centres, measures = self.windows.measure(crop, filled[which] - self.origin, radius[which])
             centres += self.origin
             n = live.size
-            plausible = self._plausible(centres[:n], tracked[live], area[:n], contrast[:n], compactness[:n], live)
+            plausible = self._plausible(centres[:n], tracked[live], measures[:, :n], live)
             if settled is None:
                 positions = np.full_like(tracked, np.nan)
             else:
@@ -609,12 +621,12 @@ class Refiner:
         retry, first, predicted = retry[ok], first[ok], predicted[ok]
         if retry.size == 0:
             return positions
-        second, area, contrast, compactness = self.windows(crop, first - self.origin, radius[retry])
+        second, measures = self.windows.measure(crop, first - self.origin, radius[retry])
         second += self.origin
         step, offset = second - first, second - predicted
         error = _squared_norm(offset)
         found = ((_squared_norm(step) <= (_SEARCH_SETTLED_FRACTION * self.spacing_px) ** 2)
-                 & (error <= self.gate_px ** 2) & self._like_at_rest(area, contrast, compactness, retry))
+                 & (error <= self.gate_px ** 2) & self._like_at_rest(measures, retry))
         if not found.any():
             return positions
         retry, second, error = retry[found], second[found], error[found]
@@ -638,19 +650,18 @@ class Refiner:
             yields = (near & (rank[neighbours] <= error[:, None])).any(axis=1)
             positions[found[yields]] = np.nan
 
-    def _plausible(self, centres: np.ndarray, estimates: np.ndarray, area: np.ndarray, contrast: np.ndarray,
-                   compactness: np.ndarray, which: np.ndarray | slice) -> np.ndarray:
+    def _plausible(self, centres: np.ndarray, estimates: np.ndarray, measures: np.ndarray,
+                   which: np.ndarray | slice) -> np.ndarray:
         """Whether windowed centroids of pins `which` are plausible: near their estimates, tips like at rest."""
         step = centres - estimates
         # NaN compares False: an empty window is not plausible.
-        return ((_squared_norm(step) <= self._max_shift_px ** 2)
-                & self._like_at_rest(area, contrast, compactness, which))
+        return (_squared_norm(step) <= self._max_shift_px ** 2) & self._like_at_rest(measures, which)
 
-    def _like_at_rest(self, area: np.ndarray, contrast: np.ndarray, compactness: np.ndarray,
-                      which: np.ndarray | slice) -> np.ndarray:
-        """Whether tips' area, contrast and compactness are like those of pins `which` at rest."""
-        return ((area >= self._area_range[0][which]) & (area <= self._area_range[1][which])
-                & (contrast >= self._min_contrast[which]) & (compactness >= self._min_compactness[which]))
+    def _like_at_rest(self, measures: np.ndarray, which: np.ndarray | slice) -> np.ndarray:
+        """Whether tips' (area, contrast, compactness), stacked (3, L), are like those of pins `which` at rest."""
+        like = np.logical_and.reduce(measures >= self._at_least[:, which], axis=0)
+        like &= measures[0] <= self._area_at_most[which]
+        return like
 
     def recover(self, grey: np.ndarray, tracked: np.ndarray, refined: np.ndarray,
                 last_seen: np.ndarray, crop: np.ndarray | None = None, *,
@@ -705,11 +716,10 @@ class Refiner:
             new = np.flatnonzero(np.isnan(refined[:, 0]) & np.isfinite(positions[:, 0]))
             if new.size:
                 radius = self.window_radius(np.where(np.isnan(positions), last_seen, positions))[new]
-                centres, area, contrast, compactness = self.windows(crop, positions[new] - self.origin, radius)
+                centres, measures = self.windows.measure(crop, positions[new] - self.origin, radius)
                 centres += self.origin
                 step = centres - positions[new]
-                keep = ((_squared_norm(step) <= self._settled_px ** 2)
-                        & self._like_at_rest(area, contrast, compactness, new))
+                keep = (_squared_norm(step) <= self._settled_px ** 2) & self._like_at_rest(measures, new)
                 positions[new] = np.where(keep[:, None], centres, np.nan)
         return positions
 
