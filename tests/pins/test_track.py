@@ -145,6 +145,28 @@ def test_windowed_centroids_meet_the_bar_without_detection(pins, depth_mm, rng):
     assert np.sqrt(np.mean(error**2)) <= 0.05 and error.max() <= 0.2
 
 
+@pytest.mark.parametrize("half_px", [9, 15])
+def test_windows_in_blocks_of_rows_measure_each_tip_as_it_alone(half_px, rng):
+    # Hundreds of windows go through the moment product in blocks of rows (one BLAS thread);
+    # each window's measures must not depend on the block it fell in, nor on its neighbours.
+    from pins._refine import WindowCentroids
+
+    rest = frame(331)
+    windows = WindowCentroids(half_px)
+    points = np.concatenate([rest.centres, rest.centres[:200] + rng.uniform(-3.0, 3.0, (200, 2))])
+    radius = rng.uniform(2.0, half_px + 1.0, len(points))
+    assert len(points) > 2 * windows._moment_rows
+    centres, measures = windows.measure(rest.image, points, radius)
+    alone = [windows.measure(rest.image, points[k:k + 1], radius[k:k + 1]) for k in range(len(points))]
+    # Mass and first moments are sums of integers below 2^24: exact in float32 whatever the order.
+    np.testing.assert_array_equal(centres, np.concatenate([c for c, _ in alone]))
+    np.testing.assert_allclose(measures, np.concatenate([m for _, m in alone], axis=1), rtol=1e-6)
+    assert np.isfinite(centres).all() and (measures[1] > 0).all()
+    # The four arrays of __call__ are the same measures.
+    for got, want in zip(windows(rest.image, points, radius), (centres, *measures)):
+        np.testing.assert_array_equal(got, want)
+
+
 @pytest.mark.parametrize("pins", [331, 532])
 def test_a_pin_slipped_towards_its_neighbour_is_recovered_on_its_own_tip(pins):
     refiner, rest = _refiner(pins)
