@@ -761,8 +761,7 @@ class Refiner:
         # NaN where there are none (the middle index is then -1, a NaN too).
         near.sort(axis=1)
         rows = np.arange(len(index))
-        median = 0.5 * (near[rows, (count - 1) // 2] + near[rows, count // 2])
-        return median
+        return 0.5 * (near[rows, (count - 1) // 2] + near[rows, count // 2])
 
 
 def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
