@@ -276,6 +276,7 @@ class WindowCentroids:
         np.fmin(np.maximum(radius, 1.0, out=radius), float(len(self._radii)), out=radius)  # NaN: the widest
         phases = self._n_phases
         mask = (radius * phases + phase[:, 1]) * phases + phase[:, 0]
+        # Phases run from -_PHASES // 2 and radius indices from 1 (the mask of radius r/4 is row r - 1).
         mask += (_PHASES // 2) * (phases + 1) - phases * phases
         np.multiply(patches, self._masks[mask.astype(np.intp)], out=patches)
         # (N, 4): mass, sum x, sum y, sum r^2; in blocks of rows that keep OpenBLAS on one thread.
@@ -514,10 +515,11 @@ class Refiner:
             error = _squared_norm(offset)
             # A search settles within its bound, inside the gate around the prediction; a pin
             # followed from its guess settles to a few tenths of a px, near its guess.
-            like = self._like_at_rest(measures, which[chain])
+            pins = which[chain]
+            like = self._like_at_rest(measures, pins)
             ok = like & np.where(searched, (moved <= self._settled_px ** 2) & (error <= self.gate_px ** 2),
                                  (moved <= fine) & (error <= reach))
-            positions[which[chain[ok]]] = centres[ok]
+            positions[pins[ok]] = centres[ok]
             placed.append(chain[ok])
             # Go on while the window holds a tip like the pin's (or a search has just started).
             going = ~ok & np.isfinite(centres[:, 0]) & (searched | (error <= reach)) & (like | fresh)
