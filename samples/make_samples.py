@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 
 from tactip.sources import DEFAULT_TAPS, SyntheticSource
-from tactip.synthetic import SyntheticTacTip
+from tactip.sim.synthetic import SyntheticTacTip
 
 SEED = 0
 PINS = 331

@@ -6,7 +6,7 @@ line's parsing and its refusals of bad input) does not wait for OpenCV, SciPy an
 
 import importlib
 
-from .errors import ConfigError, SourceError, TactipError
+from tactip.errors import ConfigError, SourceError, TactipError
 
 # Public name -> the module of this package that defines it (imported when the name is first used).
 _LAZY = {

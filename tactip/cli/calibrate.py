@@ -34,8 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip calibrate`."""
-    from tactip.config import load_station_config
-    from tactip.procedures import calibrate_station
+    from tactip.station.config import load_station_config
+    from tactip.station.procedures import calibrate_station
 
     calibrate_station(load_station_config(args.config), rest_frames=args.rest_frames, out=args.out)
     return 0

@@ -33,8 +33,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip collect`."""
-    from tactip.config import load_station_config
-    from tactip.procedures import collect_station
+    from tactip.station.config import load_station_config
+    from tactip.station.procedures import collect_station
 
     paths = collect_station(load_station_config(args.config), args.out, progress=not args.quiet,
                             workers=args.workers)

@@ -48,10 +48,10 @@ def run(args: argparse.Namespace) -> int:
     """Run `tactip inspect`; exit 0 when every inspection finished (pass, fail or undecided)."""
     import time
 
-    from tactip.config import load_station_config, simulated_station_config
-    from tactip.inspection import inspect_station
+    from tactip.station.config import load_station_config, simulated_station_config
+    from tactip.station.inspection import inspect_station
     from tactip.errors import TactipError
-    from tactip.procedures import model_is_prepared, prepare_model
+    from tactip.station.procedures import model_is_prepared, prepare_model
 
     config = simulated_station_config(args.data_dir) if args.sim else load_station_config(args.config)
     protocol = config.protocol
@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     outcomes = inspect_station(config, policy=args.policy, seed=args.seed, gaps=args.gap,
                                start_depth=args.start_depth, log=log)
     print(summary(outcomes, time.monotonic() - started))
-    from tactip.results import describe_location
+    from tactip.line.results import describe_location
 
     where = describe_location(config.results)
     print(f"results: {where}  (tactip results list --db {shlex.quote(where)})")

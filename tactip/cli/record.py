@@ -39,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run `tactip record`."""
     from tactip.errors import TactipError
-    from tactip.record import record_video
+    from tactip.replay.record import record_video
 
     from tactip._output import refuse_overwriting_inputs
 

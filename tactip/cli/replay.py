@@ -99,9 +99,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Replay the video (`tactip.replay.replay_video`) and print what was found."""
+    """Replay the video (`tactip.replay.video.replay_video`) and print what was found."""
     from pins import DetectionParams
-    from tactip.replay import replay_video
+    from tactip.replay.video import replay_video
 
     params = None if args.calibration else DetectionParams(dark_pins=args.dark_pins)
     result = replay_video(args.video, args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,

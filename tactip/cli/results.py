@@ -54,11 +54,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip results list|export`."""
-    from tactip.results import is_database_url, open_results
+    from tactip.line.results import is_database_url, open_results
 
     path = args.db
     if args.config is not None:
-        from tactip.config import load_station_config
+        from tactip.station.config import load_station_config
 
         path = load_station_config(args.config).results
     out = getattr(args, "out", None)
@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
             print(format_table(store.inspections(limit=args.limit, station=args.station)))
             return 0
         if args.action == "plot":
-            from tactip.results import plot_inspections
+            from tactip.line.results import plot_inspections
 
             plot_inspections(store.inspections(limit=args.last, station=args.station), args.out, inputs=inputs)
             print(f"wrote {args.out}")
@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _location(text: str) -> Path | str:
     """--db: a postgresql:// URL as given, else a file path."""
-    from tactip.results import is_database_url
+    from tactip.line.results import is_database_url
 
     return text if is_database_url(text) else Path(text)
 

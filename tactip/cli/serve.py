@@ -43,8 +43,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip serve` until Ctrl-C."""
-    from tactip.dashboard import DashboardServer, check_bind, make_app
-    from tactip.results import describe_location, is_database_url, open_results
+    from tactip.line.dashboard import DashboardServer, check_bind, make_app
+    from tactip.line.results import describe_location, is_database_url, open_results
 
     token = args.token or os.environ.get("TACTIP_SERVE_TOKEN") or None
     check_bind(args.host, token)
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
     if args.db is not None:
         location = args.db if is_database_url(args.db) else Path(args.db)
     else:
-        from tactip.config import load_station_config, simulated_station_config
+        from tactip.station.config import load_station_config, simulated_station_config
 
         config = simulated_station_config(args.data_dir) if args.sim else load_station_config(args.config)
         location, info = config.results, station_info(config)

@@ -13,7 +13,7 @@
       The fingertip taps the stimulus of paper 001 (rods of 4-12 mm across a 16 mm sweep, 320
       taps per rod), 003 (ten abrasive papers over 0-3 mm of depth, 150 taps per texture) or
       004 (an edge at 72 angles over 18 mm, 90 taps per angle) in two sessions (train, test)
-      that differ as the papers' collections did (tactip.taxel.stimuli documents the physics).
+      that differ as the papers' collections did (tactip.reproduce.stimuli documents the physics).
       The identity is the rod diameter (mm), the texture class (0 = p60 .. 9 = p800) or the
       edge angle (deg). --locations sets the taps per identity.
 
@@ -101,7 +101,7 @@ def _run_stimulus(args: argparse.Namespace) -> int:
     from perception import save_dataset
     from tactip.errors import TactipError
     from tactip.taxel.collect import simulate_stimulus_dataset
-    from tactip.taxel.stimuli import make_stimulus
+    from tactip.reproduce.stimuli import make_stimulus
 
     if args.sensor != "fingertip" or args.csv or args.taps_per_location != 1:
         raise TactipError(f"--stimulus {args.stimulus} is tapped by the fingertip, one tap per location: "

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import importlib
 
-from .report import Comparison, Report
+from tactip.reproduce.report import Comparison, Report
 
 __all__ = ["PAPERS", "Comparison", "Report", "reproduce"]
 

@@ -2,13 +2,13 @@
 
 Two collections of 3000 taps over 30 mm (`tactip.taxel.simulate_taxel_dataset`), passive
 (stationary) and active (fixation at the centre) perception compared at a mean decision time of
-2 taps, beliefs shifted with the uniform fill of eq. 8 (`tactip.taxel.acuity.acuity_table`). The
+2 taps, beliefs shifted with the uniform fill of eq. 8 (`tactip.reproduce.acuity.acuity_table`). The
 simulator's read noise was calibrated against this table (`tactip.taxel.sim`).
 """
 
 from __future__ import annotations
 
-from .report import Comparison, Report
+from tactip.reproduce.report import Comparison, Report
 
 __all__ = ["PAPER_TABLE2", "run"]
 
@@ -19,7 +19,7 @@ PAPER_TABLE2 = {300: 0.12}
 def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
     """Table II rows: ``classes, class_width_mm, passive_error_mm, active_error_mm, active_taps, acuity_mm``."""
     from tactip.taxel import TaxelSimulator, simulate_taxel_dataset, sweep_locations
-    from tactip.taxel.acuity import TABLE2_CLASSES, acuity_table
+    from tactip.reproduce.acuity import TABLE2_CLASSES, acuity_table
 
     simulator = TaxelSimulator("fingertip", seed=seed)
     where = sweep_locations(simulator.sensor, 3000)

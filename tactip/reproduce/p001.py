@@ -1,6 +1,6 @@
 """Paper 001 on the simulated fingertip: rod shape and position, 'boredom' deadline (Figs 4-7).
 
-Five rods (4-12 mm, `tactip.taxel.stimuli.Rods`), a 16 mm sweep of 320 taps per rod in each of
+Five rods (4-12 mm, `tactip.reproduce.stimuli.Rods`), a 16 mm sweep of 320 taps per rod in each of
 two sessions (training, test), 16 position classes of 1 mm x 5 shape classes = 80 joint classes,
 a histogram model (100 bins). Monte Carlo as in the paper: passive perception from a random
 (shape, position) class, the joint stop rule (eq. 3), and with a deadline D (eq. 4) a null
@@ -19,7 +19,7 @@ import numpy as np
 
 from perception import StationaryPolicy, monte_carlo
 
-from .report import Comparison, Report, environment, identity
+from tactip.reproduce.report import Comparison, Report, environment, identity
 
 __all__ = ["THRESHOLDS", "DEADLINES", "run"]
 
@@ -36,7 +36,7 @@ MAX_TAPS = 1000
 
 def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
     """The experiment of paper 001; rows per deadline and threshold (see the module docstring)."""
-    from tactip.taxel.stimuli import make_stimulus
+    from tactip.reproduce.stimuli import make_stimulus
 
     env = environment(make_stimulus("rods"), seed=seed, taps_per_identity=320, n_locations=16)
     thresholds = QUICK_THRESHOLDS if quick else THRESHOLDS

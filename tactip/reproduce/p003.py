@@ -1,6 +1,6 @@
 """Paper 003 on the simulated fingertip: texture under depth uncertainty, passive and active (Figs 5-7).
 
-Ten abrasive papers (`tactip.taxel.stimuli.Textures`), 150 taps per texture over 0-3 mm of depth
+Ten abrasive papers (`tactip.reproduce.stimuli.Textures`), 150 taps per texture over 0-3 mm of depth
 in each of two sessions, 15 depth classes of 0.2 mm x 10 texture classes. Stop when the 'what'
 (texture) marginal crosses 0.5 (eq. 7); move when the 'where' (depth) marginal crosses the move
 threshold (eq. 8) towards the target depth 2.1 mm (the 11th class, eq. 9), beliefs shifted with
@@ -19,7 +19,7 @@ import numpy as np
 
 from perception import FixationPolicy, StationaryPolicy, VirtualEnvironment, fit_model, monte_carlo
 
-from .report import Comparison, Report, collections, identity
+from tactip.reproduce.report import Comparison, Report, collections, identity
 
 __all__ = ["MOVE_THRESHOLDS", "run"]
 
@@ -43,7 +43,7 @@ def _single_depth(train, test, offset_mm: float, runs: int, seed: int):
 
 def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
     """The experiment of paper 003; rows per simulator seed and move threshold."""
-    from tactip.taxel.stimuli import make_stimulus
+    from tactip.reproduce.stimuli import make_stimulus
 
     stimulus = make_stimulus("textures")
     runs = 600 if quick else 2000

@@ -1,6 +1,6 @@
 """Paper 004 on the simulated fingertip: edge angle and position, contour following (Figs 6-8).
 
-An edge at 72 angles (5 deg) x 18 positions (1 mm) (`tactip.taxel.stimuli.Edge`), 90 taps per
+An edge at 72 angles (5 deg) x 18 positions (1 mm) (`tactip.reproduce.stimuli.Edge`), 90 taps per
 angle over 18 mm in each of two sessions; the fingertip follows a circular plate
 (`tactip.reproduce.contour`) with passive, active and adaptive perception (active + the adaptive
 prior of eq. 12 with Delta learned by predicted information gain, eqs. 7-11), and, as a control,
@@ -14,8 +14,8 @@ deg). Predictions: contour closing, the adaptive prior's gain, the learned Delta
 
 from __future__ import annotations
 
-from .contour import follow_contour
-from .report import Comparison, Report, environment, identity
+from tactip.reproduce.contour import follow_contour
+from tactip.reproduce.report import Comparison, Report, environment, identity
 
 __all__ = ["THRESHOLDS", "METHODS", "run"]
 
@@ -29,7 +29,7 @@ METHODS = {"passive": dict(active=False), "active": dict(active=True),
 
 def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
     """The experiment of paper 004; rows per method and threshold."""
-    from tactip.taxel.stimuli import make_stimulus
+    from tactip.reproduce.stimuli import make_stimulus
 
     env = environment(make_stimulus("edge"), seed=seed, taps_per_identity=90, n_locations=18)
     thresholds = QUICK_THRESHOLDS if quick else THRESHOLDS

@@ -12,12 +12,12 @@ from __future__ import annotations
 import pathlib
 import re
 
-from ..errors import SourceError
-from .base import Frame, FrameSource, FrameSourceBase
-from .camera import CameraSource
-from .files import IMAGE_SUFFIXES, ImageFolderSource, VideoSource
-from .simulated import DEFAULT_TAPS, SyntheticSource
-from .threaded import ThreadedReader
+from tactip.errors import SourceError
+from tactip.sources.base import Frame, FrameSource, FrameSourceBase
+from tactip.sources.camera import CameraSource
+from tactip.sources.files import IMAGE_SUFFIXES, ImageFolderSource, VideoSource
+from tactip.sim.source import DEFAULT_TAPS, SyntheticSource
+from tactip.sources.threaded import ThreadedReader
 
 __all__ = ["Frame", "FrameSource", "FrameSourceBase", "CameraSource", "VideoSource", "ImageFolderSource",
            "SyntheticSource", "ThreadedReader", "open_source", "DEFAULT_TAPS", "IMAGE_SUFFIXES"]
@@ -37,7 +37,7 @@ def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
     spec : str, int or path
         - an int, a digit string or ``/dev/videoN``: a live camera (`CameraSource`);
         - ``"synthetic"``, ``"synthetic:331"`` or ``"synthetic:rim-ring-331"`` (a preset of
-          `tactip.synthetic.PRESETS`): the synthetic TacTip tapping (`SyntheticSource`);
+          `tactip.sim.synthetic.PRESETS`): the synthetic TacTip tapping (`SyntheticSource`);
         - a directory or an image file: `ImageFolderSource`;
         - any other existing file: a video (`VideoSource`).
     **options

@@ -8,7 +8,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ..errors import SourceError
+from tactip.errors import SourceError
 
 __all__ = ["Frame", "FrameSource", "FrameSourceBase"]
 

@@ -6,8 +6,8 @@ import math
 import pathlib
 import re
 
-from ..errors import SourceError
-from .base import FrameSourceBase
+from tactip.errors import SourceError
+from tactip.sources.base import FrameSourceBase
 
 __all__ = ["VideoSource", "ImageFolderSource", "IMAGE_SUFFIXES"]
 

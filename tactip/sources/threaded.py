@@ -5,8 +5,8 @@ from __future__ import annotations
 import queue
 import threading
 
-from ..errors import SourceError
-from .base import Frame, FrameSource
+from tactip.errors import SourceError
+from tactip.sources.base import Frame, FrameSource
 
 __all__ = ["ThreadedReader"]
 

@@ -6,18 +6,18 @@
 - `tactip.taxel.segment`: cutting streams into taps (explicit times or signal magnitude, live or recorded);
 - `tactip.taxel.sources`: recorded (CSV) and live (UDP) readings, and taps from any source;
 - `tactip.taxel.collect`: simulated training and test datasets (``tactip-dataset/1``);
-- `tactip.taxel.acuity`: localisation error against class count, passive and active (paper 000 Tables II-III).
+- `tactip.reproduce.acuity`: localisation error against class count, passive and active (paper 000 Tables II-III).
 """
 
-from .acuity import ACUITY_THRESHOLDS, TABLE2_CLASSES, TABLE3_CLASSES, AcuityRow, acuity_table
-from .collect import (DEFAULT_TAPS, TaxelDatasetPaths, simulate_taxel_dataset, simulate_taxel_datasets,
+from tactip.reproduce.acuity import ACUITY_THRESHOLDS, TABLE2_CLASSES, TABLE3_CLASSES, AcuityRow, acuity_table
+from tactip.taxel.collect import (DEFAULT_TAPS, TaxelDatasetPaths, simulate_taxel_dataset, simulate_taxel_datasets,
                       write_taxel_test_stream)
-from .preprocess import (BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, highpass, remove_tap_baseline,
+from tactip.taxel.preprocess import (BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, highpass, remove_tap_baseline,
                          resample_taps, taxel_pressure)
-from .segment import TapSegmenter, TapSegments, detect_taps, segment_taps
-from .sensors import TAXEL_SENSORS, TaxelSensor, receptive_field_response, taxel_sensor
-from .sim import TaxelSimulator, TaxelStream, contact_profile, sweep_locations
-from .sources import (ENCODINGS, CsvTaxelSource, TaxelReading, TaxelSource, UdpTaxelSender, UdpTaxelSource,
+from tactip.taxel.segment import TapSegmenter, TapSegments, detect_taps, segment_taps
+from tactip.taxel.sensors import TAXEL_SENSORS, TaxelSensor, receptive_field_response, taxel_sensor
+from tactip.taxel.sim import TaxelSimulator, TaxelStream, contact_profile, sweep_locations
+from tactip.taxel.sources import (ENCODINGS, CsvTaxelSource, TaxelReading, TaxelSource, UdpTaxelSender, UdpTaxelSource,
                       decode_reading, encode_reading, read_taps, write_taxel_csv)
 
 __all__ = [

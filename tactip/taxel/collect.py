@@ -15,9 +15,9 @@ import numpy as np
 
 from perception.dataset import Dataset, save_dataset
 
-from .sensors import TaxelSensor
-from .sim import TaxelSimulator, sweep_locations
-from .sources import write_taxel_csv
+from tactip.taxel.sensors import TaxelSensor
+from tactip.taxel.sim import TaxelSimulator, sweep_locations
+from tactip.taxel.sources import write_taxel_csv
 
 __all__ = ["DEFAULT_TAPS", "MAX_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
            "write_taxel_test_stream", "simulate_stimulus_dataset"]
@@ -178,7 +178,7 @@ def _noise_seed(seed: int, collection: str) -> tuple[int, int]:
 
 def simulate_stimulus_dataset(stimulus, *, seed: int = 0, collection: str = "train", taps_per_identity: int,
                               identities=None, progress=None) -> Dataset:
-    """Collect one session of a paper's stimulus (`tactip.taxel.stimuli`): a sweep per identity.
+    """Collect one session of a paper's stimulus (`tactip.reproduce.stimuli`): a sweep per identity.
 
     For each identity the fingertip taps at ``taps_per_identity`` evenly spaced locations over the
     stimulus's range (paper 001: 320 taps over 16 mm per rod; 003: 150 over 3 mm per texture; 004:
@@ -187,7 +187,7 @@ def simulate_stimulus_dataset(stimulus, *, seed: int = 0, collection: str = "tra
 
     Parameters
     ----------
-    stimulus : tactip.taxel.stimuli.Stimulus
+    stimulus : tactip.reproduce.stimuli.Stimulus
     seed : int
         Seed of the simulated sensor (gains, rest levels); the session and noise seeds follow from
         it and ``collection``.

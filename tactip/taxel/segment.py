@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .preprocess import BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, remove_tap_baseline, resample_taps
+from tactip.taxel.preprocess import BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, remove_tap_baseline, resample_taps
 
 __all__ = ["detect_taps", "segment_taps", "TapSegments", "TapSegmenter"]
 

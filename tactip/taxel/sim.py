@@ -51,8 +51,8 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from .preprocess import BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, remove_tap_baseline, resample_taps
-from .sensors import TaxelSensor, receptive_field_response, taxel_sensor
+from tactip.taxel.preprocess import BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, remove_tap_baseline, resample_taps
+from tactip.taxel.sensors import TaxelSensor, receptive_field_response, taxel_sensor
 
 __all__ = ["TaxelStream", "TaxelSimulator", "contact_profile", "sweep_locations"]
 
@@ -238,7 +238,7 @@ class TaxelSimulator:
             As `stream`.
         field : callable, optional
             ``field(location_mm (n,), taps slice) -> ((n, K), delay_s)``: the fraction of its peak
-            each taxel reads for the taps of a block (e.g. `tactip.taxel.stimuli.Stimulus.field` of
+            each taxel reads for the taps of a block (e.g. `tactip.reproduce.stimuli.Stimulus.field` of
             each tap's identity) and the contact's delay past ``contact_delay_s`` (s, scalar or
             (n,)); default the sensor's own object (`receptive_field_response`), no delay.
         cutoff_hz : float

@@ -37,8 +37,8 @@ from typing import Iterator
 
 import numpy as np
 
-from ..errors import SourceError
-from .segment import TapSegmenter
+from tactip.errors import SourceError
+from tactip.taxel.segment import TapSegmenter
 
 __all__ = [
     "ENCODINGS", "TaxelReading", "TaxelSource", "CsvTaxelSource", "UdpTaxelSource", "UdpTaxelSender",

@@ -7,7 +7,7 @@ from arm.interface import ArmState
 from arm.pose import Pose
 from arm.safety import check_move, check_ready
 
-from .conftest import make_config
+from tests.arm.conftest import make_config
 
 LIMITS = make_config().limits
 ABOVE = Pose(10.0, 0.0, 5.0)

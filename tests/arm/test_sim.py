@@ -14,7 +14,7 @@ from arm.pose import Pose
 from arm.profile import trapezoid_duration, trapezoid_fraction
 from arm.world import PlateWorld, Gap
 
-from .conftest import make_config
+from tests.arm.conftest import make_config
 
 
 def test_sim_arm_satisfies_the_protocol(config):

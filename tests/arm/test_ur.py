@@ -12,8 +12,8 @@ from arm.pose import Pose, pose_from_ur, pose_to_ur
 from arm.tap import TapMotion
 from arm.ur import UrArm
 
-from .conftest import make_config
-from .ur_emulator import PortsBusy, UrEmulator
+from tests.arm.conftest import make_config
+from tests.arm.ur_emulator import PortsBusy, UrEmulator
 
 CONFIG = make_config(backend="ur", host="127.0.0.1")
 HOME = Pose(0.0, 0.0, 30.0, 180.0, 0.0, 0.0)                  # TCP in the work frame at start

@@ -33,7 +33,7 @@ import struct
 import threading
 import time
 
-from .ur_controller import FORMATS, PLAYING, Controller, Options, value_count, input_type, output_type
+from tests.arm.ur_controller import FORMATS, PLAYING, Controller, Options, value_count, input_type, output_type
 
 HOST = "127.0.0.1"
 DASHBOARD_PORT, RTDE_PORT, SCRIPT_PORT = 29999, 30004, 30003

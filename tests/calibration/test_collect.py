@@ -9,7 +9,7 @@ import pytest
 
 from calibration import SETS, CalibrationError, collect_datasets, collection_plan, tap_seed
 from perception import DatasetError, load_dataset
-from tactip.config import GapConfig
+from tactip.station.config import GapConfig
 
 GAPS = (GapConfig("a", 0.0, 0.0, 0.5, 0.25), GapConfig("b", 30.0, 0.0, 1.5, 0.25), GapConfig("c", 60.0, 0.0, 2.5, 0.25))
 DEPTHS = [0.0, 1.0, 2.0, 3.0]

@@ -7,7 +7,7 @@ import pytest
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
-from tactip.synthetic import Contact, SyntheticTacTip
+from tactip.sim.synthetic import Contact, SyntheticTacTip
 
 TAP = Contact(indentation_mm=5.0, gap_width_mm=2.0)
 
@@ -42,7 +42,7 @@ def match(detected: np.ndarray, truth: np.ndarray, gate_px: float = 3.0):
 
 @functools.lru_cache(maxsize=None)
 def preset_sensor(name: str, seed: int = 0, **overrides) -> SyntheticTacTip:
-    """The synthetic TacTip preset ``name`` (`tactip.synthetic.PRESETS`), cached."""
+    """The synthetic TacTip preset ``name`` (`tactip.sim.synthetic.PRESETS`), cached."""
     return SyntheticTacTip.from_preset(name, seed=seed, **overrides)
 
 
@@ -53,7 +53,11 @@ def preset_frame(name: str, contact: Contact | None = None, seed: int = 0):
     The frame carries its ground truth: ``centres``, ``visible`` (whole tips: must be found) and
     ``partial`` (tips cut by the rim ring or the image edge: may be found or not).
     """
-    return preset_sensor(name, seed).render(contact)
+    # The sensor is shared (cached): its camera noise restarts from the seed, so the frame does not
+    # depend on which tests rendered before it in this process.
+    sensor = preset_sensor(name, seed)
+    sensor.reseed_noise(seed)
+    return sensor.render(contact)
 
 
 def score(detected: np.ndarray, frame, gate_px: float = 3.0):
@@ -68,7 +72,7 @@ def score(detected: np.ndarray, frame, gate_px: float = 3.0):
     Parameters
     ----------
     detected : (M, 2) ndarray of (x, y), px
-    frame : tactip.synthetic.SyntheticFrame
+    frame : tactip.sim.synthetic.SyntheticFrame
     gate_px : float
 
     Returns

@@ -9,7 +9,7 @@ from scipy.spatial import Delaunay, cKDTree
 
 from pins import (REJECTION_REASONS, DetectionParams, NoSensorError, PinField, detect_pins, draw_pin_field,
                   find_pin_field, find_sensor_disc)
-from tactip.synthetic import Contact, SyntheticTacTip, preset_names
+from tactip.sim.synthetic import Contact, SyntheticTacTip, preset_names
 from tests.pins.conftest import TAP, preset_frame, preset_sensor, score
 
 CONTACTS = {"rest": None, "tap5mm": TAP}
@@ -250,7 +250,11 @@ def test_painted_specks_and_faint_blobs_between_pins_are_rejected(rng):
     field = find_pin_field(image)
     recall, precision, rmse = score(field.centres, f)
     assert recall >= 0.99 and precision == 1.0 and rmse <= 0.1
-    assert set(field.rejected_reason) <= set(REJECTION_REASONS) and len(field.rejected) >= 20
+    assert set(field.rejected_reason) <= set(REJECTION_REASONS)
+    # Every spot plain detection kept was seen by the field search and rejected (how many of the 40
+    # plain detection finds depends on the camera noise: 13 here).
+    kept = cKDTree(detect_pins(image)).query(spots)[0] < 2.0
+    assert kept.sum() >= 10 and (cKDTree(field.rejected).query(spots[kept])[0] < 2.0).all()
 
 
 def test_no_pins_is_an_empty_field():

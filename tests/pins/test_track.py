@@ -11,7 +11,7 @@ from scipy.spatial import cKDTree
 from pins import (DetectionParams, LKParams, PinsError, PinTracker, SensorDisc, ShapeError, detect_pins,
                   find_sensor_disc, match_to_blobs, track_pins)
 from pins._refine import Refiner
-from tactip.synthetic import Contact
+from tactip.sim.synthetic import Contact
 from tests.pins.conftest import TAP, frame, preset_sensor, sensor
 
 
@@ -247,7 +247,7 @@ def test_tracker_state_and_errors():
         LKParams(window_px=8)
 
 
-# Tracking on the phenomenon presets (tactip.synthetic.PRESETS): one 5 mm tap over a 2 mm gap,
+# Tracking on the phenomenon presets (tactip.sim.synthetic.PRESETS): one 5 mm tap over a 2 mm gap,
 # started from the drawn pins' true rest centres (detection has its own tests).
 TRACKING_PRESETS = ["tactip-331", "dark-331", "rim-ring-331", "brown-127", "radial-120", "small-pad-100", "dense-1000"]
 

@@ -1,6 +1,6 @@
 """Shared fixtures of the station tests: a small simulated station, calibrated, collected and trained once.
 
-The station is the packaged simulated one (`tactip.config.SIM_PRESET`) cut down to four gaps far apart
+The station is the packaged simulated one (`tactip.station.config.SIM_PRESET`) cut down to four gaps far apart
 in width (0.5, 1.5, 2.5, 3.5 mm), a 0.5 mm depth step over the paper's 0-5.5 mm and two taps per
 depth, so that one collection is 2 x 96 taps (with one tap per depth the histograms are too sparse
 to tell the widths apart reliably); 11 depth classes make the class width the depth step, so the
@@ -23,7 +23,7 @@ import pytest
 
 from arm.sim import SimArm
 from arm.world import Gap, PlateWorld
-from tactip.config import SIM_PRESET, load_station_config
+from tactip.station.config import SIM_PRESET, load_station_config
 
 SMALL_GAPS = ("g02", "g06", "g10", "g14")
 DEPTH_STEP_MM = 0.5

@@ -208,7 +208,7 @@ def test_replay_refuses_outputs_over_the_video_or_each_other(tmp_path):
 # -- full disk ----------------------------------------------------------------------------------------
 
 def test_collect_on_a_full_disk_keeps_only_complete_taps_and_resumes(sim_station, tmp_path):
-    from tactip.config import load_station_config
+    from tactip.station.config import load_station_config
 
     # One gap, one repeat: 12 taps per set, so that the resume stays quick.
     toml = station_copy(sim_station, tmp_path / "station", datasets=False, model=False, gaps=("g02",), repeats=1)
@@ -372,9 +372,9 @@ def test_inspect_on_a_full_disk_reports_it_and_keeps_the_stored_rows(sim_station
 
 def _sim_is(config, monkeypatch):
     """``tactip inspect --sim`` runs the station ``config`` (the small one: its preparation takes seconds)."""
-    import tactip.config
+    import tactip.station.config
 
-    monkeypatch.setattr(tactip.config, "simulated_station_config", lambda data_dir: config)
+    monkeypatch.setattr(tactip.station.config, "simulated_station_config", lambda data_dir: config)
 
 
 def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, tmp_path, monkeypatch, capsys):
@@ -382,8 +382,8 @@ def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, t
     ``inspect --sim`` (in-process, on the small station: the packaged one's preparation takes minutes)."""
     import calibration
     from tactip.cli import main
-    from tactip.config import load_station_config
-    from tactip.procedures import model_is_prepared
+    from tactip.station.config import load_station_config
+    from tactip.station.procedures import model_is_prepared
 
     toml = station_copy(sim_station, tmp_path, model=False)
     config = load_station_config(toml)
@@ -409,8 +409,8 @@ def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, t
 def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tmp_path, monkeypatch, capsys):
     from perception import save_model
     from tactip.cli import main
-    from tactip.config import load_station_config
-    from tactip.procedures import model_is_prepared
+    from tactip.station.config import load_station_config
+    from tactip.station.procedures import model_is_prepared
 
     bare = load_model(sim_station.model)
     bare = type(bare)(**{**bare.__dict__, "recommended": {}})
@@ -426,13 +426,13 @@ def test_a_half_prepared_model_is_prepared_again_or_warned_about(sim_station, tm
     assert digest(tmp_path / "station" / "model.h5") == before
     # inspect --sim (a model left by a version that trained in place): its preparation is resumed first.
     _sim_is(load_station_config(toml), monkeypatch)
-    import tactip.procedures
+    import tactip.station.procedures
 
     def prepare(config, **kwargs):
         shutil.copy(sim_station.model, config.perception.model)                # as the preparation ends
         return config.perception.model
 
-    monkeypatch.setattr(tactip.procedures, "prepare_model", prepare)
+    monkeypatch.setattr(tactip.station.procedures, "prepare_model", prepare)
     assert main(["inspect", "--sim", "--gap", "g02", "--seed", "1", "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "has no recommended settings (an earlier preparation was interrupted): resuming" in out

@@ -30,7 +30,7 @@ import numpy as np
 import pytest
 
 from tactip.cli import build_parser
-from tactip.config import parse_station_config
+from tactip.station.config import parse_station_config
 from tactip.errors import ConfigError
 from tests.tactip.conftest import small_station_table, write_station
 from tests.tactip.faultkit import assert_refused, digest, leftover_temporaries, run_tactip, run_tactip_in_process

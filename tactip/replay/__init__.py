@@ -1,0 +1,9 @@
+"""Recorded video: record a camera to a file, replay a file through the pin pipeline, decide on its taps.
+
+- `tactip.replay.record`: `record_video`, a camera (or any source) to MP4 or AVI;
+- `tactip.replay.video`: `replay_video`, a recording to pin positions, contacts and features in HDF5,
+  and an annotated video;
+- `tactip.replay.decisions`: a passive perceiver deciding the gap width from a replay's taps.
+"""
+
+__all__: list[str] = []

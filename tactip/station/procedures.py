@@ -1,0 +1,222 @@
+"""Station procedures: calibrate the sensor and collect the training and test taps.
+
+These compose a `Station` (arm + camera + front end) with the `calibration` package (which knows
+the protocol but no hardware). The CLI commands ``tactip calibrate`` and ``tactip collect`` call
+them; so can a script.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+from tactip.station.config import StationConfig
+from tactip.errors import TactipError
+from tactip.station.station import Station
+
+__all__ = ["prepare_model", "model_is_prepared", "calibration_path", "calibrate_station", "load_station_calibration", "collect_station",
+           "sensor_description", "protocol_description"]
+
+
+def calibration_path(config: StationConfig) -> Path:
+    """Where the station's calibration file is: ``[sensor] calibration`` or ``data_dir/calibration.h5``."""
+    return config.sensor.calibration or (config.data_dir / "calibration.h5")
+
+
+def calibrate_station(config: StationConfig, *, rest_frames: int = 10, out: Path | None = None,
+                      log: Callable[[str], None] = print):
+    """Take rest frames off contact, tune detection, choose the feature pins, write the calibration file.
+
+    Returns
+    -------
+    (calibration.SensorCalibration, Path)
+        The calibration and the file it was written to.
+    """
+    from calibration import calibrate_sensor, save_calibration
+
+    from tactip._output import refuse_overwriting_inputs
+
+    out = Path(out) if out is not None else calibration_path(config)
+    refuse_overwriting_inputs([out], [config.path, config.perception.model, config.results])
+    with Station(config) as station:
+        log(f"taking {rest_frames} rest frames off contact ...")
+        frames = station.rest_frames(rest_frames)
+    sensor = config.sensor
+    calibration = calibrate_sensor(frames, expected_pins=sensor.pins, pad_diameter_mm=sensor.pad_diameter_mm,
+                                   selected_pins=sensor.selected_pins, min_separation_mm=sensor.min_separation_mm,
+                                   sensor={"source": sensor.source, "pins": sensor.pins, "station": config.name})
+    save_calibration(out, calibration)
+    log(f"calibrated: {calibration.describe()}")
+    log(f"wrote {out}")
+    return calibration, out
+
+
+def load_station_calibration(config: StationConfig):
+    """The station's calibration file, read and checked against ``[sensor]``."""
+    from calibration import CalibrationError, load_calibration
+
+    calibration = load_calibration(calibration_path(config))
+    if calibration.expected_pins != config.sensor.pins:
+        raise CalibrationError(f"{calibration_path(config)} was made for {calibration.expected_pins} pins but "
+                               f"[sensor] pins = {config.sensor.pins}: run 'tactip calibrate' again")
+    return calibration
+
+
+def sensor_description(config: StationConfig, calibration) -> dict:
+    """What datasets and models record about the sensor (a rerun must match it)."""
+    return {"kind": "tactip", "pins": int(calibration.expected_pins), "selected_pins": calibration.n_selected,
+            "min_separation_mm": float(calibration.min_separation_mm),
+            "mm_per_px": round(float(calibration.mm_per_px), 6), "source": config.sensor.source,
+            "samples": config.protocol.samples}
+
+
+def protocol_description(config: StationConfig) -> dict:
+    """The collection settings stored in the datasets: resuming with other settings is refused, naming them."""
+    p = config.protocol
+    return {"seed": int(p.seed), "depth_min": float(p.depth_min), "depth_max": float(p.depth_max),
+            "depth_step": float(p.depth_step), "repeats": int(p.repeats),
+            "lateral_jitter_mm": float(p.lateral_jitter_mm), "gaps": [g.name for g in config.gaps]}
+
+
+def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = True, workers: int | None = None,
+                    log: Callable[[str], None] = print) -> dict[str, Path]:
+    """Collect ``out_dir/train.h5`` and ``out_dir/test.h5`` by the configured protocol (resumable).
+
+    Parameters
+    ----------
+    config : StationConfig
+    out_dir : Path
+    progress : bool
+        Progress bar with ETA.
+    workers : int, optional
+        Processes rendering taps on the simulated station (default: the CPU count, at most 4);
+        a real station always taps one at a time.
+
+    Returns
+    -------
+    dict of set name -> dataset path
+    """
+    from calibration import collect_datasets, collection_plan
+
+    from tactip._output import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([Path(out_dir) / "train.h5", Path(out_dir) / "test.h5"],
+                              [config.path, calibration_path(config), config.perception.model, config.results])
+    calibration = load_station_calibration(config)
+    p = config.protocol
+    plan = collection_plan(config.gaps, p.depths, repeats=p.repeats, lateral_jitter_mm=p.lateral_jitter_mm,
+                           seed=p.seed)
+    total = sum(len(v) for v in plan.values())
+    log(f"collecting {total} taps: {len(config.gaps)} gaps x {len(p.depths)} depths "
+        f"({p.depth_min:g}-{p.depth_max:g} mm at {p.depth_step:g} mm) x {p.repeats} repeat(s) x {len(plan)} sets "
+        f"into {out_dir}")
+    dims = 2 * calibration.n_selected
+    from pins import feature_dim_names
+
+    common = dict(samples=p.samples, dims=dims, dim_names=feature_dim_names(calibration.n_selected),
+                  sensor=sensor_description(config, calibration), progress=progress,
+                  protocol=protocol_description(config))
+    if workers is None:
+        workers = min(os.cpu_count() or 1, 4)
+    if config.simulated and workers > 1:
+        with _SimPool(config, calibration, workers) as pool:
+            return collect_datasets(None, plan, out_dir, tap_many=pool.map, **common)
+    with Station(config, calibration=calibration) as station:
+        return collect_datasets(lambda t: station.tap(t.gap, t.depth_mm, lateral_mm=t.lateral_mm, seed=t.seed).features,
+                                plan, out_dir, **common)
+
+
+#: Fraction of decisions within the gaps' tolerance a calibrated model's threshold is chosen for.
+DEFAULT_TARGET_ACCURACY = 0.95
+
+
+# -- the simulated station on several processes ---------------------------------------------------
+
+_worker_station: Station | None = None
+
+
+def _worker_init(config: StationConfig, calibration) -> None:
+    import cv2
+
+    cv2.setNumThreads(1)
+    global _worker_station
+    _worker_station = Station(config, calibration=calibration).__enter__()
+
+
+def _worker_tap(planned) -> np.ndarray:
+    return _worker_station.tap(planned.gap, planned.depth_mm, lateral_mm=planned.lateral_mm,
+                               seed=planned.seed).features
+
+
+class _SimPool:
+    """Simulated stations in worker processes; `map` is ordered and lazy (results as they come)."""
+
+    def __init__(self, config: StationConfig, calibration, workers: int):
+        import multiprocessing
+
+        if not config.simulated:
+            raise TactipError("only the simulated station can tap in parallel")
+        self._pool = multiprocessing.get_context("spawn").Pool(workers, initializer=_worker_init,
+                                                               initargs=(config, calibration))
+
+    def map(self, planned: Iterable) -> Iterable[np.ndarray]:
+        """Features of each planned tap, in order."""
+        return self._pool.imap(_worker_tap, list(planned), chunksize=1)
+
+    def __enter__(self) -> "_SimPool":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._pool.terminate()
+        self._pool.join()
+
+
+def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable[[str], None] = print) -> Path:
+    """The whole calibration utility in one call: calibrate (unless calibrated), collect (resuming),
+    train and pick the fixation depth; returns the model path. ``tactip inspect --sim`` runs it on
+    first use, and again after an interrupted first use (`model_is_prepared`).
+
+    The model is trained and given its recommended settings under a temporary name and renamed into
+    place only when both are done: an interruption (Ctrl-C, SIGTERM, a full disk) during training or
+    the fixation sweep leaves no half-prepared model, and the next run resumes the preparation
+    (the collected taps are kept and resumed, only training and the sweep are repeated).
+    """
+    from calibration import recommend_fixation, train_station_model
+
+    from tactip._output import atomic_output
+
+    model_path = config.perception.model
+    if model_path is None:
+        raise TactipError("no [perception] model path in the configuration")
+    if not calibration_path(config).exists():
+        calibrate_station(config, log=log)
+    paths = collect_station(config, config.data_dir / "datasets", progress=progress, log=log)
+    with atomic_output(model_path, inputs=list(paths.values())) as partial:
+        p = config.perception
+        log(f"training the model ({p.likelihood} likelihood) ...")
+        train_station_model(paths["train"], partial, n_locations=p.locations, bins=p.bins, kind=p.likelihood, log=log)
+        log("choosing the fixation depth on the test collection ...")
+        target = p.target_accuracy
+        if target is None and p.likelihood != "histogram":
+            target = DEFAULT_TARGET_ACCURACY
+        tolerance = min(g.tolerance for g in config.gaps)
+        recommend_fixation(partial, paths["test"], log=lambda line: log(line.replace(str(partial), str(model_path))),
+                           target_accuracy=target, tolerance=tolerance, max_taps=p.max_taps)
+    return model_path
+
+
+def model_is_prepared(path: Path) -> bool:
+    """Whether ``path`` holds a model with its recommended settings (fixation depth and threshold).
+
+    False for a missing file and for a model an interrupted preparation left without its settings
+    (written by versions that trained in place); `load_model`'s errors propagate for a bad file.
+    """
+    from perception import load_model
+
+    if not Path(path).exists():
+        return False
+    recommended = load_model(path).recommended
+    return "decision_threshold" in recommended and "fixation_location" in recommended

@@ -1,0 +1,237 @@
+"""The dashboard without a browser: capability figures, trends, the live feed, the app's routes and guard.
+
+The browser end to end (a simulated inspection watched in headless Chromium) is in
+`test_dashboard_browser.py`.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+import urllib.request
+
+import numpy as np
+import pytest
+
+from tactip.line.dashboard import DashboardError, DashboardServer, check_bind, gap_trends, make_app
+from tactip.line.dashboard.feed import FeedState
+from tactip.line.results import open_results, process_capability
+from tests.tactip.conftest import run_cli
+
+pytest.importorskip("starlette", reason="the dashboard needs the 'line' extra (pip install -e '.[test]')")
+
+
+class Client:
+    """GET (or another method) against a running `DashboardServer`: (status, body text)."""
+
+    def __init__(self, server):
+        self.url = server.url.rstrip("/")
+
+    def get(self, path, params=None, headers=None, method="GET"):
+        from urllib.error import HTTPError
+        from urllib.parse import urlencode
+
+        query = f"?{urlencode(params)}" if params else ""
+        request = urllib.request.Request(self.url + path + query, headers=headers or {}, method=method)
+        try:
+            with urllib.request.urlopen(request, timeout=20) as response:
+                return response.status, response.read().decode()
+        except HTTPError as exc:
+            return exc.code, exc.read().decode()
+
+
+def _verdict(store, gap, width, *, nominal=1.0, tolerance=0.2, decided=True, station="cell-1"):
+    i = store.start_inspection(gap, nominal_width=nominal, tolerance=tolerance, policy="active", station=station)
+    store.record_tap(i, tap=1, depth_mm=2.0, identity_estimate=width, belief=0.9, what_belief=[0.1, 0.9])
+    store.finish_inspection(i, estimated_width=width, estimated_depth=2.0, belief=0.9, taps=1, decided=decided)
+    return i
+
+
+def test_capability_matches_the_definition():
+    rng = np.random.default_rng(4)
+    widths = rng.normal(1.05, 0.04, size=40)
+    c = process_capability(widths, nominal_mm=1.0, tolerance_mm=0.2)
+    mu, sigma = widths.mean(), widths.std(ddof=1)
+    assert c.n == 40 and c.mean_mm == pytest.approx(mu) and c.sigma_mm == pytest.approx(sigma)
+    assert c.cp == pytest.approx(0.4 / (6 * sigma))                              # (USL - LSL) / 6 sigma
+    assert c.cpk == pytest.approx((1.2 - mu) / (3 * sigma))                      # the nearer limit is USL
+    centred = process_capability(widths - widths.mean() + 1.0, nominal_mm=1.0, tolerance_mm=0.2)
+    assert centred.cpk == pytest.approx(centred.cp)                              # centred: Cpk = Cp
+    assert process_capability([1.1], nominal_mm=1.0, tolerance_mm=0.2).cp is None
+    assert process_capability([1.1, 1.1], nominal_mm=1.0, tolerance_mm=0.2).cpk is None    # no spread
+    assert process_capability([], nominal_mm=1.0, tolerance_mm=0.2).n == 0
+    with pytest.raises(ValueError, match="tolerance_mm must be > 0"):
+        process_capability([1.0, 1.1], nominal_mm=1.0, tolerance_mm=0)
+
+
+def test_trends_use_the_newest_decided_inspections_of_each_gap(tmp_path):
+    with open_results(tmp_path / "r.sqlite") as store:
+        widths = [0.95, 1.0, 1.02, 1.1, 0.98, 1.05]
+        for w in widths:
+            _verdict(store, "door", w)
+        _verdict(store, "door", 3.0, decided=False)                # undecided: not a measurement
+        aborted = store.start_inspection("door", nominal_width=1.0, tolerance=0.2, policy="active")
+        store.abort_inspection(aborted, "protective stop")
+        _verdict(store, "hood", 2.1, nominal=2.0, tolerance=0.3)
+        rows = store.inspections()
+    door, hood = gap_trends(rows, window=4)
+    assert door["gap"] == "door" and [p["estimated_width"] for p in door["points"]] == widths[-4:]
+    expected = process_capability(widths[-4:], nominal_mm=1.0, tolerance_mm=0.2)
+    assert door["capability"] == expected.as_dict()
+    assert (hood["nominal_mm"], hood["tolerance_mm"], hood["capability"]["n"]) == (2.0, 0.3, 1)
+
+
+def test_the_feed_misses_no_tap_committed_out_of_id_order(postgres_url):
+    """Two stations' transactions: the later id commits first; the feed still delivers both, once each."""
+    import psycopg
+
+    with open_results(postgres_url) as store:
+        i = store.start_inspection("g1", nominal_width=1.0, tolerance=0.1, policy="active", station="cell-1")
+    reader = open_results(postgres_url, read_only=True)
+    feed = FeedState(reader)
+    insert = ("INSERT INTO tactip.taps (inspection_id, tap, depth_mm, at) VALUES (%s, %s, 1.0, 'now') RETURNING id")
+    with psycopg.connect(postgres_url) as slow, psycopg.connect(postgres_url, autocommit=True) as fast:
+        early = slow.execute(insert, (i, 1)).fetchone()[0]            # takes its id, not committed yet
+        late = fast.execute(insert, (i, 2)).fetchone()[0]             # a later id, committed at once
+        assert late > early
+        first = [data["id"] for kind, data in feed.poll(reader) if kind == "tap"]
+        slow.commit()
+    second = [data["id"] for kind, data in feed.poll(reader) if kind == "tap"]
+    third = [data["id"] for kind, data in feed.poll(reader) if kind == "tap"]
+    reader.close()
+    assert (first, second, third) == ([late], [early], [])
+
+
+def test_the_state_shows_the_history_with_the_station_stopped(tmp_path):
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        for w in (1.0, 1.1, 0.9):
+            _verdict(store, "door", w)
+        running = store.start_inspection("hood", nominal_width=2.0, tolerance=0.2, policy="active", station="cell-2")
+        store.record_tap(running, tap=1, depth_mm=3.0, identity_estimate=2.1, belief=0.4, what_belief=[0.4, 0.6])
+        store.update_station("cell-2", state="inspecting", arm="ur: ready", frame_rate=29.97, model="m.h5")
+        store.update_station("cell-3", state="stopped: protective stop", arm="ur: protective stop")
+    app = make_app(lambda: open_results(db, read_only=True), results_name=str(db))
+    with DashboardServer(app, port=0) as server:
+        client = Client(server)
+        page = client.get("/")
+        state = json.loads(client.get("/api/state", params={"window": 2})[1])
+        assert client.get("/api/state", params={"window": 1})[0] == 400
+        assert client.get("/api/state", method="POST")[0] == 405                # read-only: GET only
+    assert page[0] == 200 and "EventSource" in page[1]
+    assert [v["estimated_width"] for v in state["verdicts"]] == [0.9, 1.1, 1.0]   # newest first, no running row
+    assert [(s["name"], s["state"], s["gap"], s["arm"], s["frame_rate"]) for s in state["stations"]] == [
+        ("cell-1", "idle", None, None, None), ("cell-2", "inspecting", "hood", "ur: ready", 29.97),
+        ("cell-3", "idle", None, "ur: protective stop", None)]                 # a status row, no inspections yet
+    assert state["stations"][2]["station_state"] == "stopped: protective stop"
+    cell2 = next(c for c in state["current"] if c["station"] == "cell-2")
+    assert cell2["tap_rows"][0]["what_belief"] == [0.4, 0.6] and state["results"] == str(db)
+    assert state["gaps"][0]["capability"] == process_capability([1.1, 0.9], nominal_mm=1.0,
+                                                                tolerance_mm=0.2).as_dict()
+
+
+def test_no_database_yet_is_said_on_the_page(tmp_path):
+    app = make_app(lambda: open_results(tmp_path / "none.sqlite", read_only=True))
+    with DashboardServer(app, port=0) as server:
+        state = json.loads(Client(server).get("/api/state")[1])
+    assert "no results database" in state["error"] and state["verdicts"] == []
+    assert not (tmp_path / "none.sqlite").exists()
+
+
+def test_a_token_guards_every_route(tmp_path):
+    app = make_app(lambda: open_results(tmp_path / "r.sqlite", read_only=True), token="s3cret")
+    with DashboardServer(app, port=0) as server:
+        client = Client(server)
+        for path in ("/", "/api/state", "/api/events", "/healthz"):
+            assert client.get(path)[0] == 401
+            assert client.get(path, params={"token": "wrong"})[0] == 401
+            if path != "/api/events":                                       # a stream does not end by itself
+                assert client.get(path, params={"token": "s3cret"})[0] == 200
+                assert client.get(path, headers={"Authorization": "Bearer s3cret"})[0] == 200
+    check_bind("127.0.0.1", None), check_bind("localhost", None), check_bind("::1", None)
+    check_bind("0.0.0.0", "s3cret")
+    with pytest.raises(DashboardError, match="--host 0.0.0.0 is reachable from other machines: give --token"):
+        check_bind("0.0.0.0", None)
+    code, _, err = run_cli(["serve", "--db", tmp_path / "r.sqlite", "--host", "192.168.1.5"])
+    assert code == 1 and err.count("\n") == 1 and "give --token" in err
+
+
+def test_taps_and_verdicts_stream_as_server_sent_events(tmp_path):
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        _verdict(store, "hood", 2.0)                                 # history: not streamed again
+    events = []
+
+    def listen(url):
+        with urllib.request.urlopen(url + "api/events", timeout=20) as stream:
+            name = None
+            for line in stream:
+                line = line.decode().rstrip("\n")
+                if line.startswith("event: "):
+                    name = line[7:]
+                elif line.startswith("data: "):
+                    events.append((name, json.loads(line[6:])))
+                    kinds = [k for k, data in events]
+                    if "tap" in kinds and any(k == "inspection" and data["status"] == "done" for k, data in events):
+                        return
+
+    app = make_app(lambda: open_results(db, read_only=True))
+    with DashboardServer(app, port=0) as server:
+        listener = threading.Thread(target=listen, args=(server.url,), daemon=True)
+        listener.start()
+        while not events:                                           # the stream said hello
+            time.sleep(0.02)
+        with open_results(db) as store:
+            store.update_station("cell-1", state="ready", arm="sim: ready", frame_rate=20.0)
+            i = _verdict(store, "door", 1.05)
+        listener.join(20)
+    kinds = [name for name, _ in events]
+    assert kinds[:3] == ["hello", "station", "inspection"] and kinds.count("tap") == 1   # an inspection before its tap
+    assert events[1][1]["arm"] == "sim: ready" and events[1][1]["state"] == "ready"
+    tap = events[kinds.index("tap")][1]
+    assert (tap["inspection_id"], tap["tap"], tap["gap"], tap["station"], tap["what_belief"]) == \
+        (i, 1, "door", "cell-1", [0.1, 0.9])
+    last = [data for name, data in events if name == "inspection"][-1]
+    assert (last["id"], last["status"], last["passed"]) == (i, "done", True)
+
+
+def test_serve_help_names_the_guard(capsys):
+    from tactip.cli import main
+
+    with pytest.raises(SystemExit) as done:
+        main(["serve", "--help"])
+    text = capsys.readouterr().out
+    assert done.value.code == 0 and "--token" in text and "127.0.0.1" in text and "read-only" in text
+
+
+@pytest.mark.parametrize("sigint", ["default", "ignored"])
+def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path, sigint):
+    # "ignored": started as a background job by a script (SIGINT ignored from the start), where
+    # uvicorn's re-raised SIGINT does nothing: still "Stopped." and exit 1.
+    import signal
+    import subprocess
+    import sys
+
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        _verdict(store, "door", 1.05)
+    start = signal.SIG_IGN if sigint == "ignored" else signal.SIG_DFL
+    serve = subprocess.Popen([sys.executable, "-m", "tactip.cli", "serve", "--db", str(db), "--port", "0"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, start))
+    try:
+        first = serve.stdout.readline()                              # "dashboard of DB on http://127.0.0.1:PORT/ ..."
+        assert first.startswith(f"dashboard of {db} on http://127.0.0.1:"), first + serve.stderr.read()
+        url = first.split(" on ")[1].split()[0]
+        state = json.loads(urllib.request.urlopen(url + "api/state", timeout=20).read())
+        assert [v["gap"] for v in state["verdicts"]] == ["door"]
+        stream = urllib.request.urlopen(url + "api/events", timeout=20)  # an open event stream...
+        assert stream.readline().startswith(b"event: hello")
+        serve.send_signal(signal.SIGINT)                             # ...does not hold Ctrl-C up
+        out, err = serve.communicate(timeout=20)
+        stream.close()
+    finally:
+        if serve.poll() is None:
+            serve.kill()
+    assert serve.returncode == 1 and err == "Stopped.\n"

@@ -1,0 +1,94 @@
+"""Station procedures: where the files go, calibration on the station, and the whole utility in one call."""
+
+import shutil
+
+import numpy as np
+import pytest
+
+from calibration import CalibrationError, load_calibration
+from perception import load_dataset, load_model
+from tactip.station.config import parse_station_config, simulated_station_config
+from tactip.errors import TactipError
+from tactip.station.procedures import (calibrate_station, calibration_path, collect_station, load_station_calibration,
+                               prepare_model, sensor_description)
+from tests.tactip.conftest import small_station_table
+
+
+def test_the_simulated_station_keeps_every_file_in_its_folder(tmp_path, monkeypatch):
+    config = simulated_station_config(tmp_path / "sim")
+    data_dir = (tmp_path / "sim").resolve()
+    assert config.simulated and len(config.gaps) == 20
+    assert config.data_dir == data_dir
+    for path in (config.results, config.perception.model, calibration_path(config)):
+        assert path.is_absolute() and path.parent == data_dir, path
+    # a relative folder is taken from the current folder, not from the packaged preset's
+    monkeypatch.chdir(tmp_path)
+    relative = simulated_station_config("here")
+    assert relative.data_dir == (tmp_path / "here").resolve()
+    assert relative.results.parent == relative.perception.model.parent == relative.data_dir
+    assert list(tmp_path.iterdir()) == []                                       # nothing written yet
+
+
+def test_calibrating_the_station_writes_the_calibration_file(tmp_path):
+    config = parse_station_config(small_station_table(tmp_path), base_dir=tmp_path)
+    lines = []
+    calibration, path = calibrate_station(config, rest_frames=3, log=lines.append)
+    assert path == tmp_path / "calibration.h5" == calibration_path(config)
+    stored = load_station_calibration(config)
+    assert np.array_equal(stored.reference_pins, calibration.reference_pins)
+    assert len(calibration.reference_pins) == 331 and calibration.n_selected == 40 and calibration.rest_frames == 3
+    assert calibration.sensor == {"source": "synthetic", "pins": 331, "station": config.name}
+    assert lines[0] == "taking 3 rest frames off contact ..." and lines[-1] == f"wrote {path}"
+    other = calibrate_station(config, rest_frames=1, out=tmp_path / "elsewhere" / "cal.h5", log=lambda _: None)[1]
+    assert other.exists() and load_calibration(other).rest_frames == 1
+
+
+def test_a_calibration_for_another_pin_count_is_refused(sim_station, tmp_path):
+    table = small_station_table(tmp_path, sensor={"pins": 127, "calibration": str(sim_station.root / "calibration.h5")})
+    config = parse_station_config(table, base_dir=tmp_path)
+    with pytest.raises(CalibrationError, match=r"made for 331 pins but \[sensor\] pins = 127"):
+        load_station_calibration(config)
+
+
+def test_collecting_needs_a_calibration(tmp_path):
+    config = parse_station_config(small_station_table(tmp_path), base_dir=tmp_path)
+    with pytest.raises(CalibrationError, match="run 'tactip calibrate' first"):
+        collect_station(config, tmp_path / "datasets", progress=False, log=lambda _: None)
+    assert not (tmp_path / "datasets").exists()
+
+
+def test_the_datasets_describe_the_sensor(sim_station):
+    description = sensor_description(sim_station.config, sim_station.calibration)
+    assert description == {"kind": "tactip", "pins": 331, "selected_pins": 40, "min_separation_mm": 4.0,
+                           "mm_per_px": round(sim_station.calibration.mm_per_px, 6), "source": "synthetic",
+                           "samples": 40}
+    assert load_dataset(sim_station.train).sensor == description == load_dataset(sim_station.test).sensor
+
+
+def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station, tmp_path):
+    root = tmp_path / "station"
+    shutil.copytree(sim_station.root, root, ignore=shutil.ignore_patterns("model.h5", "results.sqlite*"))
+    calibration_bytes = (root / "calibration.h5").read_bytes()
+    config = parse_station_config(small_station_table(root), base_dir=root)
+    lines = []
+    path = prepare_model(config, progress=False, log=lines.append)
+    assert path == root / "model.h5"
+    assert (root / "calibration.h5").read_bytes() == calibration_bytes          # not calibrated again
+    assert not any(line.startswith("taking") for line in lines)
+    for name in ("train", "test"):                                             # nothing collected again
+        before, after = load_dataset(getattr(sim_station, name)), load_dataset(root / "datasets" / f"{name}.h5")
+        assert np.array_equal(before.taps, after.taps) and np.array_equal(before.location, after.location)
+    model = load_model(path)
+    assert model.n_locations == config.perception.locations and model.n_identities == 4
+    assert {"fixation_location", "decision_threshold"} <= set(model.recommended)
+    assert 0.0 <= model.recommended["fixation_location"] <= 5.5
+    # The station's default likelihood, its threshold chosen for 95 % of decisions within the gaps' tolerance.
+    assert model.KIND == config.perception.likelihood == "gaussian"
+    assert any("of decisions within 0.25 mm" in line or "no fixation depth reaches 0.95" in line for line in lines)
+
+
+def test_prepare_model_needs_a_model_path(tmp_path):
+    table = small_station_table(tmp_path)
+    del table["perception"]["model"]
+    with pytest.raises(TactipError, match="no \\[perception\\] model"):
+        prepare_model(parse_station_config(table, base_dir=tmp_path), progress=False, log=lambda _: None)
