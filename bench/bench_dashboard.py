@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.tactip.ser
 
 
 def _writer(url, station, inspections, taps, start, pause_s):
-    from tactip.results import open_results
+    from tactip.line.results import open_results
 
     start.wait()
     with open_results(url) as store:
@@ -62,8 +62,8 @@ def run_writers(url, writers, inspections, taps, *, pause_s=0.0) -> float:
 
 def feed_delays(url, writers, inspections, taps) -> list[float]:
     """Stored-to-event delay of every tap (s), through a dashboard server and its event stream."""
-    from tactip.dashboard import DashboardServer, make_app
-    from tactip.results import open_results
+    from tactip.line.dashboard import DashboardServer, make_app
+    from tactip.line.results import open_results
 
     delays, total = [], writers * inspections * taps
     ready = threading.Event()
@@ -102,7 +102,7 @@ def main() -> None:
     parser.add_argument("--inspections", type=int, default=20, help="inspections per station")
     parser.add_argument("--taps", type=int, default=10, help="taps per inspection")
     args = parser.parse_args()
-    from tactip.results import open_results
+    from tactip.line.results import open_results
     from tests.tactip.services import PostgresCluster, find_postgres_bin
 
     backends = {}

@@ -40,7 +40,7 @@ def kinds() -> tuple[str, ...]:
 
 def station_config(data_dir: Path, **protocol):
     """The packaged simulated station in ``data_dir``, with some ``[protocol]`` keys replaced."""
-    from tactip.config import SIM_PRESET, parse_station_config
+    from tactip.station.config import SIM_PRESET, parse_station_config
 
     data = tomllib.loads(SIM_PRESET.read_text())
     data["station"].update(data_dir=str(data_dir), results=str(data_dir / "results.sqlite"))
@@ -92,7 +92,7 @@ def compare_models(config, runs: int, seed: int) -> None:
 def inspect_live(config, seed: int) -> None:
     """Part 2: every gap inspected on the simulated station with the station's model."""
     from perception import load_model
-    from tactip.inspection import inspect_station
+    from tactip.station.inspection import inspect_station
 
     model = load_model(config.perception.model)
     print(f"\nlive inspections, {model.KIND} model, threshold {model.recommended.get('decision_threshold')}, "
@@ -118,7 +118,7 @@ def density(runs: int, seed: int, root: Path, main_config) -> None:
     """Part 3: collection size against taps per decision."""
     from perception import VirtualEnvironment, load_dataset, load_model
     from perception.reliability import fixation_for_accuracy
-    from tactip.procedures import prepare_model
+    from tactip.station.procedures import prepare_model
 
     print("\ndata density: collection protocol against mean taps to 95 % of decisions within 0.25 mm "
           "(gaussian model, best fixation):")
@@ -154,7 +154,7 @@ def main() -> None:
 
     import cv2
 
-    from tactip.procedures import prepare_model
+    from tactip.station.procedures import prepare_model
 
     cv2.setNumThreads(1)
     data_dir = (args.data_dir or Path(tempfile.mkdtemp(prefix="bench_likelihoods_"))).resolve()

@@ -17,7 +17,7 @@ Prints ms/frame at 331 and 532 pins (wall time of the best pass, and CPU time) f
 Frames are a 5 mm tap (peak displacement ~14 px), so LK sees real motion. Goals: tracking all
 331 pins at >= 500 frames/s (2 ms/frame), detection <= 3 ms.
 
-A second table, per synthetic preset (`tactip.synthetic.PRESETS`, rest and a 5 mm tap), times the
+A second table, per synthetic preset (`tactip.sim.synthetic.PRESETS`, rest and a 5 mm tap), times the
 one-off `find_pin_field` (the pin field without a count: candidate detections at a few parameter
 sets, lattice consistency) beside the per-frame fast path it sets up (`detect_pins` with the
 field's params and disc) and prints their ratio, and scores the field against the renderer's
@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 from scipy.optimize import linear_sum_assignment
 
 from pins import PinTracker, detect_pins, find_pin_field, find_sensor_disc
-from tactip.synthetic import Contact, SyntheticTacTip, preset_names
+from tactip.sim.synthetic import Contact, SyntheticTacTip, preset_names
 
 REPEATS = 5
 

@@ -2,7 +2,7 @@
 
 Prints the median over repeated renders of an indented contact over a gap, with the default
 appearance (noise, glare, gradient), and the cost of the ground truth alone (``pin_centres``); then
-the same for every preset of `tactip.synthetic.PRESETS` (image size, pins; target < 40 ms for
+the same for every preset of `tactip.sim.synthetic.PRESETS` (image size, pins; target < 40 ms for
 ``dense-1000``, 1000 pins at 1280x720), with the default 331-pin render beside it as the yardstick.
 Run: ``.venv/bin/python bench/bench_render.py``
 """
@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from tactip.synthetic import PRESETS, Contact, SyntheticTacTip
+from tactip.sim.synthetic import PRESETS, Contact, SyntheticTacTip
 
 REPEATS = 60
 

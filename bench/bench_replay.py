@@ -11,7 +11,7 @@ each repeat so that machine load falls on both alike:
 
 - decode:  every frame read through the project's video source (`tactip.sources.open_source`, grey,
            as replay reads them) and nothing else;
-- replay:  `tactip.replay.replay_video` on the same file (no --annotate, no progress bar): decode
+- replay:  `tactip.replay.video.replay_video` on the same file (no --annotate, no progress bar): decode
            on a thread, pin detection on the rest frame, tracking, displacements, taps, features
            and the HDF5 file;
 - field:   `pins.find_pin_field` on the rest frame alone: a one-off cost inside replay (the pin
@@ -39,9 +39,9 @@ import cv2
 import numpy as np
 
 from pins import PinTracker, find_pin_field
-from tactip.replay import replay_video
+from tactip.replay.video import replay_video
 from tactip.sources import open_source
-from tactip.synthetic import Contact, SyntheticTacTip, tap_profile
+from tactip.sim.synthetic import Contact, SyntheticTacTip, tap_profile
 
 
 def write_video(path: pathlib.Path, preset: str, taps: int, *, frame_rate: float = 20.0, codec: str = "mp4v") -> int:

@@ -10,7 +10,7 @@ sweep: timed, as a first `tactip inspect --sim` would), then reports:
    random start depths: mean absolute width error and mean taps.
 
 The station is trained as in the figure, with the papers' histogram likelihood on one tap per depth,
-unless --likelihood and --repeats say otherwise (as tests/tactip/test_station_bar.py does); the
+unless --likelihood and --repeats say otherwise (as tests/tactip/station/test_station_bar.py does); the
 preset's own default (gaussian, two repeats) decides in a few taps: bench_likelihoods.py measures it.
 
     python bench/bench_station.py [--data-dir DIR] [--depth-step MM] [--runs N] [--seed S] [--likelihood KIND]
@@ -44,10 +44,10 @@ def main() -> None:
     import cv2
 
     from perception import VirtualEnvironment, compare_policies, load_dataset, load_model, make_policy
-    from tactip.config import SIM_PRESET, parse_station_config
-    from tactip.inspection import inspect_station
-    from tactip.procedures import load_station_calibration, prepare_model
-    from tactip.station import Station
+    from tactip.station.config import SIM_PRESET, parse_station_config
+    from tactip.station.inspection import inspect_station
+    from tactip.station.procedures import load_station_calibration, prepare_model
+    from tactip.station.station import Station
 
     cv2.setNumThreads(1)
     data_dir = (args.data_dir or Path(tempfile.mkdtemp(prefix="bench_station_"))).resolve()

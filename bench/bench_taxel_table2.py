@@ -13,8 +13,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from tactip.taxel import (TABLE2_CLASSES, TABLE3_CLASSES, TaxelSimulator, acuity_table, simulate_taxel_dataset,
-                          sweep_locations)
+from tactip.reproduce.acuity import TABLE2_CLASSES, TABLE3_CLASSES, acuity_table
+from tactip.taxel import TaxelSimulator, simulate_taxel_dataset, sweep_locations
 from tactip.taxel.collect import DEFAULT_TAPS
 
 

@@ -62,7 +62,7 @@ ISSUE_CASES = [
       f"{_SETTINGS}[fixation_location-40.0-inspect-words3-False]"]),
     ("traceback", "--expected-pins 1..5",
      [f"{_I}test_warned_cases_of_the_issue_run_to_the_end_through_the_real_cli", _in("replay --expected-pins 1..5"),
-      *(f"tests/tactip/test_cli_detect.py::test_a_count_far_off_is_a_one_line_warning[{n}]" for n in (1, 2, 5))]),
+      *(f"tests/tactip/cli/test_cli_detect.py::test_a_count_far_off_is_a_one_line_warning[{n}]" for n in (1, 2, 5))]),
     ("traceback", "one black frame in a video", [f"{_I}test_warned_cases_of_the_issue_run_to_the_end_through_the_real_cli"]),
     ("traceback", "record --seconds inf", [_cli("record --seconds inf")]),
     ("traceback", "taps stored as bytes", [f"{_D}test_taps_stored_as_bytes_are_refused_naming_the_dataset"]),

@@ -5,11 +5,11 @@
 - `tactip.taxel.preprocess`: high-pass filter, normalisation, resampling, per-tap baseline;
 - `tactip.taxel.segment`: cutting streams into taps (explicit times or signal magnitude, live or recorded);
 - `tactip.taxel.sources`: recorded (CSV) and live (UDP) readings, and taps from any source;
-- `tactip.taxel.collect`: simulated training and test datasets (``tactip-dataset/1``);
-- `tactip.reproduce.acuity`: localisation error against class count, passive and active (paper 000 Tables II-III).
+- `tactip.taxel.collect`: simulated training and test datasets (``tactip-dataset/1``).
+
+The papers' acuity tables and stimuli built on this front end are in `tactip.reproduce`.
 """
 
-from tactip.reproduce.acuity import ACUITY_THRESHOLDS, TABLE2_CLASSES, TABLE3_CLASSES, AcuityRow, acuity_table
 from tactip.taxel.collect import (DEFAULT_TAPS, TaxelDatasetPaths, simulate_taxel_dataset, simulate_taxel_datasets,
                       write_taxel_test_stream)
 from tactip.taxel.preprocess import (BASELINE_SAMPLES, FULL_SCALE_COUNTS, HighPassFilter, highpass, remove_tap_baseline,
@@ -29,5 +29,4 @@ __all__ = [
     "encode_reading", "decode_reading", "write_taxel_csv", "read_taps",
     "DEFAULT_TAPS", "TaxelDatasetPaths", "simulate_taxel_dataset", "simulate_taxel_datasets",
     "write_taxel_test_stream",
-    "TABLE2_CLASSES", "TABLE3_CLASSES", "ACUITY_THRESHOLDS", "AcuityRow", "acuity_table",
 ]
