@@ -62,8 +62,6 @@ never leaves a half-written result; the output paths are checked before any proc
 from __future__ import annotations
 
 import contextlib
-import dataclasses
-import json
 import math
 import os
 import pathlib
@@ -71,25 +69,17 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
-from pins import (DetectionParams, NoSensorError, PadScale, PinSelection, PinsError, PinTracker, SensorDisc,
-                  displacement_from_rest, feature_dim_names, find_pin_field, pad_scale, segment_taps,
-                  select_feature_pins, tap_features, tap_signal)
+from pins import DetectionParams, NoSensorError, PadScale, PinSelection, PinsError, PinTracker, SensorDisc, find_pin_field
 
 from tactip._output import check_video_written, claim_output, refuse_overwriting_inputs, write_error
 from tactip.errors import ConfigError, SourceError
+from tactip.pipeline import frames_to_features
+from tactip.replay.contacts import analyse, check_rest_frame
+from tactip.replay.writers import FORMAT, write_annotated, write_hdf5
 
 __all__ = ["ReplayResult", "replay_video", "FORMAT", "check_rest_frame"]
 
-FORMAT = "tactip-replay/2"
-DEFAULT_PAD_DIAMETER_MM = 40.0
-# Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
-REFERENCE_PITCH_PX = 17.5
-# Displacement arrows in the annotated video are drawn this many times their length.
-ARROW_SCALE = 3.0
-_BAR_X = np.array([24, 0], dtype=np.int32)
-_BAR_Y = np.array([0, 24], dtype=np.int32)
 
 
 @dataclass(frozen=True)
@@ -159,11 +149,6 @@ class ReplayResult:
     def lost_pin_frames(self) -> int:
         """Pin-frames flagged lost after the rest frame (blank frames included)."""
         return int(self.lost_per_frame[self.rest_frame:].sum())
-
-    @property
-    def most_lost(self) -> int:
-        """Largest number of pins lost in one frame after the rest frame."""
-        return int(self.lost_per_frame[self.rest_frame:].max(initial=0))
 
     def summary(self) -> str:
         """A few readable lines: frames, pins, scale, lost and retired pins, taps, warnings, files."""
@@ -357,20 +342,28 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
             # machine, and the pool's workers only contend with them.
             with _opencv_threads(1), ThreadedReader(source, maxsize=8, when_full="block",
                                                     close_source=False) as reader:
-                track = _track_video(reader, rest_frame=int(rest_frame), expected_pins=expected_pins,
-                                     params=params, calibration=cal, progress=progress,
-                                     total=getattr(source, "frame_count", None))
+                plan = _Plan(calibration=cal, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),
+                             sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
+                             mm_per_px=mm_per_px, expected_pins=expected_pins, rest_frame=int(rest_frame))
+                start = _Start(params=params, expected_pins=expected_pins, calibration=cal)
+                try:
+                    track = frames_to_features(reader, start=start, rest_frame=int(rest_frame), selected=plan.selected,
+                                               contacts=plan.contacts, n_samples=int(n_samples), progress=progress,
+                                               total=getattr(source, "frame_count", None))
+                except PinsError as exc:  # say which frame, and how to choose another (a black first frame)
+                    raise type(exc)(f"rest frame {rest_frame}: {exc}; give --rest-frame of a frame off contact "
+                                    f"with the pad lit and in view") from None
+                frame_size, frame_rate = source.frame_size, source.frame_rate
         # From here on the tracking is kept whatever happens: problems become warnings.
-        analysis = _analyse(track, calibration=cal, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),
-                            sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
-                            mm_per_px=mm_per_px, expected_pins=expected_pins, n_samples=int(n_samples),
-                            rest_frame=int(rest_frame))
+        analysis = plan.analysis
+        bounds = analysis["bounds"]
+        valid = track.valid if len(analysis["selected"]) else np.zeros(len(bounds), dtype=bool)
         decisions = None
-        if model is not None and analysis["taps"] is not None:
+        if model is not None and len(track.contacts):
             from tactip.replay.decisions import decide_taps
 
             try:
-                decisions = decide_taps(analysis["taps"], analysis["valid"], model,
+                decisions = decide_taps(track.features, track.valid, model,
                                         decision_threshold=decision_threshold, model_path=model_path)
             except Exception as exc:  # the tracking is still written
                 analysis["warnings"].append(f"no decision: {exc}")
@@ -382,30 +375,48 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         for part, final in zip(temporary, [out_path, annotate]):
             try:  # a full disk or a lost permission is named as such; the outputs keep their old content
                 if final is out_path:
-                    _write_hdf5(part, track, analysis, settings, decisions)
+                    write_hdf5(part, track, analysis, dict(settings, frame_size=frame_size, frame_rate=frame_rate),
+                               decisions)
                 else:
-                    _write_annotated(video, part, track, analysis["bounds"], analysis["selected"], decisions)
+                    write_annotated(video, part, track, bounds, analysis["selected"], frame_size=frame_size,
+                                    frame_rate=frame_rate, decisions=decisions)
                 with open(part, "rb+") as written:
                     os.fsync(written.fileno())
             except (OSError, RuntimeError) as exc:
                 raise write_error(exc, final) from None
             if final is annotate:  # OpenCV's writer says nothing of a full disk: count the frames stored
-                check_video_written(part, final, len(track["timestamps"]))
+                check_video_written(part, final, len(track.timestamps_s))
         for part, final in zip(temporary, [out_path, annotate]):
             os.replace(part, final)
     finally:
         for part in temporary:
             part.unlink(missing_ok=True)
-    return ReplayResult(out_path=out_path, annotate_path=annotate, video=str(video), frames=len(track["timestamps"]),
-                        pins=track["rest"].shape[0], frame_rate=track["frame_rate"],
-                        lost_per_frame=track["lost"].sum(axis=1), retired_per_frame=track["retired"].sum(axis=1),
-                        blank_frames=np.flatnonzero(track["blank"]).tolist(), rest_frame=int(rest_frame),
-                        tap_bounds=analysis["bounds"],
-                        invalid_taps=[k for k, ok in enumerate(analysis["valid"]) if not ok],
+    return ReplayResult(out_path=out_path, annotate_path=annotate, video=str(video), frames=len(track.timestamps_s),
+                        pins=len(track.rest_positions), frame_rate=frame_rate,
+                        lost_per_frame=track.lost.sum(axis=1), retired_per_frame=track.retired.sum(axis=1),
+                        blank_frames=np.flatnonzero(track.blank).tolist(), rest_frame=int(rest_frame),
+                        tap_bounds=bounds, invalid_taps=[k for k, ok in enumerate(valid) if not ok],
                         selected_pins=analysis["selected"], selection=analysis["selection"],
-                        mm_per_px=float(analysis["mm_per_px"]), scale=scale, disc=track["disc"],
-                        detection=track["detection"], pins_detected=track["pins_detected"], pin_field=track["field"],
+                        mm_per_px=float(analysis["mm_per_px"]), scale=scale, disc=track.disc,
+                        detection=track.detection, pins_detected=track.pins_detected, pin_field=track.pin_field,
                         expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions)
+
+
+class _Plan:
+    """What replay asks of the tracked pins: the feature pins, then the contacts (`contacts.analyse`)."""
+
+    def __init__(self, **options):
+        self.options = options
+        self.analysis: dict = {}
+
+    def selected(self, track) -> np.ndarray:
+        """The feature pins (the analysis is made here, once the pins are tracked)."""
+        self.analysis = analyse(track, **self.options)
+        return self.analysis["selected"]
+
+    def contacts(self, track) -> list:
+        """The contacts whose features are computed: none without feature pins."""
+        return self.analysis["bounds"] if len(self.analysis["selected"]) else []
 
 
 def _load_station_files(calibration, model, decision_threshold, *, n_samples: int, given: dict):
@@ -437,85 +448,19 @@ def _load_station_files(calibration, model, decision_threshold, *, n_samples: in
     return calibration, model, model_path
 
 
-def _track_video(source, *, rest_frame: int, expected_pins, params, calibration, progress: bool,
-                 total: int | None = None) -> dict:
-    """Read every frame: find the pins in the rest frame (or place the calibrated pins there), track after it.
+class _Start:
+    """Starts the tracker on the rest frame (`tactip.pipeline.Start`)."""
 
-    Positions are kept as float32 (half the memory of a long recording), with the tracker's lost
-    and retired masks and blank flag of every frame (`getattr` defaults for trackers without them).
-    """
-    from tqdm import tqdm
+    def __init__(self, *, params, expected_pins, calibration):
+        self.params = calibration.detection if calibration is not None else params or DetectionParams()
+        self.expected_pins, self.calibration = expected_pins, calibration
 
-    params = calibration.detection if calibration is not None else params or DetectionParams()
-    tracker: PinTracker | None = None
-    positions, lost, retired, blank, timestamps = [], [], [], [], []
-    warnings: list[str] = []
-    before = 0
-    detected, field = 0, ""
-    failed: list[tuple[int, str]] = []  # frames the tracker raised on: (index, message)
-    frames = iter(source)
-    with tqdm(total=total, unit="frame", disable=not progress, desc="replay", mininterval=0.5) as bar:
-        while True:
-            try:
-                frame = next(frames)
-            except StopIteration:
-                break
-            except (SourceError, OSError) as exc:  # a damaged file: keep what was tracked before it
-                if tracker is None:
-                    raise
-                warnings.append(f"the video could not be read after frame {len(timestamps) - 1} ({exc}); the "
-                                f"frames before it are kept")
-                break
-            timestamps.append(frame.timestamp_s)
-            if tracker is not None:
-                try:
-                    moved = tracker.update(frame.image).astype(np.float32)
-                except (PinsError, ValueError) as exc:  # the tracking so far is kept; this frame is lost
-                    failed.append((frame.index, f"{type(exc).__name__}: {exc}"))
-                    moved = np.full((len(tracker.rest_positions), 2), np.nan, np.float32)
-                    gone, away, dark = np.ones(len(moved), dtype=bool), None, False
-                else:
-                    gone = getattr(tracker, "lost", None)
-                    gone = np.isnan(moved[:, 0]) if gone is None else np.array(gone, dtype=bool)
-                    away = getattr(tracker, "retired", None)
-                    dark = bool(getattr(tracker, "blank", gone.all()))
-                positions.append(moved)
-                lost.append(gone)
-                retired.append(np.zeros_like(gone) if away is None else np.array(away, dtype=bool) & gone)
-                blank.append(dark)
-            elif frame.index == rest_frame:
-                try:
-                    tracker, rest, detected, params, field = _start(frame.image, params=params,
-                                                                    expected_pins=expected_pins,
-                                                                    calibration=calibration, warnings=warnings)
-                except PinsError as exc:  # say which frame, and how to choose another (a black first frame)
-                    raise type(exc)(f"rest frame {rest_frame}: {exc}; give --rest-frame of a frame off contact "
-                                    f"with the pad lit and in view") from None
-                positions.append(rest.astype(np.float32))
-                lost.append(np.zeros(len(rest), dtype=bool))
-                retired.append(np.zeros(len(rest), dtype=bool))
-                blank.append(False)
-            else:
-                before += 1
-            if progress:
-                bar.update(1)
-    if tracker is None:
-        raise SourceError(f"the video has {len(timestamps)} frames, so there is no rest frame {rest_frame}")
-    if failed:
-        warnings.append(f"tracking failed in {len(failed)} frame(s), every pin lost there (first: frame "
-                        f"{failed[0][0]}, {failed[0][1]})")
-    pins = tracker.rest_positions.shape[0]
-    stacked = np.concatenate([np.full((before, pins, 2), np.nan, np.float32), np.stack(positions)])
-    lost = np.concatenate([np.ones((before, pins), bool), np.stack(lost)])
-    retired = np.concatenate([np.zeros((before, pins), bool), np.stack(retired)])
-    blank = np.concatenate([np.zeros(before, bool), np.asarray(blank, dtype=bool)])
-    rest32 = tracker.rest_positions.astype(np.float32)
-    displacements = displacement_from_rest(stacked, rest32).astype(np.float32, copy=False)
-    return dict(positions=stacked, displacements=displacements, lost=lost, retired=retired, blank=blank,
-                tracked=np.arange(len(stacked)) >= rest_frame,
-                timestamps=np.asarray(timestamps, dtype=np.float64), rest=tracker.rest_positions,
-                disc=tracker.disc, detection=params, tracker=tracker, frame_rate=source.frame_rate,
-                frame_size=source.frame_size, pins_detected=int(detected), field=field, warnings=warnings)
+    def __call__(self, image):
+        """(tracker, rest positions, pins found, detection params, field line, warnings) of the rest frame."""
+        warnings: list[str] = []
+        started = _start(image, params=self.params, expected_pins=self.expected_pins, calibration=self.calibration,
+                         warnings=warnings)
+        return (*started, warnings)
 
 
 def _start(image, *, params, expected_pins, calibration, warnings):
@@ -549,290 +494,3 @@ def _start(image, *, params, expected_pins, calibration, warnings):
     tracker = PinTracker(detection=field.params, disc=field.disc)
     rest = tracker.start(image, field.centres)
     return tracker, rest, field.count, field.params, field.summary()
-
-
-def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, rest_frame: int,
-                     high_px: float = 1.5, signal: np.ndarray | None = None) -> str:
-    """A warning when the rest frame looks taken during a tap (`pins.converging_frames`), else "".
-
-    Parameters
-    ----------
-    displacements : (T, N, 2) ndarray
-        Displacements from the rest frame, px (NaN where lost or not tracked).
-    rest_positions : (N, 2) ndarray
-        px.
-    rest_frame : int
-        The rest frame's index (named in the warning).
-    high_px : float
-        Smallest tap signal of a frame that counts, px.
-    signal : (T,) ndarray, optional
-        The tap signal (`pins.tap_signal`) when already computed, px.
-
-    Returns
-    -------
-    warning : str
-        Names the frames where the pins are drawn together (as at rest after a press, seen from
-        a pressed reference) and suggests for ``--rest-frame`` the middle of the longest run of
-        frames drawn together about the most (the pad still, at rest); "" when fewer than
-        max(3, 5 % of the tracked frames) converge.
-    """
-    from pins import converging_frames
-
-    if signal is None:
-        signal = tap_signal(displacements)
-    frames = converging_frames(displacements, rest_positions, high_px=high_px, signal=signal)
-    tracked = int(np.isfinite(displacements[:, :, 0]).any(axis=1).sum())
-    if len(frames) < max(3, 0.05 * tracked):
-        return ""
-    signal = np.where(np.isin(np.arange(len(displacements)), frames), signal, 0.0)
-    # The pad at rest: the middle of the longest run of frames drawn together about the most.
-    runs, count = ndimage.label(signal >= 0.9 * signal.max())
-    longest = np.argmax(np.bincount(runs.ravel())[1:]) + 1
-    suggested = int(np.median(np.flatnonzero(runs == longest)))
-    return (f"the rest frame {rest_frame} looks taken during a tap: in {len(frames)} frames (e.g. {suggested}) "
-            f"the pins are drawn together by up to {signal.max():.1f} px from it, as a pad at rest looks from a "
-            f"pressed one; displacements and taps are measured from a deformed pad: give --rest-frame of a "
-            f"frame off contact (frame {suggested} looks like one)")
-
-
-def _analyse(track: dict, *, calibration, n_pins: int, min_separation_mm: float, sensor, pins_on_pad,
-             pad_diameter_mm, mm_per_px, expected_pins, n_samples: int, rest_frame: int) -> dict:
-    """Scale, feature pins, rest-frame check, taps and features; every problem becomes a warning."""
-    warnings = list(track["warnings"])
-    rest, disc, displacements = track["rest"], track["disc"], track["displacements"]
-    found = track["pins_detected"]
-    if expected_pins and abs(found - expected_pins) > 0.1 * expected_pins:
-        warnings.append(f"{found} pins found in the rest frame, {expected_pins} expected "
-                        f"({(found - expected_pins) / expected_pins:+.0%}): check --expected-pins and the rest frame")
-    scale = selection = None
-    selected = np.zeros(0, dtype=np.intp)
-    if calibration is not None:
-        scale_mm_per_px, selected = float(calibration.mm_per_px), np.asarray(calibration.selected_pins)
-    else:
-        pad = pad_diameter_mm if pad_diameter_mm is not None or sensor is not None else DEFAULT_PAD_DIAMETER_MM
-        count = pins_on_pad if pins_on_pad is not None or sensor is not None else expected_pins
-        try:
-            scale = pad_scale(rest, sensor=sensor, pins=count, pad_diameter_mm=pad, mm_per_px=mm_per_px)
-        except (PinsError, ValueError) as exc:
-            fallback = (pad or DEFAULT_PAD_DIAMETER_MM) / (2.0 * disc.radius_px)
-            scale = PadScale(fallback, float("nan"), float("nan"),
-                             f"pad diameter {pad or DEFAULT_PAD_DIAMETER_MM:g} mm / disc diameter "
-                             f"{2 * disc.radius_px:.1f} px", {"pad_diameter_mm": pad or DEFAULT_PAD_DIAMETER_MM})
-            warnings.append(f"the scale could not come from the pin pitch ({exc}); the disc's diameter was used")
-        if sensor is None and pad_diameter_mm is None and mm_per_px is None:
-            scale = dataclasses.replace(scale, source=f"{scale.source}; pad diameter assumed, describe the sensor "
-                                                      f"with --sensor or --pad-diameter-mm")
-        scale_mm_per_px = scale.mm_per_px
-        try:
-            selection = _select(track, n_pins=n_pins, min_separation_mm=min_separation_mm, mm_per_px=scale_mm_per_px)
-            selected = selection.indices
-            if selection.warning:
-                warnings.append(f"feature pins: {selection.warning}")
-        except (PinsError, ValueError) as exc:
-            warnings.append(f"no feature pins ({exc})")
-    signal = tap_signal(displacements)  # per frame, px: for the rest-frame check, the thresholds and the taps
-    try:
-        spacing = track["tracker"].spacing_px
-        check = check_rest_frame(displacements, rest, rest_frame=rest_frame, signal=signal,
-                                 high_px=1.5 * min(1.0, spacing / REFERENCE_PITCH_PX) if spacing > 0 else 1.5)
-        if check:
-            warnings.append(check)
-    except (PinsError, ValueError) as exc:
-        warnings.append(f"the rest frame could not be checked ({exc})")
-    bounds, taps, valid = [], None, np.zeros(0, dtype=bool)
-    high_px, low_px = tap_thresholds_px(displacements, track["tracker"].spacing_px,
-                                        usable=track["tracked"] & ~track["blank"], signal=signal)
-    try:
-        bounds = segment_taps(signal, high_px=high_px, low_px=low_px)
-        if not bounds:
-            warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
-                            f"was written")
-        elif len(selected):
-            taps, valid = _features(displacements, track["timestamps"], bounds, selected, n_samples)
-        else:
-            valid = np.zeros(len(bounds), dtype=bool)
-    except (PinsError, ValueError) as exc:
-        warnings.append(f"no tap features ({exc})")
-    return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
-                bounds=bounds, taps=taps, valid=valid, warnings=warnings, tap_thresholds_px=(high_px, low_px))
-
-
-def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None,
-                      signal: np.ndarray | None = None) -> tuple[float, float]:
-    """The hysteresis thresholds of `pins.segment_taps` for this sensor, px: (high, low).
-
-    The defaults (1.5 and 0.5 px) fit a pad whose pins are about `REFERENCE_PITCH_PX` apart in the
-    image; on a pad seen smaller (a small pad, a low resolution) the pins move proportionally less
-    and the thresholds shrink with the pitch (never grow), but stay above the tracking noise: the
-    low threshold at least twice the quiet frames' tap signal (its 10th percentile).
-
-    Parameters
-    ----------
-    displacements : (T, N, 2) ndarray
-        px, NaN where lost.
-    spacing_px : float
-        Median nearest-neighbour pin spacing at rest, px.
-    usable : (T,) ndarray of bool, optional
-        Frames to measure the noise on (tracked, not blank); all by default.
-    signal : (T,) ndarray, optional
-        The tap signal of every frame (`pins.tap_signal`) when already computed, px.
-    """
-    factor = min(1.0, spacing_px / REFERENCE_PITCH_PX) if np.isfinite(spacing_px) and spacing_px > 0 else 1.0
-    if signal is None:
-        signal = tap_signal(displacements)
-    if usable is not None:
-        signal = signal[usable]
-    floor = float(np.percentile(signal, 10)) if signal.size else 0.0
-    low = max(0.5 * factor, 2.0 * floor)
-    return max(1.5 * factor, 2.0 * low), low
-
-
-def _select(track: dict, *, n_pins: int, min_separation_mm: float, mm_per_px: float) -> PinSelection:
-    """Feature pins among the pins seen in at least half the tracked frames (all pins if too few are)."""
-    rest = track["rest"]
-    usable = track["tracked"] & ~track["blank"]
-    seen = (~track["lost"][usable]).mean(axis=0) >= 0.5 if usable.any() else np.ones(len(rest), bool)
-    candidates = np.flatnonzero(seen) if seen.sum() >= min(n_pins, len(rest)) else np.arange(len(rest))
-    selection = select_feature_pins(rest[candidates], n_pins=n_pins, min_separation_mm=min_separation_mm,
-                                    mm_per_px=mm_per_px, centre=tuple(rest.mean(axis=0)))
-    return dataclasses.replace(selection, indices=candidates[selection.indices])
-
-
-def _features(displacements, timestamps, bounds, selected, n_samples):
-    """Feature arrays of the taps; NaN (and invalid) where a selected pin was lost for a whole tap."""
-    taps = np.full((len(bounds), n_samples, 2 * len(selected)), np.nan)
-    valid = np.ones(len(bounds), dtype=bool)
-    for k, (start, stop) in enumerate(bounds):
-        times = timestamps[start:stop]
-        if not np.all(np.diff(times) > 0):  # a decoder without time stamps: resample by frame
-            times = None
-        try:
-            taps[k] = tap_features(displacements[start:stop], pins=selected, n_samples=n_samples,
-                                   timestamps_s=times)
-        except PinsError:  # LostPinError, or a tap of a single frame
-            valid[k] = False
-    return taps, valid
-
-
-def _write_hdf5(path, track, analysis, settings, decisions=None) -> None:
-    """The replay file (see the module docstring for its layout)."""
-    from perception._files import hdf5_in_memory
-    from tactip import __version__
-
-    tracker = track["tracker"]
-    frames, pins = track["lost"].shape
-    # Positions are sub-pixel floats with sensor noise: gzip saves a third of their size for about
-    # 10 % of the decoding time, so they are stored plain; the masks shrink to almost nothing.
-    packed = dict(compression="gzip", compression_opts=1)
-    with hdf5_in_memory(path) as h5:  # a full disk is an OSError, not a crash inside HDF5
-        for name in ("positions", "displacements"):
-            h5.create_dataset(name, data=track[name])
-        for name in ("lost", "retired"):
-            h5.create_dataset(name, data=track[name], chunks=(min(64, max(frames, 1)), pins) if frames else None,
-                              **(packed if frames else {}))
-        h5.create_dataset("lost_count", data=track["lost"].sum(axis=1, dtype=np.int32))
-        h5.create_dataset("retired_count", data=track["retired"].sum(axis=1, dtype=np.int32))
-        h5.create_dataset("blank", data=track["blank"])
-        h5.create_dataset("tracked", data=track["tracked"])
-        h5.create_dataset("timestamps", data=track["timestamps"])
-        h5.create_dataset("rest_positions", data=track["rest"])
-        selected = h5.create_dataset("selected_pins", data=np.asarray(analysis["selected"], dtype=np.int64))
-        selection = analysis["selection"]
-        if selection is not None:
-            selected.attrs.update({"requested": selection.requested, "min_separation_mm": selection.min_separation_mm,
-                                   "separation_mm": selection.separation_mm, "warning": selection.warning})
-        bounds = analysis["bounds"]
-        h5.create_dataset("tap_bounds", data=np.asarray(bounds, dtype=np.int64).reshape(-1, 2))
-        if analysis["taps"] is not None:
-            dataset = h5.create_dataset("taps", data=analysis["taps"].astype(np.float32))
-            dataset.attrs["feature_names"] = json.dumps(feature_dim_names(len(analysis["selected"])))
-            dataset.attrs["layout"] = "columns 0..P-1 dx, P..2P-1 dy of the selected pins, px"
-            h5.create_dataset("tap_valid", data=analysis["valid"])
-        disc = track["disc"]
-        scale = analysis["scale"]
-        scale_info = {"mm_per_px": float(analysis["mm_per_px"]), "source": "calibration"} if scale is None else {
-            "mm_per_px": scale.mm_per_px, "pitch_px": scale.pitch_px, "pitch_mm": scale.pitch_mm,
-            "source": scale.source, "sensor": scale.sensor}
-        h5.attrs.update({
-            "format": FORMAT,
-            "software_version": __version__,
-            "frame_size": np.asarray(track["frame_size"], dtype=np.int64),
-            "frame_rate": float(track["frame_rate"] or np.nan),
-            "disc": json.dumps({"cx": disc.cx, "cy": disc.cy, "radius_px": disc.radius_px}),
-            "detection_params": json.dumps(track["detection"].to_dict()),
-            "tracking_params": json.dumps({"lk": dataclasses.asdict(tracker.lk), "refine": tracker.refine,
-                                           "gate_fraction": tracker.gate_fraction,
-                                           "neighbours": tracker.neighbours}),
-            "sensor": json.dumps({"kind": "tactip", "pins": int(track["rest"].shape[0]),
-                                  "pad_diameter_mm": settings["pad_diameter_mm"]}),
-            "scale": json.dumps(scale_info, default=float),
-            "pins_detected": int(track["pins_detected"]),
-            "blank_frames": np.flatnonzero(track["blank"]).astype(np.int64),
-            "warnings": json.dumps(analysis["warnings"]),
-            "tap_thresholds_px": np.asarray(analysis["tap_thresholds_px"], dtype=np.float64),
-            **settings,
-        })
-        if decisions is not None:
-            from tactip.replay.decisions import write_decisions
-
-            write_decisions(h5, decisions)
-
-
-def _write_annotated(video, path, track, bounds, selected, decisions=None) -> None:
-    """The video again, with pins, displacement arrows (x ARROW_SCALE), the tap state and the
-    running decision (each tap's width estimate and belief) drawn on."""
-    import cv2
-
-    from tactip.sources import open_source
-
-    width, height = track["frame_size"]
-    rate = track["frame_rate"] or 20.0
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), rate, (width, height), True)
-    if not writer.isOpened():
-        raise OSError(f"cannot write the annotated video {str(path)!r} (no MPEG-4 encoder?)")
-    tap_of_frame = np.full(len(track["timestamps"]), -1)
-    for k, (start, stop) in enumerate(bounds):
-        tap_of_frame[start:stop] = k
-    rest = track["rest"]
-    is_selected = np.zeros(len(rest), dtype=bool)
-    is_selected[selected] = True
-    shift = 4  # sub-pixel drawing: coordinates in 1/16 px (the crosses' half-bars are 24/16 = 1.5 px)
-    try:
-        with open_source(video) as source:
-            for frame, positions, displacement, tap in zip(source, track["positions"], track["displacements"],
-                                                           tap_of_frame):
-                image = frame.image if frame.image.ndim == 3 else cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR)
-                seen = np.isfinite(positions[:, 0])
-                # Arrows from the rest position to rest + ARROW_SCALE x displacement; a cross on the pin.
-                tail = np.rint(rest * 16).astype(np.int32)
-                # Lost pins (NaN) are drawn at rest, then masked out: no NaN reaches the integer cast.
-                tip = np.rint((rest + ARROW_SCALE * np.nan_to_num(displacement)) * 16).astype(np.int32)
-                base = np.rint(np.where(np.isfinite(positions), positions, rest) * 16).astype(np.int32)
-                for mask, colour in ((seen & ~is_selected, (0, 200, 0)), (seen & is_selected, (0, 0, 255))):
-                    centre = base[mask]
-                    # One polyline call per colour: arrow shafts and the two bars of each cross.
-                    lines = np.concatenate([np.stack([tail[mask], tip[mask]], axis=1),
-                                            np.stack([centre - _BAR_X, centre + _BAR_X], axis=1),
-                                            np.stack([centre - _BAR_Y, centre + _BAR_Y], axis=1)])
-                    cv2.polylines(image, list(lines), False, colour, 1, cv2.LINE_AA, shift)
-                state = f"tap {tap + 1}" if tap >= 0 else "rest"
-                text = f"frame {frame.index}  {frame.timestamp_s:6.2f} s  {state}  lost {int((~seen).sum())}"
-                cv2.putText(image, text, (10, height - 12), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (0, 255, 255), 1,
-                            cv2.LINE_AA)
-                if decisions is not None and tap >= 0:
-                    cv2.putText(image, _decision_text(decisions, tap), (10, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.55,
-                                (0, 255, 255), 1, cv2.LINE_AA)
-                writer.write(image)
-    finally:
-        writer.release()
-
-
-def _decision_text(decisions, tap: int) -> str:
-    """The running decision shown on the frames of tap ``tap``."""
-    if decisions.used[tap]:
-        mark = "  DECIDED" if tap == decisions.decided_at_tap else ""
-        return (f"width {decisions.identity_estimate[tap]:g} {decisions.identity_unit}  "
-                f"belief {decisions.belief[tap]:.3f}{mark}")
-    if 0 <= decisions.decided_at_tap < tap:
-        return f"decided {decisions.identity:g} {decisions.identity_unit} at tap {decisions.decided_at_tap + 1}"
-    return "tap not used (pins lost)"

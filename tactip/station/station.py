@@ -72,33 +72,45 @@ class OpticalFrontEnd:
         -------
         features : (samples, 2 P) ndarray of float32
         """
-        from calibration import place_reference_pins
-        from pins import PinsError, PinTracker, as_grey, tap_features
+        track = self.track(frames, timestamps_s)
+        if not track.valid[0]:
+            raise track.errors[0]
+        return track.features[0].astype(np.float32)
+
+    def track(self, frames: Sequence[np.ndarray], timestamps_s: Sequence[float] | None = None):
+        """The tap's pins tracked and its features (`tactip.pipeline.PinTrack`, one contact: the whole tap).
+
+        Parameters are those of `features`.
+        """
+        from pins import PinsError
+
+        from tactip.pipeline import frames_to_features
+        from tactip.sources import Frame
 
         if len(frames) < 2:
             raise TactipError(f"a tap needs at least 2 frames, got {len(frames)} (camera too slow or stalled?)")
+        times = np.arange(len(frames), dtype=np.float64) if timestamps_s is None else timestamps_s
+        stream = [Frame(k, float(t), np.asarray(image)) for k, (image, t) in enumerate(zip(frames, times))]
+        try:
+            track = frames_to_features(stream, start=self._start, selected=self.calibration.selected_pins,
+                                       n_samples=self.samples)
+        except PinsError as error:
+            raise TactipError(f"no frame of the tap shows the pins ({error}); is the camera's light on?") from None
+        if track.rest_frame == len(frames) - 1:
+            raise TactipError("no frame of the tap shows the pins before its last; is the camera's light on?")
+        return track
+
+    def _start(self, image: np.ndarray):
+        """The tracker started on the tap's rest frame from the calibrated pins, each moved onto its blob
+        there, so the pin identities (and the feature subset) are those of the calibration."""
+        from calibration import place_reference_pins
+        from pins import PinTracker, as_grey
+
         cal = self.calibration
-        # Start from the calibrated pins, each moved onto its blob in this tap's rest frame, so the
-        # pin identities (and the feature subset) are those of the calibration. A blank first frame
-        # (LEDs off, a dropped USB frame) is skipped: the first frame showing the pins is the rest.
+        grey = as_grey(image)
         tracker = PinTracker(detection=cal.detection, disc=cal.disc)
-        for first_index in range(len(frames) - 1):
-            first = as_grey(np.asarray(frames[first_index]))
-            try:
-                rest = tracker.start(first, pins=place_reference_pins(cal, first))
-                break
-            except PinsError as error:
-                blank_error = error
-        else:
-            raise TactipError(f"no frame of the tap shows the pins ({blank_error}); is the camera's light on?")
-        positions = np.full((len(frames), len(rest), 2), np.nan)
-        positions[first_index] = rest
-        for k in range(first_index + 1, len(frames)):
-            # NaN in a blank frame (`tracker.blank`) and for lost pins: tap_features fills them in time.
-            positions[k] = tracker.update(frames[k])
-        times = None if timestamps_s is None else np.asarray(timestamps_s, dtype=np.float64)
-        return tap_features(positions - rest, pins=cal.selected_pins, n_samples=self.samples,
-                            timestamps_s=times).astype(np.float32)
+        rest = tracker.start(grey, pins=place_reference_pins(cal, grey))
+        return tracker, rest, len(rest), cal.detection, "the calibration's pins", []
 
 
 class SimulatedCamera:

@@ -266,7 +266,7 @@ def test_a_full_disk_is_named_and_leaves_nothing(tmp_path, monkeypatch):
 
     out = tmp_path / "r.h5"
     out.write_bytes(b"old result")
-    monkeypatch.setattr(tactip.replay.video, "_write_hdf5", full)
+    monkeypatch.setattr(tactip.replay.video, "write_hdf5", full)
     with pytest.raises(OSError, match="disk full while writing"):
         replay_video(SAMPLE, out)
     assert out.read_bytes() == b"old result" and sorted(p.name for p in tmp_path.iterdir()) == ["r.h5"]

@@ -1,0 +1,169 @@
+"""A replay's contacts, feature pins and scale, found in the tracked pins; and the rest-frame check.
+
+Nothing here raises for lack of pins: every problem becomes a warning, so the tracking is always kept.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy import ndimage
+
+from pins import PadScale, PinSelection, PinsError, pad_scale, segment_taps, select_feature_pins, tap_signal
+
+from tactip.pipeline import PinTrack
+
+__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "tap_thresholds_px"]
+
+DEFAULT_PAD_DIAMETER_MM = 40.0
+# Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
+REFERENCE_PITCH_PX = 17.5
+
+
+def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, rest_frame: int,
+                     high_px: float = 1.5, signal: np.ndarray | None = None) -> str:
+    """A warning when the rest frame looks taken during a tap (`pins.converging_frames`), else "".
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from the rest frame, px (NaN where lost or not tracked).
+    rest_positions : (N, 2) ndarray
+        px.
+    rest_frame : int
+        The rest frame's index (named in the warning).
+    high_px : float
+        Smallest tap signal of a frame that counts, px.
+    signal : (T,) ndarray, optional
+        The tap signal (`pins.tap_signal`) when already computed, px.
+
+    Returns
+    -------
+    warning : str
+        Names the frames where the pins are drawn together (as at rest after a press, seen from
+        a pressed reference) and suggests for ``--rest-frame`` the middle of the longest run of
+        frames drawn together about the most (the pad still, at rest); "" when fewer than
+        max(3, 5 % of the tracked frames) converge.
+    """
+    from pins import converging_frames
+
+    if signal is None:
+        signal = tap_signal(displacements)
+    frames = converging_frames(displacements, rest_positions, high_px=high_px, signal=signal)
+    tracked = int(np.isfinite(displacements[:, :, 0]).any(axis=1).sum())
+    if len(frames) < max(3, 0.05 * tracked):
+        return ""
+    signal = np.where(np.isin(np.arange(len(displacements)), frames), signal, 0.0)
+    # The pad at rest: the middle of the longest run of frames drawn together about the most.
+    runs, count = ndimage.label(signal >= 0.9 * signal.max())
+    longest = np.argmax(np.bincount(runs.ravel())[1:]) + 1
+    suggested = int(np.median(np.flatnonzero(runs == longest)))
+    return (f"the rest frame {rest_frame} looks taken during a tap: in {len(frames)} frames (e.g. {suggested}) "
+            f"the pins are drawn together by up to {signal.max():.1f} px from it, as a pad at rest looks from a "
+            f"pressed one; displacements and taps are measured from a deformed pad: give --rest-frame of a "
+            f"frame off contact (frame {suggested} looks like one)")
+
+
+def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: float, sensor, pins_on_pad,
+             pad_diameter_mm, mm_per_px, expected_pins, rest_frame: int) -> dict:
+    """Scale, feature pins, rest-frame check and contacts of a replay; every problem becomes a warning.
+
+    Returns a dict: ``scale`` (`pins.PadScale` or None with a calibration), ``mm_per_px``,
+    ``selection`` (`pins.PinSelection` or None), ``selected`` (P,) pin indices, ``bounds`` (the
+    contacts, [start, stop) frames), ``warnings`` and ``tap_thresholds_px`` (high, low).
+    """
+    warnings = list(track.warnings)
+    rest, disc, displacements = track.rest_positions, track.disc, track.displacements
+    found = track.pins_detected
+    if expected_pins and abs(found - expected_pins) > 0.1 * expected_pins:
+        warnings.append(f"{found} pins found in the rest frame, {expected_pins} expected "
+                        f"({(found - expected_pins) / expected_pins:+.0%}): check --expected-pins and the rest frame")
+    scale = selection = None
+    selected = np.zeros(0, dtype=np.intp)
+    if calibration is not None:
+        scale_mm_per_px, selected = float(calibration.mm_per_px), np.asarray(calibration.selected_pins)
+    else:
+        pad = pad_diameter_mm if pad_diameter_mm is not None or sensor is not None else DEFAULT_PAD_DIAMETER_MM
+        count = pins_on_pad if pins_on_pad is not None or sensor is not None else expected_pins
+        try:
+            scale = pad_scale(rest, sensor=sensor, pins=count, pad_diameter_mm=pad, mm_per_px=mm_per_px)
+        except (PinsError, ValueError) as exc:
+            fallback = (pad or DEFAULT_PAD_DIAMETER_MM) / (2.0 * disc.radius_px)
+            scale = PadScale(fallback, float("nan"), float("nan"),
+                             f"pad diameter {pad or DEFAULT_PAD_DIAMETER_MM:g} mm / disc diameter "
+                             f"{2 * disc.radius_px:.1f} px", {"pad_diameter_mm": pad or DEFAULT_PAD_DIAMETER_MM})
+            warnings.append(f"the scale could not come from the pin pitch ({exc}); the disc's diameter was used")
+        if sensor is None and pad_diameter_mm is None and mm_per_px is None:
+            scale = dataclasses.replace(scale, source=f"{scale.source}; pad diameter assumed, describe the sensor "
+                                                      f"with --sensor or --pad-diameter-mm")
+        scale_mm_per_px = scale.mm_per_px
+        try:
+            selection = _select(track, n_pins=n_pins, min_separation_mm=min_separation_mm, mm_per_px=scale_mm_per_px)
+            selected = selection.indices
+            if selection.warning:
+                warnings.append(f"feature pins: {selection.warning}")
+        except (PinsError, ValueError) as exc:
+            warnings.append(f"no feature pins ({exc})")
+    signal = tap_signal(displacements)  # per frame, px: for the rest-frame check, the thresholds and the taps
+    try:
+        spacing = track.tracker.spacing_px
+        check = check_rest_frame(displacements, rest, rest_frame=rest_frame, signal=signal,
+                                 high_px=1.5 * min(1.0, spacing / REFERENCE_PITCH_PX) if spacing > 0 else 1.5)
+        if check:
+            warnings.append(check)
+    except (PinsError, ValueError) as exc:
+        warnings.append(f"the rest frame could not be checked ({exc})")
+    bounds = []
+    high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px,
+                                        usable=track.tracked & ~track.blank, signal=signal)
+    try:
+        bounds = segment_taps(signal, high_px=high_px, low_px=low_px)
+        if not bounds:
+            warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
+                            f"was written")
+    except (PinsError, ValueError) as exc:
+        warnings.append(f"no tap features ({exc})")
+    return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
+                bounds=bounds, warnings=warnings, tap_thresholds_px=(high_px, low_px))
+
+
+def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None,
+                      signal: np.ndarray | None = None) -> tuple[float, float]:
+    """The hysteresis thresholds of `pins.segment_taps` for this sensor, px: (high, low).
+
+    The defaults (1.5 and 0.5 px) fit a pad whose pins are about `REFERENCE_PITCH_PX` apart in the
+    image; on a pad seen smaller (a small pad, a low resolution) the pins move proportionally less
+    and the thresholds shrink with the pitch (never grow), but stay above the tracking noise: the
+    low threshold at least twice the quiet frames' tap signal (its 10th percentile).
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        px, NaN where lost.
+    spacing_px : float
+        Median nearest-neighbour pin spacing at rest, px.
+    usable : (T,) ndarray of bool, optional
+        Frames to measure the noise on (tracked, not blank); all by default.
+    signal : (T,) ndarray, optional
+        The tap signal of every frame (`pins.tap_signal`) when already computed, px.
+    """
+    factor = min(1.0, spacing_px / REFERENCE_PITCH_PX) if np.isfinite(spacing_px) and spacing_px > 0 else 1.0
+    if signal is None:
+        signal = tap_signal(displacements)
+    if usable is not None:
+        signal = signal[usable]
+    floor = float(np.percentile(signal, 10)) if signal.size else 0.0
+    low = max(0.5 * factor, 2.0 * floor)
+    return max(1.5 * factor, 2.0 * low), low
+
+
+def _select(track: PinTrack, *, n_pins: int, min_separation_mm: float, mm_per_px: float) -> PinSelection:
+    """Feature pins among the pins seen in at least half the tracked frames (all pins if too few are)."""
+    rest = track.rest_positions
+    usable = track.tracked & ~track.blank
+    seen = (~track.lost[usable]).mean(axis=0) >= 0.5 if usable.any() else np.ones(len(rest), bool)
+    candidates = np.flatnonzero(seen) if seen.sum() >= min(n_pins, len(rest)) else np.arange(len(rest))
+    selection = select_feature_pins(rest[candidates], n_pins=n_pins, min_separation_mm=min_separation_mm,
+                                    mm_per_px=mm_per_px, centre=tuple(rest.mean(axis=0)))
+    return dataclasses.replace(selection, indices=candidates[selection.indices])
