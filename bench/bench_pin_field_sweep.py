@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from pins import find_pin_field
-from tactip.sim.synthetic import Contact, SyntheticTacTip
+from tactip.sim import Contact, SyntheticTacTip
 
 BROWN = dict(colour=True, skin_tint="brown", membrane_level=70.0, pin_level=140.0, skin_texture=12.0, pin_shadows=22.0)
 BRIGHT = dict(surround_level=240.0, glare_gain=1.6, veil=40.0)

@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 from scipy.optimize import linear_sum_assignment
 
 from pins import PinTracker, detect_pins, find_pin_field, find_sensor_disc
-from tactip.sim.synthetic import Contact, SyntheticTacTip, preset_names
+from tactip.sim import Contact, SyntheticTacTip, preset_names
 
 REPEATS = 5
 

@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from tactip.sim.synthetic import PRESETS, Contact, SyntheticTacTip
+from tactip.sim import PRESETS, Contact, SyntheticTacTip
 
 REPEATS = 60
 

@@ -41,7 +41,7 @@ import numpy as np
 from pins import PinTracker, find_pin_field
 from tactip.replay.video import replay_video
 from tactip.sources import open_source
-from tactip.sim.synthetic import Contact, SyntheticTacTip, tap_profile
+from tactip.sim import Contact, SyntheticTacTip, tap_profile
 
 
 def write_video(path: pathlib.Path, preset: str, taps: int, *, frame_rate: float = 20.0, codec: str = "mp4v") -> int:

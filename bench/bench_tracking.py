@@ -35,7 +35,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from pins import DetectionParams, PinTracker, SensorDisc
-from tactip.sim.synthetic import Contact, SyntheticTacTip
+from tactip.sim import Contact, SyntheticTacTip
 
 PASSES = 7
 

@@ -7,7 +7,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from tactip.errors import SourceError
-from tactip.sim.synthetic import Contact, SyntheticFrame, SyntheticTacTip, tap_profile
+from tactip.sim.contact import Contact, SyntheticFrame, tap_profile
+from tactip.sim.synthetic import SyntheticTacTip
 from tactip.sources.base import FrameSourceBase
 
 __all__ = ["SyntheticSource", "DEFAULT_TAPS"]

@@ -7,28 +7,24 @@ the arm's contact callback to its release callback), and turn them into the tap'
 pins tracked from the tap's own rest frame, displacements of the calibrated feature pins, resampled
 to the protocol's sample count (`pins.tap_features`).
 
-Two cameras share the interface ``rest_frames(n)``, ``begin_tap(event)``, ``end_tap(event)``:
-
-- `LiveCamera`: an OpenCV camera (or video) read on a thread into a bounded queue; the frames
-  queued between the arm's two callbacks are the tap.
-- `SimulatedCamera`: the synthetic TacTip renders the tap from the simulated arm's true contact
-  (indentation, gap width, lateral offset) on the tap's own timeline: the stroke down from the
-  approach height at the tap speed, the dwell, the stroke back up, at the camera's frame rate.
+The camera is any `tactip.station.camera.Camera` (a live one, or the synthetic TacTip on the
+simulated arm), opened by `tactip.station.camera.make_camera`; the frames to features path is
+`tactip.pipeline`, which replay shares.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
 
+from tactip.errors import TactipError
+from tactip.station.camera import make_camera
 from tactip.station.config import GapConfig, StationConfig
-from tactip.errors import SourceError, TactipError
 
-__all__ = ["OpticalFrontEnd", "SimulatedCamera", "LiveCamera", "Station", "TapResult"]
+__all__ = ["OpticalFrontEnd", "Station", "TapResult"]
 
 
 class OpticalFrontEnd:
@@ -113,126 +109,6 @@ class OpticalFrontEnd:
         return tracker, rest, len(rest), cal.detection, "the calibration's pins", []
 
 
-class SimulatedCamera:
-    """The synthetic TacTip filming the simulated arm's taps (see the module docstring).
-
-    Parameters
-    ----------
-    pins : int
-        Pin preset (127, 331 or 532).
-    frame_rate : float
-        Camera frames/s.
-    tap_speed_mm_s, dwell_s, approach_height_mm : float
-        The arm's tap motion (``[arm.tap]``): they set the tap's timeline.
-    noise_sigma : float
-        Camera noise, grey levels.
-    seed : int
-        Seed of the sensor (pin layout and noise).
-    """
-
-    def __init__(self, *, pins: int = 331, frame_rate: float = 20.0, tap_speed_mm_s: float = 20.0,
-                 dwell_s: float = 0.25, approach_height_mm: float = 5.0, noise_sigma: float = 4.0, seed: int = 0):
-        from tactip.sim.synthetic import SyntheticTacTip
-
-        self.sensor = SyntheticTacTip(pins=pins, noise_sigma=noise_sigma, seed=seed)
-        self.frame_rate = float(frame_rate)
-        self.tap_speed_mm_s = float(tap_speed_mm_s)
-        self.dwell_s = float(dwell_s)
-        self.approach_height_mm = float(approach_height_mm)
-        self._event = None
-
-    def rest_frames(self, n: int) -> list[np.ndarray]:
-        """``n`` frames off contact."""
-        return [self.sensor.render(timestamp_s=k / self.frame_rate).image for k in range(n)]
-
-    def begin_tap(self, event, *, seed: int | None = None) -> None:
-        """The arm starts its stroke down; ``event.contact`` is the simulated world's contact."""
-        if seed is not None:
-            self.sensor.reseed_noise(seed)
-        self._event = event
-
-    def end_tap(self, event) -> tuple[list[np.ndarray], list[float]]:
-        """The arm is back up: render the tap's frames on its timeline. Returns (frames, times in s)."""
-        from tactip.sim.synthetic import Contact
-
-        contact = (self._event or event).contact
-        if contact is None:
-            raise TactipError("the simulated camera needs the simulated arm (no world contact in the tap event)")
-        speed = self.tap_speed_mm_s
-        indentation = max(float(contact.indentation_mm), 0.0)
-        offset = 0.0 if not math.isfinite(contact.gap_offset_mm) else float(contact.gap_offset_mm)
-        # From the approach height down to the surface (z = 0), the pressed stroke, dwell, back up.
-        free_s = max(self.approach_height_mm / speed, 1.0 / self.frame_rate)
-        press_s = max(indentation / speed, 1.0 / self.frame_rate)
-        frames, times = [], []
-        for f in self.sensor.tap(Contact(indentation_mm=indentation, gap_width_mm=float(contact.gap_width_mm),
-                                         gap_offset_mm=offset),
-                                 frame_rate=self.frame_rate, rise_s=press_s, plateau_s=self.dwell_s,
-                                 release_s=press_s, rest_before_s=free_s, rest_after_s=free_s):
-            frames.append(f.image)
-            times.append(f.timestamp_s)
-        self._event = None
-        return frames, times
-
-    def close(self) -> None:
-        """Nothing to release."""
-
-
-class LiveCamera:
-    """A real camera (OpenCV) read on a thread; a tap is the frames between the arm's callbacks.
-
-    Parameters
-    ----------
-    source : str, int or FrameSource
-        Camera index, device path or video file (`tactip.sources.open_source`), or an open source.
-    queue_frames : int
-        Capacity of the frame queue; a tap must fit in it.
-    timeout_s : float
-        How long to wait for a frame before the camera counts as stalled, s.
-    """
-
-    def __init__(self, source: str | int, *, queue_frames: int = 512, timeout_s: float = 2.0):
-        from tactip.sources import ThreadedReader, open_source
-
-        self.timeout_s = float(timeout_s)
-        if not hasattr(source, "read"):
-            source = open_source(source, grey=True)
-        self._reader = ThreadedReader(source, maxsize=queue_frames, when_full="drop")
-        self.frame_rate = self._reader.frame_rate
-        self._rest = None
-
-    def rest_frames(self, n: int) -> list[np.ndarray]:
-        """The next ``n`` frames (after dropping what was queued)."""
-        self._reader.drain()
-        frames = []
-        for _ in range(n):
-            frame = self._reader.read(timeout_s=self.timeout_s)
-            if frame is None:
-                raise SourceError("the camera stream ended while taking rest frames")
-            frames.append(frame.image)
-        return frames
-
-    def begin_tap(self, event, *, seed: int | None = None) -> None:
-        """The stroke starts: the newest queued frame (still off contact) is the tap's rest frame."""
-        queued = self._reader.drain()
-        if not queued:
-            frame = self._reader.read(timeout_s=self.timeout_s)
-            if frame is None:
-                raise SourceError("the camera stream ended")
-            queued = [frame]
-        self._rest = queued[-1]
-
-    def end_tap(self, event) -> tuple[list[np.ndarray], list[float]]:
-        """The pad is back up: the rest frame and every frame since are the tap."""
-        frames = [self._rest, *self._reader.drain()]
-        self._rest = None
-        return [f.image for f in frames], [f.timestamp_s for f in frames]
-
-    def close(self) -> None:
-        """Stop the reader thread and release the camera."""
-        self._reader.close()
-
-
 @dataclass(frozen=True)
 class TapResult:
     """One tap of the station.
@@ -281,7 +157,7 @@ class Station:
         self.config = config
         self.calibration = calibration
         self.arm = arm if arm is not None else _make_arm(config)
-        self.camera = camera if camera is not None else _make_camera(config)
+        self.camera = camera if camera is not None else make_camera(config)
         self.front_end = None if calibration is None else OpticalFrontEnd(calibration, samples=config.protocol.samples)
         self._open = False
 
@@ -301,11 +177,6 @@ class Station:
         finally:
             self._open = False
             self.camera.close()
-
-    def use_calibration(self, calibration) -> None:
-        """Set the sensor calibration `tap` uses."""
-        self.calibration = calibration
-        self.front_end = OpticalFrontEnd(calibration, samples=self.config.protocol.samples)
 
     def rest_frames(self, n: int = 10) -> list[np.ndarray]:
         """``n`` frames with the pad off contact, at the approach height over the first gap."""
@@ -360,15 +231,3 @@ def _make_arm(config: StationConfig):
     world = PlateWorld(gaps=gaps, surface_z_mm=sim.surface_z_mm, placement_noise_mm=sim.placement_noise_mm,
                        seed=sim.seed)
     return SimArm(config.arm, world=world)
-
-
-def _make_camera(config: StationConfig):
-    if config.arm.backend == "sim" or config.sensor.source == "synthetic":
-        if config.arm.backend != "sim":
-            raise TactipError("[sensor] source 'synthetic' needs the simulated arm (arm.backend = 'sim')")
-        tap = config.arm.tap
-        return SimulatedCamera(pins=config.sensor.pins, frame_rate=config.sensor.frame_rate,
-                               tap_speed_mm_s=tap.speed_mm_s, dwell_s=tap.dwell_s,
-                               approach_height_mm=tap.approach_height_mm, noise_sigma=config.sim.noise_sigma,
-                               seed=config.sim.seed)
-    return LiveCamera(config.sensor.source)

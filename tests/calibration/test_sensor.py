@@ -8,7 +8,7 @@ from scipy.spatial.distance import pdist
 
 from calibration import SCHEMA, CalibrationError, calibrate_sensor, load_calibration, save_calibration
 from perception import Dataset, save_dataset
-from tactip.sim.synthetic import SyntheticTacTip
+from tactip.sim import SyntheticTacTip
 
 
 @pytest.fixture(scope="module")

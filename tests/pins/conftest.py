@@ -7,7 +7,7 @@ import pytest
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
-from tactip.sim.synthetic import Contact, SyntheticTacTip
+from tactip.sim import Contact, SyntheticTacTip
 
 TAP = Contact(indentation_mm=5.0, gap_width_mm=2.0)
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pins import DetectionParams, NoSensorError, SensorDisc, detect_blobs, detect_pins
-from tactip.sim.synthetic import Contact
+from tactip.sim import Contact
 from tests.pins.conftest import TAP, frame, match, sensor
 
 

@@ -9,7 +9,7 @@ from scipy.spatial import Delaunay, cKDTree
 
 from pins import (REJECTION_REASONS, DetectionParams, NoSensorError, PinField, detect_pins, draw_pin_field,
                   find_pin_field, find_sensor_disc)
-from tactip.sim.synthetic import Contact, SyntheticTacTip, preset_names
+from tactip.sim import Contact, SyntheticTacTip, preset_names
 from tests.pins.conftest import TAP, preset_frame, preset_sensor, score
 
 CONTACTS = {"rest": None, "tap5mm": TAP}

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pins import PinsError, central_spacing_px, pad_scale, pin_pitch_mm, sensor_preset
-from tactip.sim.synthetic import SyntheticTacTip
+from tactip.sim import SyntheticTacTip
 
 
 @pytest.mark.parametrize("pins, pad_mm", [(127, 40.0), (331, 40.0), (532, 40.0), (1000, 40.0), (100, 20.0)])

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pins import PinTracker, converging_frames, displacement_from_rest, segment_taps, tap_signal
-from tactip.sim.synthetic import Contact
+from tactip.sim import Contact
 from tests.pins.conftest import sensor
 
 

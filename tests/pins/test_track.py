@@ -11,7 +11,7 @@ from scipy.spatial import cKDTree
 from pins import (DetectionParams, LKParams, PinsError, PinTracker, SensorDisc, ShapeError, detect_pins,
                   find_sensor_disc, match_to_blobs, track_pins)
 from pins._refine import Refiner
-from tactip.sim.synthetic import Contact
+from tactip.sim import Contact
 from tests.pins.conftest import TAP, frame, preset_sensor, sensor
 
 

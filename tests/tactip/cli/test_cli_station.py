@@ -24,7 +24,7 @@ from perception import load_dataset, load_model
 from tactip.station.config import load_station_config
 from tactip.station.procedures import collect_station, sensor_description
 from tactip.line.results import ResultsStore
-from tactip.station.station import SimulatedCamera
+from tactip.sim.camera import SimulatedCamera
 from tests.tactip.conftest import (LOCATIONS, SMALL_GAPS, THRESHOLDS, FaultyArm, printed_inspections, run_cli,
                                    sim_arm, small_station_table, stored_inspections, write_station)
 
@@ -220,7 +220,7 @@ class GreyCamera:
 ], ids=["no-sensor", "wrong-count"])
 def test_calibrate_refuses_with_one_line(tmp_path, monkeypatch, camera, pins, message):
     toml = write_station(tmp_path, small_station_table(tmp_path, sensor={"pins": pins}))
-    monkeypatch.setattr(tactip.station.station, "_make_camera", lambda config: camera())
+    monkeypatch.setattr(tactip.station.station, "make_camera", lambda config: camera())
     code, out, err = run_cli(["calibrate", "--config", toml])
     assert code == 1 and err.count("\n") == 1 and err.startswith(message)
     assert not (tmp_path / "calibration.h5").exists()

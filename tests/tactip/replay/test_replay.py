@@ -15,7 +15,7 @@ from pins import NoSensorError, PinsError
 from tactip.cli import main
 from tactip.errors import SourceError
 from tactip.replay.video import FORMAT, replay_video
-from tactip.sim.synthetic import Contact, SyntheticTacTip
+from tactip.sim import Contact, SyntheticTacTip
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 SAMPLE = ROOT / "samples" / "synthetic_tap.mp4"

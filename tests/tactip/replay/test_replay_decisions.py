@@ -16,7 +16,8 @@ import pytest
 
 from perception import ModelError, load_model, save_model
 from tactip.replay.video import replay_video
-from tactip.station.station import SimulatedCamera, Station
+from tactip.sim.camera import SimulatedCamera
+from tactip.station.station import Station
 
 from tests.tactip.conftest import run_cli
 

@@ -19,7 +19,7 @@ import pytest
 from scipy.spatial import cKDTree
 
 from tactip.replay.video import replay_video
-from tactip.sim.synthetic import Contact, SyntheticTacTip, preset_names
+from tactip.sim import Contact, SyntheticTacTip, preset_names
 
 TAP = Contact(indentation_mm=4.0, gap_width_mm=2.0)
 

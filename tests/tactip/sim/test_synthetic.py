@@ -5,7 +5,7 @@ import pytest
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from tactip.sim.synthetic import Contact, SyntheticFrame, SyntheticTacTip, tap_profile
+from tactip.sim import Contact, SyntheticFrame, SyntheticTacTip, tap_profile
 
 PRESETS = (127, 331, 532)
 

@@ -15,7 +15,7 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from tactip.sources import SyntheticSource, open_source
-from tactip.sim.synthetic import PRESETS, Contact, SyntheticTacTip, preset_names
+from tactip.sim import PRESETS, Contact, SyntheticTacTip, preset_names
 from tests.pins.conftest import preset_frame, score
 
 SAMPLES = pathlib.Path(__file__).resolve().parents[3] / "samples"

@@ -9,7 +9,7 @@ import pytest
 from tactip.errors import SourceError
 from tactip.sources import (CameraSource, Frame, FrameSource, ImageFolderSource, SyntheticSource, ThreadedReader,
                             VideoSource, open_source)
-from tactip.sim.synthetic import Contact
+from tactip.sim import Contact
 
 
 # -- a fake camera ------------------------------------------------------------------------------

@@ -7,7 +7,7 @@ import pytest
 
 from tactip.errors import SourceError
 from tactip.sources import Frame
-from tactip.station.station import LiveCamera
+from tactip.station.camera import LiveCamera
 
 
 class FakeCamera:
