@@ -39,7 +39,7 @@ import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -105,9 +105,15 @@ class SimSettings:
     home: Pose | None = None
     gaps: tuple[Gap, ...] = ()
 
-    def make_world(self) -> PlateWorld:
-        """A fresh `PlateWorld` with these settings (its generator starts from ``seed``)."""
-        return PlateWorld(gaps=self.gaps, surface_z_mm=self.surface_z_mm,
+    def make_world(self, default_gaps: Sequence[Gap] = ()) -> PlateWorld:
+        """A fresh `PlateWorld` with these settings (its generator starts from ``seed``).
+
+        Parameters
+        ----------
+        default_gaps : sequence of Gap
+            The plate's gaps when ``gaps`` is empty (a station passes the gaps it inspects).
+        """
+        return PlateWorld(gaps=self.gaps or tuple(default_gaps), surface_z_mm=self.surface_z_mm,
                           placement_noise_mm=self.placement_noise_mm, seed=self.seed)
 
 
