@@ -6,12 +6,12 @@ a positive tap depth goes down into the part. See `arm.interface` for the contra
 
 from .base import BaseArm
 from .commissioning import StatusReport, arm_status, check_tap
-from .config import ArmConfig, SimSettings, arm_config_from_table, load_arm_config
+from .config import ArmConfig, SafetyLimits, SimSettings, arm_config_from_table, load_arm_config
 from .errors import ArmConfigError, ArmConnectionError, ArmError, ArmFault, SafetyError
 from .factory import make_arm
 from .interface import Arm, ArmState, TapEvent
 from .pose import Pose, pose_from_ur, pose_to_ur
-from .safety import SafetyLimits, check_move, check_ready
+from .safety import check_move, check_ready
 from .profile import trapezoid_duration
 from .sim import SimArm
 from .tap import TapMotion, plan_tap

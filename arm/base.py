@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import time
 
-from .config import ArmConfig
+from .config import ArmConfig, SafetyLimits
 from .errors import ArmError, ArmFault, SafetyError
 from .interface import ArmState, TapCallback, TapEvent
 from .pose import Pose
-from .safety import SafetyLimits, check_move, check_point, check_ready
+from .safety import check_move, check_point, check_ready
 from .tap import Segment, TapMotion, plan_tap
 from .world import WorldContact
 

@@ -39,7 +39,7 @@ import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -48,7 +48,7 @@ from .pose import Pose
 from .tap import TapMotion
 from .world import Gap, PlateWorld
 
-__all__ = ["ArmConfig", "SimSettings", "BACKENDS", "arm_config_from_table", "load_arm_config"]
+__all__ = ["ArmConfig", "SafetyLimits", "SimSettings", "BACKENDS", "arm_config_from_table", "load_arm_config"]
 
 BACKENDS = ("sim", "ur")
 
@@ -105,9 +105,15 @@ class SimSettings:
     home: Pose | None = None
     gaps: tuple[Gap, ...] = ()
 
-    def make_world(self) -> PlateWorld:
-        """A fresh `PlateWorld` with these settings (its generator starts from ``seed``)."""
-        return PlateWorld(gaps=self.gaps, surface_z_mm=self.surface_z_mm,
+    def make_world(self, default_gaps: Sequence[Gap] = ()) -> PlateWorld:
+        """A fresh `PlateWorld` with these settings (its generator starts from ``seed``).
+
+        Parameters
+        ----------
+        default_gaps : sequence of Gap
+            The plate's gaps when ``gaps`` is empty (a station passes the gaps it inspects).
+        """
+        return PlateWorld(gaps=self.gaps or tuple(default_gaps), surface_z_mm=self.surface_z_mm,
                           placement_noise_mm=self.placement_noise_mm, seed=self.seed)
 
 
@@ -184,11 +190,27 @@ class ArmConfig:
                                  f"workspace top (z = {self.workspace_max_mm[2]} mm)")
 
     @property
-    def limits(self):
-        """The `arm.safety.SafetyLimits` of this configuration."""
-        from .safety import SafetyLimits
-
+    def limits(self) -> SafetyLimits:
+        """The `SafetyLimits` of this configuration (`arm.safety` checks every move against them)."""
         return SafetyLimits.from_config(self)
+
+
+@dataclass(frozen=True)
+class SafetyLimits:
+    """The limits every move is checked against (work frame, mm, mm/s, mm/s^2)."""
+
+    workspace_min_mm: tuple[float, float, float]
+    workspace_max_mm: tuple[float, float, float]
+    max_tap_depth_mm: float
+    max_speed_mm_s: float
+    max_acceleration_mm_s2: float
+    max_tap_speed_mm_s: float
+
+    @classmethod
+    def from_config(cls, config: ArmConfig) -> SafetyLimits:
+        """The limits of a validated `ArmConfig`."""
+        return cls(config.workspace_min_mm, config.workspace_max_mm, config.max_tap_depth_mm,
+                   config.max_speed_mm_s, config.max_acceleration_mm_s2, config.max_tap_speed_mm_s)
 
 
 def load_arm_config(path: str | Path) -> ArmConfig:

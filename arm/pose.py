@@ -80,10 +80,6 @@ class Pose:
         """The orientation as a `scipy.spatial.transform.Rotation`."""
         return Rotation.from_euler(_EULER, [self.roll, self.pitch, self.yaw], degrees=True)
 
-    def as_array(self) -> np.ndarray:
-        """(6,) ndarray ``(x, y, z, roll, pitch, yaw)`` in mm and degrees."""
-        return np.array([self.x, self.y, self.z, self.roll, self.pitch, self.yaw])
-
     def as_matrix(self) -> np.ndarray:
         """(4, 4) ndarray: the homogeneous transform, translation in mm."""
         matrix = np.eye(4)

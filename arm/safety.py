@@ -1,6 +1,7 @@
 """Safety checks run before every move. A move that breaks a limit is refused, never clipped.
 
-Limits (from the ``[arm]`` configuration, work frame, z up, surface reference at ``z = 0``):
+Limits (`arm.config.SafetyLimits`, from the ``[arm]`` configuration; work frame, z up, surface reference at
+``z = 0``):
 
 - the target TCP position lies in the workspace box (the path is a straight line between two points of a
   convex box, so it stays inside too);
@@ -23,42 +24,15 @@ arm.errors.SafetyError: target z = -7 mm is 7 mm below the surface reference, de
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .config import SafetyLimits
 from .errors import ArmFault, SafetyError
 from .interface import ArmState
 from .pose import Pose
 
-if TYPE_CHECKING:
-    from .config import ArmConfig
-
-__all__ = ["SafetyLimits", "check_move", "check_ready", "check_point"]
-
-
-@dataclass(frozen=True)
-class SafetyLimits:
-    """The limits every move is checked against (work frame, mm, mm/s, mm/s^2)."""
-
-    workspace_min_mm: tuple[float, float, float]
-    workspace_max_mm: tuple[float, float, float]
-    max_tap_depth_mm: float
-    max_speed_mm_s: float
-    max_acceleration_mm_s2: float
-    max_tap_speed_mm_s: float
-
-    @classmethod
-    def from_config(cls, config: ArmConfig) -> SafetyLimits:
-        """The limits of a validated `arm.config.ArmConfig`."""
-        return cls(config.workspace_min_mm, config.workspace_max_mm, config.max_tap_depth_mm,
-                   config.max_speed_mm_s, config.max_acceleration_mm_s2, config.max_tap_speed_mm_s)
-
-    @property
-    def lowest_z_mm(self) -> float:
-        """The lowest z a move may reach: the workspace floor or ``-max_tap_depth``, whichever is higher."""
-        return max(self.workspace_min_mm[2], -self.max_tap_depth_mm)
+__all__ = ["check_move", "check_ready", "check_point"]
 
 
 def check_point(position, limits: SafetyLimits, *, what: str = "target") -> None:

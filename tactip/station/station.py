@@ -218,16 +218,9 @@ class Station:
 
 
 def _make_arm(config: StationConfig):
-    from arm.factory import make_arm
-    from arm.world import Gap, PlateWorld
+    """The configured arm; a simulated plate without gaps of its own gets the station's (at true width)."""
+    from arm import Gap, make_arm
 
-    if config.arm.backend != "sim":
-        return make_arm(config.arm)
-    from arm.sim import SimArm
-
-    sim = config.arm.sim
-    gaps = sim.gaps or tuple(Gap(g.name, g.x, g.y, g.true_width if g.true_width is not None else g.nominal_width)
-                             for g in config.gaps)
-    world = PlateWorld(gaps=gaps, surface_z_mm=sim.surface_z_mm, placement_noise_mm=sim.placement_noise_mm,
-                       seed=sim.seed)
-    return SimArm(config.arm, world=world)
+    gaps = tuple(Gap(g.name, g.x, g.y, g.true_width if g.true_width is not None else g.nominal_width)
+                 for g in config.gaps)
+    return make_arm(config.arm, default_gaps=gaps)

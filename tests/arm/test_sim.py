@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from arm import Arm, SimArm, make_arm
+from arm import Arm, SimArm, SimSettings, make_arm
 from arm.errors import ArmFault, SafetyError
 from arm.pose import Pose
 from arm.profile import trapezoid_duration, trapezoid_fraction
@@ -19,6 +19,17 @@ from tests.arm.conftest import make_config
 
 def test_sim_arm_satisfies_the_protocol(config):
     assert isinstance(make_arm(config), Arm)
+
+
+def test_make_arm_gives_a_plate_without_gaps_of_its_own_the_default_gaps():
+    station_gaps = (Gap("s1", 10.0, 0.0, 0.5),)
+    arm = make_arm(make_config(sim=SimSettings(placement_noise_mm=0.2, seed=3)), default_gaps=station_gaps)
+    assert arm.world.gaps == station_gaps
+    assert (arm.world.placement_noise_mm, arm.world.seed) == (0.2, 3)
+    own = make_config(sim=SimSettings(gaps=(Gap("own", 5.0, 0.0, 1.0),)))
+    assert [g.name for g in make_arm(own, default_gaps=station_gaps).world.gaps] == ["own"]
+    world = PlateWorld(gaps=station_gaps)
+    assert make_arm(own, default_gaps=station_gaps, world=world).world is world
 
 
 def test_moves_in_the_work_frame_reach_the_controller_in_the_base_frame(config):
