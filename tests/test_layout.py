@@ -62,3 +62,73 @@ def test_public_functions_have_docstrings():
                         if not n.name.startswith("_") and ast.get_docstring(n) is None:
                             missing.append(f"{path.relative_to(ROOT)}:{n.lineno} {n.name}")
     assert not missing, "public names without a docstring:\n" + "\n".join(missing)
+
+
+def _module_name(path: pathlib.Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_graph(packages=PACKAGES) -> dict[str, set[str]]:
+    """Module -> the modules of ``packages`` it imports, at any depth of the file (inside functions too).
+
+    ``from a.b import c`` is an edge to ``a.b.c`` when that is a module, else to ``a.b``; an import
+    of a name the tree does not define as a module goes to the nearest module above it.
+    """
+    paths = {_module_name(p): p for package in packages if (ROOT / package).is_dir()
+             for p in (ROOT / package).rglob("*.py")}
+
+    def nearest(name: str) -> str | None:
+        while name and name not in paths:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    graph = {}
+    for module, path in paths.items():
+        base = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+        edges = set()
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.Import):
+                edges.update(nearest(alias.name) for alias in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                source = node.module or ""
+                if node.level:
+                    source = ".".join(base[: len(base) - node.level + 1] + ([source] if source else []))
+                edges.update(nearest(f"{source}.{a.name}") if f"{source}.{a.name}" in paths else nearest(source)
+                             for a in node.names)
+        graph[module] = edges - {None, module}
+    return graph
+
+
+def import_circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected groups of more than one module: each is an import circle."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    names = sorted(graph)
+    index = {name: k for k, name in enumerate(names)}
+    pairs = [(index[a], index[b]) for a, targets in graph.items() for b in targets]
+    rows, cols = zip(*pairs) if pairs else ((), ())
+    matrix = coo_matrix(([1] * len(pairs), (rows, cols)), shape=(len(names), len(names)))
+    _, label = connected_components(matrix, directed=True, connection="strong")
+    groups: dict[int, list[str]] = {}
+    for name, group in zip(names, label):
+        groups.setdefault(group, []).append(name)
+    return [members for members in groups.values() if len(members) > 1]
+
+
+def test_the_circle_finder_finds_a_circle():
+    assert import_circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert import_circles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_import_circle_anywhere():
+    circles = import_circles(import_graph())
+    assert not circles, "import circles (each group imports itself through the others):\n" + "\n".join(
+        " <-> ".join(group) for group in circles)
+
+
+def test_tactip_modules_outside_the_cli_are_short():
+    long = {str(p.relative_to(ROOT)): n for p in (ROOT / "tactip").rglob("*.py")
+            if "cli" not in p.relative_to(ROOT / "tactip").parts[:1] and (n := len(p.read_text().splitlines())) > 500}
+    assert not long, f"tactip modules over 500 lines (split them by what they are): {long}"
