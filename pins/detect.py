@@ -380,11 +380,6 @@ def _split_touching(smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, co
     return lab, count + n_new, stats
 
 
-def _empty_blobs(candidates: int) -> Blobs:
-    return Blobs(centres=np.empty((0, 2)), areas=np.empty(0, int), fills=np.empty(0), candidates=candidates,
-                 contrasts=np.empty(0))
-
-
 def _roi(disc: SensorDisc, shape: tuple[int, int]) -> tuple[int, int, np.ndarray]:
     """Top-left corner of the disc's bounding box and the disc mask (uint8) inside it; cached per disc."""
     return _roi_cached(*_disc_key(disc), shape[0], shape[1])

@@ -302,13 +302,12 @@ class _Run:
         return float(np.sum(self.blobs.contrasts[kept] * self.blobs.areas[kept]))
 
 
+# OpenCV and NumPy release the GIL in the detection, so two candidate sets run at once on two cores.
 _WORKERS = 2
 
 
 def _evaluate_all(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: dict) -> list:
     """`_evaluate` for each candidate parameter set, on `_WORKERS` threads."""
-    if _WORKERS <= 1:
-        return [_evaluate(grey, disc, params, cache) for params in candidates]
     with ThreadPoolExecutor(_WORKERS) as pool:
         return list(pool.map(lambda params: _evaluate(grey, disc, params, cache), candidates))
 

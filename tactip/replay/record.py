@@ -97,7 +97,7 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
     if frame_rate is not None and not (math.isfinite(frame_rate) and 0.01 <= frame_rate <= 1000):
         # Below 0.01 frames/s the MPEG-4 encoder has no time base and fails to open.
         raise ValueError(f"frame_rate must be in [0.01, 1000] frames/s, got {frame_rate}")
-    refuse_overwriting_inputs([out_path], [spec])  # issue 9: a video file source is an input
+    refuse_overwriting_inputs([out_path], [spec])  # a video file given as the source is an input
     part = claim_output(out_path)
     writer = None
     count, first_s, last_s, dropped = 0, None, None, 0

@@ -319,7 +319,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                                                             pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm))
     out_path = pathlib.Path(out_path)
     annotate = None if annotate_path is None else pathlib.Path(annotate_path)
-    refuse_overwriting_inputs([out_path, annotate], [video, calibration, model])  # issue 9: never over an input
+    refuse_overwriting_inputs([out_path, annotate], [video, calibration, model])  # a result never replaces what it was made from
     if annotate is not None and annotate.suffix.lower() != ".mp4":
         raise SourceError(f"cannot write the annotated video {str(annotate)!r}: it is MPEG-4, give a .mp4 name")
     temporary: list[pathlib.Path] = []

@@ -66,8 +66,8 @@ uniform bytes, fresh every frame and deterministic given the seed); optional opt
 compression (as from an MJPG webcam). ``dark_pins`` inverts the scene for dark-marker sensors.
 Rendering is vectorised over pins: about 2-5 ms per 640x480 frame.
 
-What broke the front end on real TacTips (issue 8), as options
---------------------------------------------------------------
+What makes real TacTips hard for the front end, as options
+----------------------------------------------------------
 Real recordings differ from the clean default in ways that each fooled detection or tracking; each is
 an option (all off by default, so the default frames are unchanged byte for byte) and a preset below.
 
