@@ -127,8 +127,9 @@ def run(args: argparse.Namespace) -> int:
     if args.compare and (args.sweep_fixation or args.sweep_lateral):
         raise TactipError("--compare works with the policy comparison only (not with --sweep-fixation or "
                           "--sweep-lateral)")
+    # An output written over the model or the taps would destroy what it was computed from.
     refuse_overwriting_inputs([args.json, args.plot, _reliability_path(args.plot)],
-                              [args.model, args.test, *args.compare])  # issue 9: never over an input
+                              [args.model, args.test, *args.compare])
     model = load_model(args.model)
     _check_fixation(model, args.fixation)
     test = load_dataset(args.test)
