@@ -6,21 +6,33 @@ likelihood model (`LikelihoodModel`: histogram, calibrated histogram, Gaussian, 
 `monte_carlo` and the experiments validate a model on an independent test set.
 """
 
-from .adaptive import ShiftLearner
-from .bayes import DECISION_RULES, adaptive_prior, decide, flat_prior, marginals, normalize, shift, shift_identity, update
-from .dataset import SCHEMA, Dataset, DatasetWriter, load_dataset, save_dataset
-from .errors import DatasetError, ModelError, PerceptionError
-from .experiments import FixationSweep, LateralSweep, compare_policies, fixation_sweep, lateral_sweep
-from .calibrated import CalibratedHistogramModel, fit_calibrated_histogram
-from .gaussian import GaussianModel, fit_gaussian
-from .likelihood import LikelihoodModel
-from .model import MODEL_KINDS, MODEL_SCHEMA, HistogramModel, fit_model, load_model, save_model, train_model
-from .montecarlo import DEFAULT_THRESHOLDS, MonteCarloResult, VirtualEnvironment, monte_carlo
-from .perceiver import Perceiver, Step
-from .policies import POLICIES, FixationPolicy, Policy, RandomPolicy, StationaryPolicy, make_policy
-from .reliability import (CALIBRATION_TAPS, BeliefTrace, expected_calibration_error, fit_policy_tempering,
-                          fixation_for_accuracy, reliability_bins, threshold_for_accuracy, trace_beliefs)
-from .sequence import SequenceResult, identity_distance, monte_carlo_sequence
+import importlib
+
+# Public name -> the module of this package that defines it, imported when the name is first used (PEP 562):
+# ``import perception.choices`` (the command line's --help, the station configuration) then loads no NumPy,
+# SciPy or h5py.
+_LAZY = {
+    "ShiftLearner": ".adaptive",
+    **dict.fromkeys(("DECISION_RULES", "adaptive_prior", "decide", "flat_prior", "marginals", "normalize", "shift",
+                     "shift_identity", "update"), ".bayes"),
+    **dict.fromkeys(("SCHEMA", "Dataset", "DatasetWriter", "load_dataset", "save_dataset"), ".dataset"),
+    **dict.fromkeys(("DatasetError", "ModelError", "PerceptionError"), ".errors"),
+    **dict.fromkeys(("FixationSweep", "LateralSweep", "compare_policies", "fixation_sweep", "lateral_sweep"),
+                    ".experiments"),
+    **dict.fromkeys(("CalibratedHistogramModel", "fit_calibrated_histogram"), ".calibrated"),
+    **dict.fromkeys(("GaussianModel", "fit_gaussian"), ".gaussian"),
+    "LikelihoodModel": ".likelihood",
+    **dict.fromkeys(("MODEL_KINDS", "MODEL_SCHEMA", "HistogramModel", "fit_model", "load_model", "save_model",
+                     "train_model"), ".model"),
+    **dict.fromkeys(("DEFAULT_THRESHOLDS", "MonteCarloResult", "VirtualEnvironment", "monte_carlo"), ".montecarlo"),
+    **dict.fromkeys(("Perceiver", "Step"), ".perceiver"),
+    **dict.fromkeys(("POLICIES", "FixationPolicy", "Policy", "RandomPolicy", "StationaryPolicy", "make_policy"),
+                    ".policies"),
+    **dict.fromkeys(("CALIBRATION_TAPS", "BeliefTrace", "expected_calibration_error", "fit_policy_tempering",
+                     "fixation_for_accuracy", "reliability_bins", "threshold_for_accuracy", "trace_beliefs"),
+                    ".reliability"),
+    **dict.fromkeys(("SequenceResult", "identity_distance", "monte_carlo_sequence"), ".sequence"),
+}
 
 __all__ = [
     "PerceptionError", "DatasetError", "ModelError",
@@ -37,3 +49,17 @@ __all__ = [
     "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
     "threshold_for_accuracy", "fixation_for_accuracy", "fit_policy_tempering",
 ]
+
+
+def __getattr__(name: str):
+    """The public name ``name``, its module imported on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'perception' has no attribute {name!r}")
+    value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """The module's names, the public ones not yet imported included."""
+    return sorted({*globals(), *__all__})

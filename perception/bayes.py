@@ -21,13 +21,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import logsumexp
 
+from .choices import DECISION_RULES, SHIFT_MODES
+
 __all__ = ["SHIFT_MODES", "DECISION_RULES", "normalize", "update", "shift", "shift_identity", "marginals",
            "decide", "flat_prior", "adaptive_prior"]
 
-#: Belief shift boundary conventions: replicate the edge class (paper 002) or fill uniformly (paper 000 eq. 8).
-SHIFT_MODES = ("edge", "uniform")
-#: Stop rules: a 'what' marginal crosses theta (papers 002, 003, 004) or any joint class does (paper 001 eq. 3).
-DECISION_RULES = ("marginal", "joint")
 _CLASSES = (-2, -1)
 
 

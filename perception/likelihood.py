@@ -27,6 +27,7 @@ import dataclasses
 
 import numpy as np
 
+from .choices import POLICIES
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 
@@ -182,8 +183,8 @@ class LikelihoodModel:
                 raise ModelError(f"recommended {key} must be {accepted}, got {value!r} (run 'tactip validate "
                                  f"--sweep-fixation' again)")
         policy = self.recommended.get("policy")
-        if policy is not None and policy not in ("active", "stationary", "random"):
-            raise ModelError(f"recommended policy must be one of active, stationary, random, got {policy!r}")
+        if policy is not None and policy not in POLICIES:
+            raise ModelError(f"recommended policy must be one of {', '.join(POLICIES)}, got {policy!r}")
 
     # -- class grid ------------------------------------------------------------------------
     def location_class(self, location) -> np.ndarray:

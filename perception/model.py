@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._files import atomic_path, cut_short, hdf5_in_memory
+from .choices import MODEL_KINDS
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 from .likelihood import RECOMMENDED_KEYS, LikelihoodModel
@@ -43,8 +44,6 @@ __all__ = ["MODEL_SCHEMA", "DEFAULT_EPSILON", "MODEL_KINDS", "HistogramModel", "
 MODEL_SCHEMA = "tactip-model/1"
 #: Regularising count added to every histogram bin (paper 000: epsilon << 1).
 DEFAULT_EPSILON = 1e-3
-#: Kinds of likelihood model (``tactip train --model NAME``); the first is the papers' model.
-MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian", "torch")
 _BATCH = 256  # taps per chunk in the batch likelihood (counts of 256 taps x 8000 bins: 8 MB)
 
 

@@ -18,10 +18,9 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["POLICIES", "Policy", "FixationPolicy", "StationaryPolicy", "RandomPolicy", "make_policy"]
+from .choices import POLICIES
 
-#: Names accepted by `make_policy` (and ``tactip validate --policy``).
-POLICIES = ("active", "stationary", "random")
+__all__ = ["POLICIES", "Policy", "FixationPolicy", "StationaryPolicy", "RandomPolicy", "make_policy"]
 
 
 @runtime_checkable

@@ -22,6 +22,7 @@ import argparse
 import shlex
 from pathlib import Path
 
+from perception.choices import POLICIES
 from tactip.cli._types import finite_float, seed
 
 HELP = "inspect the configured gaps (or --sim: the simulated station, no hardware)"
@@ -34,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     where.add_argument("--sim", action="store_true", help="the packaged simulated station")
     parser.add_argument("--data-dir", type=Path, default=Path("station_data/sim"),
                         help="with --sim: where the model, datasets and results live (default station_data/sim)")
-    parser.add_argument("--policy", choices=("active", "stationary", "random"), default=None,
+    parser.add_argument("--policy", choices=POLICIES, default=None,
                         help="override [perception] policy")
     parser.add_argument("--seed", type=seed, default=None, help="seed of the random start depths (>= 0)")
     parser.add_argument("--gap", action="append", default=None, metavar="NAME",

@@ -26,10 +26,8 @@ from __future__ import annotations
 
 import argparse
 
+from perception.choices import MODEL_KINDS
 from tactip.cli._types import int_at_least, int_in_range, output_file, positive_float
-
-#: The kinds of ``--model`` (perception.MODEL_KINDS, listed here so that --help needs no import of perception).
-MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian", "torch")
 
 HELP = "train a perception model (histogram, calibrated histogram, gaussian, torch) from a tap dataset"
 

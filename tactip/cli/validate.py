@@ -35,12 +35,13 @@ Examples:
 from __future__ import annotations
 
 import argparse
-
-from tactip.cli._types import (finite_float, float_in_range, fraction, fractions, image_file, int_in_range,
-                               non_negative_float, output_file, seed)
 import functools
 import json
 import pathlib
+
+from perception.choices import POLICIES, SHIFT_MODES
+from tactip.cli._types import (finite_float, float_in_range, fraction, fractions, image_file, int_in_range,
+                               non_negative_float, output_file, seed)
 
 #: Most Monte Carlo runs per policy, and most taps per run: beyond them a validation takes hours.
 MAX_RUNS = 10_000_000
@@ -57,7 +58,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser of ``tactip validate``."""
     parser.add_argument("model", metavar="MODEL.h5", help="model from tactip train (tactip-model/1)")
     parser.add_argument("test", metavar="TEST.h5", help="independent test taps (tactip-dataset/1)")
-    parser.add_argument("--policy", choices=("active", "stationary", "random"),
+    parser.add_argument("--policy", choices=POLICIES,
                         help="one policy (default: all three)")
     parser.add_argument("--fixation", type=finite_float, metavar="MM",
                         help="fixation location of the active policy, location units, inside the model's range "
@@ -72,7 +73,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="null decision and random relocation after N taps without a decision")
     parser.add_argument("--move-threshold", type=fraction, default=0.0, metavar="P",
                         help="location belief needed before moving (0 always moves, 1 never; default 0)")
-    parser.add_argument("--shift", choices=("edge", "uniform"), default=None,
+    parser.add_argument("--shift", choices=SHIFT_MODES, default=None,
                         help="belief shift at the range boundary after a move (default: the model's front-end "
                              "convention, uniform for taxel (paper 000), edge for tactip (paper 002))")
     sweep = parser.add_mutually_exclusive_group()
@@ -126,8 +127,9 @@ def run(args: argparse.Namespace) -> int:
     if args.compare and (args.sweep_fixation or args.sweep_lateral):
         raise TactipError("--compare works with the policy comparison only (not with --sweep-fixation or "
                           "--sweep-lateral)")
+    # An output written over the model or the taps would destroy what it was computed from.
     refuse_overwriting_inputs([args.json, args.plot, _reliability_path(args.plot)],
-                              [args.model, args.test, *args.compare])  # issue 9: never over an input
+                              [args.model, args.test, *args.compare])
     model = load_model(args.model)
     _check_fixation(model, args.fixation)
     test = load_dataset(args.test)
@@ -215,7 +217,7 @@ def _compare(args, model, environment, options, test, tqdm) -> list[dict]:
         models[path] = other
         environments[path] = VirtualEnvironment(other, test)
     names = {path: _model_name(path, m, models) for path, m in models.items()}
-    policy_names = [args.policy] if args.policy else ["active", "random", "stationary"]
+    policy_names = [args.policy] if args.policy else sorted(POLICIES)
     fixation_class = model.fixation_class(args.fixation)
     if "active" in policy_names:
         print(f"active fixation: {model.location_centres[fixation_class]:g} {unit}")

@@ -45,12 +45,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from perception.choices import POLICIES, STATION_MODEL_KINDS
 from tactip.errors import ConfigError
 
 __all__ = ["simulated_station_config", "SIM_PRESET", "StationConfig", "SensorConfig", "GapConfig", "ProtocolConfig", "PerceptionConfig",
            "SimConfig", "load_station_config", "parse_station_config"]
-
-POLICIES = ("active", "stationary", "random")
 
 # Ranges of the keys whose extremes would hang or exhaust a station (the paper's protocol is 111 depths
 # of 40 samples, 11 depth classes, 100 bins, a 331-pin TacTip).
@@ -61,8 +60,6 @@ MAX_SAMPLES = 1000                       # samples per tap feature array
 MAX_REPEATS = 1000                       # taps per depth and gap
 MAX_COLLECTION_TAPS = 200_000            # taps per collection, all gaps
 MAX_TAPS = 1000                          # [perception] max_taps
-#: [perception] likelihood: the kinds of model `prepare_model` trains (perception.MODEL_KINDS).
-LIKELIHOODS = ("histogram", "calibrated-histogram", "gaussian")
 MAX_LOCATIONS = 1000                     # depth classes
 MAX_BINS = 10_000                        # value bins per feature
 MAX_SEED = 2**32 - 1
@@ -233,8 +230,8 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     _range(perception.max_taps, "perception.max_taps", 1, MAX_TAPS, "taps")
     _range(perception.locations, "perception.locations", 1, MAX_LOCATIONS, "depth classes")
     _range(perception.bins, "perception.bins", 2, MAX_BINS, "bins")
-    _check(perception.likelihood in LIKELIHOODS, "perception.likelihood",
-           f"must be one of {', '.join(LIKELIHOODS)}, got {perception.likelihood!r}")
+    _check(perception.likelihood in STATION_MODEL_KINDS, "perception.likelihood",
+           f"must be one of {', '.join(STATION_MODEL_KINDS)}, got {perception.likelihood!r}")
     if perception.target_accuracy is not None:
         _check(not isinstance(perception.target_accuracy, bool) and isinstance(perception.target_accuracy, (int, float))
                and 0 < perception.target_accuracy <= 1, "perception.target_accuracy",

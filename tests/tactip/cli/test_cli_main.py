@@ -30,13 +30,16 @@ def test_console_script_version():
 
 
 def test_parsing_and_refusing_import_no_heavy_package():
-    """``tactip --help`` and a refusal while parsing load neither OpenCV, SciPy nor h5py (each start of the
-    command line paid about a second for them): the `tactip` package imports its front ends on first use
-    and `main` fills only the arguments of the command it runs."""
+    """``tactip --help`` and a refusal while parsing load neither OpenCV, SciPy, h5py nor NumPy (each start of
+    the command line paid about a second for them): the `tactip` package imports its front ends on first use,
+    `main` fills only the arguments of the command it runs, and of perception only the standard-library table
+    of choices is read (the `perception` package imports its own names on first use)."""
     script = ("import sys\nfrom tactip.cli import main\n"
               "for argv in (['--help'], ['validate', 'm.h5', 't.h5', '--seed', '-1'], ['train', '--help']):\n"
               "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
-              "print(sorted(m for m in ('cv2', 'scipy', 'h5py', 'pins', 'perception') if m in sys.modules))")
+              "heavy = ('cv2', 'scipy', 'h5py', 'numpy', 'pins', 'perception')\n"
+              "print(sorted(m for m in sys.modules if m.split('.')[0] in heavy\n"
+              "             and m not in ('perception', 'perception.choices')))")
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
     assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout + done.stderr
     assert "argument --seed: must be in 0..4294967295, got -1" in done.stderr
