@@ -105,8 +105,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the Monte Carlo validation and report it."""
     from tqdm import tqdm
 
-    from perception import (DEFAULT_THRESHOLDS, VirtualEnvironment, compare_policies, fixation_sweep, load_dataset,
-                            load_model, make_policy, save_model)
+    from perception import DEFAULT_THRESHOLDS, VirtualEnvironment, load_dataset, load_model, make_policy
 
     from tactip.cli._types import check_memory
     from tactip.errors import TactipError
@@ -142,32 +141,10 @@ def run(args: argparse.Namespace) -> int:
     environment = VirtualEnvironment(model, test)
     options = dict(thresholds=thresholds, runs=args.runs, max_taps=args.max_taps, deadline=args.deadline,
                    move_threshold=args.move_threshold, shift_mode=args.shift or model.shift_mode, seed=args.seed)
-    unit = model.location_unit
     print(model.summary())
     print(f"test: {len(test)} taps; {args.runs} runs per curve")
-    if args.sweep_fixation and args.target_accuracy is not None:
-        rows = _sweep_for_accuracy(args, model, environment, tqdm)
-    elif args.sweep_fixation:
-        progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
-        sweep = fixation_sweep(environment, tap_budget=args.tap_budget, progress=progress, **options)
-        if sweep.taps[sweep.best] > args.tap_budget:
-            fewest = float(min(r.mean_taps.min() for r in sweep.results))
-            raise TactipError(f"--tap-budget {args.tap_budget:g} is too tight: no fixation decides within "
-                              f"{args.tap_budget:g} mean taps at any threshold (fewest: {fewest:.2f}); use "
-                              f"--tap-budget in {fewest:.2f}..{args.max_taps}; nothing written")
-        print(f"{'fixation':>10} {'error':>8} {'taps':>6} {'threshold':>9}")
-        for fixation, error, taps, threshold in zip(sweep.fixations, sweep.errors, sweep.taps, sweep.thresholds):
-            print(f"{fixation:>10.3f} {error:>8.3f} {taps:>6.2f} {threshold:>9.4g}")
-        model = model.with_recommended(fixation_location=sweep.best_fixation, decision_threshold=sweep.best_threshold,
-                                       policy="active")
-        save_model(args.model, model)
-        print(f"best fixation {sweep.best_fixation:g} {unit} (threshold {sweep.best_threshold:g}, error "
-              f"{sweep.errors[sweep.best]:.3f} in {sweep.taps[sweep.best]:.1f} taps); written to {args.model}")
-        rows = [{**row, "fixation": float(f)} for f, r in zip(sweep.fixations, sweep.results) for row in r.rows()]
-        if args.plot:
-            from perception.plots import plot_fixation_sweep
-
-            plot_fixation_sweep(sweep, args.plot, units=unit)
+    if args.sweep_fixation:
+        rows = _sweep_fixation(args, model, test, options, tqdm)
     elif args.sweep_lateral:
         from perception import lateral_sweep
 
@@ -281,37 +258,33 @@ def _check_same_classes(model, other, path) -> None:
                           f"collection with the same --locations")
 
 
-def _sweep_for_accuracy(args, model, environment, tqdm) -> list[dict]:
-    """--sweep-fixation --target-accuracy: the fixation and threshold reaching the target in the fewest taps."""
-    from perception import fixation_for_accuracy, save_model
-
-    from tactip.errors import TactipError
+def _sweep_fixation(args, model, test, options, tqdm) -> list[dict]:
+    """--sweep-fixation: `calibration.recommend_fixation` writes the best fixation and threshold; its table."""
+    from calibration import recommend_fixation
 
     progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
-    sweep = fixation_for_accuracy(environment, target=args.target_accuracy, tolerance=args.tolerance, runs=args.runs,
-                                  max_taps=args.max_taps, seed=args.seed, move_threshold=args.move_threshold,
-                                  shift_mode=args.shift or model.shift_mode, progress=progress,
-                                  temper=model.temperable)
     unit, identity_unit = model.location_unit, model.identity_unit
-    print(f"decisions within {args.tolerance:g} {identity_unit} in {100 * args.target_accuracy:g} % of runs:")
-    print(f"{'fixation':>10} {'threshold':>9} {'taps':>6} {'accuracy':>8}")
-    for k, (fixation, threshold, taps, accuracy) in enumerate(zip(sweep.fixations, sweep.thresholds, sweep.taps,
-                                                                  sweep.accuracy)):
-        shown = "-" if not threshold == threshold else f"{threshold:.4g}"
-        tempered = f"  (tempering x {sweep.tempering:.3g})" if k == sweep.best and sweep.tempering != 1.0 else ""
-        print(f"{fixation:>10.3f} {shown:>9} {taps:>6.2f} {accuracy:>8.3f}{tempered}")
-    if sweep.best is None:
-        raise TactipError(f"--target-accuracy {args.target_accuracy:g} is not reached at any fixation within "
-                          f"{args.max_taps} taps (best {sweep.accuracy.max():.3f}); lower it, raise --tolerance or "
-                          f"--max-taps; nothing written")
+    trained = model.tempering if model.temperable else None
+    sweep_options = {k: options[k] for k in ("move_threshold", "shift_mode")}
+    if args.target_accuracy is None:
+        sweep_options.update(thresholds=options["thresholds"], deadline=options["deadline"])
+    model, sweep = recommend_fixation(args.model, args.test, runs=args.runs, tap_budget=args.tap_budget,
+                                      seed=args.seed, progress=progress, log=lambda line: None,
+                                      target_accuracy=args.target_accuracy, tolerance=args.tolerance,
+                                      max_taps=args.max_taps, fall_back=False, report=_print_sweep(args, model),
+                                      model=model, test=test, **sweep_options)
+    fixation, threshold = model.recommended["fixation_location"], model.recommended["decision_threshold"]
+    if args.target_accuracy is None:
+        print(f"best fixation {fixation:g} {unit} (threshold {threshold:g}, error "
+              f"{sweep.errors[sweep.best]:.3f} in {sweep.taps[sweep.best]:.1f} taps); written to {args.model}")
+        if args.plot:
+            from perception.plots import plot_fixation_sweep
+
+            plot_fixation_sweep(sweep, args.plot, units=unit)
+        return [{**row, "fixation": float(f)} for f, r in zip(sweep.fixations, sweep.results) for row in r.rows()]
     best = sweep.best
-    fixation, threshold = float(sweep.fixations[best]), float(sweep.thresholds[best])
-    tempering = ""
-    if model.temperable:
-        tempering = f", tempering {model.tempering:.4g} x {sweep.tempering:.3g} for the beliefs after 1-5 taps"
-        model = model.tempered(sweep.tempering)
-    save_model(args.model, model.with_recommended(fixation_location=fixation, decision_threshold=threshold,
-                                                  policy="active"))
+    tempering = "" if trained is None else (f", tempering {trained:.4g} x {sweep.tempering:.3g} for the beliefs "
+                                            f"after 1-5 taps")
     print(f"best fixation {fixation:g} {unit} (threshold {threshold:g}: {sweep.accuracy[best]:.3f} within "
           f"{args.tolerance:g} {identity_unit} in {sweep.taps[best]:.1f} taps{tempering}); written to {args.model}")
     if args.plot:
@@ -322,6 +295,25 @@ def _sweep_for_accuracy(args, model, environment, tqdm) -> list[dict]:
              "tempering_factor": sweep.tempering if i == sweep.best else 1.0, "tolerance": args.tolerance,
              "target_accuracy": args.target_accuracy}
             for i, (f, t, n, a) in enumerate(zip(sweep.fixations, sweep.thresholds, sweep.taps, sweep.accuracy))]
+
+
+def _print_sweep(args, model):
+    """The table of a fixation sweep, printed before anything is decided (`recommend_fixation`'s report)."""
+    def report(sweep) -> None:
+        if args.target_accuracy is None:
+            print(f"{'fixation':>10} {'error':>8} {'taps':>6} {'threshold':>9}")
+            for fixation, error, taps, threshold in zip(sweep.fixations, sweep.errors, sweep.taps, sweep.thresholds):
+                print(f"{fixation:>10.3f} {error:>8.3f} {taps:>6.2f} {threshold:>9.4g}")
+            return
+        print(f"decisions within {args.tolerance:g} {model.identity_unit} in {100 * args.target_accuracy:g} % of runs:")
+        print(f"{'fixation':>10} {'threshold':>9} {'taps':>6} {'accuracy':>8}")
+        for k, (fixation, threshold, taps, accuracy) in enumerate(zip(sweep.fixations, sweep.thresholds, sweep.taps,
+                                                                      sweep.accuracy)):
+            shown = "-" if not threshold == threshold else f"{threshold:.4g}"
+            tempered = f"  (tempering x {sweep.tempering:.3g})" if k == sweep.best and sweep.tempering != 1.0 else ""
+            print(f"{fixation:>10.3f} {shown:>9} {taps:>6.2f} {accuracy:>8.3f}{tempered}")
+
+    return report
 
 
 def _check_fixation(model, fixation) -> None:
