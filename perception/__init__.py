@@ -14,7 +14,8 @@ from .experiments import FixationSweep, LateralSweep, compare_policies, fixation
 from .calibrated import CalibratedHistogramModel, fit_calibrated_histogram
 from .gaussian import GaussianModel, fit_gaussian
 from .likelihood import LikelihoodModel
-from .model import MODEL_KINDS, MODEL_SCHEMA, HistogramModel, fit_model, load_model, save_model, train_model
+from .histogram import HistogramModel, fit_model
+from .model import MODEL_KINDS, MODEL_SCHEMA, load_model, save_model, train_model
 from .montecarlo import DEFAULT_THRESHOLDS, MonteCarloResult, VirtualEnvironment, monte_carlo
 from .perceiver import Perceiver, Step
 from .policies import POLICIES, FixationPolicy, Policy, RandomPolicy, StationaryPolicy, make_policy
