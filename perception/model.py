@@ -22,7 +22,8 @@ import pathlib
 
 import numpy as np
 
-from ._files import atomic_path, cut_short, hdf5_in_memory
+from _files import atomic_path, cut_short, hdf5_in_memory
+
 from .calibrated import CalibratedHistogramModel, fit_calibrated_histogram
 from .dataset import Dataset
 from .errors import ModelError

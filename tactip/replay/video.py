@@ -716,7 +716,7 @@ def _features(displacements, timestamps, bounds, selected, n_samples):
 
 def _write_hdf5(path, track, analysis, settings, decisions=None) -> None:
     """The replay file (see the module docstring for its layout)."""
-    from perception._files import hdf5_in_memory
+    from _files import hdf5_in_memory
     from tactip import __version__
 
     tracker = track["tracker"]
