@@ -21,7 +21,6 @@ from .perceiver import Perceiver, Step
 from .policies import POLICIES, FixationPolicy, Policy, RandomPolicy, StationaryPolicy, make_policy
 from .reliability import (CALIBRATION_TAPS, BeliefTrace, expected_calibration_error, fit_policy_tempering,
                           fixation_for_accuracy, reliability_bins, threshold_for_accuracy, trace_beliefs)
-from .sequence import SequenceResult, identity_distance, monte_carlo_sequence
 
 __all__ = [
     "PerceptionError", "DatasetError", "ModelError",
@@ -33,7 +32,6 @@ __all__ = [
     "Perceiver", "Step",
     "POLICIES", "Policy", "FixationPolicy", "StationaryPolicy", "RandomPolicy", "make_policy",
     "DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo",
-    "SequenceResult", "monte_carlo_sequence", "identity_distance",
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
     "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
     "threshold_for_accuracy", "fixation_for_accuracy", "fit_policy_tempering",
