@@ -108,8 +108,8 @@ def save_model(path, model: LikelihoodModel, *, inputs=()) -> None:
     """Write a model to an HDF5 file of schema ``tactip-model/1`` atomically (temporary file, fsync, rename).
 
     The file holds the class grid, the tap description and the recommended settings, the model's
-    ``kind`` and the kind's own parameters (a histogram model's file is the one earlier versions wrote,
-    plus ``kind``).
+    ``kind`` and the kind's own parameters (a file without ``kind`` is read as a histogram model, so
+    histogram files that do not name their kind still load).
 
     Parameters
     ----------
