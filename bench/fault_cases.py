@@ -102,7 +102,7 @@ ISSUE_CASES = [
     ("outcome", "stale running rows closed on the next start",
      [f"{_D}test_stale_running_rows_are_closed_but_live_ones_are_not"]),
     ("outcome", "atomic writes (temporary, fsync, rename; killed writers' temporaries)",
-     ["tests/perception/test_files.py::test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary",
+     ["tests/test_files.py::test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary",
       f"{_D}test_temporaries_of_killed_writers_are_removed_by_the_next_write"]),
     ("outcome", "write errors named, earlier data intact (read-only output folder)",
      [f"{_D}test_an_output_in_a_read_only_folder_is_refused_before_any_work"]),

@@ -22,8 +22,8 @@ _LAZY = {
     **dict.fromkeys(("CalibratedHistogramModel", "fit_calibrated_histogram"), ".calibrated"),
     **dict.fromkeys(("GaussianModel", "fit_gaussian"), ".gaussian"),
     "LikelihoodModel": ".likelihood",
-    **dict.fromkeys(("MODEL_KINDS", "MODEL_SCHEMA", "HistogramModel", "fit_model", "load_model", "save_model",
-                     "train_model"), ".model"),
+    **dict.fromkeys(("HistogramModel", "fit_model"), ".histogram"),
+    **dict.fromkeys(("MODEL_KINDS", "MODEL_SCHEMA", "load_model", "save_model", "train_model"), ".model"),
     **dict.fromkeys(("DEFAULT_THRESHOLDS", "MonteCarloResult", "VirtualEnvironment", "monte_carlo"), ".montecarlo"),
     **dict.fromkeys(("Perceiver", "Step"), ".perceiver"),
     **dict.fromkeys(("POLICIES", "FixationPolicy", "Policy", "RandomPolicy", "StationaryPolicy", "make_policy"),
@@ -31,7 +31,6 @@ _LAZY = {
     **dict.fromkeys(("CALIBRATION_TAPS", "BeliefTrace", "expected_calibration_error", "fit_policy_tempering",
                      "fixation_for_accuracy", "reliability_bins", "threshold_for_accuracy", "trace_beliefs"),
                     ".reliability"),
-    **dict.fromkeys(("SequenceResult", "identity_distance", "monte_carlo_sequence"), ".sequence"),
 }
 
 __all__ = [
@@ -44,7 +43,6 @@ __all__ = [
     "Perceiver", "Step",
     "POLICIES", "Policy", "FixationPolicy", "StationaryPolicy", "RandomPolicy", "make_policy",
     "DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo",
-    "SequenceResult", "monte_carlo_sequence", "identity_distance",
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
     "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
     "threshold_for_accuracy", "fixation_for_accuracy", "fit_policy_tempering",

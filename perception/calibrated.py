@@ -1,6 +1,6 @@
 """The histogram model with its tempering fitted on held-out taps (kind ``calibrated-histogram``).
 
-The same counts as the papers' model (`perception.model.fit_model`), but the mean log probability
+The same counts as the papers' model (`perception.histogram.fit_model`), but the mean log probability
 over samples and dimensions (the geometric-mean likelihood, a fixed tempering of the naive-Bayes
 product by 1 / (samples x dims)) is multiplied by a tempering factor beta fitted by cross-validation
 over the training collection:
@@ -28,7 +28,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .errors import ModelError
-from .model import DEFAULT_EPSILON, HistogramModel, fit_model, histogram_log_probability
+from .histogram import DEFAULT_EPSILON, HistogramModel, fit_model, histogram_log_probability
 from .tempering import check_tempering, cross_validation_folds, fit_tempering
 
 __all__ = ["CalibratedHistogramModel", "fit_calibrated_histogram", "held_out_log_likelihood"]

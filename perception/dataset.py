@@ -41,7 +41,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._files import atomic_path, hdf5_in_memory, write_error
+from _files import atomic_path, hdf5_in_memory, write_error
+
 from .errors import DatasetError
 
 __all__ = ["SCHEMA", "FRONT_ENDS", "Dataset", "save_dataset", "load_dataset", "DatasetWriter"]

@@ -32,8 +32,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
-from .likelihood import LikelihoodModel
-from .model import fit_model
+from .likelihood import LikelihoodModel, fit_class_grid
 from .tempering import check_tempering, cross_validation_folds, decision_log_loss, fit_tempering
 
 __all__ = ["GaussianModel", "fit_gaussian", "COMPONENT_CHOICES", "SHRINKAGE_CHOICES"]
@@ -195,7 +194,7 @@ def fit_gaussian(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class:
     dataset : Dataset
         Training taps.
     n_locations : int
-        Equal location classes over the training locations (as `perception.fit_model`).
+        Equal location classes over the training locations (`perception.likelihood.fit_class_grid`).
     min_taps_per_class : int
         Fewest training taps a class may have.
     folds : int
@@ -223,8 +222,7 @@ def fit_gaussian(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class:
         raise ValueError(f"components must be integers >= 1, got {components}")
     if not shrinkages or not all(0.0 <= s <= 1.0 for s in shrinkages):
         raise ValueError(f"shrinkages must be numbers in [0, 1], got {shrinkages}")
-    # The histogram fit gives the class grid and checks the classes; its histograms are not used.
-    grid = fit_model(dataset, n_locations=n_locations, bins=2, min_taps_per_class=min_taps_per_class)
+    grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
     x = dataset.taps.reshape(len(dataset), -1).astype(np.float64)
     cls = grid.tap_class(dataset)
     truth = grid.identity_class(dataset.identity) if grid.n_identities > 1 else grid.location_class(dataset.location)

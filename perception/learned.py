@@ -30,8 +30,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
-from .likelihood import LikelihoodModel
-from .model import fit_model
+from .likelihood import LikelihoodModel, fit_class_grid
 from .tempering import check_tempering, cross_validation_folds, fit_tempering
 
 __all__ = ["TorchModel", "fit_torch"]
@@ -215,7 +214,7 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
         import torch  # noqa: F401
     except ImportError:
         raise ImportError("the torch model needs torch: pip install torch==2.13.0") from None
-    grid = fit_model(dataset, n_locations=n_locations, bins=2, min_taps_per_class=min_taps_per_class)
+    grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
     x = dataset.taps.reshape(len(dataset), -1).astype(np.float64)
     mean, scale = x.mean(axis=0), x.std(axis=0)
     scale = np.where(scale > 0, scale, 1.0)

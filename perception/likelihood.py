@@ -16,14 +16,17 @@ log P(z | x_l, w_i) of every joint class c = (location l, identity i), c = l * n
 holding the fields ``location_edges, identities, front_end, samples, dim_names, sensor,
 location_unit, identity_unit, taps_per_class, recommended``. Each kind of model (``KIND``) adds
 its parameters and how they are stored (`perception.model.save_model` / `load_model`).
+`fit_class_grid` derives the classes from a training dataset; every kind is fitted on it.
 
-Kinds: ``histogram`` (the papers' model, `perception.model`), ``calibrated-histogram``
-(`perception.calibrated`), ``gaussian`` (`perception.gaussian`), ``torch`` (`perception.learned`).
+Kinds: ``histogram`` (the papers' model, `perception.histogram`), ``calibrated-histogram``
+(`perception.calibrated`), ``gaussian`` (`perception.gaussian`), ``torch`` (`perception.learned`);
+`perception.model` is the registry of kinds and the model file.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -31,7 +34,7 @@ from .choices import POLICIES
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 
-__all__ = ["LikelihoodModel", "RECOMMENDED_KEYS"]
+__all__ = ["LikelihoodModel", "RECOMMENDED_KEYS", "ClassGrid", "fit_class_grid"]
 
 #: Recommended settings a model may carry (written by ``tactip validate --sweep-fixation``).
 RECOMMENDED_KEYS = ("decision_threshold", "fixation_location", "policy")
@@ -277,3 +280,90 @@ class LikelihoodModel:
     def _from_stored(cls, common: dict, arrays: dict, attrs: dict):
         """The model from the common grid fields and the kind's stored parameters."""
         raise NotImplementedError
+
+
+@dataclass(frozen=True, repr=False)
+class ClassGrid(LikelihoodModel):
+    """The classes of a training dataset and the taps they hold, without a likelihood (build with `fit_class_grid`).
+
+    Every kind of model is fitted on one: it gives the (location, identity) classes, the tap
+    description and the training taps per class, which the kind's constructor copies.
+
+    Attributes
+    ----------
+    location_edges : (n_locations + 1,) float64 ndarray
+        Edges of the equal location classes, in ``location_unit``.
+    identities : (n_identities,) float64 ndarray
+        Identity of each identity class, in ``identity_unit``.
+    front_end, samples, dim_names, sensor, location_unit, identity_unit
+        The training dataset's.
+    taps_per_class : (n_locations, n_identities) int ndarray
+        Training taps in each class.
+    recommended : dict
+        Empty: a grid has no settings to recommend.
+    """
+
+    location_edges: np.ndarray
+    identities: np.ndarray
+    front_end: str
+    samples: int
+    dim_names: tuple[str, ...]
+    sensor: dict
+    location_unit: str
+    identity_unit: str
+    taps_per_class: np.ndarray
+    recommended: dict = field(default_factory=dict)
+
+    def summary(self) -> str:
+        """One line: front end, class grid, tap shape."""
+        return self._grid_summary()
+
+
+def fit_class_grid(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: int = 1) -> ClassGrid:
+    """The (location, identity) classes of a training dataset, every class checked to hold enough taps.
+
+    Location classes are ``n_locations`` equal bins spanning the training locations (one class when
+    the dataset has a single location); identity classes are the distinct training identities.
+
+    Parameters
+    ----------
+    dataset : Dataset
+        Training taps.
+    n_locations : int
+        Number of equal location classes (paper 002: 11).
+    min_taps_per_class : int
+        Fewest training taps a (location, identity) class may have.
+
+    Returns
+    -------
+    ClassGrid
+
+    Raises
+    ------
+    DatasetError
+        Not a dataset, no taps, or a class has fewer than `min_taps_per_class` taps (the message names it).
+    ValueError
+        A knob is out of range (the message names it).
+    """
+    if not isinstance(dataset, Dataset):
+        raise DatasetError(f"dataset must be a Dataset, got {type(dataset).__name__}")
+    for name, value in (("n_locations", n_locations), ("min_taps_per_class", min_taps_per_class)):
+        if int(value) != value or value < 1:
+            raise ValueError(f"{name} must be an integer >= 1, got {value}")
+    if len(dataset) == 0:
+        raise DatasetError("dataset has no taps")
+    lo, hi = float(dataset.location.min()), float(dataset.location.max())
+    n_locations = int(n_locations) if hi > lo else 1
+    identities = np.unique(dataset.identity)
+    grid = ClassGrid(np.linspace(lo, hi, n_locations + 1), identities, dataset.front_end, dataset.samples,
+                     dataset.dim_names, dataset.sensor, dataset.location_unit, dataset.identity_unit,
+                     np.zeros((n_locations, len(identities)), np.int64))
+    taps_per_class = np.bincount(grid.tap_class(dataset), minlength=grid.n_classes)
+    few = np.flatnonzero(taps_per_class < min_taps_per_class)
+    if few.size:
+        l, i = divmod(int(few[0]), len(identities))
+        raise DatasetError(f"{few.size} of {grid.n_classes} classes have fewer than {min_taps_per_class} training "
+                           f"taps, e.g. location {grid.location_centres[l]:g} {dataset.location_unit}, identity "
+                           f"{identities[i]:g} {dataset.identity_unit} has {taps_per_class[few[0]]}; "
+                           f"use fewer location classes")
+    return dataclasses.replace(grid, taps_per_class=taps_per_class.reshape(n_locations, len(identities)))

@@ -27,7 +27,7 @@ import numpy as np
 from . import bayes
 from .dataset import Dataset
 from .errors import DatasetError
-from .model import HistogramModel
+from .histogram import HistogramModel
 from .perceiver import clamp_move
 from .policies import Policy
 

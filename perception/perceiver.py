@@ -42,7 +42,7 @@ import numpy as np
 from . import bayes
 from .errors import PerceptionError
 from .likelihood import LikelihoodModel
-from .model import HistogramModel
+from .histogram import HistogramModel
 from .adaptive import ShiftLearner
 from .policies import Policy, StationaryPolicy
 

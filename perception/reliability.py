@@ -37,7 +37,8 @@ from .policies import Policy
 __all__ = ["BeliefTrace", "Decisions", "AccuracySweep", "trace_beliefs", "expected_calibration_error", "reliability_bins",
            "threshold_for_accuracy", "fixation_for_accuracy", "fit_policy_tempering", "CALIBRATION_TAPS"]
 
-#: Taps after which the calibration of the identity belief is reported (issue 11: 1, 3 and 5).
+#: Taps after which the calibration of the identity belief is reported: one tap (the likelihood alone), a few,
+#: and the last tap whose belief `fit_policy_tempering` calibrates by default.
 CALIBRATION_TAPS = (1, 3, 5)
 
 #: Thresholds `threshold_for_accuracy` chooses from: 0.3..0.99 in 0.005 steps and the 0.999x tail. With

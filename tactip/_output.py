@@ -1,7 +1,7 @@
 """Output files: written under a temporary name, fsynced and renamed at the end, never over an input.
 
-Every command that writes a file goes through these helpers (the logic lives in `perception._files`,
-the lowest package that writes files, so that calibration and perception share it):
+Every command that writes a file goes through these helpers (the logic lives in `_files`, the
+shared leaf every package may import, so that calibration and perception use it too):
 
 - `claim_output`: create the temporary file early, so an unwritable output fails before the work;
 - `atomic_output`: a context manager yielding the temporary name, renamed over the output on success;
@@ -19,8 +19,8 @@ import errno
 import os
 import pathlib
 
-from perception._files import atomic_path as atomic_output
-from perception._files import refuse_overwriting_inputs, remove_stale_temporaries, temporary_name, write_error
+from _files import atomic_path as atomic_output
+from _files import refuse_overwriting_inputs, remove_stale_temporaries, temporary_name, write_error
 
 __all__ = ["claim_output", "atomic_output", "write_text_atomic", "refuse_overwriting_inputs", "write_error",
            "check_video_written", "out_of_space"]

@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["perception.dataset", "perception.bayes", "perception.policies", "perception.adaptive", "perception.sequence"]
+MODULES = ["perception.dataset", "perception.bayes", "perception.policies", "perception.adaptive"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -1,11 +1,11 @@
-"""perception._files: atomic writes, write errors named for what they are, outputs never over inputs."""
+"""_files: atomic writes, write errors named for what they are, outputs never over inputs."""
 
 import errno
 import os
 
 import pytest
 
-from perception._files import atomic_path, refuse_overwriting_inputs, write_error
+from _files import atomic_path, refuse_overwriting_inputs, write_error
 
 
 def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):

@@ -1,7 +1,8 @@
 """Atomic file writing and honest write errors, shared by every package that writes files.
 
-perception is the lowest package that writes files (datasets, models, figures); calibration and
-tactip import these helpers from here (calibration cannot import tactip), so the logic lives once.
+The one shared leaf of the tree: perception, calibration and tactip (and pins and arm, should they
+write files) may import it, and it imports none of them, so the logic lives once and no package
+has to reach into another for it.
 
 - `atomic_path`: a context manager giving a temporary name beside the output (``.NAME.PID.part``
   plus the output's suffix); on success the file is fsynced and renamed over the output (and the
