@@ -14,13 +14,11 @@ from .scale import (SENSOR_PRESETS, PadScale, SensorDescription, central_spacing
                     sensor_preset)
 from .select import PinSelection, median_spacing_px, select_feature_pins, select_pins
 from .track import LKParams, PinTracker, match_to_blobs, track_pins
-from .tune import expected_spacing_px, tune_detection
 
 __all__ = [
     "PinsError", "NoSensorError", "ShapeError", "LostPinError",
     "SensorDisc", "find_sensor_disc", "as_grey",
     "DetectionParams", "Blobs", "detect_pins", "detect_blobs",
-    "tune_detection", "expected_spacing_px",
     "find_pin_field", "PinField", "REJECTION_REASONS", "draw_pin_field",
     "LKParams", "track_pins", "match_to_blobs", "PinTracker",
     "displacement_from_rest", "integrate_flow", "displacement_magnitude",

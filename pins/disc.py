@@ -140,9 +140,11 @@ def find_sensor_disc(frame: np.ndarray, *, dark_pins: bool = False, scale: float
 
     Examples
     --------
-    >>> disc = find_sensor_disc(frame)            # doctest: +SKIP
-    >>> disc.radius_px                            # doctest: +SKIP
-    214.6
+    >>> from tactip.sim import SyntheticTacTip
+    >>> sensor = SyntheticTacTip(pins=331, seed=0)
+    >>> disc = find_sensor_disc(sensor.render().image)
+    >>> abs(disc.radius_px - sensor.disc[2]) < 1.0       # sensor.disc: the drawn (cx, cy, radius), px
+    True
     """
     if not 0.0 < scale <= 1.0:
         raise ValueError(f"scale must be in (0, 1], got {scale}")

@@ -165,8 +165,8 @@ def tap_features(displacements: np.ndarray, *, pins: np.ndarray | None = None, n
 
     Examples
     --------
-    >>> features = tap_features(displacements[start:stop], pins=selected)   # doctest: +SKIP
-    >>> features.shape                                                       # doctest: +SKIP
+    >>> displacements = np.random.default_rng(0).normal(size=(25, 331, 2))   # (T, N, 2) px, one tap
+    >>> tap_features(displacements, pins=np.arange(40)).shape
     (40, 80)
     """
     displacements = np.asarray(displacements, dtype=np.float64)
@@ -204,11 +204,12 @@ class TapRecorder:
 
     Examples
     --------
-    >>> recorder = TapRecorder(selected, n_samples=40)              # doctest: +SKIP
-    >>> recorder.start()                                            # doctest: +SKIP
-    >>> for frame in tap_frames:                                    # doctest: +SKIP
-    ...     recorder.add(tracker.update(frame.image) - rest, timestamp_s=frame.timestamp_s)
-    >>> features = recorder.stop()                                  # doctest: +SKIP
+    >>> recorder = TapRecorder(np.arange(40), n_samples=40)
+    >>> recorder.start()
+    >>> for k in range(25):                  # each frame: tracker.update(frame) - rest, (N, 2) px
+    ...     _ = recorder.add(np.full((331, 2), 0.1 * k), timestamp_s=k / 50)
+    >>> recorder.stop().shape
+    (40, 80)
     """
 
     def __init__(self, pins: np.ndarray, *, n_samples: int = 40) -> None:

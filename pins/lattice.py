@@ -232,10 +232,16 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
 
     Examples
     --------
-    >>> field = find_pin_field(rest_frame)                          # doctest: +SKIP
-    >>> field.summary()                                             # doctest: +SKIP
-    '331 pins, pitch 17.7 px; rejected 21 (18 outside field, 3 off lattice)'
-    >>> pins = detect_pins(frame, params=field.params, disc=field.disc)   # doctest: +SKIP
+    >>> from tactip.sim import SyntheticTacTip
+    >>> sensor = SyntheticTacTip(pins=331, seed=0)
+    >>> field = find_pin_field(sensor.render().image)
+    >>> 300 <= field.count <= 331, round(field.pitch_px)
+    (True, 18)
+
+    Later frames are detected fast with the field's parameters and region:
+
+    >>> from pins import detect_pins
+    >>> pins = detect_pins(sensor.render().image, params=field.params, disc=field.disc)
     """
     if expected_pins is not None and (isinstance(expected_pins, bool) or int(expected_pins) != expected_pins
                                       or expected_pins < 1):

@@ -241,9 +241,11 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
 
     Examples
     --------
-    >>> scale = pad_scale(rest, sensor="tactip-331")       # doctest: +SKIP
-    >>> scale.describe()                                    # doctest: +SKIP
-    '0.1420 mm/px (pin pitch 2.79 mm of tactip-331: 331 pins on a 40 mm pad / 19.66 px measured)'
+    >>> from pins import detect_pins
+    >>> from tactip.sim import SyntheticTacTip
+    >>> rest = detect_pins(SyntheticTacTip(pins=331, seed=0).render().image)
+    >>> pad_scale(rest, sensor="tactip-331").describe()
+    '0.15... mm/px (pin pitch 2.793 mm (tactip-331: 331 pins on a 40 mm pad) / ... px measured)'
     """
     pitch_px = central_spacing_px(rest_positions, centre=centre)
     if mm_per_px is not None:

@@ -83,8 +83,10 @@ def segment_taps(displacements: np.ndarray, *, high_px: float = 1.5, low_px: flo
 
     Examples
     --------
-    >>> for start, stop in segment_taps(displacements):          # doctest: +SKIP
-    ...     features = tap_features(displacements[start:stop], pins=selected)
+    >>> displacements = np.zeros((28, 331, 2))      # (T, N, 2) px
+    >>> displacements[10:18] = 3.0                  # one tap, frames 10-17
+    >>> segment_taps(displacements)                 # padded by one frame each side
+    [(9, 19)]
     """
     data = np.asarray(displacements, dtype=np.float64)
     signal = data if data.ndim == 1 else tap_signal(data, percentile=percentile)

@@ -165,8 +165,12 @@ def select_pins(rest_positions: np.ndarray, *, n_pins: int = 40, min_separation_
 
     Examples
     --------
-    >>> chosen = select_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=0.096)   # doctest: +SKIP
-    >>> features_pins = rest[chosen]                                                   # doctest: +SKIP
+    >>> from pins import detect_pins
+    >>> from tactip.sim import SyntheticTacTip
+    >>> rest = detect_pins(SyntheticTacTip(pins=331, seed=0).render().image)
+    >>> chosen = select_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=0.15)
+    >>> rest[chosen].shape
+    (40, 2)
     """
     rest, order = _check(rest_positions, n_pins, min_separation_mm, mm_per_px, centre)
     separation_px = min_separation_mm / mm_per_px
@@ -207,9 +211,11 @@ def select_feature_pins(rest_positions: np.ndarray, *, n_pins: int = 40, min_sep
 
     Examples
     --------
-    >>> chosen = select_feature_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=0.12)  # doctest: +SKIP
-    >>> chosen.describe()                                                                     # doctest: +SKIP
-    '40 pins at least 2.87 mm apart (4 mm asked)'
+    >>> from pins import detect_pins
+    >>> from tactip.sim import SyntheticTacTip
+    >>> rest = detect_pins(SyntheticTacTip(pins=331, seed=0).render().image)
+    >>> select_feature_pins(rest, n_pins=40, min_separation_mm=10.0, mm_per_px=0.15).describe()
+    '40 pins at least ... mm apart (10 mm asked)'
     """
     rest, order = _check(rest_positions, n_pins, min_separation_mm, mm_per_px, centre)
     n_pins = int(n_pins)

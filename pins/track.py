@@ -137,8 +137,13 @@ def track_pins(prev_image: np.ndarray, next_image: np.ndarray, points: np.ndarra
 
     Examples
     --------
-    >>> moved, ok = track_pins(frame0, frame1, pins)          # doctest: +SKIP
-    >>> flow = moved[ok] - pins[ok]                           # doctest: +SKIP
+    >>> from tactip.sim import Contact, SyntheticTacTip
+    >>> sensor = SyntheticTacTip(pins=331, seed=0)
+    >>> rest, pressed = sensor.render(), sensor.render(Contact(indentation_mm=3.0, gap_width_mm=2.0))
+    >>> moved, ok = track_pins(rest.image, pressed.image, rest.centres)     # true centres as the pins
+    >>> flow = moved[ok] - rest.centres[ok]          # (M, 2) px
+    >>> flow.shape
+    (331, 2)
     """
     params = replace(params or LKParams(), **knobs)
     points = _as_points(points, "points")
@@ -283,11 +288,14 @@ class PinTracker:
 
     Examples
     --------
-    >>> tracker = PinTracker()                               # doctest: +SKIP
-    >>> rest = tracker.start(frames[0])                      # doctest: +SKIP
-    >>> for frame in frames[1:]:                             # doctest: +SKIP
-    ...     positions = tracker.update(frame)                # (N, 2) px, NaN where lost
-    ...     displacement = positions - rest
+    >>> from tactip.sim import Contact, SyntheticTacTip
+    >>> tap = SyntheticTacTip(pins=331, seed=0).tap(Contact(indentation_mm=3.0, gap_width_mm=2.0), frame_rate=20)
+    >>> tracker = PinTracker()
+    >>> rest = tracker.start(next(tap).image)
+    >>> for frame in tap:
+    ...     displacement = tracker.update(frame.image) - rest     # (N, 2) px, NaN where lost
+    >>> int(tracker.lost.sum()), tracker.frames
+    (0, 20)
     """
 
     def __init__(self, *, lk: LKParams | None = None, detection: DetectionParams | None = None,

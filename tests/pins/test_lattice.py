@@ -81,6 +81,11 @@ def test_rim_ring_is_the_field_boundary():
     assert score(detect_pins(f.image, params=field.params), f)[1] == 1.0
 
 
+def test_rim_ring_hides_pins_from_the_count():
+    """A rim ring hides 6 of 331 pins and cuts 12 more, some too little of a tip to find."""
+    assert 331 - 6 - 12 <= _field("rim-ring-331", "rest").count <= 331 - 6
+
+
 @pytest.mark.parametrize("name", ["tactip-331", "brown-127", "dark-331"])
 def test_without_a_rim_ring_the_search_reaches_the_disc_rim(name):
     """Only a rim ring stops the search: without one, a pin field filling the disc is whole."""
