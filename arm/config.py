@@ -36,12 +36,13 @@ A missing or out-of-range key raises `arm.errors.ArmConfigError` naming the key.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+
+from _files import parse_toml
 
 from .errors import ArmConfigError
 from .pose import Pose
@@ -224,15 +225,7 @@ def load_arm_config(path: str | Path) -> ArmConfig:
         The file is not valid TOML, has no ``[arm]`` table, or the table is invalid (the key is named).
     """
     path = Path(path)
-    with path.open("rb") as handle:
-        try:
-            document = tomllib.load(handle)
-        except UnicodeDecodeError as exc:
-            raise ArmConfigError(f"{path}: not UTF-8 text (a binary file, or saved as Latin-1?): byte "
-                                 f"0x{exc.object[exc.start]:02x} at offset {exc.start}; a TOML file must be "
-                                 f"UTF-8 text") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise ArmConfigError(f"{path}: not valid TOML: {exc}") from None
+    document = parse_toml(path.read_bytes(), path, error=ArmConfigError)
     if "arm" not in document:
         raise ArmConfigError(f"{path}: no [arm] table")
     return arm_config_from_table(document["arm"])

@@ -40,11 +40,11 @@ Relative paths are resolved against the configuration file's folder.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from _files import parse_toml
 from perception.choices import POLICIES, STATION_MODEL_KINDS
 from tactip.errors import ConfigError
 
@@ -315,21 +315,7 @@ def _read_toml(path: Path, what: str) -> dict:
         raise ConfigError(f"{what} {path}: permission denied") from None
     except OSError as exc:
         raise ConfigError(f"{what} {path}: cannot read ({exc.strerror or exc})") from None
-    try:
-        text = raw.decode("utf-8-sig")  # a byte-order mark, as some Windows editors write, is dropped
-    except UnicodeDecodeError as exc:
-        if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
-            kind = "UTF-16 text"
-        elif b"\0" in raw:
-            kind = "a binary file"
-        else:
-            kind = "not UTF-8 text (saved as Latin-1 or another encoding?)"
-        raise ConfigError(f"{path}: {kind}: byte 0x{raw[exc.start]:02x} at offset {exc.start}; a TOML file "
-                          f"must be UTF-8 text") from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    return parse_toml(raw, path, error=ConfigError)
 
 
 def _no_unknown(table: dict, known: set[str], prefix: str) -> None:
@@ -439,7 +425,7 @@ def simulated_station_config(data_dir: str | Path = "station_data/sim") -> Stati
     The calibration, datasets, model and results database all live in ``data_dir`` (relative paths
     against the current folder), so a later run finds the model the first run trained.
     """
-    data = tomllib.loads(SIM_PRESET.read_text())
+    data = parse_toml(SIM_PRESET.read_bytes(), SIM_PRESET, error=ConfigError)
     data_dir = Path(data_dir).expanduser().resolve()
     data["station"]["data_dir"] = str(data_dir)
     data["station"]["results"] = str(data_dir / "results.sqlite")
