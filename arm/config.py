@@ -42,7 +42,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from _files import parse_toml
+from _shared import outside_range, parse_toml
 
 from .errors import ArmConfigError
 from .pose import Pose
@@ -273,8 +273,9 @@ def _number(key: str, value: Any) -> float:
 
 def _in_range(key: str, value: float, low: float, high: float, unit: str) -> float:
     value = float(value)
-    if not (math.isfinite(value) and low < value <= high):
-        raise ArmConfigError(f"[arm] {key} must be in ({low:g}, {high:g}] {unit}, got {value:g}")
+    accepted = outside_range(value, low, high, low_open=True, unit=unit)
+    if accepted:
+        raise ArmConfigError(f"[arm] {key} {accepted}, got {value:g}")
     return value
 
 
@@ -304,9 +305,9 @@ def _tap(table: Any) -> TapMotion:
         if key.endswith("speed"):
             low, closed = _MIN_SPEED_MM_S, True
         value = float(value)
-        if not (math.isfinite(value) and (low <= value if closed else low < value) and value <= high):
-            raise ArmConfigError(f"[arm.tap] {key}: must be in {'[' if closed else '('}{low:g}, {high:g}] {unit}, "
-                                 f"got {value:g}")
+        accepted = outside_range(value, low, high, low_open=not closed, unit=unit)
+        if accepted:
+            raise ArmConfigError(f"[arm.tap] {key}: {accepted}, got {value:g}")
         kwargs[_TAP_KEYS[key]] = value
     try:
         return TapMotion(**kwargs)

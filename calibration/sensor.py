@@ -24,7 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
-from _files import cut_short
+from _shared import cut_short
 from pins import (DetectionParams, NoSensorError, PinsError, SensorDisc, as_grey, detect_pins, find_pin_field,
                   find_sensor_disc, match_to_blobs, median_spacing_px, select_pins)
 
@@ -160,7 +160,7 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
 
 def save_calibration(path: str | Path, calibration: SensorCalibration) -> None:
     """Write a calibration file (HDF5, ``tactip-calibration/1``), atomically."""
-    from _files import atomic_path, hdf5_in_memory
+    from _shared import atomic_path, hdf5_in_memory
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

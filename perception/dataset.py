@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from _files import atomic_path, hdf5_in_memory, write_error
+from _shared import atomic_path, hdf5_in_memory, write_error
 
 from .errors import DatasetError
 

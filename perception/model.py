@@ -22,7 +22,7 @@ import pathlib
 
 import numpy as np
 
-from _files import atomic_path, cut_short, hdf5_in_memory
+from _shared import atomic_path, cut_short, hdf5_in_memory
 
 from .calibrated import CalibratedHistogramModel, fit_calibrated_histogram
 from .choices import MODEL_KINDS

@@ -30,7 +30,7 @@ def _figure():
 
 
 def _save(plt, fig, path) -> None:
-    from _files import atomic_path
+    from _shared import atomic_path
 
     path = pathlib.Path(path)
     try:

@@ -1,6 +1,6 @@
 """Output files: written under a temporary name, fsynced and renamed at the end, never over an input.
 
-Every command that writes a file goes through these helpers (the logic lives in `_files`, the
+Every command that writes a file goes through these helpers (the logic lives in `_shared`, the
 shared leaf every package may import, so that calibration and perception use it too):
 
 - `claim_output`: create the temporary file early, so an unwritable output fails before the work;
@@ -19,8 +19,8 @@ import errno
 import os
 import pathlib
 
-from _files import atomic_path as atomic_output
-from _files import refuse_overwriting_inputs, remove_stale_temporaries, temporary_name, write_error
+from _shared import atomic_path as atomic_output
+from _shared import refuse_overwriting_inputs, remove_stale_temporaries, temporary_name, write_error
 
 __all__ = ["claim_output", "atomic_output", "write_text_atomic", "refuse_overwriting_inputs", "write_error",
            "check_video_written", "out_of_space"]

@@ -1,11 +1,11 @@
-"""_files: atomic writes, write errors named for what they are, outputs never over inputs."""
+"""_shared: atomic writes, write errors named for what they are, outputs never over inputs."""
 
 import errno
 import os
 
 import pytest
 
-from _files import atomic_path, refuse_overwriting_inputs, write_error
+from _shared import atomic_path, refuse_overwriting_inputs, write_error
 
 
 def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):

@@ -6,11 +6,11 @@ import pathlib
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-PACKAGES = ("tactip", "pins", "arm", "perception", "calibration", "_files")
+PACKAGES = ("tactip", "pins", "arm", "perception", "calibration", "_shared")
 # pins, perception and arm import none of each other; none of them imports the composers;
-# _files, the file-safety helpers every package may import, imports none of them.
+# _shared, the file-safety helpers every package may import, imports none of them.
 FORBIDDEN = {
-    "_files": {"tactip", "pins", "arm", "perception", "calibration"},
+    "_shared": {"tactip", "pins", "arm", "perception", "calibration"},
     "pins": {"arm", "perception", "tactip", "calibration"},
     "perception": {"arm", "pins", "tactip", "calibration"},
     "arm": {"pins", "perception", "tactip", "calibration"},

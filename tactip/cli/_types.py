@@ -15,6 +15,7 @@ import math
 import os
 from pathlib import Path
 
+from _shared import outside_range
 from tactip.errors import TactipError
 
 __all__ = ["int_at_least", "int_in_range", "positive_int", "non_negative_int", "seed", "finite_float",
@@ -29,9 +30,9 @@ def int_at_least(low: int, high: int | None = None):
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-        if value < low or (high is not None and value > high):
-            accepted = f">= {low}" if high is None else f"in {low}..{high}"
-            raise argparse.ArgumentTypeError(f"must be {accepted}, got {text}")
+        accepted = outside_range(value, low, high)
+        if accepted:
+            raise argparse.ArgumentTypeError(f"{accepted}, got {text}")
         return value
     return parse
 
@@ -54,13 +55,11 @@ def finite_float(text: str) -> float:
 
 def float_in_range(low: float, high: float, *, low_open: bool = False, unit: str = ""):
     """An argparse type: a finite number in ``[low, high]`` (``(low, high]`` with ``low_open``)."""
-    suffix = f" {unit}" if unit else ""
-
     def parse(text: str) -> float:
         value = _float(text)
-        if not ((low < value if low_open else low <= value) and value <= high):
-            raise argparse.ArgumentTypeError(f"must be in {'(' if low_open else '['}{low:g}, {high:g}]{suffix}, "
-                                             f"got {text}")
+        accepted = outside_range(value, float(low), float(high), low_open=low_open, unit=unit)
+        if accepted:
+            raise argparse.ArgumentTypeError(f"{accepted}, got {text}")
         return value
     return parse
 

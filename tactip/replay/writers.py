@@ -11,7 +11,7 @@ import json
 import cv2
 import numpy as np
 
-from _files import hdf5_in_memory
+from _shared import hdf5_in_memory
 from pins import feature_dim_names
 
 from tactip import __version__

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from _files import parse_toml
+from _shared import outside_range, parse_toml
 from perception.choices import POLICIES, STATION_MODEL_KINDS
 from tactip.errors import ConfigError
 
@@ -292,14 +292,9 @@ def _check(ok: bool, key: str, message: str) -> None:
 
 def _range(value, key: str, low, high, unit: str, *, low_open: bool = False) -> None:
     """Refuse ``value`` outside ``[low, high]`` (``(low, high]`` with ``low_open``), naming the key and the range."""
-    inside = (low < value if low_open else low <= value) and value <= high
-    if not inside:
-        unit = f" {unit}" if unit else ""
-        if isinstance(value, int) and isinstance(low, int) and isinstance(high, int):
-            accepted = f"{low}..{high}"
-        else:
-            accepted = f"{'(' if low_open else '['}{low:g}, {high:g}]"
-        raise ConfigError(f"{key} must be in {accepted}{unit}, got {value:g}")
+    accepted = outside_range(value, low, high, low_open=low_open, unit=unit)
+    if accepted:
+        raise ConfigError(f"{key} {accepted}, got {value:g}")
 
 
 def _read_toml(path: Path, what: str) -> dict:

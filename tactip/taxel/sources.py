@@ -351,7 +351,7 @@ def write_taxel_csv(path, timestamps_s, readings) -> None:
         raise ValueError(f"timestamps_s (T,) and readings (T, K) do not match: {t.shape} and {v.shape}")
     header = "timestamp_s," + ",".join(f"taxel{k:02d}" for k in range(v.shape[1]))
     value_format = "%d" if np.issubdtype(v.dtype, np.integer) else "%.6g"
-    from _files import atomic_path
+    from _shared import atomic_path
 
     with atomic_path(path) as tmp:  # temporary name, fsync, rename: a full disk leaves no half a recording
         np.savetxt(tmp, np.column_stack([t, v]), delimiter=",", header=header, comments="",

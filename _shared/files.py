@@ -1,9 +1,5 @@
 """Atomic file writing and honest write errors, shared by every package that writes files.
 
-The one shared leaf of the tree: perception, calibration and tactip (and pins and arm, should they
-write files) may import it, and it imports none of them, so the logic lives once and no package
-has to reach into another for it.
-
 - `atomic_path`: a context manager giving a temporary name beside the output (``.NAME.PID.part``
   plus the output's suffix); on success the file is fsynced and renamed over the output (and the
   folder fsynced), on any error it is removed, so the output is either the old file or the new one.
@@ -14,8 +10,6 @@ has to reach into another for it.
   cut) are removed when the output is next written.
 - `hdf5_in_memory`: an HDF5 file built in memory and written by Python, so a full disk is an
   `OSError` rather than a crash inside HDF5.
-- `parse_toml`: a TOML file's bytes parsed, with an error naming the file and what is wrong with its
-  encoding (UTF-16, binary, Latin-1) or its syntax; a UTF-8 byte-order mark is accepted.
 - `cut_short`: whether an HDF5 file failed to open because it is shorter than its header says (an
   interrupted copy or write), so readers say that rather than "not an HDF5 file".
 """
@@ -30,7 +24,7 @@ import pathlib
 import re
 from typing import Iterable, Iterator
 
-__all__ = ["parse_toml", "atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name", "cut_short",
+__all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name", "cut_short",
            "remove_stale_temporaries", "hdf5_in_memory"]
 
 _WHAT = {
@@ -283,31 +277,3 @@ def refuse_overwriting_inputs(outputs: Iterable, inputs: Iterable) -> None:
                 raise FileExistsError(errno.EEXIST, f"outputs {str(out)!r} and {str(other)!r} are the same file; "
                                                     f"choose two different outputs")
 
-
-def parse_toml(raw: bytes, path, *, error: type[Exception] = ValueError) -> dict:
-    """The TOML document in ``raw``, the bytes of the file at ``path``.
-
-    Raises
-    ------
-    error
-        Naming ``path``: the bytes are not UTF-8 text (UTF-16, a binary file, another encoding; the
-        first bad byte and its offset are given) or not valid TOML. A byte-order mark, as some
-        Windows editors write, is dropped.
-    """
-    import tomllib
-
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
-            kind = "UTF-16 text"
-        elif b"\0" in raw:
-            kind = "a binary file"
-        else:
-            kind = "not UTF-8 text (saved as Latin-1 or another encoding?)"
-        raise error(f"{path}: {kind}: byte 0x{raw[exc.start]:02x} at offset {exc.start}; a TOML file "
-                    f"must be UTF-8 text") from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise error(f"{path}: not valid TOML ({exc})") from None
