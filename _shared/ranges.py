@@ -1,8 +1,19 @@
-"""One range check for every number a user gives: station keys, arm keys and command-line flags."""
+"""The numeric limits a user's numbers are held to, and one range check for all of them.
+
+The limits that more than one place enforces (a station key and a command-line flag, the station and
+the arm) are defined here once; each bounds what would hang or exhaust a station, not what is useful.
+"""
 
 from __future__ import annotations
 
-__all__ = ["outside_range"]
+__all__ = ["MAX_BINS", "MAX_LOCATIONS", "MAX_SAMPLES", "MAX_SEED", "MAX_TAPS", "MAX_TAXEL_TAPS", "outside_range"]
+
+MAX_SEED = 2**32 - 1        # random seeds: NumPy's legacy range, which every seeded generator here accepts
+MAX_TAPS = 1000             # taps of one inspection or Monte Carlo run ([perception] max_taps, --max-taps)
+MAX_LOCATIONS = 1000        # depth (location) classes of a model
+MAX_BINS = 10_000           # value bins per feature of a histogram model
+MAX_SAMPLES = 1000          # samples per tap feature array
+MAX_TAXEL_TAPS = 100_000    # taps per simulated taxel collection
 
 
 def outside_range(value, low, high=None, *, low_open: bool = False, unit: str = "") -> str | None:

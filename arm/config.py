@@ -43,6 +43,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from _shared import outside_range, parse_toml
+from _shared.ranges import MAX_SEED
 
 from .errors import ArmConfigError
 from .pose import Pose
@@ -69,7 +70,7 @@ _TAP_RANGES = {"approach_height": (0.0, 100.0, False, "mm"), "speed": (0.0, 250.
                "acceleration": (0.0, 2500.0, False, "mm/s^2"), "dwell": (0.0, 10.0, True, "s"),
                "travel_speed": (0.0, 250.0, False, "mm/s")}
 _MIN_SPEED_MM_S = 0.1   # slower strokes and travels take minutes per tap
-_MAX_SEED = 2**32 - 1
+_MAX_SEED = MAX_SEED
 # [arm.sim] gaps: positions within a metre of the work frame origin, widths and lengths up to 100 / 1000 mm.
 _SIM_GAP_RANGES = {"x": (-1000.0, 1000.0), "y": (-1000.0, 1000.0), "width": (0.0, 100.0), "angle": (-360.0, 360.0),
                    "length": (0.0, 1000.0)}

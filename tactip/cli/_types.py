@@ -16,6 +16,7 @@ import os
 from pathlib import Path
 
 from _shared import outside_range
+from _shared.ranges import MAX_SEED
 from tactip.errors import TactipError
 
 __all__ = ["int_at_least", "int_in_range", "positive_int", "non_negative_int", "seed", "finite_float",
@@ -44,8 +45,8 @@ def int_in_range(low: int, high: int):
 
 positive_int = int_at_least(1)
 non_negative_int = int_at_least(0)
-#: A random seed: a whole number in 0..2**32 - 1.
-seed = int_at_least(0, 2**32 - 1)
+#: A random seed: a whole number in 0..MAX_SEED.
+seed = int_at_least(0, MAX_SEED)
 
 
 def finite_float(text: str) -> float:

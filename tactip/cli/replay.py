@@ -33,6 +33,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from _shared.ranges import MAX_SAMPLES
 from tactip.cli._types import (float_in_range, int_in_range, non_negative_float, non_negative_int,
                                output_file)
 
@@ -65,7 +66,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--expected-pins", type=_pin_count, metavar="N",
                         help="pins expected in view on the rest frame: confirms the pin field found there (the summary says "
                         "how far off it is) and is the default of --pins-on-pad")
-    parser.add_argument("--samples", type=int_in_range(1, 1000), default=40, metavar="N",
+    parser.add_argument("--samples", type=int_in_range(1, MAX_SAMPLES), default=40, metavar="N",
                         help="samples per tap feature array (default: 40)")
     parser.add_argument("--pins", type=int_in_range(1, 2000), default=40, metavar="N",
                         help="tactile pins to select (default: 40)")

@@ -29,10 +29,11 @@ from __future__ import annotations
 
 import argparse
 
-from tactip.cli._types import int_at_least, int_in_range, output_folder, seed
+from _shared.ranges import MAX_TAXEL_TAPS
+from tactip.cli._types import int_in_range, output_folder, seed
 
-#: Most taps per collection (tactip.taxel.collect.MAX_TAPS; repeated here so that --help imports nothing heavy).
-MAX_TAPS = 100_000
+#: Most taps per collection (the taxel collection's own limit).
+MAX_TAPS = MAX_TAXEL_TAPS
 
 HELP = "simulate training and test datasets (taxel: iCub fingertip or skin, paper 000)"
 

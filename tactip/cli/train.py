@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 
+from _shared.ranges import MAX_BINS, MAX_LOCATIONS
 from perception.choices import MODEL_KINDS
 from tactip.cli._types import int_at_least, int_in_range, output_file, positive_float
 
@@ -38,10 +39,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=output_file, required=True, metavar="MODEL.h5", help="model file to write (tactip-model/1 HDF5)")
     parser.add_argument("--model", choices=MODEL_KINDS, default="histogram",
                         help="kind of likelihood model (default histogram, the papers' model)")
-    parser.add_argument("--locations", type=int_in_range(1, 1000), default=11, metavar="N",
+    parser.add_argument("--locations", type=int_in_range(1, MAX_LOCATIONS), default=11, metavar="N",
                         help="equal location classes over the training range, 1..1000 (default 11; "
                              "a dataset with one location gets one class)")
-    parser.add_argument("--bins", type=int_in_range(2, 10_000), default=None, metavar="N",
+    parser.add_argument("--bins", type=int_in_range(2, MAX_BINS), default=None, metavar="N",
                         help="value bins per sensor dimension, 2..10000, histogram kinds (default 100)")
     parser.add_argument("--epsilon", type=positive_float, default=None,
                         help="count added to every histogram bin, histogram kinds (default 1e-3)")

@@ -39,13 +39,13 @@ import functools
 import json
 import pathlib
 
+from _shared.ranges import MAX_TAPS
 from perception.choices import POLICIES, SHIFT_MODES
 from tactip.cli._types import (finite_float, float_in_range, fraction, fractions, image_file, int_in_range,
                                non_negative_float, output_file, seed)
 
-#: Most Monte Carlo runs per policy, and most taps per run: beyond them a validation takes hours.
+#: Most Monte Carlo runs per policy (and most taps per run, `_shared.ranges.MAX_TAPS`): beyond them a validation takes hours.
 MAX_RUNS = 10_000_000
-MAX_TAPS = 1000
 
 HELP = "Monte Carlo validation of a model on a test dataset (speed-accuracy, fixation sweep)"
 

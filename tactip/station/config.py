@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import Any
 
 from _shared import outside_range, parse_toml
+from _shared.ranges import MAX_BINS, MAX_LOCATIONS, MAX_SAMPLES, MAX_SEED, MAX_TAPS
 from perception.choices import POLICIES, STATION_MODEL_KINDS
 from tactip.errors import ConfigError
 
@@ -56,13 +57,8 @@ __all__ = ["simulated_station_config", "SIM_PRESET", "StationConfig", "SensorCon
 MIN_PINS, MAX_PINS = 7, 2000            # [sensor] pins: one ring of six around a centre .. a dense pad
 MAX_DEPTH_MM = 100.0                     # [protocol] depths and reference height, mm
 MAX_DEPTHS = 10_000                      # protocol depths per gap
-MAX_SAMPLES = 1000                       # samples per tap feature array
 MAX_REPEATS = 1000                       # taps per depth and gap
 MAX_COLLECTION_TAPS = 200_000            # taps per collection, all gaps
-MAX_TAPS = 1000                          # [perception] max_taps
-MAX_LOCATIONS = 1000                     # depth classes
-MAX_BINS = 10_000                        # value bins per feature
-MAX_SEED = 2**32 - 1
 MAX_GAP_MM = 100.0                       # gap widths and tolerances, mm
 MAX_CAMERA_INDEX = 63                    # [sensor] source given as a whole number
 SIM_PRESET = Path(__file__).with_name("presets") / "station_sim.toml"

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from _shared.ranges import MAX_TAXEL_TAPS
 from perception.dataset import Dataset, save_dataset
 
 from tactip.taxel.sensors import TaxelSensor
@@ -26,7 +27,7 @@ __all__ = ["DEFAULT_TAPS", "MAX_TAPS", "TaxelDatasetPaths", "simulate_taxel_data
 DEFAULT_TAPS = {"fingertip": 3000, "skin": 5000}
 #: Most taps per collection (locations x taps per location): 20 times the paper's skin collection,
 #: about a minute per 50000 taps and 1 GB per file.
-MAX_TAPS = 100_000
+MAX_TAPS = MAX_TAXEL_TAPS  # taps per collection
 
 
 def simulate_taxel_dataset(simulator: TaxelSimulator, locations_mm, *, seed=None, collection: str = "",
