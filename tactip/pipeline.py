@@ -19,11 +19,12 @@ annotated video from the `PinTrack` it gets back).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from pins import DetectionParams, PinsError, PinTracker, SensorDisc, tap_features
+from pins import DetectionParams, PinsError, PinTracker, SensorDisc, displacement_from_rest, tap_features
 
 from tactip.errors import SourceError
 
@@ -92,10 +93,13 @@ class PinTrack:
     valid: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     errors: list = field(default_factory=list)
 
-    @property
+    @cached_property
     def displacements(self) -> np.ndarray:
-        """(T, N, 2) displacements from the rest frame, px (NaN where the positions are)."""
-        return self.positions - self.rest_positions
+        """(T, N, 2) displacements from the rest frame, px (NaN where the positions are).
+
+        Computed once: replay's contacts, features and both recorders read it.
+        """
+        return displacement_from_rest(self.positions, self.rest_positions)
 
     @property
     def disc(self) -> SensorDisc:
