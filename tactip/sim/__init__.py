@@ -180,6 +180,10 @@ Presets
   and pins (180), four LED reflections (50 grey) inside the pad, a glare gradient (25 grey) and shimmer 1.
   Detection finds 108-114 of the 120 pins today (3 seeds, rest and a 5 mm tap): the pins on the
   reflections are rejected, as on the real recordings.
+- ``white-dark-331``: white pins on a dark membrane in a dark (matt black, 30 grey) casing, the six LED
+  glare spots on the rim: no bright surround frames the disc. Today ``tactip detect`` refuses it ("no sensor
+  disc ... not a disc"), while ``tactip replay`` falls back to dark markers, finds a false disc and tracks
+  about 100 spurious pins (the dark gaps between the white pins), as on a real recording (issue 20).
 - ``small-pad-100``: 100 pins, the pad a quarter of the frame height, 320x240, bright surround (1 px tips).
 - ``dense-1000``: 1000 pins at 1280x720, the pad 0.9 of the frame height.
 """
