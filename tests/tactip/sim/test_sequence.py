@@ -193,3 +193,13 @@ def test_taps_and_slides_helpers_validate_and_count():
         sensor.taps(2, rest_s=-1.0)
     with pytest.raises(ValueError, match="frame_rate"):
         sensor.taps(2, frame_rate=0.0)
+
+
+def test_doctests_of_the_sequence_and_slide_modules_pass():
+    import doctest
+
+    import tactip.sim._slide
+    import tactip.sim.sequence
+
+    for module in (tactip.sim.sequence, tactip.sim._slide):
+        assert doctest.testmod(module).failed == 0
