@@ -10,13 +10,12 @@ import dataclasses
 import numpy as np
 from scipy import ndimage
 
-from pins import PadScale, PinSelection, PinsError, pad_scale, segment_taps, select_feature_pins, tap_signal
+from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, segment_taps, select_feature_pins,
+                  sensor_scale, tap_signal)
 
 from tactip.pipeline import PinTrack
 
 __all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "tap_thresholds_px"]
-
-DEFAULT_PAD_DIAMETER_MM = 40.0
 # Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
 REFERENCE_PITCH_PX = 17.5
 
@@ -84,19 +83,15 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     if calibration is not None:
         scale_mm_per_px, selected = float(calibration.mm_per_px), np.asarray(calibration.selected_pins)
     else:
-        pad = pad_diameter_mm if pad_diameter_mm is not None or sensor is not None else DEFAULT_PAD_DIAMETER_MM
-        count = pins_on_pad if pins_on_pad is not None or sensor is not None else expected_pins
-        try:
-            scale = pad_scale(rest, sensor=sensor, pins=count, pad_diameter_mm=pad, mm_per_px=mm_per_px)
+        try:  # the rule detect and calibrate apply too
+            scale = sensor_scale(rest, sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
+                                 mm_per_px=mm_per_px, expected_pins=expected_pins)
         except (PinsError, ValueError) as exc:
-            fallback = (pad or DEFAULT_PAD_DIAMETER_MM) / (2.0 * disc.radius_px)
-            scale = PadScale(fallback, float("nan"), float("nan"),
-                             f"pad diameter {pad or DEFAULT_PAD_DIAMETER_MM:g} mm / disc diameter "
-                             f"{2 * disc.radius_px:.1f} px", {"pad_diameter_mm": pad or DEFAULT_PAD_DIAMETER_MM})
+            pad = pad_diameter_mm or DEFAULT_PAD_DIAMETER_MM
+            scale = PadScale(pad / (2.0 * disc.radius_px), float("nan"), float("nan"),
+                             f"pad diameter {pad:g} mm / disc diameter {2 * disc.radius_px:.1f} px",
+                             {"pad_diameter_mm": pad})
             warnings.append(f"the scale could not come from the pin pitch ({exc}); the disc's diameter was used")
-        if sensor is None and pad_diameter_mm is None and mm_per_px is None:
-            scale = dataclasses.replace(scale, source=f"{scale.source}; pad diameter assumed, describe the sensor "
-                                                      f"with --sensor or --pad-diameter-mm")
         scale_mm_per_px = scale.mm_per_px
         try:
             selection = _select(track, n_pins=n_pins, min_separation_mm=min_separation_mm, mm_per_px=scale_mm_per_px)

@@ -493,4 +493,4 @@ def _start(image, *, params, expected_pins, calibration, warnings):
                         "assumed (--dark-pins)")
     tracker = PinTracker(detection=field.params, disc=field.disc)
     rest = tracker.start(image, field.centres)
-    return tracker, rest, field.count, field.params, field.summary()
+    return tracker, rest, field.count, field.params, field.summary(pitch=False)  # the pitch: on the scale's line
