@@ -78,6 +78,8 @@ def run(args: argparse.Namespace) -> int:
         image = source.read().image
     field = find_pin_field(image, expected_pins=args.expected_pins, dark_pins=args.dark_pins)
     scale = _scale(args, field)
+    reason = scale if isinstance(scale, str) else ""
+    scale = None if reason else scale
     if args.annotate:
         import cv2
 
@@ -100,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
             data.update(expected_pins=field.expected_pins, count_error=field.count_error)
         print(json.dumps(data))
     else:
-        _print_summary(args, field, scale)
+        _print_summary(args, field, scale, reason)
     if args.expected_pins and abs(field.count_error) > _COUNT_WARNING * args.expected_pins:
         why = ("pins hidden or out of focus, something touching the pad, or a wrong count?" if field.count_error < 0
                else "is the count right?")
@@ -110,18 +112,18 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _scale(args: argparse.Namespace, field):
-    """The scale of the pins found (`pins.PadScale`), by the rule calibrate and replay use; None without a pitch."""
+    """The scale of the pins found (`pins.PadScale`), by the rule calibrate and replay use; else why not (str)."""
     from pins import PinsError, sensor_scale
 
     try:
         return sensor_scale(field.centres, sensor=args.sensor, pins_on_pad=args.pins_on_pad,
                             pad_diameter_mm=args.pad_diameter_mm, mm_per_px=args.mm_per_px,
                             expected_pins=args.expected_pins)
-    except PinsError:  # fewer than two pins (or seven to count): nothing to measure the pitch on
-        return None
+    except (PinsError, ValueError) as exc:  # too few pins to measure the pitch on, or a count below one ring
+        return " ".join(str(exc).split())
 
 
-def _print_summary(args: argparse.Namespace, field, scale) -> None:
+def _print_summary(args: argparse.Namespace, field, scale, reason: str) -> None:
     disc, params = field.field_disc, field.params
     print(f"{field.count} pins in {args.image} (pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
           f"radius {disc.radius_px:.1f} px)")
@@ -130,8 +132,8 @@ def _print_summary(args: argparse.Namespace, field, scale) -> None:
         print(f"x {low[0]:.1f}..{high[0]:.1f} px, y {low[1]:.1f}..{high[1]:.1f} px")
     if scale is not None:  # the pitch is printed here, in the scale's derivation
         print(f"scale {scale.describe()}")
-    elif args.mm_per_px is None:
-        print("scale: none (too few pins to measure the pin pitch; give --mm-per-px)")
+    else:
+        print(f"scale: none ({reason})")
     counts = field.rejected_counts()
     detail = ", ".join(f"{n} {reason}" for reason, n in counts.items() if n)
     print(f"rejected {len(field.rejected)} blobs" + (f": {detail}" if detail else ""))
