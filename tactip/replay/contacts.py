@@ -122,7 +122,7 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px,
                                         usable=track.tracked & ~track.blank, signal=signal)
     try:
-        bounds = segment_taps(signal, high_px=high_px, low_px=low_px, merge_gap_frames=0)
+        bounds = segment_taps(_bridge_blank(signal, track.blank), high_px=high_px, low_px=low_px, merge_gap_frames=0)
         kinds = contact_kinds(displacements, bounds)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
@@ -165,6 +165,16 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
     floor = min(floor, jitter_floor_px(displacements, usable=usable))
     low = max(0.5 * factor, 2.0 * floor)
     return max(1.5 * factor, 2.0 * low), low
+
+
+def _bridge_blank(signal: np.ndarray, blank: np.ndarray) -> np.ndarray:
+    """The tap signal with blank frames (nothing seen: no rest either) interpolated from their neighbours, px."""
+    seen = np.flatnonzero(~blank)
+    if not blank.any() or not seen.size:
+        return signal
+    bridged = signal.copy()
+    bridged[blank] = np.interp(np.flatnonzero(blank), seen, signal[seen])
+    return bridged
 
 
 def _select(track: PinTrack, *, n_pins: int, min_separation_mm: float, mm_per_px: float) -> PinSelection:
