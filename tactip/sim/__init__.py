@@ -58,7 +58,8 @@ feature pins 4 mm apart see at most about 2.4 px between 0.25 and 5 mm, and 0.15
 widths 0.25 mm apart, against about 1 px for 0.25 mm more depth. (With ``rho = 8 mm`` adjacent widths
 differed by 0.02 px and no classifier could tell them apart.) Neighbouring tips stay separated (at least 1.8 px between the
 ellipses' edges) up to d = 5 mm on every preset; beyond about 6 mm the densest pad's tips begin
-to touch at the contact edge.
+to touch at the contact edge. A tap follows `tap_profile`: raised-cosine rise, plateau and release,
+250 ms each by default (paper 002, IV-A).
 
 Slides (`tactip.sim._slide`). ``Contact.slide_x_mm``, ``slide_y_mm``: the plate, pressed in, is
 dragged sideways and the skin sticks to it. The material in the contact patch (arc length from the
@@ -67,12 +68,11 @@ raised cosine to zero over ``L = max(6 mm, 2 |S|)`` (at most to the clamped base
 folds (Jacobian >= 1 - pi/4; a slide too long for the pad, beyond `_slide.max_slide_mm`, about 15 mm at
 2 mm on a 40 mm pad, is refused). The indentation then acts where the material now is: the patch stays
 centred on the apex, the skin slides through it. Slides move pins several pitches sideways, not outward
-as a tap does: 3 pitches of ``radial-led-120`` (8.4 mm) move the central pins 3.0-3.5 pitches in the
-image (the pressed patch is nearer the camera). No contact, no slide. A tap follows `tap_profile`: raised-cosine rise, plateau and release,
-250 ms each by default (paper 002, IV-A). A sequence (`tactip.sim.sequence`) is made of whole-frame
-phases: rest, then per stroke a raised-cosine press, a hold or a raised-cosine slide, a raised-cosine
-lift that releases depth and slide together (the pad springs back), and a rest of at least one frame;
-its ``events`` are exactly the runs of frames in contact.
+as a tap does: 3 pitches of ``radial-led-120`` (9.6 mm, 25 px) move the central pins 3.0-3.5 pitches in
+the image (the pressed patch is nearer the camera). No contact, no slide. A sequence
+(`tactip.sim.sequence`) is made of whole-frame phases: rest, then per stroke a raised-cosine press, a
+hold or a raised-cosine slide, a raised-cosine lift that releases depth and slide together (the pad
+springs back), and a rest of at least one frame; its ``events`` are exactly the runs of frames in contact.
 
 Appearance (`tactip.sim._render`). Bright casing around the disc (about 200 grey, vignetted); a dark
 membrane (about 25) with a radial illumination gradient towards the LED ring; six LED glare spots on

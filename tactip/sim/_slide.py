@@ -3,8 +3,9 @@
 The plate, pressed in by ``d`` mm, is dragged sideways by ``S = (slide_x_mm, slide_y_mm)`` and the
 skin sticks to it: the material in the contact patch (radius ``a = sqrt(R d)``) moves by the whole of
 ``S``; outside it the shift falls smoothly (raised cosine) to zero over ``L = max(SLIDE_DECAY_MM, 2 |S|)``
-of pad surface, but never past the pad's clamped base (arc ``pi R / 2``). The shift is laid out in unrolled pad coordinates (arc length from the apex and azimuth,
-those of the pin lattice), so it is a shift along the pad surface. The map ``q -> q + S f(|q|)`` has
+of pad surface, but never past the pad's clamped base (arc ``pi R / 2``). The shift is laid out in
+unrolled pad coordinates (arc length from the apex and azimuth, those of the pin lattice), so it is a
+shift along the pad surface. The map ``q -> q + S f(|q|)`` has
 Jacobian determinant ``1 + |S| f'(|q|) cos(angle)`` >= ``1 - pi |S| / 2 L`` >= ``1 - pi / 4``: it never
 folds, so pins never cross. Where the base cuts the fall-off short, the longest slide is the one that
 keeps that determinant >= `MIN_JACOBIAN` (`max_slide_mm`); a longer one is refused. The contact

@@ -12,7 +12,6 @@ frame has ``indentation_mm > 0``: a rest of 2 frames separates two contacts as s
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -159,9 +158,10 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
             contacts.append(Contact(stroke.indentation_mm * float(fraction), stroke.gap_width_mm, 0.0, gap_angle_deg,
                                     sx * float(share), sy * float(share)))
         stop = len(contacts)
+        sliding = stroke.kind == "slide"
         events.append(ContactEvent(stroke.kind, start, stop, start / frame_rate, stop / frame_rate,
-                                   stroke.indentation_mm, None if stroke.kind == "press" else float(stroke.direction_deg),
-                                   float(stroke.distance_mm) if stroke.kind == "slide" else 0.0))
+                                   stroke.indentation_mm, float(stroke.direction_deg) if sliding else None,
+                                   float(stroke.distance_mm) if sliding else 0.0))
         contacts.extend([rest] * n_rest)
     return contacts, events
 
@@ -205,7 +205,8 @@ class ContactSequences:
                                     hold_s=hold_s, slide_s=slide_s, lift_s=lift_s)
         return ContactSequence(self, contacts, events, frame_rate)
 
-    def slides(self, directions_deg, *, distance_mm: float = 3.0, indentation_mm: float = 2.0, **timing) -> ContactSequence:
+    def slides(self, directions_deg, *, distance_mm: float = 3.0, indentation_mm: float = 2.0,
+               **timing) -> ContactSequence:
         """Frames of slides in the given directions, each a press, a drag and a lift, with rests between.
 
         Parameters
@@ -232,7 +233,8 @@ class ContactSequences:
         """
         return self.sequence([Stroke(indentation_mm, float(a), distance_mm) for a in directions_deg], **timing)
 
-    def taps(self, count: int, *, indentation_mm: float = 3.0, gap_width_mm: float = 0.0, **timing) -> ContactSequence:
+    def taps(self, count: int, *, indentation_mm: float = 3.0, gap_width_mm: float = 0.0,
+             **timing) -> ContactSequence:
         """Frames of ``count`` plain presses (taps) with rests between them.
 
         Parameters
