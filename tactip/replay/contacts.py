@@ -10,8 +10,8 @@ import dataclasses
 import numpy as np
 from scipy import ndimage
 
-from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, segment_taps, select_feature_pins,
-                  sensor_scale, tap_signal)
+from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, contact_kinds, jitter_floor_px,
+                  segment_taps, select_feature_pins, sensor_scale, tap_signal)
 
 from tactip.pipeline import PinTrack
 
@@ -70,7 +70,10 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
 
     Returns a dict: ``scale`` (`pins.PadScale` or None with a calibration), ``mm_per_px``,
     ``selection`` (`pins.PinSelection` or None), ``selected`` (P,) pin indices, ``bounds`` (the
-    contacts, [start, stop) frames), ``warnings`` and ``tap_thresholds_px`` (high, low).
+    contacts, [start, stop) frames), ``kinds`` (a `pins.ContactKind` per contact: press or slide and
+    its direction), ``warnings`` and ``tap_thresholds_px`` (high, low).
+
+    Contacts separated by any rest are separate, however short the rest: no quiet frame is bridged.
     """
     warnings = list(track.warnings)
     rest, disc, displacements = track.rest_positions, track.disc, track.displacements
@@ -109,18 +112,19 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
             warnings.append(check)
     except (PinsError, ValueError) as exc:
         warnings.append(f"the rest frame could not be checked ({exc})")
-    bounds = []
+    bounds, kinds = [], []
     high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px,
                                         usable=track.tracked & ~track.blank, signal=signal)
     try:
-        bounds = segment_taps(signal, high_px=high_px, low_px=low_px)
+        bounds = segment_taps(_bridge_blank(signal, track.blank), high_px=high_px, low_px=low_px, merge_gap_frames=0)
+        kinds = contact_kinds(displacements, bounds)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")
     except (PinsError, ValueError) as exc:
         warnings.append(f"no tap features ({exc})")
     return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
-                bounds=bounds, warnings=warnings, tap_thresholds_px=(high_px, low_px))
+                bounds=bounds, kinds=kinds, warnings=warnings, tap_thresholds_px=(high_px, low_px))
 
 
 def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None,
@@ -130,7 +134,8 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
     The defaults (1.5 and 0.5 px) fit a pad whose pins are about `REFERENCE_PITCH_PX` apart in the
     image; on a pad seen smaller (a small pad, a low resolution) the pins move proportionally less
     and the thresholds shrink with the pitch (never grow), but stay above the tracking noise: the
-    low threshold at least twice the quiet frames' tap signal (its 10th percentile).
+    low threshold at least twice the tap signal of a still pad (the lower of the frames' 10th
+    percentile and the signal the pins' frame-to-frame jitter gives, `pins.jitter_floor_px`).
 
     Parameters
     ----------
@@ -146,11 +151,24 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
     factor = min(1.0, spacing_px / REFERENCE_PITCH_PX) if np.isfinite(spacing_px) and spacing_px > 0 else 1.0
     if signal is None:
         signal = tap_signal(displacements)
-    if usable is not None:
-        signal = signal[usable]
-    floor = float(np.percentile(signal, 10)) if signal.size else 0.0
+    quiet = signal if usable is None else signal[usable]
+    floor = float(np.percentile(quiet, 10)) if quiet.size else 0.0
+    # A recording that is mostly contact (slides with short rests between them) has few quiet frames
+    # to measure the floor on: the noise is also measured from the frame-to-frame jitter of the pins
+    # (`pins.jitter_floor_px`), which contact does not raise, and the lower of the two is kept.
+    floor = min(floor, jitter_floor_px(displacements, usable=usable))
     low = max(0.5 * factor, 2.0 * floor)
     return max(1.5 * factor, 2.0 * low), low
+
+
+def _bridge_blank(signal: np.ndarray, blank: np.ndarray) -> np.ndarray:
+    """The tap signal with blank frames (nothing seen: no rest either) interpolated from their neighbours, px."""
+    seen = np.flatnonzero(~blank)
+    if not blank.any() or not seen.size:
+        return signal
+    bridged = signal.copy()
+    bridged[blank] = np.interp(np.flatnonzero(blank), seen, signal[seen])
+    return bridged
 
 
 def _select(track: PinTrack, *, n_pins: int, min_separation_mm: float, mm_per_px: float) -> PinSelection:

@@ -31,7 +31,9 @@ The HDF5 file (format ``tactip-replay/2``) holds:
 - ``timestamps`` float64 (frames,): s;  ``rest_positions`` float64 (pins, 2): px;
 - ``selected_pins`` int (P,): indices of the tactile pins, in selection order (attributes
   ``requested``, ``min_separation_mm`` asked, ``separation_mm`` reached);
-- ``tap_bounds`` int (taps, 2): [start, stop) frame indices;
+- ``tap_bounds`` int (taps, 2): [start, stop) frame indices of the contacts (any rest separates two);
+  ``tap_kinds`` bytes (taps,): ``press`` or ``slide``; ``tap_directions_deg`` (taps,): a slide's direction
+  (degrees from image x towards image y), NaN for a press (`pins.contact_kinds`);
 - ``taps`` float32 (taps, samples, 2 P) when taps were found: columns 0..P-1 dx, P..2P-1 dy of the
   selected pins (``feature_names`` attribute); ``tap_valid`` bool (taps,): False where a selected
   pin was lost for a whole tap (its features are NaN);
@@ -100,6 +102,8 @@ class ReplayResult:
         Frames with nothing trackable (all pins lost), after the rest frame.
     rest_frame : int
     tap_bounds : list of (start, stop)
+    contact_kinds : list of pins.ContactKind
+        Press or slide, and a slide's direction, per contact.
     invalid_taps : list of int
         Taps whose features are NaN (a selected pin lost for the whole tap).
     selected_pins : (P,) ndarray of int
@@ -144,6 +148,7 @@ class ReplayResult:
     expected_pins: int | None = None
     warnings: list = field(default_factory=list)
     decisions: Any = None
+    contact_kinds: list = field(default_factory=list)
 
     @property
     def lost_pin_frames(self) -> int:
@@ -153,7 +158,8 @@ class ReplayResult:
     def summary(self) -> str:
         """A few readable lines: frames, pins, scale, lost and retired pins, taps, warnings, files."""
         rate = f" at {self.frame_rate:g} fps" if self.frame_rate else ""
-        taps = ", ".join(f"{a}-{b - 1}" for a, b in self.tap_bounds) or "none"
+        kinds = self.contact_kinds or [None] * len(self.tap_bounds)
+        taps = ", ".join(f"{a}-{b - 1}" + _kind(k) for (a, b), k in zip(self.tap_bounds, kinds)) or "none"
         detected = f"rest frame {self.rest_frame}: {self.pin_field or f'{self.pins_detected} pins'}"
         if self.expected_pins and "expected" not in self.pin_field:
             off = self.pins_detected - self.expected_pins
@@ -193,6 +199,13 @@ class ReplayResult:
             shown = ", ".join(map(str, self.blank_frames[:10])) + (" ..." if len(self.blank_frames) > 10 else "")
             text += f"; {len(self.blank_frames)} blank frame(s) (nothing trackable, pins NaN): {shown}"
         return text
+
+
+def _kind(kind) -> str:
+    """" press" or " slide 45 deg" for the summary's list of contacts ("" when unknown)."""
+    if kind is None:
+        return ""
+    return f" {kind.kind}" + (f" {kind.direction_deg:.0f} deg" if kind.kind == "slide" else "")
 
 
 def _decode_threads() -> int:
@@ -399,7 +412,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         selected_pins=analysis["selected"], selection=analysis["selection"],
                         mm_per_px=float(analysis["mm_per_px"]), scale=scale, disc=track.disc,
                         detection=track.detection, pins_detected=track.pins_detected, pin_field=track.pin_field,
-                        expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions)
+                        expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions,
+                        contact_kinds=list(analysis.get("kinds", [])))
 
 
 class _Plan:
