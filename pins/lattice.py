@@ -47,6 +47,11 @@ finds that lattice without being told the pin count:
    ring, so that the per-frame fast path `pins.detect_pins(frame, params=field.params,
    disc=field.disc)` does not detect the rim ring and its glare again.
 
+The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided the same way
+when it is not given: both are searched (each inside its own sensor disc) and the one whose lattice
+keeps more pins wins; a frame where neither keeps `MIN_SENSOR_PINS` shows no sensor (`NoSensorError`,
+saying why for each). `tactip detect` and `tactip replay` both decide so.
+
 A known pin count does not steer the search: it is compared with the result (`count_error`).
 `draw_pin_field` pictures what was kept and what was rejected, coloured by reason.
 """
@@ -64,8 +69,16 @@ from ._draw import draw_pin_field
 from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _median_nn, _sharpness
 from .detect import Blobs, DetectionParams, _detect
 from .disc import SensorDisc, as_grey, find_sensor_disc
+from .errors import NoSensorError
 
-__all__ = ["PinField", "find_pin_field", "REJECTION_REASONS", "draw_pin_field"]
+__all__ = ["PinField", "find_pin_field", "REJECTION_REASONS", "draw_pin_field", "MIN_SENSOR_PINS"]
+
+#: Fewest pins of a pin lattice that make a sensor when the polarity is decided
+#: (`find_pin_field` with ``dark_pins=None``): TacTips have 100-1000 pins, and a rest frame shows
+#: most of them; a handful of blobs of the other polarity (glare, the membrane between the pins)
+#: is no sensor.
+MIN_SENSOR_PINS = 40
+_POLARITIES = {False: "bright pins on a dark membrane", True: "dark markers on a light membrane"}
 
 
 # Possible pin pitches, as fractions of the disc radius (1000 pins on a hexagonal lattice filling
@@ -153,7 +166,7 @@ class PinField:
 
 
 def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, params: DetectionParams | None = None,
-                   disc: SensorDisc | None = None, dark_pins: bool = False) -> PinField:
+                   disc: SensorDisc | None = None, dark_pins: bool | None = None) -> PinField:
     """Find the pins of a frame as the blobs that form the pin lattice, without knowing their count.
 
     Parameters
@@ -164,21 +177,30 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
         The sensor's pin count: checked against the result (`PinField.count_error`), never used
         to steer the search.
     params : DetectionParams, optional
-        Starting parameters: tried among the candidates; their polarity is kept, and their rim
-        margin at least (`PinField.params` widens it to leave out the membrane beyond the field).
+        Starting parameters: tried among the candidates; their polarity is kept (unless
+        `dark_pins` says otherwise), and their rim margin at least (`PinField.params` widens it to
+        leave out the membrane beyond the field).
     disc : SensorDisc, optional
         The membrane disc, found with `find_sensor_disc` when not given.
-    dark_pins : bool
-        Dark markers on a light membrane (also taken from ``params.dark_pins``).
+    dark_pins : bool, optional
+        True: dark markers on a light membrane; False: bright pins on a dark membrane. None (the
+        default, and without `params`): decided from the frame, as `tactip detect` and `tactip
+        replay` do: both polarities are searched (those whose sensor disc `find_sensor_disc`
+        finds, when `disc` is not given) and the one whose pin lattice keeps more pins wins; a
+        frame where neither forms a lattice of at least `MIN_SENSOR_PINS` pins shows no sensor.
+        With `params` and no `dark_pins`, ``params.dark_pins`` is the polarity.
 
     Returns
     -------
     field : PinField
+        ``field.params.dark_pins`` is the polarity searched (or decided).
 
     Raises
     ------
     NoSensorError
-        When `disc` is not given and the frame shows no sensor disc.
+        When `disc` is not given and the frame shows no sensor disc (of the polarity asked, or of
+        either when deciding), or when deciding and no polarity forms a pin lattice of at least
+        `MIN_SENSOR_PINS` pins. The message says why for each polarity.
     ValueError
         `expected_pins` is not a positive integer.
 
@@ -198,12 +220,47 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     if expected_pins is not None and (isinstance(expected_pins, bool) or int(expected_pins) != expected_pins
                                       or expected_pins < 1):
         raise ValueError(f"expected_pins must be a positive integer, got {expected_pins!r}")
-    start = params or DetectionParams()
-    if dark_pins and not start.dark_pins:
-        start = start.replace(dark_pins=True)
     grey = as_grey(frame)
+    start = params or DetectionParams()
+    if dark_pins is None and params is None:
+        return _decide_polarity(grey, start, disc, expected_pins)
+    if dark_pins is not None:
+        start = start.replace(dark_pins=bool(dark_pins))
     if disc is None:
         disc = find_sensor_disc(grey, dark_pins=start.dark_pins)
+    return _search(grey, disc, start, params is not None, expected_pins)
+
+
+def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc | None,
+                     expected_pins: int | None) -> PinField:
+    """The pin field of the polarity whose lattice keeps more pins; NoSensorError when neither
+    polarity shows a sensor disc and a lattice of at least `MIN_SENSOR_PINS` pins.
+
+    On a frame of either polarity the other one's disc is usually refused (the inverted surround
+    is no disc), and where it is not, its blobs (the membrane between the pins, glare) form a
+    lattice of far fewer pins, or none.
+    """
+    fields: list[PinField] = []
+    why: list[str] = []
+    for dark, name in ((False, _POLARITIES[False]), (True, _POLARITIES[True])):
+        try:
+            found = disc if disc is not None else find_sensor_disc(grey, dark_pins=dark)
+        except NoSensorError as exc:
+            why.append(f"{name}: {exc}")
+            continue
+        field = _search(grey, found, start.replace(dark_pins=dark), False, expected_pins)
+        fields.append(field)
+        why.append(f"{name}: {field.count} pins form a lattice")
+    best = max(fields, key=lambda f: f.count, default=None)
+    if best is None or best.count < MIN_SENSOR_PINS:
+        raise NoSensorError(f"no sensor in the frame: no pin lattice of at least {MIN_SENSOR_PINS} pins ("
+                            + "; ".join(why) + ")")
+    return best
+
+
+def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: bool,
+            expected_pins: int | None) -> PinField:
+    """The pin field of one polarity (``start.dark_pins``) inside `disc`; `start` is a candidate when `hinted`."""
     # The possible pitches scale with the sensor disc; the search stops at a black rim ring, which,
     # like the surround, must neither make blobs (its glare) nor darken the threshold's
     # neighbourhood means (the membrane along its edge would pass for pins).
@@ -221,7 +278,7 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     pitch = float(np.clip(pitch, 0.5 * pitches.min(), 1.5 * pitches.max()))
     # Fine: blocks and offsets at the measured pitch.
     fine = list(_candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS))
-    runs = _evaluate_all(grey, search, fine + ([start] if params is not None else []), cache)
+    runs = _evaluate_all(grey, search, fine + ([start] if hinted else []), cache)
     # The pins are the blobs that most candidate sets agree on, where they agree on them: the run
     # that keeps the most of those (and the fewest others), with centres nearest the consensus.
     membership, deviation = _consensus(runs, pitch)
