@@ -110,6 +110,26 @@ an option (all off by default, so the default frames are unchanged byte for byte
   bright surround (an open, white-lit casing near saturation) with LED glare made stronger, and a
   veil of scattered light that brightens the disc edge (grey levels ``veil`` at the edge, fading
   inward over a tenth of the radius). Pins near the edge lose contrast.
+- LED reflections inside the pad ``reflections``, ``reflection_level``, ``glare_gradient``, ``shimmer``
+  (`tactip.sim._scene`): on the home-built radial TacTip the LEDs reflect in the clear window as soft
+  bright blobs inside the pad, and their glare brightens one side of it. ``reflections`` blobs
+  (flat-topped, ``2^-(r/rho)^4``, half-maximum radius ``rho`` 0.75-1.5 apex pin spacings, so 1.5-3
+  spacings across) at seeded positions 0.2-0.7 of the disc radius from its centre, each adding
+  ``reflection_level`` (+-15 %) grey at its centre; ``glare_gradient`` grey levels added on the bright
+  side of the disc, falling linearly to 0 on the other (a seeded direction). They are fixed in the
+  IMAGE, not on the membrane: they are light paths between the LEDs, the window and the lens, which do
+  not move when the skin behind them is pressed or dragged, so pins slide under and out of them. A pin
+  under this light gains only 0.7 of it (its white paint sits near the knee of the camera's response),
+  so it stands out less: on ``radial-led-120`` pins on a reflection stand on about 160 grey with a
+  contrast of about 35, the others on about 115 with about 50, as measured on the real pads (issue 20).
+  They stay ``visible`` pins; their true centres are unchanged (the tip is drawn point-symmetric; on a
+  reflection's flank the anti-aliased edge blends with a background sloping by several grey levels per
+  px, which pulls a background-subtracted centroid by up to about 0.2 px). The centres and radii are
+  ``reflection_centres`` and ``reflection_radii_px``. ``shimmer`` makes a still pad's frames differ by
+  more than sensor noise: every frame each reflection's peak varies with standard deviation ``shimmer``
+  grey (the gradient half that), and the reflections jitter by ``0.05 x shimmer`` px (at most 0.25 px);
+  a pin on a reflection then varies by 0.7 x that. The shimmer has its own random stream
+  (`SyntheticTacTip.reseed_noise` restarts it with the noise), so the noise stays what it was.
 - Pin count 100-1000: any count works (``dense-1000``: 1000 pins at 1280x720, 5 px tips about 16 px
   apart); rendering stays vectorised: about 3x the default 331-pin frame for 1000 pins at 1280x720
   (15-20 ms), 4x for a textured colour frame at 640x480 (20-30 ms; ``bench/bench_render.py``).
@@ -140,6 +160,10 @@ Presets
   and shadows 22 grey.
 - ``radial-120``: 120 small pins (2 px) on 7 rings x 17 spokes plus a centre pin, the pad a third of the
   frame height in a near-saturated surround (245) with strong glare and a veil, noise 5, 120 frames/s.
+- ``radial-led-120``: the real home-built pad of issue 20: ``radial-120`` with a grey membrane (100)
+  and pins (180), four LED reflections (50 grey) inside the pad, a glare gradient (25 grey) and shimmer 1.
+  Detection finds 108-114 of the 120 pins today (3 seeds, rest and a 5 mm tap): the pins on the
+  reflections are rejected, as on the real recordings.
 - ``small-pad-100``: 100 pins, the pad a quarter of the frame height, 320x240, bright surround (1 px tips).
 - ``dense-1000``: 1000 pins at 1280x720, the pad 0.9 of the frame height.
 """
