@@ -8,8 +8,13 @@ pins), "size" and "contrast" (unlike their neighbours). With --expected-pins the
 confirms the result: the summary says how far off it is (a warning when more than 10 % off).
 
 With --json the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
-"rejected": [[x, y, "reason"], ...]} in px (x to the right, y down), plus "expected_pins" and
-"count_error" (found minus expected) with --expected-pins.
+"rejected": [[x, y, "reason"], ...], "dark_pins": bool} in px (x to the right, y down), plus
+"expected_pins" and "count_error" (found minus expected) with --expected-pins.
+
+The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided from the
+image unless --dark-pins says so: the one whose pin lattice keeps more pins wins, and an image where
+neither forms a lattice of 40 pins or more shows no sensor (an error saying why for each). `tactip
+replay` decides the same way on its rest frame and refuses with the same message.
 
 With --annotate OUT.png a picture is written: kept pins in green, rejected blobs as crosses
 coloured by reason, the pin field's circle in yellow and a legend (images under 480 px enlarged
@@ -44,10 +49,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--expected-pins", type=positive_int, metavar="N",
                         help="the sensor's pin count (127, 331, 532 ...): confirms the pins found and says how "
                              "far off they are; does not change what is found")
-    parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
+    parser.add_argument("--dark-pins", action="store_true",
+                        help="dark markers on a light membrane (default: the polarity is decided from the image)")
     parser.add_argument("--json", action="store_true",
                         help='print {"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": '
-                             '[[x, y, "reason"], ...]} (px)')
+                             '[[x, y, "reason"], ...], "dark_pins": bool} (px)')
     parser.add_argument("--annotate", type=output_file, metavar="OUT.png",
                         help="also write a picture: kept pins green, rejected blobs coloured by reason, legend")
 
@@ -67,7 +73,8 @@ def run(args: argparse.Namespace) -> int:
         if len(source) != 1:
             raise SourceError(f"{args.image!r} is a folder of {len(source)} images; give one image file")
         image = source.read().image
-    field = find_pin_field(image, expected_pins=args.expected_pins, dark_pins=args.dark_pins)
+    # The polarity is decided as replay decides it (pins.find_pin_field with dark_pins=None).
+    field = find_pin_field(image, expected_pins=args.expected_pins, dark_pins=True if args.dark_pins else None)
     if args.annotate:
         import cv2
 
@@ -84,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
         data = {"count": field.count, "pins": [[round(x, 3), round(y, 3)] for x, y in field.centres.tolist()],
                 "pitch_px": None if field.count < 2 else round(field.pitch_px, 3),
                 "rejected": [[round(float(x), 3), round(float(y), 3), str(reason)]
-                             for (x, y), reason in zip(field.rejected, field.rejected_reason)]}
+                             for (x, y), reason in zip(field.rejected, field.rejected_reason)],
+                "dark_pins": bool(field.params.dark_pins)}
         if args.expected_pins:
             data.update(expected_pins=field.expected_pins, count_error=field.count_error)
         print(json.dumps(data))
@@ -100,7 +108,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _print_summary(args: argparse.Namespace, field) -> None:
     disc, params = field.field_disc, field.params
-    print(f"{field.count} pins in {args.image} (pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
+    polarity = "dark markers on a light membrane" if params.dark_pins else "bright pins on a dark membrane"
+    print(f"{field.count} pins in {args.image} ({polarity}; pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
           f"radius {disc.radius_px:.1f} px)")
     if field.count:
         low, high = field.centres.min(axis=0), field.centres.max(axis=0)

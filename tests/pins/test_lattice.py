@@ -19,7 +19,8 @@ CONTACTS = {"rest": None, "tap5mm": TAP}
 def _field(name: str, contact: str, expected: bool = False) -> PinField:
     f = preset_frame(name, CONTACTS[contact])
     count = int(f.visible.sum() + f.partial.sum()) if expected else None
-    return find_pin_field(f.image, expected_pins=count, dark_pins=preset_sensor(name).dark_pins)
+    # The polarity is decided (dark_pins=None), as tactip detect and tactip replay decide it.
+    return find_pin_field(f.image, expected_pins=count)
 
 
 def _gate_px(frame) -> float:
@@ -38,6 +39,7 @@ def test_field_without_a_count_meets_the_bar(name, contact):
     assert recall >= 0.99 and precision >= 0.99, (recall, precision, field.summary())
     assert rmse <= 0.1
     assert field.expected_pins is None and field.count_error is None
+    assert field.params.dark_pins == preset_sensor(name).dark_pins  # the polarity decided right
 
 
 @pytest.mark.parametrize("contact", list(CONTACTS))
@@ -267,7 +269,7 @@ def test_painted_specks_and_faint_blobs_between_pins_are_rejected(rng):
 def test_no_pins_is_an_empty_field():
     sensor = preset_sensor("tactip-331")
     blank = sensor.render(hidden=np.ones(sensor.n_pins, dtype=bool)).image
-    field = find_pin_field(blank, expected_pins=331)
+    field = find_pin_field(blank, expected_pins=331, dark_pins=False)
     assert field.centres.shape == (0, 2) and field.centres.dtype == np.float64
     assert field.count == 0 and field.count_error == -331 and np.isnan(field.pitch_px)
     assert field.rejected.shape == (len(field.rejected_reason), 2)
@@ -317,3 +319,30 @@ def test_small_frames_are_drawn_enlarged():
     green = (picture[:, :, 1] > 150) & (picture[:, :, 0] < 60) & (picture[:, :, 2] < 60)
     x, y = np.rint(2 * field.centres[0] + 0.5).astype(int)
     assert green[y - 4:y + 5, x - 4:x + 5].any()
+
+
+@pytest.mark.parametrize("name", ["tactip-331", "dark-331"])
+def test_deciding_the_polarity_refuses_a_pad_without_a_lattice_saying_why_for_both(name):
+    """A pad without pins, or with a dozen blobs (glare), shows no sensor when the polarity is decided:
+    neither polarity forms a lattice of MIN_SENSOR_PINS pins, and the message says what each found."""
+    from pins import MIN_SENSOR_PINS
+
+    sensor = preset_sensor(name)
+    hidden = np.ones(sensor.n_pins, dtype=bool)
+    hidden[::30] = False  # a dozen pins: a field of the polarity asked, no sensor when deciding
+    image = sensor.render(hidden=hidden).image
+    assert find_pin_field(image, dark_pins=sensor.dark_pins).count < MIN_SENSOR_PINS
+    with pytest.raises(NoSensorError, match=f"no pin lattice of at least {MIN_SENSOR_PINS} pins") as caught:
+        find_pin_field(image)
+    message = str(caught.value)
+    assert "bright pins on a dark membrane" in message and "dark markers on a light membrane" in message
+    assert "pins form a lattice" in message and "no sensor disc" in message  # one polarity's disc, not the other's
+
+
+def test_a_forced_polarity_is_kept():
+    """dark_pins=True or False (or params with a polarity) is searched as asked, never decided."""
+    f = preset_frame("tactip-127")
+    assert find_pin_field(f.image, dark_pins=False).params.dark_pins is False
+    assert find_pin_field(f.image, params=DetectionParams(), dark_pins=None).params.dark_pins is False
+    with pytest.raises(NoSensorError, match="no sensor disc"):
+        find_pin_field(f.image, dark_pins=True)
