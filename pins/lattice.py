@@ -436,6 +436,14 @@ def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> f
     steps = int(np.ceil(disc.radius_px))
     polar = cv2.warpPolar(grey, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
                           cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
+    # A disc cut by the frame edge: only the azimuths whose ray stays in the frame see a ring (the
+    # samples beyond the frame are black).
+    seen = cv2.warpPolar(np.full(grey.shape, 255, np.uint8), (steps, _RING_AZIMUTHS), (disc.cx, disc.cy),
+                         disc.radius_px, cv2.WARP_POLAR_LINEAR + cv2.INTER_NEAREST)
+    whole = (seen == 255).all(axis=1)
+    if whole.sum() < _RING_AZIMUTHS // 4:
+        return np.inf
+    polar = polar[whole]
     dark = np.percentile(polar, _RING_PERCENTILE, axis=0)
     end = steps - 1 - _RING_EDGE_PX
     first = max(steps // 2, _RING_STEP_PX + _RING_INSIDE_PX)

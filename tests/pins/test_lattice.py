@@ -346,3 +346,19 @@ def test_a_forced_polarity_is_kept():
     assert find_pin_field(f.image, params=DetectionParams(), dark_pins=None).params.dark_pins is False
     with pytest.raises(NoSensorError, match="no sensor disc"):
         find_pin_field(f.image, dark_pins=True)
+
+
+@pytest.mark.parametrize("sides", ["left", "left+bottom"])
+@pytest.mark.parametrize("name", ["tactip-331", "dark-331", "brown-127", "radial-120", "rim-ring-331"])
+def test_pin_field_of_a_pad_cut_by_the_frame_edge_meets_the_bar(name, sides):
+    """The membrane cut by the frame edge: the disc is found through its visible rim, the polarity is
+    decided, and the pins the frame shows whole are found (those it cuts may be or not); the black
+    beyond the frame is no rim ring."""
+    from tests.pins.test_disc import _cut
+
+    for seed in (0, 1):
+        f, _, sensor = _cut(name, seed, sides)
+        field = find_pin_field(f.image)
+        recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
+        assert recall >= 0.99 and precision >= 0.99 and rmse <= 0.1, (seed, recall, precision, rmse)
+        assert field.params.dark_pins == sensor.dark_pins
