@@ -215,7 +215,8 @@ class _Neighbourhood:
         self.link = self.dist[:, 1:] <= _LINK * np.maximum(reach[:, None], reach[self.near[:, 1:]])
 
     def anchors(self) -> np.ndarray:
-        """Per point: linked neighbours j with a point at the mirror image through j, or beyond the point."""
+        """Per point: linked neighbours j with a point at the mirror image through j, plus the lines
+        through the point (pairs of linked neighbours j, 2 p - j)."""
         points, neighbours = self.points, self.near[:, 1:]
         n, k = neighbours.shape
         others = points[neighbours]
@@ -234,7 +235,11 @@ class _Neighbourhood:
             lone = ~mutual
             beyond[lone] = self.tree.query(2.0 * np.broadcast_to(points[:, None, :], others.shape)[lone] - others[lone],
                                            distance_upper_bound=bound)[0]
-        return np.sum(self.link & (through < tolerance), axis=1) + np.sum(self.link & (beyond < tolerance), axis=1)
+        # A point between two neighbours j and 2 p - j is seen from both: one line, counted once (else
+        # the midpoint of two pins of a radial layout's diverging spokes, a reflection there, would
+        # have two anchors from one pair).
+        between = np.sum(self.link & (beyond < tolerance), axis=1)
+        return np.sum(self.link & (through < tolerance), axis=1) + (between + 1) // 2
 
     def graph(self) -> coo_matrix:
         """Sparse adjacency of the lattice links."""

@@ -66,6 +66,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
+from ._rescue import fill_lattice_holes
 from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _median_nn, _sharpness
 from .detect import Blobs, DetectionParams, _detect
 from .disc import SensorDisc, as_grey, find_sensor_disc
@@ -289,11 +290,24 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
     later = max(np.flatnonzero(close), key=lambda r: (runs[r].params.offset, -deviation[r]))
     run = runs[best]
     centres = run.blobs.centres[run.kept]
+    rejected, reason = run.blobs.centres[~run.kept], run.reason[~run.kept]
+    # Holes in the lattice (a pin on a reflection, a faint pin at a spoke's end) filled with the blobs
+    # other candidate sets found there.
+    taken = fill_lattice_holes(centres, run.blobs.areas[run.kept], run.blobs.contrasts[run.kept],
+                               [(r.blobs.centres, r.blobs.areas, r.blobs.fills, r.blobs.contrasts, r.params.offset)
+                                for r in runs],
+                               (disc.cx, disc.cy))
+    if taken:
+        extra = np.array([runs[s].blobs.centres[i] for s, i in taken])
+        centres = np.vstack([centres, extra])
+        centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
+        apart = cKDTree(extra).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
+        rejected, reason = rejected[apart], reason[apart]
     final = _final_params(runs[later], centres, disc, run.pitch, search.radius_px)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=disc,
-                    pitch_px=float(_median_nn(centres)), rejected=run.blobs.centres[~run.kept],
-                    rejected_reason=np.array(REJECTION_REASONS, dtype=object)[run.reason[~run.kept]].astype(str),
+                    pitch_px=float(_median_nn(centres)), rejected=rejected,
+                    rejected_reason=np.array(REJECTION_REASONS, dtype=object)[reason].astype(str),
                     expected_pins=None if expected_pins is None else int(expected_pins), count_error=count_error)
 
 
