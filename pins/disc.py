@@ -7,7 +7,12 @@ so that neither the bright surround nor the glare is mistaken for pins.
 The disc is found on a reduced, heavily blurred copy of the frame, where the pins average out
 with the membrane around them: Otsu's threshold splits dark (membrane) from bright (surround),
 the largest dark region is filled by its convex hull (which closes the notches glare cuts into
-the rim), and the circle of equal area centred on the hull's centroid is the disc.
+the rim), and the circle of equal area centred on the hull's centroid is the disc. A membrane cut
+by the frame edge (a pad filling the view, no casing in sight) is a disc whose visible rim is an
+arc: when the dark region touches the frame edge, the disc is the circle fitted to the rest of its
+outline, accepted when the region fills the circle's part inside the frame and lies in it. Either
+way the rim is then refined to a sub-pixel circle on rays from the centre (again, for a cut disc,
+until it settles).
 """
 
 from __future__ import annotations

@@ -27,7 +27,9 @@ finds that lattice without being told the pin count:
    0.6 local pitches of a stronger blob (a speck, a light patch between pins), or when it sits at no
    lattice site and does not look just like its neighbours. A lattice site is found by mirror
    images: a pin is the mirror of a neighbour through another neighbour (six times for interior
-   pins, at least once at the rim or at the end of a radial spoke). The local pitch is the median
+   pins, at least once at the rim or at the end of a radial spoke), and a blob midway between two
+   neighbours counts that line once (a reflection between two diverging radial spokes is not
+   anchored twice by one pair). The local pitch is the median
    nearest-neighbour distance around a blob, so radial layouts, whose spacing grows with the
    radius, and foreshortened rim pins work. Then the blobs rejected are judged again against the
    blobs kept, and those that pass rejoin (once each) and the iteration runs again: a pin first
@@ -41,6 +43,12 @@ finds that lattice without being told the pin count:
 5. the winner: the candidate set that keeps the most pins that at least half of the good sets
    (those keeping 97 % of the most pins; both when there are two) also keep, and the fewest
    others, its centres nearest their consensus;
+5b. holes: a lattice site the winner's pins predict (a mirror image through a neighbour) from both
+   sides, or once outward at the end of a lone row such as a radial spoke, that no pin occupies is
+   filled with a pin-like blob another candidate set found there (`pins._rescue`): one threshold
+   cannot suit every pin of a pad whose light varies, and a pin on an LED reflection inside the pad
+   (a brighter background, less contrast) or a faint spoke end under the veil is lost by the
+   winner's and found by another's;
 6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
    pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
    rim margin that leaves out the membrane half a pitch beyond the outermost pin and the rim

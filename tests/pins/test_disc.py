@@ -76,9 +76,12 @@ def test_small_and_large_pads_are_found(name):
 def _cut(name: str, seed: int, sides: str):
     """A rest frame of preset `name` cut by the frame edge on `sides` by 15-35 % of the disc radius,
     with the window's offset (x0, y0) px and the true disc."""
-    from tests.pins.conftest import cropped_frame, preset_frame, preset_sensor
+    from tactip.sim import SyntheticTacTip
+    from tests.pins.conftest import cropped_frame
 
-    sensor, f = preset_sensor(name, seed), preset_frame(name, seed=seed)
+    # A sensor of its own (not the shared cached one, whose frames depend on what rendered before).
+    sensor = SyntheticTacTip.from_preset(name, seed=seed)
+    f = sensor.render()
     width, height = sensor.image_size
     cx, cy, radius = sensor.disc
     a, b = np.random.default_rng(seed).uniform(0.15, 0.35, 2) * radius
