@@ -24,6 +24,7 @@ PRESETS = MappingProxyType({
                                         "frame_rate": 120.0, "membrane_level": 100.0, "pin_level": 180.0,
                                         "reflections": 4, "reflection_level": 50.0, "glare_gradient": 25.0,
                                         "shimmer": 1.0}),
+    "white-dark-331": MappingProxyType({"pins": 331, "surround_level": 30.0}),
     "small-pad-100": MappingProxyType({"pins": 100, "image_size": (320, 240), "pad_fraction": 0.25,
                                        "pin_fraction": 0.22, "surround_level": 235.0}),
     "dense-1000": MappingProxyType({"pins": 1000, "image_size": (1280, 720), "pad_fraction": 0.9}),

@@ -4,14 +4,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator
 
 import numpy as np
 
-from tactip.sim import _options, _pad, _render, _scene
+from tactip.sim import _options, _pad, _render, _scene, _slide
 from tactip.sim.contact import Contact, SyntheticFrame, tap_profile
 from tactip.sim.presets import PRESETS
+from tactip.sim.sequence import ContactSequences
 
 __all__ = ["SyntheticTacTip"]
 
@@ -23,7 +25,7 @@ _SHADOW_RING = 1.4  # pin shadows: a soft dark ring of this radius round each ti
 _SHADOW_SIGMA = 0.35  # pin shadows: Gaussian sigma across the ring, in pin radii
 
 
-class SyntheticTacTip:
+class SyntheticTacTip(ContactSequences):
     """A simulated TacTip camera: renders frames of the pin array with exact ground truth.
 
     Parameters
@@ -281,7 +283,7 @@ class SyntheticTacTip:
 
     def _skin_image(self, x, y, contact: Contact):
         """Image positions (M, 2) px of skin material points at rest lateral position (x, y) mm."""
-        point = _pad.membrane_points(x, y, contact, self._radius)
+        point = _pad.membrane_points(*_slide.slid_points(x, y, contact, self._radius), contact, self._radius)
         return np.asarray(self.disc[:2]) + self._f * point[:, :2] / (point[:, 2:] + self._h)
 
     @property
@@ -299,7 +301,8 @@ class SyntheticTacTip:
 
     def _project(self, contact: Contact):
         """Pin tips through the camera: centres (N, 2) px, ellipse matrices (N, 2, 2) px^2, facing (N,) bool."""
-        base, normal = _pad.deformed_surface(self._base_x, self._base_y, contact, self._radius)
+        x, y = _slide.slid_points(self._base_x, self._base_y, contact, self._radius)  # skin dragged sideways
+        base, normal = _pad.deformed_surface(x, y, contact, self._radius)
         return _pad.project_discs(base + _pad.STALK_MM * normal, normal, focal_px=self._f,
                                   principal_px=self.disc[:2], camera_mm=self._h,
                                   disc_radius_mm=self._tip_radius_mm)
@@ -490,7 +493,6 @@ class SyntheticTacTip:
         for k in range(int(math.floor(duration * frame_rate + 1e-9)) + 1):
             t = k / frame_rate
             fraction = tap_profile(t - rest_before_s, rise_s=rise_s, plateau_s=plateau_s, release_s=release_s)
-            state = Contact(contact.indentation_mm * fraction, contact.gap_width_mm, contact.gap_offset_mm,
-                            contact.gap_angle_deg)
+            state = dataclasses.replace(contact, indentation_mm=contact.indentation_mm * fraction)
             yield self.render(state, timestamp_s=t)
 
