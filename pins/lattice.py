@@ -88,6 +88,10 @@ __all__ = ["PinField", "find_pin_field", "REJECTION_REASONS", "draw_pin_field", 
 #: is no sensor.
 MIN_SENSOR_PINS = 40
 _POLARITIES = {False: "bright pins on a dark membrane", True: "dark markers on a light membrane"}
+# A polarity whose lattice fills less than `_SPARSE` of its disc's lattice sites, when the other
+# polarity shows no disc, has the other searched in its disc grown by `_BORROW`.
+_SPARSE = 0.2
+_BORROW = 1.25
 
 
 # Possible pin pitches, as fractions of the disc radius (1000 pins on a hexagonal lattice filling
@@ -260,11 +264,31 @@ def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc 
         field = _search(grey, found, start.replace(dark_pins=dark), False, expected_pins)
         fields.append(field)
         why.append(f"{name}: {field.count} pins form a lattice")
+    if len(fields) == 1 and disc is None and (fields[0].count < MIN_SENSOR_PINS or _sparse(fields[0])):
+        # No disc of the other polarity (white pins on a dark membrane in a dark casing: no bright
+        # surround frames the pad), and this one's lattice is no sensor's or fills little of its disc
+        # (the dark gaps between white pins): the other polarity is searched in this disc, grown.
+        found = fields[0]
+        other = not found.params.dark_pins
+        grown = SensorDisc(found.disc.cx, found.disc.cy, _BORROW * found.disc.radius_px)
+        field = _search(grey, grown, start.replace(dark_pins=other), False, expected_pins)
+        fields.append(field)
+        why.append(f"{_POLARITIES[other]} in the other's disc: {field.count} pins form a lattice")
     best = max(fields, key=lambda f: f.count, default=None)
     if best is None or best.count < MIN_SENSOR_PINS:
         raise NoSensorError(f"no sensor in the frame: no pin lattice of at least {MIN_SENSOR_PINS} pins ("
                             + "; ".join(why) + ")")
     return best
+
+
+def _sparse(field: PinField) -> bool:
+    """Whether a pin field fills less than `_SPARSE` of its disc with lattice sites (a hexagonal
+    lattice at its pitch): radial layouts fill about a third, the gaps between another polarity's
+    pins far less."""
+    if field.count < 2 or not np.isfinite(field.pitch_px):
+        return True
+    sites = np.pi * field.field_disc.radius_px ** 2 / (0.866 * field.pitch_px ** 2)
+    return field.count < _SPARSE * sites
 
 
 def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: bool,

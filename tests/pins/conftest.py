@@ -107,7 +107,6 @@ def rng():
 # bars are expected to fail on them (not strict: whoever fixes one removes it from here).
 NOT_YET_MET = {
     "radial-led-120": "issue 20: pins on the LED reflections are rejected and lost",
-    "white-dark-331": "issue 20: no bright surround: detect finds no disc, replay tracks spurious dark spots",
 }
 
 

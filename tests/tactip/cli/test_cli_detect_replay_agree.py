@@ -47,8 +47,10 @@ def test_no_sensor_is_refused_by_both_with_the_same_message(tmp_path, capsys, ca
     assert not (tmp_path / "r.h5").exists()
 
 
-@pytest.mark.parametrize("name", ["tactip-127", "dark-331"])
+@pytest.mark.parametrize("name", ["tactip-127", "dark-331", "white-dark-331"])
 def test_both_decide_the_same_polarity(tmp_path, capsys, name):
+    """Both polarities' presets, and white pins on a dark membrane in a dark casing (no bright surround:
+    no disc of their own polarity; detect refused it and replay tracked the dark gaps between them)."""
     sensor = SyntheticTacTip.from_preset(name, seed=2)
     frame, video = _still(tmp_path, sensor.render().image)
     assert main(["detect", str(frame), "--json"]) == 0
