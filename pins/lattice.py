@@ -57,8 +57,9 @@ finds that lattice without being told the pin count:
 
 The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided the same way
 when it is not given: both are searched (each inside its own sensor disc) and the one whose lattice
-keeps more pins wins; a frame where neither keeps `MIN_SENSOR_PINS` shows no sensor (`NoSensorError`,
-saying why for each). `tactip detect` and `tactip replay` both decide so.
+keeps more pins wins (a polarity without a disc of its own, white pins on a dark membrane in a dark
+casing, is searched in the other's disc when that one's lattice is sparse); a frame where neither
+keeps `MIN_SENSOR_PINS` shows no sensor (`NoSensorError`, saying why for each). `tactip detect` and `tactip replay` both decide so.
 
 A known pin count does not steer the search: it is compared with the result (`count_error`).
 `draw_pin_field` pictures what was kept and what was rejected, coloured by reason.
@@ -199,7 +200,9 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
         True: dark markers on a light membrane; False: bright pins on a dark membrane. None (the
         default, and without `params`): decided from the frame, as `tactip detect` and `tactip
         replay` do: both polarities are searched (those whose sensor disc `find_sensor_disc`
-        finds, when `disc` is not given) and the one whose pin lattice keeps more pins wins; a
+        finds, when `disc` is not given) and the one whose pin lattice keeps more pins wins; when
+        only one polarity shows a disc and its lattice is no sensor's or fills little of it (the
+        dark gaps between white pins in a dark casing), the other is searched in that disc too; a
         frame where neither forms a lattice of at least `MIN_SENSOR_PINS` pins shows no sensor.
         With `params` and no `dark_pins`, ``params.dark_pins`` is the polarity.
 
