@@ -13,6 +13,10 @@ arc: when the dark region touches the frame edge, the disc is the circle fitted 
 outline, accepted when the region fills the circle's part inside the frame and lies in it. Either
 way the rim is then refined to a sub-pixel circle on rays from the centre (again, for a cut disc,
 until it settles).
+
+Inside the disc a black rim ring (the casing lip) may lie between the pin field and the disc edge;
+`pins.find_pin_field` searches for pins inside its inner edge (`_rim_ring_inner_px`, here with the
+rest of the pad's outline).
 """
 
 from __future__ import annotations
@@ -296,3 +300,64 @@ def _fit_circle(xs: np.ndarray, ys: np.ndarray) -> tuple[float, float, float]:
     design = np.column_stack([2.0 * xs, 2.0 * ys, np.ones_like(xs)])
     (a, b, c), *_ = np.linalg.lstsq(design, xs**2 + ys**2, rcond=None)
     return a, b, np.sqrt(c + a * a + b * b)
+
+
+# A black rim ring (the casing lip) between the pin field and the disc edge: an annulus reaching the
+# disc edge (less `_RING_EDGE_PX`, its anti-aliased rim) at least `_RING_MIN_PX` wide, in which the
+# dark grey level of nearly every azimuth (`_RING_PERCENTILE`, so that LED glare on the ring and
+# pins on the membrane do not count) is at most `_RING_DARK` of the membrane's just inside it (over
+# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge) and below the same percentile of the inner
+# half of the disc. The pins are searched inside its inner edge less `_RING_INSET_PX` (its
+# anti-aliased edge).
+_RING_PERCENTILE = 5.0
+_RING_DARK = 0.5
+_RING_EDGE_PX = 2
+_RING_MIN_PX = 3
+_RING_STEP_PX = 2
+_RING_INSIDE_PX = 4
+_RING_AZIMUTHS = 720
+_RING_INSET_PX = 1.0
+
+
+def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> float:
+    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre.
+
+    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each)
+    give a dark level per radius, a low percentile over the azimuths, which neither the pins nor
+    glare covering most of the ring raise. The ring is the widest outer annulus whose dark level
+    stays at most `_RING_DARK` of the membrane's just inside its edge, and below the dark level of
+    the inner half of the disc, out to the disc's rim. Only bright pins are looked for on such a
+    ring (inf for dark pins, and when there is none).
+    """
+    if dark_pins:
+        # A black ring has the polarity of dark pins: neither its glare nor the pins it hides make
+        # candidate blobs.
+        return np.inf
+    steps = int(np.ceil(disc.radius_px))
+    polar = cv2.warpPolar(grey, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
+                          cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
+    # A disc cut by the frame edge: only the azimuths whose ray stays in the frame see a ring (the
+    # samples beyond the frame are black).
+    seen = cv2.warpPolar(np.full(grey.shape, 255, np.uint8), (steps, _RING_AZIMUTHS), (disc.cx, disc.cy),
+                         disc.radius_px, cv2.WARP_POLAR_LINEAR + cv2.INTER_NEAREST)
+    whole = (seen == 255).all(axis=1)
+    if whole.sum() < _RING_AZIMUTHS // 4:
+        return np.inf
+    polar = polar[whole]
+    dark = np.percentile(polar, _RING_PERCENTILE, axis=0)
+    end = steps - 1 - _RING_EDGE_PX
+    first = max(steps // 2, _RING_STEP_PX + _RING_INSIDE_PX)
+    if end - _RING_MIN_PX + 1 < first:
+        return np.inf
+    # Brightest dark level from each radius out to the rim, and the membrane's just inside it.
+    outward = np.maximum.accumulate(dark[end::-1])[::-1]
+    radii = np.arange(first, end - _RING_MIN_PX + 2)
+    inside = np.stack([dark[radii - _RING_STEP_PX - k] for k in range(1, _RING_INSIDE_PX + 1)])
+    # At most half as bright as the membrane next to it, and darker than the darkest membrane of
+    # the inner half of the disc (the same percentile of all its pixels): a black lip, not the
+    # membrane beyond a dense cluster of pins.
+    inner = np.percentile(polar[:, :steps // 2], _RING_PERCENTILE)
+    ring = (outward[radii] <= _RING_DARK * np.median(inside, axis=0)) & (outward[radii] <= inner)
+    if not ring.any():
+        return np.inf
+    return float(radii[np.argmax(ring)] * disc.radius_px / steps)

@@ -70,7 +70,6 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -78,7 +77,7 @@ from ._draw import draw_pin_field
 from ._rescue import fill_lattice_holes
 from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _median_nn, _sharpness
 from .detect import Blobs, DetectionParams, _detect
-from .disc import SensorDisc, as_grey, find_sensor_disc
+from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc
 from .errors import NoSensorError
 
 __all__ = ["PinField", "find_pin_field", "REJECTION_REASONS", "draw_pin_field", "MIN_SENSOR_PINS"]
@@ -451,65 +450,6 @@ def _candidates(pitches: np.ndarray, start: DetectionParams, blocks, offsets):
                 yield start.replace(block_size_px=size, offset=offset, **loose)
 
 
-# A black rim ring (the casing lip) between the pin field and the disc edge: an annulus reaching the
-# disc edge (less `_RING_EDGE_PX`, its anti-aliased rim) at least `_RING_MIN_PX` wide, in which the
-# dark grey level of nearly every azimuth (`_RING_PERCENTILE`, so that LED glare on the ring and
-# pins on the membrane do not count) is at most `_RING_DARK` of the membrane's just inside it (over
-# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge) and below the same percentile of the inner
-# half of the disc. The pins are searched inside its inner edge less `_RING_INSET_PX` (its
-# anti-aliased edge).
-_RING_PERCENTILE = 5.0
-_RING_DARK = 0.5
-_RING_EDGE_PX = 2
-_RING_MIN_PX = 3
-_RING_STEP_PX = 2
-_RING_INSIDE_PX = 4
-_RING_AZIMUTHS = 720
-_RING_INSET_PX = 1.0
-
-
-def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> float:
-    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre.
-
-    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each)
-    give a dark level per radius, a low percentile over the azimuths, which neither the pins nor
-    glare covering most of the ring raise. The ring is the widest outer annulus whose dark level
-    stays at most `_RING_DARK` of the membrane's just inside its edge, and below the dark level of
-    the inner half of the disc, out to the disc's rim. Only bright pins are looked for on such a
-    ring (inf for dark pins, and when there is none).
-    """
-    if dark_pins:
-        # A black ring has the polarity of dark pins: neither its glare nor the pins it hides make
-        # candidate blobs.
-        return np.inf
-    steps = int(np.ceil(disc.radius_px))
-    polar = cv2.warpPolar(grey, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
-                          cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
-    # A disc cut by the frame edge: only the azimuths whose ray stays in the frame see a ring (the
-    # samples beyond the frame are black).
-    seen = cv2.warpPolar(np.full(grey.shape, 255, np.uint8), (steps, _RING_AZIMUTHS), (disc.cx, disc.cy),
-                         disc.radius_px, cv2.WARP_POLAR_LINEAR + cv2.INTER_NEAREST)
-    whole = (seen == 255).all(axis=1)
-    if whole.sum() < _RING_AZIMUTHS // 4:
-        return np.inf
-    polar = polar[whole]
-    dark = np.percentile(polar, _RING_PERCENTILE, axis=0)
-    end = steps - 1 - _RING_EDGE_PX
-    first = max(steps // 2, _RING_STEP_PX + _RING_INSIDE_PX)
-    if end - _RING_MIN_PX + 1 < first:
-        return np.inf
-    # Brightest dark level from each radius out to the rim, and the membrane's just inside it.
-    outward = np.maximum.accumulate(dark[end::-1])[::-1]
-    radii = np.arange(first, end - _RING_MIN_PX + 2)
-    inside = np.stack([dark[radii - _RING_STEP_PX - k] for k in range(1, _RING_INSIDE_PX + 1)])
-    # At most half as bright as the membrane next to it, and darker than the darkest membrane of
-    # the inner half of the disc (the same percentile of all its pixels): a black lip, not the
-    # membrane beyond a dense cluster of pins.
-    inner = np.percentile(polar[:, :steps // 2], _RING_PERCENTILE)
-    ring = (outward[radii] <= _RING_DARK * np.median(inside, axis=0)) & (outward[radii] <= inner)
-    if not ring.any():
-        return np.inf
-    return float(radii[np.argmax(ring)] * disc.radius_px / steps)
 
 
 def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float, reach_px: float) -> DetectionParams:
