@@ -2,8 +2,8 @@
 
 For each preset and seed, against the renderer's ground truth (`tactip.sim`):
 
-- found:     `find_pin_field` on the rest frame (bright pins; dark markers when no disc is seen, as
-             `tactip replay` falls back): pins found, true visible pins, matched (< 2 px), spurious;
+- found:     `find_pin_field` on the rest frame (the polarity decided, as `tactip replay` decides
+             it): pins found, true visible pins, matched (< 2 px), spurious;
 - same:      pins lost by `PinTracker.update` on the very frame it started from (replay's start: the
              field's detection parameters and disc);
 - still:     pins lost per frame over a still pad (fresh noise and shimmer every frame): max, median,
@@ -40,11 +40,9 @@ STILL_FRAMES = 40
 
 
 def start(image):
-    """Replay's start without a calibration: the pin field (dark markers if no disc), then the tracker."""
-    try:
-        field = find_pin_field(image)
-    except NoSensorError:
-        field = find_pin_field(image, dark_pins=True)
+    """Replay's start without a calibration: the pin field (its polarity decided, as `tactip replay`
+    decides it; NoSensorError when the frame shows no sensor), then the tracker."""
+    field = find_pin_field(image)
     tracker = PinTracker(detection=field.params, disc=field.disc)
     return tracker, tracker.start(image, field.centres)
 

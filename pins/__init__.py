@@ -7,7 +7,7 @@ from .detect import Blobs, DetectionParams, detect_blobs, detect_pins
 from .disc import SensorDisc, as_grey, find_sensor_disc
 from .displacement import displacement_from_rest, displacement_magnitude, integrate_flow
 from .errors import NoSensorError, PinsError, ShapeError
-from .lattice import REJECTION_REASONS, PinField, draw_pin_field, find_pin_field
+from .lattice import MIN_SENSOR_PINS, REJECTION_REASONS, PinField, draw_pin_field, find_pin_field
 from .contacts import CONTACT_KINDS, ContactKind, contact_kinds
 from .features import LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, tap_features
 from .segment import converging_frames, jitter_floor_px, segment_taps, tap_signal
@@ -20,7 +20,7 @@ __all__ = [
     "PinsError", "NoSensorError", "ShapeError", "LostPinError",
     "SensorDisc", "find_sensor_disc", "as_grey",
     "DetectionParams", "Blobs", "detect_pins", "detect_blobs",
-    "find_pin_field", "PinField", "REJECTION_REASONS", "draw_pin_field",
+    "find_pin_field", "PinField", "REJECTION_REASONS", "draw_pin_field", "MIN_SENSOR_PINS",
     "LKParams", "track_pins", "match_to_blobs", "PinTracker",
     "displacement_from_rest", "integrate_flow", "displacement_magnitude",
     "select_pins", "select_feature_pins", "PinSelection", "median_spacing_px",

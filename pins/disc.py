@@ -7,7 +7,16 @@ so that neither the bright surround nor the glare is mistaken for pins.
 The disc is found on a reduced, heavily blurred copy of the frame, where the pins average out
 with the membrane around them: Otsu's threshold splits dark (membrane) from bright (surround),
 the largest dark region is filled by its convex hull (which closes the notches glare cuts into
-the rim), and the circle of equal area centred on the hull's centroid is the disc.
+the rim), and the circle of equal area centred on the hull's centroid is the disc. A membrane cut
+by the frame edge (a pad filling the view, no casing in sight) is a disc whose visible rim is an
+arc: when the dark region touches the frame edge, the disc is the circle fitted to the rest of its
+outline, accepted when the region fills the circle's part inside the frame and lies in it. Either
+way the rim is then refined to a sub-pixel circle on rays from the centre (again, for a cut disc,
+until it settles).
+
+Inside the disc a black rim ring (the casing lip) may lie between the pin field and the disc edge;
+`pins.find_pin_field` searches for pins inside its inner edge (`_rim_ring_inner_px`, here with the
+rest of the pad's outline).
 """
 
 from __future__ import annotations
@@ -27,6 +36,14 @@ _MIN_CONTRAST = 30.0
 _MIN_RADIUS_FRACTION = 0.08
 # Hull area over its enclosing circle's area: 1 for a disc, ~0.61 for a full 4:3 frame.
 _MIN_CIRCULARITY = 0.8
+# A disc cut by the frame edge: its visible rim spans at least this fraction of a turn, fits its
+# circle within this fraction of the radius (median), and the dark region fills the circle's part
+# inside the frame to this fraction.
+_CUT_MIN_ARC = 0.25
+_CUT_MAX_RESIDUAL = 0.04
+_CUT_MIN_FILL = 0.85
+# Fewest rays from the centre that must cross the rim for it to be refined.
+_MIN_RIM_RAYS = 12
 
 
 @dataclass(frozen=True)
@@ -166,22 +183,78 @@ def find_sensor_disc(frame: np.ndarray, *, dark_pins: bool = False, scale: float
             f"(need {_MIN_CONTRAST:.0f}); is the lens covered or the camera pointing elsewhere?")
     count, labels, stats, _ = cv2.connectedComponentsWithStats(dark.view(np.uint8), connectivity=8)
     largest = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    contours, _ = cv2.findContours((labels == largest).view(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    hull = cv2.convexHull(max(contours, key=cv2.contourArea))
+    region = (labels == largest).view(np.uint8)
+    contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    contour = max(contours, key=cv2.contourArea)
+    hull = cv2.convexHull(contour)
     moments = cv2.moments(hull)
     area = moments["m00"]
     (_, _), enclosing = cv2.minEnclosingCircle(hull)
     circularity = area / (np.pi * enclosing**2) if enclosing > 0 else 0.0
     # The contour runs through boundary pixel centres: half a pixel inside the true rim.
     radius = np.sqrt(area / np.pi) + 0.5
-    if radius < _MIN_RADIUS_FRACTION * min(small.shape) or circularity < _MIN_CIRCULARITY:
+    # A membrane cut by the frame edge (a pad filling the view, no casing in sight) is a disc whose
+    # visible rim is an arc: its circle is fitted to the arc (the region's centroid and area would
+    # make it small and off-centre).
+    x, y, w, h = cv2.boundingRect(contour)
+    touches = x <= 0 or y <= 0 or x + w >= small.shape[1] or y + h >= small.shape[0]
+    cut = _cut_disc(contour, labels == largest) if touches else None
+    if cut is not None:
+        cx, cy, radius = cut
+    elif radius < _MIN_RADIUS_FRACTION * min(small.shape) or circularity < _MIN_CIRCULARITY:
         raise NoSensorError(
             f"no sensor disc in the frame: the dark region is not a disc (radius {radius / scale:.0f} px, "
-            f"circularity {circularity:.2f})")
+            f"circularity {circularity:.2f})" + (", nor a disc cut by the frame edge" if touches else ""))
+    else:
+        cx, cy = moments["m10"] / area, moments["m01"] / area
     # Pixel centres are at integer coordinates at both scales: x_full = (x_small + 0.5) / scale - 0.5.
-    cx = (moments["m10"] / area + 0.5) / scale - 0.5
-    cy = (moments["m01"] / area + 0.5) / scale - 0.5
-    return _refine_rim(grey, cx, cy, radius / scale)
+    cx, cy = (cx + 0.5) / scale - 0.5, (cy + 0.5) / scale - 0.5
+    disc = _refine_rim(grey, cx, cy, radius / scale)
+    # The arc of a cut disc gives a rougher first circle (a few px off on a 200 px pad): refined
+    # again from the refined one until it settles.
+    for _ in range(3 if cut is not None else 0):
+        before, disc = disc, _refine_rim(grey, disc.cx, disc.cy, disc.radius_px)
+        if np.hypot(disc.cx - before.cx, disc.cy - before.cy) < 0.1 and abs(disc.radius_px - before.radius_px) < 0.1:
+            break
+    return disc
+
+
+def _cut_disc(contour: np.ndarray, region: np.ndarray) -> tuple[float, float, float] | None:
+    """(cx, cy, radius) px of a disc cut by the frame edge, from the dark region (bool image) and its
+    outline, or None.
+
+    The outline away from the frame edge is the visible rim: a circle fitted to it (robustly: glare
+    notches pull some of it inwards) must fit it closely, span at least `_CUT_MIN_ARC` of a turn and
+    have its centre in the frame; the dark region must fill the part of that circle inside the frame
+    and lie in it (`_CUT_MIN_FILL` each): a pad, not a dark corner, a shadow or the surround of a
+    bright pad (whose inner outline is a circle too).
+    """
+    shape = region.shape
+    height, width = shape
+    points = contour.reshape(-1, 2).astype(np.float64)
+    rim = points[(points[:, 0] > 1) & (points[:, 0] < width - 2) & (points[:, 1] > 1) & (points[:, 1] < height - 2)]
+    if len(rim) < 20 or len(rim) == len(points):
+        return None
+    keep = np.ones(len(rim), bool)
+    for _ in range(4):
+        cx, cy, radius = _fit_circle(rim[keep, 0], rim[keep, 1])
+        residual = np.abs(np.hypot(rim[:, 0] - cx, rim[:, 1] - cy) - radius)
+        keep = residual < max(3.0 * 1.4826 * np.median(residual[keep]), 1.0)
+    if not (np.isfinite(radius) and 0 <= cx < width and 0 <= cy < height):
+        return None
+    angles = np.sort(np.arctan2(rim[keep, 1] - cy, rim[keep, 0] - cx))
+    gaps = np.diff(np.append(angles, angles[0] + 2 * np.pi))
+    arc = 2 * np.pi - gaps.max()  # the rim's span: the turn less the largest gap (where the frame cuts it)
+    inside = np.zeros(shape, np.uint8)
+    cv2.circle(inside, (int(round(cx * 16)), int(round(cy * 16))), int(round(radius * 16)), 1, -1, cv2.LINE_8, 4)
+    inside = inside.view(bool)
+    common = float(np.count_nonzero(inside & region))
+    fill = common / max(float(np.count_nonzero(inside)), 1.0)
+    within = common / max(float(np.count_nonzero(region)), 1.0)
+    if (np.median(residual[keep]) > _CUT_MAX_RESIDUAL * radius or arc < _CUT_MIN_ARC * 2 * np.pi
+            or min(fill, within) < _CUT_MIN_FILL or radius < _MIN_RADIUS_FRACTION * min(shape)):
+        return None
+    return float(cx), float(cy), float(radius) + 0.5
 
 
 def _refine_rim(grey: np.ndarray, cx: float, cy: float, radius: float, *, rays: int = 180) -> SensorDisc:
@@ -203,6 +276,9 @@ def _refine_rim(grey: np.ndarray, cx: float, cy: float, radius: float, *, rays: 
     last = below.shape[1] - 1 - np.argmax(below[:, ::-1], axis=1)
     good = (bright_level - dark_level > _MIN_CONTRAST) & below.any(axis=1) & (last < below.shape[1] - 1)
     rows = np.flatnonzero(good)
+    if len(rows) < _MIN_RIM_RAYS:
+        raise NoSensorError(f"no sensor disc in the frame: the dark region has no sharp rim ({len(rows)} of {rays} "
+                            "rays cross one)")
     i = last[rows]
     p0, p1 = profile[rows, i], profile[rows, i + 1]
     frac = np.clip((mid[rows] - p0) / np.maximum(p1 - p0, 1e-9), 0.0, 1.0)
@@ -224,3 +300,64 @@ def _fit_circle(xs: np.ndarray, ys: np.ndarray) -> tuple[float, float, float]:
     design = np.column_stack([2.0 * xs, 2.0 * ys, np.ones_like(xs)])
     (a, b, c), *_ = np.linalg.lstsq(design, xs**2 + ys**2, rcond=None)
     return a, b, np.sqrt(c + a * a + b * b)
+
+
+# A black rim ring (the casing lip) between the pin field and the disc edge: an annulus reaching the
+# disc edge (less `_RING_EDGE_PX`, its anti-aliased rim) at least `_RING_MIN_PX` wide, in which the
+# dark grey level of nearly every azimuth (`_RING_PERCENTILE`, so that LED glare on the ring and
+# pins on the membrane do not count) is at most `_RING_DARK` of the membrane's just inside it (over
+# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge) and below the same percentile of the inner
+# half of the disc. The pins are searched inside its inner edge less `_RING_INSET_PX` (its
+# anti-aliased edge).
+_RING_PERCENTILE = 5.0
+_RING_DARK = 0.5
+_RING_EDGE_PX = 2
+_RING_MIN_PX = 3
+_RING_STEP_PX = 2
+_RING_INSIDE_PX = 4
+_RING_AZIMUTHS = 720
+_RING_INSET_PX = 1.0
+
+
+def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> float:
+    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre.
+
+    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each)
+    give a dark level per radius, a low percentile over the azimuths, which neither the pins nor
+    glare covering most of the ring raise. The ring is the widest outer annulus whose dark level
+    stays at most `_RING_DARK` of the membrane's just inside its edge, and below the dark level of
+    the inner half of the disc, out to the disc's rim. Only bright pins are looked for on such a
+    ring (inf for dark pins, and when there is none).
+    """
+    if dark_pins:
+        # A black ring has the polarity of dark pins: neither its glare nor the pins it hides make
+        # candidate blobs.
+        return np.inf
+    steps = int(np.ceil(disc.radius_px))
+    polar = cv2.warpPolar(grey, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
+                          cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
+    # A disc cut by the frame edge: only the azimuths whose ray stays in the frame see a ring (the
+    # samples beyond the frame are black).
+    seen = cv2.warpPolar(np.full(grey.shape, 255, np.uint8), (steps, _RING_AZIMUTHS), (disc.cx, disc.cy),
+                         disc.radius_px, cv2.WARP_POLAR_LINEAR + cv2.INTER_NEAREST)
+    whole = (seen == 255).all(axis=1)
+    if whole.sum() < _RING_AZIMUTHS // 4:
+        return np.inf
+    polar = polar[whole]
+    dark = np.percentile(polar, _RING_PERCENTILE, axis=0)
+    end = steps - 1 - _RING_EDGE_PX
+    first = max(steps // 2, _RING_STEP_PX + _RING_INSIDE_PX)
+    if end - _RING_MIN_PX + 1 < first:
+        return np.inf
+    # Brightest dark level from each radius out to the rim, and the membrane's just inside it.
+    outward = np.maximum.accumulate(dark[end::-1])[::-1]
+    radii = np.arange(first, end - _RING_MIN_PX + 2)
+    inside = np.stack([dark[radii - _RING_STEP_PX - k] for k in range(1, _RING_INSIDE_PX + 1)])
+    # At most half as bright as the membrane next to it, and darker than the darkest membrane of
+    # the inner half of the disc (the same percentile of all its pixels): a black lip, not the
+    # membrane beyond a dense cluster of pins.
+    inner = np.percentile(polar[:, :steps // 2], _RING_PERCENTILE)
+    ring = (outward[radii] <= _RING_DARK * np.median(inside, axis=0)) & (outward[radii] <= inner)
+    if not ring.any():
+        return np.inf
+    return float(radii[np.argmax(ring)] * disc.radius_px / steps)

@@ -27,7 +27,9 @@ finds that lattice without being told the pin count:
    0.6 local pitches of a stronger blob (a speck, a light patch between pins), or when it sits at no
    lattice site and does not look just like its neighbours. A lattice site is found by mirror
    images: a pin is the mirror of a neighbour through another neighbour (six times for interior
-   pins, at least once at the rim or at the end of a radial spoke). The local pitch is the median
+   pins, at least once at the rim or at the end of a radial spoke), and a blob midway between two
+   neighbours counts that line once (a reflection between two diverging radial spokes is not
+   anchored twice by one pair). The local pitch is the median
    nearest-neighbour distance around a blob, so radial layouts, whose spacing grows with the
    radius, and foreshortened rim pins work. Then the blobs rejected are judged again against the
    blobs kept, and those that pass rejoin (once each) and the iteration runs again: a pin first
@@ -41,11 +43,23 @@ finds that lattice without being told the pin count:
 5. the winner: the candidate set that keeps the most pins that at least half of the good sets
    (those keeping 97 % of the most pins; both when there are two) also keep, and the fewest
    others, its centres nearest their consensus;
+5b. holes: a lattice site the winner's pins predict (a mirror image through a neighbour) from both
+   sides, or once outward at the end of a lone row such as a radial spoke, that no pin occupies is
+   filled with a pin-like blob another candidate set found there (`pins._rescue`): one threshold
+   cannot suit every pin of a pad whose light varies, and a pin on an LED reflection inside the pad
+   (a brighter background, less contrast) or a faint spoke end under the veil is lost by the
+   winner's and found by another's;
 6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
    pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
    rim margin that leaves out the membrane half a pitch beyond the outermost pin and the rim
    ring, so that the per-frame fast path `pins.detect_pins(frame, params=field.params,
    disc=field.disc)` does not detect the rim ring and its glare again.
+
+The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided the same way
+when it is not given: both are searched (each inside its own sensor disc) and the one whose lattice
+keeps more pins wins (a polarity without a disc of its own, white pins on a dark membrane in a dark
+casing, is searched in the other's disc when that one's lattice is sparse); a frame where neither
+keeps `MIN_SENSOR_PINS` shows no sensor (`NoSensorError`, saying why for each). `tactip detect` and `tactip replay` both decide so.
 
 A known pin count does not steer the search: it is compared with the result (`count_error`).
 `draw_pin_field` pictures what was kept and what was rejected, coloured by reason.
@@ -56,22 +70,30 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from ._draw import draw_pin_field
+from ._rescue import fill_lattice_holes
+from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _sharpness
 from .detect import Blobs, DetectionParams, _detect
-from .disc import SensorDisc, as_grey, find_sensor_disc
+from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc
+from .errors import NoSensorError
 from .scale import central_spacing_px
 
-__all__ = ["PinField", "find_pin_field", "REJECTION_REASONS", "draw_pin_field"]
+__all__ = ["PinField", "find_pin_field", "REJECTION_REASONS", "draw_pin_field", "MIN_SENSOR_PINS"]
 
-#: Why a candidate blob was rejected, in `PinField.rejected_reason`.
-REJECTION_REASONS = ("outside field", "off lattice", "size", "contrast")
-_OUTSIDE, _OFF, _SIZE, _CONTRAST = range(4)
-_KEPT = -1
+#: Fewest pins of a pin lattice that make a sensor when the polarity is decided
+#: (`find_pin_field` with ``dark_pins=None``): TacTips have 100-1000 pins, and a rest frame shows
+#: most of them; a handful of blobs of the other polarity (glare, the membrane between the pins)
+#: is no sensor.
+MIN_SENSOR_PINS = 40
+_POLARITIES = {False: "bright pins on a dark membrane", True: "dark markers on a light membrane"}
+# A polarity whose lattice fills less than `_SPARSE` of its disc's lattice sites, when the other
+# polarity shows no disc, has the other searched in its disc grown by `_BORROW`.
+_SPARSE = 0.2
+_BORROW = 1.25
+
 
 # Possible pin pitches, as fractions of the disc radius (1000 pins on a hexagonal lattice filling
 # the disc: 0.06; 100 pins: 0.19; radial layouts and small pads between).
@@ -80,54 +102,10 @@ _BLOCK_PITCHES = (1.0, 1.5, 2.2)
 _OFFSETS = (5.0, 9.0, 15.0, 25.0)
 _COARSE_BLOCK = (2.2,)
 _COARSE_OFFSETS = (9.0,)
-_NEIGHBOURS = 6
-# Lattice consistency: fractions of the neighbours' medians (areas compared with `_AREA_SLACK` px
-# added, fills only for areas of `_FILL_AREA` px or more) and of the local pitch.
-_SIZE_RANGE = (0.4, 2.2)
-_MIN_FILL = 0.6
-_FILL_AREA = 15.0
-_MIN_CONTRAST = 0.5
-_MIN_SHARPNESS = 0.8
-# Below this tip radius, px, the steepest slope depends on where the pixel grid cuts the tip.
-_SHARP_RADIUS = 2.0
-_TOO_CLOSE = 0.6
-_LINK = 1.3
-# Lattice sites: a mirror image within this fraction of the link length anchors a blob; a blob with
-# fewer than `_MIN_ANCHORS` must have at least these contrast ratios and at most these area ratios
-# to its neighbours' medians (with one anchor, with none).
-_MIRROR = 0.25
-_MIN_ANCHORS = 2
-_WEAK_CONTRAST = (0.5, 0.8)
-_WEAK_SIZE = (1.8, 1.4)
-_MIN_PINS = 4
-# Fewest pins that make a pin field (TacTips have 100-1000).
-_MIN_FIELD = 10
-_AREA_SLACK = 3.0
-# Linked groups of at least this fraction of the largest make the field; isolated blobs within
-# `_HULL_MARGIN` pitches of its hull stay.
-_MIN_GROUP = 0.1
-_HULL_MARGIN = 0.3
-# Rejected blobs this many pitches beyond the field's hull are reported as outside the field.
-_OUTSIDE_MARGIN = 0.5
 # The search region of later frames reaches this many pitches beyond the outermost pin.
 _FIELD_MARGIN = 0.5
 # Area range of the final parameters around the kept pins' median area.
 _AREA_RANGE = (0.25, 2.5)
-# A black rim ring (the casing lip) between the pin field and the disc edge: an annulus reaching the
-# disc edge (less `_RING_EDGE_PX`, its anti-aliased rim) at least `_RING_MIN_PX` wide, in which the
-# dark grey level of nearly every azimuth (`_RING_PERCENTILE`, so that LED glare on the ring and
-# pins on the membrane do not count) is at most `_RING_DARK` of the membrane's just inside it (over
-# `_RING_INSIDE_PX` px after a `_RING_STEP_PX` px edge) and below the same percentile of the inner
-# half of the disc. The pins are searched inside its inner edge less `_RING_INSET_PX` (its
-# anti-aliased edge).
-_RING_PERCENTILE = 5.0
-_RING_DARK = 0.5
-_RING_EDGE_PX = 2
-_RING_MIN_PX = 3
-_RING_STEP_PX = 2
-_RING_INSIDE_PX = 4
-_RING_AZIMUTHS = 720
-_RING_INSET_PX = 1.0
 # Candidate sets: a pin matches within this many pitches; 'the same pins' within this fraction.
 _MATCH = 0.3
 _SAME_PINS = 0.005
@@ -205,7 +183,7 @@ class PinField:
 
 
 def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, params: DetectionParams | None = None,
-                   disc: SensorDisc | None = None, dark_pins: bool = False) -> PinField:
+                   disc: SensorDisc | None = None, dark_pins: bool | None = None) -> PinField:
     """Find the pins of a frame as the blobs that form the pin lattice, without knowing their count.
 
     Parameters
@@ -216,21 +194,32 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
         The sensor's pin count: checked against the result (`PinField.count_error`), never used
         to steer the search.
     params : DetectionParams, optional
-        Starting parameters: tried among the candidates; their polarity is kept, and their rim
-        margin at least (`PinField.params` widens it to leave out the membrane beyond the field).
+        Starting parameters: tried among the candidates; their polarity is kept (unless
+        `dark_pins` says otherwise), and their rim margin at least (`PinField.params` widens it to
+        leave out the membrane beyond the field).
     disc : SensorDisc, optional
         The membrane disc, found with `find_sensor_disc` when not given.
-    dark_pins : bool
-        Dark markers on a light membrane (also taken from ``params.dark_pins``).
+    dark_pins : bool, optional
+        True: dark markers on a light membrane; False: bright pins on a dark membrane. None (the
+        default, and without `params`): decided from the frame, as `tactip detect` and `tactip
+        replay` do: both polarities are searched (those whose sensor disc `find_sensor_disc`
+        finds, when `disc` is not given) and the one whose pin lattice keeps more pins wins; when
+        only one polarity shows a disc and its lattice is no sensor's or fills little of it (the
+        dark gaps between white pins in a dark casing), the other is searched in that disc too; a
+        frame where neither forms a lattice of at least `MIN_SENSOR_PINS` pins shows no sensor.
+        With `params` and no `dark_pins`, ``params.dark_pins`` is the polarity.
 
     Returns
     -------
     field : PinField
+        ``field.params.dark_pins`` is the polarity searched (or decided).
 
     Raises
     ------
     NoSensorError
-        When `disc` is not given and the frame shows no sensor disc.
+        When `disc` is not given and the frame shows no sensor disc (of the polarity asked, or of
+        either when deciding), or when deciding and no polarity forms a pin lattice of at least
+        `MIN_SENSOR_PINS` pins. The message says why for each polarity.
     ValueError
         `expected_pins` is not a positive integer.
 
@@ -250,12 +239,67 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     if expected_pins is not None and (isinstance(expected_pins, bool) or int(expected_pins) != expected_pins
                                       or expected_pins < 1):
         raise ValueError(f"expected_pins must be a positive integer, got {expected_pins!r}")
-    start = params or DetectionParams()
-    if dark_pins and not start.dark_pins:
-        start = start.replace(dark_pins=True)
     grey = as_grey(frame)
+    start = params or DetectionParams()
+    if dark_pins is None and params is None:
+        return _decide_polarity(grey, start, disc, expected_pins)
+    if dark_pins is not None:
+        start = start.replace(dark_pins=bool(dark_pins))
     if disc is None:
         disc = find_sensor_disc(grey, dark_pins=start.dark_pins)
+    return _search(grey, disc, start, params is not None, expected_pins)
+
+
+def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc | None,
+                     expected_pins: int | None) -> PinField:
+    """The pin field of the polarity whose lattice keeps more pins; NoSensorError when neither
+    polarity shows a sensor disc and a lattice of at least `MIN_SENSOR_PINS` pins.
+
+    On a frame of either polarity the other one's disc is usually refused (the inverted surround
+    is no disc), and where it is not, its blobs (the membrane between the pins, glare) form a
+    lattice of far fewer pins, or none.
+    """
+    fields: list[PinField] = []
+    why: list[str] = []
+    for dark, name in ((False, _POLARITIES[False]), (True, _POLARITIES[True])):
+        try:
+            found = disc if disc is not None else find_sensor_disc(grey, dark_pins=dark)
+        except NoSensorError as exc:
+            why.append(f"{name}: {exc}")
+            continue
+        field = _search(grey, found, start.replace(dark_pins=dark), False, expected_pins)
+        fields.append(field)
+        why.append(f"{name}: {field.count} pins form a lattice")
+    if len(fields) == 1 and disc is None and (fields[0].count < MIN_SENSOR_PINS or _sparse(fields[0])):
+        # No disc of the other polarity (white pins on a dark membrane in a dark casing: no bright
+        # surround frames the pad), and this one's lattice is no sensor's or fills little of its disc
+        # (the dark gaps between white pins): the other polarity is searched in this disc, grown.
+        found = fields[0]
+        other = not found.params.dark_pins
+        grown = SensorDisc(found.disc.cx, found.disc.cy, _BORROW * found.disc.radius_px)
+        field = _search(grey, grown, start.replace(dark_pins=other), False, expected_pins)
+        fields.append(field)
+        why.append(f"{_POLARITIES[other]} in the other's disc: {field.count} pins form a lattice")
+    best = max(fields, key=lambda f: f.count, default=None)
+    if best is None or best.count < MIN_SENSOR_PINS:
+        raise NoSensorError(f"no sensor in the frame: no pin lattice of at least {MIN_SENSOR_PINS} pins ("
+                            + "; ".join(why) + ")")
+    return best
+
+
+def _sparse(field: PinField) -> bool:
+    """Whether a pin field fills less than `_SPARSE` of its disc with lattice sites (a hexagonal
+    lattice at its pitch): radial layouts fill about a third, the gaps between another polarity's
+    pins far less."""
+    if field.count < 2 or not np.isfinite(field.pitch_px):
+        return True
+    sites = np.pi * field.field_disc.radius_px ** 2 / (0.866 * field.pitch_px ** 2)
+    return field.count < _SPARSE * sites
+
+
+def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: bool,
+            expected_pins: int | None) -> PinField:
+    """The pin field of one polarity (``start.dark_pins``) inside `disc`; `start` is a candidate when `hinted`."""
     # The possible pitches scale with the sensor disc; the search stops at a black rim ring, which,
     # like the surround, must neither make blobs (its glare) nor darken the threshold's
     # neighbourhood means (the membrane along its edge would pass for pins).
@@ -273,7 +317,7 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     pitch = float(np.clip(pitch, 0.5 * pitches.min(), 1.5 * pitches.max()))
     # Fine: blocks and offsets at the measured pitch.
     fine = list(_candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS))
-    runs = _evaluate_all(grey, search, fine + ([start] if params is not None else []), cache)
+    runs = _evaluate_all(grey, search, fine + ([start] if hinted else []), cache)
     # The pins are the blobs that most candidate sets agree on, where they agree on them: the run
     # that keeps the most of those (and the fewest others), with centres nearest the consensus.
     membership, deviation = _consensus(runs, pitch)
@@ -284,11 +328,24 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     later = max(np.flatnonzero(close), key=lambda r: (runs[r].params.offset, -deviation[r]))
     run = runs[best]
     centres = run.blobs.centres[run.kept]
+    rejected, reason = run.blobs.centres[~run.kept], run.reason[~run.kept]
+    # Holes in the lattice (a pin on a reflection, a faint pin at a spoke's end) filled with the blobs
+    # other candidate sets found there.
+    taken = fill_lattice_holes(centres, run.blobs.areas[run.kept], run.blobs.contrasts[run.kept],
+                               [(r.blobs.centres, r.blobs.areas, r.blobs.fills, r.blobs.contrasts, r.params.offset)
+                                for r in runs],
+                               (disc.cx, disc.cy))
+    if taken:
+        extra = np.array([runs[s].blobs.centres[i] for s, i in taken])
+        centres = np.vstack([centres, extra])
+        centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
+        apart = cKDTree(extra).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
+        rejected, reason = rejected[apart], reason[apart]
     final = _final_params(runs[later], centres, disc, run.pitch, search.radius_px)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=disc,
-                    pitch_px=central_spacing_px(centres), rejected=run.blobs.centres[~run.kept],
-                    rejected_reason=np.array(REJECTION_REASONS, dtype=object)[run.reason[~run.kept]].astype(str),
+                    pitch_px=central_spacing_px(centres), rejected=rejected,
+                    rejected_reason=np.array(REJECTION_REASONS, dtype=object)[reason].astype(str),
                     expected_pins=None if expected_pins is None else int(expected_pins), count_error=count_error)
 
 
@@ -397,247 +454,6 @@ def _candidates(pitches: np.ndarray, start: DetectionParams, blocks, offsets):
                 yield start.replace(block_size_px=size, offset=offset, **loose)
 
 
-def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: dict | None = None) -> np.ndarray:
-    """Steepest grey-level slope near each blob over its contrast, 1/px.
-
-    A pin tip is a disc with a sharp edge; glare, light patches of skin and shadows are smooth. On
-    tips smaller than `_SHARP_RADIUS` the slope depends on where the pixel grid cuts the tip: all ones.
-    `cache` keeps the slope image per blur between candidate sets.
-    """
-    n = len(blobs.centres)
-    radius = float(np.sqrt(np.median(blobs.areas) / np.pi)) if n else 0.0
-    if radius < _SHARP_RADIUS:
-        return np.ones(n)
-    sigma = max(params.blur_sigma_px, 0.5)
-    cache = {} if cache is None else cache
-    if sigma not in cache:
-        smooth = cv2.GaussianBlur(grey, (0, 0), sigma).astype(np.float32)
-        gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3, scale=0.125)
-        gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3, scale=0.125)
-        cache[sigma] = cv2.magnitude(gx, gy)
-    slope = cache[sigma]
-    # The steepest slope within the tip radius (plus a pixel and a half) of each centre.
-    reach = int(np.ceil(radius + 1.5))
-    dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
-    inside = dx**2 + dy**2 <= (radius + 1.5) ** 2
-    x = np.rint(blobs.centres[:, 0]).astype(np.intp)
-    y = np.rint(blobs.centres[:, 1]).astype(np.intp)
-    height, width = grey.shape
-    if n and x.min() >= reach and y.min() >= reach and x.max() < width - reach and y.max() < height - reach:
-        # Every disc of pixels inside the image: one flat gather (no clipping).
-        steepest = slope.ravel().take((y * width + x)[:, None] + (dy * width + dx)[inside]).max(axis=1)
-    else:
-        steepest = slope[np.clip(y[:, None] + dy[inside], 0, height - 1),
-                         np.clip(x[:, None] + dx[inside], 0, width - 1)].max(axis=1)
-    return steepest / np.maximum(blobs.contrasts, 1e-6)
-
-
-def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, float]:
-    """Which blobs form a lattice: (reason per blob, -1 for kept; median pitch of the kept, px)."""
-    n = len(blobs.centres)
-    reason = np.full(n, _KEPT, dtype=np.int64)
-    if n < _MIN_PINS:
-        reason[:] = _OFF
-        return reason, np.nan
-    # Photometry and spacing, iterated: removing an impostor changes its neighbours' medians. Then
-    # the blobs rejected are judged again against the blobs kept, because a pin first judged among
-    # impostors (skin highlights and specks round the spoke ends or the lone centre pin of a radial
-    # layout make it look unlike its neighbours) must come back once they are gone; those that pass
-    # rejoin and the iteration runs again, each blob rejoining at most once (else pairs of blobs
-    # could take turns).
-    centres = blobs.centres
-    active = np.ones(n, bool)
-    rejoined = np.zeros(n, bool)
-    while True:
-        for _ in range(8):
-            if active.sum() < _MIN_PINS:
-                break
-            verdict = _verdicts(blobs, sharpness, active)
-            out = active & (verdict != _KEPT)
-            if not out.any():
-                break
-            reason[out] = verdict[out]
-            active &= ~out
-        else:
-            verdict = _verdicts(blobs, sharpness, active)
-        if active.sum() < _MIN_PINS:
-            break
-        back = ~active & ~rejoined & (verdict == _KEPT)
-        if not back.any():
-            break
-        reason[back] = _KEPT
-        active |= back
-        rejoined |= back
-    index = np.flatnonzero(active)
-    if len(index) < _MIN_PINS:
-        reason[index] = _OFF
-        return reason, np.nan
-    # The field: groups of blobs joined by lattice links; blobs beyond their hull are outside.
-    hood = _Neighbourhood(centres[index])
-    groups, label = connected_components(hood.graph(), directed=False)
-    sizes = np.bincount(label, minlength=groups)
-    core = (sizes >= max(_MIN_PINS, _MIN_GROUP * sizes.max()))[label]
-    if core.sum() < _MIN_FIELD:
-        # A handful of blobs (glare round the rim of a pad without pins) is no pin field.
-        reason[index] = _OFF
-        return reason, np.nan
-    hull = cv2.convexHull(centres[index[core]].astype(np.float32))
-    pitch = float(np.median(hood.pitch[core]))
-    loose = index[~core]
-    reason[loose[_beyond(hull, centres[loose], _HULL_MARGIN * pitch)]] = _OUTSIDE
-    # Whatever else was rejected beyond the field (glare round the rim) is outside it, first of all.
-    kept = reason == _KEPT
-    rejected = np.flatnonzero(~kept)
-    reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
-    return reason, float(_median_nn(centres[reason == _KEPT]))
-
-
-def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray) -> np.ndarray:
-    """Each blob judged against its nearest `members` (bool per blob): -1 (a lattice site) or why not."""
-    n = len(blobs.centres)
-    areas = blobs.areas.astype(np.float64)
-    fills = blobs.fills
-    contrasts = np.maximum(blobs.contrasts, 1e-6)
-    strength = contrasts * areas
-    hood = _Neighbourhood(blobs.centres, members)
-    # Medians over the blob and its neighbours. Areas compared with a little slack: a 1 px tip
-    # covers 3-7 px.
-    near = hood.near
-    area_ref, contrast_ref, fill_ref, sharp_ref = _row_median(np.stack([areas, contrasts, fills, sharpness])[:, near])
-    area_ref = area_ref + _AREA_SLACK
-    area = areas + _AREA_SLACK
-    verdict = np.full(n, _KEPT)
-    # Of two blobs much closer than the local pitch, the weaker is not a lattice site.
-    close = (hood.dist[:, 1:] < _TOO_CLOSE * hood.pitch[:, None]) & (strength[near[:, 1:]] > strength[:, None])
-    verdict[close.any(axis=1)] = _OFF
-    verdict[(contrasts < _MIN_CONTRAST * contrast_ref) | (sharpness < _MIN_SHARPNESS * sharp_ref)] = _CONTRAST
-    # (The fill of a blob of a few pixels says nothing of its shape.)
-    verdict[(area < _SIZE_RANGE[0] * area_ref) | (area > _SIZE_RANGE[1] * area_ref)
-            | ((fills < _MIN_FILL * fill_ref) & (area_ref >= _FILL_AREA))] = _SIZE
-    # Lattice sites: a blob on the lattice is a mirror image of a neighbour through another one
-    # (interior pins have six such pairs, rim pins and the ends of radial spokes at least one). A
-    # blob with fewer than two must look just like its neighbours to stay.
-    anchors = hood.anchors()
-    strict = np.clip(_MIN_ANCHORS - anchors, 0, _MIN_ANCHORS) / _MIN_ANCHORS
-    ratio = contrasts / contrast_ref
-    unlike = ((ratio < _WEAK_CONTRAST[0] + strict * (_WEAK_CONTRAST[1] - _WEAK_CONTRAST[0]))
-              | (np.abs(np.log(area / area_ref)) > np.log(_WEAK_SIZE[0]) + strict * np.log(_WEAK_SIZE[1] / _WEAK_SIZE[0])))
-    verdict[(anchors < _MIN_ANCHORS) & unlike & (verdict == _KEPT)] = _OFF
-    return verdict
-
-
-def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> float:
-    """Radius of the inner edge of a black rim ring round the pin field, px from the disc centre.
-
-    The grey levels on circles about the disc centre (1 px apart, `_RING_AZIMUTHS` samples each)
-    give a dark level per radius, a low percentile over the azimuths, which neither the pins nor
-    glare covering most of the ring raise. The ring is the widest outer annulus whose dark level
-    stays at most `_RING_DARK` of the membrane's just inside its edge, and below the dark level of
-    the inner half of the disc, out to the disc's rim. Only bright pins are looked for on such a
-    ring (inf for dark pins, and when there is none).
-    """
-    if dark_pins:
-        # A black ring has the polarity of dark pins: neither its glare nor the pins it hides make
-        # candidate blobs.
-        return np.inf
-    steps = int(np.ceil(disc.radius_px))
-    polar = cv2.warpPolar(grey, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
-                          cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
-    dark = np.percentile(polar, _RING_PERCENTILE, axis=0)
-    end = steps - 1 - _RING_EDGE_PX
-    first = max(steps // 2, _RING_STEP_PX + _RING_INSIDE_PX)
-    if end - _RING_MIN_PX + 1 < first:
-        return np.inf
-    # Brightest dark level from each radius out to the rim, and the membrane's just inside it.
-    outward = np.maximum.accumulate(dark[end::-1])[::-1]
-    radii = np.arange(first, end - _RING_MIN_PX + 2)
-    inside = np.stack([dark[radii - _RING_STEP_PX - k] for k in range(1, _RING_INSIDE_PX + 1)])
-    # At most half as bright as the membrane next to it, and darker than the darkest membrane of
-    # the inner half of the disc (the same percentile of all its pixels): a black lip, not the
-    # membrane beyond a dense cluster of pins.
-    inner = np.percentile(polar[:, :steps // 2], _RING_PERCENTILE)
-    ring = (outward[radii] <= _RING_DARK * np.median(inside, axis=0)) & (outward[radii] <= inner)
-    if not ring.any():
-        return np.inf
-    return float(radii[np.argmax(ring)] * disc.radius_px / steps)
-
-
-def _beyond(hull: np.ndarray, points: np.ndarray, margin: float) -> np.ndarray:
-    """Which points lie farther than `margin` (px) outside a convex hull."""
-    return np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), True) < -margin for x, y in points],
-                    dtype=bool)
-
-
-class _Neighbourhood:
-    """Nearest neighbours among member points (each point first), local pitch, links and mirror anchors.
-
-    Every point, member or not, gets its nearest members as neighbours (a point is never its own
-    neighbour), so that blobs rejected so far can be judged against the blobs kept.
-    """
-
-    def __init__(self, points: np.ndarray, members: np.ndarray | None = None):
-        self.points = points
-        index = np.arange(len(points)) if members is None else np.flatnonzero(members)
-        self.tree = cKDTree(points[index])
-        k = min(_NEIGHBOURS + 1, len(index))
-        dist, near = self.tree.query(points, k)
-        dist, near = dist.reshape(len(points), k), index[near.reshape(len(points), k)]
-        if members is not None and not members.all():
-            # A point outside the members is not found first: put it first, before its k - 1 nearest.
-            outside = ~members
-            dist[outside] = np.column_stack([np.zeros(outside.sum()), dist[outside, :-1]])
-            near[outside] = np.column_stack([np.flatnonzero(outside), near[outside, :-1]])
-        self.dist, self.near = dist, near
-        # Local pitch: median nearest-neighbour distance of the point and its neighbours. Links
-        # reach a little beyond the second-nearest distance instead: near the rim of a hemispherical
-        # pad the pins are foreshortened towards the centre, closer in the radial direction than
-        # along the rim.
-        self.pitch, reach = _row_median(self.dist[:, [1, min(2, k - 1)]].T[:, self.near])
-        self.link = self.dist[:, 1:] <= _LINK * np.maximum(reach[:, None], reach[self.near[:, 1:]])
-
-    def anchors(self) -> np.ndarray:
-        """Per point: linked neighbours j with a point at the mirror image through j, or beyond the point."""
-        points, neighbours = self.points, self.near[:, 1:]
-        n, k = neighbours.shape
-        others = points[neighbours]
-        tolerance = _MIRROR * self.dist[:, 1:]
-        bound = float(tolerance.max()) if tolerance.size else 0.0
-        # Mirror images of the point through each neighbour j (2 j - p) ...
-        through = self.tree.query((2.0 * others - points[:, None, :]).reshape(-1, 2), distance_upper_bound=bound)[0]
-        through = through.reshape(n, k)
-        # ... and of each neighbour j through the point (2 p - j): the first kind seen from j, when p is
-        # one of j's neighbours (the same numbers: looked up, not queried again).
-        back = neighbours[neighbours] == np.arange(n)[:, None, None]  # (n, k, k): p among j's neighbours
-        mutual = back.any(axis=2)
-        beyond = np.empty((n, k))
-        beyond[mutual] = through[neighbours[mutual], back.argmax(axis=2)[mutual]]
-        if not mutual.all():
-            lone = ~mutual
-            beyond[lone] = self.tree.query(2.0 * np.broadcast_to(points[:, None, :], others.shape)[lone] - others[lone],
-                                           distance_upper_bound=bound)[0]
-        return np.sum(self.link & (through < tolerance), axis=1) + np.sum(self.link & (beyond < tolerance), axis=1)
-
-    def graph(self) -> coo_matrix:
-        """Sparse adjacency of the lattice links."""
-        n, k = self.near.shape
-        rows = np.repeat(np.arange(n), k - 1)[self.link.ravel()]
-        cols = self.near[:, 1:].ravel()[self.link.ravel()]
-        return coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-
-
-def _row_median(values: np.ndarray) -> np.ndarray:
-    """Median along the last axis, as `numpy.median` gives it (a partition alone for an odd count, 5x faster)."""
-    k = values.shape[-1]
-    if k % 2 == 0 or np.isnan(values).any():
-        return np.median(values, axis=-1)
-    return np.partition(values, k // 2, axis=-1)[..., k // 2]
-
-
-def _median_nn(centres: np.ndarray) -> float:
-    if len(centres) < 2:
-        return np.nan
-    dist, _ = cKDTree(centres).query(centres, 2)
-    return float(np.median(dist[:, 1]))
 
 
 def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float, reach_px: float) -> DetectionParams:
@@ -655,67 +471,3 @@ def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float
     reach = float(np.max(np.hypot(centres[:, 0] - disc.cx, centres[:, 1] - disc.cy)))
     margin = disc.radius_px - min(reach + _FIELD_MARGIN * pitch, reach_px)
     return params.replace(rim_margin_px=round(float(max(params.rim_margin_px, margin)), 2))
-
-
-# `draw_pin_field` enlarges frames to this shorter side, px, and scales its marks to it.
-_LEGIBLE_PX = 480
-
-#: Colours (B, G, R) of `draw_pin_field`: kept pins, then each rejection reason.
-COLOURS = {"kept": (0, 200, 0), "outside field": (255, 80, 255), "off lattice": (0, 160, 255),
-           "size": (255, 160, 0), "contrast": (0, 0, 255)}
-
-
-def draw_pin_field(frame: np.ndarray, field: PinField, *, legend: bool = True) -> np.ndarray:
-    """A colour picture of what `find_pin_field` kept and rejected, and why.
-
-    Kept pins are green circles; rejected blobs are crosses coloured by reason (`COLOURS`); the
-    pin field's circle (`PinField.field_disc`) is a thin yellow circle; a legend with the counts
-    sits top left. Frames whose shorter side is under 480 px are enlarged by a whole factor (pixels
-    repeated) so that the marks and the legend can be read.
-
-    Parameters
-    ----------
-    frame : (H, W) or (H, W, 3) ndarray of uint8
-        The frame the field was found in.
-    field : PinField
-    legend : bool
-        Draw the legend.
-
-    Returns
-    -------
-    picture : (k H, k W, 3) ndarray of uint8
-        BGR; k = 1 for frames of 480 px or more (shorter side), else ceil(480 / shorter side).
-    """
-    grey = as_grey(frame)
-    image = np.asarray(frame)
-    picture = image.copy() if image.ndim == 3 and image.shape[2] == 3 else cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR)
-    zoom = max(int(np.ceil(_LEGIBLE_PX / min(grey.shape))), 1)
-    if zoom > 1:
-        picture = cv2.resize(picture, None, fx=zoom, fy=zoom, interpolation=cv2.INTER_NEAREST)
-    scale = max(min(picture.shape[:2]) / _LEGIBLE_PX, 1.0)
-    thick = max(int(round(scale)), 1)
-    pitch = field.pitch_px if np.isfinite(field.pitch_px) else 10.0
-    radius = max(0.3 * pitch * zoom, 2.0)
-
-    def at(x: float, y: float) -> tuple[int, int]:
-        # Pixel centres sit at integers in the frame and in the enlarged picture; 4 fractional bits.
-        return int(round(((x + 0.5) * zoom - 0.5) * 16)), int(round(((y + 0.5) * zoom - 0.5) * 16))
-
-    d = field.field_disc
-    cv2.circle(picture, at(d.cx, d.cy), int(round(d.radius_px * zoom * 16)), (0, 230, 230), thick, cv2.LINE_AA, 4)
-    for x, y in field.centres:
-        cv2.circle(picture, at(x, y), int(round(radius * 16)), COLOURS["kept"], thick, cv2.LINE_AA, 4)
-    half = radius / zoom
-    for (x, y), reason in zip(field.rejected, field.rejected_reason):
-        colour = COLOURS[str(reason)]
-        cv2.line(picture, at(x - half, y - half), at(x + half, y + half), colour, thick, cv2.LINE_AA, 4)
-        cv2.line(picture, at(x - half, y + half), at(x + half, y - half), colour, thick, cv2.LINE_AA, 4)
-    if legend:
-        counts = field.rejected_counts()
-        lines = [("kept", f"kept {field.count}")] + [(r, f"{r} {n}") for r, n in counts.items()]
-        step = int(round(18 * scale))
-        cv2.rectangle(picture, (0, 0), (int(round(150 * scale)), step * len(lines) + step // 2), (0, 0, 0), -1)
-        for i, (key, text) in enumerate(lines):
-            cv2.putText(picture, text, (int(round(6 * scale)), step * (i + 1)), cv2.FONT_HERSHEY_SIMPLEX, 0.45 * scale,
-                        COLOURS[key], thick, cv2.LINE_AA)
-    return picture

@@ -13,9 +13,14 @@ the sensor's pin pitch in mm (--sensor, or --pins-on-pad / --expected-pins / the
 the pins near the field's centre; the one pitch printed). The summary says how it was derived.
 
 With --json the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
-"rejected": [[x, y, "reason"], ...], "scale": {"mm_per_px", "pitch_px", "pitch_mm", "source", "sensor"}}
-in px (x to the right, y down; "scale" is null with fewer than two pins), plus "expected_pins" and
-"count_error" (found minus expected) with --expected-pins.
+"rejected": [[x, y, "reason"], ...], "dark_pins": bool, "scale": {"mm_per_px", "pitch_px", "pitch_mm",
+"source", "sensor"}} in px (x to the right, y down; "scale" is null with fewer than two pins), plus
+"expected_pins" and "count_error" (found minus expected) with --expected-pins.
+
+The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided from the
+image unless --dark-pins says so: the one whose pin lattice keeps more pins wins, and an image where
+neither forms a lattice of 40 pins or more shows no sensor (an error saying why for each). `tactip
+replay` decides the same way on its rest frame and refuses with the same message.
 
 With --annotate OUT.png a picture is written: kept pins in green, rejected blobs as crosses
 coloured by reason, the pin field's circle in yellow and a legend (images under 480 px enlarged
@@ -52,10 +57,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--expected-pins", type=positive_int, metavar="N",
                         help="the sensor's pin count (127, 331, 532 ...): confirms the pins found and says how "
                              "far off they are; does not change what is found")
-    parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
+    parser.add_argument("--dark-pins", action="store_true",
+                        help="dark markers on a light membrane (default: the polarity is decided from the image)")
     parser.add_argument("--json", action="store_true",
                         help='print {"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": '
-                             '[[x, y, "reason"], ...], "scale": {"mm_per_px": s, "source": "how", ...}} (px)')
+                             '[[x, y, "reason"], ...], "dark_pins": bool, "scale": {"mm_per_px": s, "source": "how", '
+                             '...}} (px)')
     parser.add_argument("--annotate", type=output_file, metavar="OUT.png",
                         help="also write a picture: kept pins green, rejected blobs coloured by reason, legend")
     add_scale_arguments(parser)  # --sensor, --pins-on-pad, --pad-diameter-mm, --mm-per-px (as tactip replay)
@@ -76,7 +83,8 @@ def run(args: argparse.Namespace) -> int:
         if len(source) != 1:
             raise SourceError(f"{args.image!r} is a folder of {len(source)} images; give one image file")
         image = source.read().image
-    field = find_pin_field(image, expected_pins=args.expected_pins, dark_pins=args.dark_pins)
+    # The polarity is decided as replay decides it (pins.find_pin_field with dark_pins=None).
+    field = find_pin_field(image, expected_pins=args.expected_pins, dark_pins=True if args.dark_pins else None)
     scale = _scale(args, field)
     reason = scale if isinstance(scale, str) else ""
     scale = None if reason else scale
@@ -97,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
                 "pitch_px": None if field.count < 2 else round(field.pitch_px, 3),
                 "rejected": [[round(float(x), 3), round(float(y), 3), str(reason)]
                              for (x, y), reason in zip(field.rejected, field.rejected_reason)],
+                "dark_pins": bool(field.params.dark_pins),
                 "scale": None if scale is None else scale.to_dict()}
         if args.expected_pins:
             data.update(expected_pins=field.expected_pins, count_error=field.count_error)
@@ -125,7 +134,8 @@ def _scale(args: argparse.Namespace, field):
 
 def _print_summary(args: argparse.Namespace, field, scale, reason: str) -> None:
     disc, params = field.field_disc, field.params
-    print(f"{field.count} pins in {args.image} (pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
+    polarity = "dark markers on a light membrane" if params.dark_pins else "bright pins on a dark membrane"
+    print(f"{field.count} pins in {args.image} ({polarity}; pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
           f"radius {disc.radius_px:.1f} px)")
     if field.count:
         low, high = field.centres.min(axis=0), field.centres.max(axis=0)

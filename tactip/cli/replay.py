@@ -71,7 +71,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rest-frame", type=non_negative_int, default=0, metavar="N",
                         help="index of the rest frame, off contact (default: 0, the first frame); one that looks "
                         "taken during a tap is reported")
-    parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
+    parser.add_argument("--dark-pins", action="store_true",
+                        help="dark markers on a light membrane (default: the polarity is decided from the rest frame, "
+                        "as tactip detect decides it)")
     parser.add_argument("--calibration", metavar="CAL.h5", help="the station's sensor calibration: use its "
                         "detection, pins, feature pins and scale (instead of --expected-pins, --mm-per-px, ...)")
     parser.add_argument("--model", metavar="MODEL.h5", help="the station's model (needs --calibration): "
@@ -87,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     from pins import DetectionParams
     from tactip.replay.video import replay_video
 
-    params = None if args.calibration else DetectionParams(dark_pins=args.dark_pins)
+    params = DetectionParams(dark_pins=True) if args.dark_pins and not args.calibration else None
     result = replay_video(args.video, args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,
                           params=params, n_samples=args.samples,
                           n_pins=args.pins, min_separation_mm=args.min_separation_mm,

@@ -2,7 +2,8 @@
 
 ``replay_video`` reads every frame of a video (or any non-live frame source), finds the pins in
 the rest frame (the first frame unless told otherwise; it must be off contact) as the blobs that
-form the pin lattice (`pins.find_pin_field`: rim-ring glare, specks and skin texture rejected), tracks them
+form the pin lattice (`pins.find_pin_field`: rim-ring glare, specks and skin texture rejected; the polarity
+decided as `tactip detect` decides it, and a frame without a sensor refused with its message), tracks them
 through the video (`pins.PinTracker`: Lucas-Kanade, windowed refinement, a windowed search for
 lost pins, retirement of pins that stay lost, blank frames marked), integrates displacements from
 the rest frame, finds the taps (`pins.segment_taps`), selects the tactile pins
@@ -70,7 +71,7 @@ import pathlib
 
 import numpy as np
 
-from pins import DetectionParams, NoSensorError, PinsError, PinTracker, find_pin_field
+from pins import DetectionParams, PinsError, PinTracker, find_pin_field
 
 from tactip._output import check_video_written, claim_output, refuse_overwriting_inputs, write_error
 from tactip.errors import ConfigError, SourceError
@@ -127,8 +128,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         (`pins.find_pin_field`, which does not need it); the summary says how far off the count
         is, and a count more than 10 % off is a warning. Also the default of `pins_on_pad`.
     params : DetectionParams, optional
-        Detection parameters: a hint for the pin field search (default: none; ``dark_pins`` is
-        always kept).
+        Detection parameters: a hint for the pin field search, whose ``dark_pins`` is kept (default:
+        none, and the polarity is decided from the rest frame as `tactip detect` decides it).
     n_samples : int
         Samples per tap feature array (paper: 40).
     n_pins, min_separation_mm : int, float
@@ -341,7 +342,8 @@ class _Start:
     """Starts the tracker on the rest frame (`tactip.pipeline.Start`)."""
 
     def __init__(self, *, params, expected_pins, calibration):
-        self.params = calibration.detection if calibration is not None else params or DetectionParams()
+        # Without parameters the polarity is decided from the rest frame, as `tactip detect` does.
+        self.params = calibration.detection if calibration is not None else params
         self.expected_pins, self.calibration = expected_pins, calibration
 
     def __call__(self, image):
@@ -357,7 +359,9 @@ def _start(image, *, params, expected_pins, calibration, warnings):
 
     Without a calibration the pins are the rest frame's pin field (`pins.find_pin_field`: the blobs
     that form the pin lattice, the rim ring's glare, specks and skin texture rejected); its
-    detection parameters and field circle serve the tracker's recovery in later frames.
+    detection parameters and field circle serve the tracker's recovery in later frames. Without
+    `params` the polarity is decided there exactly as `tactip detect` decides it, and a frame that
+    shows no sensor is refused with the same message (`pins.NoSensorError`).
     """
     if calibration is not None:
         from calibration import place_reference_pins
@@ -366,20 +370,10 @@ def _start(image, *, params, expected_pins, calibration, warnings):
         rest = tracker.start(image, pins=place_reference_pins(calibration, image))
         return tracker, rest, len(rest), params, "the calibration's pins"
     # Default parameters are no hint: the field search finds its own (polarity apart).
-    hint = None if params == DetectionParams(dark_pins=params.dark_pins) else params
-    try:
-        field = find_pin_field(image, expected_pins=expected_pins, params=hint, dark_pins=params.dark_pins)
-    except NoSensorError as exc:
-        if params.dark_pins:
-            raise
-        # No dark membrane disc: perhaps dark markers on a light membrane.
-        try:
-            field = find_pin_field(image, expected_pins=expected_pins,
-                                   params=None if hint is None else hint.replace(dark_pins=True), dark_pins=True)
-        except NoSensorError:
-            raise NoSensorError(f"{exc} (nor with dark markers on a light membrane)") from None
-        warnings.append("no dark membrane with bright pins in the rest frame: dark markers on a light membrane "
-                        "assumed (--dark-pins)")
+    hint = None if params is None or params == DetectionParams(dark_pins=params.dark_pins) else params
+    field = find_pin_field(image, expected_pins=expected_pins, params=hint,
+                           dark_pins=None if params is None else params.dark_pins)
     tracker = PinTracker(detection=field.params, disc=field.disc)
     rest = tracker.start(image, field.centres)
-    return tracker, rest, field.count, field.params, field.summary(pitch=False)  # the pitch: on the scale's line
+    line = field.summary(pitch=False) + ("; dark markers on a light membrane" if field.params.dark_pins else "")
+    return tracker, rest, field.count, field.params, line  # the pitch: on the scale's line

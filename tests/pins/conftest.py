@@ -107,7 +107,6 @@ def rng():
 # bars are expected to fail on them (not strict: whoever fixes one removes it from here).
 NOT_YET_MET = {
     "radial-led-120": "issue 20: pins on the LED reflections are rejected and lost",
-    "white-dark-331": "issue 20: no bright surround: detect finds no disc, replay tracks spurious dark spots",
 }
 
 
@@ -115,3 +114,23 @@ def preset_params(names):
     """``names`` for ``parametrize``, those in `NOT_YET_MET` marked as expected failures with the reason."""
     return [pytest.param(name, marks=pytest.mark.xfail(reason=NOT_YET_MET[name], strict=False))
             if name in NOT_YET_MET else name for name in names]
+
+
+def cropped_frame(frame, x0: int, y0: int, x1: int, y1: int, pin_radius_px: float):
+    """A frame cut to the window [x0, x1) x [y0, y1) px, with its ground truth moved and re-flagged.
+
+    A pin stays ``visible`` when its whole tip (`pin_radius_px` and the 1 px edge ramp, plus half a
+    pixel) lies inside the window; a drawn pin the window cuts becomes ``partial``.
+    """
+    from types import SimpleNamespace
+
+    centres = frame.centres - [x0, y0]
+    width, height = x1 - x0, y1 - y0
+    reach = pin_radius_px + 1.5
+    x, y = centres[:, 0], centres[:, 1]
+    inside = (x >= reach) & (y >= reach) & (x <= width - 1 - reach) & (y <= height - 1 - reach)
+    near = (x >= -reach) & (y >= -reach) & (x <= width - 1 + reach) & (y <= height - 1 + reach)
+    visible = np.asarray(frame.visible, bool) & inside
+    drawn = np.asarray(frame.visible, bool) | np.asarray(frame.partial, bool)
+    return SimpleNamespace(image=np.ascontiguousarray(frame.image[y0:y1, x0:x1]), centres=centres,
+                           visible=visible, partial=drawn & near & ~visible)

@@ -71,3 +71,52 @@ def test_small_and_large_pads_are_found(name):
     cx, cy, radius = preset_sensor(name).disc
     assert abs(disc.cx - cx) < 0.5 and abs(disc.cy - cy) < 0.5
     assert abs(disc.radius_px - radius) < 1.0
+
+
+def _cut(name: str, seed: int, sides: str):
+    """A rest frame of preset `name` cut by the frame edge on `sides` by 15-35 % of the disc radius,
+    with the window's offset (x0, y0) px and the true disc."""
+    from tactip.sim import SyntheticTacTip
+    from tests.pins.conftest import cropped_frame
+
+    # A sensor of its own (not the shared cached one, whose frames depend on what rendered before).
+    sensor = SyntheticTacTip.from_preset(name, seed=seed)
+    f = sensor.render()
+    width, height = sensor.image_size
+    cx, cy, radius = sensor.disc
+    a, b = np.random.default_rng(seed).uniform(0.15, 0.35, 2) * radius
+    x0, y0 = int(max(cx - radius - 8, 0)), int(max(cy - radius - 8, 0))
+    x1, y1 = int(min(cx + radius + 8, width)), int(min(cy + radius + 8, height))
+    x0 = int(cx - radius + a) if "left" in sides else x0
+    y1 = int(cy + radius - b) if "bottom" in sides else y1
+    y0 = int(cy - radius + b) if "top" in sides else y0
+    x1 = int(cx + radius - a) if "right" in sides else x1
+    return cropped_frame(f, x0, y0, x1, y1, sensor.pin_radius_px), (x0, y0), sensor
+
+
+@pytest.mark.parametrize("sides", ["left", "left+bottom", "top+right"])
+@pytest.mark.parametrize("name", ["tactip-331", "dark-331", "brown-127", "small-pad-100", "rim-ring-331", "dense-1000"])
+def test_a_disc_cut_by_the_frame_edge_is_found(name, sides):
+    """A pad filling the view, its membrane cut by the frame edge on one or two sides: the disc is the
+    circle through its visible rim (it used to be refused, or made small and off-centre)."""
+    for seed in (0, 1, 2):
+        f, (x0, y0), sensor = _cut(name, seed, sides)
+        cx, cy, radius = sensor.disc
+        disc = find_sensor_disc(f.image, dark_pins=sensor.dark_pins)
+        tolerance = max(1.5, 0.012 * radius)
+        assert np.hypot(disc.cx + x0 - cx, disc.cy + y0 - cy) < tolerance, (seed, disc)
+        assert disc.radius_px == pytest.approx(radius, abs=tolerance), seed
+
+
+@pytest.mark.parametrize("shape", ["half-plane", "ellipse", "corner blob"])
+def test_dark_regions_cut_by_the_frame_edge_that_are_no_disc_are_refused(shape):
+    """The cut-disc fit does not make a disc of a dark half of the frame, a flat ellipse or a small blob."""
+    image = np.full((480, 640), 210, np.uint8)
+    if shape == "half-plane":
+        image[:, :300] = 30
+    elif shape == "ellipse":
+        cv2.ellipse(image, (40, 240), (300, 120), 0, 0, 360, 30, -1)
+    else:
+        cv2.circle(image, (630, 470), 25, 30, -1)
+    with pytest.raises(NoSensorError, match="cut by the frame edge"):
+        find_sensor_disc(image)

@@ -70,7 +70,9 @@ def test_replay_succeeds_on_every_preset(tmp_path, name):
     assert scale["mm_per_px"] == pytest.approx(sensor.mm_per_px, rel=0.05)
     # 40 pins at least 4 mm apart, or as far apart as the pad allows with a warning naming the separation.
     assert separation >= 4.0 or any(f"{separation:.2f} mm" in w for w in warnings)
-    assert any("dark markers" in w for w in warnings) == sensor.dark_pins
+    # The polarity decided from the rest frame (as tactip detect decides it), said in the pin field line.
+    assert result.detection.dark_pins == sensor.dark_pins
+    assert ("dark markers on a light membrane" in result.summary()) == sensor.dark_pins
     # The first frame is at rest: no complaint about it.
     assert not [w for w in warnings if "--rest-frame" in w]
     # The tap is found, around the deepest frame.

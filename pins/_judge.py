@@ -1,0 +1,264 @@
+"""The lattice judge of `pins.find_pin_field`: which blobs of one candidate set form the pin lattice.
+
+Each blob is judged against the medians of its nearest neighbours (size, contrast, sharpness) and
+against the lattice sites its neighbours make (mirror images), iterated until nothing changes, and
+then the linked groups of kept blobs make the field (see `pins.lattice`, steps 3 and 4).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from .detect import Blobs, DetectionParams
+
+
+#: Why a candidate blob was rejected, in `PinField.rejected_reason`.
+REJECTION_REASONS = ("outside field", "off lattice", "size", "contrast")
+_OUTSIDE, _OFF, _SIZE, _CONTRAST = range(4)
+_KEPT = -1
+
+_NEIGHBOURS = 6
+# Lattice consistency: fractions of the neighbours' medians (areas compared with `_AREA_SLACK` px
+# added, fills only for areas of `_FILL_AREA` px or more) and of the local pitch.
+_SIZE_RANGE = (0.4, 2.2)
+_MIN_FILL = 0.6
+_FILL_AREA = 15.0
+_MIN_CONTRAST = 0.5
+_MIN_SHARPNESS = 0.8
+# Below this tip radius, px, the steepest slope depends on where the pixel grid cuts the tip.
+_SHARP_RADIUS = 2.0
+_TOO_CLOSE = 0.6
+_LINK = 1.3
+# Lattice sites: a mirror image within this fraction of the link length anchors a blob; a blob with
+# fewer than `_MIN_ANCHORS` must have at least these contrast ratios and at most these area ratios
+# to its neighbours' medians (with one anchor, with none).
+_MIRROR = 0.25
+_MIN_ANCHORS = 2
+_WEAK_CONTRAST = (0.5, 0.8)
+_WEAK_SIZE = (1.8, 1.4)
+_MIN_PINS = 4
+# Fewest pins that make a pin field (TacTips have 100-1000).
+_MIN_FIELD = 10
+_AREA_SLACK = 3.0
+# Linked groups of at least this fraction of the largest make the field; isolated blobs within
+# `_HULL_MARGIN` pitches of its hull stay.
+_MIN_GROUP = 0.1
+_HULL_MARGIN = 0.3
+# Rejected blobs this many pitches beyond the field's hull are reported as outside the field.
+_OUTSIDE_MARGIN = 0.5
+
+
+def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: dict | None = None) -> np.ndarray:
+    """Steepest grey-level slope near each blob over its contrast, 1/px.
+
+    A pin tip is a disc with a sharp edge; glare, light patches of skin and shadows are smooth. On
+    tips smaller than `_SHARP_RADIUS` the slope depends on where the pixel grid cuts the tip: all ones.
+    `cache` keeps the slope image per blur between candidate sets.
+    """
+    n = len(blobs.centres)
+    radius = float(np.sqrt(np.median(blobs.areas) / np.pi)) if n else 0.0
+    if radius < _SHARP_RADIUS:
+        return np.ones(n)
+    sigma = max(params.blur_sigma_px, 0.5)
+    cache = {} if cache is None else cache
+    if sigma not in cache:
+        smooth = cv2.GaussianBlur(grey, (0, 0), sigma).astype(np.float32)
+        gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3, scale=0.125)
+        gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3, scale=0.125)
+        cache[sigma] = cv2.magnitude(gx, gy)
+    slope = cache[sigma]
+    # The steepest slope within the tip radius (plus a pixel and a half) of each centre.
+    reach = int(np.ceil(radius + 1.5))
+    dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
+    inside = dx**2 + dy**2 <= (radius + 1.5) ** 2
+    x = np.rint(blobs.centres[:, 0]).astype(np.intp)
+    y = np.rint(blobs.centres[:, 1]).astype(np.intp)
+    height, width = grey.shape
+    if n and x.min() >= reach and y.min() >= reach and x.max() < width - reach and y.max() < height - reach:
+        # Every disc of pixels inside the image: one flat gather (no clipping).
+        steepest = slope.ravel().take((y * width + x)[:, None] + (dy * width + dx)[inside]).max(axis=1)
+    else:
+        steepest = slope[np.clip(y[:, None] + dy[inside], 0, height - 1),
+                         np.clip(x[:, None] + dx[inside], 0, width - 1)].max(axis=1)
+    return steepest / np.maximum(blobs.contrasts, 1e-6)
+
+
+def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, float]:
+    """Which blobs form a lattice: (reason per blob, -1 for kept; median pitch of the kept, px)."""
+    n = len(blobs.centres)
+    reason = np.full(n, _KEPT, dtype=np.int64)
+    if n < _MIN_PINS:
+        reason[:] = _OFF
+        return reason, np.nan
+    # Photometry and spacing, iterated: removing an impostor changes its neighbours' medians. Then
+    # the blobs rejected are judged again against the blobs kept, because a pin first judged among
+    # impostors (skin highlights and specks round the spoke ends or the lone centre pin of a radial
+    # layout make it look unlike its neighbours) must come back once they are gone; those that pass
+    # rejoin and the iteration runs again, each blob rejoining at most once (else pairs of blobs
+    # could take turns).
+    centres = blobs.centres
+    active = np.ones(n, bool)
+    rejoined = np.zeros(n, bool)
+    while True:
+        for _ in range(8):
+            if active.sum() < _MIN_PINS:
+                break
+            verdict = _verdicts(blobs, sharpness, active)
+            out = active & (verdict != _KEPT)
+            if not out.any():
+                break
+            reason[out] = verdict[out]
+            active &= ~out
+        else:
+            verdict = _verdicts(blobs, sharpness, active)
+        if active.sum() < _MIN_PINS:
+            break
+        back = ~active & ~rejoined & (verdict == _KEPT)
+        if not back.any():
+            break
+        reason[back] = _KEPT
+        active |= back
+        rejoined |= back
+    index = np.flatnonzero(active)
+    if len(index) < _MIN_PINS:
+        reason[index] = _OFF
+        return reason, np.nan
+    # The field: groups of blobs joined by lattice links; blobs beyond their hull are outside.
+    hood = _Neighbourhood(centres[index])
+    groups, label = connected_components(hood.graph(), directed=False)
+    sizes = np.bincount(label, minlength=groups)
+    core = (sizes >= max(_MIN_PINS, _MIN_GROUP * sizes.max()))[label]
+    if core.sum() < _MIN_FIELD:
+        # A handful of blobs (glare round the rim of a pad without pins) is no pin field.
+        reason[index] = _OFF
+        return reason, np.nan
+    hull = cv2.convexHull(centres[index[core]].astype(np.float32))
+    pitch = float(np.median(hood.pitch[core]))
+    loose = index[~core]
+    reason[loose[_beyond(hull, centres[loose], _HULL_MARGIN * pitch)]] = _OUTSIDE
+    # Whatever else was rejected beyond the field (glare round the rim) is outside it, first of all.
+    kept = reason == _KEPT
+    rejected = np.flatnonzero(~kept)
+    reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
+    return reason, float(_median_nn(centres[reason == _KEPT]))
+
+
+def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray) -> np.ndarray:
+    """Each blob judged against its nearest `members` (bool per blob): -1 (a lattice site) or why not."""
+    n = len(blobs.centres)
+    areas = blobs.areas.astype(np.float64)
+    fills = blobs.fills
+    contrasts = np.maximum(blobs.contrasts, 1e-6)
+    strength = contrasts * areas
+    hood = _Neighbourhood(blobs.centres, members)
+    # Medians over the blob and its neighbours. Areas compared with a little slack: a 1 px tip
+    # covers 3-7 px.
+    near = hood.near
+    area_ref, contrast_ref, fill_ref, sharp_ref = _row_median(np.stack([areas, contrasts, fills, sharpness])[:, near])
+    area_ref = area_ref + _AREA_SLACK
+    area = areas + _AREA_SLACK
+    verdict = np.full(n, _KEPT)
+    # Of two blobs much closer than the local pitch, the weaker is not a lattice site.
+    close = (hood.dist[:, 1:] < _TOO_CLOSE * hood.pitch[:, None]) & (strength[near[:, 1:]] > strength[:, None])
+    verdict[close.any(axis=1)] = _OFF
+    verdict[(contrasts < _MIN_CONTRAST * contrast_ref) | (sharpness < _MIN_SHARPNESS * sharp_ref)] = _CONTRAST
+    # (The fill of a blob of a few pixels says nothing of its shape.)
+    verdict[(area < _SIZE_RANGE[0] * area_ref) | (area > _SIZE_RANGE[1] * area_ref)
+            | ((fills < _MIN_FILL * fill_ref) & (area_ref >= _FILL_AREA))] = _SIZE
+    # Lattice sites: a blob on the lattice is a mirror image of a neighbour through another one
+    # (interior pins have six such pairs, rim pins and the ends of radial spokes at least one). A
+    # blob with fewer than two must look just like its neighbours to stay.
+    anchors = hood.anchors()
+    strict = np.clip(_MIN_ANCHORS - anchors, 0, _MIN_ANCHORS) / _MIN_ANCHORS
+    ratio = contrasts / contrast_ref
+    unlike = ((ratio < _WEAK_CONTRAST[0] + strict * (_WEAK_CONTRAST[1] - _WEAK_CONTRAST[0]))
+              | (np.abs(np.log(area / area_ref)) > np.log(_WEAK_SIZE[0]) + strict * np.log(_WEAK_SIZE[1] / _WEAK_SIZE[0])))
+    verdict[(anchors < _MIN_ANCHORS) & unlike & (verdict == _KEPT)] = _OFF
+    return verdict
+
+
+def _beyond(hull: np.ndarray, points: np.ndarray, margin: float) -> np.ndarray:
+    """Which points lie farther than `margin` (px) outside a convex hull."""
+    return np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), True) < -margin for x, y in points],
+                    dtype=bool)
+
+
+class _Neighbourhood:
+    """Nearest neighbours among member points (each point first), local pitch, links and mirror anchors.
+
+    Every point, member or not, gets its nearest members as neighbours (a point is never its own
+    neighbour), so that blobs rejected so far can be judged against the blobs kept.
+    """
+
+    def __init__(self, points: np.ndarray, members: np.ndarray | None = None):
+        self.points = points
+        index = np.arange(len(points)) if members is None else np.flatnonzero(members)
+        self.tree = cKDTree(points[index])
+        k = min(_NEIGHBOURS + 1, len(index))
+        dist, near = self.tree.query(points, k)
+        dist, near = dist.reshape(len(points), k), index[near.reshape(len(points), k)]
+        if members is not None and not members.all():
+            # A point outside the members is not found first: put it first, before its k - 1 nearest.
+            outside = ~members
+            dist[outside] = np.column_stack([np.zeros(outside.sum()), dist[outside, :-1]])
+            near[outside] = np.column_stack([np.flatnonzero(outside), near[outside, :-1]])
+        self.dist, self.near = dist, near
+        # Local pitch: median nearest-neighbour distance of the point and its neighbours. Links
+        # reach a little beyond the second-nearest distance instead: near the rim of a hemispherical
+        # pad the pins are foreshortened towards the centre, closer in the radial direction than
+        # along the rim.
+        self.pitch, reach = _row_median(self.dist[:, [1, min(2, k - 1)]].T[:, self.near])
+        self.link = self.dist[:, 1:] <= _LINK * np.maximum(reach[:, None], reach[self.near[:, 1:]])
+
+    def anchors(self) -> np.ndarray:
+        """Per point: linked neighbours j with a point at the mirror image through j, plus the lines
+        through the point (pairs of linked neighbours j, 2 p - j)."""
+        points, neighbours = self.points, self.near[:, 1:]
+        n, k = neighbours.shape
+        others = points[neighbours]
+        tolerance = _MIRROR * self.dist[:, 1:]
+        bound = float(tolerance.max()) if tolerance.size else 0.0
+        # Mirror images of the point through each neighbour j (2 j - p) ...
+        through = self.tree.query((2.0 * others - points[:, None, :]).reshape(-1, 2), distance_upper_bound=bound)[0]
+        through = through.reshape(n, k)
+        # ... and of each neighbour j through the point (2 p - j): the first kind seen from j, when p is
+        # one of j's neighbours (the same numbers: looked up, not queried again).
+        back = neighbours[neighbours] == np.arange(n)[:, None, None]  # (n, k, k): p among j's neighbours
+        mutual = back.any(axis=2)
+        beyond = np.empty((n, k))
+        beyond[mutual] = through[neighbours[mutual], back.argmax(axis=2)[mutual]]
+        if not mutual.all():
+            lone = ~mutual
+            beyond[lone] = self.tree.query(2.0 * np.broadcast_to(points[:, None, :], others.shape)[lone] - others[lone],
+                                           distance_upper_bound=bound)[0]
+        # A point between two neighbours j and 2 p - j is seen from both: one line, counted once (else
+        # the midpoint of two pins of a radial layout's diverging spokes, a reflection there, would
+        # have two anchors from one pair).
+        between = np.sum(self.link & (beyond < tolerance), axis=1)
+        return np.sum(self.link & (through < tolerance), axis=1) + (between + 1) // 2
+
+    def graph(self) -> coo_matrix:
+        """Sparse adjacency of the lattice links."""
+        n, k = self.near.shape
+        rows = np.repeat(np.arange(n), k - 1)[self.link.ravel()]
+        cols = self.near[:, 1:].ravel()[self.link.ravel()]
+        return coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+
+
+def _row_median(values: np.ndarray) -> np.ndarray:
+    """Median along the last axis, as `numpy.median` gives it (a partition alone for an odd count, 5x faster)."""
+    k = values.shape[-1]
+    if k % 2 == 0 or np.isnan(values).any():
+        return np.median(values, axis=-1)
+    return np.partition(values, k // 2, axis=-1)[..., k // 2]
+
+
+def _median_nn(centres: np.ndarray) -> float:
+    if len(centres) < 2:
+        return np.nan
+    dist, _ = cKDTree(centres).query(centres, 2)
+    return float(np.median(dist[:, 1]))

@@ -1,0 +1,171 @@
+"""Pins at empty lattice sites, taken back from the other candidate sets (`pins.find_pin_field`, step 5b).
+
+One candidate set (one blur, neighbourhood and offset) cannot suit every pin of a pad whose light
+varies: a pin on an LED reflection inside the pad stands less above a brighter background (contrast
+~35 against ~50), and at a low offset the reflection joins it into one large blob; a pin of the
+outermost ring under the veil and the rim glare is faint, and at a high offset only a few pixels of
+it pass. The winning set then leaves holes in the lattice that other sets fill.
+
+A hole is a lattice site the kept pins predict and none occupies: the mirror image of a kept pin
+through a linked neighbour (the next pin along a radial spoke or a lattice row, the spoke's end
+included), with no kept pin within `_MIRROR` of the link length, and either predicted from opposite
+sides (inside the lattice) or predicted once, outward from the disc centre (the outer end of a lone
+row, such as a radial spoke: not the next row of a hexagonal lattice, predicted twice from one side,
+nor the inner end of a spoke, which points into the empty zone round the lone centre pin). A blob of any candidate set at a
+hole (within the same tolerance) fills it when it looks like a pin beside the kept pins around the
+hole: an area within `_AREA_RANGE` of theirs (not a reflection merged with its pins, nor a
+speck), at least `_MIN_CONTRAST` of their contrast and a box filled like a disc's; of several, the one of the highest offset
+(the most confident), then the nearest. Sites are predicted by the judged pins, and then by the pins
+taken back (several pins missing in a row along a spoke that crosses a reflection), through links of
+about one pitch, never farther from the disc centre than the outermost judged pin plus `_BEYOND`
+pitches, so that no chain reaches the glare on the rim.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ._judge import _MIRROR, _Neighbourhood, _row_median
+
+# A blob at a hole: its area within this range of the median area of the kept pins round the hole
+# (px added to both, as the judge does), and at least this fraction of their median contrast.
+_AREA_RANGE = (0.35, 2.2)
+_AREA_SLACK = 3.0
+_MIN_CONTRAST = 0.35
+# ... and fill its bounding box like a disc (0.785), not like a crescent of a reflection's edge.
+_MIN_FILL = 0.6
+# No blob closer than this many local pitches to a kept pin fills a hole (a split pin, a speck).
+_APART = 0.6
+# Rounds of prediction: by the judged pins, then by the pins taken back in the round before (a
+# spoke crossing a reflection loses several pins in a row).
+_ROUNDS = 4
+# Links that predict a site are at most this many local pitches long; sites lie at most `_BEYOND`
+# local pitches farther from the disc centre than the farthest judged pin.
+_SHORT_LINK = 1.3
+_BEYOND = 0.3
+# Two predictions of a site come from opposite sides when their directions' cosine is below this.
+_OPPOSITE = -0.5
+# The outer end of a lone row has one pin (the row's) within this many link lengths.
+_LONE = 1.3
+
+
+def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts: np.ndarray,
+                       candidates: list, centre: tuple[float, float]) -> list[tuple[int, int]]:
+    """The blobs of the candidate sets that fill holes of the lattice of `kept`.
+
+    Parameters
+    ----------
+    kept : (N, 2) ndarray of float64
+        The judged pins (x, y), px.
+    kept_areas, kept_contrasts : (N,) ndarray
+        Their areas (px) and contrasts (grey levels).
+    candidates : list of (centres (M, 2), areas (M,), fills (M,), contrasts (M,), offset)
+        The blobs of every candidate set, with the set's threshold offset.
+    centre : (float, float)
+        The sensor disc's centre (x, y), px: no hole lies farther from it than the farthest judged
+        pin plus `_BEYOND` local pitches.
+
+    Returns
+    -------
+    taken : list of (int, int)
+        (candidate set, blob) of each blob taken back, at most one per hole.
+    """
+    if len(kept) < 7 or not candidates:
+        return []
+    owner = np.concatenate([np.full(len(c[0]), s) for s, c in enumerate(candidates)])
+    index = np.concatenate([np.arange(len(c[0])) for c in candidates])
+    if not len(owner):
+        return []
+    centres = np.concatenate([c[0] for c in candidates])
+    areas = np.concatenate([c[1] for c in candidates]).astype(np.float64)
+    fills = np.concatenate([c[2] for c in candidates]).astype(np.float64)
+    contrasts = np.concatenate([c[3] for c in candidates]).astype(np.float64)
+    offsets = np.concatenate([np.full(len(c[0]), float(c[4])) for c in candidates])
+    field_reach = float(np.max(np.hypot(kept[:, 0] - centre[0], kept[:, 1] - centre[1])))
+    pool = cKDTree(centres)
+    pins, pin_areas, pin_contrasts = kept, kept_areas.astype(np.float64), kept_contrasts.astype(np.float64)
+    taken: list[tuple[int, int]] = []
+    used = np.zeros(len(centres), bool)
+    first_new = len(pins)
+    for round_ in range(_ROUNDS):
+        hood = _Neighbourhood(pins)
+        k = hood.near.shape[1] - 1
+        if k < 2:
+            break
+        area_ref, contrast_ref = _row_median(np.stack([pin_areas, pin_contrasts])[:, hood.near])
+        source = np.repeat(np.arange(len(pins)), k)
+        through = hood.near[:, 1:].ravel()
+        length = hood.dist[:, 1:].ravel()
+        # Links about a pitch long (not the long links of a radial layout's lone centre pin).
+        link = hood.link.ravel() & (length <= _SHORT_LINK * hood.pitch[source])
+        if round_ > 0:  # only the pins taken back predict anew
+            link &= (source >= first_new) | (through >= first_new)
+        source, through, length = source[link], through[link], length[link]
+        sites = 2.0 * pins[through] - pins[source]
+        tolerance = _MIRROR * length
+        # Never beyond the field: glare on the rim lies a pitch past the outermost pins, the next row
+        # of a hexagonal lattice 0.87 pitch past the judged pins' hull, the end of a radial spoke whose
+        # outermost pin is missing about half a pitch past it.
+        inside = (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1])
+                  <= field_reach + _BEYOND * hood.pitch[through])
+        sites, tolerance, through = sites[inside], tolerance[inside], through[inside]
+        if not len(sites):
+            break
+        # Holes: sites no pin occupies.
+        occupied = np.isfinite(cKDTree(pins).query(sites, distance_upper_bound=tolerance.max())[0])
+        occupied &= cKDTree(pins).query(sites)[0] <= tolerance
+        sites, tolerance, through = sites[~occupied], tolerance[~occupied], through[~occupied]
+        # A hole inside the lattice has pins on opposite sides along a row (predicted from both
+        # directions, or with a pin beyond it); the outer end of a lone row (a radial spoke whose rim pin is under the veil) is
+        # predicted once, from inside. Not the next row of a hexagonal lattice (predicted twice, from
+        # one side: skin and glare beyond the field), nor the inner end of a radial spoke (the empty
+        # zone round the lone centre pin).
+        if not len(sites):
+            break
+        ahead = sites - pins[through]
+        ahead /= np.maximum(np.hypot(*ahead.T), 1e-9)[:, None]
+        groups = cKDTree(sites).query_ball_point(sites, tolerance)
+        predictions = np.array([len(g) for g in groups])
+        opposite = np.array([np.min(ahead[g] @ ahead[i]) < _OPPOSITE for i, g in enumerate(groups)])
+        # ... or a pin beyond it along the row (the next one, whose own predictor is missing).
+        opposite |= cKDTree(pins).query(2.0 * sites - pins[through])[0] <= tolerance
+        outward = (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1])
+                   > np.hypot(pins[through, 0] - centre[0], pins[through, 1] - centre[1]))
+        # A lone row's end has one pin within a pitch (the next along the row); the next row of a
+        # hexagonal lattice has two.
+        lone = np.array([len(g) for g in cKDTree(pins).query_ball_point(sites, _LONE * tolerance / _MIRROR)]) == 1
+        plausible = opposite | ((predictions == 1) & outward & lone)
+        sites, tolerance, through = sites[plausible], tolerance[plausible], through[plausible]
+        new = []
+        for site, reach, near_pin in zip(sites, tolerance, through):
+            if len(new) and np.min(np.hypot(*(np.array([centres[i] for i in new]) - site).T)) <= reach:
+                continue  # a hole already filled (predicted from several pins)
+            found = np.array(pool.query_ball_point(site, reach), dtype=int)
+            if not len(found):
+                continue
+            found = found[~used[found]]
+            ref_area, ref_contrast = area_ref[near_pin] + _AREA_SLACK, contrast_ref[near_pin]
+            ratio = (areas[found] + _AREA_SLACK) / ref_area
+            good = found[(ratio >= _AREA_RANGE[0]) & (ratio <= _AREA_RANGE[1])
+                         & (contrasts[found] >= _MIN_CONTRAST * ref_contrast) & (fills[found] >= _MIN_FILL)]
+            if not len(good):
+                continue
+            # Apart from every pin (a split pin or a speck beside one is no hole's pin).
+            apart = cKDTree(pins).query(centres[good])[0] >= _APART * hood.pitch[near_pin]
+            good = good[apart]
+            if not len(good):
+                continue
+            best = max(good, key=lambda i: (offsets[i], -np.hypot(*(centres[i] - site))))
+            new.append(best)
+            # The same blob found by other sets is used up with it.
+            used[pool.query_ball_point(centres[best], 0.5 * reach)] = True
+        if not new:
+            break
+        filled = np.array(new)
+        taken += [(int(owner[i]), int(index[i])) for i in filled]
+        first_new = len(pins)
+        pins = np.vstack([pins, centres[filled]])
+        pin_areas = np.append(pin_areas, areas[filled])
+        pin_contrasts = np.append(pin_contrasts, contrasts[filled])
+    return taken
