@@ -107,7 +107,7 @@ class SensorCalibration:
 
 def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, pad_diameter_mm: float | None = None,
                      selected_pins: int = 40, min_separation_mm: float = 4.0, count_tolerance: float = 0.1,
-                     mm_per_px: float | None = None, dark_pins: bool = False,
+                     mm_per_px: float | None = None, dark_pins: bool | None = None,
                      sensor: dict | None = None,
                      description: str | SensorDescription | None = None) -> SensorCalibration:
     """Calibrate a TacTip from frames taken off contact.
@@ -131,8 +131,9 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
         rim pins hidden by a rim ring or the image edge are usually a few %).
     mm_per_px : float, optional
         A measured scale, mm per px, instead of the one from the pin pitch.
-    dark_pins : bool
-        Dark markers on a light membrane.
+    dark_pins : bool or None
+        Dark markers on a light membrane (True) or bright pins on a dark one (False); None: decided
+        from the frames as `tactip detect` and `tactip replay` decide it (`pins.find_pin_field`).
     sensor : dict, optional
         Description stored with the calibration.
     description : str or pins.SensorDescription, optional
@@ -158,10 +159,11 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
     mean = np.rint(np.mean(np.stack(greys), axis=0)).astype(np.uint8)
 
     try:
-        disc = find_sensor_disc(mean, dark_pins=dark_pins)
+        disc = None if dark_pins is None else find_sensor_disc(mean, dark_pins=dark_pins)
+        field = find_pin_field(mean, expected_pins=expected_pins, disc=disc, dark_pins=dark_pins)
     except NoSensorError as exc:
         raise CalibrationError(f"no sensor in view: {exc} (is the camera the TacTip's, and its LEDs on?)") from None
-    field = find_pin_field(mean, expected_pins=expected_pins, disc=disc, dark_pins=dark_pins)
+    disc = field.disc
     if abs(field.count_error) > count_tolerance * expected_pins:
         raise CalibrationError(
             f"pin detection cannot be tuned to {expected_pins} pins: the pin lattice has {field.count} pins "

@@ -25,9 +25,9 @@ def _three_scales(name: str, seed: int, folder):
     """(detect, calibrate, replay) mm/px and the truth for one rest frame of the preset."""
     sensor = SyntheticTacTip.from_preset(name, seed=seed)
     image = sensor.render().image
-    field = find_pin_field(image, dark_pins=sensor.dark_pins)
+    field = find_pin_field(image)  # the polarity decided, as detect and replay decide it
     detect = sensor_scale(field.centres, sensor=name).mm_per_px
-    calibrate = calibrate_sensor([image], expected_pins=sensor.n_pins, dark_pins=sensor.dark_pins,
+    calibrate = calibrate_sensor([image], expected_pins=sensor.n_pins,
                                  description=name).mm_per_px
     frames = folder / f"{name}-{seed}"
     frames.mkdir()
