@@ -8,7 +8,8 @@ from .disc import SensorDisc, as_grey, find_sensor_disc
 from .displacement import displacement_from_rest, displacement_magnitude, integrate_flow
 from .errors import NoSensorError, PinsError, ShapeError
 from .lattice import REJECTION_REASONS, PinField, draw_pin_field, find_pin_field
-from .features import LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, tap_features
+from .features import (LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, seen_pins,
+                       tap_features)
 from .segment import converging_frames, segment_taps, tap_signal
 from .scale import (SENSOR_PRESETS, PadScale, SensorDescription, central_spacing_px, pad_scale, pin_pitch_mm,
                     sensor_preset)
@@ -25,6 +26,6 @@ __all__ = [
     "select_pins", "select_feature_pins", "PinSelection", "median_spacing_px",
     "pad_scale", "PadScale", "pin_pitch_mm", "central_spacing_px", "SensorDescription", "SENSOR_PRESETS",
     "sensor_preset",
-    "feature_dim_names", "fill_lost", "resample_tap", "tap_features", "TapRecorder",
+    "feature_dim_names", "fill_lost", "resample_tap", "seen_pins", "tap_features", "TapRecorder",
     "tap_signal", "segment_taps", "converging_frames",
 ]
