@@ -33,8 +33,8 @@ The HDF5 file (format ``tactip-replay/2``) holds:
   ``requested``, ``min_separation_mm`` asked, ``separation_mm`` reached);
 - ``tap_bounds`` int (taps, 2): [start, stop) frame indices;
 - ``taps`` float32 (taps, samples, 2 P) when taps were found: columns 0..P-1 dx, P..2P-1 dy of the
-  selected pins (``feature_names`` attribute); ``tap_valid`` bool (taps,): False where a selected
-  pin was lost for a whole tap (its features are NaN);
+  selected pins (``feature_names`` attribute), NaN in the columns of a pin unseen for the whole tap;
+  ``tap_pins_seen`` int (taps,), of P (``of``); ``tap_valid`` bool (taps,): False below P / 2 seen (NaN);
 - attributes: format, software version, video path, frame size and rate, rest frame, disc
   (cx, cy, radius px), ``mm_per_px`` and ``scale`` (JSON: mm_per_px, pitch_px, pitch_mm, source,
   sensor), pad diameter, detection and tracking parameters (JSON), selection and sampling settings,
@@ -100,8 +100,8 @@ class ReplayResult:
         Frames with nothing trackable (all pins lost), after the rest frame.
     rest_frame : int
     tap_bounds : list of (start, stop)
-    invalid_taps : list of int
-        Taps whose features are NaN (a selected pin lost for the whole tap).
+    invalid_taps, pins_seen : list of int
+        Taps whose features are NaN (fewer than half the selected pins seen); selected pins seen per tap.
     selected_pins : (P,) ndarray of int
     selection : pins.PinSelection or None
         How the feature pins were chosen (None with a calibration, or when selection failed).
@@ -144,6 +144,7 @@ class ReplayResult:
     expected_pins: int | None = None
     warnings: list = field(default_factory=list)
     decisions: Any = None
+    pins_seen: list = field(default_factory=list)
 
     @property
     def lost_pin_frames(self) -> int:
@@ -167,9 +168,11 @@ class ReplayResult:
             f"Taps: {len(self.tap_bounds)} (frames {taps}); features of "
             + (self.selection.describe() if self.selection is not None else f"{len(self.selected_pins)} pins"),
         ]
+        if self.pins_seen:
+            lines[-1] += f"; pins seen {min(self.pins_seen)}/{len(self.selected_pins)} in the poorest tap"
         lines += [f"Warning: {w}" for w in self.warnings]
         if self.invalid_taps:
-            lines.append(f"Warning: taps {self.invalid_taps} have a selected pin lost throughout (features NaN)")
+            lines.append(f"Warning: taps {self.invalid_taps} have fewer than half the selected pins seen (features NaN)")
         if self.decisions is not None:
             lines += self.decisions.lines()
         written = [str(self.out_path)] + ([str(self.annotate_path)] if self.annotate_path else [])
@@ -399,7 +402,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         selected_pins=analysis["selected"], selection=analysis["selection"],
                         mm_per_px=float(analysis["mm_per_px"]), scale=scale, disc=track.disc,
                         detection=track.detection, pins_detected=track.pins_detected, pin_field=track.pin_field,
-                        expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions)
+                        expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions,
+                        pins_seen=[int(n) for n in track.pins_seen])
 
 
 class _Plan:
