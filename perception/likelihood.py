@@ -5,6 +5,10 @@ log P(z | x_l, w_i) of every joint class c = (location l, identity i), c = l * n
 (papers 000 and 002 eqs. 2-3). The perceiver, the Monte Carlo, the station and replay call only:
 
 - ``log_likelihood(tap)`` -> (n_locations, n_identities) and ``log_likelihood_batch(taps)``;
+  a tap may miss values (NaN: the dimensions of a pin unseen during the tap), and every kind then
+  gives the likelihood of the values observed, the missing ones marginalised out (integrated over),
+  never the tap discarded: all classes are scored on the same observed values, so the posterior
+  stays a comparison of like with like;
 - the class grid: ``n_locations``, ``n_identities``, ``n_classes``, ``location_edges``,
   ``location_centres``, ``class_width``, ``identities``, ``location_class``, ``identity_class``,
   ``fixation_class``;
@@ -56,6 +60,7 @@ class LikelihoodModel:
         Parameters
         ----------
         taps : (N, samples, dims) array
+            NaN where a value is missing (marginalised out).
 
         Returns
         -------
@@ -69,6 +74,7 @@ class LikelihoodModel:
         Parameters
         ----------
         tap : (samples, dims) array
+            NaN where a value is missing (marginalised out).
 
         Returns
         -------
@@ -341,7 +347,9 @@ def fit_class_grid(dataset: Dataset, *, n_locations: int = 11, min_taps_per_clas
     Raises
     ------
     DatasetError
-        Not a dataset, no taps, or a class has fewer than `min_taps_per_class` taps (the message names it).
+        Not a dataset, no taps, a class has fewer than `min_taps_per_class` taps, or a dimension is
+        never observed (NaN in every tap) in some class: its likelihood there would be a guess (the
+        message names the dimension and the class).
     ValueError
         A knob is out of range (the message names it).
     """
@@ -366,4 +374,22 @@ def fit_class_grid(dataset: Dataset, *, n_locations: int = 11, min_taps_per_clas
                            f"taps, e.g. location {grid.location_centres[l]:g} {dataset.location_unit}, identity "
                            f"{identities[i]:g} {dataset.identity_unit} has {taps_per_class[few[0]]}; "
                            f"use fewer location classes")
+    _check_observed_per_class(grid, dataset)
     return dataclasses.replace(grid, taps_per_class=taps_per_class.reshape(n_locations, len(identities)))
+
+
+def _check_observed_per_class(grid: ClassGrid, dataset: Dataset) -> None:
+    """Raise DatasetError when a dimension has no observed value in any training tap of some class."""
+    if dataset.complete:
+        return
+    observed = (~np.isnan(dataset.taps)).any(axis=1).astype(np.int64)          # (N, dims)
+    per_class = np.zeros((grid.n_classes, dataset.dims), np.int64)
+    np.add.at(per_class, grid.tap_class(dataset), observed)
+    never = np.argwhere(per_class == 0)
+    if never.size:
+        c, k = never[0]
+        l, i = divmod(int(c), grid.n_identities)
+        raise DatasetError(f"dimension {dataset.dim_names[k]} is never observed in the training taps of location "
+                           f"{grid.location_centres[l]:g} {dataset.location_unit}, identity {grid.identities[i]:g} "
+                           f"{dataset.identity_unit} ({len(never)} such class and dimension pairs): its likelihood "
+                           f"there cannot be learned; collect taps of that class in which the pin is seen")
