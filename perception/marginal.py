@@ -28,7 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LowRankGaussian", "missing_patterns", "fit_low_rank_gaussian"]
+__all__ = ["LowRankGaussian", "missing_patterns", "fit_low_rank_gaussian", "RESIDUAL_FLOOR"]
+
+#: Smallest sigma^2 as a fraction of the smallest variance along the directions (conditioning).
+RESIDUAL_FLOOR = 1e-3
 
 
 def missing_patterns(missing: np.ndarray):
@@ -86,12 +89,14 @@ class LowRankGaussian:
         transform : (D, K) array
             Orthogonal columns of norm 1 / sqrt(lambda_k) (directions divided by their spread).
         residual_variance : float
-            sigma^2 of the values outside the columns' span.
+            sigma^2 of the values outside the columns' span; floored at `RESIDUAL_FLOOR` times the
+            smallest lambda, which keeps the small solves well conditioned (with as many directions as
+            values sigma^2 changes nothing, and a spread that small is a fit's rounding, not the data).
         """
         transform = np.asarray(transform, dtype=np.float64)
         variances = 1.0 / (transform ** 2).sum(axis=0)
         return cls(np.asarray(mean, dtype=np.float64), transform * np.sqrt(variances), variances,
-                   float(residual_variance))
+                   max(float(residual_variance), RESIDUAL_FLOOR * float(variances.min())))
 
     def _pattern(self, missing: np.ndarray):
         """C = Q_O^T Q_O and N = sigma^2 I + C A of one missing pattern."""
@@ -205,5 +210,5 @@ def fit_low_rank_gaussian(x, n_components: int) -> LowRankGaussian:
     k = max(k, 1)
     left = variances[k:]
     residual = float(np.clip(left, 0.0, None).mean()) if left.size else 0.0
-    residual = max(residual, 1e-6 * float(variances[:k].min()), 1e-300)
+    residual = max(residual, RESIDUAL_FLOOR * float(variances[:k].min()), 1e-300)
     return LowRankGaussian(mean, vectors[:, :k], np.maximum(variances[:k], residual * (1 + 1e-9)), residual)
