@@ -77,7 +77,7 @@ class PinTrack:
         Columns 0..P-1 dx, P..2P-1 dy of the feature pins, px; NaN in the columns of a pin unseen
         for the whole contact, and everywhere for an invalid contact. None when no features were asked for.
     pins_seen : (contacts,) ndarray of int
-        Feature pins seen in at least one frame of each contact (of P).
+        Feature pins seen in at least one frame of each contact other than the rest frame (of P).
     valid : (contacts,) ndarray of bool
     errors : list of (pins.PinsError or None)
         Why each invalid contact is invalid (None for a valid one).
@@ -262,12 +262,17 @@ def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selec
         times = track.timestamps_s[begin:end]
         if not np.all(np.diff(times) > 0):
             times = None
-        seen[k] = seen_pins(displacements[begin:end], pins=selected).sum()
+        window = displacements[begin:end, selected]
+        # Seen = found in a frame of the contact other than the rest frame, whose displacement is 0 by
+        # construction: a pin lost in every other frame has no displacement to report, not a still one.
+        moving = np.arange(begin, begin + len(window)) != track.rest_frame
+        found = seen_pins(window[moving])
+        seen[k] = found.sum()
         try:
             if seen[k] < needed:
                 raise LostPinError(f"only {seen[k]} of {len(selected)} feature pins were seen in the contact; "
                                    f"its features need at least {needed}")
-            features[k] = tap_features(displacements[begin:end], pins=selected, n_samples=int(n_samples),
+            features[k] = tap_features(np.where(found[:, None], window, np.nan), n_samples=int(n_samples),
                                        timestamps_s=times)
         except PinsError as exc:  # too few pins seen, or a contact of a single frame
             valid[k], errors[k] = False, exc

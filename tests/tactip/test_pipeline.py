@@ -105,3 +105,29 @@ def test_a_contact_with_unseen_feature_pins_keeps_the_seen_ones_and_needs_half_o
         kept = np.setdiff1d(np.arange(pins), np.append(hidden, order[-1]))
         columns = np.concatenate([kept, kept + pins])
         np.testing.assert_array_equal(features[:, columns], complete[:, columns])
+
+
+def test_the_station_keeps_a_tap_whose_feature_pins_are_partly_unseen(sim_station, tap, monkeypatch):
+    # Three feature pins unseen after the rest frame (the tracker reports them lost in every later
+    # frame): the tap is no longer discarded, their columns are missing, the other pins' are unchanged.
+    import pins
+
+    frames, _ = tap
+    front_end = OpticalFrontEnd(sim_station.calibration, samples=40)
+    selected = np.asarray(sim_station.calibration.selected_pins)
+    clean = front_end.features(frames, None)
+    hidden = np.array([0, len(selected) // 2, len(selected) - 1])
+    update = pins.PinTracker.update
+
+    def losing(self, image):
+        moved = np.array(update(self, image), dtype=np.float64)
+        moved[selected[hidden]] = np.nan
+        return moved
+
+    monkeypatch.setattr(pins.PinTracker, "update", losing)
+    features = front_end.features(frames, None)
+    count = len(selected)
+    missing = np.zeros(2 * count, bool)
+    missing[np.concatenate([hidden, hidden + count])] = True
+    assert np.isnan(features[:, missing]).all() and np.isfinite(features[:, ~missing]).all()
+    np.testing.assert_array_equal(features[:, ~missing], clean[:, ~missing])
