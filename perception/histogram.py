@@ -15,8 +15,9 @@ A missing value s_k(j) (NaN) is marginalised: the dimensions are independent giv
 integrating the value out leaves sum_b P_k(b | c) = 1, a term log 1 = 0. The sum runs over the
 observed values only and keeps its divisor N_samples N_dims (the model's fixed tempering), so a tap
 missing some values is weaker evidence, never stronger; every class is scored on the same observed
-values. Training counts the observed values of each dimension (a dimension needs an observed value
-in every class, `perception.likelihood.fit_class_grid`).
+values. Training counts the observed values of each dimension; one never observed in some class is
+left out of every class (`perception.likelihood.learnable_taps`): uniform counts, the same constant
+for every class.
 
 Location classes are ``n_locations`` equal bins of the training locations; identity classes are
 the distinct training identities (`perception.likelihood.fit_class_grid`). Class c = l * n_identities + i, so a likelihood vector reshapes
@@ -38,7 +39,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
-from .likelihood import LikelihoodModel, fit_class_grid
+from .likelihood import LikelihoodModel, fit_class_grid, learnable_taps
 
 __all__ = ["DEFAULT_EPSILON", "HistogramModel", "fit_model", "histogram_log_probability"]
 
@@ -242,10 +243,14 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
     if not (np.isfinite(epsilon) and epsilon > 0):
         raise ValueError(f"epsilon must be a finite number > 0, got {epsilon}")
     grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
+    dataset = learnable_taps(grid, dataset)
     dims, bins = dataset.dims, int(bins)
-    values = dataset.taps.reshape(-1, dims)
-    bin_lower = np.nanmin(values, axis=0).astype(np.float64)  # over the observed values of each dimension
-    span = np.nanmax(values, axis=0) - bin_lower
+    values = dataset.taps.reshape(-1, dims).astype(np.float64)
+    # Over the observed values of each dimension (one never observed: any bins, it has no counts).
+    low = np.where(np.isnan(values), np.inf, values).min(axis=0)
+    high = np.where(np.isnan(values), -np.inf, values).max(axis=0)
+    bin_lower = np.where(np.isfinite(low), low, 0.0)
+    span = np.where(np.isfinite(high), high - bin_lower, 0.0)
     bin_width = np.where(span > 0, span / bins, 1.0)
     empty = HistogramModel(np.zeros((dims, bins, grid.n_classes), np.float32), bin_lower, bin_width,
                            grid.location_edges, grid.identities, grid.front_end, grid.samples, grid.dim_names,

@@ -42,7 +42,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
-from .likelihood import LikelihoodModel, fit_class_grid
+from .likelihood import LikelihoodModel, fit_class_grid, learnable_taps
 from .marginal import LowRankGaussian, fit_low_rank_gaussian
 from .tempering import check_tempering, cross_validation_folds, fit_tempering
 
@@ -267,7 +267,10 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
     except ImportError:
         raise ImportError("the torch model needs torch: pip install torch==2.13.0") from None
     grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
+    dataset = learnable_taps(grid, dataset)
     x = dataset.taps.reshape(len(dataset), -1).astype(np.float64)
+    never = np.isnan(x).all(axis=0)            # values left out of the model: their input weights are zeroed
+    x[:, never] = 0.0
     mean, scale = np.nanmean(x, axis=0), np.nanstd(x, axis=0)   # over the observed values
     scale = np.where(scale > 0, scale, 1.0)
     x = (x - mean) / scale
@@ -292,6 +295,7 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
     check_tempering(beta)
     (w1, b1, w2, b2), _, _ = _train(x, cls, grid.n_classes, hidden=hidden, epochs=best + 1,
                                     weight_decay=weight_decay, seed=seed)
+    w1[:, never] = 0.0   # a value never observed in training has no say, whatever a tap holds there
     return TorchModel(mean, scale, w1.T.astype(np.float32), b1.astype(np.float32), w2.T.astype(np.float32),
                       b2.astype(np.float32), float(beta), best + 1, grid.location_edges, grid.identities,
                       grid.front_end, grid.samples, grid.dim_names, grid.sensor, grid.location_unit,
