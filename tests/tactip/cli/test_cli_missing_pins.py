@@ -60,3 +60,15 @@ def test_taps_missing_5_of_40_pins_are_classified_as_well_as_complete_ones(tmp_p
     capsys.readouterr()
     assert np.mean(drops) <= 0.02 and max(drops) <= 0.04, drops
     assert np.mean(single) <= 0.05, single
+
+
+def test_train_says_which_dimension_it_leaves_out(tmp_path, capsys):
+    train = gap_dataset(seed=1, taps_per_class=4, **GRID)
+    taps = train.taps.copy()
+    rows = np.flatnonzero((train.location == 0) & (train.identity == 1))
+    taps[rows[:, None], :, [7, 47]] = np.nan                                      # pin 7 never seen in one class
+    save_dataset(tmp_path / "train.h5", Dataset(taps, train.location, train.identity, None, "tactip"))
+    assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "m.h5"), "--locations", "4"]) == 0
+    out = capsys.readouterr().out
+    assert "(4 with missing dims)" in out
+    assert "warning: 2 dimension(s) are never observed in the training taps of some class and are left out" in out
