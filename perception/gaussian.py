@@ -32,8 +32,8 @@ Sigma_OO^{-1} (x_O - mu_O), computed in the components' space, one small solve p
 (`perception.marginal`). With nothing missing G_O = I and z_O is the whitened tap: the formula above.
 Training imputes a missing value by the mean of that value over its class's observed taps (the
 components and covariance are fitted on the filled taps); held-out taps keep their NaN and are
-scored by the marginal. A value never observed in training is filled by 0: constant, it has no
-weight on the components and no say in any class (`perception.likelihood.learnable_taps`).
+scored by the marginal. A value a class never observed is filled by its mean over all the classes'
+taps (one never observed at all by 0: constant, it has no weight on the components).
 
 Example
 -------
@@ -50,7 +50,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
-from .likelihood import LikelihoodModel, fit_class_grid, learnable_taps
+from .likelihood import LikelihoodModel, fit_class_grid
 from .marginal import LowRankGaussian
 from .tempering import check_tempering, cross_validation_folds, decision_log_loss, fit_tempering
 
@@ -316,7 +316,6 @@ def fit_gaussian(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class:
     if not shrinkages or not all(0.0 <= s <= 1.0 for s in shrinkages):
         raise ValueError(f"shrinkages must be numbers in [0, 1], got {shrinkages}")
     grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
-    dataset = learnable_taps(grid, dataset)
     x = dataset.taps.reshape(len(dataset), -1).astype(np.float64)
     incomplete = np.isnan(x).any(axis=1)
     cls = grid.tap_class(dataset)

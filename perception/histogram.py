@@ -15,9 +15,9 @@ A missing value s_k(j) (NaN) is marginalised: the dimensions are independent giv
 integrating the value out leaves sum_b P_k(b | c) = 1, a term log 1 = 0. The sum runs over the
 observed values only and keeps its divisor N_samples N_dims (the model's fixed tempering), so a tap
 missing some values is weaker evidence, never stronger; every class is scored on the same observed
-values. Training counts the observed values of each dimension; one never observed in some class is
-left out of every class (`perception.likelihood.learnable_taps`): uniform counts, the same constant
-for every class.
+values. Training counts the observed values of each dimension; a class without any observed value
+of a dimension takes that dimension's counts pooled over all the classes (and a warning,
+`perception.likelihood.fit_class_grid`).
 
 Location classes are ``n_locations`` equal bins of the training locations; identity classes are
 the distinct training identities (`perception.likelihood.fit_class_grid`). Class c = l * n_identities + i, so a likelihood vector reshapes
@@ -39,7 +39,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
-from .likelihood import LikelihoodModel, fit_class_grid, learnable_taps
+from .likelihood import LikelihoodModel, fit_class_grid
 
 __all__ = ["DEFAULT_EPSILON", "HistogramModel", "fit_model", "histogram_log_probability"]
 
@@ -243,7 +243,6 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
     if not (np.isfinite(epsilon) and epsilon > 0):
         raise ValueError(f"epsilon must be a finite number > 0, got {epsilon}")
     grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
-    dataset = learnable_taps(grid, dataset)
     dims, bins = dataset.dims, int(bins)
     values = dataset.taps.reshape(-1, dims).astype(np.float64)
     # Over the observed values of each dimension (one never observed: any bins, it has no counts).
@@ -284,6 +283,10 @@ def histogram_log_probability(grid: HistogramModel, taps, tap_class) -> np.ndarr
         flat = ((tap_class[start:start + 4096, None, None] * dims + np.arange(dims)) * bins
                 + grid.bin_index(chunk)).ravel()
         counts += np.bincount(flat[~np.isnan(chunk).ravel()], minlength=counts.size).reshape(counts.shape)
+    # A class with taps but no observed value of a dimension: that dimension's counts over all the classes.
+    empty = (counts.sum(axis=2) == 0) & (np.bincount(tap_class, minlength=n_classes) > 0)[:, None]
+    if empty.any():
+        counts = np.where(empty[:, :, None], counts.sum(axis=0, keepdims=True), counts)
     # P_k(b|c) = (h(b,k,c) + eps) / sum_b (h(b,k,c) + eps)
     regularised = counts + grid.epsilon
     log_p = np.log(regularised) - np.log(regularised.sum(axis=2, keepdims=True))

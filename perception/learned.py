@@ -42,7 +42,7 @@ import numpy as np
 
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
-from .likelihood import LikelihoodModel, fit_class_grid, learnable_taps
+from .likelihood import LikelihoodModel, fit_class_grid
 from .marginal import LowRankGaussian, fit_low_rank_gaussian
 from .tempering import check_tempering, cross_validation_folds, fit_tempering
 
@@ -267,7 +267,6 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
     except ImportError:
         raise ImportError("the torch model needs torch: pip install torch==2.13.0") from None
     grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
-    dataset = learnable_taps(grid, dataset)
     x = dataset.taps.reshape(len(dataset), -1).astype(np.float64)
     never = np.isnan(x).all(axis=0)            # values left out of the model: their input weights are zeroed
     x[:, never] = 0.0

@@ -38,7 +38,7 @@ from .choices import POLICIES
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 
-__all__ = ["LikelihoodModel", "RECOMMENDED_KEYS", "ClassGrid", "fit_class_grid", "learnable_taps"]
+__all__ = ["LikelihoodModel", "RECOMMENDED_KEYS", "ClassGrid", "fit_class_grid"]
 
 #: Recommended settings a model may carry (written by ``tactip validate --sweep-fixation``).
 RECOMMENDED_KEYS = ("decision_threshold", "fixation_location", "policy")
@@ -372,46 +372,31 @@ def fit_class_grid(dataset: Dataset, *, n_locations: int = 11, min_taps_per_clas
                            f"taps, e.g. location {grid.location_centres[l]:g} {dataset.location_unit}, identity "
                            f"{identities[i]:g} {dataset.identity_unit} has {taps_per_class[few[0]]}; "
                            f"use fewer location classes")
+    _warn_unobserved(grid, dataset)
     return dataclasses.replace(grid, taps_per_class=taps_per_class.reshape(n_locations, len(identities)))
 
 
-def learnable_taps(grid: ClassGrid, dataset: Dataset) -> Dataset:
-    """The training taps with each dimension never observed in some class made missing in every tap.
+def _warn_unobserved(grid: ClassGrid, dataset: Dataset) -> None:
+    """Warn when a dimension has no observed value among the training taps of some class.
 
-    A dimension with no observed value among the training taps of a class (a pin unseen in every tap
-    of that class) has no likelihood there, and guessing one would favour or disfavour that class.
-    Every class is scored on the same dimensions only when the dimension is left out of them all: it
-    is then marginalised for every tap, and a warning names it. Every kind trains on these taps.
-
-    Parameters
-    ----------
-    grid : ClassGrid
-        The classes of ``dataset`` (`fit_class_grid`).
-    dataset : Dataset
-
-    Returns
-    -------
-    Dataset
-        ``dataset`` itself when every dimension is observed in every class.
+    Such a class has nothing to learn that dimension's distribution from; every kind then uses what
+    all the classes' taps say of it (the histogram counts pooled over the classes, the Gaussian's
+    overall mean, the network's imputation), so a tap's value there neither favours nor rules out
+    that class much. Taps of that class where the pin is seen are the cure.
     """
     if dataset.complete:
-        return dataset
+        return
     observed = (~np.isnan(dataset.taps)).any(axis=1).astype(np.int64)          # (N, dims)
     per_class = np.zeros((grid.n_classes, dataset.dims), np.int64)
     np.add.at(per_class, grid.tap_class(dataset), observed)
     never = np.argwhere(per_class == 0)
     if not never.size:
-        return dataset
+        return
     import warnings
 
     c, k = never[0]
     l, i = divmod(int(c), grid.n_identities)
-    left_out = np.unique(never[:, 1])
-    warnings.warn(f"{len(left_out)} dimension(s) are never observed in the training taps of some class and are left "
-                  f"out of the model (marginalised for every class), e.g. {dataset.dim_names[k]} at location "
-                  f"{grid.location_centres[l]:g} {dataset.location_unit}, identity {grid.identities[i]:g} "
-                  f"{dataset.identity_unit}: collect taps of those classes in which the pin is seen to use it",
-                  stacklevel=3)
-    taps = dataset.taps.copy()
-    taps[:, :, left_out] = np.nan
-    return dataclasses.replace(dataset, taps=taps)
+    warnings.warn(f"{len(never)} class and dimension pair(s) have no observed value in the training taps (e.g. "
+                  f"{dataset.dim_names[k]} at location {grid.location_centres[l]:g} {dataset.location_unit}, identity "
+                  f"{grid.identities[i]:g} {dataset.identity_unit}); those classes use the dimension's distribution "
+                  f"over all classes: collect taps of them in which the pin is seen", stacklevel=3)

@@ -51,12 +51,15 @@ def missing_patterns(missing: np.ndarray):
     missing = np.asarray(missing, dtype=bool)
     if len(missing) == 0:
         return
-    patterns, inverse = np.unique(missing, axis=0, return_inverse=True)
+    # One byte string per row (its bits packed), so that the rows are told apart by one 1-D unique.
+    packed = np.ascontiguousarray(np.packbits(missing, axis=1))
+    keys = packed.view(np.dtype((np.void, packed.shape[1]))).ravel()
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     inverse = inverse.reshape(-1)
     order = np.argsort(inverse, kind="stable")
-    bounds = np.searchsorted(inverse[order], np.arange(len(patterns) + 1))
-    for k, pattern in enumerate(patterns):
-        yield pattern, order[bounds[k]:bounds[k + 1]]
+    bounds = np.searchsorted(inverse[order], np.arange(len(first) + 1))
+    for k, row in enumerate(first):
+        yield missing[row], order[bounds[k]:bounds[k + 1]]
 
 
 @dataclass(frozen=True)
