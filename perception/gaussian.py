@@ -240,9 +240,12 @@ def _marginal_distances(mean, transform, class_means, residual_variance, x):
     out = np.empty((len(x), len(class_means)))
     for precision, rows in precisions:
         g = root[:, None] * precision * root                            # G_O
-        shared = np.einsum("nk,kn->n", h[rows], np.linalg.lstsq(g, h[rows].T, rcond=None)[0])
-        out[rows] = np.einsum("ck,kj,cj->c", class_means, g, class_means) - 2.0 * h[rows] @ class_means.T \
-            + shared[:, None]
+        try:
+            z = np.linalg.solve(g, h[rows].T)
+        except np.linalg.LinAlgError:  # fewer observed values than components: any solution, the term is shared
+            z = np.linalg.lstsq(g, h[rows].T, rcond=None)[0]
+        shared = (h[rows] * z.T).sum(axis=1)
+        out[rows] = ((class_means @ g) * class_means).sum(axis=1) - 2.0 * h[rows] @ class_means.T + shared[:, None]
     return out
 
 
