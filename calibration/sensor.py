@@ -4,14 +4,18 @@ A TacTip is calibrated off contact: a few rest frames are averaged (sensor noise
 1/sqrt(n)), the sensor disc is found, the pin field is found (`pins.find_pin_field`: the blobs
 that form the pin lattice, with detection parameters for later frames) and its count checked
 against the expected pin count, and the subset used as features is chosen (paper 002 III-A.3:
-40 pins at least 4 mm apart). The scale, mm per px, is the pad diameter over the disc diameter
-unless the caller measured it.
+40 pins at least 4 mm apart; on a pad where they cannot be, as far apart as it allows, by the rule
+replay uses: `pins.select_feature_pins`). The scale, mm per px, is the sensor's pin pitch in mm over
+the central pin pitch in px (`pins.sensor_scale`, the rule ``tactip detect`` and ``tactip replay``
+use too) unless the caller measured it.
 
 The calibration file is HDF5 (schema ``tactip-calibration/1``): datasets ``reference_pins``
 (N, 2) float64 px and ``selected_pins`` (P,) int; attributes ``schema``, ``detection`` (JSON of
 `pins.DetectionParams`), ``disc`` (cx, cy, radius px), ``mm_per_px``, ``expected_pins``,
 ``frame_size`` (width, height px), ``rest_frames``, ``min_separation_mm``, ``sensor`` (JSON),
-``created_at``.
+``created_at``; and, in files written since the scale comes from the pin pitch, ``scale`` (JSON:
+mm_per_px, pitch_px, pitch_mm, source, sensor) and ``separation_mm`` (the selected pins' smallest
+distance, mm).
 """
 
 from __future__ import annotations
@@ -25,8 +29,9 @@ from typing import Sequence
 import numpy as np
 
 from _shared import cut_short
-from pins import (DetectionParams, NoSensorError, PinsError, SensorDisc, as_grey, detect_pins, find_pin_field,
-                  find_sensor_disc, match_to_blobs, median_spacing_px, select_pins)
+from pins import (DetectionParams, NoSensorError, PinsError, SensorDescription, SensorDisc, as_grey, detect_pins,
+                  find_pin_field, find_sensor_disc, match_to_blobs, median_spacing_px, select_feature_pins,
+                  sensor_scale)
 
 from .errors import CalibrationError
 
@@ -62,6 +67,12 @@ class SensorCalibration:
         How many rest frames were averaged.
     sensor : dict
         Free description of the sensor (source, preset, serial ...).
+    scale : dict
+        How `mm_per_px` was derived (`pins.PadScale.to_dict`: mm_per_px, pitch_px, pitch_mm, source,
+        sensor); empty in files older than that.
+    separation_mm : float
+        Smallest distance between two selected pins, mm: `min_separation_mm` or more, less only on a
+        pad where the pins cannot be that far apart (NaN in older files).
     """
 
     detection: DetectionParams
@@ -74,6 +85,8 @@ class SensorCalibration:
     min_separation_mm: float = 4.0
     rest_frames: int = 1
     sensor: dict = field(default_factory=dict)
+    scale: dict = field(default_factory=dict)
+    separation_mm: float = float("nan")
 
     @property
     def n_selected(self) -> int:
@@ -81,16 +94,22 @@ class SensorCalibration:
         return int(len(self.selected_pins))
 
     def describe(self) -> str:
-        """One line for a person: pins found, pins selected, scale."""
+        """One line for a person: pins found, pins selected, scale and how it was derived."""
+        apart = f">= {self.min_separation_mm:g} mm apart"
+        if self.separation_mm < self.min_separation_mm * (1 - 1e-9):
+            apart = (f">= {self.separation_mm:.2f} mm apart (as far as the pad allows; "
+                     f"{self.min_separation_mm:g} mm asked)")
+        source = f" ({self.scale['source']})" if self.scale.get("source") else ""
         return (f"{len(self.reference_pins)} pins (expected {self.expected_pins}), {self.n_selected} selected "
-                f">= {self.min_separation_mm:g} mm apart, {self.mm_per_px:.4f} mm/px, disc r = "
+                f"{apart}, {self.mm_per_px:.4f} mm/px{source}, disc r = "
                 f"{self.disc.radius_px:.1f} px at ({self.disc.cx:.1f}, {self.disc.cy:.1f})")
 
 
-def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, pad_diameter_mm: float = 40.0,
+def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, pad_diameter_mm: float | None = None,
                      selected_pins: int = 40, min_separation_mm: float = 4.0, count_tolerance: float = 0.1,
                      mm_per_px: float | None = None, dark_pins: bool = False,
-                     sensor: dict | None = None) -> SensorCalibration:
+                     sensor: dict | None = None,
+                     description: str | SensorDescription | None = None) -> SensorCalibration:
     """Calibrate a TacTip from frames taken off contact.
 
     Parameters
@@ -98,9 +117,11 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
     rest_frames : sequence of (H, W) or (H, W, 3) uint8 arrays
         Frames with nothing touching the pad (averaged).
     expected_pins : int
-        The sensor's pin count; it confirms the pin field found (which does not depend on it).
-    pad_diameter_mm : float
-        Diameter of the pad, mm; gives the scale from the disc's diameter in px.
+        The sensor's pin count; it confirms the pin field found (which does not depend on it) and,
+        unless `description` says otherwise, is the pin count of the pin pitch in mm.
+    pad_diameter_mm : float, optional
+        Diameter of the hemispherical pad, mm, for the pin pitch in mm (default the description's,
+        else 40 mm, assumed).
     selected_pins : int
         How many feature pins to choose (paper: 40).
     min_separation_mm : float
@@ -109,11 +130,13 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
         Largest accepted relative difference between the pins found and `expected_pins` (0.1: 10 %;
         rim pins hidden by a rim ring or the image edge are usually a few %).
     mm_per_px : float, optional
-        A measured scale, mm per px, instead of the pad-diameter estimate.
+        A measured scale, mm per px, instead of the one from the pin pitch.
     dark_pins : bool
         Dark markers on a light membrane.
     sensor : dict, optional
         Description stored with the calibration.
+    description : str or pins.SensorDescription, optional
+        The sensor (a `pins.SENSOR_PRESETS` name), for the pin pitch in mm.
 
     Returns
     -------
@@ -123,7 +146,7 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
     ------
     CalibrationError
         No frames, frames of different sizes, no sensor disc in view, a pin count far from
-        expected, or too few pins far enough apart to select.
+        expected, fewer pins than `selected_pins`, or too few to measure the pin pitch.
     """
     if len(rest_frames) == 0:
         raise CalibrationError("no rest frames to calibrate from")
@@ -145,17 +168,22 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
             f"({field.count_error:+d}, {field.count_error / expected_pins:+.0%}, more than {count_tolerance:.0%} off); "
             f"is the pad touching something, the count ([sensor] pins) wrong, or the image out of focus?")
     params, reference = field.params, field.centres
-    scale = float(mm_per_px) if mm_per_px is not None else pad_diameter_mm / (2.0 * disc.radius_px)
     try:
-        chosen = select_pins(reference, n_pins=selected_pins, min_separation_mm=min_separation_mm, mm_per_px=scale,
-                             centre=(disc.cx, disc.cy))
+        scale = sensor_scale(reference, sensor=description, pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px,
+                             expected_pins=expected_pins)
     except PinsError as exc:
-        raise CalibrationError(f"cannot select the feature pins: {exc}") from None
+        raise CalibrationError(f"cannot derive the scale: {exc}") from None
+    if len(reference) < selected_pins:
+        raise CalibrationError(f"cannot select the feature pins: only {len(reference)} pins were found, "
+                               f"{selected_pins} asked; lower [sensor] selected_pins")
+    # As far apart as the pad allows when the pins cannot be min_separation_mm apart (replay's rule).
+    chosen = select_feature_pins(reference, n_pins=selected_pins, min_separation_mm=min_separation_mm,
+                                 mm_per_px=scale.mm_per_px, centre=(disc.cx, disc.cy))
     height, width = mean.shape
-    return SensorCalibration(detection=params, disc=disc, reference_pins=reference, selected_pins=np.asarray(chosen),
-                             mm_per_px=scale, expected_pins=int(expected_pins), frame_size=(width, height),
+    return SensorCalibration(detection=params, disc=disc, reference_pins=reference, selected_pins=chosen.indices,
+                             mm_per_px=scale.mm_per_px, expected_pins=int(expected_pins), frame_size=(width, height),
                              min_separation_mm=float(min_separation_mm), rest_frames=len(greys),
-                             sensor=dict(sensor or {}))
+                             sensor=dict(sensor or {}), scale=scale.to_dict(), separation_mm=chosen.separation_mm)
 
 
 def save_calibration(path: str | Path, calibration: SensorCalibration) -> None:
@@ -177,6 +205,8 @@ def save_calibration(path: str | Path, calibration: SensorCalibration) -> None:
         f.attrs["min_separation_mm"] = float(calibration.min_separation_mm)
         f.attrs["rest_frames"] = int(calibration.rest_frames)
         f.attrs["sensor"] = json.dumps(calibration.sensor)
+        f.attrs["scale"] = json.dumps(calibration.scale)
+        f.attrs["separation_mm"] = float(calibration.separation_mm)
         f.attrs["created_at"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
 
 
@@ -211,6 +241,8 @@ def load_calibration(path: str | Path) -> SensorCalibration:
                     min_separation_mm=float(f.attrs["min_separation_mm"]),
                     rest_frames=int(f.attrs["rest_frames"]),
                     sensor=json.loads(f.attrs["sensor"]),
+                    scale=json.loads(f.attrs.get("scale", "{}")),  # optional: older files lack these two
+                    separation_mm=float(f.attrs.get("separation_mm", np.nan)),
                 )
             except (TypeError, ValueError) as exc:  # JSON, numbers or shapes that are not what was written
                 raise CalibrationError(f"{path} holds unreadable settings ({' '.join(str(exc).split())}): a damaged "

@@ -8,11 +8,12 @@ from .disc import SensorDisc, as_grey, find_sensor_disc
 from .displacement import displacement_from_rest, displacement_magnitude, integrate_flow
 from .errors import NoSensorError, PinsError, ShapeError
 from .lattice import REJECTION_REASONS, PinField, draw_pin_field, find_pin_field
+from .contacts import CONTACT_KINDS, ContactKind, contact_kinds
 from .features import (LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, seen_pins,
                        tap_features)
-from .segment import converging_frames, segment_taps, tap_signal
-from .scale import (SENSOR_PRESETS, PadScale, SensorDescription, central_spacing_px, pad_scale, pin_pitch_mm,
-                    sensor_preset)
+from .segment import converging_frames, jitter_floor_px, segment_taps, tap_signal
+from .scale import (DEFAULT_PAD_DIAMETER_MM, SENSOR_PRESETS, PadScale, SensorDescription, central_spacing_px,
+                    pad_scale, pin_pitch_mm, sensor_preset, sensor_scale)
 from .select import PinSelection, median_spacing_px, select_feature_pins, select_pins
 from .track import LKParams, PinTracker, match_to_blobs, track_pins
 
@@ -25,7 +26,7 @@ __all__ = [
     "displacement_from_rest", "integrate_flow", "displacement_magnitude",
     "select_pins", "select_feature_pins", "PinSelection", "median_spacing_px",
     "pad_scale", "PadScale", "pin_pitch_mm", "central_spacing_px", "SensorDescription", "SENSOR_PRESETS",
-    "sensor_preset",
+    "sensor_preset", "sensor_scale", "DEFAULT_PAD_DIAMETER_MM",
     "feature_dim_names", "fill_lost", "resample_tap", "seen_pins", "tap_features", "TapRecorder",
-    "tap_signal", "segment_taps", "converging_frames",
+    "tap_signal", "segment_taps", "converging_frames", "jitter_floor_px", "contact_kinds", "ContactKind", "CONTACT_KINDS",
 ]

@@ -64,6 +64,7 @@ from scipy.spatial import cKDTree
 
 from .detect import Blobs, DetectionParams, _detect
 from .disc import SensorDisc, as_grey, find_sensor_disc
+from .scale import central_spacing_px
 
 __all__ = ["PinField", "find_pin_field", "REJECTION_REASONS", "draw_pin_field"]
 
@@ -149,7 +150,9 @@ class PinField:
         The sensor disc, px (the pins were searched inside it, or inside a black rim ring's inner
         edge when there is one).
     pitch_px : float
-        Median nearest-neighbour distance of the kept pins, px (nan with fewer than two).
+        The pin pitch, px: median nearest-neighbour distance of the kept pins near the field's centre
+        (`pins.central_spacing_px`, the pitch the scale `pins.pad_scale` divides by; nan with fewer
+        than two).
     rejected : (M, 2) ndarray of float64
         Centres of the candidate blobs rejected, px.
     rejected_reason : (M,) ndarray of str
@@ -187,10 +190,11 @@ class PinField:
         """How many blobs were rejected for each reason (every reason listed, zeros included)."""
         return {reason: int(np.count_nonzero(self.rejected_reason == reason)) for reason in REJECTION_REASONS}
 
-    def summary(self) -> str:
-        """One line for a person: pins kept, pitch, blobs rejected by reason, the count check."""
+    def summary(self, *, pitch: bool = True) -> str:
+        """One line for a person: pins kept, pitch (unless `pitch` is False: a summary that prints the
+        scale prints the pitch there), blobs rejected by reason, the count check."""
         rejected = ", ".join(f"{n} {reason}" for reason, n in self.rejected_counts().items() if n)
-        pitch = f", pitch {self.pitch_px:.1f} px" if np.isfinite(self.pitch_px) else ""
+        pitch = f", pitch {self.pitch_px:.1f} px" if pitch and np.isfinite(self.pitch_px) else ""
         line = f"{self.count} pins{pitch}; rejected {len(self.rejected)}"
         line += f" ({rejected})" if rejected else ""
         if self.expected_pins is not None:
@@ -283,7 +287,7 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     final = _final_params(runs[later], centres, disc, run.pitch, search.radius_px)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=disc,
-                    pitch_px=float(_median_nn(centres)), rejected=run.blobs.centres[~run.kept],
+                    pitch_px=central_spacing_px(centres), rejected=run.blobs.centres[~run.kept],
                     rejected_reason=np.array(REJECTION_REASONS, dtype=object)[run.reason[~run.kept]].astype(str),
                     expected_pins=None if expected_pins is None else int(expected_pins), count_error=count_error)
 

@@ -23,7 +23,10 @@ are pad-surface mm at the apex, the scale of the paper's "4 mm apart".
 
 Named sensors (`SENSOR_PRESETS`) give pin count, pad diameter and the field's extent in one word;
 `pad_scale` turns any of these (or an explicit ``mm_per_px``) into a `PadScale` that says how it
-was derived.
+was derived. `sensor_scale` is the one rule ``tactip detect``, ``tactip calibrate`` and ``tactip
+replay`` apply to a rest frame's pins (with their defaults: the pins on the pad are the sensor's, else
+the expected count, else the pins detected; the pad is 40 mm when nothing says otherwise), so the
+three agree on mm/px for the same frames.
 """
 
 from __future__ import annotations
@@ -38,9 +41,11 @@ from scipy.spatial import cKDTree
 from .errors import PinsError, ShapeError
 
 __all__ = ["SensorDescription", "SENSOR_PRESETS", "sensor_preset", "pin_pitch_mm", "central_spacing_px",
-           "PadScale", "pad_scale"]
+           "PadScale", "pad_scale", "sensor_scale", "DEFAULT_PAD_DIAMETER_MM"]
 
 FIELD_POLAR_DEG = 80.0
+#: Pad diameter assumed, mm, when nothing describes the sensor (the common TacTip; said in the scale's source).
+DEFAULT_PAD_DIAMETER_MM = 40.0
 # A count this much above a full hexagonal number is that number plus spurious detections.
 _OVERCOUNT = 0.03
 
@@ -129,6 +134,9 @@ SENSOR_PRESETS: dict[str, SensorDescription] = {d.name: d for d in (
     SensorDescription("brown-127", 127, 40.0, note="127-pin TacTip with a brown, low-contrast skin"),
     SensorDescription("radial-120", 120, 40.0, rings=7, spokes=17,
                       note="home-built TacTip: 7 rings x 17 spokes + a centre pin"),
+    SensorDescription("radial-led-120", 120, 40.0, rings=7, spokes=17,
+                      note="the home-built radial TacTip with 4 LED reflections inside the pad"),
+    SensorDescription("white-dark-331", 331, 40.0, note="331 white pins on a dark membrane in a dark casing"),
     SensorDescription("small-pad-100", 100, 40.0, note="100-pin pad, small in the image"),
     SensorDescription("dense-1000", 1000, 40.0, note="dense 1000-pin pad"),
 )}
@@ -202,8 +210,19 @@ class PadScale:
     sensor: dict
 
     def describe(self) -> str:
-        """One line: the scale and its derivation."""
-        return f"{self.mm_per_px:.4f} mm/px ({self.source})"
+        """One line: the scale and its derivation (with the central pin pitch, px, whenever measured)."""
+        source = self.source
+        if np.isfinite(self.pitch_px) and "px measured" not in source:
+            source += f"; central pin pitch {self.pitch_px:.2f} px"
+        return f"{self.mm_per_px:.4f} mm/px ({source})"
+
+    def to_dict(self) -> dict:
+        """JSON-ready: ``mm_per_px``, ``pitch_px``, ``pitch_mm`` (None when not known), ``source``, ``sensor``."""
+        def number(value: float):
+            return float(value) if np.isfinite(value) else None
+
+        return {"mm_per_px": float(self.mm_per_px), "pitch_px": number(self.pitch_px),
+                "pitch_mm": number(self.pitch_mm), "source": self.source, "sensor": dict(self.sensor)}
 
 
 def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | None = None,
@@ -272,7 +291,7 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
     what = f"{description.pins} pins{' detected' if counted else ''} on a {description.pad_diameter_mm:g} mm pad"
     if description.name:
         what = f"{description.name}: {what}"
-    source = f"pin pitch {pitch_mm:.3f} mm ({what}) / {pitch_px:.2f} px measured"
+    source = f"pin pitch {pitch_mm:.3f} mm ({what}) / central pin pitch {pitch_px:.2f} px measured"
     info = {"pins": description.pins, "pad_diameter_mm": description.pad_diameter_mm,
             "field_polar_deg": description.field_polar_deg, "pins_counted": counted}
     if description.spokes:
@@ -280,3 +299,54 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
     if description.name:
         info["name"] = description.name
     return PadScale(pitch_mm / pitch_px, pitch_px, pitch_mm, source, info)
+
+
+def sensor_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | None = None,
+                 pins_on_pad: int | None = None, pad_diameter_mm: float | None = None,
+                 mm_per_px: float | None = None, expected_pins: int | None = None) -> PadScale:
+    """The scale of a rest frame's pins as ``detect``, ``calibrate`` and ``replay`` all derive it.
+
+    `pad_scale` with their shared defaults: the pins on the whole pad are `pins_on_pad`, else the
+    sensor's, else `expected_pins`, else the pins detected; the pad is `pad_diameter_mm`, else the
+    sensor's, else `DEFAULT_PAD_DIAMETER_MM` (assumed, and the source says so).
+
+    Parameters
+    ----------
+    rest_positions : (N, 2) ndarray
+        Pin positions at rest, px (the pins the rest frame's pin field kept).
+    sensor : str or SensorDescription, optional
+        A `SENSOR_PRESETS` name or a description.
+    pins_on_pad : int, optional
+        Pins on the whole pad, in view or not.
+    pad_diameter_mm : float, optional
+    mm_per_px : float, optional
+        A measured scale: used as is.
+    expected_pins : int, optional
+        The count the user expects (``--expected-pins``, ``[sensor] pins``): the pins on the pad
+        when neither `pins_on_pad` nor `sensor` says.
+
+    Returns
+    -------
+    PadScale
+
+    Raises
+    ------
+    PinsError
+        Too few pins to measure the pitch from (when the scale is not given).
+
+    Examples
+    --------
+    >>> from tactip.sim import SyntheticTacTip
+    >>> scale = sensor_scale(SyntheticTacTip(pins=127, seed=0).rest_centres)
+    >>> scale.pitch_mm, scale.sensor["pins_counted"], "pad diameter assumed" in scale.source
+    (4.654..., True, True)
+    """
+    pins = pins_on_pad if pins_on_pad is not None or sensor is not None else expected_pins
+    assumed = sensor is None and pad_diameter_mm is None and mm_per_px is None
+    scale = pad_scale(rest_positions, sensor=sensor, pins=pins, mm_per_px=mm_per_px,
+                      pad_diameter_mm=DEFAULT_PAD_DIAMETER_MM if assumed else pad_diameter_mm)
+    if assumed:
+        scale = dataclasses.replace(scale, source=f"{scale.source}; pad diameter assumed "
+                                                  f"({DEFAULT_PAD_DIAMETER_MM:g} mm): describe the sensor "
+                                                  f"(its name or pad diameter)")
+    return scale

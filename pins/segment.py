@@ -17,7 +17,7 @@ from scipy import ndimage
 from .displacement import displacement_magnitude
 from .errors import ShapeError
 
-__all__ = ["tap_signal", "segment_taps", "converging_frames"]
+__all__ = ["tap_signal", "segment_taps", "converging_frames", "jitter_floor_px"]
 
 
 def tap_signal(displacements: np.ndarray, *, percentile: float = 90.0) -> np.ndarray:
@@ -177,3 +177,52 @@ def converging_frames(displacements: np.ndarray, rest_positions: np.ndarray, *, 
     elif np.shape(signal) != (len(data),):
         raise ShapeError(f"signal must have shape ({len(data)},), got {np.shape(signal)}")
     return np.flatnonzero((score < cosine) & (signal > high_px))
+
+
+def jitter_floor_px(displacements: np.ndarray, *, usable: np.ndarray | None = None) -> float:
+    """The tap signal of a still pad, px, estimated from the pins' frame-to-frame jitter.
+
+    Tracking noise of standard deviation sigma per axis, white in time, gives second differences
+    ``d[t+1] - 2 d[t] + d[t-1]`` of standard deviation ``sqrt(6) sigma`` per axis, whose magnitude's
+    median over the pins is ``1.18 sqrt(6) sigma``; smooth contact motion adds little to them. A
+    still pad's tap signal (the 90th percentile over pins of ``|d|``, each pin's rest position
+    carrying the same noise) is then ``2.15 sqrt(2) sigma``, about 1.05 times that median. The
+    frames' medians are summarised by their 25th percentile, so that fast motion in a few frames
+    does not count. Needs no quiet frames, unlike a percentile of the tap signal itself.
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from rest, px; NaN where lost (ignored).
+    usable : (T,) ndarray of bool, optional
+        Frames to measure on (tracked, not blank); all by default. A second difference needs its
+        three frames usable.
+
+    Returns
+    -------
+    floor : float
+        px; infinite when fewer than three consecutive usable frames exist.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> still = rng.normal(0.0, 0.1, (200, 300, 2))          # sigma 0.1 px per axis, no contact
+    >>> round(jitter_floor_px(still), 2), round(float(np.median(tap_signal(still - still[0]))), 2)
+    (0.29, 0.3)
+    """
+    data = np.asarray(displacements, dtype=np.float64)
+    if data.ndim != 3 or data.shape[2] != 2:
+        raise ShapeError(f"displacements must have shape (T, N, 2), got {data.shape}")
+    if len(data) < 3:
+        return float("inf")
+    second = data[2:] - 2.0 * data[1:-1] + data[:-2]
+    jitter = np.hypot(second[..., 0], second[..., 1])
+    if usable is not None:
+        usable = np.asarray(usable, dtype=bool)
+        jitter = jitter[usable[2:] & usable[1:-1] & usable[:-2]]
+    finite = np.isfinite(jitter)
+    rows = finite.any(axis=1)
+    if not rows.any():
+        return float("inf")
+    medians = np.nanmedian(np.where(finite[rows], jitter[rows], np.nan), axis=1)
+    return 1.05 * float(np.percentile(medians, 25))

@@ -3,6 +3,10 @@ count, reference pins and the feature-pin subset, written to the calibration fil
 
 The arm lifts the pad clear of the part (above the first gap) while the rest frames are taken.
 The file goes to [sensor] calibration, or DATA_DIR/calibration.h5; collect and inspect read it.
+The scale (mm/px) is derived as `tactip detect` and `tactip replay` derive it: the pin pitch of
+[sensor] pins on a pad of [sensor] pad_diameter_mm over the central pin pitch in px (the summary says
+so). Feature pins that cannot be [sensor] min_separation_mm apart are taken as far apart as the pad
+allows, as replay takes them, and the summary gives the separation reached.
 Refuses with a clear message when the frame shows no sensor or the pin count is far from [sensor] pins.
 
 Examples:

@@ -7,8 +7,14 @@ being told the pin count. The other blobs are rejected and counted by reason: "o
 pins), "size" and "contrast" (unlike their neighbours). With --expected-pins the count only
 confirms the result: the summary says how far off it is (a warning when more than 10 % off).
 
+The scale (mm/px) is derived as ``tactip calibrate`` and ``tactip replay`` derive it (`pins.sensor_scale`):
+the sensor's pin pitch in mm (--sensor, or --pins-on-pad / --expected-pins / the pins found on a pad of
+--pad-diameter-mm, default 40) over the central pin pitch in px (the median nearest-neighbour distance of
+the pins near the field's centre; the one pitch printed). The summary says how it was derived.
+
 With --json the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
-"rejected": [[x, y, "reason"], ...]} in px (x to the right, y down), plus "expected_pins" and
+"rejected": [[x, y, "reason"], ...], "scale": {"mm_per_px", "pitch_px", "pitch_mm", "source", "sensor"}}
+in px (x to the right, y down; "scale" is null with fewer than two pins), plus "expected_pins" and
 "count_error" (found minus expected) with --expected-pins.
 
 With --annotate OUT.png a picture is written: kept pins in green, rejected blobs as crosses
@@ -19,6 +25,7 @@ Examples:
   tactip detect samples/synthetic_frame.png
   tactip detect frame.png --expected-pins 331 --annotate out/frame_pins.png
   tactip detect frame.png --dark-pins --json
+  tactip detect frame.png --sensor radial-120
 """
 
 from __future__ import annotations
@@ -27,6 +34,7 @@ import argparse
 import json
 import sys
 
+from tactip.cli._scale import add_scale_arguments
 from tactip.cli._types import output_file, positive_int
 
 HELP = "find the pin field in one image (pins kept, blobs rejected and why; optional count check)"
@@ -47,9 +55,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dark-pins", action="store_true", help="dark markers on a light membrane")
     parser.add_argument("--json", action="store_true",
                         help='print {"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": '
-                             '[[x, y, "reason"], ...]} (px)')
+                             '[[x, y, "reason"], ...], "scale": {"mm_per_px": s, "source": "how", ...}} (px)')
     parser.add_argument("--annotate", type=output_file, metavar="OUT.png",
                         help="also write a picture: kept pins green, rejected blobs coloured by reason, legend")
+    add_scale_arguments(parser)  # --sensor, --pins-on-pad, --pad-diameter-mm, --mm-per-px (as tactip replay)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -68,6 +77,9 @@ def run(args: argparse.Namespace) -> int:
             raise SourceError(f"{args.image!r} is a folder of {len(source)} images; give one image file")
         image = source.read().image
     field = find_pin_field(image, expected_pins=args.expected_pins, dark_pins=args.dark_pins)
+    scale = _scale(args, field)
+    reason = scale if isinstance(scale, str) else ""
+    scale = None if reason else scale
     if args.annotate:
         import cv2
 
@@ -84,12 +96,13 @@ def run(args: argparse.Namespace) -> int:
         data = {"count": field.count, "pins": [[round(x, 3), round(y, 3)] for x, y in field.centres.tolist()],
                 "pitch_px": None if field.count < 2 else round(field.pitch_px, 3),
                 "rejected": [[round(float(x), 3), round(float(y), 3), str(reason)]
-                             for (x, y), reason in zip(field.rejected, field.rejected_reason)]}
+                             for (x, y), reason in zip(field.rejected, field.rejected_reason)],
+                "scale": None if scale is None else scale.to_dict()}
         if args.expected_pins:
             data.update(expected_pins=field.expected_pins, count_error=field.count_error)
         print(json.dumps(data))
     else:
-        _print_summary(args, field)
+        _print_summary(args, field, scale, reason)
     if args.expected_pins and abs(field.count_error) > _COUNT_WARNING * args.expected_pins:
         why = ("pins hidden or out of focus, something touching the pad, or a wrong count?" if field.count_error < 0
                else "is the count right?")
@@ -98,14 +111,29 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print_summary(args: argparse.Namespace, field) -> None:
+def _scale(args: argparse.Namespace, field):
+    """The scale of the pins found (`pins.PadScale`), by the rule calibrate and replay use; else why not (str)."""
+    from pins import PinsError, sensor_scale
+
+    try:
+        return sensor_scale(field.centres, sensor=args.sensor, pins_on_pad=args.pins_on_pad,
+                            pad_diameter_mm=args.pad_diameter_mm, mm_per_px=args.mm_per_px,
+                            expected_pins=args.expected_pins)
+    except (PinsError, ValueError) as exc:  # too few pins to measure the pitch on, or a count below one ring
+        return " ".join(str(exc).split())
+
+
+def _print_summary(args: argparse.Namespace, field, scale, reason: str) -> None:
     disc, params = field.field_disc, field.params
     print(f"{field.count} pins in {args.image} (pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
           f"radius {disc.radius_px:.1f} px)")
     if field.count:
         low, high = field.centres.min(axis=0), field.centres.max(axis=0)
-        pitch = f", pitch {field.pitch_px:.1f} px" if field.count > 1 else ""
-        print(f"x {low[0]:.1f}..{high[0]:.1f} px, y {low[1]:.1f}..{high[1]:.1f} px{pitch}")
+        print(f"x {low[0]:.1f}..{high[0]:.1f} px, y {low[1]:.1f}..{high[1]:.1f} px")
+    if scale is not None:  # the pitch is printed here, in the scale's derivation
+        print(f"scale {scale.describe()}")
+    else:
+        print(f"scale: none ({reason})")
     counts = field.rejected_counts()
     detail = ", ".join(f"{n} {reason}" for reason, n in counts.items() if n)
     print(f"rejected {len(field.rejected)} blobs" + (f": {detail}" if detail else ""))

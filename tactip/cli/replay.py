@@ -34,6 +34,7 @@ import argparse
 import math
 
 from _shared.ranges import MAX_SAMPLES
+from tactip.cli._scale import add_scale_arguments, pin_count
 from tactip.cli._types import (float_in_range, int_in_range, non_negative_float, non_negative_int,
                                output_file)
 
@@ -50,20 +51,13 @@ def _finite(parse):
     return finite
 
 
-def _pin_count(text: str) -> int:
-    """An argparse type: a pin count of at least one ring and at most a dense pad (7..2000)."""
-    return int_in_range(7, 2000)(text)
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``tactip replay``."""
-    from pins import SENSOR_PRESETS
-
     parser.add_argument("video", metavar="VIDEO", help="video file (or folder of frames) to replay")
     parser.add_argument("--out", type=output_file, required=True, metavar="RESULT.h5", help="HDF5 file to write")
     parser.add_argument("--annotate", type=output_file, metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
-    parser.add_argument("--expected-pins", type=_pin_count, metavar="N",
+    parser.add_argument("--expected-pins", type=pin_count, metavar="N",
                         help="pins expected in view on the rest frame: confirms the pin field found there (the summary says "
                         "how far off it is) and is the default of --pins-on-pad")
     parser.add_argument("--samples", type=int_in_range(1, MAX_SAMPLES), default=40, metavar="N",
@@ -73,18 +67,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--min-separation-mm", type=_finite(non_negative_float), default=4.0, metavar="MM",
                         help="preferred distance between selected pins, mm; a pad without room for --pins pins "
                         "this far apart gets them as far apart as it allows (default: 4)")
-    parser.add_argument("--sensor", choices=sorted(SENSOR_PRESETS), metavar="NAME",
-                        help="the sensor, for the scale from its pin pitch: "
-                        + "; ".join(f"{d.name} ({d.pins} pins, {d.pad_diameter_mm:g} mm pad)"
-                                    for d in SENSOR_PRESETS.values()))
-    parser.add_argument("--pins-on-pad", type=_pin_count, metavar="N",
-                        help="pins on the whole pad, in view or not, for the pin pitch (default: the sensor's, "
-                        "else --expected-pins, else the pins detected)")
-    parser.add_argument("--pad-diameter-mm", type=float_in_range(0, 500, low_open=True, unit="mm"), metavar="MM",
-                        help="diameter of the hemispherical pad, mm, for the pin pitch (default: the sensor's, "
-                        "else 40)")
-    parser.add_argument("--mm-per-px", type=float_in_range(0, 10, low_open=True, unit="mm/px"), metavar="MM",
-                        help="image scale at the pad, mm per px, instead of the one from the pin pitch")
+    add_scale_arguments(parser)  # --sensor, --pins-on-pad, --pad-diameter-mm, --mm-per-px (as tactip detect)
     parser.add_argument("--rest-frame", type=non_negative_int, default=0, metavar="N",
                         help="index of the rest frame, off contact (default: 0, the first frame); one that looks "
                         "taken during a tap is reported")

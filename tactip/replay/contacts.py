@@ -10,13 +10,12 @@ import dataclasses
 import numpy as np
 from scipy import ndimage
 
-from pins import PadScale, PinSelection, PinsError, pad_scale, segment_taps, select_feature_pins, tap_signal
+from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, contact_kinds, jitter_floor_px,
+                  segment_taps, select_feature_pins, sensor_scale, tap_signal)
 
 from tactip.pipeline import PinTrack
 
 __all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "tap_thresholds_px"]
-
-DEFAULT_PAD_DIAMETER_MM = 40.0
 # Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
 REFERENCE_PITCH_PX = 17.5
 
@@ -71,7 +70,10 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
 
     Returns a dict: ``scale`` (`pins.PadScale` or None with a calibration), ``mm_per_px``,
     ``selection`` (`pins.PinSelection` or None), ``selected`` (P,) pin indices, ``bounds`` (the
-    contacts, [start, stop) frames), ``warnings`` and ``tap_thresholds_px`` (high, low).
+    contacts, [start, stop) frames), ``kinds`` (a `pins.ContactKind` per contact: press or slide and
+    its direction), ``warnings`` and ``tap_thresholds_px`` (high, low).
+
+    Contacts separated by any rest are separate, however short the rest: no quiet frame is bridged.
     """
     warnings = list(track.warnings)
     rest, disc, displacements = track.rest_positions, track.disc, track.displacements
@@ -84,19 +86,15 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     if calibration is not None:
         scale_mm_per_px, selected = float(calibration.mm_per_px), np.asarray(calibration.selected_pins)
     else:
-        pad = pad_diameter_mm if pad_diameter_mm is not None or sensor is not None else DEFAULT_PAD_DIAMETER_MM
-        count = pins_on_pad if pins_on_pad is not None or sensor is not None else expected_pins
-        try:
-            scale = pad_scale(rest, sensor=sensor, pins=count, pad_diameter_mm=pad, mm_per_px=mm_per_px)
+        try:  # the rule detect and calibrate apply too
+            scale = sensor_scale(rest, sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
+                                 mm_per_px=mm_per_px, expected_pins=expected_pins)
         except (PinsError, ValueError) as exc:
-            fallback = (pad or DEFAULT_PAD_DIAMETER_MM) / (2.0 * disc.radius_px)
-            scale = PadScale(fallback, float("nan"), float("nan"),
-                             f"pad diameter {pad or DEFAULT_PAD_DIAMETER_MM:g} mm / disc diameter "
-                             f"{2 * disc.radius_px:.1f} px", {"pad_diameter_mm": pad or DEFAULT_PAD_DIAMETER_MM})
+            pad = pad_diameter_mm or DEFAULT_PAD_DIAMETER_MM
+            scale = PadScale(pad / (2.0 * disc.radius_px), float("nan"), float("nan"),
+                             f"pad diameter {pad:g} mm / disc diameter {2 * disc.radius_px:.1f} px",
+                             {"pad_diameter_mm": pad})
             warnings.append(f"the scale could not come from the pin pitch ({exc}); the disc's diameter was used")
-        if sensor is None and pad_diameter_mm is None and mm_per_px is None:
-            scale = dataclasses.replace(scale, source=f"{scale.source}; pad diameter assumed, describe the sensor "
-                                                      f"with --sensor or --pad-diameter-mm")
         scale_mm_per_px = scale.mm_per_px
         try:
             selection = _select(track, n_pins=n_pins, min_separation_mm=min_separation_mm, mm_per_px=scale_mm_per_px)
@@ -114,18 +112,19 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
             warnings.append(check)
     except (PinsError, ValueError) as exc:
         warnings.append(f"the rest frame could not be checked ({exc})")
-    bounds = []
+    bounds, kinds = [], []
     high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px,
                                         usable=track.tracked & ~track.blank, signal=signal)
     try:
-        bounds = segment_taps(signal, high_px=high_px, low_px=low_px)
+        bounds = segment_taps(_bridge_blank(signal, track.blank), high_px=high_px, low_px=low_px, merge_gap_frames=0)
+        kinds = contact_kinds(displacements, bounds)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")
     except (PinsError, ValueError) as exc:
         warnings.append(f"no tap features ({exc})")
     return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
-                bounds=bounds, warnings=warnings, tap_thresholds_px=(high_px, low_px))
+                bounds=bounds, kinds=kinds, warnings=warnings, tap_thresholds_px=(high_px, low_px))
 
 
 def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None,
@@ -135,7 +134,8 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
     The defaults (1.5 and 0.5 px) fit a pad whose pins are about `REFERENCE_PITCH_PX` apart in the
     image; on a pad seen smaller (a small pad, a low resolution) the pins move proportionally less
     and the thresholds shrink with the pitch (never grow), but stay above the tracking noise: the
-    low threshold at least twice the quiet frames' tap signal (its 10th percentile).
+    low threshold at least twice the tap signal of a still pad (the lower of the frames' 10th
+    percentile and the signal the pins' frame-to-frame jitter gives, `pins.jitter_floor_px`).
 
     Parameters
     ----------
@@ -151,11 +151,24 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
     factor = min(1.0, spacing_px / REFERENCE_PITCH_PX) if np.isfinite(spacing_px) and spacing_px > 0 else 1.0
     if signal is None:
         signal = tap_signal(displacements)
-    if usable is not None:
-        signal = signal[usable]
-    floor = float(np.percentile(signal, 10)) if signal.size else 0.0
+    quiet = signal if usable is None else signal[usable]
+    floor = float(np.percentile(quiet, 10)) if quiet.size else 0.0
+    # A recording that is mostly contact (slides with short rests between them) has few quiet frames
+    # to measure the floor on: the noise is also measured from the frame-to-frame jitter of the pins
+    # (`pins.jitter_floor_px`), which contact does not raise, and the lower of the two is kept.
+    floor = min(floor, jitter_floor_px(displacements, usable=usable))
     low = max(0.5 * factor, 2.0 * floor)
     return max(1.5 * factor, 2.0 * low), low
+
+
+def _bridge_blank(signal: np.ndarray, blank: np.ndarray) -> np.ndarray:
+    """The tap signal with blank frames (nothing seen: no rest either) interpolated from their neighbours, px."""
+    seen = np.flatnonzero(~blank)
+    if not blank.any() or not seen.size:
+        return signal
+    bridged = signal.copy()
+    bridged[blank] = np.interp(np.flatnonzero(blank), seen, signal[seen])
+    return bridged
 
 
 def _select(track: PinTrack, *, n_pins: int, min_separation_mm: float, mm_per_px: float) -> PinSelection:

@@ -31,7 +31,9 @@ The HDF5 file (format ``tactip-replay/2``) holds:
 - ``timestamps`` float64 (frames,): s;  ``rest_positions`` float64 (pins, 2): px;
 - ``selected_pins`` int (P,): indices of the tactile pins, in selection order (attributes
   ``requested``, ``min_separation_mm`` asked, ``separation_mm`` reached);
-- ``tap_bounds`` int (taps, 2): [start, stop) frame indices;
+- ``tap_bounds`` int (taps, 2): [start, stop) frame indices of the contacts (any rest separates two);
+  ``tap_kinds`` bytes (taps,): ``press`` or ``slide``; ``tap_directions_deg`` (taps,): a slide's direction
+  (degrees from image x towards image y), NaN for a press (`pins.contact_kinds`);
 - ``taps`` float32 (taps, samples, 2 P) when taps were found: columns 0..P-1 dx, P..2P-1 dy of the
   selected pins (``feature_names`` attribute), NaN in the columns of a pin unseen for the whole tap;
   ``tap_pins_seen`` int (taps,), of P (``of``); ``tap_valid`` bool (taps,): False below P / 2 seen (NaN);
@@ -65,137 +67,20 @@ import contextlib
 import math
 import os
 import pathlib
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
-from pins import DetectionParams, NoSensorError, PadScale, PinSelection, PinsError, PinTracker, SensorDisc, find_pin_field
+from pins import DetectionParams, NoSensorError, PinsError, PinTracker, find_pin_field
 
 from tactip._output import check_video_written, claim_output, refuse_overwriting_inputs, write_error
 from tactip.errors import ConfigError, SourceError
 from tactip.pipeline import frames_to_features
 from tactip.replay.contacts import analyse, check_rest_frame
+from tactip.replay.result import ReplayResult
 from tactip.replay.writers import FORMAT, write_annotated, write_hdf5
 
 __all__ = ["ReplayResult", "replay_video", "FORMAT", "check_rest_frame"]
 
-
-
-@dataclass(frozen=True)
-class ReplayResult:
-    """What a replay found (the arrays are in the HDF5 file).
-
-    Attributes
-    ----------
-    out_path, annotate_path : pathlib.Path, pathlib.Path or None
-    video : str
-    frames, pins : int
-        Frames read; pins tracked.
-    frame_rate : float or None
-    lost_per_frame, retired_per_frame : (frames,) ndarray of int
-        Pins lost (retired included) and retired in each frame (all pins before the rest frame
-        and in blank frames).
-    blank_frames : list of int
-        Frames with nothing trackable (all pins lost), after the rest frame.
-    rest_frame : int
-    tap_bounds : list of (start, stop)
-    invalid_taps, pins_seen : list of int
-        Taps whose features are NaN (fewer than half the selected pins seen); selected pins seen per tap.
-    selected_pins : (P,) ndarray of int
-    selection : pins.PinSelection or None
-        How the feature pins were chosen (None with a calibration, or when selection failed).
-    mm_per_px : float
-    scale : pins.PadScale or None
-        How the scale was derived (None with a calibration).
-    disc : SensorDisc
-    detection : DetectionParams
-    pins_detected : int
-        Pins found in the rest frame.
-    pin_field : str
-        The rest frame's pin field: pins kept, pitch, blobs rejected and why (`pins.PinField.summary`).
-    expected_pins : int or None
-    warnings : list of str
-        What did not go as asked (also in the file).
-    decisions : tactip.replay.decisions.ReplayDecisions or None
-        The decision, when a model was given.
-    """
-
-    out_path: pathlib.Path
-    annotate_path: pathlib.Path | None
-    video: str
-    frames: int
-    pins: int
-    frame_rate: float | None
-    lost_per_frame: np.ndarray
-    retired_per_frame: np.ndarray
-    blank_frames: list
-    rest_frame: int
-    tap_bounds: list
-    invalid_taps: list
-    selected_pins: np.ndarray
-    selection: PinSelection | None
-    mm_per_px: float
-    scale: PadScale | None
-    disc: SensorDisc
-    detection: DetectionParams
-    pins_detected: int
-    pin_field: str = ""
-    expected_pins: int | None = None
-    warnings: list = field(default_factory=list)
-    decisions: Any = None
-    pins_seen: list = field(default_factory=list)
-
-    @property
-    def lost_pin_frames(self) -> int:
-        """Pin-frames flagged lost after the rest frame (blank frames included)."""
-        return int(self.lost_per_frame[self.rest_frame:].sum())
-
-    def summary(self) -> str:
-        """A few readable lines: frames, pins, scale, lost and retired pins, taps, warnings, files."""
-        rate = f" at {self.frame_rate:g} fps" if self.frame_rate else ""
-        taps = ", ".join(f"{a}-{b - 1}" for a, b in self.tap_bounds) or "none"
-        detected = f"rest frame {self.rest_frame}: {self.pin_field or f'{self.pins_detected} pins'}"
-        if self.expected_pins and "expected" not in self.pin_field:
-            off = self.pins_detected - self.expected_pins
-            detected += f", {self.expected_pins} expected ({off:+d}, {off / self.expected_pins:+.1%})"
-        scale = self.scale.describe() if self.scale is not None else f"{self.mm_per_px:.4f} mm/px (calibration)"
-        lines = [
-            f"Replayed {self.video}: {self.frames} frames{rate}",
-            f"Pins: {self.pins} tracked ({detected}); disc radius {self.disc.radius_px:.1f} px",
-            f"Scale: {scale}",
-            self._losses(),
-            f"Taps: {len(self.tap_bounds)} (frames {taps}); features of "
-            + (self.selection.describe() if self.selection is not None else f"{len(self.selected_pins)} pins"),
-        ]
-        if self.pins_seen:
-            lines[-1] += f"; pins seen {min(self.pins_seen)}/{len(self.selected_pins)} in the poorest tap"
-        lines += [f"Warning: {w}" for w in self.warnings]
-        if self.invalid_taps:
-            lines.append(f"Warning: taps {self.invalid_taps} have fewer than half the selected pins seen (features NaN)")
-        if self.decisions is not None:
-            lines += self.decisions.lines()
-        written = [str(self.out_path)] + ([str(self.annotate_path)] if self.annotate_path else [])
-        lines.append("Wrote " + " and ".join(written))
-        return "\n".join(lines)
-
-    def _losses(self) -> str:
-        """Lost and retired pins per tracked frame (blank frames apart), and the blank frames."""
-        tracked = np.arange(self.frames) >= self.rest_frame
-        tracked[self.blank_frames] = False
-        lost, retired = self.lost_per_frame[tracked], self.retired_per_frame[tracked]
-        if lost.size == 0:
-            text = "Lost pins: no tracked frame"
-        else:
-            worst = np.flatnonzero(tracked)[np.argsort(-lost, kind="stable")[:3]]
-            worst = [int(f) for f in worst if self.lost_per_frame[f] > 0]
-            text = (f"Lost pins per frame (retired included): median {np.median(lost):g}, max {lost.max()} of {self.pins}"
-                    + (f" (frames {', '.join(map(str, worst))})" if worst else "")
-                    + f"; retired: median {np.median(retired):g}, max {retired.max()}")
-        if self.blank_frames:
-            shown = ", ".join(map(str, self.blank_frames[:10])) + (" ..." if len(self.blank_frames) > 10 else "")
-            text += f"; {len(self.blank_frames)} blank frame(s) (nothing trackable, pins NaN): {shown}"
-        return text
 
 
 def _decode_threads() -> int:
@@ -403,6 +288,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         mm_per_px=float(analysis["mm_per_px"]), scale=scale, disc=track.disc,
                         detection=track.detection, pins_detected=track.pins_detected, pin_field=track.pin_field,
                         expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions,
+                        contact_kinds=list(analysis.get("kinds", [])),
                         pins_seen=[int(n) for n in track.pins_seen])
 
 
@@ -497,4 +383,4 @@ def _start(image, *, params, expected_pins, calibration, warnings):
                         "assumed (--dark-pins)")
     tracker = PinTracker(detection=field.params, disc=field.disc)
     rest = tracker.start(image, field.centres)
-    return tracker, rest, field.count, field.params, field.summary()
+    return tracker, rest, field.count, field.params, field.summary(pitch=False)  # the pitch: on the scale's line

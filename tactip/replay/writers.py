@@ -56,6 +56,10 @@ def write_hdf5(path, track: PinTrack, analysis: dict, settings: dict, decisions=
                                    "separation_mm": selection.separation_mm, "warning": selection.warning})
         bounds = analysis["bounds"]
         h5.create_dataset("tap_bounds", data=np.asarray(bounds, dtype=np.int64).reshape(-1, 2))
+        kinds = analysis.get("kinds", [])
+        h5.create_dataset("tap_kinds", data=np.array([k.kind for k in kinds], dtype="S5"))
+        directions = h5.create_dataset("tap_directions_deg", data=np.array([k.direction_deg for k in kinds], float))
+        directions.attrs["units"] = "degrees from image x towards image y; NaN for a press"
         if track.features is not None and len(track.contacts):
             dataset = h5.create_dataset("taps", data=track.features.astype(np.float32))
             dataset.attrs["feature_names"] = json.dumps(feature_dim_names(len(analysis["selected"])))

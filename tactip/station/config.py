@@ -8,7 +8,9 @@ Tables (see ``samples/station_sim.toml`` for a documented example):
 ``[sensor]``
     ``source`` (``"synthetic"``, a camera index such as ``0``, ``/dev/videoN``, or a video file);
     ``pins`` (expected pin count / synthetic preset); ``pad_diameter_mm``; ``frame_rate`` (frames/s);
-    ``calibration`` (file written by ``tactip calibrate``); ``selected_pins``; ``min_separation_mm``.
+    ``calibration`` (file written by ``tactip calibrate``); ``selected_pins``; ``min_separation_mm``;
+    ``preset`` (optional: a named sensor of ``pins.SENSOR_PRESETS``, e.g. ``"radial-120"``, whose pin
+    layout gives the pin pitch of the scale, as ``tactip detect/replay --sensor`` does).
 ``[arm]``
     validated by the arm package (``arm.config``): backend, host, tcp, work_frame, workspace, caps.
 ``[[gaps]]``
@@ -75,6 +77,7 @@ class SensorConfig:
     calibration: Path | None = None
     selected_pins: int = 40
     min_separation_mm: float = 4.0
+    preset: str = ""  # a pins.SENSOR_PRESETS name for the scale's pin pitch ("": pins on a hexagonal pad)
 
 
 @dataclass(frozen=True)
@@ -203,6 +206,11 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     _range(sensor.frame_rate, "sensor.frame_rate", 0, 1000, "frames/s", low_open=True)
     _range(sensor.selected_pins, "sensor.selected_pins", 1, sensor.pins, "pins")
     _range(sensor.min_separation_mm, "sensor.min_separation_mm", 0, sensor.pad_diameter_mm, "mm")
+    if sensor.preset:
+        from pins import SENSOR_PRESETS
+
+        _check(sensor.preset in SENSOR_PRESETS, "sensor.preset",
+               f"must be one of {', '.join(SENSOR_PRESETS)}, got {sensor.preset!r}")
     _range(protocol.depth_min, "protocol.depth_min", 0, MAX_DEPTH_MM, "mm")
     _range(protocol.depth_max, "protocol.depth_max", 0, MAX_DEPTH_MM, "mm")
     _check(protocol.depth_max > protocol.depth_min, "protocol.depth_max",

@@ -46,6 +46,7 @@ def calibrate_station(config: StationConfig, *, rest_frames: int = 10, out: Path
         frames = station.rest_frames(rest_frames)
     sensor = config.sensor
     calibration = calibrate_sensor(frames, expected_pins=sensor.pins, pad_diameter_mm=sensor.pad_diameter_mm,
+                                   description=sensor.preset or None,  # the scale's pin pitch, as replay --sensor
                                    selected_pins=sensor.selected_pins, min_separation_mm=sensor.min_separation_mm,
                                    sensor={"source": sensor.source, "pins": sensor.pins, "station": config.name})
     save_calibration(out, calibration)

@@ -8,6 +8,7 @@ from scipy.spatial.distance import pdist
 
 from calibration import SCHEMA, CalibrationError, calibrate_sensor, load_calibration, save_calibration
 from perception import Dataset, save_dataset
+from pins import select_feature_pins
 from tactip.sim import SyntheticTacTip
 
 
@@ -39,8 +40,10 @@ def test_reference_pins_are_the_true_pins(sensor, calibration):
     cx, cy, radius = sensor.disc
     assert (calibration.disc.cx, calibration.disc.cy) == pytest.approx((cx, cy), abs=1.0)
     assert calibration.disc.radius_px == pytest.approx(radius, rel=0.02)
-    # the scale is the pad diameter over the disc diameter
-    assert calibration.mm_per_px == pytest.approx(40.0 / (2 * radius), rel=0.02)
+    # the scale is the pin pitch (mm, 331 pins on a 40 mm pad) over the central pin pitch (px): the renderer's
+    assert calibration.mm_per_px == pytest.approx(sensor.mm_per_px, rel=0.05)
+    assert "pin pitch 2.793 mm" in calibration.scale["source"]
+    assert calibration.scale["mm_per_px"] == calibration.mm_per_px
 
 
 def test_selected_pins_are_far_enough_apart_in_mm(calibration):
@@ -112,9 +115,33 @@ def test_bad_rest_frames_are_refused(frames, message):
         calibrate_sensor(frames, expected_pins=331)
 
 
-def test_too_many_pins_for_the_separation_is_refused(rest_frames):
-    with pytest.raises(CalibrationError, match="cannot select the feature pins"):
-        calibrate_sensor(rest_frames, expected_pins=331, selected_pins=300, min_separation_mm=4.0)
+def test_too_many_pins_for_the_separation_are_spread_as_far_as_the_pad_allows(rest_frames):
+    # 300 of 331 pins cannot be 4 mm apart: calibrate takes them as far apart as they can be, by replay's rule.
+    crowded = calibrate_sensor(rest_frames, expected_pins=331, selected_pins=300, min_separation_mm=4.0)
+    reached = pdist(crowded.reference_pins[crowded.selected_pins]).min() * crowded.mm_per_px
+    assert crowded.n_selected == 300 == len(np.unique(crowded.selected_pins))
+    assert crowded.separation_mm == pytest.approx(reached) and reached < 4.0
+    assert crowded.min_separation_mm == 4.0 and "as far as the pad allows; 4 mm asked" in crowded.describe()
+    same = select_feature_pins(crowded.reference_pins, n_pins=300, min_separation_mm=4.0,
+                               mm_per_px=crowded.mm_per_px, centre=(crowded.disc.cx, crowded.disc.cy))
+    assert np.array_equal(same.indices, crowded.selected_pins)
+    # One pin more than the pad has is still refused: a calibration has the feature pins it was asked for.
+    with pytest.raises(CalibrationError, match="cannot select the feature pins: only 331 pins"):
+        calibrate_sensor(rest_frames, expected_pins=331, selected_pins=332)
+
+
+def test_a_radial_pad_too_small_for_40_pins_10_mm_apart_is_calibrated_as_replay_does():
+    # A radial layout of 120 pins (the home-built sensor): 40 of them cannot be 10 mm apart.
+    sensor = SyntheticTacTip.from_preset("radial-120", seed=4)
+    image = sensor.render().image
+    radial = calibrate_sensor([image], expected_pins=120, description="radial-120", min_separation_mm=10.0)
+    assert radial.mm_per_px == pytest.approx(sensor.mm_per_px, rel=0.05) and "radial-120" in radial.scale["source"]
+    assert radial.n_selected == 40 and radial.separation_mm < 10.0 and "10 mm asked" in radial.describe()
+    reached = pdist(radial.reference_pins[radial.selected_pins]).min() * radial.mm_per_px
+    assert radial.separation_mm == pytest.approx(reached)
+    replayed = select_feature_pins(radial.reference_pins, n_pins=40, min_separation_mm=10.0, mm_per_px=radial.mm_per_px,
+                                   centre=(radial.disc.cx, radial.disc.cy))
+    assert np.array_equal(replayed.indices, radial.selected_pins)
 
 
 def test_the_file_round_trips(tmp_path, calibration):
@@ -126,7 +153,8 @@ def test_the_file_round_trips(tmp_path, calibration):
     assert np.array_equal(loaded.selected_pins, calibration.selected_pins)
     assert loaded.detection == calibration.detection
     assert loaded.disc == calibration.disc
-    for name in ("mm_per_px", "expected_pins", "frame_size", "min_separation_mm", "rest_frames", "sensor"):
+    for name in ("mm_per_px", "expected_pins", "frame_size", "min_separation_mm", "rest_frames", "sensor", "scale",
+                 "separation_mm"):
         assert getattr(loaded, name) == getattr(calibration, name), name
     with h5py.File(path, "r") as f:
         assert f.attrs["schema"] == SCHEMA

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pins import PinsError, central_spacing_px, pad_scale, pin_pitch_mm, sensor_preset
+from pins import PinsError, central_spacing_px, pad_scale, pin_pitch_mm, sensor_preset, sensor_scale
 from tactip.sim import SyntheticTacTip
 
 
@@ -51,3 +51,30 @@ def test_bad_descriptions_are_named():
 def test_central_spacing_of_a_square_grid():
     x, y = np.meshgrid(np.arange(9) * 7.0, np.arange(9) * 7.0)
     assert central_spacing_px(np.column_stack([x.ravel(), y.ravel()])) == pytest.approx(7.0)
+
+
+def test_sensor_scale_applies_the_defaults_detect_calibrate_and_replay_share():
+    sensor = SyntheticTacTip(pins=331, seed=2)
+    seen = sensor.rest_centres[:250]  # rim pins hidden: the count detected would mislead
+    # Nothing describes the pad: the pins detected on a 40 mm pad, and the source says it was assumed.
+    assumed = sensor_scale(seen)
+    assert assumed.sensor["pins"] == 250 and assumed.sensor["pins_counted"]
+    assert "pad diameter assumed (40 mm)" in assumed.source
+    # The expected count is the pins on the pad unless the sensor or --pins-on-pad says otherwise.
+    expected = sensor_scale(seen, expected_pins=331, pad_diameter_mm=40.0)
+    assert expected.mm_per_px == pytest.approx(sensor.mm_per_px, rel=0.05) and "assumed" not in expected.source
+    assert sensor_scale(seen, sensor="tactip-331", expected_pins=127).mm_per_px == expected.mm_per_px
+    assert sensor_scale(seen, pins_on_pad=331, expected_pins=127, pad_diameter_mm=40.0).mm_per_px == expected.mm_per_px
+    assert sensor_scale(seen, mm_per_px=0.2, expected_pins=331).mm_per_px == 0.2
+    # One pitch: the pin field's is the scale's (the central spacing of the same pins).
+    assert expected.pitch_px == central_spacing_px(seen)
+    assert expected.to_dict()["pitch_px"] == expected.pitch_px and "central pin pitch" in expected.describe()
+
+
+def test_the_pin_fields_pitch_is_the_scales():
+    from pins import find_pin_field
+
+    sensor = SyntheticTacTip(pins=127, seed=3)
+    field = find_pin_field(sensor.render().image)
+    assert field.pitch_px == sensor_scale(field.centres).pitch_px
+    assert "pitch" not in field.summary(pitch=False) and f"pitch {field.pitch_px:.1f} px" in field.summary()

@@ -11,6 +11,7 @@ from scipy.spatial.distance import cdist
 
 from pins import REJECTION_REASONS
 from tactip.cli import main
+from tactip.sim import SyntheticTacTip
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 FRAME = ROOT / "samples" / "synthetic_frame.png"
@@ -28,11 +29,16 @@ def _rmse_against_truth(pins):
 def test_json_output(capsys):
     assert main(["detect", str(FRAME), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert set(data) == {"count", "pins", "pitch_px", "rejected"}
+    assert set(data) == {"count", "pins", "pitch_px", "rejected", "scale"}
     pins = np.array(data["pins"])
     assert data["count"] == len(pins) == 331 and pins.shape == (331, 2)
     assert _rmse_against_truth(pins) <= 0.1
     assert 15.0 < data["pitch_px"] < 20.0
+    # The scale from the pin pitch (as calibrate and replay derive it): the renderer's within 5 %, one pitch.
+    scale = data["scale"]
+    assert scale["pitch_px"] == pytest.approx(data["pitch_px"], abs=1e-3)
+    assert scale["mm_per_px"] == pytest.approx(SyntheticTacTip(pins=331).mm_per_px, rel=0.05)  # the sample's sensor
+    assert "pin pitch" in scale["source"] and "pad diameter assumed" in scale["source"]
     assert all(len(r) == 3 and r[2] in REJECTION_REASONS for r in data["rejected"])
 
 
@@ -48,7 +54,8 @@ def test_expected_pins_confirms_and_does_not_steer(capsys):
 def test_human_summary(capsys):
     assert main(["detect", str(FRAME), "--expected-pins", "331"]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("331 pins in") and "radius" in out and "pitch 17." in out
+    assert out.startswith("331 pins in") and "radius" in out and out.count("pitch 18.") == 1
+    assert "scale 0.15" in out and "mm/px (pin pitch 2.793 mm" in out
     assert "expected 331 pins: exactly as expected" in out and "rejected" in out
 
 

@@ -28,7 +28,13 @@ def test_sample_sim_station_loads():
 
 def test_sample_ur_station_loads():
     cfg = load_station_config(SAMPLES / "station_ur.toml")
-    assert not cfg.simulated and cfg.arm.host
+    assert not cfg.simulated and cfg.arm.host and cfg.sensor.preset == ""
+
+
+def test_a_named_sensor_describes_the_pad():
+    data = _sim_table()
+    data["sensor"].update(preset="radial-120", pins=120)
+    assert parse_station_config(data, base_dir=SAMPLES).sensor.preset == "radial-120"
 
 
 @pytest.mark.parametrize("mutate, key", [
@@ -39,6 +45,7 @@ def test_sample_ur_station_loads():
     (lambda d: d["protocol"].update(samples="forty"), "protocol.samples"),
     (lambda d: d["protocol"].update(depth_max=9.0), "protocol.depth_max"),
     (lambda d: d["sensor"].update(colour=True), "colour"),
+    (lambda d: d["sensor"].update(preset="tactip-9"), "sensor.preset must be one of tactip-127"),
     (lambda d: d["gaps"][3].pop("nominal_width"), "gaps[3].nominal_width"),
     (lambda d: d["gaps"][0].update(tolerance=-1), "gaps[0].tolerance"),
     (lambda d: d["gaps"][1].update(name="g01"), "duplicate gap names: g01"),

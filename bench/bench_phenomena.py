@@ -1,0 +1,117 @@
+"""Issue 20's phenomena on the synthetic TacTip: what detection, tracking and replay do with them today.
+
+For each preset and seed, against the renderer's ground truth (`tactip.sim`):
+
+- found:     `find_pin_field` on the rest frame (bright pins; dark markers when no disc is seen, as
+             `tactip replay` falls back): pins found, true visible pins, matched (< 2 px), spurious;
+- same:      pins lost by `PinTracker.update` on the very frame it started from (replay's start: the
+             field's detection parameters and disc);
+- still:     pins lost per frame over a still pad (fresh noise and shimmer every frame): max, median,
+             and pins retired at the end;
+- slides:    after 8 slides (0, 45, ..., 315 degrees, 3 pitches, 2 mm deep, 3-frame rests) and the final
+             rest: matched pins more than 10 px and more than 1 px from their true place, lost, and
+             identity swaps (tracked position nearest another pin's truth);
+- contacts:  `replay_video` on an mp4v video of those slides, and of 6 taps with 2-frame rests: contacts
+             found / rendered.
+
+Bars (issue 20): no pin lost on the same or still frames, zero swaps, all pins within 1 px after the
+return, contacts found = rendered, the radial count within 1 %.
+
+Run: .venv/bin/python bench/bench_phenomena.py [--presets radial-led-120,white-dark-331] [--seeds 0,1,2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from pins import NoSensorError, PinTracker, find_pin_field  # noqa: E402
+from tactip.sim import SyntheticTacTip  # noqa: E402
+
+FRAME_RATE = 120.0
+STILL_FRAMES = 40
+
+
+def start(image):
+    """Replay's start without a calibration: the pin field (dark markers if no disc), then the tracker."""
+    try:
+        field = find_pin_field(image)
+    except NoSensorError:
+        field = find_pin_field(image, dark_pins=True)
+    tracker = PinTracker(detection=field.params, disc=field.disc)
+    return tracker, tracker.start(image, field.centres)
+
+
+def contacts_found(sensor, name, run) -> int:
+    """Taps `replay_video` finds in an mp4v video of the sequence ``run``."""
+    import cv2
+
+    from tactip.replay.video import replay_video
+
+    folder = tempfile.mkdtemp()
+    path = os.path.join(folder, "run.mp4")
+    writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*"mp4v"), FRAME_RATE, sensor.image_size, True)
+    for frame in run:
+        writer.write(cv2.cvtColor(frame.image, cv2.COLOR_GRAY2BGR) if frame.image.ndim == 2 else frame.image)
+    writer.release()
+    try:
+        return len(replay_video(path, os.path.join(folder, "run.h5"), sensor=name).tap_bounds)
+    except Exception as exc:  # noqa: BLE001 - a refusal is a result here
+        return f"refused ({type(exc).__name__})"
+
+
+def measure(name: str, seed: int, *, contacts: bool) -> dict:
+    sensor = SyntheticTacTip.from_preset(name, seed=seed, frame_rate=FRAME_RATE)
+    first = sensor.render()
+    row = {"preset": name, "seed": seed, "true": int(first.visible.sum())}
+    try:
+        tracker, rest = start(first.image)
+    except NoSensorError:
+        return {**row, "found": "no sensor"}
+    distance, identity = cKDTree(first.centres).query(rest)
+    real = distance < 2.0
+    row.update(found=len(rest), matched=int(real.sum()), spurious=int((~real).sum()))
+    tracker.update(first.image)
+    row["same"] = int(tracker.lost.sum())
+    lost = []
+    for _ in range(STILL_FRAMES):
+        tracker.update(sensor.render().image)
+        lost.append(int(tracker.lost.sum()))
+    row.update(still_max=max(lost), still_median=int(np.median(lost)), retired=int(tracker.retired.sum()))
+    slides = sensor.slides(range(0, 360, 45), distance_mm=3 * sensor.pin_spacing_mm, indentation_mm=2.0,
+                           rest_s=3 / FRAME_RATE, press_s=0.05, slide_s=0.15, lift_s=0.05)
+    for frame in slides:
+        positions = tracker.update(frame.image)
+    error = np.linalg.norm(positions - frame.centres[identity], axis=1)[real]
+    seen = ~np.isnan(positions[:, 0]) & real
+    _, nearest = cKDTree(frame.centres).query(positions[seen]) if seen.any() else (None, identity[seen])
+    row.update(over_10px=int((error > 10).sum()), over_1px=int((error > 1).sum()),
+               lost_after=int(np.isnan(error).sum()), swaps=int((nearest != identity[seen]).sum()))
+    if contacts:
+        taps = sensor.taps(6, indentation_mm=3.0, rest_s=2 / FRAME_RATE, press_s=0.08, hold_s=0.05, lift_s=0.08)
+        row["slides_found"] = f"{contacts_found(sensor, name, slides)}/{len(slides.events)}"
+        row["taps_found"] = f"{contacts_found(sensor, name, taps)}/{len(taps.events)}"
+    return row
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--presets", default="radial-led-120,white-dark-331,radial-120,tactip-331")
+    parser.add_argument("--seeds", default="0,1,2")
+    parser.add_argument("--no-contacts", action="store_true", help="skip the replay of the sequences")
+    args = parser.parse_args()
+    for name in args.presets.split(","):
+        for seed in (int(s) for s in args.seeds.split(",")):
+            row = measure(name, seed, contacts=not args.no_contacts)
+            print("  ".join(f"{key}={value}" for key, value in row.items()), flush=True)
+
+
+if __name__ == "__main__":
+    main()

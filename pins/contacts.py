@@ -1,0 +1,104 @@
+"""What kind of contact a tap is: a press (pins pushed apart) or a slide (pins dragged one way).
+
+A press spreads the pins away from the contact, so their displacements point in all directions and
+cancel in a mean; a slide drags the skin under the plate sideways, so they share one direction. For
+each frame of a contact, with every pin weighted by its squared displacement magnitude (the pins
+the contact moves most, as in `pins.converging_frames`), the *drag ratio* is the length of the
+weighted mean displacement over the weighted mean magnitude: 0 for displacements that cancel,
+1 for a rigid translation. A contact is a slide when, at the frame where the weighted mean
+displacement is longest, that ratio reaches `slide_ratio` and the mean is longer than `min_drag_px`;
+the slide's direction is that mean's, in degrees from image x towards image y (image y points down).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ShapeError
+
+__all__ = ["ContactKind", "contact_kinds", "CONTACT_KINDS"]
+
+#: The kinds of contact `contact_kinds` tells apart.
+CONTACT_KINDS = ("press", "slide")
+
+
+@dataclass(frozen=True)
+class ContactKind:
+    """The kind of one contact.
+
+    Attributes
+    ----------
+    kind : {"press", "slide"}
+    direction_deg : float
+        Direction of a slide in [0, 360), degrees from image x towards image y; NaN for a press.
+    drag_ratio : float
+        The drag ratio at the frame of longest drag, in [0, 1] (see the module docstring).
+    drag_px : float
+        Length of the weighted mean displacement at that frame, px.
+    """
+
+    kind: str
+    direction_deg: float
+    drag_ratio: float
+    drag_px: float
+
+
+def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], *, slide_ratio: float = 0.6,
+                  min_drag_px: float = 1.0) -> list[ContactKind]:
+    """Press or slide, and a slide's direction, for each contact of a recording.
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from rest, px; NaN where lost (ignored).
+    bounds : sequence of (start, stop)
+        The contacts' frame ranges, stop exclusive (`pins.segment_taps`).
+    slide_ratio : float
+        Smallest drag ratio of a slide, in (0, 1].
+    min_drag_px : float
+        Shortest weighted mean displacement of a slide, px (>= 0): a contact that hardly moves the
+        pins is a press.
+
+    Returns
+    -------
+    kinds : list of ContactKind
+        One per contact, in order.
+
+    Examples
+    --------
+    >>> rest = np.stack(np.meshgrid(np.arange(-3, 4), np.arange(-3, 4)), -1).reshape(-1, 2) * 10.0
+    >>> press = 0.1 * rest[None] * np.linspace(0, 1, 5)[:, None, None]    # (5, 49, 2): pins pushed apart
+    >>> slide = np.zeros_like(press); slide[..., 1] = np.linspace(0, 8, 5)[:, None]  # dragged along +y
+    >>> [(k.kind, k.direction_deg) for k in contact_kinds(np.concatenate([press, slide]), [(0, 5), (5, 10)])]
+    [('press', nan), ('slide', 90.0)]
+    """
+    data = np.asarray(displacements, dtype=np.float64)
+    if data.ndim != 3 or data.shape[2] != 2:
+        raise ShapeError(f"displacements must have shape (T, N, 2), got {data.shape}")
+    if not 0.0 < slide_ratio <= 1.0:
+        raise ValueError(f"slide_ratio must be in (0, 1], got {slide_ratio}")
+    if not min_drag_px >= 0.0:
+        raise ValueError(f"min_drag_px must be >= 0, got {min_drag_px}")
+    kinds = []
+    for start, stop in bounds:
+        if not 0 <= start < stop <= len(data):
+            raise ValueError(f"contact bounds ({start}, {stop}) outside the {len(data)} frames")
+        part = np.nan_to_num(data[start:stop])
+        magnitude = np.hypot(part[..., 0], part[..., 1])            # (F, N) px
+        weight = magnitude ** 2
+        total = weight.sum(axis=1)                                  # (F,)
+        safe = np.where(total > 0, total, 1.0)
+        drag = np.einsum("fn,fnk->fk", weight, part) / safe[:, None]  # weighted mean displacement, px
+        spread = (weight * magnitude).sum(axis=1) / safe            # weighted mean magnitude, px
+        length = np.hypot(drag[:, 0], drag[:, 1])
+        peak = int(np.argmax(length))
+        ratio = float(length[peak] / spread[peak]) if spread[peak] > 0 else 0.0
+        if ratio >= slide_ratio and length[peak] > min_drag_px:
+            direction = float(np.degrees(np.arctan2(drag[peak, 1], drag[peak, 0])) % 360.0)
+            kinds.append(ContactKind("slide", round(direction, 6) % 360.0, ratio, float(length[peak])))
+        else:
+            kinds.append(ContactKind("press", float("nan"), ratio, float(length[peak])))
+    return kinds
