@@ -7,7 +7,7 @@ On disk it is one HDF5 file of schema ``tactip-dataset/1``:
 ==============  ==========================  ============================================
 name            kind                        content
 ==============  ==========================  ============================================
-``taps``        float32 (N, samples, dims)  sensor values of each tap
+``taps``        float32 (N, samples, dims)  sensor values of each tap; NaN where missing
 ``location``    float64 (N,)                location of each tap (``location_unit``)
 ``identity``    float64 (N,)                identity of each tap (``identity_unit``)
 ``lateral``     float64 (N,), optional      lateral placement offset of each tap, mm
@@ -17,6 +17,11 @@ name            kind                        content
 ``dim_names``   attribute, list of str      one name per dimension (``"pin03_x"``, ``"taxel07"``)
 ``sensor``      attribute, JSON string      sensor description (kind, pins or taxels, preset, ...)
 ==============  ==========================  ============================================
+
+A missing value is NaN: a TacTip tap holds NaN in the dx and dy dimensions of a feature pin unseen
+for the whole tap (`tactip.pipeline.contact_features`); every likelihood model marginalises such
+dimensions (`perception.likelihood`). Labels are never missing, no value is infinite, and every tap
+has at least one observed value.
 
 `save_dataset` writes a whole dataset atomically; `DatasetWriter` appends taps one at a time
 (flushing each, so a crash loses at most the tap in progress) and resumes an existing file.
@@ -62,7 +67,8 @@ class Dataset:
     Parameters
     ----------
     taps : (N, samples, dims) array, converted to float32
-        Sensor values of each tap (pin displacements in px, or taxel readings).
+        Sensor values of each tap (pin displacements in px, or taxel readings); NaN where missing
+        (e.g. the dimensions of a pin unseen during the tap).
     location : (N,) array, converted to float64
         Location of each tap in ``location_unit`` (e.g. depth in mm).
     identity : (N,) array, converted to float64
@@ -81,8 +87,8 @@ class Dataset:
     Raises
     ------
     DatasetError
-        Naming the field: wrong shapes, NaN or infinite values, unknown front end,
-        wrong number of dim names, a sensor description that is not JSON.
+        Naming the field: wrong shapes, NaN or infinite labels, infinite tap values, a tap with no
+        observed value, unknown front end, wrong number of dim names, a sensor description that is not JSON.
     """
 
     taps: np.ndarray
@@ -110,10 +116,12 @@ class Dataset:
                 raise DatasetError(f"{name} must have shape ({n},) to match taps {taps.shape}, got {value.shape}")
             arrays[name] = value
         for name, value in arrays.items():
-            bad = ~np.isfinite(value)
+            bad = np.isinf(value) if name == "taps" else ~np.isfinite(value)
             if bad.any():
                 first = int(np.argwhere(bad)[0][0])
-                raise DatasetError(f"{name} holds NaN or infinite values (first in tap {first})")
+                kind = "infinite values" if name == "taps" else "NaN or infinite values"
+                raise DatasetError(f"{name} holds {kind} (first in tap {first})")
+        _check_observed(taps)
         if self.front_end not in FRONT_ENDS:
             raise DatasetError(f"front_end must be one of {FRONT_ENDS}, got {self.front_end!r}")
         dims = taps.shape[2]
@@ -142,6 +150,16 @@ class Dataset:
         return self.taps.shape[1]
 
     @property
+    def observed(self) -> np.ndarray:
+        """(N, samples, dims) bool: the values that are not missing (not NaN)."""
+        return ~np.isnan(self.taps)
+
+    @property
+    def complete(self) -> bool:
+        """Whether no value of any tap is missing."""
+        return not np.isnan(self.taps).any()
+
+    @property
     def dims(self) -> int:
         """Data dimensions per sample (2 per pin for the TacTip, 1 per taxel)."""
         return self.taps.shape[2]
@@ -165,8 +183,20 @@ class Dataset:
             if len(values) == 0:
                 return "-"
             return f"{values.min():g}..{values.max():g} {unit} ({len(np.unique(values))} values)"
-        return (f"{self.front_end} dataset: {len(self)} taps of {self.samples} samples x {self.dims} dims; "
+        incomplete = int(np.isnan(self.taps).any(axis=(1, 2)).sum())
+        missing = f" ({incomplete} with missing dims)" if incomplete else ""
+        return (f"{self.front_end} dataset: {len(self)} taps of {self.samples} samples x {self.dims} dims{missing}; "
                 f"location {span(self.location, self.location_unit)}; identity {span(self.identity, self.identity_unit)}")
+
+
+def _check_observed(taps: np.ndarray) -> None:
+    """Raise DatasetError for a tap without a single observed value (nothing to classify it by)."""
+    if taps.size == 0:
+        return
+    empty = np.isnan(taps).all(axis=(1, 2))
+    if empty.any():
+        raise DatasetError(f"taps holds {int(empty.sum())} tap(s) with no observed value (all NaN; first: tap "
+                           f"{int(np.argmax(empty))}); leave such taps out")
 
 
 def save_dataset(path, dataset: Dataset, *, inputs=()) -> None:
@@ -454,7 +484,7 @@ class DatasetWriter:
         Parameters
         ----------
         tap : (samples, dims) array
-            Sensor values of the tap.
+            Sensor values of the tap; NaN where missing.
         location, identity : float
             Labels in the dataset's units.
         lateral : float or None
@@ -463,7 +493,8 @@ class DatasetWriter:
         Raises
         ------
         DatasetError
-            Wrong tap shape, NaN or infinite values, or `lateral` given for some taps only.
+            Wrong tap shape, infinite values or no observed value, labels not finite, or `lateral`
+            given for some taps only.
         OSError
             Disk full or permission denied, named so. The tap is not counted and the writer is
             closed; the taps before it stay intact and a rerun resumes after them.
@@ -473,8 +504,10 @@ class DatasetWriter:
         tap = np.asarray(tap, dtype=np.float32)
         if tap.shape != self._shape:
             raise DatasetError(f"tap must have shape (samples, dims) {self._shape}, got {tap.shape}")
-        if not np.isfinite(tap).all():
-            raise DatasetError("tap holds NaN or infinite values")
+        if np.isinf(tap).any():
+            raise DatasetError("tap holds infinite values")
+        if np.isnan(tap).all():
+            raise DatasetError("tap has no observed value (all NaN)")
         labels = {"location": location, "identity": identity}
         if lateral is not None:
             labels["lateral"] = lateral

@@ -11,6 +11,14 @@ dimensions k (a geometric-mean likelihood, paper 001):
 
     log P(z | c) = sum_k sum_j log P_k(b_k(j) | c) / (N_samples N_dims)
 
+A missing value s_k(j) (NaN) is marginalised: the dimensions are independent given the class, so
+integrating the value out leaves sum_b P_k(b | c) = 1, a term log 1 = 0. The sum runs over the
+observed values only and keeps its divisor N_samples N_dims (the model's fixed tempering), so a tap
+missing some values is weaker evidence, never stronger; every class is scored on the same observed
+values. Training counts the observed values of each dimension; a class without any observed value
+of a dimension takes that dimension's counts pooled over all the classes (and a warning,
+`perception.likelihood.fit_class_grid`).
+
 Location classes are ``n_locations`` equal bins of the training locations; identity classes are
 the distinct training identities (`perception.likelihood.fit_class_grid`). Class c = l * n_identities + i, so a likelihood vector reshapes
 to ``(n_locations, n_identities)``.
@@ -137,13 +145,15 @@ class HistogramModel(LikelihoodModel):
         Parameters
         ----------
         taps : (..., dims) array
+            NaN where missing.
 
         Returns
         -------
         (..., dims) intp ndarray in [0, bins)
+            Bin 0 for a missing value (mask it with ``~np.isnan(taps)``).
         """
         b = np.floor((np.asarray(taps, dtype=np.float64) - self.bin_lower) / self.bin_width)
-        return np.clip(b, 0, self.bins - 1).astype(np.intp)
+        return np.clip(np.nan_to_num(b, nan=0.0), 0, self.bins - 1).astype(np.intp)
 
     def log_likelihood(self, tap) -> np.ndarray:
         """Mean log likelihood log P(z | x_l, w_i) of one tap against every class (eq. 3).
@@ -151,6 +161,7 @@ class HistogramModel(LikelihoodModel):
         Parameters
         ----------
         tap : (samples, dims) array
+            NaN where missing: those values' terms are dropped (marginalised).
 
         Returns
         -------
@@ -158,8 +169,8 @@ class HistogramModel(LikelihoodModel):
         """
         tap = self._check_taps(tap, batch=False)
         flat = (self.bin_index(tap) + np.arange(self.dims) * self.bins).ravel()
-        # One gather of the occupied (dim, bin) rows, weighted by how many samples fell in each.
-        counts = np.bincount(flat, minlength=self.dims * self.bins)
+        # One gather of the occupied (dim, bin) rows, weighted by how many observed samples fell in each.
+        counts = np.bincount(flat[~np.isnan(tap).ravel()], minlength=self.dims * self.bins)
         rows = np.flatnonzero(counts)
         table = self.log_probability.reshape(self.dims * self.bins, self.n_classes)
         total = counts[rows].astype(np.float32) @ np.take(table, rows, axis=0)
@@ -171,6 +182,7 @@ class HistogramModel(LikelihoodModel):
         Parameters
         ----------
         taps : (N, samples, dims) array
+            NaN where missing: those values' terms are dropped (marginalised).
 
         Returns
         -------
@@ -184,6 +196,9 @@ class HistogramModel(LikelihoodModel):
             chunk = taps[start:start + _BATCH]
             n = len(chunk)
             flat = (self.bin_index(chunk) + offsets + (np.arange(n) * self.dims * self.bins)[:, None, None]).ravel()
+            missing = np.isnan(chunk).ravel()
+            if missing.any():  # log P_k(b | c) of a missing value is marginalised to log 1 = 0: no count
+                flat = flat[~missing]
             counts = np.bincount(flat, minlength=n * self.dims * self.bins).astype(np.float32)
             out[start:start + n] = counts.reshape(n, -1) @ table
         out /= self.samples * self.dims
@@ -229,9 +244,12 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
         raise ValueError(f"epsilon must be a finite number > 0, got {epsilon}")
     grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
     dims, bins = dataset.dims, int(bins)
-    values = dataset.taps.reshape(-1, dims)
-    bin_lower = values.min(axis=0).astype(np.float64)
-    span = values.max(axis=0) - bin_lower
+    values = dataset.taps.reshape(-1, dims).astype(np.float64)
+    # Over the observed values of each dimension (one never observed: any bins, it has no counts).
+    low = np.where(np.isnan(values), np.inf, values).min(axis=0)
+    high = np.where(np.isnan(values), -np.inf, values).max(axis=0)
+    bin_lower = np.where(np.isfinite(low), low, 0.0)
+    span = np.where(np.isfinite(high), high - bin_lower, 0.0)
     bin_width = np.where(span > 0, span / bins, 1.0)
     empty = HistogramModel(np.zeros((dims, bins, grid.n_classes), np.float32), bin_lower, bin_width,
                            grid.location_edges, grid.identities, grid.front_end, grid.samples, grid.dim_names,
@@ -248,6 +266,7 @@ def histogram_log_probability(grid: HistogramModel, taps, tap_class) -> np.ndarr
     grid : HistogramModel
         Gives the value bins, the classes and epsilon.
     taps : (N, samples, dims) array
+        NaN where missing: only observed values are counted.
     tap_class : (N,) int array
         Joint class l * n_identities + i of each tap.
 
@@ -260,9 +279,14 @@ def histogram_log_probability(grid: HistogramModel, taps, tap_class) -> np.ndarr
     # h(b, k, c): sample counts per class, dimension and bin, in one bincount.
     counts = np.zeros((n_classes, dims, bins))
     for start in range(0, len(taps), 4096):  # bounded memory for large datasets
-        b = grid.bin_index(taps[start:start + 4096])
-        flat = (tap_class[start:start + 4096, None, None] * dims + np.arange(dims)) * bins + b
-        counts += np.bincount(flat.ravel(), minlength=counts.size).reshape(counts.shape)
+        chunk = taps[start:start + 4096]
+        flat = ((tap_class[start:start + 4096, None, None] * dims + np.arange(dims)) * bins
+                + grid.bin_index(chunk)).ravel()
+        counts += np.bincount(flat[~np.isnan(chunk).ravel()], minlength=counts.size).reshape(counts.shape)
+    # A class with taps but no observed value of a dimension: that dimension's counts over all the classes.
+    empty = (counts.sum(axis=2) == 0) & (np.bincount(tap_class, minlength=n_classes) > 0)[:, None]
+    if empty.any():
+        counts = np.where(empty[:, :, None], counts.sum(axis=0, keepdims=True), counts)
     # P_k(b|c) = (h(b,k,c) + eps) / sum_b (h(b,k,c) + eps)
     regularised = counts + grid.epsilon
     log_p = np.log(regularised) - np.log(regularised.sum(axis=2, keepdims=True))

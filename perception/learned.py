@@ -11,6 +11,18 @@ the held-out taps' decision posteriors (temperature scaling, `perception.temperi
 trained again on every training tap for that many epochs. With a balanced training set the scores are
 log posteriors under a flat prior, i.e. log likelihoods up to a constant shared by all classes.
 
+A tap missing values (NaN: the dimensions of a pin unseen during the tap) is scored on its
+conditional-mean imputation: the standardised training taps are fitted by a Gaussian (probabilistic
+PCA, `perception.marginal.fit_low_rank_gaussian`, ``imputation_*``), and a missing value is replaced
+by its mean given the tap's observed values, E[x_M | x_O], before the network scores it; training
+taps missing values are filled the same way. Why this route rather than training with random
+dimension dropout and a mask input: the network and its numpy evaluation stay as they are; every
+missing pattern is handled, not only those drawn in training; neighbouring pins move together, so
+the observed pins predict an unseen one well (the conditional mean is the least-squares guess); and
+it costs one eigendecomposition at training. It is a plug-in, not the exact marginal
+(integrating the network's posterior over P(x_M | x_O)): the two agree when the scores are close to
+linear over the spread of the missing values, which the measured accuracy checks.
+
 Torch is needed to train only (``pip install torch==2.13.0``, the optional extra ``learned``): the
 weights are stored as arrays and the likelihood is computed with numpy, so a station runs the model
 without torch.
@@ -31,11 +43,14 @@ import numpy as np
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
 from .likelihood import LikelihoodModel, fit_class_grid
+from .marginal import LowRankGaussian, fit_low_rank_gaussian
 from .tempering import check_tempering, cross_validation_folds, fit_tempering
 
 __all__ = ["TorchModel", "fit_torch"]
 
 _BATCH = 1024
+#: Directions of the Gaussian that imputes missing values (capped by the training taps).
+IMPUTATION_COMPONENTS = 64
 
 
 @dataclass(frozen=True, repr=False)
@@ -54,6 +69,13 @@ class TorchModel(LikelihoodModel):
         beta > 0 (1 / temperature), fitted on held-out taps.
     epochs : int
         Training epochs (chosen by early stopping).
+    imputation_basis : (samples * dims, K) float64 ndarray or None
+        Directions of the Gaussian over standardised taps that imputes missing values.
+    imputation_variances : (K,) float64 ndarray or None
+        Variance along each direction.
+    imputation_residual : float
+        Variance per standardised value outside the directions; NaN (and the arrays None) in a
+        model file written before imputation (such a model scores complete taps only).
     location_edges, identities, front_end, samples, dim_names, sensor, location_unit, identity_unit,
     taps_per_class, recommended
         As for `perception.HistogramModel`.
@@ -77,19 +99,28 @@ class TorchModel(LikelihoodModel):
     identity_unit: str
     taps_per_class: np.ndarray
     recommended: dict = field(default_factory=dict)
+    imputation_basis: np.ndarray | None = None
+    imputation_variances: np.ndarray | None = None
+    imputation_residual: float = float("nan")
 
     KIND = "torch"
-    _ARRAYS = ("mean", "scale", "hidden_weight", "hidden_bias", "output_weight", "output_bias")
-    _ATTRS = ("tempering", "epochs")
+    _ARRAYS = ("mean", "scale", "hidden_weight", "hidden_bias", "output_weight", "output_bias", "imputation_basis",
+               "imputation_variances")
+    _ATTRS = ("tempering", "epochs", "imputation_residual")
+    _OPTIONAL = {"imputation_basis": None, "imputation_variances": None, "imputation_residual": float("nan")}
 
     def __post_init__(self):
         values = self.samples * len(self.dim_names)
         hidden = self.hidden_bias.shape[0] if self.hidden_bias.ndim == 1 else -1
         shapes = {"mean": (values,), "scale": (values,), "hidden_weight": (values, hidden),
                   "output_weight": (hidden, self.n_classes), "output_bias": (self.n_classes,)}
+        if self.imputation_basis is not None:
+            k = self.imputation_basis.shape[-1]
+            shapes.update(imputation_basis=(values, k), imputation_variances=(k,))
         for name, shape in shapes.items():
-            if getattr(self, name).shape != shape:
-                raise ModelError(f"{name} must have shape {shape}, got {getattr(self, name).shape}")
+            if getattr(self, name) is None or getattr(self, name).shape != shape:
+                raise ModelError(f"{name} must have shape {shape}, got "
+                                 f"{None if getattr(self, name) is None else getattr(self, name).shape}")
         if not (np.isfinite(self.tempering) and self.tempering > 0):
             raise ModelError(f"tempering must be a finite number > 0, got {self.tempering!r}")
         self._check_recommended()
@@ -99,9 +130,29 @@ class TorchModel(LikelihoodModel):
         return (f"{self._grid_summary()}; torch network, {self.hidden_bias.size} hidden units, {self.epochs} epochs, "
                 f"tempering {self.tempering:.4g}")
 
-    def scores(self, taps) -> np.ndarray:
-        """Untempered network scores s_c(z), (N, classes) float64, with numpy."""
+    def imputed(self, taps) -> np.ndarray:
+        """Standardised flattened taps, (N, samples * dims) float64, each missing value replaced by its
+        conditional mean given the tap's observed values.
+
+        Raises
+        ------
+        ModelError
+            A tap misses values and the model has no imputation Gaussian (a file from before it was stored).
+        """
         x = (np.asarray(taps, dtype=np.float64).reshape(len(taps), -1) - self.mean) / self.scale
+        if not np.isnan(x).any():
+            return x
+        if self.imputation_basis is None or not np.isfinite(self.imputation_residual):
+            raise ModelError("this torch model was trained before missing values could be handled (its file has "
+                             "no imputation Gaussian); train it again to score taps with unseen pins")
+        gaussian = LowRankGaussian(np.zeros(x.shape[1]), np.asarray(self.imputation_basis, dtype=np.float64),
+                                   np.asarray(self.imputation_variances, dtype=np.float64),
+                                   float(self.imputation_residual))
+        return gaussian.conditional_mean(x)
+
+    def scores(self, taps) -> np.ndarray:
+        """Untempered network scores s_c(z), (N, classes) float64, with numpy (missing values imputed)."""
+        x = self.imputed(taps)
         hidden = np.maximum(x @ self.hidden_weight + self.hidden_bias, 0.0)
         return hidden @ self.output_weight + self.output_bias
 
@@ -123,13 +174,14 @@ class TorchModel(LikelihoodModel):
         return out.reshape(len(taps), self.n_locations, self.n_identities)
 
     def _stored(self) -> tuple[dict, dict]:
-        return ({name: getattr(self, name) for name in self._ARRAYS},
-                {"tempering": self.tempering, "epochs": self.epochs})
+        return ({name: getattr(self, name) for name in self._ARRAYS if getattr(self, name) is not None},
+                {"tempering": self.tempering, "epochs": self.epochs, "imputation_residual": self.imputation_residual})
 
     @classmethod
     def _from_stored(cls, common: dict, arrays: dict, attrs: dict):
         try:
-            settings = dict(tempering=float(attrs["tempering"]), epochs=int(attrs["epochs"]))
+            settings = dict(tempering=float(attrs["tempering"]), epochs=int(attrs["epochs"]),
+                            imputation_residual=float(attrs["imputation_residual"]))
         except (TypeError, ValueError):
             raise ModelError(f"unreadable torch model settings {dict(attrs)!r}") from None
         return cls(**{k: np.asarray(v) for k, v in arrays.items()}, **common, **settings)
@@ -216,9 +268,15 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
         raise ImportError("the torch model needs torch: pip install torch==2.13.0") from None
     grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
     x = dataset.taps.reshape(len(dataset), -1).astype(np.float64)
-    mean, scale = x.mean(axis=0), x.std(axis=0)
+    never = np.isnan(x).all(axis=0)            # values left out of the model: their input weights are zeroed
+    x[:, never] = 0.0
+    mean, scale = np.nanmean(x, axis=0), np.nanstd(x, axis=0)   # over the observed values
     scale = np.where(scale > 0, scale, 1.0)
     x = (x - mean) / scale
+    imputation = fit_low_rank_gaussian(x, min(IMPUTATION_COMPONENTS, max(len(x) - 1, 1)))
+    imputation = LowRankGaussian(np.zeros(x.shape[1]), imputation.basis, imputation.variances,
+                                 imputation.residual_variance)
+    x = imputation.conditional_mean(x)   # training taps missing values: filled as the model fills test taps
     cls = grid.tap_class(dataset)
     fold = cross_validation_folds(cls, folds, order=dataset.location)
     train, held = fold != 0, fold == 0
@@ -236,7 +294,9 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
     check_tempering(beta)
     (w1, b1, w2, b2), _, _ = _train(x, cls, grid.n_classes, hidden=hidden, epochs=best + 1,
                                     weight_decay=weight_decay, seed=seed)
+    w1[:, never] = 0.0   # a value never observed in training has no say, whatever a tap holds there
     return TorchModel(mean, scale, w1.T.astype(np.float32), b1.astype(np.float32), w2.T.astype(np.float32),
                       b2.astype(np.float32), float(beta), best + 1, grid.location_edges, grid.identities,
                       grid.front_end, grid.samples, grid.dim_names, grid.sensor, grid.location_unit,
-                      grid.identity_unit, grid.taps_per_class)
+                      grid.identity_unit, grid.taps_per_class, imputation_basis=imputation.basis,
+                      imputation_variances=imputation.variances, imputation_residual=imputation.residual_variance)

@@ -5,6 +5,10 @@ log P(z | x_l, w_i) of every joint class c = (location l, identity i), c = l * n
 (papers 000 and 002 eqs. 2-3). The perceiver, the Monte Carlo, the station and replay call only:
 
 - ``log_likelihood(tap)`` -> (n_locations, n_identities) and ``log_likelihood_batch(taps)``;
+  a tap may miss values (NaN: the dimensions of a pin unseen during the tap), and every kind then
+  gives the likelihood of the values observed, the missing ones marginalised out (integrated over),
+  never the tap discarded: all classes are scored on the same observed values, so the posterior
+  stays a comparison of like with like;
 - the class grid: ``n_locations``, ``n_identities``, ``n_classes``, ``location_edges``,
   ``location_centres``, ``class_width``, ``identities``, ``location_class``, ``identity_class``,
   ``fixation_class``;
@@ -56,6 +60,7 @@ class LikelihoodModel:
         Parameters
         ----------
         taps : (N, samples, dims) array
+            NaN where a value is missing (marginalised out).
 
         Returns
         -------
@@ -69,6 +74,7 @@ class LikelihoodModel:
         Parameters
         ----------
         tap : (samples, dims) array
+            NaN where a value is missing (marginalised out).
 
         Returns
         -------
@@ -366,4 +372,31 @@ def fit_class_grid(dataset: Dataset, *, n_locations: int = 11, min_taps_per_clas
                            f"taps, e.g. location {grid.location_centres[l]:g} {dataset.location_unit}, identity "
                            f"{identities[i]:g} {dataset.identity_unit} has {taps_per_class[few[0]]}; "
                            f"use fewer location classes")
+    _warn_unobserved(grid, dataset)
     return dataclasses.replace(grid, taps_per_class=taps_per_class.reshape(n_locations, len(identities)))
+
+
+def _warn_unobserved(grid: ClassGrid, dataset: Dataset) -> None:
+    """Warn when a dimension has no observed value among the training taps of some class.
+
+    Such a class has nothing to learn that dimension's distribution from; every kind then uses what
+    all the classes' taps say of it (the histogram counts pooled over the classes, the Gaussian's
+    overall mean, the network's imputation), so a tap's value there neither favours nor rules out
+    that class much. Taps of that class where the pin is seen are the cure.
+    """
+    if dataset.complete:
+        return
+    observed = (~np.isnan(dataset.taps)).any(axis=1).astype(np.int64)          # (N, dims)
+    per_class = np.zeros((grid.n_classes, dataset.dims), np.int64)
+    np.add.at(per_class, grid.tap_class(dataset), observed)
+    never = np.argwhere(per_class == 0)
+    if not never.size:
+        return
+    import warnings
+
+    c, k = never[0]
+    l, i = divmod(int(c), grid.n_identities)
+    warnings.warn(f"{len(never)} class and dimension pair(s) have no observed value in the training taps (e.g. "
+                  f"{dataset.dim_names[k]} at location {grid.location_centres[l]:g} {dataset.location_unit}, identity "
+                  f"{grid.identities[i]:g} {dataset.identity_unit}); those classes use the dimension's distribution "
+                  f"over all classes: collect taps of them in which the pin is seen", stacklevel=3)

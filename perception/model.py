@@ -189,9 +189,10 @@ def load_model(path) -> LikelihoodModel:
             cls = model_class(kind)
         except ModelError as exc:
             raise ModelError(f"{path}: {exc}") from None
-        names = _COMMON_ARRAYS + cls._ARRAYS
+        optional = getattr(cls, "_OPTIONAL", {})  # fields a file of an older version may lack: their defaults
+        names = _COMMON_ARRAYS + tuple(n for n in cls._ARRAYS if n in f or n not in optional)
         attr_names = _COMMON_ATTRS + cls._ATTRS
-        missing = [n for n in names if n not in f] + [n for n in attr_names if n not in f.attrs]
+        missing = [n for n in names if n not in f] + [n for n in attr_names if n not in f.attrs and n not in optional]
         if missing:
             raise ModelError(f"{path} misses {', '.join(missing)} (required by {MODEL_SCHEMA} {kind})")
         for name in names:
@@ -202,7 +203,7 @@ def load_model(path) -> LikelihoodModel:
         try:
             common.update(samples=int(f.attrs["samples"]), sensor=json.loads(f.attrs["sensor"]),
                           recommended=json.loads(f.attrs["recommended"]))
-            own = {name: f.attrs[name] for name in cls._ATTRS}
+            own = {name: f.attrs[name] if name in f.attrs else optional[name] for name in cls._ATTRS}
         except (TypeError, ValueError) as exc:
             raise ModelError(f"{path}: unreadable settings ({exc})") from None
         common["dim_names"] = tuple(str(n) for n in np.atleast_1d(f.attrs["dim_names"]))

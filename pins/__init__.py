@@ -9,7 +9,8 @@ from .displacement import displacement_from_rest, displacement_magnitude, integr
 from .errors import NoSensorError, PinsError, ShapeError
 from .lattice import MIN_SENSOR_PINS, REJECTION_REASONS, PinField, draw_pin_field, find_pin_field
 from .contacts import CONTACT_KINDS, ContactKind, contact_kinds
-from .features import LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, tap_features
+from .features import (LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, seen_pins,
+                       tap_features)
 from .segment import converging_frames, jitter_floor_px, segment_taps, tap_signal
 from .scale import (DEFAULT_PAD_DIAMETER_MM, SENSOR_PRESETS, PadScale, SensorDescription, central_spacing_px,
                     pad_scale, pin_pitch_mm, sensor_preset, sensor_scale)
@@ -26,6 +27,6 @@ __all__ = [
     "select_pins", "select_feature_pins", "PinSelection", "median_spacing_px",
     "pad_scale", "PadScale", "pin_pitch_mm", "central_spacing_px", "SensorDescription", "SENSOR_PRESETS",
     "sensor_preset", "sensor_scale", "DEFAULT_PAD_DIAMETER_MM",
-    "feature_dim_names", "fill_lost", "resample_tap", "tap_features", "TapRecorder",
+    "feature_dim_names", "fill_lost", "resample_tap", "seen_pins", "tap_features", "TapRecorder",
     "tap_signal", "segment_taps", "converging_frames", "jitter_floor_px", "contact_kinds", "ContactKind", "CONTACT_KINDS",
 ]

@@ -12,7 +12,9 @@ array, shape (n_samples, 2 P):
 A tap is recorded at the camera's frame rate for however long it lasts and resampled to
 `n_samples` by linear interpolation over its duration (by time stamps when given). Pins lost for
 some frames are interpolated over time from the frames where they were seen; a pin never seen
-during the tap cannot be, and raises `LostPinError`.
+during the tap cannot be: its dx and dy columns are NaN in every sample (a missing dimension, which
+the likelihood models marginalise, `perception.likelihood`). `seen_pins` says which pins were seen;
+whether a tap with unseen pins is still usable is the caller's rule (`tactip.pipeline`).
 """
 
 from __future__ import annotations
@@ -21,11 +23,12 @@ import numpy as np
 
 from .errors import PinsError, ShapeError
 
-__all__ = ["feature_dim_names", "fill_lost", "resample_tap", "tap_features", "TapRecorder", "LostPinError"]
+__all__ = ["feature_dim_names", "fill_lost", "resample_tap", "seen_pins", "tap_features", "TapRecorder",
+           "LostPinError"]
 
 
 class LostPinError(PinsError):
-    """A selected pin was lost during a whole tap, so its displacements cannot be filled in."""
+    """A selected pin was lost during a whole tap (or too many were), so its displacements cannot be filled in."""
 
 
 def feature_dim_names(n_pins: int) -> list[str]:
@@ -53,7 +56,7 @@ def feature_dim_names(n_pins: int) -> list[str]:
     return [f"pin{k:0{width}d}_{axis}" for axis in ("dx", "dy") for k in range(int(n_pins))]
 
 
-def fill_lost(series: np.ndarray) -> np.ndarray:
+def fill_lost(series: np.ndarray, *, keep_unseen: bool = False) -> np.ndarray:
     """Fill NaN samples by linear interpolation over time, column by column, all columns at once.
 
     Samples before the first or after the last valid one take that valid value.
@@ -62,6 +65,8 @@ def fill_lost(series: np.ndarray) -> np.ndarray:
     ----------
     series : (T, ...) ndarray
         Time along axis 0; NaN where unknown.
+    keep_unseen : bool
+        A column without any valid sample stays NaN (True) or raises (False).
 
     Returns
     -------
@@ -70,7 +75,7 @@ def fill_lost(series: np.ndarray) -> np.ndarray:
     Raises
     ------
     LostPinError
-        A column has no valid sample at all (the message lists the columns).
+        A column has no valid sample at all and ``keep_unseen`` is False (the message lists the columns).
     """
     series = np.asarray(series, dtype=np.float64)
     if series.ndim < 1 or series.shape[0] == 0:
@@ -80,7 +85,7 @@ def fill_lost(series: np.ndarray) -> np.ndarray:
     if valid.all():
         return series.copy()
     never = np.flatnonzero(~valid.any(axis=0))
-    if never.size:
+    if never.size and not keep_unseen:
         raise LostPinError(f"{never.size} feature column(s) have no valid sample in the tap "
                            f"(first: {never[:5].tolist()}); the pin was lost for the whole tap")
     steps = flat.shape[0]
@@ -90,6 +95,8 @@ def fill_lost(series: np.ndarray) -> np.ndarray:
     after = np.minimum.accumulate(np.where(valid, t, steps)[::-1], axis=0)[::-1]
     before = np.where(before < 0, after, before)
     after = np.where(after >= steps, before, after)
+    if never.size:  # columns without a valid sample point nowhere: any index, they stay NaN
+        before, after = np.minimum(before, steps - 1), np.minimum(after, steps - 1)
     columns = np.arange(flat.shape[1])[None, :]
     low, high = flat[before, columns], flat[after, columns]
     span = np.maximum(after - before, 1)
@@ -103,7 +110,7 @@ def resample_tap(series: np.ndarray, n_samples: int, *, timestamps_s: np.ndarray
     Parameters
     ----------
     series : (T, C) ndarray
-        T >= 2 samples of C columns, no NaN.
+        T >= 2 samples of C columns, no NaN (a column NaN throughout stays NaN).
     n_samples : int
         Number of output samples (paper: 40).
     timestamps_s : (T,) ndarray, optional
@@ -156,12 +163,8 @@ def tap_features(displacements: np.ndarray, *, pins: np.ndarray | None = None, n
     Returns
     -------
     features : (n_samples, 2 P) ndarray of float64
-        Columns 0..P-1 = dx, P..2P-1 = dy of the selected pins (see `feature_dim_names`).
-
-    Raises
-    ------
-    LostPinError
-        A selected pin was lost in every frame of the tap.
+        Columns 0..P-1 = dx, P..2P-1 = dy of the selected pins (see `feature_dim_names`); both columns
+        of a pin lost in every frame of the tap are NaN in every sample (`seen_pins`).
 
     Examples
     --------
@@ -179,13 +182,38 @@ def tap_features(displacements: np.ndarray, *, pins: np.ndarray | None = None, n
         displacements = displacements[:, pins]
     # (T, P, 2) -> (T, 2P) with all dx first, then all dy.
     series = np.concatenate([displacements[:, :, 0], displacements[:, :, 1]], axis=1)
-    try:
-        series = fill_lost(series)
-    except LostPinError:
-        never = np.flatnonzero(~np.isfinite(displacements).any(axis=(0, 2)))
-        raise LostPinError(f"pin(s) {never.tolist()} (position in the selection) were lost for the whole tap; "
-                           f"their displacements cannot be filled in") from None
-    return resample_tap(series, n_samples, timestamps_s=timestamps_s)
+    # A pin seen in some frames is interpolated over time; one never seen keeps NaN columns.
+    return resample_tap(fill_lost(series, keep_unseen=True), n_samples, timestamps_s=timestamps_s)
+
+
+def seen_pins(displacements: np.ndarray, *, pins: np.ndarray | None = None) -> np.ndarray:
+    """Which pins were seen (had a displacement) in at least one frame of a tap.
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from rest of all N tracked pins over the T frames of the tap, px; NaN where lost.
+    pins : (P,) ndarray of int, optional
+        Selected pin indices, in selection order; all pins when omitted.
+
+    Returns
+    -------
+    seen : (P,) ndarray of bool
+        In selection order; False for a pin whose feature columns `tap_features` leaves NaN.
+
+    Examples
+    --------
+    >>> displacements = np.zeros((5, 3, 2))
+    >>> displacements[:, 1] = np.nan                    # pin 1 lost in every frame
+    >>> seen_pins(displacements).tolist()
+    [True, False, True]
+    """
+    displacements = np.asarray(displacements, dtype=np.float64)
+    if displacements.ndim != 3 or displacements.shape[2] != 2:
+        raise ShapeError(f"displacements must have shape (T, N, 2), got {displacements.shape}")
+    if pins is not None:
+        displacements = displacements[:, np.asarray(pins, dtype=np.intp)]
+    return np.isfinite(displacements).all(axis=2).any(axis=0)
 
 
 class TapRecorder:
@@ -265,14 +293,16 @@ class TapRecorder:
         Returns
         -------
         features : (n_samples, 2 P) ndarray of float64
-            Layout as in `tap_features`.
+            Layout as in `tap_features`; NaN columns for a pin lost throughout.
 
         Raises
         ------
         PinsError
             Not recording, or fewer than 2 frames recorded.
-        LostPinError
-            A selected pin was lost for the whole tap.
+
+        Notes
+        -----
+        A selected pin lost for the whole tap has NaN columns (`tap_features`).
         """
         if not self.recording:
             raise PinsError("TapRecorder.stop called without start()")

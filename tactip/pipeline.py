@@ -10,8 +10,10 @@ annotated video from the `PinTrack` it gets back).
   one contact (every frame it captured between the arm's callbacks); replay finds them in the
   recording (`tactip.replay.contacts.find_contacts`).
 - `contact_features` resamples each contact's displacements of the feature pins into a
-  ``(samples, 2 P)`` array (`pins.tap_features`); a contact whose features cannot be computed (a
-  feature pin lost throughout) is marked invalid, with the reason.
+  ``(samples, 2 P)`` array (`pins.tap_features`). A feature pin unseen for the whole contact leaves
+  its two columns NaN (missing dimensions, which every likelihood model marginalises); the contact
+  counts its seen pins, and is invalid, with the reason, only when fewer than half of them
+  (`MIN_SEEN_FRACTION`) were seen, or it has a single frame.
 
 `frames_to_features` runs the three steps in order.
 """
@@ -24,11 +26,15 @@ from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
-from pins import DetectionParams, PinsError, PinTracker, SensorDisc, displacement_from_rest, tap_features
+from pins import (DetectionParams, LostPinError, PinsError, PinTracker, SensorDisc, displacement_from_rest, seen_pins,
+                  tap_features)
 
 from tactip.errors import SourceError
 
-__all__ = ["PinTrack", "Start", "contact_features", "frames_to_features", "track_pins"]
+__all__ = ["MIN_SEEN_FRACTION", "PinTrack", "Start", "contact_features", "frames_to_features", "track_pins"]
+
+#: Fewest feature pins a valid contact has seen, as a fraction of the feature pins (20 of 40 is valid, 19 is not).
+MIN_SEEN_FRACTION = 0.5
 
 # start(image) -> (tracker, rest positions px, pins detected, detection parameters, pin-field summary,
 #                  warnings)
@@ -68,8 +74,10 @@ class PinTrack:
     contacts : list of (int, int)
         Frame ranges [start, stop) whose features were computed.
     features : (contacts, samples, 2 P) ndarray of float64, or None
-        Columns 0..P-1 dx, P..2P-1 dy of the feature pins, px; NaN for an invalid contact. None when
-        no features were asked for.
+        Columns 0..P-1 dx, P..2P-1 dy of the feature pins, px; NaN in the columns of a pin unseen
+        for the whole contact, and everywhere for an invalid contact. None when no features were asked for.
+    pins_seen : (contacts,) ndarray of int
+        Feature pins seen in at least one frame of each contact other than the rest frame (of P).
     valid : (contacts,) ndarray of bool
     errors : list of (pins.PinsError or None)
         Why each invalid contact is invalid (None for a valid one).
@@ -90,6 +98,7 @@ class PinTrack:
     warnings: list = field(default_factory=list)
     contacts: list = field(default_factory=list)
     features: np.ndarray | None = None
+    pins_seen: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     valid: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     errors: list = field(default_factory=list)
 
@@ -222,8 +231,9 @@ def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selec
     """``track`` with the features of each contact's feature pins (`pins.tap_features`).
 
     A contact's frames are resampled on their time stamps, or frame by frame when the stamps are
-    not strictly increasing (a decoder without them). A contact whose features cannot be computed
-    (a feature pin lost for the whole contact, a contact of one frame) is invalid, its features NaN.
+    not strictly increasing (a decoder without them). A feature pin lost for the whole contact has
+    NaN columns; a contact is invalid, its features all NaN, when fewer than `MIN_SEEN_FRACTION` of
+    the feature pins were seen in it, or when it has a single frame.
 
     Parameters
     ----------
@@ -238,24 +248,35 @@ def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selec
     Returns
     -------
     PinTrack
-        The same track, its ``contacts``, ``features``, ``valid`` and ``errors`` set.
+        The same track, its ``contacts``, ``features``, ``pins_seen``, ``valid`` and ``errors`` set.
     """
     contacts = [(int(a), int(b)) for a, b in contacts]
     selected = np.asarray(selected, dtype=np.intp)
     features = np.full((len(contacts), int(n_samples), 2 * len(selected)), np.nan)
+    seen = np.zeros(len(contacts), dtype=np.int64)
     valid = np.ones(len(contacts), dtype=bool)
     errors: list[PinsError | None] = [None] * len(contacts)
     displacements = track.displacements
+    needed = int(np.ceil(MIN_SEEN_FRACTION * len(selected)))
     for k, (begin, end) in enumerate(contacts):
         times = track.timestamps_s[begin:end]
         if not np.all(np.diff(times) > 0):
             times = None
+        window = displacements[begin:end, selected]
+        # Seen = found in a frame of the contact other than the rest frame, whose displacement is 0 by
+        # construction: a pin lost in every other frame has no displacement to report, not a still one.
+        moving = np.arange(begin, begin + len(window)) != track.rest_frame
+        found = seen_pins(window[moving])
+        seen[k] = found.sum()
         try:
-            features[k] = tap_features(displacements[begin:end], pins=selected, n_samples=int(n_samples),
+            if seen[k] < needed:
+                raise LostPinError(f"only {seen[k]} of {len(selected)} feature pins were seen in the contact; "
+                                   f"its features need at least {needed}")
+            features[k] = tap_features(np.where(found[:, None], window, np.nan), n_samples=int(n_samples),
                                        timestamps_s=times)
-        except PinsError as exc:  # LostPinError, or a contact of a single frame
+        except PinsError as exc:  # too few pins seen, or a contact of a single frame
             valid[k], errors[k] = False, exc
-    track.contacts, track.features, track.valid, track.errors = contacts, features, valid, errors
+    track.contacts, track.features, track.pins_seen, track.valid, track.errors = contacts, features, seen, valid, errors
     return track
 
 

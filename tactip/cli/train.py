@@ -77,8 +77,14 @@ def run(args: argparse.Namespace) -> int:
     options = {} if args.epsilon is None else {"epsilon": args.epsilon}
     if args.model == "torch":
         _require_torch()
-    model = train_model(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
-                        min_taps_per_class=args.min_taps, **options)
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:  # e.g. a pin never seen in some class: said in one line
+        warnings.simplefilter("always", UserWarning)
+        model = train_model(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
+                            min_taps_per_class=args.min_taps, **options)
+    for warning in caught:
+        print(f"warning: {warning.message}")
     save_model(args.out, model, inputs=[args.dataset])
     counts = model.taps_per_class
     print(model.summary())

@@ -34,7 +34,7 @@ class ReplayResult:
     contact_kinds : list of pins.ContactKind
         Press or slide, and a slide's direction, per contact.
     invalid_taps : list of int
-        Taps whose features are NaN (a selected pin lost for the whole tap).
+        Taps whose features are NaN (fewer than half the selected pins seen in the tap).
     selected_pins : (P,) ndarray of int
     selection : pins.PinSelection or None
         How the feature pins were chosen (None with a calibration, or when selection failed).
@@ -52,6 +52,8 @@ class ReplayResult:
         What did not go as asked (also in the file).
     decisions : tactip.replay.decisions.ReplayDecisions or None
         The decision, when a model was given.
+    pins_seen : list of int
+        Selected pins seen in each tap (a pin unseen for a whole tap has NaN features there).
     """
 
     out_path: pathlib.Path
@@ -78,6 +80,7 @@ class ReplayResult:
     warnings: list = field(default_factory=list)
     decisions: Any = None
     contact_kinds: list = field(default_factory=list)
+    pins_seen: list = field(default_factory=list)
 
     @property
     def lost_pin_frames(self) -> int:
@@ -102,9 +105,11 @@ class ReplayResult:
             f"Taps: {len(self.tap_bounds)} (frames {taps}); features of "
             + (self.selection.describe() if self.selection is not None else f"{len(self.selected_pins)} pins"),
         ]
+        if self.pins_seen:
+            lines[-1] += f"; pins seen {min(self.pins_seen)}/{len(self.selected_pins)} in the poorest tap"
         lines += [f"Warning: {w}" for w in self.warnings]
         if self.invalid_taps:
-            lines.append(f"Warning: taps {self.invalid_taps} have a selected pin lost throughout (features NaN)")
+            lines.append(f"Warning: taps {self.invalid_taps} have fewer than half the selected pins seen (features NaN)")
         if self.decisions is not None:
             lines += self.decisions.lines()
         written = [str(self.out_path)] + ([str(self.annotate_path)] if self.annotate_path else [])

@@ -36,8 +36,8 @@ The HDF5 file (format ``tactip-replay/2``) holds:
   ``tap_kinds`` bytes (taps,): ``press`` or ``slide``; ``tap_directions_deg`` (taps,): a slide's direction
   (degrees from image x towards image y), NaN for a press (`pins.contact_kinds`);
 - ``taps`` float32 (taps, samples, 2 P) when taps were found: columns 0..P-1 dx, P..2P-1 dy of the
-  selected pins (``feature_names`` attribute); ``tap_valid`` bool (taps,): False where a selected
-  pin was lost for a whole tap (its features are NaN);
+  selected pins (``feature_names`` attribute), NaN in the columns of a pin unseen for the whole tap;
+  ``tap_pins_seen`` int (taps,), of P (``of``); ``tap_valid`` bool (taps,): False below P / 2 seen (NaN);
 - attributes: format, software version, video path, frame size and rate, rest frame, disc
   (cx, cy, radius px), ``mm_per_px`` and ``scale`` (JSON: mm_per_px, pitch_px, pitch_mm, source,
   sensor), pad diameter, detection and tracking parameters (JSON), selection and sampling settings,
@@ -289,7 +289,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         mm_per_px=float(analysis["mm_per_px"]), scale=scale, disc=track.disc,
                         detection=track.detection, pins_detected=track.pins_detected, pin_field=track.pin_field,
                         expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions,
-                        contact_kinds=list(analysis.get("kinds", [])))
+                        contact_kinds=list(analysis.get("kinds", [])),
+                        pins_seen=[int(n) for n in track.pins_seen])
 
 
 class _Plan:

@@ -65,6 +65,8 @@ def write_hdf5(path, track: PinTrack, analysis: dict, settings: dict, decisions=
             dataset.attrs["feature_names"] = json.dumps(feature_dim_names(len(analysis["selected"])))
             dataset.attrs["layout"] = "columns 0..P-1 dx, P..2P-1 dy of the selected pins, px"
             h5.create_dataset("tap_valid", data=track.valid)
+            seen = h5.create_dataset("tap_pins_seen", data=np.asarray(track.pins_seen, dtype=np.int32))
+            seen.attrs["of"] = len(analysis["selected"])
         disc = track.disc
         scale = analysis["scale"]
         scale_info = {"mm_per_px": float(analysis["mm_per_px"]), "source": "calibration"} if scale is None else {

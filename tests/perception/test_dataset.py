@@ -64,13 +64,30 @@ def test_dataset_refuses_bad_fields_naming_them(change, field):
         Dataset(**kwargs)
 
 
-@pytest.mark.parametrize("field", ["taps", "location", "identity", "lateral"])
-def test_dataset_refuses_nan(field):
+@pytest.mark.parametrize("field", ["location", "identity", "lateral"])
+def test_dataset_refuses_nan_labels(field):
     ds = make_dataset()
     arrays = {name: getattr(ds, name).copy() for name in ("taps", "location", "identity", "lateral")}
-    arrays[field].reshape(-1)[7 if field == "taps" else 3] = np.nan
+    arrays[field].reshape(-1)[3] = np.nan
     with pytest.raises(DatasetError, match=f"{field} holds NaN"):
         Dataset(arrays["taps"], arrays["location"], arrays["identity"], arrays["lateral"], "tactip")
+
+
+def test_dataset_holds_missing_values_but_refuses_infinite_ones_and_empty_taps(tmp_path):
+    ds = make_dataset()
+    taps = ds.taps.copy()
+    taps[1, :, 2] = np.nan                                   # a dimension missing from one tap
+    missing = Dataset(taps, ds.location, ds.identity, ds.lateral, "tactip")
+    assert not missing.complete and ds.complete and missing.observed.sum() == taps.size - taps.shape[1]
+    assert "(1 with missing dims)" in missing.describe()
+    save_dataset(tmp_path / "m.h5", missing)
+    np.testing.assert_array_equal(load_dataset(tmp_path / "m.h5").taps, taps)
+    taps[2, 0, 0] = np.inf
+    with pytest.raises(DatasetError, match=r"taps holds infinite values \(first in tap 2\)"):
+        Dataset(taps, ds.location, ds.identity, ds.lateral, "tactip")
+    taps[2, 0, 0], taps[4] = 0.0, np.nan
+    with pytest.raises(DatasetError, match=r"1 tap\(s\) with no observed value \(all NaN; first: tap 4\)"):
+        Dataset(taps, ds.location, ds.identity, ds.lateral, "tactip")
 
 
 def test_load_refuses_another_schema(tmp_path):
@@ -97,11 +114,12 @@ def test_load_refuses_mismatched_lengths(tmp_path):
         load_dataset(tmp_path / "d.h5")
 
 
-def test_load_refuses_nan_in_file_naming_the_file(tmp_path):
+def test_load_refuses_infinite_values_in_file_naming_the_file(tmp_path):
     save_dataset(tmp_path / "d.h5", make_dataset())
     with h5py.File(tmp_path / "d.h5", "r+") as f:
-        f["taps"][2, 0, 0] = np.nan
-    with pytest.raises(DatasetError, match=r"d\.h5: taps holds NaN or infinite values \(first in tap 2\)"):
+        f["taps"][2, 0, 0] = -np.inf
+        f["location"][3] = np.nan
+    with pytest.raises(DatasetError, match=r"d\.h5: taps holds infinite values \(first in tap 2\)"):
         load_dataset(tmp_path / "d.h5")
 
 
@@ -171,8 +189,10 @@ def test_writer_refuses_to_resume_a_different_file(tmp_path, change, field):
 
 def test_writer_refuses_bad_taps(tmp_path):
     with DatasetWriter(tmp_path / "w.h5", samples=2, dims=1, front_end="taxel") as writer:
-        with pytest.raises(DatasetError, match="NaN"):
-            writer.append(np.array([[1.0], [np.nan]]), 1.0, 0.0)
+        with pytest.raises(DatasetError, match="infinite"):
+            writer.append(np.array([[1.0], [np.inf]]), 1.0, 0.0)
+        with pytest.raises(DatasetError, match="no observed value"):
+            writer.append(np.array([[np.nan], [np.nan]]), 1.0, 0.0)
         with pytest.raises(DatasetError, match="shape"):
             writer.append(np.ones((3, 1)), 1.0, 0.0)
         with pytest.raises(DatasetError, match="location must be finite"):
@@ -180,8 +200,9 @@ def test_writer_refuses_bad_taps(tmp_path):
         writer.append(np.ones((2, 1)), 1.0, 0.0)
         with pytest.raises(DatasetError, match="lateral given for tap 1"):
             writer.append(np.ones((2, 1)), 1.0, 0.0, lateral=0.5)
-        assert writer.count == 1
-    assert len(load_dataset(tmp_path / "w.h5")) == 1
+        writer.append(np.array([[np.nan], [2.0]]), 1.0, 0.0)     # a missing value is stored
+        assert writer.count == 2
+    assert np.isnan(load_dataset(tmp_path / "w.h5").taps[1, 0, 0])
 
 
 def test_subset_keeps_metadata():

@@ -46,3 +46,28 @@ def test_the_network_tells_the_widths_apart_and_survives_a_round_trip(model, tmp
     loaded = load_model(tmp_path / "t.h5")
     assert loaded.KIND == "torch" and 1 <= loaded.epochs
     np.testing.assert_allclose(loaded.log_likelihood_batch(test.taps[:5]), model.log_likelihood_batch(test.taps[:5]))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_network_trained_on_taps_missing_a_pin_tells_the_widths_apart_on_taps_missing_one(seed):
+    from perception import Dataset
+    from perception.learned import fit_torch
+
+    grid = dict(GRID, dims=16)   # 8 pins: dx 0..7, dy 8..15
+
+    def lose_a_pin(dataset, rng):
+        taps = dataset.taps.copy()
+        for tap in taps:
+            k = rng.integers(8)
+            tap[:, [k, k + 8]] = np.nan
+        return Dataset(taps, dataset.location, dataset.identity, None, "tactip")
+
+    rng = np.random.default_rng(seed)
+    model = fit_torch(lose_a_pin(gap_dataset(seed=1, taps_per_class=8, **grid), rng), n_locations=3, seed=seed,
+                      max_epochs=40)
+    test = gap_dataset(seed=3, taps_per_class=10, **grid)
+    accuracy = []
+    for taps in (test.taps, lose_a_pin(test, rng).taps):
+        what = logsumexp(model.log_likelihood_batch(taps), axis=1)
+        accuracy.append(np.mean(what.argmax(axis=1) == model.identity_class(test.identity)))
+    assert accuracy[0] > 0.8 and accuracy[0] - accuracy[1] < 0.05

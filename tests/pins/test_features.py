@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pins import (LostPinError, PinsError, PinTracker, ShapeError, TapRecorder, displacement_from_rest,
-                  feature_dim_names, fill_lost, resample_tap, select_pins, tap_features)
+                  feature_dim_names, fill_lost, resample_tap, seen_pins, select_pins, tap_features)
 from tests.pins.conftest import TAP, sensor
 
 
@@ -73,11 +73,25 @@ def test_fill_lost_equals_a_plain_loop(steps, columns, lost_fraction, seed):
     assert np.allclose(fill_lost(series), expected)
 
 
-def test_lost_pin_for_the_whole_tap_is_named():
-    displacements = np.zeros((10, 5, 2))
-    displacements[:, 3] = np.nan
-    with pytest.raises(LostPinError, match=r"\[1\]"):
-        tap_features(displacements, pins=np.array([0, 3]))
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_pin_unseen_for_the_whole_tap_gives_nan_columns_and_the_others_are_unchanged(seed):
+    rng = np.random.default_rng(seed)
+    displacements = rng.normal(size=(17, 30, 2))
+    pins = rng.permutation(30)[:12]
+    unseen = rng.choice(12, size=3, replace=False)       # positions in the selection
+    partly = np.setdiff1d(np.arange(12), unseen)[0]
+    lossy = displacements.copy()
+    lossy[:, pins[unseen]] = np.nan
+    lossy[3:9, pins[partly]] = np.nan                       # lost for some frames: interpolated as before
+    features = tap_features(lossy, pins=pins, n_samples=20)
+    complete = tap_features(lossy[:, pins[np.setdiff1d(np.arange(12), unseen)]], n_samples=20)
+    missing = np.zeros(24, bool)
+    missing[np.concatenate([unseen, unseen + 12])] = True
+    assert np.isnan(features[:, missing]).all() and np.isfinite(features[:, ~missing]).all()
+    assert np.array_equal(features[:, ~missing], complete)
+    assert seen_pins(lossy, pins=pins).tolist() == [k not in unseen for k in range(12)]
+    with pytest.raises(LostPinError, match=r"no valid sample"):
+        fill_lost(np.concatenate([lossy[:, pins, 0], lossy[:, pins, 1]], axis=1))
 
 
 def test_features_of_a_tracked_tap_match_ground_truth():

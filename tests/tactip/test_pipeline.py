@@ -6,6 +6,8 @@ and the features replay writes for each contact it finds are the station's own t
 over that contact.
 """
 
+import dataclasses
+
 import cv2
 import h5py
 import numpy as np
@@ -74,3 +76,58 @@ def test_tracking_is_the_same_whatever_feeds_the_frames(sim_station, tap):
     np.testing.assert_array_equal(one.positions, two.positions)
     assert two.contacts == [(2, 9)] and two.features.shape == (1, 10, 2 * len(sim_station.calibration.selected_pins))
     assert one.features is None and two.valid.all()
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_contact_with_unseen_feature_pins_keeps_the_seen_ones_and_needs_half_of_them(sim_station, tap, seed):
+    frames, _ = tap
+    selected = np.asarray(sim_station.calibration.selected_pins)
+    pins = len(selected)
+    track = OpticalFrontEnd(sim_station.calibration).track(frames, None)
+    complete = contact_features(track, [(0, len(frames))], selected).features[0]
+    rng = np.random.default_rng(seed)
+    order = rng.permutation(pins)
+    for seen in (pins // 2 - 1, pins // 2, pins - 5, pins):
+        hidden = order[:pins - seen]
+        positions = track.positions.copy()
+        positions[:, selected[hidden]] = np.nan          # feature pins lost in every frame of the contact
+        positions[2:5, selected[order[-1]]] = np.nan     # and one lost for a few frames only: interpolated
+        lossy = contact_features(dataclasses.replace(track, positions=positions), [(0, len(frames))], selected)
+        assert lossy.pins_seen.tolist() == [seen]
+        assert lossy.valid[0] == (2 * seen >= pins)
+        if not lossy.valid[0]:
+            assert np.isnan(lossy.features).all() and f"only {seen} of {pins}" in str(lossy.errors[0])
+            continue
+        missing = np.zeros(2 * pins, bool)
+        missing[np.concatenate([hidden, hidden + pins])] = True
+        features = lossy.features[0]
+        assert np.isnan(features[:, missing]).all() and np.isfinite(features[:, ~missing]).all()
+        kept = np.setdiff1d(np.arange(pins), np.append(hidden, order[-1]))
+        columns = np.concatenate([kept, kept + pins])
+        np.testing.assert_array_equal(features[:, columns], complete[:, columns])
+
+
+def test_the_station_keeps_a_tap_whose_feature_pins_are_partly_unseen(sim_station, tap, monkeypatch):
+    # Three feature pins unseen after the rest frame (the tracker reports them lost in every later
+    # frame): the tap is no longer discarded, their columns are missing, the other pins' are unchanged.
+    import pins
+
+    frames, _ = tap
+    front_end = OpticalFrontEnd(sim_station.calibration, samples=40)
+    selected = np.asarray(sim_station.calibration.selected_pins)
+    clean = front_end.features(frames, None)
+    hidden = np.array([0, len(selected) // 2, len(selected) - 1])
+    update = pins.PinTracker.update
+
+    def losing(self, image):
+        moved = np.array(update(self, image), dtype=np.float64)
+        moved[selected[hidden]] = np.nan
+        return moved
+
+    monkeypatch.setattr(pins.PinTracker, "update", losing)
+    features = front_end.features(frames, None)
+    count = len(selected)
+    missing = np.zeros(2 * count, bool)
+    missing[np.concatenate([hidden, hidden + count])] = True
+    assert np.isnan(features[:, missing]).all() and np.isfinite(features[:, ~missing]).all()
+    np.testing.assert_array_equal(features[:, ~missing], clean[:, ~missing])

@@ -69,6 +69,7 @@ def test_taps_found_and_featured(replayed):
         taps = h5["taps"][:]
         selected = h5["selected_pins"][:]
         assert h5["tap_valid"][:].all()
+        assert h5["tap_pins_seen"][:].tolist() == [40, 40, 40] and h5["tap_pins_seen"].attrs["of"] == 40
         names = json.loads(h5["taps"].attrs["feature_names"])
         attrs = dict(h5.attrs)
     assert len(bounds) == 3 and taps.shape == (3, 40, 80) and len(names) == 80 and len(selected) == 40
@@ -99,6 +100,7 @@ def test_annotated_video_and_summary(replayed):
     assert ok and image.shape == (480, 640, 3) and frames == 86
     text = result.summary()
     assert "86 frames" in text and "331 tracked" in text and "Taps: 3" in text and str(out) in text
+    assert "pins seen 40/40 in the poorest tap" in text and result.pins_seen == [40, 40, 40]
     assert "Lost pins per frame (retired included): median 0, max 0 of 331" in text and "mm/px (pin pitch" in text
     assert not list(out.parent.glob(".*part*"))
 
