@@ -96,6 +96,8 @@ _SEARCH_SETTLED_FRACTION = 0.1
 _GUESS_FRACTION = 0.03
 _FOLLOW_FRACTION = 0.4
 _FOLLOW_PASSES = 4
+# Passes of mean shift that take the given rest positions to the windows' fixed points.
+_REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
@@ -182,6 +184,7 @@ class Refiner:
         k = min(max(neighbours, _WINDOW_NEIGHBOURS), len(rest_positions) - 1)
         index = cKDTree(rest_positions).query(rest_positions, k=k + 1)[1][:, 1:]
         self._neighbour_index = index[:, :neighbours]
+        self._every = np.arange(len(rest_positions))
         self._window_neighbours = np.ascontiguousarray(index[:, :_WINDOW_NEIGHBOURS].T)  # (k, N)
         self.windows = WindowCentroids(int(np.clip(np.ceil(0.5 * spacing_px), 2, 32)))
         self._radius_cap = np.inf
@@ -200,16 +203,31 @@ class Refiner:
         self._radius_cap = np.where(np.isfinite(tip), _TIP_REACH * tip + _TIP_MARGIN_PX, np.inf)
         tip_px = tip[np.isfinite(tip)]
         self.windows.above_mean |= bool(tip_px.size and np.median(tip_px) < _SMALL_TIP_PX)
-        centres, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
-                                                            self.window_radius(rest_positions))
         # Fractions of the spacing, with floors in px for the smallest pads (tips of 1 px, 4 px apart,
         # whose centroids scatter by a few tenths of a px in camera noise).
         self._max_shift_px = max(_MAX_SHIFT_FRACTION * spacing_px, _MIN_SHIFT_PX)
         self._guess_px = max(_GUESS_FRACTION * spacing_px, _MIN_GUESS_PX)
         self._settled_px = max(_SEARCH_SETTLED_FRACTION * spacing_px, _MIN_SHIFT_PX)
-        step = centres + origin - rest_positions
+        # Each pin's rest position is the windows' own fixed point near the given one (mean shift,
+        # a few passes): a window there finds its centroid where it stands, so the rest frame given
+        # again places every pin, whatever pulled the given position off it (another estimator, a
+        # sloped background, the rim). Farther than the search's settling bound, the given
+        # position stands.
+        positions = rest_positions
+        for _ in range(_REST_PASSES):
+            centres = self.windows(rest_crop, positions - origin, self.window_radius(positions))[0] + origin
+            positions = np.where(np.isfinite(centres), centres, positions)
+        near = _squared_norm(positions - rest_positions) <= self._settled_px ** 2
+        positions = np.where(near[:, None], positions, rest_positions)
+        centres, area, contrast, compactness = self.windows(rest_crop, positions - origin,
+                                                            self.window_radius(positions))
+        step = centres + origin - positions
         settled = _squared_norm(step) <= self._max_shift_px ** 2
-        self.rest_positions = np.where(settled[:, None], centres + origin, rest_positions)
+        self.rest_positions = positions
+        # What still pulls a window at rest off its place (a fixed point not quite reached, a
+        # window that drifts on the rim or a reflection), up to the search's settling bound.
+        offset = np.where(np.isfinite(step), step, 0.0)
+        self._rest_offset = np.where((_squared_norm(offset) <= self._settled_px ** 2)[:, None], offset, 0.0)
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above.
         self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
@@ -313,14 +331,17 @@ class Refiner:
         start = filled[which]
         first, measures = self.windows.measure(crop, start - self.origin, radius)
         first += self.origin
-        step = first - start
-        moved = _squared_norm(step)
+        # A window at the guess is judged by its centroid less the pin's own offset at rest (the
+        # window's pull by what lies around the tip), so a still tip is placed where it rested.
+        placed_at = first - self._rest_offset[which]
+        moved = _squared_norm(placed_at - start)
         like = self._like_at_rest(measures, which)
         fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
         done = (moved <= fine) & like
         done[n:] = False  # a lost pin's prediction is no guess: two passes
         positions = np.full(guess.shape, np.nan)
-        positions[which[done]] = first[done]
+        positions[which[done]] = placed_at[done]
+        moved = _squared_norm(first - start)
         # Second and third passes: pins that moved but not far re-centred on their last centroid;
         # a pin with a guess that found no tip near it searched for from its prediction from the
         # pins just placed (its neighbours' guesses held: a lone pin that vanished, or that moved
@@ -341,7 +362,7 @@ class Refiner:
         fresh = np.zeros(chain.size, dtype=bool)
         fresh[chain.size - far.size:] = True
         placed = [done.nonzero()[0]]
-        for _ in range(_FOLLOW_PASSES - 1):
+        for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
             if chain.size == 0:
                 break
             centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
@@ -353,8 +374,10 @@ class Refiner:
             # followed from its guess settles to a few tenths of a px, near its guess.
             pins = which[chain]
             like = self._like_at_rest(measures, pins)
-            ok = like & np.where(searched, (moved <= self._settled_px ** 2) & (error <= self.gate_px ** 2),
-                                 (moved <= fine) & (error <= reach))
+            settles = (moved <= self._settled_px ** 2) & (error <= self.gate_px ** 2)
+            # In the last pass a pin followed from its guess settles as a searched one does (a
+            # faint tip's centroid jitters in camera noise by more than a few tenths of a px).
+            ok = like & np.where(searched, settles, ((moved <= fine) & (error <= reach)) | (last & settles))
             positions[pins[ok]] = centres[ok]
             placed.append(chain[ok])
             # Go on while the window holds a tip like the pin's (or a search has just started).
@@ -471,6 +494,44 @@ class Refiner:
         positions[retry] = second
         self._one_pin_per_tip(positions, retry, error)
         return positions
+
+    def reconcile(self, crop: np.ndarray, positions: np.ndarray, last_seen: np.ndarray,
+                  search: np.ndarray) -> np.ndarray:
+        """Pins that moved unlike their neighbours searched for again where their neighbours say they are.
+
+        A pin whose displacement from rest departs from the median displacement of its nearest
+        pins at rest by more than `gate_px` (the membrane is continuous: neighbours move alike) sits
+        on another pin's tip or on nothing, as after a fast slide whose stale motion carried its
+        window onto a neighbour. It is searched for around its prediction (rest position moved by
+        that median: the rest position itself when the pad is back at rest), with the missing
+        pins in `search`, as `refine` searches; a pin found there takes its own tip, one that is
+        not found keeps its position.
+
+        Parameters
+        ----------
+        crop : (h, w) ndarray of uint8
+            The frame's crop at `origin`, bright pins.
+        positions : (N, 2) ndarray
+            Positions so far, px; NaN where missing.
+        last_seen : (N, 2) ndarray
+            Each pin's last known position, px.
+        search : (N,) ndarray of bool
+            Missing pins to search for with them.
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            `positions` with the odd pins (and missing ones) found again, px.
+        """
+        shift = positions - self.rest_positions
+        median = self.neighbour_median(shift, self._every)
+        odd = _squared_norm(shift - median) > self.gate_px ** 2  # NaN compares False
+        if not odd.any():
+            return positions
+        trial = positions.copy()
+        trial[odd] = np.nan
+        found = self.refine(crop, trial, last_seen, odd | search, settled=~odd & np.isfinite(positions[:, 0]))
+        return np.where(np.isnan(found[:, :1]) & odd[:, None], positions, found)
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.

@@ -512,6 +512,9 @@ class PinTracker:
             tracked = np.where(need[:, None], moved + origin, positions)
             positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
                                        filled=np.where(need[:, None], tracked, filled))
+        # Pins that moved unlike their neighbours (carried onto another tip by a stale guess) are
+        # searched for where their neighbours say they are.
+        positions = refiner.reconcile(crop, positions, self._last_seen, search)
         missing = np.isnan(positions[:, 0])
         if not missing.any():
             return positions, False, False
