@@ -129,6 +129,9 @@ SENSOR_PRESETS: dict[str, SensorDescription] = {d.name: d for d in (
     SensorDescription("brown-127", 127, 40.0, note="127-pin TacTip with a brown, low-contrast skin"),
     SensorDescription("radial-120", 120, 40.0, rings=7, spokes=17,
                       note="home-built TacTip: 7 rings x 17 spokes + a centre pin"),
+    SensorDescription("radial-led-120", 120, 40.0, rings=7, spokes=17,
+                      note="the home-built radial TacTip with 4 LED reflections inside the pad"),
+    SensorDescription("white-dark-331", 331, 40.0, note="331 white pins on a dark membrane in a dark casing"),
     SensorDescription("small-pad-100", 100, 40.0, note="100-pin pad, small in the image"),
     SensorDescription("dense-1000", 1000, 40.0, note="dense 1000-pin pad"),
 )}

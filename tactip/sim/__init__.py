@@ -4,8 +4,11 @@ Nothing here imports the rest of `tactip`, so `pins`' tests and doctests can dra
 
 - `tactip.sim.synthetic`: `SyntheticTacTip` renders the pin array under a `Contact`, with the true
   centre of every pin tip (`SyntheticFrame`); its presets name sensors of other generations.
+- `tactip.sim.sequence`: `SyntheticTacTip.sequence`, ``slides`` and ``taps``: presses and slides with
+  short rests between them, and their ground truth (`ContactEvent`: frame bounds, kind, direction, depth).
 - `tactip.sim.source`: `SyntheticSource`, a frame source of rendered taps (``synthetic:`` specs).
-- `tactip.sim._pad`, `tactip.sim._render`: the pad's geometry and contact mechanics, and the painting.
+- `tactip.sim._pad`, `tactip.sim._slide`, `tactip.sim._render`, `tactip.sim._scene`: the pad's geometry
+  and contact mechanics, the skin's slide under a sticking plate, the painting, and the light inside the pad.
 
 Model and its assumptions
 -------------------------
@@ -55,8 +58,21 @@ feature pins 4 mm apart see at most about 2.4 px between 0.25 and 5 mm, and 0.15
 widths 0.25 mm apart, against about 1 px for 0.25 mm more depth. (With ``rho = 8 mm`` adjacent widths
 differed by 0.02 px and no classifier could tell them apart.) Neighbouring tips stay separated (at least 1.8 px between the
 ellipses' edges) up to d = 5 mm on every preset; beyond about 6 mm the densest pad's tips begin
-to touch at the contact edge. A tap follows `tap_profile`: raised-cosine rise, plateau and release,
-250 ms each by default (paper 002, IV-A).
+to touch at the contact edge.
+
+Slides (`tactip.sim._slide`). ``Contact.slide_x_mm``, ``slide_y_mm``: the plate, pressed in, is
+dragged sideways and the skin sticks to it. The material in the contact patch (arc length from the
+apex ``<= a``) moves by the whole slide ``S`` along the pad surface; outside it the shift falls as a
+raised cosine to zero over ``L = max(6 mm, 2 |S|)`` (at most to the clamped base), so the map never
+folds (Jacobian >= 1 - pi/4; a slide too long for the pad, beyond `_slide.max_slide_mm`, about 15 mm at
+2 mm on a 40 mm pad, is refused). The indentation then acts where the material now is: the patch stays
+centred on the apex, the skin slides through it. Slides move pins several pitches sideways, not outward
+as a tap does: 3 pitches of ``radial-led-120`` (8.4 mm) move the central pins 3.0-3.5 pitches in the
+image (the pressed patch is nearer the camera). No contact, no slide. A tap follows `tap_profile`: raised-cosine rise, plateau and release,
+250 ms each by default (paper 002, IV-A). A sequence (`tactip.sim.sequence`) is made of whole-frame
+phases: rest, then per stroke a raised-cosine press, a hold or a raised-cosine slide, a raised-cosine
+lift that releases depth and slide together (the pad springs back), and a rest of at least one frame;
+its ``events`` are exactly the runs of frames in contact.
 
 Appearance (`tactip.sim._render`). Bright casing around the disc (about 200 grey, vignetted); a dark
 membrane (about 25) with a radial illumination gradient towards the LED ring; six LED glare spots on
@@ -110,6 +126,26 @@ an option (all off by default, so the default frames are unchanged byte for byte
   bright surround (an open, white-lit casing near saturation) with LED glare made stronger, and a
   veil of scattered light that brightens the disc edge (grey levels ``veil`` at the edge, fading
   inward over a tenth of the radius). Pins near the edge lose contrast.
+- LED reflections inside the pad ``reflections``, ``reflection_level``, ``glare_gradient``, ``shimmer``
+  (`tactip.sim._scene`): on the home-built radial TacTip the LEDs reflect in the clear window as soft
+  bright blobs inside the pad, and their glare brightens one side of it. ``reflections`` blobs
+  (flat-topped, ``2^-(r/rho)^4``, half-maximum radius ``rho`` 0.75-1.5 apex pin spacings, so 1.5-3
+  spacings across) at seeded positions 0.2-0.7 of the disc radius from its centre, each adding
+  ``reflection_level`` (+-15 %) grey at its centre; ``glare_gradient`` grey levels added on the bright
+  side of the disc, falling linearly to 0 on the other (a seeded direction). They are fixed in the
+  IMAGE, not on the membrane: they are light paths between the LEDs, the window and the lens, which do
+  not move when the skin behind them is pressed or dragged, so pins slide under and out of them. A pin
+  under this light gains only 0.7 of it (its white paint sits near the knee of the camera's response),
+  so it stands out less: on ``radial-led-120`` pins on a reflection stand on about 160 grey with a
+  contrast of about 35, the others on about 115 with about 50, as measured on the real pads (issue 20).
+  They stay ``visible`` pins; their true centres are unchanged (the tip is drawn point-symmetric; on a
+  reflection's flank the anti-aliased edge blends with a background sloping by several grey levels per
+  px, which pulls a background-subtracted centroid by up to about 0.2 px). The centres and radii are
+  ``reflection_centres`` and ``reflection_radii_px``. ``shimmer`` makes a still pad's frames differ by
+  more than sensor noise: every frame each reflection's peak varies with standard deviation ``shimmer``
+  grey (the gradient half that), and the reflections jitter by ``0.05 x shimmer`` px (at most 0.25 px);
+  a pin on a reflection then varies by 0.7 x that. The shimmer has its own random stream
+  (`SyntheticTacTip.reseed_noise` restarts it with the noise), so the noise stays what it was.
 - Pin count 100-1000: any count works (``dense-1000``: 1000 pins at 1280x720, 5 px tips about 16 px
   apart); rendering stays vectorised: about 3x the default 331-pin frame for 1000 pins at 1280x720
   (15-20 ms), 4x for a textured colour frame at 640x480 (20-30 ms; ``bench/bench_render.py``).
@@ -140,12 +176,22 @@ Presets
   and shadows 22 grey.
 - ``radial-120``: 120 small pins (2 px) on 7 rings x 17 spokes plus a centre pin, the pad a third of the
   frame height in a near-saturated surround (245) with strong glare and a veil, noise 5, 120 frames/s.
+- ``radial-led-120``: the real home-built pad of issue 20: ``radial-120`` with a grey membrane (100)
+  and pins (180), four LED reflections (50 grey) inside the pad, a glare gradient (25 grey) and shimmer 1.
+  Detection finds 108-114 of the 120 pins today (3 seeds, rest and a 5 mm tap): the pins on the
+  reflections are rejected, as on the real recordings.
+- ``white-dark-331``: white pins on a dark membrane in a dark (matt black, 30 grey) casing, the six LED
+  glare spots on the rim: no bright surround frames the disc. Today ``tactip detect`` refuses it ("no sensor
+  disc ... not a disc"), while ``tactip replay`` falls back to dark markers, finds a false disc and tracks
+  about 100 spurious pins (the dark gaps between the white pins), as on a real recording (issue 20).
 - ``small-pad-100``: 100 pins, the pad a quarter of the frame height, 320x240, bright surround (1 px tips).
 - ``dense-1000``: 1000 pins at 1280x720, the pad 0.9 of the frame height.
 """
 
 from tactip.sim.contact import Contact, SyntheticFrame, tap_profile
 from tactip.sim.presets import PRESETS, preset_names
+from tactip.sim.sequence import ContactEvent, ContactSequence, Stroke
 from tactip.sim.synthetic import SyntheticTacTip
 
-__all__ = ["Contact", "PRESETS", "SyntheticFrame", "SyntheticTacTip", "preset_names", "tap_profile"]
+__all__ = ["Contact", "ContactEvent", "ContactSequence", "PRESETS", "Stroke", "SyntheticFrame", "SyntheticTacTip",
+           "preset_names", "tap_profile"]

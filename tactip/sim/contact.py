@@ -24,15 +24,21 @@ class Contact:
         Lateral position of the gap centre line from the pad axis, along image y, mm.
     gap_angle_deg : float
         Direction of the gap line in the plate, degrees (0: along image x).
+    slide_x_mm, slide_y_mm : float
+        How far the plate has dragged the skin under it sideways (sticking), along image x and y, mm of
+        pad surface: the contact patch moves by all of it, the skin around it less (`tactip.sim._slide`).
+        No effect without contact (``indentation_mm <= 0``).
     """
 
     indentation_mm: float = 0.0
     gap_width_mm: float = 0.0
     gap_offset_mm: float = 0.0
     gap_angle_deg: float = 0.0
+    slide_x_mm: float = 0.0
+    slide_y_mm: float = 0.0
 
     def __post_init__(self):
-        for name in ("indentation_mm", "gap_width_mm", "gap_offset_mm", "gap_angle_deg"):
+        for name in ("indentation_mm", "gap_width_mm", "gap_offset_mm", "gap_angle_deg", "slide_x_mm", "slide_y_mm"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"{name} must be finite, got {getattr(self, name)!r}")
         if self.gap_width_mm < 0:

@@ -4,28 +4,28 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator
 
 import numpy as np
 
-from tactip.sim import _pad, _render
+from tactip.sim import _options, _pad, _render, _scene, _slide
 from tactip.sim.contact import Contact, SyntheticFrame, tap_profile
 from tactip.sim.presets import PRESETS
+from tactip.sim.sequence import ContactSequences
 
 __all__ = ["SyntheticTacTip"]
 
 _DISC_FRACTION = 0.435  # radius of the dark membrane disc / image height
 _DARK_INVERSION = 240.0  # dark_pins: grey level g becomes 240 - g (light membrane, dark tips)
-_PIN_SPACING_FRACTION = 0.3  # pin radius / pin spacing at the apex, both in px (at most 6 px)
-_LAYOUTS = ("auto", "radial")
-_SKIN_TINTS = (None, "brown")
+_PIN_SPACING_FRACTION = _options.PIN_SPACING_FRACTION  # pin radius / pin spacing at the apex (at most 6 px)
 _TEXTURE_POLAR_DEG = 84.0  # skin texture is drawn out to this polar angle (inside the casing edge)
 _SHADOW_RING = 1.4  # pin shadows: a soft dark ring of this radius round each tip, in pin radii
 _SHADOW_SIGMA = 0.35  # pin shadows: Gaussian sigma across the ring, in pin radii
 
 
-class SyntheticTacTip:
+class SyntheticTacTip(ContactSequences):
     """A simulated TacTip camera: renders frames of the pin array with exact ground truth.
 
     Parameters
@@ -78,6 +78,15 @@ class SyntheticTacTip:
         Colour frames only: a brown skin with cream pins instead of the neutral tint.
     frame_rate : float
         The camera's frame rate, frames/s; `tap` uses it when not given one.
+    reflections : int
+        Internal LED reflections: soft bright blobs inside the pad (0-16), fixed in the image.
+    reflection_level : float
+        Grey levels a reflection adds at its centre (each +-15 %).
+    glare_gradient : float
+        Glare across the pad: grey levels added on its brightest side, fading linearly to 0 across it.
+    shimmer : float
+        Per-frame std of the reflections' brightness, grey levels (half that on the glare gradient),
+        with sub-pixel jitter of their centres; a still pad's frames then differ by more than noise.
 
     Attributes
     ----------
@@ -99,6 +108,10 @@ class SyntheticTacTip:
         Centres (x, y) px of the LED glare blobs on the rim ring (empty without them).
     frame_rate : float
         Frames per second of `tap` by default.
+    reflection_centres : (K, 2) float64 ndarray
+        Centres (x, y) px of the internal LED reflections (empty without them).
+    reflection_radii_px : (K,) float64 ndarray
+        Their radii at half maximum, px.
     preset : str or None
         The preset's name when built by `from_preset`.
 
@@ -118,46 +131,17 @@ class SyntheticTacTip:
                  ring_glare: int = 0, membrane_level: float | None = None, pin_level: float | None = None,
                  surround_level: float | None = None, glare_gain: float = 1.0, veil: float = 0.0,
                  skin_texture: float = 0.0, pin_shadows: float = 0.0, skin_tint: str | None = None,
-                 frame_rate: float = 20.0):
-        if int(pins) != pins or pins < 7:
-            raise ValueError(f"pins must be an integer >= 7, got {pins!r}")
-        if layout not in _LAYOUTS:
-            raise ValueError(f"layout must be one of {_LAYOUTS}, got {layout!r}")
-        if not 0.25 <= pad_fraction <= 0.9:
-            raise ValueError(f"pad_fraction must be in 0.25..0.9, got {pad_fraction!r}")
-        if not 0.1 <= pin_fraction <= 0.4:
-            raise ValueError(f"pin_fraction must be in 0.1..0.4, got {pin_fraction!r}")
-        if rim_polar_deg is not None and not 60.0 <= rim_polar_deg < _pad.CASING_POLAR_DEG:
-            raise ValueError(f"rim_polar_deg must be None or in 60..{_pad.CASING_POLAR_DEG}, got {rim_polar_deg!r}")
-        if int(ring_glare) != ring_glare or not 0 <= ring_glare <= 64:
-            raise ValueError(f"ring_glare must be an integer in 0..64, got {ring_glare!r}")
-        if ring_glare and rim_polar_deg is None:
-            raise ValueError("ring_glare needs a rim ring: give rim_polar_deg")
-        for name, value in (("membrane_level", membrane_level), ("pin_level", pin_level),
-                            ("surround_level", surround_level)):
-            if value is not None and not 0 <= value <= 255:
-                raise ValueError(f"{name} must be None or in 0..255, got {value!r}")
-        for name, value in (("glare_gain", glare_gain), ("veil", veil), ("skin_texture", skin_texture),
-                            ("pin_shadows", pin_shadows)):
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
-        if skin_tint not in _SKIN_TINTS:
-            raise ValueError(f"skin_tint must be one of {_SKIN_TINTS}, got {skin_tint!r}")
-        if not (math.isfinite(frame_rate) and frame_rate > 0):
-            raise ValueError(f"frame_rate must be > 0, got {frame_rate!r}")
-        if layout == "radial":
-            _pad.radial_rings(int(pins))  # raises ValueError naming pins
-        if not pad_diameter_mm > 4 * _pad.STALK_MM:
-            raise ValueError(f"pad_diameter_mm must be > {4 * _pad.STALK_MM}, got {pad_diameter_mm!r}")
+                 frame_rate: float = 20.0, reflections: int = 0, reflection_level: float = 50.0,
+                 glare_gradient: float = 0.0, shimmer: float = 0.0):
+        _options.check_options(
+            pins=pins, pad_diameter_mm=pad_diameter_mm, image_size=image_size, noise_sigma=noise_sigma,
+            blur_sigma=blur_sigma, jpeg_quality=jpeg_quality, layout=layout, pad_fraction=pad_fraction,
+            pin_fraction=pin_fraction, rim_polar_deg=rim_polar_deg, ring_glare=ring_glare,
+            membrane_level=membrane_level, pin_level=pin_level, surround_level=surround_level,
+            glare_gain=glare_gain, veil=veil, skin_texture=skin_texture, pin_shadows=pin_shadows,
+            skin_tint=skin_tint, frame_rate=frame_rate, reflections=reflections,
+            reflection_level=reflection_level, glare_gradient=glare_gradient, shimmer=shimmer)
         width, height = (int(v) for v in image_size)
-        if width < 64 or height < 64:
-            raise ValueError(f"image_size must be at least (64, 64), got {image_size!r}")
-        if not noise_sigma >= 0:
-            raise ValueError(f"noise_sigma must be >= 0, got {noise_sigma!r}")
-        if not blur_sigma >= 0:
-            raise ValueError(f"blur_sigma must be >= 0, got {blur_sigma!r}")
-        if jpeg_quality is not None and not 1 <= jpeg_quality <= 100:
-            raise ValueError(f"jpeg_quality must be in 1..100 or None, got {jpeg_quality!r}")
         self._n = int(pins)
         self.pad_diameter_mm = float(pad_diameter_mm)
         self.image_size = (width, height)
@@ -174,6 +158,8 @@ class SyntheticTacTip:
         self.glare_gain, self.veil = float(glare_gain), float(veil)
         self.skin_texture, self.pin_shadows, self.skin_tint = float(skin_texture), float(pin_shadows), skin_tint
         self.frame_rate = float(frame_rate)
+        self.reflections, self.reflection_level = int(reflections), float(reflection_level)
+        self.glare_gradient, self.shimmer = float(glare_gradient), float(shimmer)
         self.preset = None
         layout_rng, self._noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
         scene_rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(2,)))  # new layers only
@@ -237,6 +223,16 @@ class SyntheticTacTip:
                 spot_px=max(pin_px, 2.0))
             self._ring = ((1.0 - alpha).reshape(-1), value.reshape(-1))
         self._texture = self._skin_spots(scene_rng) if self.skin_texture > 0 else None
+        self._light = None  # LED reflections and glare gradient inside the pad: image-fixed (see _scene)
+        if self.reflections or self.glare_gradient:
+            self._light = _scene.PadLight(
+                self.image_size, self.disc, np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3,))),
+                reflections=self.reflections, reflection_level=self.reflection_level,
+                spacing_px=centre_spacing_px, gradient_level=self.glare_gradient, shimmer=self.shimmer)
+        self.reflection_centres = np.zeros((0, 2)) if self._light is None else self._light.centres
+        self.reflection_radii_px = np.zeros(0) if self._light is None else self._light.radii_px
+        self._shimmer_rng = None
+        self.reseed_noise(None)
         self._tint = (_render.tint_table(self.membrane_level or _render.MEMBRANE_LEVEL, 0.85 * self._pin_level)
                       if self.skin_tint == "brown" else None)
 
@@ -287,7 +283,7 @@ class SyntheticTacTip:
 
     def _skin_image(self, x, y, contact: Contact):
         """Image positions (M, 2) px of skin material points at rest lateral position (x, y) mm."""
-        point = _pad.membrane_points(x, y, contact, self._radius)
+        point = _pad.membrane_points(*_slide.slid_points(x, y, contact, self._radius), contact, self._radius)
         return np.asarray(self.disc[:2]) + self._f * point[:, :2] / (point[:, 2:] + self._h)
 
     @property
@@ -296,7 +292,7 @@ class SyntheticTacTip:
         return self._n
 
     def __repr__(self) -> str:
-        extra = "".join(f", {name}={getattr(self, name)!r}" for name, default in _NEW_OPTIONS.items()
+        extra = "".join(f", {name}={getattr(self, name)!r}" for name, default in _options.REPR_DEFAULTS.items()
                         if getattr(self, name) != default)
         return (f"SyntheticTacTip(pins={self._n}, pad_diameter_mm={self.pad_diameter_mm}, "
                 f"image_size={self.image_size}, noise_sigma={self.noise_sigma}, glare={self.glare}, "
@@ -305,18 +301,24 @@ class SyntheticTacTip:
 
     def _project(self, contact: Contact):
         """Pin tips through the camera: centres (N, 2) px, ellipse matrices (N, 2, 2) px^2, facing (N,) bool."""
-        base, normal = _pad.deformed_surface(self._base_x, self._base_y, contact, self._radius)
+        x, y = _slide.slid_points(self._base_x, self._base_y, contact, self._radius)  # skin dragged sideways
+        base, normal = _pad.deformed_surface(x, y, contact, self._radius)
         return _pad.project_discs(base + _pad.STALK_MM * normal, normal, focal_px=self._f,
                                   principal_px=self.disc[:2], camera_mm=self._h,
                                   disc_radius_mm=self._tip_radius_mm)
 
-    def reseed_noise(self, seed: int) -> None:
+    def reseed_noise(self, seed: int | None) -> None:
         """Restart the camera-noise generator from ``seed`` (the pin layout is unchanged).
 
         The simulated station reseeds before each tap, so a tap's frames depend only on the tap
-        (a resumed collection renders exactly what an uninterrupted one would have).
+        (a resumed collection renders exactly what an uninterrupted one would have). The shimmer's
+        generator restarts from ``seed`` too; None restarts it alone from the sensor's seed.
         """
-        self._noise_rng = np.random.default_rng(seed)
+        if seed is not None:
+            self._noise_rng = np.random.default_rng(seed)
+        if self.shimmer > 0:  # shimmer has a stream of its own, so the noise stays what it was
+            key = self.seed if seed is None else seed
+            self._shimmer_rng = np.random.default_rng(np.random.SeedSequence(key, spawn_key=(4,)))
 
     def pin_centres(self, contact: Contact | None = None) -> tuple[np.ndarray, np.ndarray]:
         """True pin-tip centres for a contact state, without rendering.
@@ -432,6 +434,10 @@ class SyntheticTacTip:
         levels = self._pin_level * brightness * self._illumination.reshape(-1)[anchor[:, 1] * width + anchor[:, 0]]
         if self.dark_pins:
             levels = _DARK_INVERSION - levels
+        if self._light is not None:  # image-fixed light over skin and pins; the pins gain only a share of it
+            light = self._light.frame_layer(self._shimmer_rng)
+            levels = levels + _scene.PIN_LIGHT_SHARE * light.reshape(-1)[anchor[:, 1] * width + anchor[:, 0]]
+            flat += light.reshape(-1)
         _render.paint_pins(flat, self.image_size, centres, shape, levels)
         if self._ring is not None:  # the casing lip in front of the membrane hides what lies behind it
             flat *= self._ring[0]
@@ -487,14 +493,6 @@ class SyntheticTacTip:
         for k in range(int(math.floor(duration * frame_rate + 1e-9)) + 1):
             t = k / frame_rate
             fraction = tap_profile(t - rest_before_s, rise_s=rise_s, plateau_s=plateau_s, release_s=release_s)
-            state = Contact(contact.indentation_mm * fraction, contact.gap_width_mm, contact.gap_offset_mm,
-                            contact.gap_angle_deg)
+            state = dataclasses.replace(contact, indentation_mm=contact.indentation_mm * fraction)
             yield self.render(state, timestamp_s=t)
-
-
-# Options whose defaults the repr leaves out (it names them only when changed), so a repr stays short.
-_NEW_OPTIONS = {"layout": "auto", "pad_fraction": 0.87, "pin_fraction": _PIN_SPACING_FRACTION, "rim_polar_deg": None,
-                "ring_glare": 0, "membrane_level": None, "pin_level": None, "surround_level": None,
-                "glare_gain": 1.0, "veil": 0.0, "skin_texture": 0.0, "pin_shadows": 0.0, "skin_tint": None,
-                "frame_rate": 20.0}
 

@@ -101,3 +101,17 @@ def score(detected: np.ndarray, frame, gate_px: float = 3.0):
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+# Presets that show issue 20's phenomena before the front end copes with them: the detection and replay
+# bars are expected to fail on them (not strict: whoever fixes one removes it from here).
+NOT_YET_MET = {
+    "radial-led-120": "issue 20: pins on the LED reflections are rejected and lost",
+    "white-dark-331": "issue 20: no bright surround: detect finds no disc, replay tracks spurious dark spots",
+}
+
+
+def preset_params(names):
+    """``names`` for ``parametrize``, those in `NOT_YET_MET` marked as expected failures with the reason."""
+    return [pytest.param(name, marks=pytest.mark.xfail(reason=NOT_YET_MET[name], strict=False))
+            if name in NOT_YET_MET else name for name in names]

@@ -10,7 +10,7 @@ from scipy.spatial import Delaunay, cKDTree
 from pins import (REJECTION_REASONS, DetectionParams, NoSensorError, PinField, detect_pins, draw_pin_field,
                   find_pin_field, find_sensor_disc)
 from tactip.sim import Contact, SyntheticTacTip, preset_names
-from tests.pins.conftest import TAP, preset_frame, preset_sensor, score
+from tests.pins.conftest import TAP, preset_frame, preset_params, preset_sensor, score
 
 CONTACTS = {"rest": None, "tap5mm": TAP}
 
@@ -30,7 +30,7 @@ def _gate_px(frame) -> float:
 
 
 @pytest.mark.parametrize("contact", list(CONTACTS))
-@pytest.mark.parametrize("name", preset_names())
+@pytest.mark.parametrize("name", preset_params(preset_names()))
 def test_field_without_a_count_meets_the_bar(name, contact):
     f = preset_frame(name, CONTACTS[contact])
     field = _field(name, contact)
@@ -41,7 +41,7 @@ def test_field_without_a_count_meets_the_bar(name, contact):
 
 
 @pytest.mark.parametrize("contact", list(CONTACTS))
-@pytest.mark.parametrize("name", preset_names())
+@pytest.mark.parametrize("name", preset_params(preset_names()))
 def test_a_count_confirms_and_does_not_steer(name, contact):
     f = preset_frame(name, CONTACTS[contact])
     without, given = _field(name, contact), _field(name, contact, expected=True)

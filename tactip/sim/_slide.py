@@ -1,0 +1,101 @@
+"""Lateral slide of the skin under a sticking plate (the model is argued in `tactip.sim`, "Slides").
+
+The plate, pressed in by ``d`` mm, is dragged sideways by ``S = (slide_x_mm, slide_y_mm)`` and the
+skin sticks to it: the material in the contact patch (radius ``a = sqrt(R d)``) moves by the whole of
+``S``; outside it the shift falls smoothly (raised cosine) to zero over ``L = max(SLIDE_DECAY_MM, 2 |S|)``
+of pad surface, but never past the pad's clamped base (arc ``pi R / 2``). The shift is laid out in unrolled pad coordinates (arc length from the apex and azimuth,
+those of the pin lattice), so it is a shift along the pad surface. The map ``q -> q + S f(|q|)`` has
+Jacobian determinant ``1 + |S| f'(|q|) cos(angle)`` >= ``1 - pi |S| / 2 L`` >= ``1 - pi / 4``: it never
+folds, so pins never cross. Where the base cuts the fall-off short, the longest slide is the one that
+keeps that determinant >= `MIN_JACOBIAN` (`max_slide_mm`); a longer one is refused. The contact
+mechanics then act at the material's new place.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+SLIDE_DECAY_MM = 6.0  # shortest fall-off of the slide outside the contact patch, mm of pad surface (2+ pitches)
+DECAY_PER_SLIDE = 2.0  # the fall-off is at least this x the slide: the map's Jacobian stays >= 1 - pi / 4
+MIN_JACOBIAN = 0.05  # a slide may compress the skin round the patch to this share of its area, no further
+
+
+def _decay_mm(indentation_mm: float, slide_mm: float, radius_mm: float) -> float:
+    """Fall-off length of the slide outside the patch, mm: it ends at the latest at the clamped base."""
+    room = np.pi * radius_mm / 2 - np.sqrt(radius_mm * indentation_mm)
+    return min(max(SLIDE_DECAY_MM, DECAY_PER_SLIDE * slide_mm), room)
+
+
+def max_slide_mm(indentation_mm: float, radius_mm: float) -> float:
+    """The longest slide the model renders without folding at this indentation, mm of pad surface.
+
+    Parameters
+    ----------
+    indentation_mm : float
+        Depth of the press, mm (> 0).
+    radius_mm : float
+        Pad radius R, mm.
+
+    Examples
+    --------
+    >>> round(max_slide_mm(2.0, 20.0), 1)
+    15.2
+    """
+    room = np.pi * radius_mm / 2 - np.sqrt(radius_mm * indentation_mm)
+    # 1 - pi S / (2 L) >= MIN_JACOBIAN with L = min(max(decay, 2 S), room)
+    return float(max(2 * room * (1 - MIN_JACOBIAN) / np.pi, 0.0))
+
+
+def slide_fraction(arc_mm, contact, radius_mm: float):
+    """Share of the slide each material point takes, by its rest arc length from the apex: 1 in the patch.
+
+    Parameters
+    ----------
+    arc_mm : ndarray
+        Arc length of the points from the apex along the pad surface at rest, mm.
+    contact : Contact
+    radius_mm : float
+        Pad radius R, mm.
+
+    Returns
+    -------
+    ndarray shaped like ``arc_mm``, in [0, 1] (zeros when the plate does not touch or does not slide).
+    """
+    d, slide = contact.indentation_mm, np.hypot(contact.slide_x_mm, contact.slide_y_mm)
+    if d <= 0 or slide == 0:
+        return np.zeros(np.shape(arc_mm))
+    patch = np.sqrt(radius_mm * d)  # Hertz contact radius a
+    if slide > max_slide_mm(d, radius_mm) + 1e-9:
+        raise ValueError(f"slide_x_mm, slide_y_mm: a slide of {slide:.3g} mm folds the skin of a {2 * radius_mm:g} mm "
+                         f"pad at {d:g} mm indentation; at most {max_slide_mm(d, radius_mm):.3g} mm")
+    decay = _decay_mm(d, slide, radius_mm)
+    t = np.clip((np.asarray(arc_mm) - patch) / decay, 0.0, 1.0)
+    return 0.5 * (1.0 + np.cos(np.pi * t))
+
+
+def slid_points(x, y, contact, radius_mm: float):
+    """Lateral positions (x, y), mm, of membrane points at rest (x, y) after the plate's slide.
+
+    Parameters
+    ----------
+    x, y : ndarray
+        Lateral positions at rest, mm, on the sphere of radius ``radius_mm``.
+    contact : Contact
+    radius_mm : float
+
+    Returns
+    -------
+    x, y : ndarray
+        The same points shifted along the pad surface (the inputs themselves when nothing slides).
+    """
+    if contact.indentation_mm <= 0 or (contact.slide_x_mm == 0 and contact.slide_y_mm == 0):
+        return x, y
+    r = np.hypot(x, y)
+    arc = radius_mm * np.arcsin(np.clip(r / radius_mm, 0.0, 1.0))
+    scale = np.divide(arc, r, out=np.ones_like(r), where=r > 0)
+    share = slide_fraction(arc, contact, radius_mm)
+    qx, qy = x * scale + contact.slide_x_mm * share, y * scale + contact.slide_y_mm * share
+    arc = np.hypot(qx, qy)
+    lateral = radius_mm * np.sin(np.clip(arc / radius_mm, 0.0, np.pi / 2))
+    back = np.divide(lateral, arc, out=np.ones_like(arc), where=arc > 0)
+    return qx * back, qy * back
