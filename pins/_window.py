@@ -15,9 +15,12 @@ __all__ = ["WindowCentroids"]
 _PHASES = 4
 _SINGLE_THREAD_MACS = 262_143
 # The background plane's rise across half a window counts only beyond this fraction of the tip's
-# contrast (renders: the brown skin's pin shadows and mottling rise by 2-8 % of it and would bias
-# centroids by 0.1 px; an LED reflection on a faint tip rises by 20-50 %).
+# contrast (renders: the brown skin's pin shadows and mottling, and the noise of the sides' darkest
+# pixels, rise by 2-8 % of it and would bias centroids by 0.1 px; an LED reflection on a faint tip
+# rises by 20-50 %).
 _FLAT_RISE = 0.1
+# The background of a window's side is its darkest run of this many pixels (the mean of a run).
+_SIDE_RUN = 4
 
 class WindowCentroids:
     """Centroids of pin tips in square windows of side ``2 * half_px + 1`` around guesses.
@@ -27,8 +30,8 @@ class WindowCentroids:
     half_px : int
         Half side of the windows, px: about half the pin spacing (masks reach half_px + 0.5 at most).
     threshold_fraction : float
-        Where the threshold sits between the local background (a plane through the lower quartiles
-        of the window's sides) and the pin's top, in (0, 1).
+        Where the threshold sits between the local background (a plane through the darkest runs of
+        pixels along the window's sides) and the pin's top, in (0, 1).
     above_mean : bool
         Keep the threshold at least at the window's mean (textured skins, small tips).
     """
@@ -57,12 +60,16 @@ class WindowCentroids:
         masks = d2[None] <= (self._radii ** 2)[:, None, None, None]
         self._n_phases = len(phases)
         self._masks = masks.reshape(-1, gx.size).astype(np.uint8)  # (radius, phase y, phase x) -> P
-        # The four sides' pixels (left, right, top, bottom), the rank of their lower quartiles, and
-        # each pixel's (x, y) for the threshold plane.
+        # The four sides' pixels (left, right, top, bottom) and each pixel's (x, y) for the
+        # threshold plane.
         index = np.arange(gx.size).reshape(side, side)
-        self._sides = np.stack([index[:, 0], index[:, -1], index[0, :], index[-1, :]])  # (4, side)
-        self._quartile = side // 4
-        self._plane = np.stack([gx, gy]).astype(np.float32)  # (2, P): x and y of each pixel
+        # Runs of `_SIDE_RUN` pixels end to end along the middle of each side: (4 x runs x run,).
+        runs = side // _SIDE_RUN
+        middle = slice((side - runs * _SIDE_RUN) // 2, (side - runs * _SIDE_RUN) // 2 + runs * _SIDE_RUN)
+        self._sides = np.concatenate([index[middle, 0], index[middle, -1], index[0, middle], index[-1, middle]])
+        # (level, rise x, rise y) of the plane through the four sides' values: (4, 3).
+        self._side_plane = np.array([[0.25, -0.5, 0.0], [0.25, 0.5, 0.0], [0.25, 0.0, -0.5], [0.25, 0.0, 0.5]]) / _SIDE_RUN
+        self._plane = np.stack([np.ones_like(gx), gx, gy]).astype(np.float32)  # (3, P): 1, x and y of each pixel
         # Rows of the moment product per call: OpenBLAS keeps to one thread below 2^18 multiply-adds
         # (4 moments of P pixels a row). Threaded, this tiny product costs 20 ms on a busy machine
         # instead of 0.2.
@@ -111,8 +118,8 @@ class WindowCentroids:
         area : (N,) ndarray of float64
             Mass over the threshold-to-top height: about the tip's area, px.
         contrast : (N,) ndarray of float64
-            Pin top minus the local background (the plane through the lower quartiles of the
-            window's sides, at its centre), grey levels; negative where no tip rises above it.
+            Pin top minus the local background (the plane through the darkest runs of pixels along
+            the window's sides, at its centre), grey levels; negative where no tip rises above it.
         compactness : (N,) ndarray
             Area over 2 pi times the weights' mean squared distance from the centroid: 1 for a
             uniform disc, more for a domed tip, less for an elongated one or one with a speck.
@@ -141,47 +148,47 @@ class WindowCentroids:
         view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0, image.strides * 2)
         patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)  # (N, P) copy
         top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)  # their mean
-        # The local background: a plane through the lower quartiles of the window's four sides
-        # (left, right, top, bottom), robust to the feet of neighbouring tips on up to three
-        # quarters of a side. Judged above that plane, a tip on the slope of an LED reflection or
-        # of a bright surround's veil is weighed as on a flat membrane: its centroid is not pulled
-        # towards the bright side, nor is its contrast taken from a darkest pixel far below it.
-        sides = patches[:, self._sides]  # (N, 4, side)
-        sides.partition(self._quartile, axis=2)
-        quartiles = sides[:, :, self._quartile].astype(np.float64)  # (N, 4)
-        background = np.add.reduce(quartiles, axis=1) / 4  # the plane at the window's centre
-        slope = np.empty((n, 2))  # grey levels per px, (x, y)
-        np.subtract(quartiles[:, 1], quartiles[:, 0], out=slope[:, 0])
-        np.subtract(quartiles[:, 3], quartiles[:, 2], out=slope[:, 1])
-        slope /= 2 * half
-        # A rise across the half window below `_FLAT_RISE` of the tip's contrast pulls no centroid
-        # (the threshold lies a fifth of the way up), and there the plane is mostly the pin's own
-        # shadow or the skin's texture: the slope shrinks by that much (soft threshold).
-        rise = np.hypot(slope[:, 0], slope[:, 1])
-        rise *= half
-        with np.errstate(divide="ignore", invalid="ignore"):
-            keep = 1.0 - _FLAT_RISE * np.maximum(top - background, 0.0) / rise
-        slope *= np.fmax(np.minimum(keep, 1.0), 0.0)[:, None]  # NaN (no rise): 0
+        # The local background: a plane through the darkest of the runs of `_SIDE_RUN` pixels along
+        # each of the window's sides (left, right, top, bottom), where no neighbour's foot or glare
+        # lies, a run averaging the noise down (gathered contiguous: reductions over strided sides
+        # cost several times more). Judged above that plane, a tip on the slope of an LED
+        # reflection or of a bright surround's veil is weighed as on a flat membrane: its centroid
+        # is not pulled towards the bright side, nor is its contrast taken from a darkest pixel far
+        # below it. The plane: its level at the centre and its rise across half the window (x, y).
+        runs = np.add.reduce(patches[:, self._sides].reshape(n, 4, -1, _SIDE_RUN), axis=3, dtype=np.uint16)
+        plane = np.matmul(np.minimum.reduce(runs, axis=2).astype(np.float64), self._side_plane)  # (N, 3)
+        background = plane[:, 0]
         measures = np.empty((3, n))  # area, contrast, compactness
         area, contrast, compactness = measures
         np.subtract(top, background, out=contrast)  # the tip's height above the local background
+        # A rise below `_FLAT_RISE` of the tip's contrast pulls no centroid (the threshold lies a
+        # fifth of the way up), and there the plane is mostly noise, the pin's own shadow or the
+        # skin's texture: the rise shrinks by that much (soft threshold), to nothing for most windows.
+        rise = plane[:, 1:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            shrink = _FLAT_RISE * contrast / np.sqrt(np.einsum("ij,ij->i", rise, rise))
+        sloped = np.flatnonzero(shrink < 1.0)  # NaN (no rise, no contrast) compares False
         lift = self.threshold_fraction * np.maximum(contrast, 0.0)
         if self.above_mean:
             # Above the window's mean too (over the plane, whose mean over the window is its centre
             # value): on a textured or shadowed skin the membrane's texture must not count.
             mean = np.add.reduce(patches, axis=1, dtype=np.float64) / patches.shape[1]
             lift = np.minimum(np.maximum(lift, mean - background), np.maximum(contrast, 0.0))
-        level = background + lift  # the threshold at the window's centre
-        # The threshold plane, whole grey levels (so that weights stay integers), and the positive
-        # part of (pixel - threshold).
-        plane = slope.astype(np.float32)
-        threshold = plane[:, :1] * self._plane[0]  # (N, P)
-        threshold += plane[:, 1:] * self._plane[1]
-        threshold += level.astype(np.float32)[:, None]
-        np.rint(threshold, out=threshold)
-        weights = patches.astype(np.float32)
-        np.subtract(weights, threshold, out=weights)
-        np.maximum(weights, 0.0, out=weights)
+        level = background + lift  # the threshold at the window's centre, <= top
+        # Windows on a slope (few) weigh their pixels above the threshold plane, in whole grey
+        # levels so that weights stay integers; the others above a flat threshold, in uint8.
+        if sloped.size:
+            coefficients = np.empty((sloped.size, 3), np.float32)  # level, slope x, y (grey levels per px)
+            coefficients[:, 0] = level[sloped]
+            coefficients[:, 1:] = rise[sloped] * ((1.0 - np.maximum(shrink[sloped], 0.0)) / half)[:, None]
+            tilted = np.rint(np.matmul(coefficients, self._plane))  # (k, P) threshold plane
+            np.subtract(patches[sloped], tilted, out=tilted)
+            np.maximum(tilted, 0.0, out=tilted)
+        threshold = np.rint(level).astype(np.uint8)
+        # Positive part of (pixel - threshold), in place, without leaving uint8.
+        below = threshold[:, None]
+        np.maximum(patches, below, out=patches)
+        np.subtract(patches, below, out=patches)
         # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
         # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x).
         phase = np.rint((points - anchor) * _PHASES)
@@ -191,7 +198,11 @@ class WindowCentroids:
         mask = (radius * phases + phase[:, 1]) * phases + phase[:, 0]
         # Phases run from -_PHASES // 2 and radius indices from 1 (the mask of radius r/4 is row r - 1).
         mask += (_PHASES // 2) * (phases + 1) - phases * phases
-        np.multiply(weights, self._masks[mask.astype(np.intp)], out=weights)
+        masks = self._masks[mask.astype(np.intp)]
+        np.multiply(patches, masks, out=patches)
+        weights = patches.astype(np.float32)
+        if sloped.size:
+            weights[sloped] = tilted * masks[sloped]
         # (N, 4): mass, sum x, sum y, sum r^2; in blocks of rows that keep OpenBLAS on one thread.
         rows = self._moment_rows
         if n <= rows:
