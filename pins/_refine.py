@@ -89,6 +89,13 @@ _WINDOW_REACH = 0.55
 # and two positions nearer than this fraction of the spacing are one tip (tips of neighbours
 # pushed together stay more than half a spacing apart).
 _SEARCH_SETTLED_FRACTION = 0.1
+# The pad is back at rest when this share of the placed pins lie within this fraction of the
+# spacing of their rest positions.
+_STILL_SHARE = 0.5
+_STILL_FRACTION = 0.1
+# ... and at most this share of them lie between that and the gate (a moving pad's field of
+# displacements is continuous: its transition from still to moved pins holds many).
+_BETWEEN_SHARE = 0.02
 # A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
 # this fraction of the spacing (a few tenths of a px: the window was centred on the tip as LK
 # centres it), and it ended within the second fraction of the spacing of its guess (farther, LK
@@ -374,10 +381,12 @@ class Refiner:
             # followed from its guess settles to a few tenths of a px, near its guess.
             pins = which[chain]
             like = self._like_at_rest(measures, pins)
-            settles = (moved <= self._settled_px ** 2) & (error <= self.gate_px ** 2)
-            # In the last pass a pin followed from its guess settles as a searched one does (a
-            # faint tip's centroid jitters in camera noise by more than a few tenths of a px).
-            ok = like & np.where(searched, settles, ((moved <= fine) & (error <= reach)) | (last & settles))
+            settled = moved <= self._settled_px ** 2
+            # In the last pass a pin followed from its guess may settle as loosely as a searched one
+            # (a faint tip's centroid jitters in camera noise by more than a few tenths of a px), but
+            # no farther from its guess than that: a window still drifting is no tip of its own.
+            ok = like & np.where(searched, settled & (error <= self.gate_px ** 2),
+                                 ((moved <= fine) & (error <= reach)) | (last & settled & (error <= self._settled_px ** 2)))
             positions[pins[ok]] = centres[ok]
             placed.append(chain[ok])
             # Go on while the window holds a tip like the pin's (or a search has just started).
@@ -495,17 +504,16 @@ class Refiner:
         self._one_pin_per_tip(positions, retry, error)
         return positions
 
-    def reconcile(self, crop: np.ndarray, positions: np.ndarray, last_seen: np.ndarray,
-                  search: np.ndarray) -> np.ndarray:
-        """Pins that moved unlike their neighbours searched for again where their neighbours say they are.
+    def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
 
-        A pin whose displacement from rest departs from the median displacement of its nearest
-        pins at rest by more than `gate_px` (the membrane is continuous: neighbours move alike) sits
-        on another pin's tip or on nothing, as after a fast slide whose stale motion carried its
-        window onto a neighbour. It is searched for around its prediction (rest position moved by
-        that median: the rest position itself when the pad is back at rest), with the missing
-        pins in `search`, as `refine` searches; a pin found there takes its own tip, one that is
-        not found keeps its position.
+        When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing
+        of their rest positions and hardly any (`_BETWEEN_SHARE`) lie between that and `gate_px`
+        (the pad is back at rest: a moving pad's field of displacements is continuous), a pin farther than `gate_px` from its
+        rest position (a fast return from a slide carried its stale guess onto a neighbour's tip)
+        or missing is looked for in a window at its rest position, and placed there when the
+        window settles on a tip like its own at rest, as a search does. Whatever a moving pad
+        does, nothing is moved: the check costs a few vector operations per frame.
 
         Parameters
         ----------
@@ -513,25 +521,34 @@ class Refiner:
             The frame's crop at `origin`, bright pins.
         positions : (N, 2) ndarray
             Positions so far, px; NaN where missing.
-        last_seen : (N, 2) ndarray
-            Each pin's last known position, px.
-        search : (N,) ndarray of bool
-            Missing pins to search for with them.
 
         Returns
         -------
         positions : (N, 2) ndarray of float64
-            `positions` with the odd pins (and missing ones) found again, px.
+            `positions`, or a copy with the pins found at their rest positions, px.
         """
-        shift = positions - self.rest_positions
-        median = self.neighbour_median(shift, self._every)
-        odd = _squared_norm(shift - median) > self.gate_px ** 2  # NaN compares False
-        if not odd.any():
+        distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
+        far = distance > self.gate_px ** 2
+        if not far.any():
             return positions
-        trial = positions.copy()
-        trial[odd] = np.nan
-        found = self.refine(crop, trial, last_seen, odd | search, settled=~odd & np.isfinite(positions[:, 0]))
-        return np.where(np.isnan(found[:, :1]) & odd[:, None], positions, found)
+        still = distance <= (_STILL_FRACTION * self.spacing_px) ** 2
+        placed = np.count_nonzero(np.isfinite(distance))
+        # A moving pad's field of displacements is continuous: between its still pins and those
+        # moved farther than the gate lie pins moved by less. Pins put on wrong tips are off by
+        # a whole spacing, with none in between.
+        between = placed - np.count_nonzero(still) - np.count_nonzero(far)
+        if np.count_nonzero(still) < _STILL_SHARE * placed or between > _BETWEEN_SHARE * placed:
+            return positions  # the pad is not at rest
+        look = np.flatnonzero(far | np.isnan(distance))
+        rest = self.rest_positions[look]
+        centres, measures = self.windows.measure(crop, rest - self.origin, self.window_radius(self.rest_positions)[look])
+        centres += self.origin
+        found = (_squared_norm(centres - rest) <= self._settled_px ** 2) & self._like_at_rest(measures, look)
+        if not found.any():
+            return positions
+        positions = positions.copy()
+        positions[look[found]] = centres[found]
+        return positions
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.

@@ -512,9 +512,9 @@ class PinTracker:
             tracked = np.where(need[:, None], moved + origin, positions)
             positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
                                        filled=np.where(need[:, None], tracked, filled))
-        # Pins that moved unlike their neighbours (carried onto another tip by a stale guess) are
-        # searched for where their neighbours say they are.
-        positions = refiner.reconcile(crop, positions, self._last_seen, search)
+        # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
+        # missing ones are looked for at their rest positions.
+        positions = refiner.snap_to_rest(crop, positions)
         missing = np.isnan(positions[:, 0])
         if not missing.any():
             return positions, False, False
