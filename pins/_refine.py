@@ -234,7 +234,7 @@ class Refiner:
         # What still pulls a window at rest off its place (a fixed point not quite reached, a
         # window that drifts on the rim or a reflection), up to the search's settling bound.
         offset = np.where(np.isfinite(step), step, 0.0)
-        self._rest_offset = np.where((_squared_norm(offset) <= self._settled_px ** 2)[:, None], offset, 0.0)
+        self._rest_offset = np.where((_squared_norm(offset) <= self.gate_px ** 2)[:, None], offset, 0.0)
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above.
         self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
