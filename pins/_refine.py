@@ -504,7 +504,11 @@ class Refiner:
         self._one_pin_per_tip(positions, retry, error)
         return positions
 
-    def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    def still(self, steps: np.ndarray) -> np.ndarray:
+        """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
+        return _squared_norm(steps) <= self._settled_px ** 2
+
+    def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
         """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
 
         When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing
@@ -521,6 +525,8 @@ class Refiner:
             The frame's crop at `origin`, bright pins.
         positions : (N, 2) ndarray
             Positions so far, px; NaN where missing.
+        search : (N,) ndarray of bool
+            Missing pins to look for (retired ones take turns).
 
         Returns
         -------
@@ -529,7 +535,8 @@ class Refiner:
         """
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
         far = distance > self.gate_px ** 2
-        if not far.any():
+        wanted = far | (np.isnan(distance) & search)
+        if not wanted.any():
             return positions
         still = distance <= (_STILL_FRACTION * self.spacing_px) ** 2
         placed = np.count_nonzero(np.isfinite(distance))
@@ -539,7 +546,7 @@ class Refiner:
         between = placed - np.count_nonzero(still) - np.count_nonzero(far)
         if np.count_nonzero(still) < _STILL_SHARE * placed or between > _BETWEEN_SHARE * placed:
             return positions  # the pad is not at rest
-        look = np.flatnonzero(far | np.isnan(distance))
+        look = np.flatnonzero(wanted)
         rest = self.rest_positions[look]
         centres, measures = self.windows.measure(crop, rest - self.origin, self.window_radius(self.rest_positions)[look])
         centres += self.origin
