@@ -236,6 +236,8 @@ class Refiner:
         offset = np.where(np.isfinite(step), step, 0.0)
         self._rest_offset = np.where((_squared_norm(offset) <= self.gate_px ** 2)[:, None], offset, 0.0)
         self.settled_share = float(np.mean(settled & (contrast > 0)))
+        positive = contrast[contrast > 0]
+        self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
         # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above.
         self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
                                    _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)

@@ -34,6 +34,13 @@ class WindowCentroids:
         pixels along the window's sides) and the pin's top, in (0, 1).
     above_mean : bool
         Keep the threshold at least at the window's mean (textured skins, small tips).
+
+    Attributes
+    ----------
+    least_contrast : float
+        Windows whose tip rises less above the background, grey levels, weigh their pixels over a
+        flat threshold whatever the plane's slope (no tip to pull; `Refiner` sets a quarter of the
+        faintest tips' contrast at rest).
     """
 
     def __init__(self, half_px: int, *, threshold_fraction: float = 0.2, above_mean: bool = False) -> None:
@@ -44,6 +51,7 @@ class WindowCentroids:
         self.half_px = int(half_px)
         self.threshold_fraction = float(threshold_fraction)
         self.above_mean = bool(above_mean)
+        self.least_contrast = 0.0
         side = 2 * self.half_px + 1
         offsets = np.arange(-self.half_px, self.half_px + 1, dtype=np.float32)
         gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
@@ -167,7 +175,8 @@ class WindowCentroids:
         rise = plane[:, 1:]
         with np.errstate(divide="ignore", invalid="ignore"):
             shrink = _FLAT_RISE * contrast / np.sqrt(np.einsum("ij,ij->i", rise, rise))
-        sloped = np.flatnonzero(shrink < 1.0)  # NaN (no rise, no contrast) compares False
+        # (Windows without a tip of some contrast, a lost pin's empty window, need no plane.)
+        sloped = np.flatnonzero((shrink < 1.0) & (contrast > self.least_contrast))  # NaN compares False
         lift = self.threshold_fraction * np.maximum(contrast, 0.0)
         if self.above_mean:
             # Above the window's mean too (over the plane, whose mean over the window is its centre
