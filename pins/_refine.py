@@ -680,22 +680,13 @@ class Refiner:
         Returns (L, 2), NaN for a pin none of whose neighbours has a finite value.
         """
         index = self._neighbour_index[which]
-        # x and y apart, each (L, k) and contiguous along the neighbours (a row's x and y are NaN
-        # together): `take` and a sort along the last axis cost half of a (L, k, 2) gather and sort.
-        near = np.empty((2, *index.shape))
-        values[:, 0].take(index, out=near[0])
-        values[:, 1].take(index, out=near[1])
-        count = index.shape[1] - np.add.reduce(np.isnan(near[0]), axis=1)
+        near = values[index]  # (L, k, 2), a copy
+        count = np.add.reduce(np.isfinite(near[..., 0]), axis=1)
         # Median over the finite neighbours (sorting puts NaN last): mean of the middle one or two;
         # NaN where there are none (the middle index is then -1, a NaN too).
-        near.sort(axis=2)
-        flat = near.reshape(2, -1)
-        start = np.arange(0, flat.shape[1], index.shape[1])
-        low, high = start + (count - 1) // 2, start + count // 2
-        median = flat[:, low]
-        median += flat[:, high]
-        median *= 0.5
-        return median.T
+        near.sort(axis=1)
+        rows = np.arange(len(index))
+        return 0.5 * (near[rows, (count - 1) // 2] + near[rows, count // 2])
 
 
 def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
