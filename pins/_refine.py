@@ -7,11 +7,12 @@ the intensity-weighted centroid of its tip in a small window around its estimate
 sliding-window view, as `numpy.lib.stride_tricks.sliding_window_view` makes) and processed as
 one (N, P) uint8 array, O(pins x window):
 
-1. the threshold of each window is its darkest pixel (the membrane, less the noise) plus
+1. the threshold of each window lies above its local background, a plane through the darkest
+   runs of pixels along the window's four sides (`pins._window`; tilted only where it rises by
+   more than a tenth of the tip's contrast: an LED reflection's or a veil's flank), by
    `threshold_fraction` of the way up to the pin's top (the mean of the five pixels at the
    window's centre), so that membrane noise never counts and the whole tip above its foot does,
-   and at least the window's mean, so that the texture of a coloured skin whose shadows make the
-   darkest pixel far darker than the membrane does not count either;
+   and at least the window's mean on textured skins;
 2. each pixel is weighted by its grey level above the threshold (the positive part);
 3. a disc mask centred on the estimate (to a quarter pixel) keeps the pixels nearer to it than
    0.55 of the distance to the nearest neighbouring pin, and no farther than 1.6 tip radii
@@ -37,6 +38,14 @@ contrast; a neighbour, glare or a speck in the window pulls the centroid, adds a
 the mass. Limit: a small bright speck detached from a tip but inside its window pulls it by less
 than that bound (up to 0.5 px in tests where blob detection would have kept them apart); a speck
 touching a tip fools blob detection as much.
+
+Rest. The rest positions are the windows' own fixed points near the given ones (a few passes of
+mean shift), and what still pulls a window at rest is the pin's rest offset, taken off its first
+window later: the rest frame given again places every pin. A step within the search's settling
+bound is camera noise, not velocity. On a pad back at rest (half the pins within 0.1 spacing of
+rest, hardly any between that and the gate), pins far from rest and missing ones are looked for
+at their rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on
+their neighbours' tips.
 
 Search. A lost pin (or one whose centroid is implausible) is looked for in a window at its
 predicted position (its rest position moved by the median displacement of its tracked
