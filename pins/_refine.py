@@ -7,11 +7,12 @@ the intensity-weighted centroid of its tip in a small window around its estimate
 sliding-window view, as `numpy.lib.stride_tricks.sliding_window_view` makes) and processed as
 one (N, P) uint8 array, O(pins x window):
 
-1. the threshold of each window is its darkest pixel (the membrane, less the noise) plus
+1. the threshold of each window lies above its local background, a plane through the darkest
+   runs of pixels along the window's four sides (`pins._window`; tilted only where it rises by
+   more than a tenth of the tip's contrast: an LED reflection's or a veil's flank), by
    `threshold_fraction` of the way up to the pin's top (the mean of the five pixels at the
    window's centre), so that membrane noise never counts and the whole tip above its foot does,
-   and at least the window's mean, so that the texture of a coloured skin whose shadows make the
-   darkest pixel far darker than the membrane does not count either;
+   and at least the window's mean on textured skins;
 2. each pixel is weighted by its grey level above the threshold (the positive part);
 3. a disc mask centred on the estimate (to a quarter pixel) keeps the pixels nearer to it than
    0.55 of the distance to the nearest neighbouring pin, and no farther than 1.6 tip radii
@@ -38,6 +39,14 @@ the mass. Limit: a small bright speck detached from a tip but inside its window 
 than that bound (up to 0.5 px in tests where blob detection would have kept them apart); a speck
 touching a tip fools blob detection as much.
 
+Rest. The rest positions are the windows' own fixed points near the given ones (a few passes of
+mean shift), and what still pulls a window at rest is the pin's rest offset, taken off its first
+window later: the rest frame given again places every pin. A step within the search's settling
+bound is camera noise, not velocity. On a pad back at rest (half the pins within 0.1 spacing of
+rest, hardly any between that and the gate), pins far from rest and missing ones are looked for
+at their rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on
+their neighbours' tips.
+
 Search. A lost pin (or one whose centroid is implausible) is looked for in a window at its
 predicted position (its rest position moved by the median displacement of its tracked
 neighbours), re-centred once; it is found when that move is at most 0.1 spacings, its tip is like
@@ -60,13 +69,11 @@ from scipy.spatial import cKDTree
 
 from .detect import DetectionParams, _detect
 from .disc import SensorDisc
+from ._window import WindowCentroids, _squared_norm
 from .errors import ShapeError
 
 __all__ = ["match_to_blobs", "WindowCentroids", "Refiner"]
 
-# Sub-pixel steps per px of the window masks' centres and radii.
-_PHASES = 4
-_SINGLE_THREAD_MACS = 262_143
 _TIP_REACH = 1.6
 _TIP_MARGIN_PX = 1.5
 # A skin is textured when, in the median window at rest, the window's median lies more than this
@@ -91,6 +98,13 @@ _WINDOW_REACH = 0.55
 # and two positions nearer than this fraction of the spacing are one tip (tips of neighbours
 # pushed together stay more than half a spacing apart).
 _SEARCH_SETTLED_FRACTION = 0.1
+# The pad is back at rest when this share of the placed pins lie within this fraction of the
+# spacing of their rest positions.
+_STILL_SHARE = 0.5
+_STILL_FRACTION = 0.1
+# ... and at most this share of them lie between that and the gate (a moving pad's field of
+# displacements is continuous: its transition from still to moved pins holds many).
+_BETWEEN_SHARE = 0.02
 # A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
 # this fraction of the spacing (a few tenths of a px: the window was centred on the tip as LK
 # centres it), and it ended within the second fraction of the spacing of its guess (farther, LK
@@ -98,6 +112,8 @@ _SEARCH_SETTLED_FRACTION = 0.1
 _GUESS_FRACTION = 0.03
 _FOLLOW_FRACTION = 0.4
 _FOLLOW_PASSES = 4
+# Passes of mean shift that take the given rest positions to the windows' fixed points.
+_REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
@@ -138,168 +154,6 @@ def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> 
     winners = order[first]
     index[live[winners]] = nearest[winners]
     return index
-
-
-class WindowCentroids:
-    """Centroids of pin tips in square windows of side ``2 * half_px + 1`` around guesses.
-
-    Parameters
-    ----------
-    half_px : int
-        Half side of the windows, px: about half the pin spacing (masks reach half_px + 0.5 at most).
-    threshold_fraction : float
-        Where the threshold sits between the darkest pixel of a window and the pin's top, in (0, 1).
-    above_mean : bool
-        Keep the threshold at least at the window's mean (textured skins, small tips).
-    """
-
-    def __init__(self, half_px: int, *, threshold_fraction: float = 0.2, above_mean: bool = False) -> None:
-        if int(half_px) != half_px or half_px < 2:
-            raise ValueError(f"half_px must be an integer >= 2, got {half_px}")
-        if not 0.0 < threshold_fraction < 1.0:
-            raise ValueError(f"threshold_fraction must be in (0, 1), got {threshold_fraction}")
-        self.half_px = int(half_px)
-        self.threshold_fraction = float(threshold_fraction)
-        self.above_mean = bool(above_mean)
-        side = 2 * self.half_px + 1
-        offsets = np.arange(-self.half_px, self.half_px + 1, dtype=np.float32)
-        gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
-        # Moments of each window pixel: mass, x, y and squared distance from the window's centre pixel.
-        self._moments = np.column_stack([np.ones_like(gx), gx, gy, gx * gx + gy * gy])  # (P, 4)
-        middle = gx.size // 2
-        self._top = np.array([middle, middle - 1, middle + 1, middle - side, middle + side])
-        # Disc masks for every quarter-pixel centre in [-0.5, 0.5]^2 and radius up to half_px + 0.5.
-        phases = np.arange(-_PHASES // 2, _PHASES // 2 + 1) / _PHASES
-        self._radii = np.arange(1, (self.half_px + 0.5) * _PHASES + 1) / _PHASES
-        dx2 = (gx[None, :] - phases[:, None]) ** 2  # (phase x, P)
-        dy2 = (gy[None, :] - phases[:, None]) ** 2  # (phase y, P)
-        d2 = dy2[:, None, :] + dx2[None, :, :]  # (phase y, phase x, P)
-        masks = d2[None] <= (self._radii ** 2)[:, None, None, None]
-        self._n_phases = len(phases)
-        self._masks = masks.reshape(-1, gx.size).astype(np.uint8)  # (radius, phase y, phase x) -> P
-        # Rows of the moment product per call: OpenBLAS keeps to one thread below 2^18 multiply-adds
-        # (4 moments of P pixels a row). Threaded, this tiny product costs 20 ms on a busy machine
-        # instead of 0.2.
-        self._moment_rows = max(1, _SINGLE_THREAD_MACS // (4 * gx.size))
-
-    def __repr__(self) -> str:
-        return (f"WindowCentroids(half_px={self.half_px}, threshold_fraction={self.threshold_fraction}, "
-                f"above_mean={self.above_mean})")
-
-    def levels(self, image: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Darkest pixel, median and tip top (the mean of the five centre pixels) of each window, grey levels.
-
-        Windows at the finite `points` (N, 2), px, that fit in `image`; NaN elsewhere. (N,) each.
-        """
-        side = 2 * self.half_px + 1
-        image = np.ascontiguousarray(image)
-        height, width = image.shape
-        corner = np.rint(points).astype(np.intp) - self.half_px
-        fits = ((corner >= 0).all(axis=1) & (corner[:, 0] <= width - side) & (corner[:, 1] <= height - side))
-        out = np.full((3, len(points)), np.nan)
-        if fits.any():
-            view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0,
-                              image.strides * 2)
-            patches = view[corner[fits, 1], corner[fits, 0]].reshape(int(fits.sum()), -1)
-            out[:, fits] = (patches.min(axis=1), np.median(patches, axis=1), patches[:, self._top].mean(axis=1))
-        return out[0], out[1], out[2]
-
-    def __call__(self, image: np.ndarray, points: np.ndarray,
-                 radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Centroids of the bright tips around `points`.
-
-        Parameters
-        ----------
-        image : (H, W) ndarray of uint8
-            Grey image, bright pins on a dark membrane.
-        points : (N, 2) ndarray
-            Finite guesses (x, y), px.
-        radius_px : (N,) ndarray
-            Radius of each mask, px (a little more than half the distance to the nearest
-            neighbouring pin); clipped to [0.25, half_px + 0.5].
-
-        Returns
-        -------
-        centres : (N, 2) ndarray of float64
-            Weighted centroids (x, y), px; NaN where the window is empty or does not fit in the image.
-        area : (N,) ndarray of float64
-            Mass over the threshold-to-top height: about the tip's area, px.
-        contrast : (N,) ndarray of float64
-            Pin top minus the darkest pixel of the window, grey levels.
-        compactness : (N,) ndarray
-            Area over 2 pi times the weights' mean squared distance from the centroid: 1 for a
-            uniform disc, more for a domed tip, less for an elongated one or one with a speck.
-        """
-        centres, measures = self.measure(image, points, radius_px)
-        return centres, measures[0], measures[1], measures[2]
-
-    def measure(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """As `__call__`: the centroids (N, 2), px, and (area, contrast, compactness) stacked (3, N)."""
-        half, side = self.half_px, 2 * self.half_px + 1
-        n = len(points)
-        if n == 0:
-            return np.empty((0, 2)), np.empty((3, 0))
-        # Called a few times a frame, mostly on a few dozen windows: each NumPy call's own cost
-        # counts, so ufuncs and their reductions are called directly (not through array methods).
-        image = np.ascontiguousarray(image)
-        height, width = image.shape
-        anchor = np.rint(points)
-        corner = anchor.astype(np.intp)
-        corner -= half
-        # A negative corner, read as unsigned, lies beyond either bound: one comparison a side.
-        inside = corner.view(np.uintp) <= np.array((width - side, height - side), np.uintp)
-        fits = inside[:, 0] & inside[:, 1]
-        corner *= fits[:, None]
-        # All windows at once: a (H - side + 1, W - side + 1, side, side) sliding view, fancy-indexed.
-        view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0, image.strides * 2)
-        patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)  # (N, P) copy
-        low = np.minimum.reduce(patches, axis=1)
-        top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)  # their mean
-        measures = np.empty((3, n))  # area, contrast, compactness
-        area, contrast, compactness = measures
-        np.subtract(top, low, out=contrast)  # >= 0: the darkest pixel is no brighter than the five's mean
-        level = low + self.threshold_fraction * contrast  # <= top
-        if self.above_mean:
-            # Above the window's mean too: on a textured or shadowed skin the darkest pixel lies
-            # well below the membrane, and a threshold near it would let the membrane's texture count.
-            level = np.minimum(np.maximum(level, np.add.reduce(patches, axis=1, dtype=np.float64) / patches.shape[1]),
-                               top)
-        threshold = np.rint(level).astype(np.uint8)
-        # Positive part of (pixel - threshold), in place, without leaving uint8.
-        below = threshold[:, None]
-        np.maximum(patches, below, out=patches)
-        np.subtract(patches, below, out=patches)
-        # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
-        # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x).
-        phase = np.rint((points - anchor) * _PHASES)
-        radius = np.rint(np.asarray(radius_px, dtype=np.float64) * _PHASES)
-        np.fmin(np.maximum(radius, 1.0, out=radius), float(len(self._radii)), out=radius)  # NaN: the widest
-        phases = self._n_phases
-        mask = (radius * phases + phase[:, 1]) * phases + phase[:, 0]
-        # Phases run from -_PHASES // 2 and radius indices from 1 (the mask of radius r/4 is row r - 1).
-        mask += (_PHASES // 2) * (phases + 1) - phases * phases
-        np.multiply(patches, self._masks[mask.astype(np.intp)], out=patches)
-        # (N, 4): mass, sum x, sum y, sum r^2; in blocks of rows that keep OpenBLAS on one thread.
-        weights = patches.astype(np.float32)
-        rows = self._moment_rows
-        if n <= rows:
-            moments = np.matmul(weights, self._moments)
-        else:
-            moments = np.empty((n, 4), np.float32)
-            for row in range(0, n, rows):
-                np.matmul(weights[row:row + rows], self._moments, out=moments[row:row + rows])
-        moments = moments.astype(np.float64)
-        mass = moments[:, 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            moments[:, 1:] /= mass[:, None]  # centroid offset (x, y) and mean r^2
-            offset = moments[:, 1:3]
-            np.divide(mass, top - threshold, out=area)
-            # Mean squared distance from the centroid; a disc of area A has A / (2 pi).
-            spread = moments[:, 3] - _squared_norm(offset)
-            np.divide(area, 2 * np.pi * spread, out=compactness)
-        centres = anchor + offset
-        centres[~fits | (mass <= 0)] = np.nan
-        return centres, measures
 
 
 class Refiner:
@@ -346,6 +200,7 @@ class Refiner:
         k = min(max(neighbours, _WINDOW_NEIGHBOURS), len(rest_positions) - 1)
         index = cKDTree(rest_positions).query(rest_positions, k=k + 1)[1][:, 1:]
         self._neighbour_index = index[:, :neighbours]
+        self._every = np.arange(len(rest_positions))
         self._window_neighbours = np.ascontiguousarray(index[:, :_WINDOW_NEIGHBOURS].T)  # (k, N)
         self.windows = WindowCentroids(int(np.clip(np.ceil(0.5 * spacing_px), 2, 32)))
         self._radius_cap = np.inf
@@ -364,17 +219,34 @@ class Refiner:
         self._radius_cap = np.where(np.isfinite(tip), _TIP_REACH * tip + _TIP_MARGIN_PX, np.inf)
         tip_px = tip[np.isfinite(tip)]
         self.windows.above_mean |= bool(tip_px.size and np.median(tip_px) < _SMALL_TIP_PX)
-        centres, area, contrast, compactness = self.windows(rest_crop, rest_positions - origin,
-                                                            self.window_radius(rest_positions))
         # Fractions of the spacing, with floors in px for the smallest pads (tips of 1 px, 4 px apart,
         # whose centroids scatter by a few tenths of a px in camera noise).
         self._max_shift_px = max(_MAX_SHIFT_FRACTION * spacing_px, _MIN_SHIFT_PX)
         self._guess_px = max(_GUESS_FRACTION * spacing_px, _MIN_GUESS_PX)
         self._settled_px = max(_SEARCH_SETTLED_FRACTION * spacing_px, _MIN_SHIFT_PX)
-        step = centres + origin - rest_positions
+        # Each pin's rest position is the windows' own fixed point near the given one (mean shift,
+        # a few passes): a window there finds its centroid where it stands, so the rest frame given
+        # again places every pin, whatever pulled the given position off it (another estimator, a
+        # sloped background, the rim). Farther than the search's settling bound, the given
+        # position stands.
+        positions = rest_positions
+        for _ in range(_REST_PASSES):
+            centres = self.windows(rest_crop, positions - origin, self.window_radius(positions))[0] + origin
+            positions = np.where(np.isfinite(centres), centres, positions)
+        near = _squared_norm(positions - rest_positions) <= self._settled_px ** 2
+        positions = np.where(near[:, None], positions, rest_positions)
+        centres, area, contrast, compactness = self.windows(rest_crop, positions - origin,
+                                                            self.window_radius(positions))
+        step = centres + origin - positions
         settled = _squared_norm(step) <= self._max_shift_px ** 2
-        self.rest_positions = np.where(settled[:, None], centres + origin, rest_positions)
+        self.rest_positions = positions
+        # What still pulls a window at rest off its place (a fixed point not quite reached, a
+        # window that drifts on the rim or a reflection), up to the search's settling bound.
+        offset = np.where(np.isfinite(step), step, 0.0)
+        self._rest_offset = np.where((_squared_norm(offset) <= self.gate_px ** 2)[:, None], offset, 0.0)
         self.settled_share = float(np.mean(settled & (contrast > 0)))
+        positive = contrast[contrast > 0]
+        self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
         # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above.
         self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
                                    _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
@@ -477,14 +349,17 @@ class Refiner:
         start = filled[which]
         first, measures = self.windows.measure(crop, start - self.origin, radius)
         first += self.origin
-        step = first - start
-        moved = _squared_norm(step)
+        # A window at the guess is judged by its centroid less the pin's own offset at rest (the
+        # window's pull by what lies around the tip), so a still tip is placed where it rested.
+        placed_at = first - self._rest_offset[which]
+        moved = _squared_norm(placed_at - start)
         like = self._like_at_rest(measures, which)
         fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
         done = (moved <= fine) & like
         done[n:] = False  # a lost pin's prediction is no guess: two passes
         positions = np.full(guess.shape, np.nan)
-        positions[which[done]] = first[done]
+        positions[which[done]] = placed_at[done]
+        moved = _squared_norm(first - start)
         # Second and third passes: pins that moved but not far re-centred on their last centroid;
         # a pin with a guess that found no tip near it searched for from its prediction from the
         # pins just placed (its neighbours' guesses held: a lone pin that vanished, or that moved
@@ -505,7 +380,7 @@ class Refiner:
         fresh = np.zeros(chain.size, dtype=bool)
         fresh[chain.size - far.size:] = True
         placed = [done.nonzero()[0]]
-        for _ in range(_FOLLOW_PASSES - 1):
+        for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
             if chain.size == 0:
                 break
             centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
@@ -517,8 +392,12 @@ class Refiner:
             # followed from its guess settles to a few tenths of a px, near its guess.
             pins = which[chain]
             like = self._like_at_rest(measures, pins)
-            ok = like & np.where(searched, (moved <= self._settled_px ** 2) & (error <= self.gate_px ** 2),
-                                 (moved <= fine) & (error <= reach))
+            settled = moved <= self._settled_px ** 2
+            # In the last pass a pin followed from its guess may settle as loosely as a searched one
+            # (a faint tip's centroid jitters in camera noise by more than a few tenths of a px), but
+            # no farther from its guess than that: a window still drifting is no tip of its own.
+            ok = like & np.where(searched, settled & (error <= self.gate_px ** 2),
+                                 ((moved <= fine) & (error <= reach)) | (last & settled & (error <= self._settled_px ** 2)))
             positions[pins[ok]] = centres[ok]
             placed.append(chain[ok])
             # Go on while the window holds a tip like the pin's (or a search has just started).
@@ -634,6 +513,59 @@ class Refiner:
         retry, second, error = retry[found], second[found], error[found]
         positions[retry] = second
         self._one_pin_per_tip(positions, retry, error)
+        return positions
+
+    def still(self, steps: np.ndarray) -> np.ndarray:
+        """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
+        return _squared_norm(steps) <= self._settled_px ** 2
+
+    def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
+        """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
+
+        When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing
+        of their rest positions and hardly any (`_BETWEEN_SHARE`) lie between that and `gate_px`
+        (the pad is back at rest: a moving pad's field of displacements is continuous), a pin farther than `gate_px` from its
+        rest position (a fast return from a slide carried its stale guess onto a neighbour's tip)
+        or missing is looked for in a window at its rest position, and placed there when the
+        window settles on a tip like its own at rest, as a search does. Whatever a moving pad
+        does, nothing is moved: the check costs a few vector operations per frame.
+
+        Parameters
+        ----------
+        crop : (h, w) ndarray of uint8
+            The frame's crop at `origin`, bright pins.
+        positions : (N, 2) ndarray
+            Positions so far, px; NaN where missing.
+        search : (N,) ndarray of bool
+            Missing pins to look for (retired ones take turns).
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            `positions`, or a copy with the pins found at their rest positions, px.
+        """
+        distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
+        far = distance > self.gate_px ** 2
+        wanted = far | (np.isnan(distance) & search)
+        if not wanted.any():
+            return positions
+        still = distance <= (_STILL_FRACTION * self.spacing_px) ** 2
+        placed = np.count_nonzero(np.isfinite(distance))
+        # A moving pad's field of displacements is continuous: between its still pins and those
+        # moved farther than the gate lie pins moved by less. Pins put on wrong tips are off by
+        # a whole spacing, with none in between.
+        between = placed - np.count_nonzero(still) - np.count_nonzero(far)
+        if np.count_nonzero(still) < _STILL_SHARE * placed or between > _BETWEEN_SHARE * placed:
+            return positions  # the pad is not at rest
+        look = np.flatnonzero(wanted)
+        rest = self.rest_positions[look]
+        centres, measures = self.windows.measure(crop, rest - self.origin, self.window_radius(self.rest_positions)[look])
+        centres += self.origin
+        found = (_squared_norm(centres - rest) <= self._settled_px ** 2) & self._like_at_rest(measures, look)
+        if not found.any():
+            return positions
+        positions = positions.copy()
+        positions[look[found]] = centres[found]
         return positions
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
@@ -778,12 +710,6 @@ def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple
     r, c = linear_sum_assignment(sub)
     accepted = sub[r, c] <= gate
     return rows[r[accepted]], cols[c[accepted]]
-
-
-def _squared_norm(vectors: np.ndarray) -> np.ndarray:
-    """x^2 + y^2 of (..., 2) vectors (as ``np.einsum("...d,...d->...")`` gives it, at half its cost)."""
-    square = vectors * vectors
-    return square[..., 0] + square[..., 1]
 
 
 def _as_points(points: np.ndarray, name: str) -> np.ndarray:

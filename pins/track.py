@@ -481,6 +481,11 @@ class PinTracker:
             fresh = (np.isnan(velocity[:, 0]) & np.isfinite(positions[:, 0])).nonzero()[0]
             if fresh.size:
                 velocity[fresh] = self._refiner.neighbour_median(velocity, fresh)
+        # A step within the search's settling bound is no motion to carry on (a faint tip's centroid
+        # jitters by a few tenths of a px in noise; extrapolated, the jitter would walk the guesses
+        # off a still pad); the windows re-centre on slow motion anyway.
+        if self.refine:
+            velocity[self._refiner.still(velocity)] = 0.0
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
@@ -512,6 +517,9 @@ class PinTracker:
             tracked = np.where(need[:, None], moved + origin, positions)
             positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
                                        filled=np.where(need[:, None], tracked, filled))
+        # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
+        # missing ones are looked for at their rest positions.
+        positions = refiner.snap_to_rest(crop, positions, search)
         missing = np.isnan(positions[:, 0])
         if not missing.any():
             return positions, False, False

@@ -1,0 +1,240 @@
+"""Windowed centroids of pin tips, for `pins._refine.Refiner` (paper 002, III-A.3).
+
+All windows are gathered at once from the grey crop (a fancy index into its sliding-window view,
+as `numpy.lib.stride_tricks.sliding_window_view` makes) and processed as one (N, P) array,
+O(pins x window). `pins._refine` says how the centroids are used and judged.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["WindowCentroids"]
+
+# Sub-pixel steps per px of the window masks' centres and radii.
+_PHASES = 4
+_SINGLE_THREAD_MACS = 262_143
+# The background plane's rise across half a window counts only beyond this fraction of the tip's
+# contrast (renders: the brown skin's pin shadows and mottling, and the noise of the sides' darkest
+# pixels, rise by 2-8 % of it and would bias centroids by 0.1 px; an LED reflection on a faint tip
+# rises by 20-50 %).
+_FLAT_RISE = 0.1
+# The background of a window's side is its darkest run of this many pixels (the mean of a run).
+_SIDE_RUN = 4
+
+class WindowCentroids:
+    """Centroids of pin tips in square windows of side ``2 * half_px + 1`` around guesses.
+
+    Parameters
+    ----------
+    half_px : int
+        Half side of the windows, px: about half the pin spacing (masks reach half_px + 0.5 at most).
+    threshold_fraction : float
+        Where the threshold sits between the local background (a plane through the darkest runs of
+        pixels along the window's sides) and the pin's top, in (0, 1).
+    above_mean : bool
+        Keep the threshold at least at the window's mean (textured skins, small tips).
+
+    Attributes
+    ----------
+    least_contrast : float
+        Windows whose tip rises less above the background, grey levels, weigh their pixels over a
+        flat threshold whatever the plane's slope (no tip to pull; `Refiner` sets a quarter of the
+        faintest tips' contrast at rest).
+    """
+
+    def __init__(self, half_px: int, *, threshold_fraction: float = 0.2, above_mean: bool = False) -> None:
+        if int(half_px) != half_px or half_px < 2:
+            raise ValueError(f"half_px must be an integer >= 2, got {half_px}")
+        if not 0.0 < threshold_fraction < 1.0:
+            raise ValueError(f"threshold_fraction must be in (0, 1), got {threshold_fraction}")
+        self.half_px = int(half_px)
+        self.threshold_fraction = float(threshold_fraction)
+        self.above_mean = bool(above_mean)
+        self.least_contrast = 0.0
+        side = 2 * self.half_px + 1
+        offsets = np.arange(-self.half_px, self.half_px + 1, dtype=np.float32)
+        gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
+        # Moments of each window pixel: mass, x, y and squared distance from the window's centre pixel.
+        self._moments = np.column_stack([np.ones_like(gx), gx, gy, gx * gx + gy * gy])  # (P, 4)
+        middle = gx.size // 2
+        self._top = np.array([middle, middle - 1, middle + 1, middle - side, middle + side])
+        # Disc masks for every quarter-pixel centre in [-0.5, 0.5]^2 and radius up to half_px + 0.5.
+        phases = np.arange(-_PHASES // 2, _PHASES // 2 + 1) / _PHASES
+        self._radii = np.arange(1, (self.half_px + 0.5) * _PHASES + 1) / _PHASES
+        dx2 = (gx[None, :] - phases[:, None]) ** 2  # (phase x, P)
+        dy2 = (gy[None, :] - phases[:, None]) ** 2  # (phase y, P)
+        d2 = dy2[:, None, :] + dx2[None, :, :]  # (phase y, phase x, P)
+        masks = d2[None] <= (self._radii ** 2)[:, None, None, None]
+        self._n_phases = len(phases)
+        self._masks = masks.reshape(-1, gx.size).astype(np.uint8)  # (radius, phase y, phase x) -> P
+        # The four sides' pixels (left, right, top, bottom) and each pixel's (x, y) for the
+        # threshold plane.
+        index = np.arange(gx.size).reshape(side, side)
+        # Runs of `_SIDE_RUN` pixels end to end along the middle of each side: (4 x runs x run,).
+        runs = side // _SIDE_RUN
+        middle = slice((side - runs * _SIDE_RUN) // 2, (side - runs * _SIDE_RUN) // 2 + runs * _SIDE_RUN)
+        self._sides = np.concatenate([index[middle, 0], index[middle, -1], index[0, middle], index[-1, middle]])
+        # (level, rise x, rise y) of the plane through the four sides' values: (4, 3).
+        self._side_plane = np.array([[0.25, -0.5, 0.0], [0.25, 0.5, 0.0], [0.25, 0.0, -0.5], [0.25, 0.0, 0.5]]) / _SIDE_RUN
+        self._plane = np.stack([np.ones_like(gx), gx, gy]).astype(np.float32)  # (3, P): 1, x and y of each pixel
+        # Rows of the moment product per call: OpenBLAS keeps to one thread below 2^18 multiply-adds
+        # (4 moments of P pixels a row). Threaded, this tiny product costs 20 ms on a busy machine
+        # instead of 0.2.
+        self._moment_rows = max(1, _SINGLE_THREAD_MACS // (4 * gx.size))
+
+    def __repr__(self) -> str:
+        return (f"WindowCentroids(half_px={self.half_px}, threshold_fraction={self.threshold_fraction}, "
+                f"above_mean={self.above_mean})")
+
+    def levels(self, image: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Darkest pixel, median and tip top (the mean of the five centre pixels) of each window, grey levels.
+
+        Windows at the finite `points` (N, 2), px, that fit in `image`; NaN elsewhere. (N,) each.
+        """
+        side = 2 * self.half_px + 1
+        image = np.ascontiguousarray(image)
+        height, width = image.shape
+        corner = np.rint(points).astype(np.intp) - self.half_px
+        fits = ((corner >= 0).all(axis=1) & (corner[:, 0] <= width - side) & (corner[:, 1] <= height - side))
+        out = np.full((3, len(points)), np.nan)
+        if fits.any():
+            view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0,
+                              image.strides * 2)
+            patches = view[corner[fits, 1], corner[fits, 0]].reshape(int(fits.sum()), -1)
+            out[:, fits] = (patches.min(axis=1), np.median(patches, axis=1), patches[:, self._top].mean(axis=1))
+        return out[0], out[1], out[2]
+
+    def __call__(self, image: np.ndarray, points: np.ndarray,
+                 radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Centroids of the bright tips around `points`.
+
+        Parameters
+        ----------
+        image : (H, W) ndarray of uint8
+            Grey image, bright pins on a dark membrane.
+        points : (N, 2) ndarray
+            Finite guesses (x, y), px.
+        radius_px : (N,) ndarray
+            Radius of each mask, px (a little more than half the distance to the nearest
+            neighbouring pin); clipped to [0.25, half_px + 0.5].
+
+        Returns
+        -------
+        centres : (N, 2) ndarray of float64
+            Weighted centroids (x, y), px; NaN where the window is empty or does not fit in the image.
+        area : (N,) ndarray of float64
+            Mass over the threshold-to-top height: about the tip's area, px.
+        contrast : (N,) ndarray of float64
+            Pin top minus the local background (the plane through the darkest runs of pixels along
+            the window's sides, at its centre), grey levels; negative where no tip rises above it.
+        compactness : (N,) ndarray
+            Area over 2 pi times the weights' mean squared distance from the centroid: 1 for a
+            uniform disc, more for a domed tip, less for an elongated one or one with a speck.
+        """
+        centres, measures = self.measure(image, points, radius_px)
+        return centres, measures[0], measures[1], measures[2]
+
+    def measure(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """As `__call__`: the centroids (N, 2), px, and (area, contrast, compactness) stacked (3, N)."""
+        half, side = self.half_px, 2 * self.half_px + 1
+        n = len(points)
+        if n == 0:
+            return np.empty((0, 2)), np.empty((3, 0))
+        # Called a few times a frame, mostly on a few dozen windows: each NumPy call's own cost
+        # counts, so ufuncs and their reductions are called directly (not through array methods).
+        image = np.ascontiguousarray(image)
+        height, width = image.shape
+        anchor = np.rint(points)
+        corner = anchor.astype(np.intp)
+        corner -= half
+        # A negative corner, read as unsigned, lies beyond either bound: one comparison a side.
+        inside = corner.view(np.uintp) <= np.array((width - side, height - side), np.uintp)
+        fits = inside[:, 0] & inside[:, 1]
+        corner *= fits[:, None]
+        # All windows at once: a (H - side + 1, W - side + 1, side, side) sliding view, fancy-indexed.
+        view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0, image.strides * 2)
+        patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)  # (N, P) copy
+        top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)  # their mean
+        # The local background: a plane through the darkest of the runs of `_SIDE_RUN` pixels along
+        # each of the window's sides (left, right, top, bottom), where no neighbour's foot or glare
+        # lies, a run averaging the noise down (gathered contiguous: reductions over strided sides
+        # cost several times more). Judged above that plane, a tip on the slope of an LED
+        # reflection or of a bright surround's veil is weighed as on a flat membrane: its centroid
+        # is not pulled towards the bright side, nor is its contrast taken from a darkest pixel far
+        # below it. The plane: its level at the centre and its rise across half the window (x, y).
+        runs = np.add.reduce(patches[:, self._sides].reshape(n, 4, -1, _SIDE_RUN), axis=3, dtype=np.uint16)
+        plane = np.matmul(np.minimum.reduce(runs, axis=2).astype(np.float64), self._side_plane)  # (N, 3)
+        background = plane[:, 0]
+        measures = np.empty((3, n))  # area, contrast, compactness
+        area, contrast, compactness = measures
+        np.subtract(top, background, out=contrast)  # the tip's height above the local background
+        # A rise below `_FLAT_RISE` of the tip's contrast pulls no centroid (the threshold lies a
+        # fifth of the way up), and there the plane is mostly noise, the pin's own shadow or the
+        # skin's texture: the rise shrinks by that much (soft threshold), to nothing for most windows.
+        rise = plane[:, 1:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            shrink = _FLAT_RISE * contrast / np.sqrt(np.einsum("ij,ij->i", rise, rise))
+        # (Windows without a tip of some contrast, a lost pin's empty window, need no plane.)
+        sloped = np.flatnonzero((shrink < 1.0) & (contrast > self.least_contrast))  # NaN compares False
+        lift = self.threshold_fraction * np.maximum(contrast, 0.0)
+        if self.above_mean:
+            # Above the window's mean too (over the plane, whose mean over the window is its centre
+            # value): on a textured or shadowed skin the membrane's texture must not count.
+            mean = np.add.reduce(patches, axis=1, dtype=np.float64) / patches.shape[1]
+            lift = np.minimum(np.maximum(lift, mean - background), np.maximum(contrast, 0.0))
+        level = background + lift  # the threshold at the window's centre, <= top
+        # Windows on a slope (few) weigh their pixels above the threshold plane, in whole grey
+        # levels so that weights stay integers; the others above a flat threshold, in uint8.
+        if sloped.size:
+            coefficients = np.empty((sloped.size, 3), np.float32)  # level, slope x, y (grey levels per px)
+            coefficients[:, 0] = level[sloped]
+            coefficients[:, 1:] = rise[sloped] * ((1.0 - np.maximum(shrink[sloped], 0.0)) / half)[:, None]
+            tilted = np.rint(np.matmul(coefficients, self._plane))  # (k, P) threshold plane
+            np.subtract(patches[sloped], tilted, out=tilted)
+            np.maximum(tilted, 0.0, out=tilted)
+        threshold = np.rint(level).astype(np.uint8)
+        # Positive part of (pixel - threshold), in place, without leaving uint8.
+        below = threshold[:, None]
+        np.maximum(patches, below, out=patches)
+        np.subtract(patches, below, out=patches)
+        # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
+        # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x).
+        phase = np.rint((points - anchor) * _PHASES)
+        radius = np.rint(np.asarray(radius_px, dtype=np.float64) * _PHASES)
+        np.fmin(np.maximum(radius, 1.0, out=radius), float(len(self._radii)), out=radius)  # NaN: the widest
+        phases = self._n_phases
+        mask = (radius * phases + phase[:, 1]) * phases + phase[:, 0]
+        # Phases run from -_PHASES // 2 and radius indices from 1 (the mask of radius r/4 is row r - 1).
+        mask += (_PHASES // 2) * (phases + 1) - phases * phases
+        masks = self._masks[mask.astype(np.intp)]
+        np.multiply(patches, masks, out=patches)
+        weights = patches.astype(np.float32)
+        if sloped.size:
+            weights[sloped] = tilted * masks[sloped]
+        # (N, 4): mass, sum x, sum y, sum r^2; in blocks of rows that keep OpenBLAS on one thread.
+        rows = self._moment_rows
+        if n <= rows:
+            moments = np.matmul(weights, self._moments)
+        else:
+            moments = np.empty((n, 4), np.float32)
+            for row in range(0, n, rows):
+                np.matmul(weights[row:row + rows], self._moments, out=moments[row:row + rows])
+        moments = moments.astype(np.float64)
+        mass = moments[:, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            moments[:, 1:] /= mass[:, None]  # centroid offset (x, y) and mean r^2
+            offset = moments[:, 1:3]
+            np.divide(mass, top - level, out=area)
+            # Mean squared distance from the centroid; a disc of area A has A / (2 pi).
+            spread = moments[:, 3] - _squared_norm(offset)
+            np.divide(area, 2 * np.pi * spread, out=compactness)
+        centres = anchor + offset
+        centres[~fits | (mass <= 0)] = np.nan
+        return centres, measures
+
+
+def _squared_norm(vectors: np.ndarray) -> np.ndarray:
+    """x^2 + y^2 of (..., 2) vectors (as ``np.einsum("...d,...d->...")`` gives it, at half its cost)."""
+    square = vectors * vectors
+    return square[..., 0] + square[..., 1]
