@@ -2,12 +2,14 @@
 
 A press spreads the pins away from the contact, so their displacements point in all directions and
 cancel in a mean; a slide drags the skin under the plate sideways, so they share one direction. For
-each frame of a contact, with every pin weighted by its squared displacement magnitude (the pins
-the contact moves most, as in `pins.converging_frames`), the *drag ratio* is the length of the
-weighted mean displacement over the weighted mean magnitude: 0 for displacements that cancel,
-1 for a rigid translation. A contact is a slide when, at the frame where the weighted mean
-displacement is longest, that ratio reaches `slide_ratio` and the mean is longer than `min_drag_px`;
-the slide's direction is that mean's, in degrees from image x towards image y (image y points down).
+each frame of a contact, among the pins the contact moves most (displaced by at least half the
+frame's 90th percentile), the *drag ratio* is the length of their median displacement (per axis)
+over their median displacement magnitude: about 0 for displacements that cancel, 1 for a rigid
+translation. Medians, not means, so that a few pins tracked wrongly (a swap moves a pin by a
+pitch) cannot make a press look like a slide or turn a slide. A contact is a slide when, at the
+frame where that median displacement is longest, the ratio reaches `slide_ratio` and the median
+is longer than `min_drag_px`; the slide's direction is the median's, in degrees from image x
+towards image y (image y points down).
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ class ContactKind:
     drag_ratio : float
         The drag ratio at the frame of longest drag, in [0, 1] (see the module docstring).
     drag_px : float
-        Length of the weighted mean displacement at that frame, px.
+        Length of the moved pins' median displacement at that frame, px.
     """
 
     kind: str
@@ -86,16 +88,22 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
     for start, stop in bounds:
         if not 0 <= start < stop <= len(data):
             raise ValueError(f"contact bounds ({start}, {stop}) outside the {len(data)} frames")
-        part = np.nan_to_num(data[start:stop])
-        magnitude = np.hypot(part[..., 0], part[..., 1])            # (F, N) px
-        weight = magnitude ** 2
-        total = weight.sum(axis=1)                                  # (F,)
-        safe = np.where(total > 0, total, 1.0)
-        drag = np.einsum("fn,fnk->fk", weight, part) / safe[:, None]  # weighted mean displacement, px
-        spread = (weight * magnitude).sum(axis=1) / safe            # weighted mean magnitude, px
+        part = data[start:stop]
+        magnitude = np.hypot(part[..., 0], part[..., 1])            # (F, N) px, NaN where lost
+        level = np.nanpercentile(np.where(np.isfinite(magnitude).any(axis=1, keepdims=True), magnitude, 0.0),
+                                 90, axis=1)
+        moved = magnitude >= 0.5 * level[:, None]                   # the pins the contact moves most
+        moved &= np.isfinite(magnitude) & (level[:, None] > 0)
+        if not moved.any():
+            kinds.append(ContactKind("press", float("nan"), 0.0, 0.0))
+            continue
+        frames = np.flatnonzero(moved.any(axis=1))
+        chosen = np.where(moved[frames, :, None], part[frames], np.nan)
+        drag = np.nanmedian(chosen, axis=1)                          # (F', 2) px: the moved pins' median motion
+        spread = np.nanmedian(np.where(moved[frames], magnitude[frames], np.nan), axis=1)
         length = np.hypot(drag[:, 0], drag[:, 1])
         peak = int(np.argmax(length))
-        ratio = float(length[peak] / spread[peak]) if spread[peak] > 0 else 0.0
+        ratio = float(min(length[peak] / spread[peak], 1.0)) if spread[peak] > 0 else 0.0
         if ratio >= slide_ratio and length[peak] > min_drag_px:
             direction = float(np.degrees(np.arctan2(drag[peak, 1], drag[peak, 0])) % 360.0)
             kinds.append(ContactKind("slide", round(direction, 6) % 360.0, ratio, float(length[peak])))
