@@ -15,7 +15,7 @@ from perception import VirtualEnvironment, compare_policies, load_dataset, load_
 from tactip.station.config import simulated_station_config
 from tactip.station.procedures import prepare_model
 
-THRESHOLDS = np.round(np.linspace(0.05, 0.4, 36), 3)
+THRESHOLDS = np.round(np.linspace(0.05, 0.6, 56), 3)
 
 
 @pytest.fixture(scope="module")
