@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ShapeError
+from .segment import tap_signal
 
 __all__ = ["ContactKind", "contact_kinds", "CONTACT_KINDS"]
 
@@ -90,8 +91,7 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
             raise ValueError(f"contact bounds ({start}, {stop}) outside the {len(data)} frames")
         part = data[start:stop]
         magnitude = np.hypot(part[..., 0], part[..., 1])            # (F, N) px, NaN where lost
-        level = np.nanpercentile(np.where(np.isfinite(magnitude).any(axis=1, keepdims=True), magnitude, 0.0),
-                                 90, axis=1)
+        level = tap_signal(part)                                     # (F,) px: the 90th percentile over pins
         moved = magnitude >= 0.5 * level[:, None]                   # the pins the contact moves most
         moved &= np.isfinite(magnitude) & (level[:, None] > 0)
         if not moved.any():
