@@ -117,6 +117,11 @@ _REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
+# Weight of each still step in a window's learnt scatter (`Refiner.observe_still`), and how many
+# times that scatter a still pin's window may lie from where its still neighbours place it.
+_JITTER_RATE = 0.2
+_JITTER_FIRST = 3
+_JITTER_BOUND = 3.0
 
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
@@ -227,13 +232,13 @@ class Refiner:
         # Each pin's rest position is the windows' own fixed point near the given one (mean shift,
         # a few passes): a window there finds its centroid where it stands, so the rest frame given
         # again places every pin, whatever pulled the given position off it (another estimator, a
-        # sloped background, the rim). Farther than the search's settling bound, the given
-        # position stands.
+        # sloped background, the rim). Farther than the plausibility bound, the given position
+        # stands (a fixed point on a reflection's or the veil's flank lies up to a px off the tip).
         positions = rest_positions
         for _ in range(_REST_PASSES):
             centres = self.windows(rest_crop, positions - origin, self.window_radius(positions))[0] + origin
             positions = np.where(np.isfinite(centres), centres, positions)
-        near = _squared_norm(positions - rest_positions) <= self._settled_px ** 2
+        near = _squared_norm(positions - rest_positions) <= self._max_shift_px ** 2
         positions = np.where(near[:, None], positions, rest_positions)
         centres, area, contrast, compactness = self.windows(rest_crop, positions - origin,
                                                             self.window_radius(positions))
@@ -241,9 +246,14 @@ class Refiner:
         settled = _squared_norm(step) <= self._max_shift_px ** 2
         self.rest_positions = positions
         # What still pulls a window at rest off its place (a fixed point not quite reached, a
-        # window that drifts on the rim or a reflection), up to the search's settling bound.
+        # window that drifts on the rim or a reflection), up to the gate: taken off every window
+        # near the rest position (`_pull`), so that there the windows' fixed point is the rest position.
         offset = np.where(np.isfinite(step), step, 0.0)
         self._rest_offset = np.where((_squared_norm(offset) <= self.gate_px ** 2)[:, None], offset, 0.0)
+        # Each window's scatter in the camera's noise while its pin is still, px, learnt frame by frame
+        # (`observe_still`): crisp tips scatter by a few hundredths of a px, faint tips in glare by up to a px.
+        self._jitter_sq = np.zeros(len(positions))
+        self._jitter_seen = np.zeros(len(positions))
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
@@ -351,7 +361,7 @@ class Refiner:
         first += self.origin
         # A window at the guess is judged by its centroid less the pin's own offset at rest (the
         # window's pull by what lies around the tip), so a still tip is placed where it rested.
-        placed_at = first - self._rest_offset[which]
+        placed_at = first - self._pull(start, which)
         moved = _squared_norm(placed_at - start)
         like = self._like_at_rest(measures, which)
         fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
@@ -359,7 +369,7 @@ class Refiner:
         done[n:] = False  # a lost pin's prediction is no guess: two passes
         positions = np.full(guess.shape, np.nan)
         positions[which[done]] = placed_at[done]
-        moved = _squared_norm(first - start)
+        moved = _squared_norm(placed_at - start)
         # Second and third passes: pins that moved but not far re-centred on their last centroid;
         # a pin with a guess that found no tip near it searched for from its prediction from the
         # pins just placed (its neighbours' guesses held: a lone pin that vanished, or that moved
@@ -368,7 +378,7 @@ class Refiner:
         again[:n] &= moved[:n] <= reach
         far = (~done[:n] & ~again[:n]).nonzero()[0]
         chain = np.concatenate([again.nonzero()[0], far])
-        points = first[chain]
+        points = placed_at[chain]
         if far.size:
             start[far] = points[-far.size:] = self._predict(positions, which[far], last_seen)
             # Their neighbours' guesses were off too: windows bounded by where the pins now are.
@@ -383,14 +393,16 @@ class Refiner:
         for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
             if chain.size == 0:
                 break
+            pins = which[chain]
+            # Each window's centroid less what pulls it near its rest position (the fixed point of a
+            # still pin is where it rested, not on the rim's veil or a reflection's flank).
             centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
-            centres += self.origin
+            centres += self.origin - self._pull(points, pins)
             step, offset = centres - points, centres - start[chain]
             moved = _squared_norm(step)
             error = _squared_norm(offset)
             # A search settles within its bound, inside the gate around the prediction; a pin
             # followed from its guess settles to a few tenths of a px, near its guess.
-            pins = which[chain]
             like = self._like_at_rest(measures, pins)
             settled = moved <= self._settled_px ** 2
             # In the last pass a pin followed from its guess may settle as loosely as a searched one
@@ -515,9 +527,38 @@ class Refiner:
         self._one_pin_per_tip(positions, retry, error)
         return positions
 
+    def _pull(self, points: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """What pulls windows at finite `points` (L, 2), px, of pins `which` off their tips: (L, 2), px.
+
+        A pin's rest offset (what its window found around its tip at rest: the rim's veil, a
+        reflection's flank) while the window lies within the gate of its rest position, fading
+        to nothing a spacing away (there the window sees other surroundings).
+        """
+        distance = np.sqrt(_squared_norm(points - self.rest_positions[which]))
+        weight = np.clip((self.spacing_px - distance) / (self.spacing_px - self.gate_px), 0.0, 1.0)
+        return self._rest_offset[which] * np.where(np.isnan(weight), 0.0, weight)[:, None]
+
     def still(self, steps: np.ndarray) -> np.ndarray:
         """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
         return _squared_norm(steps) <= self._settled_px ** 2
+
+    def observe_still(self, steps: np.ndarray) -> np.ndarray:
+        """Learn each window's scatter from one frame's (N, 2) steps, px; returns which steps were still (N,) bool.
+
+        A step within the settling bound (`still`) is the difference of two noisy centroids: half its
+        square updates the pin's running mean square scatter (the mean of its first `_JITTER_FIRST`,
+        then weight `_JITTER_RATE` for steps within `_JITTER_BOUND` times the scatter so far).
+        """
+        square = _squared_norm(steps)
+        still = square <= self._settled_px ** 2  # NaN (lost) compares False
+        # The first `_JITTER_FIRST` still steps are averaged; later ones count only when they lie within
+        # `_JITTER_BOUND` times the scatter so far: slow motion (a tap's onset) is no noise.
+        first = self._jitter_seen < _JITTER_FIRST
+        learn = still & (first | (0.5 * square <= _JITTER_BOUND ** 2 * self._jitter_sq))
+        rate = np.where(first, 1.0 / (self._jitter_seen + 1.0), _JITTER_RATE)[learn]
+        self._jitter_sq[learn] += rate * (0.5 * square[learn] - self._jitter_sq[learn])
+        self._jitter_seen[learn] += 1
+        return still
 
     def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
         """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
@@ -546,26 +587,45 @@ class Refiner:
         """
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
         far = distance > self.gate_px ** 2
-        wanted = far | (np.isnan(distance) & search)
-        if not wanted.any():
+        # Pins that drifted from rest by more than a window's settling in noise are looked at again.
+        drifted = distance > self._guess_px ** 2
+        if not (drifted.any() or (np.isnan(distance) & search).any()):
             return positions
         still = distance <= (_STILL_FRACTION * self.spacing_px) ** 2
         placed = np.count_nonzero(np.isfinite(distance))
         # A moving pad's field of displacements is continuous: between its still pins and those
         # moved farther than the gate lie pins moved by less. Pins put on wrong tips are off by
         # a whole spacing, with none in between.
-        between = placed - np.count_nonzero(still) - np.count_nonzero(far)
-        if np.count_nonzero(still) < _STILL_SHARE * placed or between > _BETWEEN_SHARE * placed:
+        # A faint tip's window jitters in noise by up to a fifth of the spacing: a pin within that of
+        # rest whose neighbours are still is such jitter, not motion.
+        between = np.flatnonzero(~still & ~far & np.isfinite(distance))
+        if between.size and np.count_nonzero(still) >= _STILL_SHARE * placed:
+            around = _squared_norm(self.neighbour_median(positions - self.rest_positions, between))
+            jitter = (around <= (_STILL_FRACTION * self.spacing_px) ** 2) & (
+                distance[between] <= (2.0 * _STILL_FRACTION * self.spacing_px) ** 2)
+            between = between[~jitter]
+        if np.count_nonzero(still) < _STILL_SHARE * placed or between.size > _BETWEEN_SHARE * placed:
             return positions  # the pad is not at rest
-        look = np.flatnonzero(wanted)
+        look = np.flatnonzero(drifted | (np.isnan(distance) & search))
         rest = self.rest_positions[look]
         centres, measures = self.windows.measure(crop, rest - self.origin, self.window_radius(self.rest_positions)[look])
-        centres += self.origin
-        found = (_squared_norm(centres - rest) <= self._settled_px ** 2) & self._like_at_rest(measures, look)
+        centres += self.origin - self._rest_offset[look]
+        # Where its neighbours say the pin is: its rest position moved by their median displacement.
+        # When they lie within a few tenths of a px of rest, the membrane there is at rest (it is
+        # continuous: no pin moves by a px alone), and a window that settles within a few times its
+        # own scatter in noise (`observe_still`; up to twice the search's bound) shows the pin there.
+        shift = self.neighbour_median(positions - self.rest_positions, look)
+        quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
+        residual = centres - rest - shift
+        calm = quiet & (_squared_norm(residual) <= _JITTER_BOUND ** 2 * self._jitter_sq[look])
+        bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
+        found = (_squared_norm(centres - rest) <= bound ** 2) & self._like_at_rest(measures, look)
+        # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
+        found &= calm | ~(distance[look] <= self.gate_px ** 2)
         if not found.any():
             return positions
         positions = positions.copy()
-        positions[look[found]] = centres[found]
+        positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
