@@ -122,6 +122,9 @@ _SAME_TIP_FRACTION = 0.25
 _JITTER_RATE = 0.2
 _JITTER_FIRST = 3
 _JITTER_BOUND = 3.0
+# A pin's window at rest is calm within this many times its learnt scatter of where its still
+# neighbours place it (the scatter of its steps misses the constant part: its rest offset's noise).
+_CALM_BOUND = 5.0
 
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
@@ -394,10 +397,11 @@ class Refiner:
             if chain.size == 0:
                 break
             pins = which[chain]
-            # Each window's centroid less what pulls it near its rest position (the fixed point of a
-            # still pin is where it rested, not on the rim's veil or a reflection's flank).
+            # Re-centred windows follow their centroids as they are: less the rest offset they would
+            # hold a pin whose tip leaves slowly near its rest position (a still pin drifted onto the
+            # veil is re-measured at rest by `snap_to_rest`).
             centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
-            centres += self.origin - self._pull(points, pins)
+            centres += self.origin
             step, offset = centres - points, centres - start[chain]
             moved = _squared_norm(step)
             error = _squared_norm(offset)
@@ -617,9 +621,15 @@ class Refiner:
         shift = self.neighbour_median(positions - self.rest_positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
         residual = centres - rest - shift
-        calm = quiet & (_squared_norm(residual) <= _JITTER_BOUND ** 2 * self._jitter_sq[look])
+        # (A pin's scatter, or the median pin's if more: a still window's scatter is learnt from steps.)
+        learnt = self._jitter_sq[self._jitter_seen >= _JITTER_FIRST]
+        floor = float(np.median(learnt)) if learnt.size else 0.0
+        calm = quiet & (_squared_norm(residual) <= _CALM_BOUND ** 2 * np.maximum(self._jitter_sq[look], floor))
         bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
-        found = (_squared_norm(centres - rest) <= bound ** 2) & self._like_at_rest(measures, look)
+        # A calm pin's window need only show a tip (its contrast): its area and compactness near the
+        # rim's veil swing with the noise of its top pixels.
+        like = np.where(calm, measures[1] >= self._at_least[1, look], self._like_at_rest(measures, look))
+        found = (_squared_norm(centres - rest) <= bound ** 2) & like
         # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
         found &= calm | ~(distance[look] <= self.gate_px ** 2)
         if not found.any():
