@@ -42,10 +42,12 @@ touching a tip fools blob detection as much.
 Rest. The rest positions are the windows' own fixed points near the given ones (a few passes of
 mean shift), and what still pulls a window at rest is the pin's rest offset, taken off its first
 window later: the rest frame given again places every pin. A step within the search's settling
-bound is camera noise, not velocity. On a pad back at rest (half the pins within 0.1 spacing of
-rest, hardly any between that and the gate), pins far from rest and missing ones are looked for
-at their rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on
-their neighbours' tips.
+bound is camera noise, not velocity. Near its rest position a window at its guess is judged by
+its centroid less that offset. On a pad back at rest (half the pins within 0.1 spacing of rest,
+hardly any between that and the gate but a faint tip's jitter among still neighbours), pins far
+from rest, drifted by more than a few tenths of a px, and missing ones are looked for at their
+rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on their
+neighbours' tips, nor a faint rim tip's window on the veil beside it.
 
 Search. A lost pin (or one whose centroid is implausible) is looked for in a window at its
 predicted position (its rest position moved by the median displacement of its tracked
@@ -569,11 +571,17 @@ class Refiner:
 
         When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing
         of their rest positions and hardly any (`_BETWEEN_SHARE`) lie between that and `gate_px`
-        (the pad is back at rest: a moving pad's field of displacements is continuous), a pin farther than `gate_px` from its
-        rest position (a fast return from a slide carried its stale guess onto a neighbour's tip)
-        or missing is looked for in a window at its rest position, and placed there when the
-        window settles on a tip like its own at rest, as a search does. Whatever a moving pad
-        does, nothing is moved: the check costs a few vector operations per frame.
+        (the pad is back at rest: a moving pad's field of displacements is continuous; a pin within
+        twice that fraction whose neighbours are still is a faint tip's jitter), a pin farther than
+        `gate_px` from its rest position (a fast return from a slide carried its stale guess onto a
+        neighbour's tip), drifted by more than a few tenths of a px, or missing is looked for in a
+        window at its rest position (its centroid less the rest offset). A pin far from rest or
+        missing is placed there when the window settles within the search's bound on a tip like its
+        own at rest. A *calm* pin (its still neighbours' median displacement within a few tenths of a
+        px, and its window within `_CALM_BOUND` times its learnt scatter, `observe_still`, of where
+        they place it) is placed where they place it, its tip shown by its contrast. A pin placed
+        near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
+        the check costs a few vector operations per frame.
 
         Parameters
         ----------
