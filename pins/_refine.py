@@ -127,6 +127,7 @@ _JITTER_BOUND = 3.0
 # A pin's window at rest is calm within this many times its learnt scatter of where its still
 # neighbours place it (the scatter of its steps misses the constant part: its rest offset's noise).
 _CALM_BOUND = 5.0
+_FLOOR_EVERY = 8
 
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
@@ -258,7 +259,10 @@ class Refiner:
         # Each window's scatter in the camera's noise while its pin is still, px, learnt frame by frame
         # (`observe_still`): crisp tips scatter by a few hundredths of a px, faint tips in glare by up to a px.
         self._jitter_sq = np.zeros(len(positions))
+        self._rest_radius = self.window_radius(positions)
         self._jitter_seen = np.zeros(len(positions))
+        self._jitter_floor = 0.0  # the median pin's, updated every `_FLOOR_EVERY` frames
+        self._observed = 0
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
@@ -555,15 +559,24 @@ class Refiner:
         square updates the pin's running mean square scatter (the mean of its first `_JITTER_FIRST`,
         then weight `_JITTER_RATE` for steps within `_JITTER_BOUND` times the scatter so far).
         """
-        square = _squared_norm(steps)
-        still = square <= self._settled_px ** 2  # NaN (lost) compares False
+        half = _squared_norm(steps)
+        still = half <= self._settled_px ** 2  # NaN (lost) compares False
+        half *= 0.5
         # The first `_JITTER_FIRST` still steps are averaged; later ones count only when they lie within
         # `_JITTER_BOUND` times the scatter so far: slow motion (a tap's onset) is no noise.
-        first = self._jitter_seen < _JITTER_FIRST
-        learn = still & (first | (0.5 * square <= _JITTER_BOUND ** 2 * self._jitter_sq))
-        rate = np.where(first, 1.0 / (self._jitter_seen + 1.0), _JITTER_RATE)[learn]
-        self._jitter_sq[learn] += rate * (0.5 * square[learn] - self._jitter_sq[learn])
-        self._jitter_seen[learn] += 1
+        seen, jitter = self._jitter_seen, self._jitter_sq
+        first = seen < _JITTER_FIRST
+        learn = still & (first | (half <= _JITTER_BOUND ** 2 * jitter))
+        rate = np.where(first, 1.0 / (seen + 1.0), _JITTER_RATE)
+        rate *= learn
+        half -= jitter
+        half *= rate
+        jitter += np.where(learn, half, 0.0)  # NaN steps (lost pins) learn nothing
+        seen += learn
+        self._observed += 1
+        if self._observed % _FLOOR_EVERY == 1:
+            learnt = jitter[seen >= _JITTER_FIRST]
+            self._jitter_floor = float(np.median(learnt)) if learnt.size else 0.0
         return still
 
     def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
@@ -620,19 +633,18 @@ class Refiner:
             return positions  # the pad is not at rest
         look = np.flatnonzero(drifted | (np.isnan(distance) & search))
         rest = self.rest_positions[look]
-        centres, measures = self.windows.measure(crop, rest - self.origin, self.window_radius(self.rest_positions)[look])
+        centres, measures = self.windows.measure(crop, rest - self.origin, self._rest_radius[look])
         centres += self.origin - self._rest_offset[look]
         # Where its neighbours say the pin is: its rest position moved by their median displacement.
         # When they lie within a few tenths of a px of rest, the membrane there is at rest (it is
         # continuous: no pin moves by a px alone), and a window that settles within a few times its
         # own scatter in noise (`observe_still`; up to twice the search's bound) shows the pin there.
+        # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
         shift = self.neighbour_median(positions - self.rest_positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
         residual = centres - rest - shift
-        # (A pin's scatter, or the median pin's if more: a still window's scatter is learnt from steps.)
-        learnt = self._jitter_sq[self._jitter_seen >= _JITTER_FIRST]
-        floor = float(np.median(learnt)) if learnt.size else 0.0
-        calm = quiet & (_squared_norm(residual) <= _CALM_BOUND ** 2 * np.maximum(self._jitter_sq[look], floor))
+        calm = quiet & (_squared_norm(residual)
+                        <= _CALM_BOUND ** 2 * np.maximum(self._jitter_sq[look], self._jitter_floor))
         bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
         # A calm pin's window need only show a tip (its contrast): its area and compactness near the
         # rim's veil swing with the noise of its top pixels.
