@@ -42,10 +42,12 @@ touching a tip fools blob detection as much.
 Rest. The rest positions are the windows' own fixed points near the given ones (a few passes of
 mean shift), and what still pulls a window at rest is the pin's rest offset, taken off its first
 window later: the rest frame given again places every pin. A step within the search's settling
-bound is camera noise, not velocity. On a pad back at rest (half the pins within 0.1 spacing of
-rest, hardly any between that and the gate), pins far from rest and missing ones are looked for
-at their rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on
-their neighbours' tips.
+bound is camera noise, not velocity. Near its rest position a window at its guess is judged by
+its centroid less that offset. On a pad back at rest (half the pins within 0.1 spacing of rest,
+hardly any between that and the gate but a faint tip's jitter among still neighbours), pins far
+from rest, drifted by more than a few tenths of a px, and missing ones are looked for at their
+rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on their
+neighbours' tips, nor a faint rim tip's window on the veil beside it.
 
 Search. A lost pin (or one whose centroid is implausible) is looked for in a window at its
 predicted position (its rest position moved by the median displacement of its tracked
@@ -117,6 +119,15 @@ _REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
+# Weight of each still step in a window's learnt scatter (`Refiner.observe_still`), and how many
+# times that scatter a still pin's window may lie from where its still neighbours place it.
+_JITTER_RATE = 0.2
+_JITTER_FIRST = 3
+_JITTER_BOUND = 3.0
+# A pin's window at rest is calm within this many times its learnt scatter of where its still
+# neighbours place it (the scatter of its steps misses the constant part: its rest offset's noise).
+_CALM_BOUND = 5.0
+_FLOOR_EVERY = 8
 
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
@@ -227,13 +238,13 @@ class Refiner:
         # Each pin's rest position is the windows' own fixed point near the given one (mean shift,
         # a few passes): a window there finds its centroid where it stands, so the rest frame given
         # again places every pin, whatever pulled the given position off it (another estimator, a
-        # sloped background, the rim). Farther than the search's settling bound, the given
-        # position stands.
+        # sloped background, the rim). Farther than the plausibility bound, the given position
+        # stands (a fixed point on a reflection's or the veil's flank lies up to a px off the tip).
         positions = rest_positions
         for _ in range(_REST_PASSES):
             centres = self.windows(rest_crop, positions - origin, self.window_radius(positions))[0] + origin
             positions = np.where(np.isfinite(centres), centres, positions)
-        near = _squared_norm(positions - rest_positions) <= self._settled_px ** 2
+        near = _squared_norm(positions - rest_positions) <= self._max_shift_px ** 2
         positions = np.where(near[:, None], positions, rest_positions)
         centres, area, contrast, compactness = self.windows(rest_crop, positions - origin,
                                                             self.window_radius(positions))
@@ -241,9 +252,17 @@ class Refiner:
         settled = _squared_norm(step) <= self._max_shift_px ** 2
         self.rest_positions = positions
         # What still pulls a window at rest off its place (a fixed point not quite reached, a
-        # window that drifts on the rim or a reflection), up to the search's settling bound.
+        # window that drifts on the rim or a reflection), up to the gate: taken off every window
+        # near the rest position (`_pull`), so that there the windows' fixed point is the rest position.
         offset = np.where(np.isfinite(step), step, 0.0)
         self._rest_offset = np.where((_squared_norm(offset) <= self.gate_px ** 2)[:, None], offset, 0.0)
+        # Each window's scatter in the camera's noise while its pin is still, px, learnt frame by frame
+        # (`observe_still`): crisp tips scatter by a few hundredths of a px, faint tips in glare by up to a px.
+        self._jitter_sq = np.zeros(len(positions))
+        self._rest_radius = self.window_radius(positions)
+        self._jitter_seen = np.zeros(len(positions))
+        self._jitter_floor = 0.0  # the median pin's, updated every `_FLOOR_EVERY` frames
+        self._observed = 0
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
@@ -351,7 +370,7 @@ class Refiner:
         first += self.origin
         # A window at the guess is judged by its centroid less the pin's own offset at rest (the
         # window's pull by what lies around the tip), so a still tip is placed where it rested.
-        placed_at = first - self._rest_offset[which]
+        placed_at = first - self._pull(start, which)
         moved = _squared_norm(placed_at - start)
         like = self._like_at_rest(measures, which)
         fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
@@ -359,7 +378,7 @@ class Refiner:
         done[n:] = False  # a lost pin's prediction is no guess: two passes
         positions = np.full(guess.shape, np.nan)
         positions[which[done]] = placed_at[done]
-        moved = _squared_norm(first - start)
+        moved = _squared_norm(placed_at - start)
         # Second and third passes: pins that moved but not far re-centred on their last centroid;
         # a pin with a guess that found no tip near it searched for from its prediction from the
         # pins just placed (its neighbours' guesses held: a lone pin that vanished, or that moved
@@ -368,7 +387,7 @@ class Refiner:
         again[:n] &= moved[:n] <= reach
         far = (~done[:n] & ~again[:n]).nonzero()[0]
         chain = np.concatenate([again.nonzero()[0], far])
-        points = first[chain]
+        points = placed_at[chain]
         if far.size:
             start[far] = points[-far.size:] = self._predict(positions, which[far], last_seen)
             # Their neighbours' guesses were off too: windows bounded by where the pins now are.
@@ -383,6 +402,10 @@ class Refiner:
         for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
             if chain.size == 0:
                 break
+            pins = which[chain]
+            # Re-centred windows follow their centroids as they are: less the rest offset they would
+            # hold a pin whose tip leaves slowly near its rest position (a still pin drifted onto the
+            # veil is re-measured at rest by `snap_to_rest`).
             centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
             centres += self.origin
             step, offset = centres - points, centres - start[chain]
@@ -390,7 +413,6 @@ class Refiner:
             error = _squared_norm(offset)
             # A search settles within its bound, inside the gate around the prediction; a pin
             # followed from its guess settles to a few tenths of a px, near its guess.
-            pins = which[chain]
             like = self._like_at_rest(measures, pins)
             settled = moved <= self._settled_px ** 2
             # In the last pass a pin followed from its guess may settle as loosely as a searched one
@@ -515,20 +537,64 @@ class Refiner:
         self._one_pin_per_tip(positions, retry, error)
         return positions
 
+    def _pull(self, points: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """What pulls windows at finite `points` (L, 2), px, of pins `which` off their tips: (L, 2), px.
+
+        A pin's rest offset (what its window found around its tip at rest: the rim's veil, a
+        reflection's flank) while the window lies within the gate of its rest position, fading
+        to nothing a spacing away (there the window sees other surroundings).
+        """
+        distance = np.sqrt(_squared_norm(points - self.rest_positions[which]))
+        weight = np.clip((self.spacing_px - distance) / (self.spacing_px - self.gate_px), 0.0, 1.0)
+        return self._rest_offset[which] * np.where(np.isnan(weight), 0.0, weight)[:, None]
+
     def still(self, steps: np.ndarray) -> np.ndarray:
         """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
         return _squared_norm(steps) <= self._settled_px ** 2
+
+    def observe_still(self, steps: np.ndarray) -> np.ndarray:
+        """Learn each window's scatter from one frame's (N, 2) steps, px; returns which steps were still (N,) bool.
+
+        A step within the settling bound (`still`) is the difference of two noisy centroids: half its
+        square updates the pin's running mean square scatter (the mean of its first `_JITTER_FIRST`,
+        then weight `_JITTER_RATE` for steps within `_JITTER_BOUND` times the scatter so far).
+        """
+        half = _squared_norm(steps)
+        still = half <= self._settled_px ** 2  # NaN (lost) compares False
+        half *= 0.5
+        # The first `_JITTER_FIRST` still steps are averaged; later ones count only when they lie within
+        # `_JITTER_BOUND` times the scatter so far: slow motion (a tap's onset) is no noise.
+        seen, jitter = self._jitter_seen, self._jitter_sq
+        first = seen < _JITTER_FIRST
+        learn = still & (first | (half <= _JITTER_BOUND ** 2 * jitter))
+        rate = np.where(first, 1.0 / (seen + 1.0), _JITTER_RATE)
+        rate *= learn
+        half -= jitter
+        half *= rate
+        jitter += np.where(learn, half, 0.0)  # NaN steps (lost pins) learn nothing
+        seen += learn
+        self._observed += 1
+        if self._observed % _FLOOR_EVERY == 1:
+            learnt = jitter[seen >= _JITTER_FIRST]
+            self._jitter_floor = float(np.median(learnt)) if learnt.size else 0.0
+        return still
 
     def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
         """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
 
         When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing
         of their rest positions and hardly any (`_BETWEEN_SHARE`) lie between that and `gate_px`
-        (the pad is back at rest: a moving pad's field of displacements is continuous), a pin farther than `gate_px` from its
-        rest position (a fast return from a slide carried its stale guess onto a neighbour's tip)
-        or missing is looked for in a window at its rest position, and placed there when the
-        window settles on a tip like its own at rest, as a search does. Whatever a moving pad
-        does, nothing is moved: the check costs a few vector operations per frame.
+        (the pad is back at rest: a moving pad's field of displacements is continuous; a pin within
+        twice that fraction whose neighbours are still is a faint tip's jitter), a pin farther than
+        `gate_px` from its rest position (a fast return from a slide carried its stale guess onto a
+        neighbour's tip), drifted by more than a few tenths of a px, or missing is looked for in a
+        window at its rest position (its centroid less the rest offset). A pin far from rest or
+        missing is placed there when the window settles within the search's bound on a tip like its
+        own at rest. A *calm* pin (its still neighbours' median displacement within a few tenths of a
+        px, and its window within `_CALM_BOUND` times its learnt scatter, `observe_still`, of where
+        they place it) is placed where they place it, its tip shown by its contrast. A pin placed
+        near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
+        the check costs a few vector operations per frame.
 
         Parameters
         ----------
@@ -546,26 +612,50 @@ class Refiner:
         """
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
         far = distance > self.gate_px ** 2
-        wanted = far | (np.isnan(distance) & search)
-        if not wanted.any():
+        # Pins that drifted from rest by more than a window's settling in noise are looked at again.
+        drifted = distance > self._guess_px ** 2
+        if not (drifted.any() or (np.isnan(distance) & search).any()):
             return positions
         still = distance <= (_STILL_FRACTION * self.spacing_px) ** 2
         placed = np.count_nonzero(np.isfinite(distance))
         # A moving pad's field of displacements is continuous: between its still pins and those
         # moved farther than the gate lie pins moved by less. Pins put on wrong tips are off by
         # a whole spacing, with none in between.
-        between = placed - np.count_nonzero(still) - np.count_nonzero(far)
-        if np.count_nonzero(still) < _STILL_SHARE * placed or between > _BETWEEN_SHARE * placed:
+        # A faint tip's window jitters in noise by up to a fifth of the spacing: a pin within that of
+        # rest whose neighbours are still is such jitter, not motion.
+        between = np.flatnonzero(~still & ~far & np.isfinite(distance))
+        if between.size and np.count_nonzero(still) >= _STILL_SHARE * placed:
+            around = _squared_norm(self.neighbour_median(positions - self.rest_positions, between))
+            jitter = (around <= (_STILL_FRACTION * self.spacing_px) ** 2) & (
+                distance[between] <= (2.0 * _STILL_FRACTION * self.spacing_px) ** 2)
+            between = between[~jitter]
+        if np.count_nonzero(still) < _STILL_SHARE * placed or between.size > _BETWEEN_SHARE * placed:
             return positions  # the pad is not at rest
-        look = np.flatnonzero(wanted)
+        look = np.flatnonzero(drifted | (np.isnan(distance) & search))
         rest = self.rest_positions[look]
-        centres, measures = self.windows.measure(crop, rest - self.origin, self.window_radius(self.rest_positions)[look])
-        centres += self.origin
-        found = (_squared_norm(centres - rest) <= self._settled_px ** 2) & self._like_at_rest(measures, look)
+        centres, measures = self.windows.measure(crop, rest - self.origin, self._rest_radius[look])
+        centres += self.origin - self._rest_offset[look]
+        # Where its neighbours say the pin is: its rest position moved by their median displacement.
+        # When they lie within a few tenths of a px of rest, the membrane there is at rest (it is
+        # continuous: no pin moves by a px alone), and a window that settles within a few times its
+        # own scatter in noise (`observe_still`; up to twice the search's bound) shows the pin there.
+        # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
+        shift = self.neighbour_median(positions - self.rest_positions, look)
+        quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
+        residual = centres - rest - shift
+        calm = quiet & (_squared_norm(residual)
+                        <= _CALM_BOUND ** 2 * np.maximum(self._jitter_sq[look], self._jitter_floor))
+        bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
+        # A calm pin's window need only show a tip (its contrast): its area and compactness near the
+        # rim's veil swing with the noise of its top pixels.
+        like = np.where(calm, measures[1] >= self._at_least[1, look], self._like_at_rest(measures, look))
+        found = (_squared_norm(centres - rest) <= bound ** 2) & like
+        # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
+        found &= calm | ~(distance[look] <= self.gate_px ** 2)
         if not found.any():
             return positions
         positions = positions.copy()
-        positions[look[found]] = centres[found]
+        positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:

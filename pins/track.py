@@ -485,7 +485,7 @@ class PinTracker:
         # jitters by a few tenths of a px in noise; extrapolated, the jitter would walk the guesses
         # off a still pad); the windows re-centre on slow motion anyway.
         if self.refine:
-            velocity[self._refiner.still(velocity)] = 0.0
+            velocity[self._refiner.observe_still(velocity)] = 0.0
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
