@@ -8,7 +8,7 @@ from .disc import SensorDisc, as_grey, find_sensor_disc
 from .displacement import displacement_from_rest, displacement_magnitude, integrate_flow
 from .errors import NoSensorError, PinsError, ShapeError
 from .lattice import MIN_SENSOR_PINS, REJECTION_REASONS, PinField, draw_pin_field, find_pin_field
-from .contacts import CONTACT_KINDS, ContactKind, contact_kinds
+from .contacts import ContactKind, contact_kinds
 from .features import (LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, seen_pins,
                        tap_features)
 from .segment import converging_frames, jitter_floor_px, segment_taps, tap_signal
@@ -28,5 +28,5 @@ __all__ = [
     "pad_scale", "PadScale", "pin_pitch_mm", "central_spacing_px", "SensorDescription", "SENSOR_PRESETS",
     "sensor_preset", "sensor_scale", "DEFAULT_PAD_DIAMETER_MM",
     "feature_dim_names", "fill_lost", "resample_tap", "seen_pins", "tap_features", "TapRecorder",
-    "tap_signal", "segment_taps", "converging_frames", "jitter_floor_px", "contact_kinds", "ContactKind", "CONTACT_KINDS",
+    "tap_signal", "segment_taps", "converging_frames", "jitter_floor_px", "contact_kinds", "ContactKind",
 ]

@@ -22,10 +22,7 @@ import numpy as np
 from .errors import ShapeError
 from .segment import tap_signal
 
-__all__ = ["ContactKind", "contact_kinds", "CONTACT_KINDS"]
-
-#: The kinds of contact `contact_kinds` tells apart.
-CONTACT_KINDS = ("press", "slide")
+__all__ = ["ContactKind", "contact_kinds"]
 
 
 @dataclass(frozen=True)
@@ -50,7 +47,7 @@ class ContactKind:
 
 
 def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], *, slide_ratio: float = 0.6,
-                  min_drag_px: float = 1.0) -> list[ContactKind]:
+                  min_drag_px: float = 1.0, signal: np.ndarray | None = None) -> list[ContactKind]:
     """Press or slide, and a slide's direction, for each contact of a recording.
 
     Parameters
@@ -62,8 +59,10 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
     slide_ratio : float
         Smallest drag ratio of a slide, in (0, 1].
     min_drag_px : float
-        Shortest weighted mean displacement of a slide, px (>= 0): a contact that hardly moves the
-        pins is a press.
+        Shortest median displacement of a slide, px (>= 0): a contact that hardly moves the pins is
+        a press.
+    signal : (T,) ndarray, optional
+        The recording's tap signal (`pins.tap_signal`, 90th percentile) when already computed, px.
 
     Returns
     -------
@@ -85,13 +84,17 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
         raise ValueError(f"slide_ratio must be in (0, 1], got {slide_ratio}")
     if not min_drag_px >= 0.0:
         raise ValueError(f"min_drag_px must be >= 0, got {min_drag_px}")
+    if signal is None:
+        signal = tap_signal(data)
+    elif np.shape(signal) != (len(data),):
+        raise ShapeError(f"signal must have shape ({len(data)},), got {np.shape(signal)}")
     kinds = []
     for start, stop in bounds:
         if not 0 <= start < stop <= len(data):
             raise ValueError(f"contact bounds ({start}, {stop}) outside the {len(data)} frames")
         part = data[start:stop]
         magnitude = np.hypot(part[..., 0], part[..., 1])            # (F, N) px, NaN where lost
-        level = tap_signal(part)                                     # (F,) px: the 90th percentile over pins
+        level = np.asarray(signal[start:stop], dtype=np.float64)     # (F,) px: the 90th percentile over pins
         moved = magnitude >= 0.5 * level[:, None]                   # the pins the contact moves most
         moved &= np.isfinite(magnitude) & (level[:, None] > 0)
         if not moved.any():

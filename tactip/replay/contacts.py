@@ -117,7 +117,7 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
                                         usable=track.tracked & ~track.blank, signal=signal)
     try:
         bounds = segment_taps(_bridge_blank(signal, track.blank), high_px=high_px, low_px=low_px, merge_gap_frames=0)
-        kinds = contact_kinds(displacements, bounds)
+        kinds = contact_kinds(displacements, bounds, signal=signal)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")

@@ -88,3 +88,17 @@ def test_jitter_floor_of_too_few_frames_is_infinite():
 def test_one_quiet_frame_separates_two_contacts():
     signal = np.concatenate([[0, 0], np.full(10, 4.0), [0.1], np.full(10, 4.0), [0, 0]])
     assert segment_taps(signal, merge_gap_frames=0, pad_frames=0) == [(2, 12), (13, 23)]
+
+
+def test_a_given_tap_signal_gives_the_same_kinds_and_is_checked():
+    sensor = SyntheticTacTip.from_preset("tactip-127", seed=4)
+    run = sensor.sequence([Stroke(3.0), Stroke(2.0, 120.0, 2.0 * sensor.pin_spacing_mm)], rest_s=0.1, frame_rate=20.0)
+    displacements = _true_displacements(sensor, run)
+    bounds = [(e.start_frame, e.stop_frame) for e in run.events]
+    given = contact_kinds(displacements, bounds, signal=tap_signal(displacements))
+    computed = contact_kinds(displacements, bounds)
+    assert [k.kind for k in given] == [k.kind for k in computed] == ["press", "slide"]
+    np.testing.assert_array_equal([[k.direction_deg, k.drag_ratio, k.drag_px] for k in given],
+                                  [[k.direction_deg, k.drag_ratio, k.drag_px] for k in computed])  # NaN == NaN here
+    with pytest.raises(ShapeError, match="signal"):
+        contact_kinds(displacements, bounds, signal=np.zeros(3))
