@@ -16,6 +16,8 @@ name            kind                        content
 ``location_unit``, ``identity_unit``        attributes, e.g. ``"mm"`` (``"none"`` for a constant)
 ``dim_names``   attribute, list of str      one name per dimension (``"pin03_x"``, ``"taxel07"``)
 ``sensor``      attribute, JSON string      sensor description (kind, pins or taxels, preset, ...)
+``identity_period``  attribute, optional    period of a circular identity (e.g. 360 for an angle in deg)
+``identity_names``   attribute, optional    class names of a named identity (its values are indices 0..K-1)
 ==============  ==========================  ============================================
 
 A missing value is NaN: a TacTip tap holds NaN in the dx and dy dimensions of a feature pin unseen
@@ -50,7 +52,7 @@ from _shared import atomic_path, hdf5_in_memory, write_error
 
 from .errors import DatasetError
 
-__all__ = ["SCHEMA", "FRONT_ENDS", "Dataset", "save_dataset", "load_dataset", "DatasetWriter"]
+__all__ = ["SCHEMA", "FRONT_ENDS", "Dataset", "save_dataset", "load_dataset", "DatasetWriter", "check_identity_labels"]
 
 SCHEMA = "tactip-dataset/1"
 FRONT_ENDS = ("tactip", "taxel")
@@ -83,6 +85,12 @@ class Dataset:
         One name per dimension; empty generates ``("dim00", "dim01", ...)``.
     sensor : dict
         JSON-serialisable sensor description (kind, pins or taxels, preset, ...).
+    identity_period : float or None
+        Period of a circular identity in ``identity_unit`` (e.g. 360 for a slide direction in deg):
+        errors between identities wrap (315 and 0 deg are 45 deg apart). None: not circular.
+    identity_names : tuple of str
+        Names of a named identity (e.g. shapes): identity k is class ``identity_names[k]``, and
+        errors between names are only right or wrong. Empty: the identity is a number.
 
     Raises
     ------
@@ -100,6 +108,8 @@ class Dataset:
     identity_unit: str = "mm"
     dim_names: tuple[str, ...] = ()
     sensor: dict = field(default_factory=dict)
+    identity_period: float | None = None
+    identity_names: tuple[str, ...] = ()
 
     def __post_init__(self):
         taps = np.asarray(self.taps, dtype=np.float32)
@@ -136,6 +146,9 @@ class Dataset:
             object.__setattr__(self, name, value)
         object.__setattr__(self, "dim_names", names)
         object.__setattr__(self, "sensor", sensor)
+        period, labels = check_identity_labels(self.identity_period, self.identity_names, arrays["identity"])
+        object.__setattr__(self, "identity_period", period)
+        object.__setattr__(self, "identity_names", labels)
 
     def __repr__(self) -> str:
         return f"<Dataset {self.describe()}>"
@@ -175,7 +188,8 @@ class Dataset:
         index = np.asarray(index)
         lateral = None if self.lateral is None else self.lateral[index]
         return Dataset(self.taps[index], self.location[index], self.identity[index], lateral, self.front_end,
-                       self.location_unit, self.identity_unit, self.dim_names, self.sensor)
+                       self.location_unit, self.identity_unit, self.dim_names, self.sensor, self.identity_period,
+                       self.identity_names)
 
     def describe(self) -> str:
         """One line: front end, taps, samples x dims, location and identity ranges."""
@@ -187,6 +201,44 @@ class Dataset:
         missing = f" ({incomplete} with missing dims)" if incomplete else ""
         return (f"{self.front_end} dataset: {len(self)} taps of {self.samples} samples x {self.dims} dims{missing}; "
                 f"location {span(self.location, self.location_unit)}; identity {span(self.identity, self.identity_unit)}")
+
+
+def check_identity_labels(period, names, identity=None) -> tuple[float | None, tuple[str, ...]]:
+    """The checked ``(identity_period, identity_names)`` of a dataset or model.
+
+    Parameters
+    ----------
+    period : float or None
+        Finite and > 0, or None.
+    names : sequence of str
+        Distinct non-empty names; with names, every identity must be an index 0..len(names)-1.
+    identity : array, optional
+        The identities to check against the names.
+
+    Raises
+    ------
+    DatasetError
+        Naming what is wrong.
+    """
+    if period is not None:
+        try:
+            period = float(period)
+        except (TypeError, ValueError):
+            raise DatasetError(f"identity_period must be a number > 0 or None, got {period!r}") from None
+        if not (np.isfinite(period) and period > 0):
+            raise DatasetError(f"identity_period must be a finite number > 0 or None, got {period!r}")
+    names = tuple(str(n) for n in (names or ()))
+    if names:
+        if period is not None:
+            raise DatasetError("a named identity has no period: give identity_names or identity_period, not both")
+        if len(set(names)) != len(names) or not all(names):
+            raise DatasetError(f"identity_names must be distinct and non-empty, got {list(names)[:10]}")
+        if identity is not None and len(identity):
+            bad = (identity != np.round(identity)) | (identity < 0) | (identity >= len(names))
+            if bad.any():
+                raise DatasetError(f"a named identity holds class indices 0..{len(names) - 1}, got "
+                                   f"{identity[bad][0]:g} (tap {int(np.argmax(bad))})")
+    return period, names
 
 
 def _check_observed(taps: np.ndarray) -> None:
@@ -224,7 +276,7 @@ def save_dataset(path, dataset: Dataset, *, inputs=()) -> None:
     with atomic_path(path, inputs=inputs) as tmp:
         with hdf5_in_memory(tmp) as f:  # a full disk is an OSError, not a crash inside HDF5
             _write_attributes(f, dataset.front_end, dataset.location_unit, dataset.identity_unit,
-                              dataset.dim_names, dataset.sensor)
+                              dataset.dim_names, dataset.sensor, dataset.identity_period, dataset.identity_names)
             f.create_dataset("taps", data=dataset.taps, chunks=_taps_chunks(dataset.samples, dataset.dims),
                              maxshape=(None, dataset.samples, dataset.dims))
             for name in ("location", "identity", "lateral"):
@@ -568,13 +620,18 @@ def _taps_chunks(samples: int, dims: int) -> tuple[int, int, int]:
     return (max(1, min(64, 65536 // max(1, samples * dims))), samples, dims)
 
 
-def _write_attributes(f, front_end, location_unit, identity_unit, dim_names, sensor) -> None:
+def _write_attributes(f, front_end, location_unit, identity_unit, dim_names, sensor, identity_period=None,
+                      identity_names=()) -> None:
     f.attrs["schema"] = SCHEMA
     f.attrs["front_end"] = front_end
     f.attrs["location_unit"] = location_unit
     f.attrs["identity_unit"] = identity_unit
     f.attrs["dim_names"] = list(dim_names)
     f.attrs["sensor"] = json.dumps(sensor, sort_keys=True)
+    if identity_period is not None:
+        f.attrs["identity_period"] = float(identity_period)
+    if identity_names:
+        f.attrs["identity_names"] = list(identity_names)
 
 
 def _check_schema(f, path) -> None:
@@ -602,4 +659,7 @@ def _read_attributes(f, path) -> dict:
         "identity_unit": text(f.attrs["identity_unit"]),
         "dim_names": tuple(text(n) for n in np.atleast_1d(f.attrs["dim_names"])),
         "sensor": sensor,
+        "identity_period": float(f.attrs["identity_period"]) if "identity_period" in f.attrs else None,
+        "identity_names": tuple(text(n) for n in np.atleast_1d(f.attrs["identity_names"]))
+        if "identity_names" in f.attrs else (),
     }

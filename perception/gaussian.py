@@ -105,6 +105,8 @@ class GaussianModel(LikelihoodModel):
     identity_unit: str
     taps_per_class: np.ndarray
     recommended: dict = field(default_factory=dict)
+    identity_period: float | None = None   # circular identity (e.g. 360 deg), from the training dataset
+    identity_names: tuple[str, ...] = ()   # class names of a named identity, from the training dataset
     residual_variance: float = float("nan")
 
     KIND = "gaussian"
@@ -367,4 +369,5 @@ def fit_gaussian(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class:
     residual = _residual_variances(filled, cls, grid.n_classes, directions)[directions.shape[1]]
     return GaussianModel(mean, transform, class_means, float(beta), float(shrinkage), int(folds), grid.location_edges,
                          grid.identities, grid.front_end, grid.samples, grid.dim_names, grid.sensor, grid.location_unit,
-                         grid.identity_unit, grid.taps_per_class, residual_variance=float(residual))
+                         grid.identity_unit, grid.taps_per_class, residual_variance=float(residual),
+                         identity_period=grid.identity_period, identity_names=grid.identity_names)

@@ -92,6 +92,8 @@ class HistogramModel(LikelihoodModel):
     epsilon: float
     taps_per_class: np.ndarray
     recommended: dict = field(default_factory=dict)
+    identity_period: float | None = None   # circular identity (e.g. 360 deg), from the training dataset
+    identity_names: tuple[str, ...] = ()   # class names of a named identity, from the training dataset
 
     def __post_init__(self):
         dims, _, classes = self.log_probability.shape
@@ -253,7 +255,8 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
     bin_width = np.where(span > 0, span / bins, 1.0)
     empty = HistogramModel(np.zeros((dims, bins, grid.n_classes), np.float32), bin_lower, bin_width,
                            grid.location_edges, grid.identities, grid.front_end, grid.samples, grid.dim_names,
-                           grid.sensor, grid.location_unit, grid.identity_unit, float(epsilon), grid.taps_per_class)
+                           grid.sensor, grid.location_unit, grid.identity_unit, float(epsilon), grid.taps_per_class,
+                           identity_period=grid.identity_period, identity_names=grid.identity_names)
     return dataclasses.replace(empty, log_probability=histogram_log_probability(empty, dataset.taps,
                                                                                 grid.tap_class(dataset)))
 

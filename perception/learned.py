@@ -99,6 +99,8 @@ class TorchModel(LikelihoodModel):
     identity_unit: str
     taps_per_class: np.ndarray
     recommended: dict = field(default_factory=dict)
+    identity_period: float | None = None   # circular identity (e.g. 360 deg), from the training dataset
+    identity_names: tuple[str, ...] = ()   # class names of a named identity, from the training dataset
     imputation_basis: np.ndarray | None = None
     imputation_variances: np.ndarray | None = None
     imputation_residual: float = float("nan")
@@ -299,4 +301,5 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
                       b2.astype(np.float32), float(beta), best + 1, grid.location_edges, grid.identities,
                       grid.front_end, grid.samples, grid.dim_names, grid.sensor, grid.location_unit,
                       grid.identity_unit, grid.taps_per_class, imputation_basis=imputation.basis,
-                      imputation_variances=imputation.variances, imputation_residual=imputation.residual_variance)
+                      imputation_variances=imputation.variances, imputation_residual=imputation.residual_variance,
+                      identity_period=grid.identity_period, identity_names=grid.identity_names)

@@ -124,12 +124,40 @@ class LikelihoodModel:
         """
         return "uniform" if self.front_end == "taxel" else "edge"
 
+    def identity_label(self, index) -> str:
+        """How identity class ``index`` is shown: its name, or its value and unit (``"45 deg"``)."""
+        if self.identity_names:
+            return self.identity_names[int(self.identities[index])]
+        return f"{self.identities[index]:g} {self.identity_unit}"
+
+    def identity_error(self, decided, true) -> np.ndarray:
+        """|decided - true| between identity values, identity units: wrapped for a circular identity
+        (``identity_period``), 0 or 1 (wrong) for a named one.
+
+        Parameters
+        ----------
+        decided, true : arrays of identity values (not class indices)
+        """
+        decided, true = np.asarray(decided, np.float64), np.asarray(true, np.float64)
+        if self.identity_names:
+            return (decided != true).astype(np.float64)
+        error = np.abs(decided - true)
+        if self.identity_period is not None:
+            error = error % self.identity_period
+            error = np.minimum(error, self.identity_period - error)
+        return error
+
     def _grid_summary(self) -> str:
         lo, hi = self.location_edges[0], self.location_edges[-1]
+        if self.identity_names:
+            shown = ", ".join(self.identity_names[:6]) + (", ..." if len(self.identity_names) > 6 else "")
+            identities = f"({shown})"
+        else:
+            period = f", period {self.identity_period:g}" if self.identity_period is not None else ""
+            identities = f"({self.identities.min():g}..{self.identities.max():g} {self.identity_unit}{period})"
         return (f"{self.front_end} model: {self.n_classes} classes = {self.n_locations} locations "
                 f"({lo:g}..{hi:g} {self.location_unit}) x {self.n_identities} identities "
-                f"({self.identities.min():g}..{self.identities.max():g} {self.identity_unit}); "
-                f"taps of {self.samples} samples x {self.dims} dims")
+                f"{identities}; taps of {self.samples} samples x {self.dims} dims")
 
     def summary(self) -> str:
         """One line: kind, front end, class grid, tap shape."""
@@ -264,7 +292,7 @@ class LikelihoodModel:
         if (dataset.front_end, dataset.dims, dataset.samples) != (self.front_end, self.dims, self.samples):
             raise ModelError(f"model trained for {self.front_end} ({self.dims} dims, {self.samples} samples), "
                              f"got {dataset.front_end} taps ({dataset.dims} dims, {dataset.samples} samples)")
-        for name in ("location_unit", "identity_unit"):
+        for name in ("location_unit", "identity_unit", "identity_period", "identity_names"):
             if getattr(dataset, name) != getattr(self, name):
                 raise ModelError(f"model trained with {name} {getattr(self, name)!r}, got {getattr(dataset, name)!r}")
 
@@ -319,6 +347,8 @@ class ClassGrid(LikelihoodModel):
     identity_unit: str
     taps_per_class: np.ndarray
     recommended: dict = field(default_factory=dict)
+    identity_period: float | None = None   # circular identity (e.g. 360 deg), from the training dataset
+    identity_names: tuple[str, ...] = ()   # class names of a named identity, from the training dataset
 
     def summary(self) -> str:
         """One line: front end, class grid, tap shape."""
@@ -363,7 +393,8 @@ def fit_class_grid(dataset: Dataset, *, n_locations: int = 11, min_taps_per_clas
     identities = np.unique(dataset.identity)
     grid = ClassGrid(np.linspace(lo, hi, n_locations + 1), identities, dataset.front_end, dataset.samples,
                      dataset.dim_names, dataset.sensor, dataset.location_unit, dataset.identity_unit,
-                     np.zeros((n_locations, len(identities)), np.int64))
+                     np.zeros((n_locations, len(identities)), np.int64), identity_period=dataset.identity_period,
+                     identity_names=dataset.identity_names)
     taps_per_class = np.bincount(grid.tap_class(dataset), minlength=grid.n_classes)
     few = np.flatnonzero(taps_per_class < min_taps_per_class)
     if few.size:

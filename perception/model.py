@@ -26,8 +26,8 @@ from _shared import atomic_path, cut_short, hdf5_in_memory
 
 from .calibrated import CalibratedHistogramModel, fit_calibrated_histogram
 from .choices import MODEL_KINDS
-from .dataset import Dataset
-from .errors import ModelError
+from .dataset import Dataset, check_identity_labels
+from .errors import DatasetError, ModelError
 from .gaussian import GaussianModel, fit_gaussian
 from .histogram import DEFAULT_EPSILON, HistogramModel, fit_model
 from .learned import TorchModel, fit_torch
@@ -142,6 +142,10 @@ def save_model(path, model: LikelihoodModel, *, inputs=()) -> None:
             f.attrs["dim_names"] = list(model.dim_names)
             f.attrs["sensor"] = json.dumps(model.sensor, sort_keys=True)
             f.attrs["recommended"] = json.dumps(model.recommended, sort_keys=True)
+            if model.identity_period is not None:
+                f.attrs["identity_period"] = float(model.identity_period)
+            if model.identity_names:
+                f.attrs["identity_names"] = list(model.identity_names)
             for name, value in attrs.items():
                 f.attrs[name] = value
 
@@ -207,6 +211,12 @@ def load_model(path) -> LikelihoodModel:
         except (TypeError, ValueError) as exc:
             raise ModelError(f"{path}: unreadable settings ({exc})") from None
         common["dim_names"] = tuple(str(n) for n in np.atleast_1d(f.attrs["dim_names"]))
+        try:  # optional: the label's period and class names (absent: a plain number)
+            common["identity_period"], common["identity_names"] = check_identity_labels(
+                f.attrs["identity_period"] if "identity_period" in f.attrs else None,
+                [str(n) for n in np.atleast_1d(f.attrs["identity_names"])] if "identity_names" in f.attrs else ())
+        except DatasetError as exc:
+            raise ModelError(f"{path}: {exc}") from None
     _check_model_arrays(path, arrays)
     if not isinstance(common["recommended"], dict):
         raise ModelError(f"{path}: recommended settings are not a table")

@@ -209,7 +209,8 @@ def monte_carlo(environment: VirtualEnvironment, policy: Policy, *, thresholds=D
         Stop on the 'what' marginal (papers 002-004) or the joint class (paper 001 eq. 3).
     identity_period : float, optional
         Period of circular identities (e.g. 360 deg for edge angles): identity errors go the
-        shorter way round.
+        shorter way round. Default: the model's own (``model.identity_period``, from its training
+        dataset); a named identity's error is 0 or 1 (wrong).
     start_location, true_identity : (runs,) int arrays, optional
         Starting location class and true identity class of each run (default: uniform random).
 
@@ -305,8 +306,9 @@ def _simulate(env, policy, thresholds, start, identity, rng, *, move_threshold, 
 def _summarise(model, name, thresholds, start, identity, out, period=None) -> MonteCarloResult:
     """Errors, accuracy, taps, per starting-class maps."""
     n_loc, n_id = model.n_locations, model.n_identities
-    identity_error = np.abs(model.identities[out["identity_class"]] - model.identities[identity])
-    if period is not None:
+    identity_error = model.identity_error(model.identities[out["identity_class"]], model.identities[identity])
+    if period is not None:  # a period given to this run, over the model's own
+        identity_error = np.abs(model.identities[out["identity_class"]] - model.identities[identity])
         identity_error = np.minimum(identity_error % period, period - identity_error % period)
     centres = model.location_centres
     location_error = np.abs(centres[out["location_class"]] - centres[out["true_location"]])

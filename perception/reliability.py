@@ -154,6 +154,8 @@ class BeliefTrace:
         True class of the decision marginal at that tap (identity, or the current location class).
     values : (n,) float64 ndarray
         Value of each decision class (identities, or location class centres), for errors.
+    period : float or None
+        Period of circular values (e.g. 360 deg): errors wrap. None: not circular.
     """
 
     policy: str
@@ -161,6 +163,7 @@ class BeliefTrace:
     estimate: np.ndarray
     truth: np.ndarray
     values: np.ndarray
+    period: float | None = None
 
     @property
     def runs(self) -> int:
@@ -204,6 +207,8 @@ class BeliefTrace:
         rows = np.arange(self.runs)
         identity = self.estimate[rows, column]
         error = np.abs(self.values[identity] - self.values[self.truth[rows, column]])
+        if self.period is not None:
+            error = np.minimum(error % self.period, self.period - error % self.period)
         return Decisions(float(threshold), column + 1, identity, self.belief[rows, column], forced, error)
 
 
@@ -257,7 +262,8 @@ def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int 
         location = np.clip(location + offset, 0, n_loc - 1)
         log_belief = bayes.shift(log_belief, offset, mode=shift_mode)
     values = model.identities if n_id > 1 else model.location_centres
-    return BeliefTrace(policy.name, belief, estimate, truth, np.asarray(values, dtype=np.float64))
+    return BeliefTrace(policy.name, belief, estimate, truth, np.asarray(values, dtype=np.float64),
+                       model.identity_period if n_id > 1 else None)
 
 
 def fit_policy_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: int = CALIBRATION_TAPS[-1],
