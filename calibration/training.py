@@ -12,7 +12,7 @@ overrides them. With a target accuracy, a calibrated kind's tempering is refitte
 for the beliefs after 1 to 5 taps of active perception (`perception.fit_policy_tempering`): the taps
 of one inspection repeat each other's evidence, which a tempering fitted on single taps ignores.
 
-No peeking (`prepare_station_model`): the station's fixation depth, threshold and tempering are chosen
+No peeking (`fit_with_fixation`, `prepare_station_model`): the station's fixation depth, threshold and tempering are chosen
 on a validation split carved from the training collection (`carve_validation`), on a model fitted
 to the rest of it; the model kept is then fitted on every training tap and given those settings. The
 test collection is used once, at the end, for the figures reported (`final_figures`), so that they are
@@ -32,7 +32,7 @@ from perception import (VirtualEnvironment, fixation_for_accuracy, fixation_swee
                         make_policy, save_model, trace_beliefs, train_model)
 
 __all__ = ["train_station_model", "recommend_fixation", "choose_fixation", "carve_validation",
-           "prepare_station_model", "final_figures", "FinalFigures"]
+           "prepare_station_model", "fit_with_fixation", "final_figures", "FinalFigures"]
 
 
 def train_station_model(train_path: str | Path, out: str | Path, *, n_locations: int = 11, bins: int = 100,
@@ -268,50 +268,66 @@ def final_figures(model, test, *, tolerance: float = 0.0, runs: int = 2000, max_
                        int(runs))
 
 
-def prepare_station_model(train_path: str | Path, out: str | Path, *, kind: str = "histogram", n_locations: int = 11,
-                          bins: int = 100, target_accuracy: float | None = None, tolerance: float = 0.0,
-                          max_taps: int = 20, runs: int = 2000, seed: int = 0, log: Callable[[str], None] = print):
-    """Train the station's model and choose its fixation, threshold and tempering without peeking at the test set.
+def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, bins: int = 100,
+                      target_accuracy: float | None = None, tolerance: float = 0.0, max_taps: int = 20,
+                      runs: int = 2000, seed: int = 0, fall_back: bool = True, model=None,
+                      log: Callable[[str], None] = print, **fit_options):
+    """A model fitted on every training tap, with its fixation, threshold and tempering chosen on a split of them.
 
-    1. `carve_validation` splits the training collection into a fitting part and a validation part;
+    1. `carve_validation` splits the training taps into a fitting part and a validation part;
     2. a model of ``kind`` fitted on the fitting part is swept over fixations on the validation part
-       (`choose_fixation`), which chooses the fixation depth, the threshold and a calibrated kind's
+       (`choose_fixation`), which chooses the fixation location, the threshold and a calibrated kind's
        tempering factor for 1-5 taps;
     3. the model kept is fitted on every training tap and given those settings (its own tempering
-       times the factor), and written to ``out``.
+       times the factor).
 
-    The settings were chosen for a model fitted on half the taps: the full model decides at least as
-    well, so the threshold errs on the safe side.
+    The settings are chosen for a model fitted on half the taps: the full model decides at least as
+    well, so the threshold errs on the safe side. No test tap is read.
 
     Parameters
     ----------
-    train_path : str or path
-        The training collection.
-    out : str or path
-        Model file to write.
-    kind, n_locations, bins
+    train : perception.Dataset
+        The training taps.
+    kind, n_locations, bins, **fit_options
         As `perception.train_model`.
-    target_accuracy, tolerance, max_taps, runs, seed
+    target_accuracy, tolerance, max_taps, runs, seed, fall_back
         As `choose_fixation`.
+    model : perception.LikelihoodModel, optional
+        The model already fitted on every training tap with these options (else fitted here).
     log : callable
+        Where the lines saying what was chosen go.
+
+    Returns
+    -------
+    perception.LikelihoodModel
+    """
+    fit, validation = carve_validation(train)
+    log(f"choosing the fixation and threshold on a validation split of the training taps "
+        f"({len(validation)} of {len(train)}; the model for it is fitted on the other {len(fit)})")
+    options = dict(kind=kind, n_locations=n_locations, bins=bins, **fit_options)
+    partial = train_model(train.subset(fit), **options)
+    chosen, _, line = choose_fixation(partial, train.subset(validation), target_accuracy=target_accuracy,
+                                      tolerance=tolerance, max_taps=max_taps, runs=runs, seed=seed, log=log,
+                                      fall_back=fall_back)
+    log(line)
+    model = train_model(train, **options) if model is None else model
+    if model.temperable and chosen.tempering != partial.tempering:
+        model = model.tempered(chosen.tempering / partial.tempering)
+    return model.with_recommended(**chosen.recommended)
+
+
+def prepare_station_model(train_path: str | Path, out: str | Path, *, log: Callable[[str], None] = print, **options):
+    """Train the station's model and choose its settings without peeking at the test set; write it to ``out``.
+
+    `fit_with_fixation` on the training collection at ``train_path`` (its options: ``kind``,
+    ``n_locations``, ``bins``, ``target_accuracy``, ``tolerance``, ``max_taps``, ``runs``, ``seed``).
 
     Returns
     -------
     perception.LikelihoodModel
         The model written, with its recommended settings.
     """
-    train = load_dataset(train_path)
-    fit, validation = carve_validation(train)
-    log(f"choosing the fixation depth and threshold on a validation split of the training taps "
-        f"({len(validation)} of {len(train)}; the model for it is fitted on the other {len(fit)})")
-    partial = train_model(train.subset(fit), kind=kind, n_locations=n_locations, bins=bins)
-    chosen, _, line = choose_fixation(partial, train.subset(validation), target_accuracy=target_accuracy,
-                                      tolerance=tolerance, max_taps=max_taps, runs=runs, seed=seed, log=log)
-    log(line)
-    model = train_model(train, kind=kind, n_locations=n_locations, bins=bins)
-    if model.temperable and chosen.tempering != partial.tempering:
-        model = model.tempered(chosen.tempering / partial.tempering)
-    model = model.with_recommended(**chosen.recommended)
+    model = fit_with_fixation(load_dataset(train_path), log=log, **options)
     save_model(out, model, inputs=[train_path])
     log(model.summary())
     return model
