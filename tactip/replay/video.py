@@ -73,7 +73,8 @@ import numpy as np
 
 from pins import DetectionParams, PinsError, PinTracker, find_pin_field
 
-from tactip._output import check_video_written, claim_output, refuse_overwriting_inputs, write_error
+from tactip._output import (check_video_written, claim_output, discard_temporary, publish, refuse_overwriting_inputs,
+                            write_error)
 from tactip.errors import ConfigError, SourceError
 from tactip.pipeline import frames_to_features
 from tactip.replay.contacts import analyse, check_rest_frame
@@ -276,10 +277,10 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
             if final is annotate:  # OpenCV's writer says nothing of a full disk: count the frames stored
                 check_video_written(part, final, len(track.timestamps_s))
         for part, final in zip(temporary, [out_path, annotate]):
-            os.replace(part, final)
+            publish(part, final)       # renamed over a file, streamed into /dev/null or a FIFO
     finally:
         for part in temporary:
-            part.unlink(missing_ok=True)
+            discard_temporary(part)
     return ReplayResult(out_path=out_path, annotate_path=annotate, video=str(video), frames=len(track.timestamps_s),
                         pins=len(track.rest_positions), frame_rate=frame_rate,
                         lost_per_frame=track.lost.sum(axis=1), retired_per_frame=track.retired.sum(axis=1),
