@@ -75,8 +75,11 @@ def run(args: argparse.Namespace) -> int:
     from tactip.cli._types import check_memory
     from tactip.errors import TactipError
 
-    if args.epsilon is not None and not math.isfinite(args.epsilon):
-        raise TactipError(f"--epsilon must be a finite number > 0, got {args.epsilon}")
+    from perception.histogram import MAX_EPSILON
+
+    if args.epsilon is not None and not (math.isfinite(args.epsilon) and args.epsilon <= MAX_EPSILON):
+        raise TactipError(f"--epsilon must be a number in (0, {MAX_EPSILON:g}] (a count added to every bin; more "
+                          f"drowns the taps' counts), got {args.epsilon:g}")
     if "histogram" not in args.model:
         given = [flag for flag, value in (("--bins", args.bins), ("--epsilon", args.epsilon)) if value is not None]
         if given:

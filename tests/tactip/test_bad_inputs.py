@@ -34,3 +34,30 @@ def test_a_synthetic_source_out_of_range_is_refused_before_recording(tmp_path, c
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"'synthetic:{pins}'" in err[0] and "pins must be an integer in 7..5000" in err[0]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_epsilon_that_drowns_the_counts_is_refused(tmp_path, capsys):
+    from perception import save_dataset
+    from tests.perception.synthetic import gap_dataset
+
+    save_dataset(tmp_path / "train.h5", gap_dataset(seed=1, taps_per_class=2, depths=3, widths=2, samples=5, dims=4))
+    assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "m.h5"), "--epsilon", "1e308"]) == 1
+    assert "--epsilon must be a number in (0, 1e+06]" in capsys.readouterr().err
+    assert not (tmp_path / "m.h5").exists()
+
+
+def test_a_model_with_negative_tap_counts_is_refused(tmp_path, capsys):
+    import h5py
+
+    from perception import save_dataset
+    from tests.perception.synthetic import gap_dataset
+
+    save_dataset(tmp_path / "train.h5", gap_dataset(seed=1, taps_per_class=2, depths=3, widths=2, samples=5, dims=4))
+    assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "m.h5"), "--locations", "3"]) == 0
+    with h5py.File(tmp_path / "m.h5", "a") as f:
+        counts = f["taps_per_class"][()]
+        del f["taps_per_class"]
+        f["taps_per_class"] = counts * 0 - 3
+    capsys.readouterr()
+    assert main(["validate", str(tmp_path / "m.h5"), str(tmp_path / "train.h5"), "--runs", "10", "--quiet"]) == 1
+    assert "taps_per_class must hold a whole number >= 0" in capsys.readouterr().err
