@@ -239,7 +239,7 @@ class LabelScheme:
                 return self.low
             width = (self.high - self.low) / self.classes
             index = min(max(int(math.floor((value - self.low) / width)), 0), self.classes - 1)
-            return self.low + (index + 0.5) * width
+            return float(f"{self.low + (index + 0.5) * width:.12g}")  # 2.898, not 2.8979999999999997
         return float(value)
 
     def class_name(self, identity: float) -> str:
