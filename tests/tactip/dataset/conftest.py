@@ -2,8 +2,8 @@
 
 - `slide_videos`: the radial pad ``radial-led-120`` sliding in 8 directions (0, 45, ..., 315 deg), one MJPG
   video per direction with 4 slides each; labels.csv ``path,direction_deg``.
-- `press_videos`: the 331-pin pad pressed at 4 depths (2-5 mm), 2 videos per depth with 3 presses each; the
-  labels are written as measured depths (1.0 +- 0.2 mm), so that --classes has to bin them.
+- `press_videos`: the 331-pin pad pressed at 3 depths (2-5 mm), 2 videos per depth with 3 presses each; the
+  labels are written as measured depths (2.0 +- 0.2 mm), so that --classes has to bin them.
 - `shape_images`: the 127-pin pad, one image per tap of three named contacts (``shallow``, ``deep``, ``gap``)
   plus a rest image; labels.csv ``path,shape``.
 
@@ -22,7 +22,7 @@ from tactip.sim.contact import Contact
 from tests.tactip.conftest import built_once
 
 DIRECTIONS = tuple(range(0, 360, 45))
-DEPTHS_MM = (2.0, 3.0, 4.0, 5.0)
+DEPTHS_MM = (2.0, 3.5, 5.0)
 SHAPES = {"shallow": Contact(1.5), "deep": Contact(3.5), "gap": Contact(2.5, gap_width_mm=3.0)}
 
 

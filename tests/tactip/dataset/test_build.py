@@ -11,7 +11,7 @@ from calibration import load_calibration
 from perception import load_dataset
 from tactip.dataset import OUTPUTS, LabelsError, build_dataset, recording_taps
 from tactip.sim import SyntheticTacTip
-from tests.tactip.dataset.conftest import DEPTHS_MM, DIRECTIONS, SHAPES, press_run, write_video
+from tests.tactip.dataset.conftest import DIRECTIONS, SHAPES, press_run, write_video
 
 
 def _datasets(out):
@@ -35,15 +35,15 @@ def test_slide_videos_become_angle_identities_with_a_period(slide_videos, tmp_pa
 
 
 def test_press_videos_binned_into_depth_classes_with_a_group_split(press_videos, tmp_path):
-    build_dataset(press_videos.labels, tmp_path / "out", label="depth_mm", classes=4, split="group", seed=3,
+    build_dataset(press_videos.labels, tmp_path / "out", label="depth_mm", classes=3, split="group", seed=3,
                   sensor="tactip-331")
     train, test, summary = _datasets(tmp_path / "out")
     low, high = summary["scheme"]["range"]
-    width = (high - low) / 4
-    centres = low + width * (np.arange(4) + 0.5)
+    width = (high - low) / 3
+    centres = low + width * (np.arange(3) + 0.5)
     assert np.allclose(sorted(set(train.identity.tolist()) | set(test.identity.tolist())), centres)
     assert train.identity_unit == "mm" and train.identity_period is None
-    # whole recordings on one side: each of the 8 rows' 3 taps all train or all test, one recording per side and class
+    # whole recordings on one side: each of the 6 rows' 3 taps all train or all test, one recording per side and class
     for row in summary["rows"]:
         assert row["taps"] == 3 and sorted([row["train"], row["test"]]) == [0, 3]
     assert all((c["train"], c["test"], c["recordings"]) == (3, 3, 2) for c in summary["classes"])
@@ -58,9 +58,9 @@ def test_column_split_follows_the_csv(press_videos, tmp_path):
     rows = [lines[0] + ",split"] + [f"{line},{'test' if k % 2 else 'train'}" for k, line in enumerate(lines[1:])]
     labels = press_videos.root / "labels_split.csv"
     labels.write_text("\n".join(rows) + "\n")
-    result = build_dataset(labels, tmp_path / "out", label="depth_mm", classes=4, split="column",
+    result = build_dataset(labels, tmp_path / "out", label="depth_mm", classes=3, split="column",
                            sensor="tactip-331")
-    assert [(r["train"], r["test"]) for r in result.summary["rows"]] == [(3, 0), (0, 3)] * 4
+    assert [(r["train"], r["test"]) for r in result.summary["rows"]] == [(3, 0), (0, 3)] * 3
 
 
 def test_images_give_one_tap_each_from_the_rest_image_with_named_labels(shape_images, tmp_path):
@@ -85,7 +85,7 @@ def test_bad_rows_are_named_by_line_and_left_out(press_videos, tmp_path):
     rows = ["path,depth_mm,operator", good[0], "missing.avi,2.0,op0", good[1], "broken.avi,1.0,op0",
             good[2].split(",")[0] + ",,op0", "still.avi,3.0,op1", *good[3:]]
     (folder / "labels.csv").write_text("\n".join(rows) + "\n")
-    result = build_dataset(folder / "labels.csv", tmp_path / "out", label="depth_mm", classes=4, sensor="tactip-331")
+    result = build_dataset(folder / "labels.csv", tmp_path / "out", label="depth_mm", classes=3, sensor="tactip-331")
     reasons = {r["line"]: r["reason"] for r in result.summary["left_out"]}
     assert sorted(reasons) == [3, 5, 6, 7]
     assert "no such file" in reasons[3] and "empty label" in reasons[6] and "no contact" in reasons[7]
@@ -113,7 +113,7 @@ def test_nothing_is_written_when_nothing_is_left_or_on_an_interrupt(press_videos
 
     monkeypatch.setattr(build_module, "recording_taps", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        build_dataset(press_videos.labels, tmp_path / "out", label="depth_mm", classes=4, sensor="tactip-331")
+        build_dataset(press_videos.labels, tmp_path / "out", label="depth_mm", classes=3, sensor="tactip-331")
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
 
 
@@ -121,32 +121,39 @@ def test_existing_outputs_are_kept_unless_overwrite(press_videos, tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "train.h5").write_text("an older set")
+    labels = press_videos.root / "labels_two.csv"  # one recording of two depths
+    lines = press_videos.labels.read_text().splitlines()
+    labels.write_text("\n".join([lines[0], lines[1], lines[3]]) + "\n")
     with pytest.raises(LabelsError, match="already holds train.h5.*--overwrite"):
-        build_dataset(press_videos.labels, out, label="depth_mm", classes=4)
+        build_dataset(labels, out, label="depth_mm")
     assert (out / "train.h5").read_text() == "an older set"
-    build_dataset(press_videos.labels, out, label="depth_mm", classes=4, overwrite=True, sensor="tactip-331")
+    build_dataset(labels, out, label="depth_mm", overwrite=True, sensor="tactip-331")
     assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUTS)  # no temporary file left
 
 
 def test_a_given_calibration_is_used_and_copied(press_videos, tmp_path):
-    first = build_dataset(press_videos.labels, tmp_path / "a", label="depth_mm", classes=4, sensor="tactip-331")
-    again = build_dataset(press_videos.labels, tmp_path / "b", label="depth_mm", classes=4,
-                          calibration=tmp_path / "a" / "calibration.h5")
-    a, b = load_calibration(tmp_path / "a" / "calibration.h5"), load_calibration(tmp_path / "b" / "calibration.h5")
-    assert np.array_equal(a.selected_pins, b.selected_pins) and np.allclose(a.reference_pins, b.reference_pins)
-    assert again.summary["calibration"]["made_on"] == "given" and first.summary["calibration"]["made_on"]["line"] == 2
-    assert np.allclose(load_dataset(tmp_path / "a" / "test.h5").taps, load_dataset(tmp_path / "b" / "test.h5").taps,
-                       equal_nan=True)
+    from calibration import save_calibration
+    from tactip.dataset import make_calibration, rest_frame_of
+
+    rest = rest_frame_of(press_videos.root / "press_5_1.avi")
+    save_calibration(tmp_path / "given.h5", make_calibration(rest, sensor="tactip-331", n_pins=30))
+    result = build_dataset(press_videos.labels, tmp_path / "out", label="depth_mm", classes=3,
+                           calibration=tmp_path / "given.h5")
+    given, copied = load_calibration(tmp_path / "given.h5"), load_calibration(tmp_path / "out" / "calibration.h5")
+    assert np.array_equal(given.selected_pins, copied.selected_pins)
+    assert np.allclose(given.reference_pins, copied.reference_pins)
+    assert result.summary["calibration"]["made_on"] == "given" and load_dataset(tmp_path / "out" / "test.h5").dims == 60
     with pytest.raises(LabelsError, match="sensor cannot be combined"):
-        build_dataset(press_videos.labels, tmp_path / "c", label="depth_mm", sensor="tactip-331",
-                      calibration=tmp_path / "a" / "calibration.h5")
+        build_dataset(press_videos.labels, tmp_path / "other", label="depth_mm", sensor="tactip-331",
+                      calibration=tmp_path / "given.h5")
 
 
 @pytest.mark.parametrize("hidden", [10, 25])
-def test_unseen_feature_pins_leave_nan_columns_not_dropped_taps(press_videos, tmp_path, hidden):
-    build_dataset(press_videos.labels, tmp_path / "out", label="depth_mm", classes=4, sensor="tactip-331")
-    calibration = load_calibration(tmp_path / "out" / "calibration.h5")
+def test_unseen_feature_pins_leave_nan_columns_not_dropped_taps(tmp_path, hidden):
+    from tactip.dataset import make_calibration
+
     sensor = SyntheticTacTip.from_preset("tactip-331", seed=0)
+    calibration = make_calibration(sensor.render().image, sensor="tactip-331")
     sensor.reseed_noise(99)
     # the sensor's pins nearest the first `hidden` feature pins, hidden in every frame of contact
     from scipy.spatial import cKDTree
