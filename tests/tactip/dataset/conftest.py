@@ -101,3 +101,16 @@ def shape_images(tmp_path_factory):
                     rows.append(f"{name}_{repeat}.png,{name}")
             (root / "labels.csv").write_text("\n".join(rows) + "\n")
     return SimpleNamespace(root=root, labels=root / "labels.csv", rest=root / "rest.png")
+
+
+@pytest.fixture(scope="session")
+def slides_model(slide_videos, tmp_path_factory):
+    """`slide_videos` after ``tactip dataset build --period 360`` and ``tactip train --model gaussian``: the folder."""
+    from tactip.cli import main
+
+    with built_once(tmp_path_factory, "dataset-slides-model") as (out, build):
+        if build:
+            assert main(["dataset", "build", str(slide_videos.labels), "--out", str(out), "--period", "360",
+                         "--sensor", "radial-led-120", "--quiet", "--overwrite"]) == 0
+            assert main(["train", str(out / "train.h5"), "--out", str(out / "model.h5"), "--model", "gaussian"]) == 0
+    return out

@@ -18,9 +18,9 @@ def _datasets(out):
     return load_dataset(out / "train.h5"), load_dataset(out / "test.h5"), json.loads((out / "summary.json").read_text())
 
 
-def test_slide_videos_become_angle_identities_with_a_period(slide_videos, tmp_path):
-    build_dataset(slide_videos.labels, tmp_path / "out", period=360.0, sensor="radial-led-120")
-    train, test, summary = _datasets(tmp_path / "out")
+def test_slide_videos_become_angle_identities_with_a_period(slides_model):
+    """Built with ``--period 360`` (the `slides_model` fixture runs the CLI)."""
+    train, test, summary = _datasets(slides_model)
     for ds in (train, test):
         assert ds.identity_period == 360.0 and ds.identity_unit == "deg"
         assert ds.location_unit == "none" and not ds.location.any()
@@ -30,7 +30,7 @@ def test_slide_videos_become_angle_identities_with_a_period(slide_videos, tmp_pa
     assert [(c["train"], c["test"]) for c in summary["classes"]] == [(2, 2)] * len(DIRECTIONS)
     assert summary["pins"]["feature_pins"] == 40 and summary["recordings"] == {"used": 8, "left_out": 0}
     # one calibration for the set: its feature pins are the datasets' columns
-    calibration = load_calibration(tmp_path / "out" / "calibration.h5")
+    calibration = load_calibration(slides_model / "calibration.h5")
     assert calibration.n_selected * 2 == train.dims and train.sensor["selected_pins"] == calibration.n_selected
 
 

@@ -25,15 +25,6 @@ def _label_error(row):
     return row["mean_label_error"] if "mean_label_error" in row else row["mean_identity_error"]
 
 
-@pytest.fixture(scope="module")
-def slides_model(slide_videos, tmp_path_factory):
-    out = tmp_path_factory.mktemp("slides")
-    assert main(["dataset", "build", str(slide_videos.labels), "--out", str(out), "--period", "360",
-                 "--sensor", "radial-led-120", "--quiet"]) == 0
-    assert main(["train", str(out / "train.h5"), "--out", str(out / "model.h5"), "--model", "gaussian"]) == 0
-    return out
-
-
 def test_slide_directions_are_recovered_at_one_tap(slides_model, capsys):
     assert main(["validate", str(slides_model / "model.h5"), str(slides_model / "test.h5"), "--runs", "800",
                  "--json", str(slides_model / "v.json"), "--quiet"]) == 0
