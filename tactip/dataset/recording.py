@@ -8,9 +8,10 @@ map it over recordings; it reads its inputs and writes nothing.
   frame (`calibration.place_reference_pins`), tracked through it, the contacts found, and each
   contact's feature pins resampled into a ``(samples, 2 P)`` tap. A tap whose feature pins were
   fewer than half seen is left out (and counted); one with some unseen keeps NaN in their columns.
-- An **image** is one tap: the displacement of the feature pins from a rest image (tracked from the
-  rest image to the image, as a station's tap is from its rest frame), ``dx`` then ``dy`` of the P
-  pins, repeated over ``samples`` rows (1 by default: a still image has no time course).
+- An **image** is one tap: the displacement of the feature pins from a rest image (the pins placed on
+  the rest image and matched to the image's blobs outwards from the unambiguous ones,
+  `pins.match_by_propagation`: one large step, not a frame-to-frame track), ``dx`` then ``dy`` of the
+  P pins, repeated over ``samples`` rows (1 by default: a still image has no time course).
 
 The feature pins are the calibration's in every recording, so taps of different recordings line up.
 """
@@ -24,6 +25,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tactip.errors import SourceError
+
+
+
 
 __all__ = ["RecordingTaps", "recording_taps", "is_image", "rest_frame_of", "read_grey_image"]
 
@@ -170,12 +174,16 @@ def _direction(kind) -> float:
 
 
 def _image_taps(path, rest, calibration, *, samples: int) -> RecordingTaps:
-    """One tap: the feature pins' displacement from the rest image to the image."""
-    from pins import PinTracker
+    """One tap: the feature pins' displacement from the rest image to the image.
+
+    The two images are one large step apart (a deep press moves rim pins by most of a pitch), so the
+    pins are not tracked frame to frame: the calibration's pins are placed on the rest image's blobs,
+    and matched to the image's blobs outwards from the unambiguous ones (`pins.match_by_propagation`).
+    """
+    from pins import detect_pins, match_by_propagation, median_spacing_px
 
     from calibration import CalibrationError, place_reference_pins
-    from tactip.pipeline import MIN_SEEN_FRACTION, track_pins
-    from tactip.sources import Frame
+    from tactip.pipeline import MIN_SEEN_FRACTION
 
     if rest is None:
         raise SourceError("an image needs a rest image: give --rest IMAGE or a 'rest' column")
@@ -185,21 +193,16 @@ def _image_taps(path, rest, calibration, *, samples: int) -> RecordingTaps:
             width, height = calibration.frame_size
             raise CalibrationError(f"the {name} is {image.shape[1]}x{image.shape[0]} px, the calibration's frames "
                                    f"{width}x{height} px")
-
-    def start(image):
-        tracker = PinTracker(detection=calibration.detection, disc=calibration.disc)
-        placed = tracker.start(image, pins=place_reference_pins(calibration, image))
-        return tracker, placed, len(placed), calibration.detection, "the calibration's pins", []
-
-    track = track_pins([Frame(0, 0.0, before), Frame(1, 1.0, after)], start=start, rest_frame=0)
+    at_rest = place_reference_pins(calibration, before)
+    blobs = detect_pins(after, params=calibration.detection, disc=calibration.disc)
+    found = match_by_propagation(at_rest, blobs, spacing_px=median_spacing_px(at_rest))
     chosen = np.asarray(calibration.selected_pins, dtype=np.intp)
-    moved = track.displacements[1, chosen]  # (P, 2) px
-    seen = np.isfinite(moved).all(axis=1) & ~track.lost[1, chosen]
+    moved = (found - at_rest)[chosen]  # (P, 2) px, NaN where unmatched
+    seen = np.isfinite(moved).all(axis=1)
     needed = math.ceil(MIN_SEEN_FRACTION * len(chosen))
     if seen.sum() < needed:
         raise SourceError(f"only {int(seen.sum())} of {len(chosen)} feature pins were found in the image; a tap "
                           f"needs {needed}")
-    moved = np.where(seen[:, None], moved, np.nan)
     tap = np.tile(np.concatenate([moved[:, 0], moved[:, 1]])[None, :], (samples, 1)).astype(np.float32)
     return RecordingTaps(taps=tap[None], pins_seen=np.array([int(seen.sum())]), kinds=["image"],
-                         directions_deg=[math.nan], contacts=1, warnings=list(track.warnings))
+                         directions_deg=[math.nan], contacts=1)

@@ -176,3 +176,33 @@ def test_unseen_feature_pins_leave_nan_columns_not_dropped_taps(tmp_path, hidden
     expected[:hidden] = expected[40:40 + hidden] = True
     assert (unseen == expected).all()
     assert np.isfinite(got.taps[:, :, ~expected]).all()
+
+
+def test_videos_and_images_mix_with_a_rest_column(press_videos, tmp_path):
+    """Images of the same pad beside its videos: the image taps repeat their displacement over the video's samples."""
+    import cv2
+
+    folder = tmp_path / "set"
+    shutil.copytree(press_videos.root, folder, ignore=shutil.ignore_patterns("*.csv"))
+    sensor = SyntheticTacTip.from_preset("tactip-331", seed=0)
+    sensor.reseed_noise(7)
+    cv2.imwrite(str(folder / "rest.png"), sensor.render().image)
+    from tactip.sim.contact import Contact
+
+    for name, depth in (("held_2.png", 2.0), ("held_5.png", 5.0)):
+        cv2.imwrite(str(folder / name), sensor.render(Contact(depth)).image)
+    rows = ["path,depth_mm,rest", "press_2_0.avi,2.0,", "press_5_0.avi,5.0,", "held_2.png,2.0,rest.png",
+            "held_5.png,5.0,rest.png", "held_5.png,5.0,"]
+    (folder / "labels.csv").write_text("\n".join(rows) + "\n")
+    result = build_dataset(folder / "labels.csv", tmp_path / "out", sensor="tactip-331")
+    assert [r["line"] for r in result.summary["left_out"]] == [6]  # an image without a rest image
+    assert "rest image" in result.summary["left_out"][0]["reason"]
+    assert any("videos and images mixed" in w for w in result.summary["warnings"])
+    train, test, _ = _datasets(tmp_path / "out")
+    taps = np.concatenate([train.taps, test.taps])
+    assert taps.shape[1:] == (40, 80) and len(taps) == 3 + 3 + 1 + 1
+    image_rows = [r for r in result.summary["rows"] if r["kinds"] == ["image"]]
+    assert [r["taps"] for r in image_rows] == [1, 1]
+    same = (taps == taps[:, :1]) | (np.isnan(taps) & np.isnan(taps[:, :1]))
+    constant = same.all(axis=(1, 2))  # an image's tap: one displacement, held (NaN for a pin it lost)
+    assert constant.sum() == 2

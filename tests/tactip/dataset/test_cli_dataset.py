@@ -81,3 +81,15 @@ def test_build_help_shows_examples(capsys):
     assert stop.value.code == 0
     out = capsys.readouterr().out
     assert "Examples:" in out and "tactip dataset build" in out and "--period" in out and "--split" in out
+
+
+def test_named_shapes_from_images_are_recovered_at_one_tap(shape_images, tmp_path):
+    out = tmp_path / "shapes"
+    assert main(["dataset", "build", str(shape_images.labels), "--out", str(out), "--rest", str(shape_images.rest),
+                 "--sensor", "tactip-127", "--quiet"]) == 0
+    assert main(["train", str(out / "train.h5"), "--out", str(out / "model.h5"), "--model", "gaussian"]) == 0
+    assert main(["validate", str(out / "model.h5"), str(out / "test.h5"), "--runs", "800", "--json",
+                 str(out / "v.json"), "--quiet"]) == 0
+    row = _one_tap(json.loads((out / "v.json").read_text()))
+    assert row["accuracy"] >= 0.95, row
+    assert load_model(out / "model.h5").identity_names == ("deep", "gap", "shallow")
