@@ -388,7 +388,7 @@ def _summary(labels_csv, column, scheme: LabelScheme, split, per_row, identity, 
 def _write(outputs: dict, cal, taps, identity, test, scheme: LabelScheme, summary: dict, *, given_calibration,
            samples: int, inputs) -> None:
     """Write every output to a temporary name, then rename them all: nothing half-written."""
-    from _shared import fsync_path, temporary_name
+    from _shared import fsync_path, remove_stale_temporaries, temporary_name
     from pins import feature_dim_names
 
     from calibration import save_calibration
@@ -401,6 +401,8 @@ def _write(outputs: dict, cal, taps, identity, test, scheme: LabelScheme, summar
               "source": "tactip dataset build", "samples": int(samples)}
     names = tuple(scheme.names)
     parts: dict[str, pathlib.Path] = {}
+    for path in outputs.values():
+        remove_stale_temporaries(path)  # left by a build that was killed
     try:
         skip_calibration = given_calibration is not None and _same_file(pathlib.Path(given_calibration),
                                                                         outputs["calibration.h5"])
