@@ -81,14 +81,17 @@ def test_bad_rows_are_named_by_line_and_left_out(press_videos, tmp_path):
     (folder / "broken.avi").write_bytes(b"not a video at all")
     sensor = SyntheticTacTip.from_preset("tactip-331", seed=0)
     write_video(folder / "still.avi", [sensor.render()] * 12, 60.0)  # no contact
+    small = SyntheticTacTip.from_preset("small-pad-100", seed=0)
+    write_video(folder / "small.avi", [small.render()] * 3, 60.0)  # another camera's frame size
     good = [line for line in press_videos.labels.read_text().splitlines()[1:]]
     rows = ["path,depth_mm,operator", good[0], "missing.avi,2.0,op0", good[1], "broken.avi,1.0,op0",
-            good[2].split(",")[0] + ",,op0", "still.avi,3.0,op1", *good[3:]]
+            good[2].split(",")[0] + ",,op0", "still.avi,3.0,op1", "small.avi,2.0,op1", *good[3:]]
     (folder / "labels.csv").write_text("\n".join(rows) + "\n")
     result = build_dataset(folder / "labels.csv", tmp_path / "out", label="depth_mm", classes=3, sensor="tactip-331")
     reasons = {r["line"]: r["reason"] for r in result.summary["left_out"]}
-    assert sorted(reasons) == [3, 5, 6, 7]
+    assert sorted(reasons) == [3, 5, 6, 7, 8]
     assert "no such file" in reasons[3] and "empty label" in reasons[6] and "no contact" in reasons[7]
+    assert "320x240" in reasons[8] and "640x480" in reasons[8]
     assert reasons[5]  # the unreadable video, in its own words
     assert all(any(w.startswith(f"line {n} ") for w in result.summary["warnings"]) for n in reasons)
     assert result.summary["recordings"]["used"] == len(good) - 1

@@ -93,3 +93,19 @@ def test_named_shapes_from_images_are_recovered_at_one_tap(shape_images, tmp_pat
     row = _one_tap(json.loads((out / "v.json").read_text()))
     assert row["accuracy"] >= 0.95, row
     assert load_model(out / "model.h5").identity_names == ("deep", "gap", "shallow")
+
+
+def test_replay_with_the_built_calibration_and_model_decides_a_new_recording(slides_model, tmp_path):
+    """The calibration written beside the datasets makes a new video's taps line up with the model's."""
+    import h5py
+
+    from tactip.sim import SyntheticTacTip
+    from tests.tactip.dataset.conftest import slide_run, write_video
+
+    sensor = SyntheticTacTip.from_preset("radial-led-120", seed=0)
+    sensor.reseed_noise(77)
+    video = write_video(tmp_path / "new.avi", slide_run(sensor, [135], count=2), 120.0)
+    assert main(["replay", str(video), "--out", str(tmp_path / "new.h5"), "--calibration",
+                 str(slides_model / "calibration.h5"), "--model", str(slides_model / "model.h5"), "--quiet"]) == 0
+    with h5py.File(tmp_path / "new.h5") as h5:
+        assert bool(h5["decisions"].attrs["decided"]) and h5["decisions"].attrs["identity_estimate"] == 135.0
