@@ -61,3 +61,36 @@ def test_a_model_with_negative_tap_counts_is_refused(tmp_path, capsys):
     capsys.readouterr()
     assert main(["validate", str(tmp_path / "m.h5"), str(tmp_path / "train.h5"), "--runs", "10", "--quiet"]) == 1
     assert "taps_per_class must hold a whole number >= 0" in capsys.readouterr().err
+
+
+def test_an_unknown_gap_is_refused_before_the_simulated_station_prepares(tmp_path, monkeypatch, capsys):
+    """inspect --sim --gap g99 trained for 541 s before saying there is no g99: now it says so at once."""
+    monkeypatch.setenv("TACTIP_SIM_DIR", str(tmp_path / "sim"))
+    assert main(["inspect", "--sim", "--gap", "g99", "--quiet"]) == 1
+    captured = capsys.readouterr()
+    assert f"simulated station in {tmp_path / 'sim'}" in captured.out
+    assert "no gap 'g99' on station" in captured.err and "g01, g02" in captured.err
+    assert not (tmp_path / "sim").exists()                     # nothing calibrated, collected or trained
+
+
+def test_the_simulated_station_lives_in_one_place_whatever_the_folder(tmp_path, monkeypatch):
+    from tactip.station.config import default_sim_dir, simulated_station_config
+
+    monkeypatch.delenv("TACTIP_SIM_DIR", raising=False)
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    places = set()
+    for here in (tmp_path / "a", tmp_path / "b"):
+        here.mkdir()
+        monkeypatch.chdir(here)
+        places.add(simulated_station_config().data_dir)
+    assert places == {tmp_path / "data" / "tactip" / "sim"} == {default_sim_dir()}
+
+
+@pytest.mark.parametrize("verb", ["inspect", "serve"])
+def test_data_dir_without_sim_is_refused_not_ignored(tmp_path, capsys, verb):
+    from pathlib import Path
+
+    toml = Path(__file__).parents[2] / "samples" / "station_sim.toml"
+    argv = [verb, "--config", str(toml), "--data-dir", str(tmp_path / "x")]
+    assert main(argv) == 1
+    assert "--data-dir goes with --sim" in capsys.readouterr().err
