@@ -201,6 +201,10 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     except ArmConfigError as exc:
         raise ConfigError(str(exc)) from None
 
+    if arm.backend == "sim":  # the simulated arm's camera renders the synthetic TacTip: another source would be ignored
+        _check(sensor.source == "synthetic", "sensor.source",
+               f"must be \"synthetic\" with the simulated arm (arm.backend = \"sim\" renders the synthetic TacTip, "
+               f"so a camera or video would be ignored), got {sensor.source!r}")
     _range(sensor.pins, "sensor.pins", MIN_PINS, MAX_PINS, "pins")
     _range(sensor.pad_diameter_mm, "sensor.pad_diameter_mm", 0, 500, "mm", low_open=True)
     _range(sensor.frame_rate, "sensor.frame_rate", 0, 1000, "frames/s", low_open=True)

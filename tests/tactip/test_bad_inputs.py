@@ -94,3 +94,25 @@ def test_data_dir_without_sim_is_refused_not_ignored(tmp_path, capsys, verb):
     argv = [verb, "--config", str(toml), "--data-dir", str(tmp_path / "x")]
     assert main(argv) == 1
     assert "--data-dir goes with --sim" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("source", [7, "/etc/passwd"])
+def test_a_source_the_simulated_arm_would_ignore_is_refused(tmp_path, source):
+    from tactip.station.config import ConfigError, parse_station_config
+    from tests.tactip.conftest import small_station_table
+
+    table = small_station_table(tmp_path, sensor={"source": source})
+    with pytest.raises(ConfigError, match='sensor.source must be "synthetic" with the simulated arm'):
+        parse_station_config(table, base_dir=tmp_path)
+
+
+def test_a_model_of_another_kind_than_the_station_names_is_refused(sim_station, tmp_path):
+    from perception import ModelError
+    from tactip.station.config import parse_station_config
+    from tactip.station.inspection import load_station_model
+    from tests.tactip.conftest import small_station_table
+
+    table = small_station_table(sim_station.root, perception={"likelihood": "gaussian"})   # its model: histogram
+    config = parse_station_config(table, base_dir=sim_station.root)
+    with pytest.raises(ModelError, match='is a histogram model but \\[perception\\] likelihood = "gaussian"'):
+        load_station_model(config, sim_station.calibration)

@@ -69,7 +69,7 @@ def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station
     root = tmp_path / "station"
     shutil.copytree(sim_station.root, root, ignore=shutil.ignore_patterns("model.h5", "results.sqlite*"))
     calibration_bytes = (root / "calibration.h5").read_bytes()
-    config = parse_station_config(small_station_table(root), base_dir=root)
+    config = parse_station_config(small_station_table(root, perception={"likelihood": "gaussian"}), base_dir=root)
     lines = []
     path = prepare_model(config, progress=False, log=lines.append)
     assert path == root / "model.h5"
