@@ -9,7 +9,12 @@ training taps and scored on the same test taps:
 - ``logistic``: (multinomial) logistic regression over the label classes, its inverse
   regularisation C chosen by cross-validation the same way;
 - ``ridge``: ridge regression of a numeric label (of ``(cos, sin)`` of a circular label, the
-  angle then taken back with ``atan2``), its alpha chosen by leave-one-out; none for a named label.
+  angle then taken back with ``atan2``), its alpha chosen by leave-one-out, its estimate snapped to
+  the nearest label class; none for a named label.
+
+Every baseline thus decides one of the label classes, as the model does: the errors compare like
+with like (snapping also makes ridge the stronger baseline when its estimates scatter by less than
+a class spacing, the usual case).
 
 Features: every tap flattened to one row of ``samples x dims`` values, NaN (a pin unseen during
 the tap) imputed with the training mean of that column (`sklearn.impute.SimpleImputer`; a column
@@ -18,8 +23,7 @@ never observed in the training taps is dropped), then standardised.
 The label is what the model decides: the identity, or the location (class centres) of a model
 with a single identity. Errors are in the label's unit, circular for a label with a period (315
 and 0 deg are 45 deg apart), and 0 or 1 (wrong) for a named label, so that its mean error is the
-fraction wrong. Ridge's error is that of its continuous estimate; its accuracy counts its nearest
-class. Means weigh each true class equally (as the Monte Carlo validation draws its classes).
+fraction wrong. Means weigh each true class equally (as the Monte Carlo validation draws its classes).
 
 The model's own 1-tap figures (`one_tap`) are exact: its decision on every test tap from the flat
 prior (the first tap of any policy), on the same taps as the baselines. `keep_verdict` then says
@@ -35,6 +39,8 @@ Example
 
 from __future__ import annotations
 
+import contextlib
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,7 +58,7 @@ BASELINES = ("knn", "logistic", "ridge")
 #: Candidate k of the nearest-neighbour baseline (those below the size of a cross-validation training fold).
 KNN_NEIGHBOURS = (1, 3, 5, 9, 15, 25)
 #: Candidate inverse regularisation strengths C of the logistic baseline.
-LOGISTIC_C = (0.01, 0.1, 1.0)
+LOGISTIC_C = (0.001, 0.01, 0.1, 1.0)
 #: Candidate alphas of the ridge baseline (leave-one-out picks one).
 RIDGE_ALPHAS = tuple(np.logspace(-3, 4, 15))
 #: Cross-validation folds (fewer when a class has fewer training taps).
@@ -74,11 +80,11 @@ class BaselineResult:
     error : float
         Mean label error (label units; the fraction wrong for a named label), classes weighed equally.
     accuracy : float
-        Fraction of test taps whose (nearest) class is right, classes weighed equally.
+        Fraction of test taps whose class is right, classes weighed equally.
     settings : dict
         What cross-validation chose (``{"k": 5}``, ``{"C": 0.1}``, ``{"alpha": 10.0}``).
     predicted : (T,) ndarray
-        Label value predicted for each test tap.
+        Label value (one of the classes') decided for each test tap.
     """
 
     name: str
@@ -305,26 +311,38 @@ def fit_baselines(features, classes, values, *, period: float | None = None, nam
     Returns
     -------
     dict
-        Name -> ``(predict, settings)``: ``predict(features)`` gives the predicted label values of
-        test rows; ``settings`` what cross-validation chose.
+        Name -> ``(predict, settings)``: ``predict(features)`` gives the label value (one of
+        `values`) decided for each test row; ``settings`` what cross-validation chose.
 
     Raises
     ------
     DatasetError
         Fewer than two label classes, or fewer than two training taps.
     """
-    from sklearn.linear_model import LogisticRegression, RidgeCV
-    from sklearn.model_selection import GridSearchCV
-    from sklearn.neighbors import KNeighborsClassifier
-    from sklearn.pipeline import Pipeline
-
     features = np.asarray(features, np.float64)
     classes = np.asarray(classes, np.intp)
     values = np.asarray(values, np.float64)
     if len(np.unique(classes)) < 2 or len(classes) < 2:
         raise DatasetError(f"baselines need training taps of two or more label classes, got {len(classes)} taps of "
                            f"{len(np.unique(classes))} class(es)")
-    folds = _folds(classes, seed)
+    with _quiet_imputer():
+        return _fit(features, classes, values, period=period, named=named, folds=_folds(classes, seed))
+
+
+@contextlib.contextmanager
+def _quiet_imputer():
+    """Silence the imputer's notice that it drops a column never observed (in the training taps or a fold of them)."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Skipping features without any observed values")
+        yield
+
+
+def _fit(features, classes, values, *, period, named, folds) -> dict:
+    """`fit_baselines` on checked arrays."""
+    from sklearn.linear_model import LogisticRegression, RidgeCV
+    from sklearn.model_selection import GridSearchCV
+    from sklearn.neighbors import KNeighborsClassifier
+    from sklearn.pipeline import Pipeline
 
     def score(estimator, x, y):  # higher is better: minus the label error of the decided classes
         return -label_error(values[estimator.predict(x)], values[y], period=period, named=named).mean()
@@ -349,9 +367,9 @@ def fit_baselines(features, classes, values, *, period: float | None = None, nam
 
         def predict(x, ridge=ridge):
             estimate = ridge.predict(np.asarray(x, np.float64))
-            if period is None:
-                return estimate
-            return (np.arctan2(estimate[:, 1], estimate[:, 0]) * period / (2 * np.pi)) % period
+            if period is not None:
+                estimate = (np.arctan2(estimate[:, 1], estimate[:, 0]) * period / (2 * np.pi)) % period
+            return values[label_error(estimate[:, None], values, period=period).argmin(axis=1)]   # nearest class
 
         fitted["ridge"] = (predict, {"alpha": float(ridge[-1].alpha_)})
     return fitted
@@ -384,7 +402,7 @@ def compare_baselines(model: LikelihoodModel, train: Dataset, test: Dataset, *, 
 
     # One BLAS and OpenMP thread: these are small problems (hundreds to thousands of taps), on which threads
     # only spin; on a busy machine they made the fits 10-30x slower.
-    with threadpool_limits(limits=1):
+    with threadpool_limits(limits=1), _quiet_imputer():
         fitted = fit_baselines(tap_features(train.taps), train_classes, values, period=period, named=named, seed=seed)
         features = tap_features(test.taps)
         predictions = {name: predict(features) for name, (predict, _) in fitted.items()}
@@ -395,9 +413,9 @@ def compare_baselines(model: LikelihoodModel, train: Dataset, test: Dataset, *, 
             continue
         predicted = predictions[name]
         settings = fitted[name][1]
-        nearest = label_error(predicted[:, None], values, period=period, named=named).argmin(axis=1)
-        results.append(BaselineResult(name, float(weights @ label_error(predicted, true, period=period, named=named)),
-                                      float(weights @ (nearest == test_classes)), settings, predicted))
+        error = label_error(predicted, true, period=period, named=named)
+        results.append(BaselineResult(name, float(weights @ error), float(weights @ (predicted == true)), settings,
+                                      predicted))
     _, error, accuracy = one_tap(model, test, log_likelihood=log_likelihood)
     return BaselineReport(tuple(results), error, accuracy, unit, period, named)
 
