@@ -59,7 +59,7 @@ import pathlib
 
 from _shared.ranges import MAX_TAPS
 from perception.choices import POLICIES, SHIFT_MODES
-from tactip.cli._validate_report import KEEP_THRESHOLD
+from tactip.cli._validate_report import KEEP_THRESHOLD, with_label_error
 from tactip.cli._types import (finite_float, float_in_range, fraction, fractions, image_file, int_in_range,
                                non_negative_float, output_file, seed)
 
@@ -190,7 +190,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"{'sigma':>8} {'error':>8} {'ratio':>6}")
         for sigma, error, ratio in zip(sweep.sigmas, sweep.errors, sweep.ratio):
             print(f"{sigma:>8.3g} {error:>8.3f} {ratio:>6.2f}")
-        rows = [{**row, "sigma": float(s)} for s, r in zip(sweep.sigmas, sweep.results) for row in r.rows()]
+        rows = with_label_error(model, [{**row, "sigma": float(s)} for s, r in zip(sweep.sigmas, sweep.results)
+                                        for row in r.rows()])
         if args.plot:
             from perception.plots import plot_lateral_sweep
 
@@ -198,7 +199,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         rows = _compare(args, model, environment, options, test, tqdm, train)
     if args.json:
-        write_text_atomic(args.json, json.dumps(rows, indent=1) + "\n", inputs=[args.model, args.test])
+        inputs = [args.model, args.test, *args.compare, *([args.train] if args.train else [])]
+        write_text_atomic(args.json, json.dumps(rows, indent=1) + "\n", inputs=inputs)
         print(f"wrote {args.json}")
     if args.plot:
         print(f"wrote {args.plot}")
@@ -218,7 +220,7 @@ def _compare(args, model, environment, options, test, tqdm, train=None) -> list[
     from perception import (CALIBRATION_TAPS, VirtualEnvironment, compare_policies, load_model, make_policy,
                             trace_beliefs)
 
-    from tactip.cli._validate_report import describe_label, print_rows, report_baselines, with_label_error
+    from tactip.cli._validate_report import describe_label, print_rows, report_baselines
 
     unit = model.location_unit
     models = {args.model: model}
@@ -321,7 +323,8 @@ def _sweep_fixation(args, model, test, options, tqdm) -> list[dict]:
             from perception.plots import plot_fixation_sweep
 
             plot_fixation_sweep(sweep, args.plot, units=unit)
-        return [{**row, "fixation": float(f)} for f, r in zip(sweep.fixations, sweep.results) for row in r.rows()]
+        return with_label_error(model, [{**row, "fixation": float(f)} for f, r in zip(sweep.fixations, sweep.results)
+                                        for row in r.rows()])
     best = sweep.best
     tempering = "" if trained is None else (f", tempering {trained:.4g} x {sweep.tempering:.3g} for the beliefs "
                                             f"after 1-5 taps")
