@@ -45,10 +45,15 @@ def xor_pairs(seed, per_class=40, pins=6, samples=4):
 
 
 def measure(train, test, kind, runs, seed):
-    """(1-tap error, error at 0.9, mean taps at 0.9, best baseline's name and error) of one model kind."""
+    """(1-tap error, error at 0.9, mean taps at 0.9, BaselineReport) of one model kind; None if it cannot train."""
     from perception import VirtualEnvironment, compare_baselines, make_policy, monte_carlo, train_model
+    from perception.errors import DatasetError
 
-    model = train_model(train, kind=kind, n_locations=1)
+    try:
+        model = train_model(train, kind=kind, n_locations=1)
+    except DatasetError as error:   # e.g. a calibrated kind refusing taps it tells apart no better than chance
+        print(f"  {kind} (seed {seed}) does not train: {error}")
+        return None
     environment = VirtualEnvironment(model, test)
     report = compare_baselines(model, train, test, seed=seed, log_likelihood=environment.log_likelihood)
     result = monte_carlo(environment, make_policy("stationary", fixation_class=0), thresholds=[0.9], runs=runs,
@@ -64,11 +69,12 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--runs", type=int, default=2000)
     parser.add_argument("--unseen", type=float, default=0.1, help="probability that a pin is unseen for a tap")
+    parser.add_argument("--cases", nargs="+", default=[*CASES, "xor"], choices=[*CASES, "xor"])
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     print(f"{'label':<9} {'model':<21} {'1 tap':>7} {'best bl':>8} {'ratio':>6} {'at 0.9':>7} {'taps':>5} "
           f"{'ratio':>6} {'worse':>6} {'well below':>10}  best baselines")
-    for case in (*CASES, "xor"):
+    for case in args.cases:
         table = {kind: [] for kind in KINDS}
         for seed in range(args.seeds):
             if case == "xor":
@@ -79,15 +85,17 @@ def main(argv=None) -> int:
             for kind in KINDS:
                 table[kind].append(measure(train, test, kind, args.runs, seed))
         for kind, rows in table.items():
+            rows = [r for r in rows if r is not None]
+            if not rows:
+                continue
             one, held, taps = (np.array([r[k] for r in rows]) for k in range(3))
             best = np.array([r[3].best.error for r in rows])
             names = sorted({r[3].best.name for r in rows})
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ratio_one, ratio_held = one / best, held / best
+            ratio_one, ratio_held = one.mean() / best.mean(), held.mean() / best.mean()   # of the means over seeds
             worse = int((one > 1.05 * best + 1e-12).sum())
             below = int((held <= 0.75 * best + 1e-12).sum())
-            print(f"{case:<9} {kind:<21} {one.mean():>7.3f} {best.mean():>8.3f} {np.nanmean(ratio_one):>6.2f} "
-                  f"{held.mean():>7.3f} {taps.mean():>5.2f} {np.nanmean(ratio_held):>6.2f} {worse:>3}/{len(rows):<2} "
+            print(f"{case:<9} {kind:<21} {one.mean():>7.3f} {best.mean():>8.3f} {ratio_one:>6.2f} "
+                  f"{held.mean():>7.3f} {taps.mean():>5.2f} {ratio_held:>6.2f} {worse:>3}/{len(rows):<2} "
                   f"{below:>7}/{len(rows):<2}  {','.join(names)}")
     return 0
 

@@ -131,7 +131,8 @@ class KeepVerdict:
     Attributes
     ----------
     one_tap_ratio : float
-        Model's 1-tap error / best baseline's 1-tap error (inf when the baseline is exact and the model is not).
+        Model's 1-tap error / best baseline's 1-tap error (inf when the baseline is exact and the model is not,
+        1 when both are).
     worse_at_one_tap : bool
         The ratio exceeds ``1 + ONE_TAP_TOLERANCE``.
     threshold_ratio : float or None
@@ -447,7 +448,7 @@ def keep_verdict(model_error: float, best_error: float, threshold_error: float |
     KeepVerdict(one_tap_ratio=1.05, worse_at_one_tap=False, threshold_ratio=0.5, well_below_at_threshold=True)
     """
     def divide(a, b):
-        return float(a / b) if b > 0 else (0.0 if a <= 0 else float("inf"))
+        return float(a / b) if b > 0 else (1.0 if a <= 0 else float("inf"))   # both exact: level
 
     one = divide(model_error, best_error)
     worse = bool(model_error > (1 + tolerance) * best_error + 1e-12)

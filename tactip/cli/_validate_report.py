@@ -84,12 +84,13 @@ def report_baselines(args, model, train, test, models: dict, names: dict, enviro
     print(f"baselines fitted on {args.train} ({len(train)} taps): features = the flattened taps ({test.samples} "
           f"samples x {test.dims} dims), NaN (unseen pins) imputed with the training mean, standardised; each decides "
           f"from 1 tap, on every one of the {len(test)} test taps, classes weighed equally")
-    print(f"{'model':<40} {'taps':>6} {f'error {unit}':>12} {'accuracy':>8}  settings")
+    width = max(24, *(len(f"{n}, threshold {KEEP_THRESHOLD:g} ({policy})") for n in names.values()))
+    print(f"{'model':<{width}} {'taps':>6} {f'error {unit}':>12} {'accuracy':>8}  settings")
     rows = []
     for baseline in report.baselines:
         settings = ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
                              for k, v in baseline.settings.items())
-        print(f"{'baseline-' + baseline.name:<40} {1:>6.2f} {baseline.error:>12.3f} {baseline.accuracy:>8.3f}  "
+        print(f"{'baseline-' + baseline.name:<{width}} {1:>6.2f} {baseline.error:>12.3f} {baseline.accuracy:>8.3f}  "
               f"{settings}")
         rows.append({"model": f"baseline-{baseline.name}", "policy": None, "threshold": None, "mean_taps": 1.0,
                      "accuracy": baseline.accuracy, "mean_label_error": baseline.error, "label_error_unit": unit,
@@ -105,8 +106,8 @@ def report_baselines(args, model, train, test, models: dict, names: dict, enviro
         label_errors = result.mean_identity_error if other.n_identities > 1 else result.mean_location_error
         held, taps = float(label_errors[at]), float(result.mean_taps[at])
         verdict = keep_verdict(error, best.error, held)
-        print(f"{name + ', 1 tap':<40} {1:>6.2f} {error:>12.3f} {accuracy:>8.3f}  exact, from the flat prior")
-        print(f"{f'{name}, threshold {KEEP_THRESHOLD:g} ({policy})':<40} {taps:>6.2f} {held:>12.3f} "
+        print(f"{name + ', 1 tap':<{width}} {1:>6.2f} {error:>12.3f} {accuracy:>8.3f}  exact, from the flat prior")
+        print(f"{f'{name}, threshold {KEEP_THRESHOLD:g} ({policy})':<{width}} {taps:>6.2f} {held:>12.3f} "
               f"{float(result.accuracy[at]):>8.3f}  {result.runs} Monte Carlo runs")
         verdicts.append(_verdict_lines(name, error, held, taps, best, verdict, unit, policy, THRESHOLD_RATIO))
         rows.append({"model": name, "check": "baselines", "policy": None, "threshold": None, "held_policy": policy,
@@ -124,22 +125,29 @@ def report_baselines(args, model, train, test, models: dict, names: dict, enviro
 def _verdict_lines(name, error, held, taps, best, verdict, unit, policy, ratio) -> list[str]:
     """Plain words: is the model worse than the best baseline at 1 tap, and well below it at the threshold?"""
     against = f"the best baseline's (baseline-{best.name}, {best.error:.3g} {unit})"
+    at = f"at threshold {KEEP_THRESHOLD:g} ({policy}, {taps:.2f} taps)"
+    if best.error == 0:   # nothing to be below: the model can only match an exact baseline
+        lines = [f"{name}: exact at 1 tap, as is baseline-{best.name}" if error == 0 else
+                 f"{name}: WORSE THAN BASELINE at 1 tap: error {error:.3g} {unit}, where baseline-{best.name} is exact"]
+        lines.append(f"{name}: exact {at}" if held == 0 else
+                     f"{name}: NOT WELL BELOW BASELINE {at}: error {held:.3g} {unit}, where baseline-{best.name} is "
+                     f"exact at 1 tap")
+        return lines
     lines = []
     if verdict.worse_at_one_tap:
         lines.append(f"{name}: WORSE THAN BASELINE at 1 tap: error {error:.3g} {unit} is "
                      f"{_times(verdict.one_tap_ratio)} {against}, more than 5 % above it")
     else:
-        standing = "below it" if verdict.one_tap_ratio <= 1 else "within 5 % of it"
+        standing = "below it" if verdict.one_tap_ratio < 1 else "level with it" if verdict.one_tap_ratio == 1 else \
+            "within 5 % of it"
         lines.append(f"{name}: at 1 tap, error {error:.3g} {unit} is {_times(verdict.one_tap_ratio)} {against}: "
                      f"{standing}")
     if verdict.well_below_at_threshold:
-        lines.append(f"{name}: at threshold {KEEP_THRESHOLD:g} ({policy}, {taps:.2f} taps), error {held:.3g} {unit} "
-                     f"is {_times(verdict.threshold_ratio)} the best baseline's 1-tap error: well below it "
-                     f"(bar {ratio:g}x)")
+        lines.append(f"{name}: {at}, error {held:.3g} {unit} is {_times(verdict.threshold_ratio)} the best "
+                     f"baseline's 1-tap error: well below it (bar {ratio:g}x)")
     else:
-        lines.append(f"{name}: NOT WELL BELOW BASELINE at threshold {KEEP_THRESHOLD:g} ({policy}, {taps:.2f} taps): "
-                     f"error {held:.3g} {unit} is {_times(verdict.threshold_ratio)} the best baseline's 1-tap error "
-                     f"(bar {ratio:g}x)")
+        lines.append(f"{name}: NOT WELL BELOW BASELINE {at}: error {held:.3g} {unit} is "
+                     f"{_times(verdict.threshold_ratio)} the best baseline's 1-tap error (bar {ratio:g}x)")
     return lines
 
 

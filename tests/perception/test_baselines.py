@@ -106,3 +106,5 @@ def test_keep_verdict_marks_worse_beyond_five_percent_and_the_threshold_bar():
     assert not keep_verdict(0.5, 1.0, 0.76).well_below_at_threshold
     exact = keep_verdict(0.01, 0.0, 0.0)                                     # an exact baseline
     assert exact.worse_at_one_tap and exact.one_tap_ratio == float("inf") and exact.well_below_at_threshold
+    both = keep_verdict(0.0, 0.0, 0.0)                                       # both exact: level, not worse
+    assert both.one_tap_ratio == 1.0 and not both.worse_at_one_tap and both.well_below_at_threshold
