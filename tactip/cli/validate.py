@@ -33,7 +33,8 @@ Does the model earn its keep? --baselines --train TRAIN.h5 fits scikit-learn's s
 model's training taps (the model file does not hold them: give the dataset the model was trained on)
 and scores them on the test taps: k-nearest neighbours (k chosen by cross-validation on the training
 taps), logistic regression over the label classes, and ridge regression of a numeric label (of the
-cos and sin of a circular one). Features: every tap flattened (samples x dims), NaN (a pin unseen
+cos and sin of a circular one) snapped to the nearest class, so that each decides a class as the model
+does. Features: every tap flattened (samples x dims), NaN (a pin unseen
 during the tap) imputed with the training mean, standardised. Each decides from 1 tap, on every test
 tap; beside them the model's own exact 1-tap decision and its decisions at threshold 0.9 (the active
 policy, or the one policy run). The report says WORSE THAN BASELINE when the model's 1-tap error is
