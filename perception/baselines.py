@@ -58,9 +58,9 @@ BASELINES = ("knn", "logistic", "ridge")
 #: Candidate k of the nearest-neighbour baseline (those below the size of a cross-validation training fold).
 KNN_NEIGHBOURS = (1, 3, 5, 9, 15, 25)
 #: Candidate inverse regularisation strengths C of the logistic baseline.
-LOGISTIC_C = (0.001, 0.01, 0.1, 1.0)
+LOGISTIC_C = (1e-4, 1e-3, 0.01, 0.1, 1.0)
 #: Candidate alphas of the ridge baseline (leave-one-out picks one).
-RIDGE_ALPHAS = tuple(np.logspace(-3, 4, 15))
+RIDGE_ALPHAS = tuple(np.logspace(-4, 4, 17))
 #: Cross-validation folds (fewer when a class has fewer training taps).
 FOLDS = 5
 #: The project's 1-tap error may exceed the best baseline's by this fraction before it is called worse.

@@ -119,6 +119,10 @@ def report_baselines(args, model, train, test, models: dict, names: dict, enviro
                      "well_below_baseline": verdict.well_below_at_threshold, "label_error_unit": unit})
     for lines in verdicts:
         print("\n".join(lines))
+    if any(row.get("worse_than_baseline") for row in rows):
+        print("note: when training and test taps come from the same recordings (tactip dataset build --split "
+              "alternate), a baseline may recognise the recording rather than the label; --split group keeps each "
+              "recording on one side, the honest test of a new recording")
     return rows
 
 

@@ -71,6 +71,7 @@ def test_the_report_says_when_a_model_is_worse_than_a_baseline(tmp_path, capsys,
     out = capsys.readouterr().out
     assert "label: 2 named classes; error = fraction of decisions wrong" in out
     assert "histogram: WORSE THAN BASELINE at 1 tap" in out and "histogram: NOT WELL BELOW BASELINE" in out
+    assert "--split group keeps each recording on one side" in out         # the leak a user should rule out
     rows = json.loads((tmp_path / "out.json").read_text())
     (verdict,) = [r for r in rows if r.get("check") == "baselines"]
     assert verdict["worse_than_baseline"] and not verdict["well_below_baseline"]
@@ -94,6 +95,7 @@ def test_the_report_is_quiet_when_the_model_earns_its_keep(tmp_path, capsys, see
                  "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "WORSE" not in out and "NOT WELL BELOW" not in out, out
+    assert "--split group" not in out
     assert "gaussian: at threshold 0.9 (stationary" in out and "well below it (bar 0.75x)" in out
     rows = json.loads((tmp_path / "out.json").read_text())
     assert sorted(r["threshold"] for r in rows if r["policy"]) == [0.5, 0.9]       # 0.9 added for the verdict
