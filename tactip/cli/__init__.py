@@ -30,6 +30,7 @@ COMMANDS: dict[str, str] = {
     "replay": "tactip.cli.replay",
     "calibrate": "tactip.cli.calibrate",
     "collect": "tactip.cli.collect",
+    "dataset": "tactip.cli.dataset",
     "train": "tactip.cli.train",
     "validate": "tactip.cli.validate",
     "inspect": "tactip.cli.inspect",

@@ -1,0 +1,63 @@
+"""Bad inputs met by a probe of the CLI (issue 22): each a one-line error, never a traceback, nothing left behind."""
+
+import struct
+import zlib
+
+import pytest
+
+from tactip.cli import main
+
+
+def _png_claiming(path, width, height):
+    """A PNG whose header claims ``width`` x ``height`` px (with almost no data)."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    header = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(b"\0" * 100))
+                     + chunk(b"IEND", b""))
+    return path
+
+
+@pytest.mark.parametrize("verb", ["detect", "replay"])
+def test_an_image_claiming_more_pixels_than_the_decoder_takes_is_named(tmp_path, capsys, verb):
+    image = _png_claiming(tmp_path / "huge.png", 60000, 60000)
+    argv = [verb, str(image)] + (["--out", str(tmp_path / "r.h5")] if verb == "replay" else [])
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "larger than the decoder's limit (60000 x 60000 px)" in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["huge.png"]
+
+
+@pytest.mark.parametrize("pins", ["0", "2000000"])
+def test_a_synthetic_source_out_of_range_is_refused_before_recording(tmp_path, capsys, pins):
+    assert main(["record", f"synthetic:{pins}", "--out", str(tmp_path / "x.mp4"), "--frames", "2", "--quiet"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"'synthetic:{pins}'" in err[0] and "pins must be an integer in 7..5000" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_epsilon_that_drowns_the_counts_is_refused(tmp_path, capsys):
+    from perception import save_dataset
+    from tests.perception.synthetic import gap_dataset
+
+    save_dataset(tmp_path / "train.h5", gap_dataset(seed=1, taps_per_class=2, depths=3, widths=2, samples=5, dims=4))
+    assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "m.h5"), "--epsilon", "1e308"]) == 1
+    assert "--epsilon must be a number in (0, 1e+06]" in capsys.readouterr().err
+    assert not (tmp_path / "m.h5").exists()
+
+
+def test_a_model_with_negative_tap_counts_is_refused(tmp_path, capsys):
+    import h5py
+
+    from perception import save_dataset
+    from tests.perception.synthetic import gap_dataset
+
+    save_dataset(tmp_path / "train.h5", gap_dataset(seed=1, taps_per_class=2, depths=3, widths=2, samples=5, dims=4))
+    assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "m.h5"), "--locations", "3"]) == 0
+    with h5py.File(tmp_path / "m.h5", "a") as f:
+        counts = f["taps_per_class"][()]
+        del f["taps_per_class"]
+        f["taps_per_class"] = counts * 0 - 3
+    capsys.readouterr()
+    assert main(["validate", str(tmp_path / "m.h5"), str(tmp_path / "train.h5"), "--runs", "10", "--quiet"]) == 1
+    assert "taps_per_class must hold a whole number >= 0" in capsys.readouterr().err
