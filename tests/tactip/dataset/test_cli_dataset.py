@@ -15,8 +15,10 @@ from tests.tactip.dataset.conftest import DIRECTIONS
 
 
 def _one_tap(rows):
-    """The active policy's row deciding after one tap (threshold 0: every run decides at its first tap)."""
-    row = next(r for r in rows if r["policy"] == "active" and r["threshold"] == 0.0)
+    """The row deciding after one tap (threshold 0: every run decides at its first tap) of the one policy a
+    model of one location runs (stationary: the sensor never moves)."""
+    assert {r["policy"] for r in rows} == {"stationary"}
+    row = next(r for r in rows if r["threshold"] == 0.0)
     assert row["mean_taps"] == 1.0
     return row
 
