@@ -104,9 +104,9 @@ def main(argv: list[str] | None = None) -> int:
             print("Stopped (terminated)." if exc.signum == signal.SIGTERM else
                   f"Stopped ({exc.signal_name}: the terminal closed).", file=sys.stderr)
         return 128 + exc.signum
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # 128 + SIGINT, as a shell reports a process Ctrl-C stopped
         print("Stopped.", file=sys.stderr)
-        return 1
+        return 130
     except BrokenPipeError as exc:
         if _stdout_broken():  # output piped into `head` and the like: stop quietly
             _silence_stdout()

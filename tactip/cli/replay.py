@@ -98,6 +98,10 @@ def run(args: argparse.Namespace) -> int:
     from pins import DetectionParams
     from tactip.replay.video import replay_video
 
+    if args.decision_threshold is not None and args.model is None:
+        from tactip.errors import TactipError
+
+        raise TactipError("--decision-threshold sets the model's decisions: it needs --model (and --calibration)")
     params = DetectionParams(dark_pins=True) if args.dark_pins and not args.calibration else None
     result = replay_video(args.video, args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,
                           params=params, n_samples=args.samples,

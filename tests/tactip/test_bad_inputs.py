@@ -116,3 +116,12 @@ def test_a_model_of_another_kind_than_the_station_names_is_refused(sim_station, 
     config = parse_station_config(table, base_dir=sim_station.root)
     with pytest.raises(ModelError, match='is a histogram model but \\[perception\\] likelihood = "gaussian"'):
         load_station_model(config, sim_station.calibration)
+
+
+def test_a_decision_threshold_without_a_model_is_refused_not_ignored(tmp_path, capsys):
+    from pathlib import Path
+
+    video = Path(__file__).parents[2] / "samples" / "synthetic_tap.mp4"
+    assert main(["replay", str(video), "--out", str(tmp_path / "r.h5"), "--decision-threshold", "0.8"]) == 1
+    assert "--decision-threshold sets the model's decisions: it needs --model" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []

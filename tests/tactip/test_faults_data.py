@@ -394,7 +394,7 @@ def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, t
 
     prepare = calibration.prepare_station_model
     monkeypatch.setattr(calibration, "prepare_station_model", interrupted)
-    assert main(["inspect", "--sim", "--gap", "g02", "--quiet"]) == 1           # Ctrl-C in the sweep
+    assert main(["inspect", "--sim", "--gap", "g02", "--quiet"]) == 130         # Ctrl-C in the sweep
     assert "Stopped." in capsys.readouterr().err
     assert not config.perception.model.exists() and not model_is_prepared(config.perception.model)
     assert not leftover_temporaries(tmp_path) and not (tmp_path / "results.sqlite").exists()

@@ -166,7 +166,7 @@ def test_a_killed_collection_resumes_to_the_uninterrupted_dataset(small_collecti
             process.kill()
             process.wait()
     if stop == signal.SIGINT:
-        assert process.returncode == 1 and err.strip().splitlines()[-1] == "Stopped." and "Traceback" not in err
+        assert process.returncode == 130 and err.strip().splitlines()[-1] == "Stopped." and "Traceback" not in err
     else:
         assert process.returncode == -signal.SIGKILL
     partial = stored_taps(out / "train.h5") + (stored_taps(out / "test.h5") or 0)
