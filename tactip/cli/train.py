@@ -19,9 +19,9 @@ The calibrated kinds need at least two taps per class, ideally repeated at the s
 
 --choose-fixation also picks the fixation location, the decision threshold and (calibrated kinds)
 the tempering for 1-5 taps, as the station does on its first run, without looking at the test set:
-on a validation split carved from the training taps (alternate taps of each identity), with a model
-fitted on the rest; the model written is fitted on every training tap and carries those settings.
-Then 'tactip validate MODEL TEST' gives figures the settings were not chosen on.
+one tap of each class is held out of the training taps, the model is fitted on the rest, and its
+settings are chosen on the held-out taps; that model is written with them. Then 'tactip validate
+MODEL TEST' gives figures the settings were not chosen on.
 
 Examples:
   tactip train data/train.h5 --out models/gaps.h5 --locations 11
@@ -104,10 +104,11 @@ def run(args: argparse.Namespace) -> int:
 
     with warnings.catch_warnings(record=True) as caught:  # e.g. a pin never seen in some class: said in one line
         warnings.simplefilter("always", UserWarning)
-        model = train_model(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
-                            min_taps_per_class=args.min_taps, **options)
         if args.choose_fixation:
-            model = _choose_fixation(args, dataset, model, options)
+            model = _choose_fixation(args, dataset, {**options, "min_taps_per_class": args.min_taps})
+        else:
+            model = train_model(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
+                                min_taps_per_class=args.min_taps, **options)
     for warning in {str(w.message): w for w in caught}.values():
         print(f"warning: {warning.message}")
     save_model(args.out, model, inputs=[args.dataset])
@@ -119,15 +120,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _choose_fixation(args, dataset, model, options):
-    """--choose-fixation: settings chosen on a validation split of the training taps, given to ``model``."""
+def _choose_fixation(args, dataset, options):
+    """--choose-fixation: a model fitted on most training taps, its settings chosen on the others."""
     from calibration import CalibrationError, fit_with_fixation
     from perception.errors import DatasetError, ModelError
 
     from tactip.errors import TactipError
 
     try:
-        return fit_with_fixation(dataset, model=model, kind=args.model, n_locations=args.locations, bins=args.bins,
+        return fit_with_fixation(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
                                  target_accuracy=args.target_accuracy, tolerance=args.tolerance, fall_back=False,
                                  **options)
     except (CalibrationError, DatasetError, ModelError) as exc:  # e.g. a class without taps in the split
