@@ -12,8 +12,8 @@ POLICIES = ("active", "stationary", "random")
 #: Kinds of likelihood model (`perception.model.train_model`); the first is the papers' model.
 MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian", "torch")
 
-#: The kinds a station trains itself (``[perception] likelihood``): every kind but the optional torch network.
-STATION_MODEL_KINDS = tuple(kind for kind in MODEL_KINDS if kind != "torch")
+#: The kinds a station trains itself (``[perception] likelihood``): every kind (torch needs the extra ``learned``).
+STATION_MODEL_KINDS = MODEL_KINDS
 
 #: Belief shift boundary conventions (`perception.bayes.shift`): replicate the edge class (paper 002) or
 #: fill uniformly (paper 000 eq. 8).

@@ -1,13 +1,13 @@
-"""The torch likelihood (optional extra): numpy inference equals torch's, storage, calibration; skipped without torch."""
+"""The torch likelihood: numpy inference equals torch's, storage, calibration (torch is in the test extra)."""
 
 import numpy as np
 import pytest
+import torch
 from scipy.special import logsumexp
 
 from perception import load_model, save_model, train_model
 from tests.perception.synthetic import gap_dataset
 
-torch = pytest.importorskip("torch")
 
 GRID = dict(depths=3, widths=4, samples=6, dims=6, contact_floor=1.0, noise=0.1)
 
@@ -24,17 +24,22 @@ def test_train_model_makes_a_torch_model():
     assert model.KIND == "torch" and model.summary().endswith(f"tempering {model.tempering:.4g}")
 
 
-def test_numpy_scores_equal_the_torch_network(model):
+def test_numpy_scores_equal_the_torch_networks(model):
+    # Each member rebuilt as a plain torch network: the model's numpy scores are their log softmax, averaged.
     taps = gap_dataset(seed=2, taps_per_class=2, **GRID).taps
-    net = torch.nn.Sequential(torch.nn.Linear(model.mean.size, model.hidden_bias.size), torch.nn.ReLU(),
-                              torch.nn.Linear(model.hidden_bias.size, model.n_classes))
-    with torch.no_grad():
-        net[0].weight.copy_(torch.as_tensor(model.hidden_weight.T))
-        net[0].bias.copy_(torch.as_tensor(model.hidden_bias))
-        net[2].weight.copy_(torch.as_tensor(model.output_weight.T))
-        net[2].bias.copy_(torch.as_tensor(model.output_bias))
-        x = (taps.reshape(len(taps), -1) - model.mean) / model.scale
-        expected = model.tempering * net(torch.as_tensor(x, dtype=torch.float32)).numpy()
+    x = torch.as_tensor((taps.reshape(len(taps), -1) - model.mean) / model.scale, dtype=torch.float32)
+    members = []
+    for m in range(model.members):
+        net = torch.nn.Sequential(torch.nn.Linear(model.mean.size, model.hidden_bias.shape[1]), torch.nn.ReLU(),
+                                  torch.nn.Linear(model.hidden_bias.shape[1], model.n_classes))
+        with torch.no_grad():
+            net[0].weight.copy_(torch.as_tensor(model.hidden_weight[m].T))
+            net[0].bias.copy_(torch.as_tensor(model.hidden_bias[m]))
+            net[2].weight.copy_(torch.as_tensor(model.output_weight[m].T))
+            net[2].bias.copy_(torch.as_tensor(model.output_bias[m]))
+            members.append(torch.log_softmax(net(x), dim=1).numpy())
+    expected = model.tempering * np.mean(members, axis=0)
+    assert model.members == 5
     np.testing.assert_allclose(model.log_likelihood_batch(taps).reshape(len(taps), -1), expected, rtol=1e-4, atol=1e-4)
 
 
