@@ -28,7 +28,8 @@ Tables (see ``samples/station_sim.toml`` for a documented example):
     recommendation from ``tactip validate --sweep-fixation``), ``start_depth`` (mm: where each
     inspection starts; omitted: a random protocol depth, the paper's unknown start), ``policy`` (active|stationary|random), ``max_taps``, ``locations`` (depth
     classes), ``bins``, ``likelihood`` (the kind of model the station trains: ``gaussian``, the
-    default, ``calibrated-histogram`` or the papers' ``histogram``), ``target_accuracy`` (fraction
+    default, ``calibrated-histogram``, the papers' ``histogram``, or ``torch``, an ensemble of small
+    networks, which needs torch to train: ``pip install torch==2.13.0``), ``target_accuracy`` (fraction
     of decisions within the gaps' tolerance the chosen threshold must reach; omitted: 0.95 for the
     calibrated kinds, and the papers' lowest error within 12 taps for ``histogram``).
 ``[sim]``

@@ -192,6 +192,7 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
     model_path = config.perception.model
     if model_path is None:
         raise TactipError("no [perception] model path in the configuration")
+    _require_model_kind(config.perception.likelihood)   # before any calibration or collection work
     if not calibration_path(config).exists():
         calibrate_station(config, log=log)
     paths = collect_station(config, config.data_dir / "datasets", progress=progress, log=log)
@@ -207,6 +208,17 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
         recommend_fixation(partial, paths["test"], log=lambda line: log(line.replace(str(partial), str(model_path))),
                            target_accuracy=target, tolerance=tolerance, max_taps=p.max_taps)
     return model_path
+
+
+def _require_model_kind(kind: str) -> None:
+    """Refuse, in one line, a kind the station cannot train here (torch not installed)."""
+    if kind == "torch":
+        from perception.learned import require_torch
+
+        try:
+            require_torch()
+        except ImportError as exc:
+            raise TactipError(f'[perception] likelihood = "torch": {exc}') from None
 
 
 def model_is_prepared(path: Path) -> bool:
