@@ -56,14 +56,14 @@ def torch_ece(torch_station):
 
 
 def test_the_torch_models_beliefs_are_near_calibrated_after_1_3_and_5_taps(torch_ece):
-    # Measured 0.04-0.09 over three trainings; left at the tempering of its training the same model
-    # gives 0.12-0.18 (beliefs compressed towards the middle); a tenfold weight decay gave 0.22-0.26 (one training).
+    # Measured 0.05-0.08 (1, 3, 5 taps: 0.054, 0.061, 0.080); the network before its scale was pooled over
+    # the tap's values gave 0.04-0.09, and left at the tempering of its training 0.12-0.18.
     assert max(torch_ece) <= 0.12, torch_ece
 
 
 @pytest.mark.xfail(strict=False, reason="issue 21 bar not met yet on the small station (96 training taps, 44 "
-                                        "classes): ECE after 1 tap 0.066-0.092 over three trainings, after 3 and "
-                                        "5 taps 0.037-0.061")
+                                        "classes): ECE 0.054, 0.061, 0.080 after 1, 3, 5 taps (5000 runs: 0.05-0.06, "
+                                        "0.07, 0.09); one tempering for 1-5 taps does not fit them all")
 def test_the_torch_models_beliefs_meet_the_issue_bar_after_1_3_and_5_taps(torch_ece):
     assert max(torch_ece) <= 0.05, torch_ece
 
