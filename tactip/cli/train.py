@@ -11,10 +11,11 @@ distinct identity (e.g. gap width, mm) is a class (papers 000 and 002). --model 
   gaussian              class-conditional Gaussians with a shared covariance on whitened principal
                         components of the tap (correlations between pins and samples), tempered
                         the same way; the station's default
-  torch                 an ensemble of five small networks over the tap (whitened principal
-                        components -> 64 ReLU units -> the classes), early-stopped on held-out
-                        taps and tempered the same way; trains on every core; needs torch
-                        (pip install torch==2.13.0, the CPU build; or tactip[learned])
+  torch                 an ensemble of five small networks over the tap (every value, one pooled
+                        scale -> 64 ReLU units -> the classes), each early-stopped on held-out
+                        taps, the ensemble tempered the same way; trains on every core (large
+                        taps; small networks on one); needs torch (pip install torch==2.13.0,
+                        the CPU build; or tactip[learned])
 
 The calibrated kinds need at least two taps per class, ideally repeated at the same locations
 ([protocol] repeats = 2). Use a dataset collected separately from the one you validate with
