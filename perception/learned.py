@@ -8,7 +8,7 @@ to one score per joint class; the members' log posteriors are averaged (a geomet
     log P(z | c) = beta s_c(z) + const
 
 Trained with torch (Adam, cross-entropy over the joint classes, weight decay; all members at once as
-one batched network on every core, `perception._ensemble_training`) on the training taps of every
+one batched network, on every core when it is large, `perception._ensemble_training`) on the training taps of every
 fold but one; each member keeps the epoch of its lowest held-out loss (early stopping), beta is
 fitted on the held-out taps' decision posteriors of the ensemble (temperature scaling,
 `perception.tempering`), and the members are trained again on every training tap for their epochs.
