@@ -1,8 +1,9 @@
-"""A small learned likelihood (kind ``torch``): an ensemble of networks over the tap, early-stopped and temperature-scaled.
+"""A small learned likelihood (kind ``torch``): an ensemble of networks, early-stopped and temperature-scaled.
 
 The tap (samples x dims) is flattened, centred on the training taps' mean and divided by their
-spread pooled over every value (one scale, so values that carry only noise stay small), and mapped by each of M small networks (one hidden layer of ``hidden`` ReLU units, different seeds)
-to one score per joint class; the members' log posteriors are averaged (a geometric-mean ensemble):
+spread pooled over every value (one scale, so values that carry only noise stay small), and mapped
+by each of M small networks (one hidden layer of ``hidden`` ReLU units, different seeds) to one
+score per joint class; the members' log posteriors are averaged (a geometric-mean ensemble):
 
     s_c(z) = 1/M sum_m log softmax_c(W2_m relu(W1_m (x - mu) / sigma + b1_m) + b2_m),
     log P(z | c) = beta s_c(z) + const

@@ -99,3 +99,23 @@ def test_a_circular_label_of_one_location_is_decided_and_its_errors_wrap(tmp_pat
     assert model.identity_error(np.array([315.0]), np.array([0.0]))[0] == 45.0   # across the wrap, not 315
     save_model(tmp_path / "d.h5", model)
     assert load_model(tmp_path / "d.h5").identity_period == 360.0
+
+
+def test_training_uses_every_core_and_gives_the_callers_threads_back(monkeypatch):
+    import os
+
+    import perception._ensemble_training as training
+    from perception.learned import fit_torch
+
+    seen = []
+    real = training.train_ensemble
+    monkeypatch.setattr(training, "MIN_SHARED_WORK", 0)       # this small network as if it were a large one
+    monkeypatch.setattr(training, "train_ensemble",
+                        lambda *a, **k: seen.append(torch.get_num_threads()) or real(*a, **k))
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        fit_torch(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=3, max_epochs=3)
+        assert seen == [os.cpu_count()] * 2 and torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)
