@@ -8,10 +8,12 @@ So the logic lives once and no package reaches into another for it (`tests/test_
 it a leaf). It imports only the standard library (h5py inside the one helper that needs it).
 """
 
-from _shared.files import (atomic_path, cut_short, fsync_path, hdf5_in_memory, refuse_overwriting_inputs,
-                           remove_stale_temporaries, temporary_name, write_error)
+from _shared.files import (atomic_path, cut_short, discard_temporary, fsync_path, hdf5_in_memory, output_temporary, publish,
+                           refuse_overwriting_inputs, remove_stale_temporaries, stream_target, temporary_name,
+                           write_error)
 from _shared.ranges import outside_range
 from _shared.toml import parse_toml
 
 __all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name", "cut_short",
-           "remove_stale_temporaries", "hdf5_in_memory", "outside_range", "parse_toml"]
+           "remove_stale_temporaries", "hdf5_in_memory", "stream_target", "output_temporary", "publish", "discard_temporary",
+           "outside_range", "parse_toml"]

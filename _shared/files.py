@@ -12,6 +12,11 @@
   `OSError` rather than a crash inside HDF5.
 - `cut_short`: whether an HDF5 file failed to open because it is shorter than its header says (an
   interrupted copy or write), so readers say that rather than "not an HDF5 file".
+- `stream_target`, `publish`: an output that is not a regular file (``-`` for stdout, ``/dev/null``,
+  a terminal, a FIFO with a reader, ``/dev/stdout`` and other links to them) is written in place by
+  streaming the finished temporary file into it, never renamed over; a block device, a socket or a
+  FIFO nobody reads is refused at once (it would be destroyed, or the write would hang). A symlink
+  to a regular file is followed: the file it points to is replaced and the link kept.
 """
 
 from __future__ import annotations
@@ -22,10 +27,14 @@ import glob
 import os
 import pathlib
 import re
+import shutil
+import stat
+import sys
+import tempfile
 from typing import Iterable, Iterator
 
 __all__ = ["atomic_path", "refuse_overwriting_inputs", "write_error", "fsync_path", "temporary_name", "cut_short",
-           "remove_stale_temporaries", "hdf5_in_memory"]
+           "remove_stale_temporaries", "hdf5_in_memory", "stream_target", "output_temporary", "publish", "discard_temporary"]
 
 _WHAT = {
     errno.ENOSPC: "disk full while writing",
@@ -88,6 +97,120 @@ def cut_short(exc: BaseException) -> tuple[int, int] | None:
     if found and int(found.group(2)) > int(found.group(1)):
         return int(found.group(1)), int(found.group(2))
     return None
+
+
+def stream_target(path) -> bool:
+    """Whether ``path`` is an output to stream into rather than replace: not a regular file (or none).
+
+    ``-`` (standard output), a character device (``/dev/null``, a terminal), a FIFO with a reader, and
+    links to them (``/dev/stdout``) are streamed into. A missing path, a regular file or a link to one
+    is replaced atomically.
+
+    Raises
+    ------
+    OSError
+        A block device or a socket (``"... is a block device: refusing to write a file onto it"``).
+        (A FIFO is not probed for a reader here: opening and closing its write end would end the
+        reader's stream; `publish` finds out.)
+    """
+    if str(path) == "-":
+        return True
+    try:
+        mode = os.stat(path).st_mode                                   # follows links, as opening does
+    except FileNotFoundError:
+        return False
+    except OSError as exc:
+        raise OSError(exc.errno, f"cannot write {str(path)!r} ({exc.strerror})") from None
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return False
+    if stat.S_ISBLK(mode) or stat.S_ISSOCK(mode):
+        kind = "a block device" if stat.S_ISBLK(mode) else "a socket"
+        raise OSError(errno.EINVAL, f"output {str(path)!r} is {kind}: refusing to write a file onto it; "
+                                    f"choose a file name")
+    return True
+
+
+def output_temporary(path, suffix: str | None = None) -> pathlib.Path:
+    """Where an output is built before `publish`: ``.STEM.PID.partSUFFIX`` beside a file (same file
+    system, so the rename is atomic), or in a private temporary folder for a stream (nothing is ever
+    created beside ``/dev/null`` or a FIFO). A symlink to a file is followed."""
+    path = pathlib.Path(path)
+    if stream_target(path):
+        name = pathlib.Path("stdout" if str(path) == "-" else path.name)
+        return pathlib.Path(tempfile.mkdtemp(prefix=_STREAM_FOLDER)) / temporary_name(name, suffix).name
+    return temporary_name(_followed(path), suffix)
+
+
+def discard_temporary(tmp: pathlib.Path) -> None:
+    """Remove an unfinished temporary output (and the private folder of a stream's); never raises."""
+    tmp = pathlib.Path(tmp)
+    with contextlib.suppress(OSError):
+        tmp.unlink(missing_ok=True)
+    if tmp.parent.name.startswith(_STREAM_FOLDER):
+        with contextlib.suppress(OSError):
+            tmp.parent.rmdir()
+
+
+_STREAM_FOLDER = "tactip-out-"
+
+
+def _followed(path: pathlib.Path) -> pathlib.Path:
+    """A symlink's final target (so it is replaced, not the link); other paths as they are."""
+    return path.resolve() if path.is_symlink() else path
+
+
+def publish(tmp: pathlib.Path, path) -> None:
+    """Put the finished temporary ``tmp`` in place of ``path``: fsync and rename for a file, copy its
+    bytes into a stream (`stream_target`) and remove it and its private folder.
+
+    Raises
+    ------
+    OSError
+        Named by `write_error` ("disk full while writing X", ...); a FIFO that no process reads (the
+        write would wait for ever) is refused at once, and the finished output is kept where the
+        message says.
+    """
+    path = pathlib.Path(path)
+    try:
+        if stream_target(path):
+            try:
+                out = _open_stream(path, tmp)
+            except OSError:
+                raise
+            try:
+                with open(tmp, "rb") as source, out:
+                    shutil.copyfileobj(source, out)
+                    out.flush()
+            except BrokenPipeError:  # the reader went away (| head): what it wanted it has
+                pass
+            tmp.unlink(missing_ok=True)
+            with contextlib.suppress(OSError):
+                tmp.parent.rmdir()
+            return
+        target = _followed(path)
+        fsync_path(tmp)
+        os.replace(tmp, target)
+        fsync_path(target.parent if str(target.parent) else pathlib.Path("."), folder=True)
+    except OSError as exc:
+        raise write_error(exc, path) from None
+
+
+def _open_stream(path: pathlib.Path, tmp: pathlib.Path):
+    """A binary file object writing into a stream output (stdout for ``-``); a FIFO without a reader is an error."""
+    if str(path) == "-":
+        sys.stdout.flush()
+        return os.fdopen(os.dup(sys.stdout.fileno()), "wb")
+    if stat.S_ISFIFO(os.stat(path).st_mode):
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_NONBLOCK)
+        except OSError as exc:
+            if exc.errno != errno.ENXIO:
+                raise
+            raise OSError(errno.ENXIO, f"output {str(path)!r} is a FIFO that no process is reading (the write "
+                                       f"would wait for ever); the result is kept in {str(tmp)!r}") from None
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, "wb")
+    return open(path, "wb")
 
 
 def temporary_name(path: pathlib.Path, suffix: str | None = None) -> pathlib.Path:
@@ -214,8 +337,11 @@ def atomic_path(path, *, suffix: str | None = None, inputs: Iterable = ()) -> It
     refuse_overwriting_inputs([path], inputs)
     if path.is_dir():
         raise IsADirectoryError(errno.EISDIR, f"output path {str(path)!r} is a directory")
-    tmp = temporary_name(path, suffix)
-    remove_stale_temporaries(path)
+    streamed = stream_target(path)
+    tmp = output_temporary(path, suffix)
+    if not streamed:
+        remove_stale_temporaries(_followed(path))
+    kept = False
     try:
         try:
             yield tmp
@@ -224,14 +350,17 @@ def atomic_path(path, *, suffix: str | None = None, inputs: Iterable = ()) -> It
                 raise write_error(exc, path) from None
             raise
         try:
-            fsync_path(tmp)
-            os.replace(tmp, path)
-            fsync_path(path.parent if str(path.parent) else pathlib.Path("."), folder=True)
+            publish(tmp, path)
         except OSError as exc:
-            raise write_error(exc, path) from None
+            kept = exc.errno == errno.ENXIO and streamed        # a FIFO without a reader: the result is kept
+            raise
     finally:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
+        if not kept:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        if streamed and not kept:
+            with contextlib.suppress(OSError):
+                tmp.parent.rmdir()
 
 
 def _is_write_error(exc: OSError) -> bool:

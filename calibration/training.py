@@ -11,18 +11,28 @@ written into the model's recommended settings, which the station uses unless its
 overrides them. With a target accuracy, a calibrated kind's tempering is refitted at the chosen depth
 for the beliefs after 1 to 5 taps of active perception (`perception.fit_policy_tempering`): the taps
 of one inspection repeat each other's evidence, which a tempering fitted on single taps ignores.
+
+No peeking (`fit_with_fixation`, `prepare_station_model`): the station's fixation depth, threshold and tempering are chosen
+on a validation split carved from the training collection (`carve_validation`), on a model fitted
+to the rest of it; the model kept is then fitted on every training tap and given those settings. The
+test collection is used once, at the end, for the figures reported (`final_figures`), so that they are
+not flattered by settings picked on the very taps they are measured on.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from calibration.errors import CalibrationError
 from perception import (VirtualEnvironment, fixation_for_accuracy, fixation_sweep, load_dataset, load_model,
-                        save_model, train_model)
+                        make_policy, save_model, trace_beliefs, train_model)
 
-__all__ = ["train_station_model", "recommend_fixation"]
+__all__ = ["train_station_model", "recommend_fixation", "choose_fixation", "carve_validation",
+           "prepare_station_model", "fit_with_fixation", "final_figures", "FinalFigures"]
 
 
 def train_station_model(train_path: str | Path, out: str | Path, *, n_locations: int = 11, bins: int = 100,
@@ -35,21 +45,60 @@ def train_station_model(train_path: str | Path, out: str | Path, *, n_locations:
     return model
 
 
-def recommend_fixation(model_path: str | Path, test_path: str | Path, *, runs: int = 2000, tap_budget: float = 12.0,
-                       seed: int = 0, progress: Callable | None = None, log: Callable[[str], None] = print,
-                       target_accuracy: float | None = None, tolerance: float = 0.0, max_taps: int = 20,
-                       fall_back: bool = True, report: Callable | None = None, model=None, test=None, **options):
-    """Sweep the fixation depth on the test set; write the best one (and its threshold) into the model.
+def recommend_fixation(model_path: str | Path, test_path: str | Path, *, model=None, test=None,
+                       log: Callable[[str], None] = print, **options):
+    """Sweep the fixation depth on a dataset; write the best one (and its threshold) into the model file.
 
-    Without ``target_accuracy``: the lowest mean width error within ``tap_budget`` mean taps (paper 002).
-    With it: the fewest mean taps whose decisions are within ``tolerance`` (identity units) of the
-    true width in a fraction ``target_accuracy`` of runs, with the tempering of a calibrated kind
-    refitted there for the beliefs after 1 to 5 taps (the model written is tempered accordingly).
+    `choose_fixation` on the dataset at ``test_path``, then the model (with its recommended settings,
+    tempered as chosen) is saved back to ``model_path``. Use a validation set, not the test set whose
+    figures you will report: settings chosen on the test taps flatter them (`prepare_station_model`
+    does this for the station).
 
     Parameters
     ----------
     model_path, test_path : str or path
-        The model (rewritten with its recommended settings) and the test collection.
+        The model (rewritten with its recommended settings) and the dataset the sweep runs on.
+    model, test : optional
+        The model and dataset already loaded from those paths.
+    log : callable
+        Where the line saying what was chosen goes.
+    **options
+        As `choose_fixation`.
+
+    Returns
+    -------
+    (perception.LikelihoodModel, sweep)
+        As `choose_fixation`.
+
+    Raises
+    ------
+    CalibrationError
+        As `choose_fixation`; nothing is written then.
+    """
+    model = load_model(model_path) if model is None else model
+    test = load_dataset(test_path) if test is None else test
+    model, sweep, line = choose_fixation(model, test, **options)
+    save_model(model_path, model, inputs=[test_path])
+    log(f"{line}; written to {model_path}")
+    return model, sweep
+
+
+def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.0, seed: int = 0,
+                    progress: Callable | None = None, target_accuracy: float | None = None, tolerance: float = 0.0,
+                    max_taps: int = 20, fall_back: bool = True, report: Callable | None = None,
+                    log: Callable[[str], None] = print, **options):
+    """Sweep the fixation depth of the active policy on ``dataset``; the model with the best one set.
+
+    Without ``target_accuracy``: the lowest mean width error within ``tap_budget`` mean taps (paper 002).
+    With it: the fewest mean taps whose decisions are within ``tolerance`` (identity units) of the
+    true width in a fraction ``target_accuracy`` of runs, with the tempering of a calibrated kind
+    refitted there for the beliefs after 1 to 5 taps (the model returned is tempered accordingly).
+
+    Parameters
+    ----------
+    model : perception.LikelihoodModel
+    dataset : perception.Dataset
+        The taps the runs draw from (a validation split, independent of the model's training taps).
     runs, seed, max_taps : int
         Monte Carlo runs per fixation, their seed, most taps per run.
     tap_budget : float
@@ -60,27 +109,26 @@ def recommend_fixation(model_path: str | Path, test_path: str | Path, *, runs: i
         When no fixation reaches ``target_accuracy`` within ``max_taps``: take the lowest error within
         the tap budget instead (the station's first use), or refuse (`tactip validate`).
     report : callable, optional
-        ``report(sweep)`` before anything is decided or written (the CLI prints its table there).
-    model, test : optional
-        The model and dataset already loaded from those paths.
+        ``report(sweep)`` before anything is decided (the CLI prints its table there).
     progress, log : callable
-        A tqdm-like progress factory; where the lines saying what was chosen go.
+        A tqdm-like progress factory; where a line saying that the target was missed goes.
     **options
         Passed to the sweeps: ``thresholds``, ``deadline``, ``move_threshold``, ``shift_mode``.
 
     Returns
     -------
-    (perception.LikelihoodModel, perception.FixationSweep or perception.reliability.AccuracySweep)
-        The model with its recommended settings, and the sweep (for a plot or a table).
+    (perception.LikelihoodModel, sweep, str)
+        The model with its recommended settings (``fixation_location``, ``decision_threshold``,
+        ``policy``), the sweep (`perception.FixationSweep` or `perception.reliability.AccuracySweep`,
+        for a plot or a table), and one line saying what was chosen.
 
     Raises
     ------
     CalibrationError
         ``fall_back`` is False and the target is not reached; or no fixation decides within the tap
-        budget at any threshold. Nothing is written then.
+        budget at any threshold.
     """
-    model = load_model(model_path) if model is None else model
-    environment = VirtualEnvironment(model, load_dataset(test_path) if test is None else test)
+    environment = VirtualEnvironment(model, dataset)
     unit, identity_unit = model.location_unit, model.identity_unit
     if target_accuracy is not None:
         accuracy_options = {k: v for k, v in options.items() if k != "thresholds" and k != "deadline"}
@@ -97,11 +145,9 @@ def recommend_fixation(model_path: str | Path, test_path: str | Path, *, runs: i
                 tempering = f", tempering {model.tempering:.4g} x {sweep.tempering:.3g} for 1-5 taps"
                 model = model.tempered(sweep.tempering)
             model = model.with_recommended(fixation_location=fixation, decision_threshold=threshold, policy="active")
-            save_model(model_path, model, inputs=[test_path])
-            log(f"fixation depth {fixation:g} {unit}: {sweep.accuracy[best]:.3f} of decisions within {tolerance:g} "
-                f"{identity_unit} in {sweep.taps[best]:.1f} taps (decision threshold {threshold:g}{tempering}); "
-                f"written to {model_path}")
-            return model, sweep
+            return model, sweep, (f"fixation depth {fixation:g} {unit}: {sweep.accuracy[best]:.3f} of decisions within "
+                                  f"{tolerance:g} {identity_unit} in {sweep.taps[best]:.1f} taps (decision threshold "
+                                  f"{threshold:g}{tempering})")
         if not fall_back:
             raise CalibrationError(f"--target-accuracy {target_accuracy:g} is not reached at any fixation within "
                                    f"{max_taps} taps (best {sweep.accuracy.max():.3f}); lower it, raise --tolerance "
@@ -119,8 +165,169 @@ def recommend_fixation(model_path: str | Path, test_path: str | Path, *, runs: i
         report(sweep)
     model = model.with_recommended(fixation_location=float(sweep.best_fixation),
                                    decision_threshold=float(sweep.best_threshold), policy="active")
-    save_model(model_path, model, inputs=[test_path])
-    log(f"fixation depth {sweep.best_fixation:g} {unit}: mean width error {sweep.errors[sweep.best]:.3f} "
-        f"{identity_unit} in {sweep.taps[sweep.best]:.1f} taps (decision threshold {sweep.best_threshold:g}); "
-        f"written to {model_path}")
-    return model, sweep
+    return model, sweep, (f"fixation depth {sweep.best_fixation:g} {unit}: mean width error "
+                          f"{sweep.errors[sweep.best]:.3f} {identity_unit} in {sweep.taps[sweep.best]:.1f} taps "
+                          f"(decision threshold {sweep.best_threshold:g})")
+
+
+def carve_validation(dataset) -> tuple[np.ndarray, np.ndarray]:
+    """Split a training collection into a fitting part and a validation part, about half each.
+
+    Taps are ordered by identity, then location, then collection order, and alternate between the
+    parts within each identity: with repeated taps at each depth ([protocol] repeats >= 2) each part
+    gets taps at every depth of every gap; with one tap per depth, alternate depths. Deterministic,
+    so a rerun chooses the same settings.
+
+    Parameters
+    ----------
+    dataset : perception.Dataset
+
+    Returns
+    -------
+    (fit, validation) : int ndarrays of tap indices, disjoint, together every tap
+
+    Raises
+    ------
+    CalibrationError
+        An identity has fewer than 2 taps (nothing to hold out).
+    """
+    order = np.lexsort((np.arange(len(dataset)), dataset.location, dataset.identity))
+    identity = dataset.identity[order]
+    first = np.r_[True, identity[1:] != identity[:-1]]
+    group_start = np.maximum.accumulate(np.where(first, np.arange(len(order)), 0))
+    rank = np.arange(len(order)) - group_start          # position of each tap within its identity
+    counts = np.diff(np.r_[np.flatnonzero(first), len(order)])
+    if (counts < 2).any():
+        raise CalibrationError(f"identity {identity[first][counts < 2][0]:g} {dataset.identity_unit} has a single "
+                               f"training tap: nothing to hold out for choosing the fixation and threshold")
+    held_out = rank % 2 == 1
+    return np.sort(order[~held_out]), np.sort(order[held_out])
+
+
+@dataclass(frozen=True)
+class FinalFigures:
+    """What the test collection says of a prepared model, at its recommended fixation and threshold.
+
+    Attributes
+    ----------
+    fixation, threshold : float
+        The settings tested (location units; belief).
+    mean_taps, mean_error, accuracy : float
+        Mean decision taps, mean |decided - true| identity (identity units, wrapped for a circular
+        identity) and the fraction of decisions of exactly the right class.
+    within_tolerance : float
+        Fraction of decisions within ``tolerance`` of the true identity.
+    tolerance : float
+    runs : int
+    """
+
+    fixation: float
+    threshold: float
+    mean_taps: float
+    mean_error: float
+    accuracy: float
+    within_tolerance: float
+    tolerance: float
+    runs: int
+
+    def describe(self, model) -> str:
+        """One line, in the model's units."""
+        return (f"test collection (used once, for these figures): {self.within_tolerance:.3f} of decisions within "
+                f"{self.tolerance:g} {model.identity_unit}, mean error {self.mean_error:.3f} {model.identity_unit}, "
+                f"accuracy {self.accuracy:.3f} in {self.mean_taps:.2f} taps ({self.runs} runs at fixation "
+                f"{self.fixation:g} {model.location_unit}, threshold {self.threshold:g})")
+
+
+def final_figures(model, test, *, tolerance: float = 0.0, runs: int = 2000, max_taps: int = 20,
+                 seed: int = 0) -> FinalFigures:
+    """Monte Carlo figures of the active policy on the test collection at the model's recommended settings.
+
+    Parameters
+    ----------
+    model : perception.LikelihoodModel
+        With ``fixation_location`` and ``decision_threshold`` recommended.
+    test : perception.Dataset
+        The test collection, independent of everything the model and its settings were chosen on.
+    tolerance : float
+        Identity units: a decision this close to the truth counts as within tolerance.
+    runs, max_taps, seed : int
+
+    Returns
+    -------
+    FinalFigures
+    """
+    fixation = float(model.recommended["fixation_location"])
+    threshold = float(model.recommended["decision_threshold"])
+    policy = make_policy("active", fixation_class=model.fixation_class(fixation))
+    trace = trace_beliefs(VirtualEnvironment(model, test), policy, runs=runs, max_taps=max_taps, seed=seed,
+                          shift_mode=model.shift_mode)
+    decisions = trace.decisions(threshold)
+    right = decisions.identity == trace.truth[np.arange(trace.runs), decisions.taps - 1]
+    return FinalFigures(fixation, threshold, float(decisions.taps.mean()), float(decisions.error.mean()),
+                       float(right.mean()), float((decisions.error <= tolerance + 1e-9).mean()), float(tolerance),
+                       int(runs))
+
+
+def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, bins: int = 100,
+                      target_accuracy: float | None = None, tolerance: float = 0.0, max_taps: int = 20,
+                      runs: int = 2000, seed: int = 0, fall_back: bool = True, model=None,
+                      log: Callable[[str], None] = print, **fit_options):
+    """A model fitted on every training tap, with its fixation, threshold and tempering chosen on a split of them.
+
+    1. `carve_validation` splits the training taps into a fitting part and a validation part;
+    2. a model of ``kind`` fitted on the fitting part is swept over fixations on the validation part
+       (`choose_fixation`), which chooses the fixation location, the threshold and a calibrated kind's
+       tempering factor for 1-5 taps;
+    3. the model kept is fitted on every training tap and given those settings (its own tempering
+       times the factor).
+
+    The settings are chosen for a model fitted on half the taps: the full model decides at least as
+    well, so the threshold errs on the safe side. No test tap is read.
+
+    Parameters
+    ----------
+    train : perception.Dataset
+        The training taps.
+    kind, n_locations, bins, **fit_options
+        As `perception.train_model`.
+    target_accuracy, tolerance, max_taps, runs, seed, fall_back
+        As `choose_fixation`.
+    model : perception.LikelihoodModel, optional
+        The model already fitted on every training tap with these options (else fitted here).
+    log : callable
+        Where the lines saying what was chosen go.
+
+    Returns
+    -------
+    perception.LikelihoodModel
+    """
+    fit, validation = carve_validation(train)
+    log(f"choosing the fixation and threshold on a validation split of the training taps "
+        f"({len(validation)} of {len(train)}; the model for it is fitted on the other {len(fit)})")
+    options = dict(kind=kind, n_locations=n_locations, bins=bins, **fit_options)
+    partial = train_model(train.subset(fit), **options)
+    chosen, _, line = choose_fixation(partial, train.subset(validation), target_accuracy=target_accuracy,
+                                      tolerance=tolerance, max_taps=max_taps, runs=runs, seed=seed, log=log,
+                                      fall_back=fall_back)
+    log(line)
+    model = train_model(train, **options) if model is None else model
+    if model.temperable and chosen.tempering != partial.tempering:
+        model = model.tempered(chosen.tempering / partial.tempering)
+    return model.with_recommended(**chosen.recommended)
+
+
+def prepare_station_model(train_path: str | Path, out: str | Path, *, log: Callable[[str], None] = print, **options):
+    """Train the station's model and choose its settings without peeking at the test set; write it to ``out``.
+
+    `fit_with_fixation` on the training collection at ``train_path`` (its options: ``kind``,
+    ``n_locations``, ``bins``, ``target_accuracy``, ``tolerance``, ``max_taps``, ``runs``, ``seed``).
+
+    Returns
+    -------
+    perception.LikelihoodModel
+        The model written, with its recommended settings.
+    """
+    model = fit_with_fixation(load_dataset(train_path), log=log, **options)
+    save_model(out, model, inputs=[train_path])
+    log(model.summary())
+    return model

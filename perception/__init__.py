@@ -3,7 +3,8 @@
 The dataset (`Dataset`, `DatasetWriter`, schema ``tactip-dataset/1``) is the contract with the
 front ends; `fit_model` trains the papers' histogram likelihood and `train_model` any kind of
 likelihood model (`LikelihoodModel`: histogram, calibrated histogram, Gaussian, torch); `Perceiver` classifies tap by tap;
-`monte_carlo` and the experiments validate a model on an independent test set.
+`monte_carlo` and the experiments validate a model on an independent test set, and `compare_baselines`
+holds it against simple scikit-learn learners on the same taps.
 """
 
 import importlib
@@ -13,6 +14,7 @@ import importlib
 # SciPy or h5py.
 _LAZY = {
     "ShiftLearner": ".adaptive",
+    **dict.fromkeys(("BaselineReport", "BaselineResult", "compare_baselines", "keep_verdict"), ".baselines"),
     **dict.fromkeys(("DECISION_RULES", "adaptive_prior", "decide", "flat_prior", "marginals", "normalize", "shift",
                      "shift_identity", "update"), ".bayes"),
     **dict.fromkeys(("SCHEMA", "Dataset", "DatasetWriter", "load_dataset", "save_dataset"), ".dataset"),
@@ -46,6 +48,7 @@ __all__ = [
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
     "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
     "threshold_for_accuracy", "fixation_for_accuracy", "fit_policy_tempering",
+    "BaselineResult", "BaselineReport", "compare_baselines", "keep_verdict",
 ]
 
 

@@ -45,6 +45,8 @@ __all__ = ["DEFAULT_EPSILON", "HistogramModel", "fit_model", "histogram_log_prob
 
 #: Regularising count added to every histogram bin (paper 000: epsilon << 1).
 DEFAULT_EPSILON = 1e-3
+#: Largest regularising count: a million taps' worth in every bin, beyond any collection's counts.
+MAX_EPSILON = 1e6
 _BATCH = 256  # taps per chunk in the batch likelihood (counts of 256 taps x 8000 bins: 8 MB)
 
 
@@ -221,7 +223,8 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
     bins : int
         Value bins per dimension, spanning its training range (paper: 100).
     epsilon : float
-        Regularising count added to every bin (> 0).
+        Regularising count added to every bin, in (0, `MAX_EPSILON`]: more would drown any count of taps
+        (and beyond about 1e300 the probabilities overflow).
     min_taps_per_class : int
         Fewest training taps a (location, identity) class may have.
 
@@ -242,8 +245,8 @@ def fit_model(dataset: Dataset, *, n_locations: int = 11, bins: int = 100, epsil
                              ("min_taps_per_class", min_taps_per_class, 1)):
         if int(value) != value or value < low:
             raise ValueError(f"{name} must be an integer >= {low}, got {value}")
-    if not (np.isfinite(epsilon) and epsilon > 0):
-        raise ValueError(f"epsilon must be a finite number > 0, got {epsilon}")
+    if not (np.isfinite(epsilon) and 0 < epsilon <= MAX_EPSILON):
+        raise ValueError(f"epsilon must be a number in (0, {MAX_EPSILON:g}], got {epsilon}")
     grid = fit_class_grid(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class)
     dims, bins = dataset.dims, int(bins)
     values = dataset.taps.reshape(-1, dims).astype(np.float64)

@@ -254,7 +254,12 @@ def _check_model_arrays(path, arrays: dict) -> None:
 
 
 def _check_grid(path, arrays: dict) -> None:
-    """Refuse empty or reversed location classes."""
+    """Refuse empty or reversed location classes, and training tap counts that are not counts of them."""
     edges = arrays["location_edges"]
     if len(edges) < 2 or (len(edges) > 2 and not (np.diff(edges) > 0).all()):
         raise ModelError(f"{path}: location_edges must increase (at least 2 edges)")
+    counts = np.asarray(arrays["taps_per_class"])
+    shape = (len(edges) - 1, len(np.atleast_1d(arrays["identities"])))
+    if counts.shape != shape or not np.isfinite(counts).all() or (counts < 0).any() or (counts != np.round(counts)).any():
+        raise ModelError(f"{path}: taps_per_class must hold a whole number >= 0 for each of the {shape[0]} x "
+                         f"{shape[1]} classes; train the model again")

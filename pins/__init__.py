@@ -16,13 +16,14 @@ from .scale import (DEFAULT_PAD_DIAMETER_MM, SENSOR_PRESETS, PadScale, SensorDes
                     pad_scale, pin_pitch_mm, sensor_preset, sensor_scale)
 from .select import PinSelection, median_spacing_px, select_feature_pins, select_pins
 from .track import LKParams, PinTracker, match_to_blobs, track_pins
+from .propagate import match_by_propagation
 
 __all__ = [
     "PinsError", "NoSensorError", "ShapeError", "LostPinError",
     "SensorDisc", "find_sensor_disc", "as_grey",
     "DetectionParams", "Blobs", "detect_pins", "detect_blobs",
     "find_pin_field", "PinField", "REJECTION_REASONS", "draw_pin_field", "MIN_SENSOR_PINS",
-    "LKParams", "track_pins", "match_to_blobs", "PinTracker",
+    "LKParams", "track_pins", "match_to_blobs", "PinTracker", "match_by_propagation",
     "displacement_from_rest", "integrate_flow", "displacement_magnitude",
     "select_pins", "select_feature_pins", "PinSelection", "median_spacing_px",
     "pad_scale", "PadScale", "pin_pitch_mm", "central_spacing_px", "SensorDescription", "SENSOR_PRESETS",

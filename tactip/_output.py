@@ -6,6 +6,8 @@ shared leaf every package may import, so that calibration and perception use it 
 - `claim_output`: create the temporary file early, so an unwritable output fails before the work;
 - `atomic_output`: a context manager yielding the temporary name, renamed over the output on success;
 - `write_text_atomic`: a whole text file at once;
+- `publish`, `discard_temporary`: put a finished temporary in place (renamed over a file, streamed into
+  ``-``, ``/dev/null``, a terminal or a FIFO: never renamed over a device), or remove an unfinished one;
 - `refuse_overwriting_inputs`: no output may be one of the command's inputs (resolved paths, samefile);
 - `write_error`: a write error named for what it is ("disk full while writing X");
 - `check_video_written`, `out_of_space`: OpenCV's video writer ignores write errors, so a video is
@@ -20,10 +22,11 @@ import os
 import pathlib
 
 from _shared import atomic_path as atomic_output
-from _shared import refuse_overwriting_inputs, remove_stale_temporaries, temporary_name, write_error
+from _shared import (discard_temporary, output_temporary, publish, refuse_overwriting_inputs, remove_stale_temporaries,
+                     stream_target, write_error)
 
 __all__ = ["claim_output", "atomic_output", "write_text_atomic", "refuse_overwriting_inputs", "write_error",
-           "check_video_written", "out_of_space"]
+           "check_video_written", "out_of_space", "publish", "discard_temporary"]
 
 
 def claim_output(path: pathlib.Path, suffix: str | None = None) -> pathlib.Path:
@@ -39,13 +42,16 @@ def claim_output(path: pathlib.Path, suffix: str | None = None) -> pathlib.Path:
     Returns
     -------
     pathlib.Path
-        ``.STEM.PID.partSUFFIX`` beside ``path``; the caller renames it with `os.replace` or unlinks it.
+        ``.STEM.PID.partSUFFIX`` beside ``path`` (in a private temporary folder when ``path`` is a
+        stream such as ``/dev/null`` or ``-``); the caller puts it in place with `publish` or
+        removes it with `discard_temporary`.
     """
     path = pathlib.Path(path)
     if path.is_dir():
         raise IsADirectoryError(21, "output path is a directory", str(path))
-    part = temporary_name(path, suffix)
-    remove_stale_temporaries(path)  # left by a writer that was killed
+    part = output_temporary(path, suffix)
+    if not stream_target(path):
+        remove_stale_temporaries(path)  # left by a writer that was killed
     try:
         with open(part, "wb"):
             pass

@@ -30,6 +30,7 @@ COMMANDS: dict[str, str] = {
     "replay": "tactip.cli.replay",
     "calibrate": "tactip.cli.calibrate",
     "collect": "tactip.cli.collect",
+    "dataset": "tactip.cli.dataset",
     "train": "tactip.cli.train",
     "validate": "tactip.cli.validate",
     "inspect": "tactip.cli.inspect",
@@ -103,9 +104,9 @@ def main(argv: list[str] | None = None) -> int:
             print("Stopped (terminated)." if exc.signum == signal.SIGTERM else
                   f"Stopped ({exc.signal_name}: the terminal closed).", file=sys.stderr)
         return 128 + exc.signum
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # 128 + SIGINT, as a shell reports a process Ctrl-C stopped
         print("Stopped.", file=sys.stderr)
-        return 1
+        return 130
     except BrokenPipeError as exc:
         if _stdout_broken():  # output piped into `head` and the like: stop quietly
             _silence_stdout()

@@ -101,8 +101,11 @@ def fractions(text: str) -> list[float]:
 
 
 def output_file(text: str) -> Path:
-    """An argparse type: a file to write in an existing folder; refused when it names a folder."""
+    """An argparse type: a file to write in an existing folder; refused when it names a folder.
+    ``-`` (standard output), ``/dev/null``, a terminal or a FIFO are written into as streams."""
     path = creatable_file(text)
+    if _stream(path, text):
+        return path
     if not path.parent.is_dir():
         raise argparse.ArgumentTypeError(f"the folder {str(path.parent)!r} of {text!r} does not exist")
     _writable(path.parent, text)
@@ -112,11 +115,14 @@ def output_file(text: str) -> Path:
 def _not_recorded_data(path: Path, text: str) -> None:
     """Refuse an output over collected taps (a tactip-dataset file) or a results database: records that
     took hours of collecting or inspecting, which no command of the project writes over."""
+    if not path.is_file():
+        return  # missing (the usual case), or not a regular file: nothing recorded in it (and reading a FIFO or a
+        # terminal would wait for ever)
     try:
         with open(path, "rb") as f:
             head = f.read(16)
     except OSError:
-        return  # missing (the usual case) or unreadable: the writer reports what it meets
+        return  # unreadable: the writer reports what it meets
     what = None
     if head.startswith(b"SQLite format 3\0"):
         what = "an SQLite database (inspection results?)"
@@ -146,9 +152,22 @@ def creatable_file(text: str) -> Path:
     _name_fits(path, text)
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
+    if _stream(path, text):      # streamed into, never replaced: nothing to check in its folder, nothing to read
+        return path
     _writable(_folders_or_missing(path.parent, text), text)
     _not_recorded_data(path, text)
     return path
+
+
+def _stream(path: Path, text: str) -> bool:
+    """Whether ``path`` is an output streamed into (``-``, a device such as /dev/null, a FIFO, /dev/stdout);
+    a block device or a socket is refused (`_shared.stream_target`)."""
+    from _shared import stream_target
+
+    try:
+        return stream_target(path)
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(exc.strerror or str(exc)) from None
 
 
 def output_folder(text: str) -> Path:

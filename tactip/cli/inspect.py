@@ -8,7 +8,8 @@ An arm fault stops the arm, records the inspection as aborted with the reason, a
 
 --sim runs the packaged simulated station (synthetic TacTip on a simulated arm over a plate of
 20 gaps, 0.25-5 mm) with no hardware; on first use it calibrates, collects the training taps,
-trains and picks the fixation depth (a few minutes), keeping everything in --data-dir.
+trains and picks the fixation depth (a few minutes), keeping everything in --data-dir (default
+$TACTIP_SIM_DIR, else ~/.local/share/tactip/sim, whatever the current folder; the first line says where).
 
 Examples:
   tactip inspect --sim
@@ -33,8 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     where = parser.add_mutually_exclusive_group(required=True)
     where.add_argument("--config", type=Path, help="station TOML file")
     where.add_argument("--sim", action="store_true", help="the packaged simulated station")
-    parser.add_argument("--data-dir", type=Path, default=Path("station_data/sim"),
-                        help="with --sim: where the model, datasets and results live (default station_data/sim)")
+    parser.add_argument("--data-dir", type=Path, default=None,
+                        help="with --sim: where the model, datasets and results live (default $TACTIP_SIM_DIR, else ~/.local/share/tactip/sim, whatever the "
+                             "current folder)")
     parser.add_argument("--policy", choices=POLICIES, default=None,
                         help="override [perception] policy")
     parser.add_argument("--seed", type=seed, default=None, help="seed of the random start depths (>= 0)")
@@ -54,7 +56,16 @@ def run(args: argparse.Namespace) -> int:
     from tactip.errors import TactipError
     from tactip.station.procedures import model_is_prepared, prepare_model
 
+    if args.data_dir is not None and not args.sim:
+        raise TactipError("--data-dir goes with --sim; a station TOML names its own [station] data_dir")
     config = simulated_station_config(args.data_dir) if args.sim else load_station_config(args.config)
+    if args.sim:
+        print(f"simulated station in {config.data_dir}")
+    known = [gap.name for gap in config.gaps]
+    unknown = [name for name in args.gap or () if name not in known]
+    if unknown:  # said before any preparation or inspection starts
+        raise TactipError(f"no gap {', '.join(map(repr, unknown))} on station {config.name!r}; its gaps are "
+                          f"{', '.join(known[:30])}{' ...' if len(known) > 30 else ''}")
     protocol = config.protocol
     if args.start_depth is not None and not protocol.depth_min - 1e-9 <= args.start_depth <= protocol.depth_max + 1e-9:
         # Refused before anything starts: no inspection row is opened for a depth the station cannot tap.

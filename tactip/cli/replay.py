@@ -57,6 +57,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=output_file, required=True, metavar="RESULT.h5", help="HDF5 file to write")
     parser.add_argument("--annotate", type=output_file, metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
+    add_sensor_arguments(parser)
+    parser.add_argument("--calibration", metavar="CAL.h5", help="the station's sensor calibration: use its "
+                        "detection, pins, feature pins and scale (instead of --expected-pins, --mm-per-px, ...)")
+    parser.add_argument("--model", metavar="MODEL.h5", help="the station's model (needs --calibration): "
+                        "decide the gap width from the taps")
+    parser.add_argument("--decision-threshold", type=float_in_range(0, 1, low_open=True), metavar="P",
+                        help="decision threshold on the width belief, (0, 1] (default: the model's recommended, "
+                             "else 0.9)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+
+
+def add_sensor_arguments(parser: argparse.ArgumentParser) -> None:
+    """--expected-pins, --samples, --pins, --min-separation-mm, the scale's flags, --rest-frame and --dark-pins.
+
+    How a recording's pins are found, which become feature pins and how a tap is sampled: the flags
+    ``tactip replay`` and ``tactip dataset build`` share.
+    """
     parser.add_argument("--expected-pins", type=pin_count, metavar="N",
                         help="pins expected in view on the rest frame: confirms the pin field found there (the summary says "
                         "how far off it is) and is the default of --pins-on-pad")
@@ -74,14 +91,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dark-pins", action="store_true",
                         help="dark markers on a light membrane (default: the polarity is decided from the rest frame, "
                         "as tactip detect decides it)")
-    parser.add_argument("--calibration", metavar="CAL.h5", help="the station's sensor calibration: use its "
-                        "detection, pins, feature pins and scale (instead of --expected-pins, --mm-per-px, ...)")
-    parser.add_argument("--model", metavar="MODEL.h5", help="the station's model (needs --calibration): "
-                        "decide the gap width from the taps")
-    parser.add_argument("--decision-threshold", type=float_in_range(0, 1, low_open=True), metavar="P",
-                        help="decision threshold on the width belief, (0, 1] (default: the model's recommended, "
-                             "else 0.9)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -89,6 +98,10 @@ def run(args: argparse.Namespace) -> int:
     from pins import DetectionParams
     from tactip.replay.video import replay_video
 
+    if args.decision_threshold is not None and args.model is None:
+        from tactip.errors import TactipError
+
+        raise TactipError("--decision-threshold sets the model's decisions: it needs --model (and --calibration)")
     params = DetectionParams(dark_pins=True) if args.dark_pins and not args.calibration else None
     result = replay_video(args.video, args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,
                           params=params, n_samples=args.samples,

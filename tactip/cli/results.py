@@ -7,7 +7,7 @@ keeps one station's rows.
 
 Examples:
   tactip results list --config samples/station_sim.toml
-  tactip results list --db station_data/sim/results.sqlite --limit 20
+  tactip results list --db ~/.local/share/tactip/sim/results.sqlite --limit 20
   tactip results export --config samples/station_sim.toml --csv --out results.csv
   tactip results export --db results.sqlite --json
   tactip results plot --config samples/station_sim.toml --out widths.png --last 20

@@ -31,8 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     where.add_argument("--config", type=Path, help="station TOML file (its [station] results database)")
     where.add_argument("--sim", action="store_true", help="the simulated station's results (in --data-dir)")
     where.add_argument("--db", metavar="FILE|URL", help="results database: an SQLite file or a postgresql:// URL")
-    parser.add_argument("--data-dir", type=Path, default=Path("station_data/sim"),
-                        help="with --sim: the simulated station's folder (default station_data/sim)")
+    parser.add_argument("--data-dir", type=Path, default=None,
+                        help="with --sim: the simulated station's folder (default $TACTIP_SIM_DIR, else ~/.local/share/tactip/sim, whatever the "
+                             "current folder)")
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default 127.0.0.1; any other needs --token)")
     parser.add_argument("--port", type=int_in_range(0, 65535), default=8050,
@@ -46,6 +47,10 @@ def run(args: argparse.Namespace) -> int:
     from tactip.line.dashboard import DashboardServer, check_bind, make_app
     from tactip.line.results import describe_location, is_database_url, open_results
 
+    if args.data_dir is not None and not args.sim:
+        from tactip.errors import TactipError
+
+        raise TactipError("--data-dir goes with --sim (a station TOML or --db names its own results)")
     token = args.token or os.environ.get("TACTIP_SERVE_TOKEN") or None
     check_bind(args.host, token)
     info = None
@@ -53,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         location = args.db if is_database_url(args.db) else Path(args.db)
     else:
         from tactip.station.config import load_station_config, simulated_station_config
+
 
         config = simulated_station_config(args.data_dir) if args.sim else load_station_config(args.config)
         location, info = config.results, station_info(config)

@@ -21,10 +21,17 @@ The calibrated kinds need at least two taps per class, ideally repeated at the s
 ([protocol] repeats = 2). Use a dataset collected separately from the one you validate with
 (tactip validate).
 
+--choose-fixation also picks the fixation location, the decision threshold and (calibrated kinds)
+the tempering for 1-5 taps, as the station does on its first run, without looking at the test set:
+on a validation split carved from the training taps (alternate taps of each identity), with a model
+fitted on the rest; the model written is fitted on every training tap and carries those settings.
+Then 'tactip validate MODEL TEST' gives figures the settings were not chosen on.
+
 Examples:
   tactip train data/train.h5 --out models/gaps.h5 --locations 11
   tactip train data/train.h5 --out models/gaps.h5 --model gaussian
   tactip train data/train.h5 --out models/gaps.h5 --model torch
+  tactip train data/train.h5 --out models/gaps.h5 --model gaussian --choose-fixation --target-accuracy 0.95 --tolerance 0.25
 """
 
 from __future__ import annotations
@@ -33,7 +40,7 @@ import argparse
 
 from _shared.ranges import MAX_BINS, MAX_LOCATIONS
 from perception.choices import MODEL_KINDS
-from tactip.cli._types import int_at_least, int_in_range, output_file, positive_float
+from tactip.cli._types import fraction, int_at_least, int_in_range, non_negative_float, output_file, positive_float
 
 HELP = "train a perception model (histogram, calibrated histogram, gaussian, torch) from a tap dataset"
 
@@ -53,6 +60,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="count added to every histogram bin, histogram kinds (default 1e-3)")
     parser.add_argument("--min-taps", type=int_at_least(1), default=1, metavar="N",
                         help="fewest training taps a class may have (default 1)")
+    parser.add_argument("--choose-fixation", action="store_true",
+                        help="also choose the fixation, threshold and tempering on a validation split of the "
+                             "training taps (not the test set) and write them into the model")
+    parser.add_argument("--target-accuracy", type=fraction, metavar="P",
+                        help="with --choose-fixation: the threshold reaching this fraction of decisions within "
+                             "--tolerance in the fewest taps (default: the lowest error within 12 taps)")
+    parser.add_argument("--tolerance", type=non_negative_float, default=0.0, metavar="U",
+                        help="with --target-accuracy: largest |decided - true| identity counted right, identity "
+                             "units (default 0: the exact class)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,14 +80,21 @@ def run(args: argparse.Namespace) -> int:
     from tactip.cli._types import check_memory
     from tactip.errors import TactipError
 
-    if args.epsilon is not None and not math.isfinite(args.epsilon):
-        raise TactipError(f"--epsilon must be a finite number > 0, got {args.epsilon}")
+    from perception.histogram import MAX_EPSILON
+
+    if args.epsilon is not None and not (math.isfinite(args.epsilon) and args.epsilon <= MAX_EPSILON):
+        raise TactipError(f"--epsilon must be a number in (0, {MAX_EPSILON:g}] (a count added to every bin; more "
+                          f"drowns the taps' counts), got {args.epsilon:g}")
     if "histogram" not in args.model:
         given = [flag for flag, value in (("--bins", args.bins), ("--epsilon", args.epsilon)) if value is not None]
         if given:
             raise TactipError(f"{' and '.join(given)} set{'s' if len(given) == 1 else ''} the histograms of the "
                               f"histogram kinds; a {args.model} model has none (leave {' and '.join(given)} out)")
     args.bins = 100 if args.bins is None else args.bins
+    if not args.choose_fixation and (args.target_accuracy is not None or args.tolerance):
+        raise TactipError("--target-accuracy and --tolerance go with --choose-fixation")
+    if args.target_accuracy == 0:
+        raise TactipError("--target-accuracy must be in (0, 1], got 0")
     refuse_overwriting_inputs([args.out], [args.dataset])
     dataset = load_dataset(args.dataset)
     print(dataset.describe())
@@ -92,7 +115,9 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always", UserWarning)
         model = train_model(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
                             min_taps_per_class=args.min_taps, **options)
-    for warning in caught:
+        if args.choose_fixation:
+            model = _choose_fixation(args, dataset, model, options)
+    for warning in {str(w.message): w for w in caught}.values():
         print(f"warning: {warning.message}")
     save_model(args.out, model, inputs=[args.dataset])
     counts = model.taps_per_class
@@ -101,6 +126,21 @@ def run(args: argparse.Namespace) -> int:
           f"{model.class_width:g} {model.location_unit}")
     print(f"wrote {args.out}")
     return 0
+
+
+def _choose_fixation(args, dataset, model, options):
+    """--choose-fixation: settings chosen on a validation split of the training taps, given to ``model``."""
+    from calibration import CalibrationError, fit_with_fixation
+    from perception.errors import DatasetError, ModelError
+
+    from tactip.errors import TactipError
+
+    try:
+        return fit_with_fixation(dataset, model=model, kind=args.model, n_locations=args.locations, bins=args.bins,
+                                 target_accuracy=args.target_accuracy, tolerance=args.tolerance, fall_back=False,
+                                 **options)
+    except (CalibrationError, DatasetError, ModelError) as exc:  # e.g. a class without taps in the split
+        raise TactipError(f"--choose-fixation: {exc}") from None
 
 
 def _require_torch() -> None:

@@ -3,11 +3,17 @@
 Each run picks a true class and a random starting location, then taps: every tap is drawn from
 the test taps of the current (location, identity) class, the beliefs update, the policy moves
 the sensor, until the identity belief crosses the decision threshold (papers 000 and 002).
-For each threshold the table gives the mean decision taps, the mean absolute identity error,
-the fraction of exactly right identities and the mean absolute location error.
+For each threshold the table gives the mean decision taps, the mean label error, the fraction of
+exactly right labels and the mean absolute location error. The label is what the model decides: the
+identity, or the location of a model with one identity. Its error is in the label's unit, circular
+for a label with a period (315 and 0 deg are 45 deg apart); for a named label (classes such as
+shapes) it is the fraction of decisions wrong, 1 - accuracy. JSON rows carry it as
+mean_label_error (beside mean_identity_error and mean_location_error), with label_error_unit.
 
 Policies: active (move to the --fixation location), stationary (never move), random (move
-uniformly over the range). Without --policy all three run on the same starting classes.
+uniformly over the range). Without --policy all three run on the same starting classes. A model
+with one location (trained on a dataset from labelled recordings, tactip dataset build) never moves:
+every policy is the same, so one runs, called stationary, and no location error or fixation is shown.
 
 --sweep-fixation runs the active policy at every fixation location, picks the one with the
 lowest error within --tap-budget mean taps, and writes it with its threshold into the model's
@@ -23,6 +29,18 @@ after 1, 3 and 5 taps (a belief of 0.9 should be right 90 % of the time: ECE 0),
 reliability diagram (OUT_reliability.png). --compare adds other models (e.g. trained with other
 --model kinds) on the same runs: same seed, same true classes and starting locations.
 
+Does the model earn its keep? --baselines --train TRAIN.h5 fits scikit-learn's simple learners on the
+model's training taps (the model file does not hold them: give the dataset the model was trained on)
+and scores them on the test taps: k-nearest neighbours (k chosen by cross-validation on the training
+taps), logistic regression over the label classes, and ridge regression of a numeric label (of the
+cos and sin of a circular one) snapped to the nearest class, so that each decides a class as the model
+does. Features: every tap flattened (samples x dims), NaN (a pin unseen
+during the tap) imputed with the training mean, standardised. Each decides from 1 tap, on every test
+tap; beside them the model's own exact 1-tap decision and its decisions at threshold 0.9 (the active
+policy, or the one policy run). The report says WORSE THAN BASELINE when the model's 1-tap error is
+more than 5 % above the best baseline's, and NOT WELL BELOW BASELINE when its error at threshold 0.9
+is above 0.75x the best baseline's 1-tap error.
+
 Examples:
   tactip validate models/gaps.h5 data/test.h5 --plot out/curves.png --json out/curves.json
   tactip validate models/gaps.h5 data/test.h5 --policy active --fixation 4.75 --thresholds 0.9 0.99
@@ -30,6 +48,7 @@ Examples:
   tactip validate models/gaps.h5 data/test_jitter.h5 --sweep-lateral 0.25 0.5 1 2 --plot out/lateral.png
   tactip validate models/gaussian.h5 data/test.h5 --compare models/histogram.h5 --policy active --plot out/models.png
   tactip validate models/gaussian.h5 data/test.h5 --sweep-fixation --target-accuracy 0.95 --tolerance 0.25
+  tactip validate shapes/model.h5 shapes/test.h5 --baselines --train shapes/train.h5 --json out/shapes.json
 """
 
 from __future__ import annotations
@@ -41,6 +60,7 @@ import pathlib
 
 from _shared.ranges import MAX_TAPS
 from perception.choices import POLICIES, SHIFT_MODES
+from tactip.cli._validate_report import KEEP_THRESHOLD, with_label_error
 from tactip.cli._types import (finite_float, float_in_range, fraction, fractions, image_file, int_in_range,
                                non_negative_float, output_file, seed)
 
@@ -94,7 +114,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "identity units (default 0: the exact class)")
     parser.add_argument("--compare", nargs="+", metavar="MODEL.h5", default=[],
                         help="other models validated on the same runs (speed-accuracy and calibration side by side)")
-    parser.add_argument("--json", type=output_file, metavar="OUT.json", help="write one entry per policy and threshold")
+    parser.add_argument("--baselines", action="store_true",
+                        help="also fit k-nearest neighbours, logistic and ridge regression (scikit-learn) on the "
+                             "training taps (--train) and say whether the model beats them at 1 tap and at "
+                             f"threshold {KEEP_THRESHOLD:g}")
+    parser.add_argument("--train", metavar="TRAIN.h5",
+                        help="with --baselines: the dataset the model was trained on (the model file does not hold "
+                             "its taps); the baselines are fitted on it, never on the test taps")
+    parser.add_argument("--json", type=output_file, metavar="OUT.json",
+                        help="write one entry per policy and threshold (with --baselines, also one per baseline and "
+                             "a verdict per model)")
     parser.add_argument("--plot", type=image_file, metavar="OUT.png",
                         help="plot error against mean taps (or against fixation); .png, .pdf, .svg ...")
     parser.add_argument("--seed", type=seed, default=0, help="random seed, >= 0 (default 0)")
@@ -126,13 +155,18 @@ def run(args: argparse.Namespace) -> int:
     if args.compare and (args.sweep_fixation or args.sweep_lateral):
         raise TactipError("--compare works with the policy comparison only (not with --sweep-fixation or "
                           "--sweep-lateral)")
+    _check_baseline_options(args)
     # An output written over the model or the taps would destroy what it was computed from.
     refuse_overwriting_inputs([args.json, args.plot, _reliability_path(args.plot)],
-                              [args.model, args.test, *args.compare])
+                              [args.model, args.test, *args.compare, *([args.train] if args.train else [])])
     model = load_model(args.model)
+    _check_one_location(model, args)
     _check_fixation(model, args.fixation)
     test = load_dataset(args.test)
+    train = load_dataset(args.train) if args.baselines else None
     thresholds = sorted({t for group in args.thresholds for t in group}) if args.thresholds else DEFAULT_THRESHOLDS
+    if args.baselines:   # the decisions held against the baselines
+        thresholds = sorted({*thresholds, KEEP_THRESHOLD})
     if args.sweep_fixation:
         thresholds = _deciding_thresholds(model, thresholds)
     # Peak memory of the runs stepping together: beliefs and their temporaries, then one result per threshold.
@@ -157,15 +191,17 @@ def run(args: argparse.Namespace) -> int:
         print(f"{'sigma':>8} {'error':>8} {'ratio':>6}")
         for sigma, error, ratio in zip(sweep.sigmas, sweep.errors, sweep.ratio):
             print(f"{sigma:>8.3g} {error:>8.3f} {ratio:>6.2f}")
-        rows = [{**row, "sigma": float(s)} for s, r in zip(sweep.sigmas, sweep.results) for row in r.rows()]
+        rows = with_label_error(model, [{**row, "sigma": float(s)} for s, r in zip(sweep.sigmas, sweep.results)
+                                        for row in r.rows()])
         if args.plot:
             from perception.plots import plot_lateral_sweep
 
             plot_lateral_sweep(sweep, args.plot)
     else:
-        rows = _compare(args, model, environment, options, test, tqdm)
+        rows = _compare(args, model, environment, options, test, tqdm, train)
     if args.json:
-        write_text_atomic(args.json, json.dumps(rows, indent=1) + "\n", inputs=[args.model, args.test])
+        inputs = [args.model, args.test, *args.compare, *([args.train] if args.train else [])]
+        write_text_atomic(args.json, json.dumps(rows, indent=1) + "\n", inputs=inputs)
         print(f"wrote {args.json}")
     if args.plot:
         print(f"wrote {args.plot}")
@@ -180,10 +216,12 @@ def _reliability_path(plot):
     return plot.with_name(f"{plot.stem}_reliability{plot.suffix}")
 
 
-def _compare(args, model, environment, options, test, tqdm) -> list[dict]:
+def _compare(args, model, environment, options, test, tqdm, train=None) -> list[dict]:
     """Speed-accuracy of each policy and the calibration of the active policy, for each model; returns JSON rows."""
     from perception import (CALIBRATION_TAPS, VirtualEnvironment, compare_policies, load_model, make_policy,
                             trace_beliefs)
+
+    from tactip.cli._validate_report import describe_label, print_rows, report_baselines
 
     unit = model.location_unit
     models = {args.model: model}
@@ -194,28 +232,37 @@ def _compare(args, model, environment, options, test, tqdm) -> list[dict]:
         models[path] = other
         environments[path] = VirtualEnvironment(other, test)
     names = {path: _model_name(path, m, models) for path, m in models.items()}
-    policy_names = [args.policy] if args.policy else sorted(POLICIES)
+    one_location = model.n_locations == 1
+    if one_location:   # nowhere to move: every policy is the stationary one
+        policy_names = ["stationary"]
+        asked = f" (--policy {args.policy})" if args.policy and args.policy != "stationary" else ""
+        print(f"one location class: the sensor never moves, so every policy is the same; shown as stationary{asked}")
+    else:
+        policy_names = [args.policy] if args.policy else sorted(POLICIES)
     fixation_class = model.fixation_class(args.fixation)
     if "active" in policy_names:
         print(f"active fixation: {model.location_centres[fixation_class]:g} {unit}")
-    rows, curves, traces = [], {}, {}
+    print(describe_label(model))
+    rows, curves, traces, results = [], {}, {}, {}
     for path, m in models.items():
         policies = [make_policy(name, fixation_class=fixation_class) for name in policy_names]
         progress = functools.partial(tqdm, desc="policies", unit="policy", disable=args.quiet)
-        results = compare_policies(environments[path], policies, progress=progress, **options)
+        results[path] = compare_policies(environments[path], policies, progress=progress, **options)
         if len(models) > 1:
             print(f"model {names[path]}: {m.summary()}")
-        model_rows = [{**row, "model": names[path]} for result in results.values() for row in result.rows()]
-        _print_rows(model_rows)
+        model_rows = with_label_error(m, [{**row, "model": names[path]} for result in results[path].values()
+                                          for row in result.rows()])
+        print_rows(m, model_rows)
         rows += model_rows
-        for policy, result in results.items():
+        for policy, result in results[path].items():
             curves[f"{names[path]} {policy}" if len(models) > 1 else policy] = result
         traces[names[path]] = trace_beliefs(environments[path], make_policy("active", fixation_class=fixation_class),
                                             runs=options["runs"], max_taps=options["max_taps"], seed=options["seed"],
                                             move_threshold=options["move_threshold"], shift_mode=options["shift_mode"])
     taps = [t for t in CALIBRATION_TAPS if t <= args.max_taps]
     what = "identity" if model.n_identities > 1 else "location"
-    print(f"calibration of the {what} belief, active policy ({options['runs']} runs): expected calibration error "
+    policy = "" if one_location else ", active policy"
+    print(f"calibration of the {what} belief{policy} ({options['runs']} runs): expected calibration error "
           f"(0 = a belief of p is right a fraction p of the time)")
     print(f"{'model':<24} " + " ".join(f"{f'{t} tap' + ('s' if t > 1 else ''):>8}" for t in taps))
     for name, trace in traces.items():
@@ -223,6 +270,9 @@ def _compare(args, model, environment, options, test, tqdm) -> list[dict]:
     for row in rows:
         trace = traces[row["model"]]
         row.update({f"ece_{t}_taps": trace.calibration_error(t) for t in taps})
+    if train is not None:
+        held = "active" if "active" in policy_names else policy_names[0]
+        rows += report_baselines(args, model, train, test, models, names, environments, results, held)
     if args.plot:
         from perception.plots import plot_reliability, plot_speed_accuracy
 
@@ -230,13 +280,6 @@ def _compare(args, model, environment, options, test, tqdm) -> list[dict]:
         plot_reliability(traces, _reliability_path(args.plot), taps=taps)
         print(f"wrote {_reliability_path(args.plot)}")
     return rows
-
-
-def _print_rows(rows) -> None:
-    print(f"{'policy':<11} {'threshold':>9} {'taps':>6} {'id error':>8} {'accuracy':>8} {'loc error':>9}")
-    for row in rows:
-        print(f"{row['policy']:<11} {row['threshold']:>9.4g} {row['mean_taps']:>6.2f} "
-              f"{row['mean_identity_error']:>8.3f} {row['accuracy']:>8.3f} {row['mean_location_error']:>9.3f}")
 
 
 def _model_name(path, model, models) -> str:
@@ -281,7 +324,8 @@ def _sweep_fixation(args, model, test, options, tqdm) -> list[dict]:
             from perception.plots import plot_fixation_sweep
 
             plot_fixation_sweep(sweep, args.plot, units=unit)
-        return [{**row, "fixation": float(f)} for f, r in zip(sweep.fixations, sweep.results) for row in r.rows()]
+        return with_label_error(model, [{**row, "fixation": float(f)} for f, r in zip(sweep.fixations, sweep.results)
+                                        for row in r.rows()])
     best = sweep.best
     tempering = "" if trained is None else (f", tempering {trained:.4g} x {sweep.tempering:.3g} for the beliefs "
                                             f"after 1-5 taps")
@@ -314,6 +358,39 @@ def _print_sweep(args, model):
             print(f"{fixation:>10.3f} {shown:>9} {taps:>6.2f} {accuracy:>8.3f}{tempered}")
 
     return report
+
+
+def _check_baseline_options(args) -> None:
+    """--baselines needs --train (the model's training taps), a different file from the test taps."""
+    from tactip.errors import TactipError
+
+    if args.train and not args.baselines:
+        raise TactipError("--train is only read by --baselines (the baselines are fitted on it)")
+    if not args.baselines:
+        return
+    if args.sweep_fixation or args.sweep_lateral:
+        raise TactipError("--baselines works with the policy comparison only (not with --sweep-fixation or "
+                          "--sweep-lateral)")
+    if not args.train:
+        raise TactipError("--baselines needs --train TRAIN.h5, the dataset the model was trained on (the model file "
+                          "does not hold its taps)")
+    if pathlib.Path(args.train).resolve() == pathlib.Path(args.test).resolve():
+        raise TactipError(f"--train {args.train} is the test dataset: the baselines must be fitted on the training "
+                          f"taps and scored on other taps")
+
+
+def _check_one_location(model, args) -> None:
+    """A model with one location class has no fixation to give or sweep."""
+    from tactip.errors import TactipError
+
+    if model.n_locations > 1:
+        return
+    if args.sweep_fixation:
+        raise TactipError("--sweep-fixation: nothing to sweep, the model has one location class (the sensor never "
+                          "moves); validate without it and read the threshold off the table")
+    if args.fixation is not None:
+        raise TactipError(f"--fixation {args.fixation:g}: the model has one location class, so there is no fixation "
+                          f"to choose; leave --fixation out")
 
 
 def _check_fixation(model, fixation) -> None:

@@ -3,6 +3,7 @@
 - `tactip.replay.record`: `record_video`, a camera (or any source) to MP4 or AVI;
 - `tactip.replay.video`: `replay_video`, a recording to pin positions, contacts and features in HDF5,
   and an annotated video (`tactip.replay.result.ReplayResult`: what it found, and its summary);
+  `track_video`, the same tracking, contacts and features without a file (``tactip dataset build``);
 - `tactip.replay.decisions`: a passive perceiver deciding the gap width from a replay's taps.
 """
 

@@ -14,7 +14,8 @@ import os
 import pathlib
 from dataclasses import dataclass
 
-from tactip._output import check_video_written, claim_output, out_of_space, refuse_overwriting_inputs, write_error
+from tactip._output import (check_video_written, claim_output, discard_temporary, out_of_space, publish,
+                            refuse_overwriting_inputs, write_error)
 from tactip.errors import SourceError
 
 __all__ = ["RecordResult", "record_video"]
@@ -138,9 +139,9 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
         check_video_written(part, out_path, count)  # OpenCV's writer says nothing of a full disk
         with open(part, "rb+") as written:
             os.fsync(written.fileno())
-        os.replace(part, out_path)
+        publish(part, out_path)        # renamed over a file, streamed into /dev/null or a FIFO
     finally:
         if writer is not None:
             writer.release()
-        part.unlink(missing_ok=True)
+        discard_temporary(part)
     return RecordResult(out_path, count, rate, float(last_s - first_s), dropped)

@@ -73,14 +73,15 @@ import numpy as np
 
 from pins import DetectionParams, PinsError, PinTracker, find_pin_field
 
-from tactip._output import check_video_written, claim_output, refuse_overwriting_inputs, write_error
+from tactip._output import (check_video_written, claim_output, discard_temporary, publish, refuse_overwriting_inputs,
+                            write_error)
 from tactip.errors import ConfigError, SourceError
 from tactip.pipeline import frames_to_features
 from tactip.replay.contacts import analyse, check_rest_frame
 from tactip.replay.result import ReplayResult
 from tactip.replay.writers import FORMAT, write_annotated, write_hdf5
 
-__all__ = ["ReplayResult", "replay_video", "FORMAT", "check_rest_frame"]
+__all__ = ["ReplayResult", "replay_video", "track_video", "FORMAT", "check_rest_frame"]
 
 
 
@@ -186,7 +187,6 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
     >>> result = replay_video("samples/synthetic_tap.mp4", "out/replay.h5", sensor="tactip-331")  # doctest: +SKIP
     >>> print(result.summary())                                                                   # doctest: +SKIP
     """
-    from tactip.sources import ThreadedReader, open_source
 
     if int(rest_frame) != rest_frame or rest_frame < 0:
         raise ValueError(f"rest_frame must be a non-negative integer, got {rest_frame}")
@@ -216,35 +216,11 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         temporary.append(claim_output(out_path, ".h5"))
         if annotate:
             temporary.append(claim_output(annotate, ".mp4"))
-        # The decoder on one thread fewer than the cores: this thread tracks on the last one, and
-        # FFmpeg's second thread on a 2-core machine only adds its own overhead to the contention.
-        with open_source(video, grey=True, decode_threads=_decode_threads()) as source:
-            if source.live:
-                raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
-            if cal is not None and tuple(source.frame_size) != tuple(cal.frame_size):
-                from calibration import CalibrationError
-
-                raise CalibrationError(f"the calibration was made for {cal.frame_size[0]}x{cal.frame_size[1]} px "
-                                       f"frames, the video's are {source.frame_size[0]}x{source.frame_size[1]} px")
-            # Decode on a thread while this one tracks; blocking, so that no frame is dropped. OpenCV's
-            # own worker pool stays at one thread meanwhile: the two threads already fill a 2-core
-            # machine, and the pool's workers only contend with them.
-            with _opencv_threads(1), ThreadedReader(source, maxsize=8, when_full="block",
-                                                    close_source=False) as reader:
-                plan = _Plan(calibration=cal, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),
-                             sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
-                             mm_per_px=mm_per_px, expected_pins=expected_pins, rest_frame=int(rest_frame))
-                start = _Start(params=params, expected_pins=expected_pins, calibration=cal)
-                try:
-                    track = frames_to_features(reader, start=start, rest_frame=int(rest_frame), selected=plan.selected,
-                                               contacts=plan.contacts, n_samples=int(n_samples), progress=progress,
-                                               total=getattr(source, "frame_count", None))
-                except PinsError as exc:  # say which frame, and how to choose another (a black first frame)
-                    raise type(exc)(f"rest frame {rest_frame}: {exc}; give --rest-frame of a frame off contact "
-                                    f"with the pad lit and in view") from None
-                frame_size, frame_rate = source.frame_size, source.frame_rate
+        track, analysis, frame_size, frame_rate = track_video(
+            video, calibration=cal, params=params, expected_pins=expected_pins, n_samples=n_samples,
+            n_pins=n_pins, min_separation_mm=min_separation_mm, sensor=sensor, pins_on_pad=pins_on_pad,
+            pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px, rest_frame=rest_frame, progress=progress)
         # From here on the tracking is kept whatever happens: problems become warnings.
-        analysis = plan.analysis
         bounds = analysis["bounds"]
         valid = track.valid if len(analysis["selected"]) else np.zeros(len(bounds), dtype=bool)
         decisions = None
@@ -276,10 +252,10 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
             if final is annotate:  # OpenCV's writer says nothing of a full disk: count the frames stored
                 check_video_written(part, final, len(track.timestamps_s))
         for part, final in zip(temporary, [out_path, annotate]):
-            os.replace(part, final)
+            publish(part, final)       # renamed over a file, streamed into /dev/null or a FIFO
     finally:
         for part in temporary:
-            part.unlink(missing_ok=True)
+            discard_temporary(part)
     return ReplayResult(out_path=out_path, annotate_path=annotate, video=str(video), frames=len(track.timestamps_s),
                         pins=len(track.rest_positions), frame_rate=frame_rate,
                         lost_per_frame=track.lost.sum(axis=1), retired_per_frame=track.retired.sum(axis=1),
@@ -291,6 +267,68 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions,
                         contact_kinds=list(analysis.get("kinds", [])),
                         pins_seen=[int(n) for n in track.pins_seen])
+
+
+def track_video(video, *, calibration=None, params: DetectionParams | None = None, expected_pins: int | None = None,
+                n_samples: int = 40, n_pins: int = 40, min_separation_mm: float = 4.0, sensor: str | None = None,
+                pins_on_pad: int | None = None, pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
+                rest_frame: int = 0, progress: bool = False) -> tuple:
+    """Track the pins of a recording and find its contacts and their features (replay's work, no file written).
+
+    The options are `replay_video`'s (checked there), except that `calibration` must be a loaded
+    `calibration.SensorCalibration` (or None). ``tactip dataset build`` calls it per recording.
+
+    Returns
+    -------
+    track : tactip.pipeline.PinTrack
+        With its contacts' features (``features``, ``pins_seen``, ``valid``).
+    analysis : dict
+        `tactip.replay.contacts.analyse`'s: scale, feature pins, contacts (``bounds``, ``kinds``), warnings.
+    frame_size : (int, int)
+        (width, height) of the frames, px.
+    frame_rate : float
+        Frames per second.
+
+    Raises
+    ------
+    SourceError
+        The video is missing, unreadable, live, or shorter than `rest_frame`.
+    CalibrationError
+        The calibration was made for frames of another size.
+    PinsError
+        No sensor in the rest frame.
+    """
+    from tactip.sources import ThreadedReader, open_source
+
+    # The decoder on one thread fewer than the cores: this thread tracks on the last one, and
+    # FFmpeg's second thread on a 2-core machine only adds its own overhead to the contention.
+    with open_source(video, grey=True, decode_threads=_decode_threads()) as source:
+        if source.live:
+            raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
+        if calibration is not None and tuple(source.frame_size) != tuple(calibration.frame_size):
+            from calibration import CalibrationError
+
+            width, height = calibration.frame_size
+            raise CalibrationError(f"the calibration was made for {width}x{height} px frames, the video's are "
+                                   f"{source.frame_size[0]}x{source.frame_size[1]} px")
+        # Decode on a thread while this one tracks; blocking, so that no frame is dropped. OpenCV's
+        # own worker pool stays at one thread meanwhile: the two threads already fill a 2-core
+        # machine, and the pool's workers only contend with them.
+        with _opencv_threads(1), ThreadedReader(source, maxsize=8, when_full="block",
+                                                close_source=False) as reader:
+            plan = _Plan(calibration=calibration, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),
+                         sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
+                         mm_per_px=mm_per_px, expected_pins=expected_pins, rest_frame=int(rest_frame))
+            start = _Start(params=params, expected_pins=expected_pins, calibration=calibration)
+            try:
+                track = frames_to_features(reader, start=start, rest_frame=int(rest_frame), selected=plan.selected,
+                                           contacts=plan.contacts, n_samples=int(n_samples), progress=progress,
+                                           total=getattr(source, "frame_count", None))
+            except PinsError as exc:  # say which frame, and how to choose another (a black first frame)
+                raise type(exc)(f"rest frame {rest_frame}: {exc}; give --rest-frame of a frame off contact "
+                                f"with the pad lit and in view") from None
+            frame_size, frame_rate = source.frame_size, source.frame_rate
+    return track, plan.analysis, frame_size, frame_rate
 
 
 class _Plan:

@@ -16,6 +16,9 @@ MAX_REFLECTIONS = 16
 PIN_SPACING_FRACTION = 0.3  # default pin radius / pin spacing at the apex
 
 
+#: Most pins of a synthetic TacTip: well beyond real ones (100-1000), short of what renders for minutes a frame.
+MAX_SYNTHETIC_PINS = 5000
+
 def _finite_nonnegative(**values) -> None:
     for name, value in values.items():
         if not (math.isfinite(value) and value >= 0):
@@ -30,8 +33,8 @@ def check_options(*, pins, pad_diameter_mm, image_size, noise_sigma, blur_sigma,
 
     The parameters are the constructor's (see `SyntheticTacTip`); ``image_size`` as given.
     """
-    if int(pins) != pins or pins < 7:
-        raise ValueError(f"pins must be an integer >= 7, got {pins!r}")
+    if int(pins) != pins or not 7 <= pins <= MAX_SYNTHETIC_PINS:
+        raise ValueError(f"pins must be an integer in 7..{MAX_SYNTHETIC_PINS}, got {pins!r}")
     if layout not in LAYOUTS:
         raise ValueError(f"layout must be one of {LAYOUTS}, got {layout!r}")
     if not 0.25 <= pad_fraction <= 0.9:

@@ -73,7 +73,10 @@ def open_source(spec: str | int | pathlib.Path, **options) -> FrameSource:
             options.setdefault("pins", int(match.group(1)))
         elif match.group(1):
             options.setdefault("preset", match.group(1))
-        return SyntheticSource(**options)
+        try:
+            return SyntheticSource(**options)
+        except ValueError as exc:  # e.g. synthetic:0 pins: a spec out of range, said as a source error
+            raise SourceError(f"cannot open source {text!r}: {exc}") from None
     path = pathlib.Path(text)
     if path.is_dir() or (path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES):
         return ImageFolderSource(path, **options)

@@ -151,7 +151,12 @@ class ImageFolderSource(FrameSourceBase):
         self.frame_size = (first.shape[1], first.shape[0])
 
     def _load(self, file: pathlib.Path):
-        image = self._cv2.imread(str(file), self._cv2.IMREAD_ANYCOLOR)
+        try:
+            image = self._cv2.imread(str(file), self._cv2.IMREAD_ANYCOLOR)
+        except self._cv2.error as exc:  # e.g. a header claiming more pixels than the decoder's limit
+            limit = "larger than the decoder's limit" if "MAX_IMAGE_PIXELS" in str(exc) else "undecodable"
+            raise SourceError(f"cannot read image {str(file)!r}: its header claims an image {limit} "
+                              f"({_claimed_size(file)})") from None
         if image is None:
             head = _read_head(file, "image")
             if not head:
@@ -220,3 +225,11 @@ def _sniff_video(path: pathlib.Path) -> str | None:
     if head[:6] in (b"GIF87a", b"GIF89a"):
         return "GIF"
     return None
+
+
+def _claimed_size(file: pathlib.Path) -> str:
+    """``"W x H px"`` from a PNG's header, else ``"size unknown"`` (for the message only)."""
+    head = _read_head(file, "image")
+    if head[:8] == b"\x89PNG\r\n\x1a\n" and len(head) >= 24:
+        return f"{int.from_bytes(head[16:20], 'big')} x {int.from_bytes(head[20:24], 'big')} px"
+    return "size unknown"

@@ -202,6 +202,10 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     except ArmConfigError as exc:
         raise ConfigError(str(exc)) from None
 
+    if arm.backend == "sim":  # the simulated arm's camera renders the synthetic TacTip: another source would be ignored
+        _check(sensor.source == "synthetic", "sensor.source",
+               f"must be \"synthetic\" with the simulated arm (arm.backend = \"sim\" renders the synthetic TacTip, "
+               f"so a camera or video would be ignored), got {sensor.source!r}")
     _range(sensor.pins, "sensor.pins", MIN_PINS, MAX_PINS, "pins")
     _range(sensor.pad_diameter_mm, "sensor.pad_diameter_mm", 0, 500, "mm", low_open=True)
     _range(sensor.frame_rate, "sensor.frame_rate", 0, 1000, "frames/s", low_open=True)
@@ -419,12 +423,26 @@ def _gap(table: dict, k: int) -> GapConfig:
                      true_width=None if true_width is None else float(true_width))
 
 
-def simulated_station_config(data_dir: str | Path = "station_data/sim") -> StationConfig:
+def default_sim_dir() -> Path:
+    """Where the simulated station (``tactip inspect --sim``, ``serve --sim``) keeps its files unless told:
+    ``$TACTIP_SIM_DIR``, else ``$XDG_DATA_HOME/tactip/sim`` (``~/.local/share/tactip/sim``): one place,
+    whatever the current folder, so every run finds the model the first one trained."""
+    import os
+
+    if os.environ.get("TACTIP_SIM_DIR"):
+        return Path(os.environ["TACTIP_SIM_DIR"]).expanduser().resolve()
+    data_home = os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share"
+    return (Path(data_home).expanduser() / "tactip" / "sim").resolve()
+
+
+def simulated_station_config(data_dir: str | Path | None = None) -> StationConfig:
     """The packaged simulated station (``tactip inspect --sim``), keeping its files in ``data_dir``.
 
-    The calibration, datasets, model and results database all live in ``data_dir`` (relative paths
-    against the current folder), so a later run finds the model the first run trained.
+    The calibration, datasets, model and results database all live in ``data_dir`` (default
+    `default_sim_dir`; a relative path is taken against the current folder), so a later run finds
+    the model the first run trained.
     """
+    data_dir = default_sim_dir() if data_dir is None else data_dir
     data = parse_toml(SIM_PRESET.read_bytes(), SIM_PRESET, error=ConfigError)
     data_dir = Path(data_dir).expanduser().resolve()
     data["station"]["data_dir"] = str(data_dir)

@@ -85,6 +85,10 @@ def load_station_model(config: StationConfig, calibration):
         raise ModelError(f"no model at {path}: collect taps and run 'tactip train' (or 'tactip inspect --sim')")
     model = load_model(path)
     check_model_fits(model, calibration, samples=config.protocol.samples, source=str(path))
+    if model.KIND != config.perception.likelihood:  # the key would otherwise say one thing while another runs
+        raise ModelError(f"{path} is a {model.KIND} model but [perception] likelihood = "
+                         f"\"{config.perception.likelihood}\": set likelihood = \"{model.KIND}\", or train the "
+                         f"model again with that kind")
     return model
 
 

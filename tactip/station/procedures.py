@@ -177,7 +177,9 @@ class _SimPool:
 
 def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable[[str], None] = print) -> Path:
     """The whole calibration utility in one call: calibrate (unless calibrated), collect (resuming),
-    train and pick the fixation depth; returns the model path. ``tactip inspect --sim`` runs it on
+    train and pick the fixation depth, threshold and tempering on a validation split of the training
+    collection (`calibration.prepare_station_model`: no peeking at the test collection), then report
+    the model's figures on the test collection, used once; returns the model path. ``tactip inspect --sim`` runs it on
     first use, and again after an interrupted first use (`model_is_prepared`).
 
     The model is trained and given its recommended settings under a temporary name and renamed into
@@ -185,7 +187,8 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
     the fixation sweep leaves no half-prepared model, and the next run resumes the preparation
     (the collected taps are kept and resumed, only training and the sweep are repeated).
     """
-    from calibration import recommend_fixation, train_station_model
+    from calibration import final_figures, prepare_station_model
+    from perception import load_dataset
 
     from tactip._output import atomic_output
 
@@ -196,17 +199,18 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
     if not calibration_path(config).exists():
         calibrate_station(config, log=log)
     paths = collect_station(config, config.data_dir / "datasets", progress=progress, log=log)
+    p = config.perception
+    target = p.target_accuracy
+    if target is None and p.likelihood != "histogram":
+        target = DEFAULT_TARGET_ACCURACY
+    tolerance = min(g.tolerance for g in config.gaps)
     with atomic_output(model_path, inputs=list(paths.values())) as partial:
-        p = config.perception
         log(f"training the model ({p.likelihood} likelihood) ...")
-        train_station_model(paths["train"], partial, n_locations=p.locations, bins=p.bins, kind=p.likelihood, log=log)
-        log("choosing the fixation depth on the test collection ...")
-        target = p.target_accuracy
-        if target is None and p.likelihood != "histogram":
-            target = DEFAULT_TARGET_ACCURACY
-        tolerance = min(g.tolerance for g in config.gaps)
-        recommend_fixation(partial, paths["test"], log=lambda line: log(line.replace(str(partial), str(model_path))),
-                           target_accuracy=target, tolerance=tolerance, max_taps=p.max_taps)
+        model = prepare_station_model(paths["train"], partial, kind=p.likelihood, n_locations=p.locations,
+                                      bins=p.bins, target_accuracy=target, tolerance=tolerance, max_taps=p.max_taps,
+                                      log=log)
+    # The test collection, used once: the figures of the model as the station will run it.
+    log(final_figures(model, load_dataset(paths["test"]), tolerance=tolerance, max_taps=p.max_taps).describe(model))
     return model_path
 
 

@@ -5,7 +5,7 @@ import importlib
 
 import pytest
 
-MODULES = ["perception.dataset", "perception.bayes", "perception.policies", "perception.adaptive"]
+MODULES = ["perception.dataset", "perception.bayes", "perception.policies", "perception.adaptive", "perception.baselines"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -189,8 +189,9 @@ def test_bad_recommended_settings_are_refused_naming_them(small, tmp_path, setti
 
 
 def test_non_finite_epsilon_and_likelihoods_are_refused(small, tmp_path):
-    with pytest.raises(ValueError, match="epsilon must be a finite number"):
-        fit_model(small, epsilon=float("inf"))
+    for epsilon in (float("inf"), 1e308, 0.0):
+        with pytest.raises(ValueError, match="epsilon must be a number in"):
+            fit_model(small, epsilon=epsilon)
     save_model(tmp_path / "m.h5", fit_model(small, n_locations=4))
     with h5py.File(tmp_path / "m.h5", "r+") as f:
         f["log_probability"][0, 0, :] = np.nan

@@ -75,12 +75,14 @@ def small_station_table(root: Path, *, gaps=SMALL_GAPS, depth_step: float = DEPT
                         **sections) -> dict:
     """The simulated preset with only ``gaps``, a coarse ``depth_step`` (mm), every file under ``root``.
 
-    ``sections`` update tables key by key, e.g. ``perception={"max_taps": 5}``.
+    ``sections`` update tables key by key, e.g. ``perception={"max_taps": 5}``. The likelihood is
+    ``histogram``, the kind the session's station trains (`sim_station`: ``tactip train``'s default), since
+    a station refuses a model of another kind than its key names.
     """
     table = tomllib.loads(SIM_PRESET.read_text())
     root = Path(root)
     table["station"].update(data_dir=str(root), results=str(root / "results.sqlite"))
-    table["perception"].update(model=str(root / "model.h5"), locations=LOCATIONS)
+    table["perception"].update(model=str(root / "model.h5"), locations=LOCATIONS, likelihood="histogram")
     table["protocol"].update(depth_step=depth_step, repeats=repeats)
     table["gaps"] = [g for g in table["gaps"] if g["name"] in gaps]
     for name, values in sections.items():

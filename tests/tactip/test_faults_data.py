@@ -392,14 +392,14 @@ def test_an_interrupted_preparation_leaves_no_half_prepared_model(sim_station, t
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    sweep = calibration.recommend_fixation
-    monkeypatch.setattr(calibration, "recommend_fixation", interrupted)
-    assert main(["inspect", "--sim", "--gap", "g02", "--quiet"]) == 1           # Ctrl-C in the sweep
+    prepare = calibration.prepare_station_model
+    monkeypatch.setattr(calibration, "prepare_station_model", interrupted)
+    assert main(["inspect", "--sim", "--gap", "g02", "--quiet"]) == 130         # Ctrl-C in the sweep
     assert "Stopped." in capsys.readouterr().err
     assert not config.perception.model.exists() and not model_is_prepared(config.perception.model)
     assert not leftover_temporaries(tmp_path) and not (tmp_path / "results.sqlite").exists()
-    monkeypatch.setattr(calibration, "recommend_fixation",
-                        lambda *a, **k: sweep(*a, **{**k, "runs": 100}))
+    monkeypatch.setattr(calibration, "prepare_station_model",
+                        lambda *a, **k: prepare(*a, **{**k, "runs": 100}))
     assert main(["inspect", "--sim", "--gap", "g02", "--seed", "1", "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "No trained model" in out and "model ready" in out and "1 gap(s)" in out

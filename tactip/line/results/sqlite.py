@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import functools
 import os
 import sqlite3
 from pathlib import Path
@@ -94,6 +95,16 @@ CREATE TABLE IF NOT EXISTS stations (
     updated_at TEXT NOT NULL
 );
 """
+
+
+@functools.lru_cache(maxsize=1)
+def _our_columns() -> dict[str, frozenset]:
+    """The columns of each table of our schema (read off `_SCHEMA` built in memory)."""
+    with contextlib.closing(sqlite3.connect(":memory:")) as db:
+        db.executescript(_SCHEMA)
+        tables = [r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")]
+        return {t: frozenset(r[1] for r in db.execute(f"PRAGMA table_info({t})")) for t in tables
+                if t != "sqlite_sequence"}
 
 
 class ResultsStore(ResultsStoreBase):
@@ -184,15 +195,20 @@ class ResultsStore(ResultsStoreBase):
                     tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
                     schema = None
                     if "meta" in tables:
-                        row = db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()
-                        schema = row and row[0]
+                        with contextlib.suppress(sqlite3.Error):      # a foreign 'meta' may have other columns
+                            row = db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()
+                            schema = row and row[0]
+                    columns = {t: {r[1] for r in db.execute(f"PRAGMA table_info({t})")}
+                               for t in tables & set(_our_columns())}
             except sqlite3.Error as exc:
                 raise self._error(exc, "reading") from None
-            # A database whose creation was cut short (disk full) holds some of our tables and no schema yet.
-            ours = (schema is not None and str(schema).startswith("tactip-results/")) or \
-                tables <= {"meta", "inspections", "taps", "stations", "sqlite_sequence"}
+            # A database whose creation was cut short (disk full) holds some of our tables, each with our
+            # columns (older versions lack the added ones), and no schema row yet.
+            stamped = schema is not None and str(schema).startswith("tactip-results/")
+            foreign = [t for t, have in columns.items() if not _our_columns()[t] - set(_ADDED_COLUMNS) <= have]
+            ours = stamped or (tables <= {*_our_columns(), "sqlite_sequence"} and not foreign)
             if tables - {"sqlite_sequence"} and not ours:
-                names = ", ".join(sorted(tables - {"sqlite_sequence"})[:5])
+                names = ", ".join(sorted(foreign or (tables - {"sqlite_sequence"}))[:5])
                 raise ResultsError(f"{path} is another SQLite database (tables {names}), not tactip results; "
                                    f"it was left unchanged: choose another results file")
         if not self.read_only:

@@ -106,8 +106,12 @@ def test_inspect_then_export_the_results(sim_station, tmp_path):
 def test_inspect_sim_keeps_everything_in_its_data_dir(sim_station, tmp_path, monkeypatch):
     data = tmp_path / "data"
     data.mkdir()
-    for name in ("calibration.h5", "model.h5"):        # the small station's sensor is the preset's sensor
-        shutil.copy(sim_station.root / name, data / name)
+    shutil.copy(sim_station.root / "calibration.h5", data)    # the small station's sensor is the preset's sensor
+    # The packaged station's likelihood, on the small station's taps and with its recommended settings.
+    from perception import load_dataset, load_model, save_model, train_model
+
+    model = train_model(load_dataset(sim_station.train), kind="gaussian", n_locations=int(LOCATIONS))
+    save_model(data / "model.h5", model.with_recommended(**load_model(sim_station.model).recommended))
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(["inspect", "--sim", "--data-dir", "data", "--gap", "g14", "--start-depth", "5",
                               "--quiet"])
@@ -162,7 +166,7 @@ def test_a_killed_collection_resumes_to_the_uninterrupted_dataset(small_collecti
             process.kill()
             process.wait()
     if stop == signal.SIGINT:
-        assert process.returncode == 1 and err.strip().splitlines()[-1] == "Stopped." and "Traceback" not in err
+        assert process.returncode == 130 and err.strip().splitlines()[-1] == "Stopped." and "Traceback" not in err
     else:
         assert process.returncode == -signal.SIGKILL
     partial = stored_taps(out / "train.h5") + (stored_taps(out / "test.h5") or 0)

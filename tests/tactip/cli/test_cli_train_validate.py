@@ -71,6 +71,7 @@ def test_sweep_fixation_writes_recommended_settings(files, capsys, tmp_path):
     assert f"best fixation {recommended['fixation_location']:g} mm" in out
     rows = json.loads((tmp_path / "fix.json").read_text())
     assert len(rows) == 6 * 3 and {r["policy"] for r in rows} == {"active"}
+    assert all(r["mean_label_error"] == r["mean_identity_error"] and r["label_error_unit"] == "mm" for r in rows)
     # The next validation uses the recommended fixation by default.
     assert main(["validate", str(model_path), str(files / "test.h5"), "--policy", "active", "--runs", "50",
                  "--thresholds", "0.9", "--quiet"]) == 0

@@ -208,7 +208,7 @@ def test_serve_help_names_the_guard(capsys):
 @pytest.mark.parametrize("sigint", ["default", "ignored"])
 def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path, sigint):
     # "ignored": started as a background job by a script (SIGINT ignored from the start), where
-    # uvicorn's re-raised SIGINT does nothing: still "Stopped." and exit 1.
+    # uvicorn's re-raised SIGINT does nothing: still "Stopped." and exit 130.
     import signal
     import subprocess
     import sys
@@ -234,4 +234,4 @@ def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path, s
     finally:
         if serve.poll() is None:
             serve.kill()
-    assert serve.returncode == 1 and err == "Stopped.\n"
+    assert serve.returncode == 130 and err == "Stopped.\n"

@@ -9,6 +9,7 @@ import sqlite3
 import pytest
 
 from tactip.line.results import EXPORT_FIELDS, ResultsError, ResultsStore
+from tactip.line.results.sqlite import _SCHEMA
 
 
 def _inspect(store, gap="g1", nominal=2.0, estimate=2.25, decided=True, tolerance=0.25):
@@ -87,6 +88,27 @@ def test_another_sqlite_database_is_refused_unchanged(tmp_path):
     (tmp_path / "notes.txt").write_text("not a database")
     with pytest.raises(ResultsError, match="not an SQLite file"):
         ResultsStore(tmp_path / "notes.txt")
+
+
+def test_a_foreign_database_with_tables_named_as_ours_is_refused_unchanged(tmp_path):
+    """Issue 22: an SQLite file with its own 'inspections' (and 'meta') tables was given columns and tables
+    before it failed on 'no such column: started_at'. Table names are not enough: the columns must be ours."""
+    path = tmp_path / "plant.sqlite"
+    with sqlite3.connect(path) as con:
+        con.execute("CREATE TABLE inspections (id INTEGER PRIMARY KEY, part TEXT, verdict TEXT)")
+        con.execute("CREATE TABLE meta (name TEXT)")
+    before = path.read_bytes()
+    for read_only in (False, True):
+        with pytest.raises(ResultsError, match="another SQLite database .*inspections"):
+            ResultsStore(path, read_only=read_only)
+    assert path.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["plant.sqlite"]
+    # Our own database cut short after its first table (disk full while creating it) is still ours.
+    ours = tmp_path / "cut.sqlite"
+    with sqlite3.connect(ours) as con:
+        con.executescript(_SCHEMA.split(";")[0] + ";" + _SCHEMA.split(";")[1] + ";")
+    with ResultsStore(ours) as store:
+        _inspect(store)
+        assert len(store.inspections()) == 1
 
 
 def test_a_reader_changes_nothing(tmp_path):

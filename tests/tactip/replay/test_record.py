@@ -30,9 +30,11 @@ def test_seconds_limit_on_a_recording_uses_its_time_stamps(tmp_path):
 
 
 def test_a_live_camera_is_recorded_for_the_time_asked(tmp_path, monkeypatch):
-    monkeypatch.setattr(tactip.sources, "open_source", lambda spec, **options: FakeCamera())
+    # Frames 5 ms apart on the camera's clock; it delivers 62 (never more than the recorder's queue holds,
+    # so none is dropped however slow the machine) and then waits: 0.3 s is frames 0..59.
+    monkeypatch.setattr(tactip.sources, "open_source", lambda spec, **options: FakeCamera(allowed=62))
     result = record_video(0, tmp_path / "live.avi", seconds=0.3)
-    assert 20 <= result.frames <= 65 and result.duration_s == pytest.approx(0.3, abs=0.1)
+    assert result.frames == 60 and result.duration_s == pytest.approx(0.295) and result.dropped_frames == 0
     capture = cv2.VideoCapture(str(tmp_path / "live.avi"))
     values = []
     while True:

@@ -69,7 +69,7 @@ def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station
     root = tmp_path / "station"
     shutil.copytree(sim_station.root, root, ignore=shutil.ignore_patterns("model.h5", "results.sqlite*"))
     calibration_bytes = (root / "calibration.h5").read_bytes()
-    config = parse_station_config(small_station_table(root), base_dir=root)
+    config = parse_station_config(small_station_table(root, perception={"likelihood": "gaussian"}), base_dir=root)
     lines = []
     path = prepare_model(config, progress=False, log=lines.append)
     assert path == root / "model.h5"
@@ -85,6 +85,9 @@ def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station
     # The station's default likelihood, its threshold chosen for 95 % of decisions within the gaps' tolerance.
     assert model.KIND == config.perception.likelihood == "gaussian"
     assert any("of decisions within 0.25 mm" in line or "no fixation depth reaches 0.95" in line for line in lines)
+    # Chosen on a split of the training taps; the test collection gives the figures reported, once, at the end.
+    assert any("validation split of the training taps" in line for line in lines)
+    assert lines[-1].startswith("test collection (used once")
 
 
 def test_prepare_model_needs_a_model_path(tmp_path):

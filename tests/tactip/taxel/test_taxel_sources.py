@@ -118,7 +118,7 @@ def test_udp_timeout_and_garbage_raise_source_error():
         began = time.monotonic()
         with pytest.raises(SourceError, match=r"no taxel reading within 0.2 s on udp://127.0.0.1:\d+"):
             source.read()
-        assert time.monotonic() - began < 2.0
+        assert time.monotonic() - began < 10.0                 # the timeout fired (a bound on a hang, not a speed)
         with UdpTaxelSender(source.address) as sender:
             sender.send_raw(b"not a reading")
             with pytest.raises(SourceError, match="expected 20 bytes"):
