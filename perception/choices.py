@@ -4,16 +4,14 @@ Standard library only (nothing at all is imported), so the command line can buil
 and the station configuration can validate its keys without loading NumPy, SciPy or h5py.
 """
 
-__all__ = ["POLICIES", "MODEL_KINDS", "STATION_MODEL_KINDS", "SHIFT_MODES", "DECISION_RULES"]
+__all__ = ["POLICIES", "MODEL_KINDS", "SHIFT_MODES", "DECISION_RULES"]
 
 #: How the sensor moves between taps: names accepted by `perception.policies.make_policy`.
 POLICIES = ("active", "stationary", "random")
 
-#: Kinds of likelihood model (`perception.model.train_model`); the first is the papers' model.
+#: Kinds of likelihood model (`perception.model.train_model`); the first is the papers' model. A station
+#: trains any of them (``[perception] likelihood``; torch needs the extra ``learned``).
 MODEL_KINDS = ("histogram", "calibrated-histogram", "gaussian", "torch")
-
-#: The kinds a station trains itself (``[perception] likelihood``): every kind but the optional torch network.
-STATION_MODEL_KINDS = tuple(kind for kind in MODEL_KINDS if kind != "torch")
 
 #: Belief shift boundary conventions (`perception.bayes.shift`): replicate the edge class (paper 002) or
 #: fill uniformly (paper 000 eq. 8).

@@ -11,7 +11,11 @@ distinct identity (e.g. gap width, mm) is a class (papers 000 and 002). --model 
   gaussian              class-conditional Gaussians with a shared covariance on whitened principal
                         components of the tap (correlations between pins and samples), tempered
                         the same way; the station's default
-  torch                 a small network over the tap (optional: pip install torch==2.13.0)
+  torch                 an ensemble of five small networks over the tap (every value, one pooled
+                        scale -> 64 ReLU units -> the classes), each early-stopped on held-out
+                        taps, the ensemble tempered the same way; trains on every core (large
+                        taps; small networks on one); needs torch (pip install torch==2.13.0,
+                        the CPU build; or tactip[learned])
 
 The calibrated kinds need at least two taps per class, ideally repeated at the same locations
 ([protocol] repeats = 2). Use a dataset collected separately from the one you validate with
@@ -26,6 +30,7 @@ MODEL TEST' gives figures the settings were not chosen on.
 Examples:
   tactip train data/train.h5 --out models/gaps.h5 --locations 11
   tactip train data/train.h5 --out models/gaps.h5 --model gaussian
+  tactip train data/train.h5 --out models/gaps.h5 --model torch
   tactip train data/train.h5 --out models/gaps.h5 --model gaussian --choose-fixation --target-accuracy 0.95 --tolerance 0.25
 """
 
@@ -100,6 +105,10 @@ def run(args: argparse.Namespace) -> int:
     options = {} if args.epsilon is None else {"epsilon": args.epsilon}
     if args.model == "torch":
         _require_torch()
+        values = dataset.taps.shape[1] * dataset.taps.shape[2]   # the imputation Gaussian's covariance, and copies
+        check_memory(8.0 * (3 * values ** 2 + 4 * len(dataset) * values),
+                     what=f"the torch model's imputation Gaussian over {values} values per tap",
+                     hint="use fewer feature pins or samples per tap")
     import warnings
 
     with warnings.catch_warnings(record=True) as caught:  # e.g. a pin never seen in some class: said in one line
@@ -137,10 +146,10 @@ def _choose_fixation(args, dataset, options):
 
 def _require_torch() -> None:
     """Refuse --model torch, in one line, when torch is not installed."""
-    import importlib.util
-
+    from perception.learned import require_torch
     from tactip.errors import TactipError
 
-    if importlib.util.find_spec("torch") is None:
-        raise TactipError("--model torch needs torch: pip install torch==2.13.0 (the CPU build; an unpinned torch "
-                          "pulls gigabytes)")
+    try:
+        require_torch()
+    except ImportError as exc:
+        raise TactipError(f"--model torch: {exc}") from None

@@ -28,7 +28,8 @@ Tables (see ``samples/station_sim.toml`` for a documented example):
     recommendation from ``tactip validate --sweep-fixation``), ``start_depth`` (mm: where each
     inspection starts; omitted: a random protocol depth, the paper's unknown start), ``policy`` (active|stationary|random), ``max_taps``, ``locations`` (depth
     classes), ``bins``, ``likelihood`` (the kind of model the station trains: ``gaussian``, the
-    default, ``calibrated-histogram`` or the papers' ``histogram``), ``target_accuracy`` (fraction
+    default, ``calibrated-histogram``, the papers' ``histogram``, or ``torch``, an ensemble of small
+    networks, which needs torch to train: ``pip install torch==2.13.0``), ``target_accuracy`` (fraction
     of decisions within the gaps' tolerance the chosen threshold must reach; omitted: 0.95 for the
     calibrated kinds, and the papers' lowest error within 12 taps for ``histogram``).
 ``[sim]``
@@ -48,7 +49,7 @@ from typing import Any
 
 from _shared import outside_range, parse_toml
 from _shared.ranges import MAX_BINS, MAX_LOCATIONS, MAX_SAMPLES, MAX_SEED, MAX_TAPS
-from perception.choices import POLICIES, STATION_MODEL_KINDS
+from perception.choices import MODEL_KINDS, POLICIES
 from tactip.errors import ConfigError
 
 __all__ = ["simulated_station_config", "SIM_PRESET", "StationConfig", "SensorConfig", "GapConfig", "ProtocolConfig", "PerceptionConfig",
@@ -238,8 +239,8 @@ def parse_station_config(data: dict, *, base_dir: Path = Path("."), path: Path |
     _range(perception.max_taps, "perception.max_taps", 1, MAX_TAPS, "taps")
     _range(perception.locations, "perception.locations", 1, MAX_LOCATIONS, "depth classes")
     _range(perception.bins, "perception.bins", 2, MAX_BINS, "bins")
-    _check(perception.likelihood in STATION_MODEL_KINDS, "perception.likelihood",
-           f"must be one of {', '.join(STATION_MODEL_KINDS)}, got {perception.likelihood!r}")
+    _check(perception.likelihood in MODEL_KINDS, "perception.likelihood",
+           f"must be one of {', '.join(MODEL_KINDS)}, got {perception.likelihood!r}")
     if perception.target_accuracy is not None:
         _check(not isinstance(perception.target_accuracy, bool) and isinstance(perception.target_accuracy, (int, float))
                and 0 < perception.target_accuracy <= 1, "perception.target_accuracy",

@@ -195,6 +195,7 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
     model_path = config.perception.model
     if model_path is None:
         raise TactipError("no [perception] model path in the configuration")
+    _require_model_kind(config.perception.likelihood)   # before any calibration or collection work
     if not calibration_path(config).exists():
         calibrate_station(config, log=log)
     paths = collect_station(config, config.data_dir / "datasets", progress=progress, log=log)
@@ -211,6 +212,17 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
     # The test collection, used once: the figures of the model as the station will run it.
     log(final_figures(model, load_dataset(paths["test"]), tolerance=tolerance, max_taps=p.max_taps).describe(model))
     return model_path
+
+
+def _require_model_kind(kind: str) -> None:
+    """Refuse, in one line, a kind the station cannot train here (torch not installed)."""
+    if kind == "torch":
+        from perception.learned import require_torch
+
+        try:
+            require_torch()
+        except ImportError as exc:
+            raise TactipError(f'[perception] likelihood = "torch": {exc}') from None
 
 
 def model_is_prepared(path: Path) -> bool:

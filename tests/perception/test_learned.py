@@ -1,13 +1,13 @@
-"""The torch likelihood (optional extra): numpy inference equals torch's, storage, calibration; skipped without torch."""
+"""The torch likelihood: numpy inference equals torch's, storage, calibration (torch is in the test extra)."""
 
 import numpy as np
 import pytest
+import torch
 from scipy.special import logsumexp
 
 from perception import load_model, save_model, train_model
 from tests.perception.synthetic import gap_dataset
 
-torch = pytest.importorskip("torch")
 
 GRID = dict(depths=3, widths=4, samples=6, dims=6, contact_floor=1.0, noise=0.1)
 
@@ -24,17 +24,22 @@ def test_train_model_makes_a_torch_model():
     assert model.KIND == "torch" and model.summary().endswith(f"tempering {model.tempering:.4g}")
 
 
-def test_numpy_scores_equal_the_torch_network(model):
+def test_numpy_scores_equal_the_torch_networks(model):
+    # Each member rebuilt as a plain torch network: the model's numpy scores are their log softmax, averaged.
     taps = gap_dataset(seed=2, taps_per_class=2, **GRID).taps
-    net = torch.nn.Sequential(torch.nn.Linear(model.mean.size, model.hidden_bias.size), torch.nn.ReLU(),
-                              torch.nn.Linear(model.hidden_bias.size, model.n_classes))
-    with torch.no_grad():
-        net[0].weight.copy_(torch.as_tensor(model.hidden_weight.T))
-        net[0].bias.copy_(torch.as_tensor(model.hidden_bias))
-        net[2].weight.copy_(torch.as_tensor(model.output_weight.T))
-        net[2].bias.copy_(torch.as_tensor(model.output_bias))
-        x = (taps.reshape(len(taps), -1) - model.mean) / model.scale
-        expected = model.tempering * net(torch.as_tensor(x, dtype=torch.float32)).numpy()
+    x = torch.as_tensor((taps.reshape(len(taps), -1) - model.mean) / model.scale, dtype=torch.float32)
+    members = []
+    for m in range(model.members):
+        net = torch.nn.Sequential(torch.nn.Linear(model.mean.size, model.hidden_bias.shape[1]), torch.nn.ReLU(),
+                                  torch.nn.Linear(model.hidden_bias.shape[1], model.n_classes))
+        with torch.no_grad():
+            net[0].weight.copy_(torch.as_tensor(model.hidden_weight[m].T))
+            net[0].bias.copy_(torch.as_tensor(model.hidden_bias[m]))
+            net[2].weight.copy_(torch.as_tensor(model.output_weight[m].T))
+            net[2].bias.copy_(torch.as_tensor(model.output_bias[m]))
+            members.append(torch.log_softmax(net(x), dim=1).numpy())
+    expected = model.tempering * np.mean(members, axis=0)
+    assert model.members == 5
     np.testing.assert_allclose(model.log_likelihood_batch(taps).reshape(len(taps), -1), expected, rtol=1e-4, atol=1e-4)
 
 
@@ -71,3 +76,46 @@ def test_a_network_trained_on_taps_missing_a_pin_tells_the_widths_apart_on_taps_
         what = logsumexp(model.log_likelihood_batch(taps), axis=1)
         accuracy.append(np.mean(what.argmax(axis=1) == model.identity_class(test.identity)))
     assert accuracy[0] > 0.8 and accuracy[0] - accuracy[1] < 0.05
+
+
+def test_a_circular_label_of_one_location_is_decided_and_its_errors_wrap(tmp_path):
+    # Slide directions every 45 deg (period 360) at one location, as `tactip dataset build --period 360` makes them.
+    from dataclasses import replace
+
+    from perception.learned import fit_torch
+
+    def directions(dataset):
+        return replace(dataset, location=np.zeros(len(dataset)), location_unit="none",
+                       identity=(dataset.identity - 1) * 45.0, identity_unit="deg", identity_period=360.0)
+
+    grid = dict(GRID, depths=1, widths=8, noise=0.02)
+    model = fit_torch(directions(gap_dataset(seed=1, taps_per_class=12, **grid)), n_locations=1, seed=0)
+    test = directions(gap_dataset(seed=3, taps_per_class=10, **grid))
+    decided = model.identities[model.log_likelihood_batch(test.taps)[:, 0].argmax(axis=1)]
+    assert model.identity_period == 360.0 and model.n_locations == 1
+    # Measured 0.83-0.85 right (the Gaussian: 1.0; chance 0.125), a mean wrapped error of 7-8 deg (chance 90).
+    assert np.mean(decided == test.identity) > 0.75
+    assert model.identity_error(decided, test.identity).mean() < 15.0
+    assert model.identity_error(np.array([315.0]), np.array([0.0]))[0] == 45.0   # across the wrap, not 315
+    save_model(tmp_path / "d.h5", model)
+    assert load_model(tmp_path / "d.h5").identity_period == 360.0
+
+
+def test_training_uses_every_core_and_gives_the_callers_threads_back(monkeypatch):
+    import os
+
+    import perception._ensemble_training as training
+    from perception.learned import fit_torch
+
+    seen = []
+    real = training.train_ensemble
+    monkeypatch.setattr(training, "MIN_SHARED_WORK", 0)       # this small network as if it were a large one
+    monkeypatch.setattr(training, "train_ensemble",
+                        lambda *a, **k: seen.append(torch.get_num_threads()) or real(*a, **k))
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        fit_torch(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=3, max_epochs=3)
+        assert seen == [os.cpu_count()] * 2 and torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)

@@ -2,11 +2,10 @@
 
 The same model classifies the complete test taps and the same taps with 5 random pins of each unseen
 (both their dx and dy dimensions NaN); the decisions stay as accurate, within 2 points on average over
-seeds, for the papers' histogram model, the station's Gaussian model and the torch network (when torch is
-installed: it scores a tap missing values on their conditional mean). Training taps may miss pins too.
+seeds, for the papers' histogram model, the station's Gaussian model and the torch ensemble (it scores a
+tap missing values on their conditional mean; torch is in the test extra, so this runs in CI). Training taps may miss pins too.
 """
 
-import importlib.util
 import json
 
 import numpy as np
@@ -19,8 +18,6 @@ from tests.perception.synthetic import gap_dataset
 PINS, LOST = 40, 5
 GRID = dict(depths=4, widths=4, samples=6, dims=2 * PINS, legible_from=0.3, noise=0.05)
 SEEDS = (0, 1, 2)
-TORCH = pytest.param("torch", marks=pytest.mark.skipif(importlib.util.find_spec("torch") is None,
-                                                       reason="torch is an optional extra (pip install torch==2.13.0)"))
 
 
 def lose_pins(dataset, seed):
@@ -41,7 +38,7 @@ def accuracy(folder, model, test, seed, *extra):
     return json.loads(out.read_text())[0]["accuracy"]
 
 
-@pytest.mark.parametrize("kind", ["histogram", "gaussian", TORCH])
+@pytest.mark.parametrize("kind", ["histogram", "gaussian", "torch"])
 def test_taps_missing_5_of_40_pins_are_classified_as_well_as_complete_ones(tmp_path, kind, capsys):
     drops, single = [], []
     for seed in SEEDS:
