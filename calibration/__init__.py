@@ -7,7 +7,7 @@ from .collect import SETS, PlannedTap, collect_datasets, collection_plan, tap_se
 from .errors import CalibrationError
 from .sensor import (SCHEMA, SensorCalibration, calibrate_sensor, check_model_fits, load_calibration,
                      place_reference_pins, save_calibration)
-from .training import (FinalFigures, carve_validation, choose_fixation, final_figures, fit_with_fixation,
+from .training import (HOLDOUT_FOLDS, FinalFigures, carve_validation, cross_fitted_environment, holdout_folds, choose_fixation, final_figures, fit_with_fixation,
                        prepare_station_model,
                        recommend_fixation, train_station_model)
 
@@ -17,5 +17,5 @@ __all__ = [
     "place_reference_pins", "check_model_fits",
     "PlannedTap", "collection_plan", "collect_datasets", "tap_seed", "SETS",
     "train_station_model", "recommend_fixation", "choose_fixation", "carve_validation", "prepare_station_model",
-    "fit_with_fixation", "final_figures", "FinalFigures",
+    "fit_with_fixation", "final_figures", "FinalFigures", "holdout_folds", "cross_fitted_environment", "HOLDOUT_FOLDS",
 ]

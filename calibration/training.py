@@ -13,8 +13,8 @@ for the beliefs after 1 to 5 taps of active perception (`perception.fit_policy_t
 of one inspection repeat each other's evidence, which a tempering fitted on single taps ignores.
 
 No peeking (`fit_with_fixation`, `prepare_station_model`): the station's fixation depth, threshold and
-tempering are chosen on a validation split carved from the training collection (`carve_validation`:
-one tap of each class), for the model fitted on the rest of it, which is the model kept. The test
+tempering are chosen on training taps held out in folds (`holdout_folds`), each scored by a model
+fitted on the others (`cross_fitted_environment`); fold 0's model is the one kept. The test
 collection is used once, at the end, for the figures reported (`final_figures`), so that they are not
 flattered by settings picked on the very taps they are measured on.
 """
@@ -32,7 +32,8 @@ from perception import (VirtualEnvironment, fixation_for_accuracy, fixation_swee
                         make_policy, save_model, trace_beliefs, train_model)
 
 __all__ = ["train_station_model", "recommend_fixation", "choose_fixation", "carve_validation",
-           "prepare_station_model", "fit_with_fixation", "final_figures", "FinalFigures"]
+           "prepare_station_model", "fit_with_fixation", "final_figures", "holdout_folds",
+           "cross_fitted_environment", "HOLDOUT_FOLDS", "FinalFigures"]
 
 
 def train_station_model(train_path: str | Path, out: str | Path, *, n_locations: int = 11, bins: int = 100,
@@ -86,7 +87,7 @@ def recommend_fixation(model_path: str | Path, test_path: str | Path, *, model=N
 def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.0, seed: int = 0,
                     progress: Callable | None = None, target_accuracy: float | None = None, tolerance: float = 0.0,
                     max_taps: int = 20, fall_back: bool = True, report: Callable | None = None,
-                    log: Callable[[str], None] = print, **options):
+                    log: Callable[[str], None] = print, environment=None, **options):
     """Sweep the fixation depth of the active policy on ``dataset``; the model with the best one set.
 
     Without ``target_accuracy``: the lowest mean width error within ``tap_budget`` mean taps (paper 002).
@@ -97,8 +98,11 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
     Parameters
     ----------
     model : perception.LikelihoodModel
-    dataset : perception.Dataset
+    dataset : perception.Dataset or None
         The taps the runs draw from (a validation split, independent of the model's training taps).
+    environment : perception.VirtualEnvironment, optional
+        The runs' taps and their log likelihoods, given instead of ``dataset`` (e.g. out-of-fold
+        likelihoods, `cross_fitted_environment`).
     runs, seed, max_taps : int
         Monte Carlo runs per fixation, their seed, most taps per run.
     tap_budget : float
@@ -128,7 +132,7 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
         ``fall_back`` is False and the target is not reached; or no fixation decides within the tap
         budget at any threshold.
     """
-    environment = VirtualEnvironment(model, dataset)
+    environment = VirtualEnvironment(model, dataset) if environment is None else environment
     unit, identity_unit = model.location_unit, model.identity_unit
     if target_accuracy is not None:
         accuracy_options = {k: v for k, v in options.items() if k != "thresholds" and k != "deadline"}
@@ -170,25 +174,31 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
                           f"(decision threshold {sweep.best_threshold:g})")
 
 
-def carve_validation(dataset, n_locations: int = 11) -> tuple[np.ndarray, np.ndarray]:
-    """Split a training collection into a fitting part and a validation part: one tap of each class held out.
+#: Folds of the training taps the station's settings are chosen on (`holdout_folds`).
+HOLDOUT_FOLDS = 4
+
+
+def holdout_folds(dataset, n_locations: int = 11, folds: int = HOLDOUT_FOLDS) -> np.ndarray:
+    """The fold each training tap is held out in, for choosing settings on taps a model was not fitted on.
 
     The classes are the model's (`perception.likelihood.fit_class_grid`: ``n_locations`` equal location
-    classes x the identities). Of each class with two taps or more, one is held out for validation:
-    the middle one in location then collection order, never one at the collection's shallowest or
-    deepest location (so the fitting part spans the same range and its model has the same classes).
-    With the station's protocol (23 depths x 2 repeats, 11 classes) that is a quarter of the taps.
-    Deterministic, so a rerun chooses the same settings.
+    classes x the identities). Within each class the taps take folds 0, 1, ..., ``folds`` - 1 in turn
+    (in location then collection order), except that a tap at the collection's shallowest or deepest
+    location is never held out (-1), so that every fold's model has the very classes of the whole set;
+    and one tap of each class always stays in. Deterministic, so a rerun chooses the same settings.
 
     Parameters
     ----------
     dataset : perception.Dataset
     n_locations : int
         Location classes of the model to be fitted.
+    folds : int
+        Number of folds (>= 2): each fold's model is fitted on the other taps.
 
     Returns
     -------
-    (fit, validation) : int ndarrays of tap indices, disjoint, together every tap
+    (N,) int ndarray
+        The fold of each tap, -1 for a tap never held out.
 
     Raises
     ------
@@ -204,7 +214,6 @@ def carve_validation(dataset, n_locations: int = 11) -> tuple[np.ndarray, np.nda
     cls = tap_class[order]
     starts = np.flatnonzero(np.r_[True, cls[1:] != cls[:-1]])
     counts = np.diff(np.r_[starts, len(order)])
-    candidates = np.add.reduceat((~extreme[order]).astype(int), starts)    # taps of each class off the extremes
     if (counts < 2).any():
         c = int(cls[starts[np.argmax(counts < 2)]])
         l, i = divmod(c, grid.n_identities)
@@ -212,10 +221,56 @@ def carve_validation(dataset, n_locations: int = 11) -> tuple[np.ndarray, np.nda
                                f"identity {grid.identities[i]:g} {dataset.identity_unit} has a single training tap: "
                                f"nothing to hold out for choosing the fixation and threshold (collect repeats, or "
                                f"use fewer location classes)")
-    pick = np.where(candidates > 0, (np.maximum(candidates, 1) - 1) // 2, (counts - 1) // 2)
-    held_out = np.zeros(len(order), bool)
-    held_out[starts + pick] = True
-    return np.sort(order[~held_out]), np.sort(order[held_out])
+    rank = np.arange(len(order)) - np.repeat(starts, counts)                 # position within the class
+    off_extremes = np.add.reduceat((~extreme[order]).astype(int), starts)   # taps of each class not at an extreme
+    # Held-out candidates: the taps off the extremes, all but one of them (the last) when nothing else stays in;
+    # a class of extreme taps only holds out its first.
+    kept_in = np.repeat(np.where(off_extremes == counts, 1, 0), counts)
+    candidates = np.repeat(np.where(off_extremes > 0, off_extremes, 1), counts) - kept_in
+    fold = np.where(rank < candidates, rank % folds, -1)
+    out = np.empty(len(dataset), np.int64)
+    out[order] = fold
+    return out
+
+
+def carve_validation(dataset, n_locations: int = 11) -> tuple[np.ndarray, np.ndarray]:
+    """Fold 0 of `holdout_folds`: ``(fit, validation)`` tap indices, disjoint, together every tap."""
+    fold = holdout_folds(dataset, n_locations)
+    return np.flatnonzero(fold != 0), np.flatnonzero(fold == 0)
+
+
+def cross_fitted_environment(train, *, n_locations: int = 11, folds: int = HOLDOUT_FOLDS, **fit_options):
+    """A model fitted on most training taps, and the out-of-fold environment its settings are chosen in.
+
+    Each fold of `holdout_folds` gets a model fitted on the other taps, which scores the fold's taps;
+    together they give every held-out training tap a log likelihood from a model that never saw it
+    (out-of-fold), so a Monte Carlo run at the fixation draws from all of a class's held-out taps, not
+    from one. The models share their classes (the extreme locations are never held out).
+
+    Parameters
+    ----------
+    train : perception.Dataset
+    n_locations, folds, **fit_options
+        As `holdout_folds` and `perception.train_model` (``kind``, ``bins``, ...).
+
+    Returns
+    -------
+    (perception.LikelihoodModel, perception.VirtualEnvironment)
+        Fold 0's model (fitted on every tap but fold 0's) and the environment of the held-out taps,
+        in that model's terms.
+    """
+    fold = holdout_folds(train, n_locations, folds)
+    held = np.flatnonzero(fold >= 0)
+    table = np.empty((len(held), 0))
+    models = {}
+    for k in np.unique(fold[held]):
+        models[k] = train_model(train.subset(np.flatnonzero(fold != k)), n_locations=n_locations, **fit_options)
+        if table.shape[1] == 0:
+            table = np.empty((len(held), models[k].n_classes))
+        rows = np.flatnonzero(fold[held] == k)
+        table[rows] = models[k].log_likelihood_batch(train.taps[held[rows]]).reshape(len(rows), -1)
+    model = models[min(models)]
+    return model, VirtualEnvironment(model, train.subset(held), _log_likelihood=table)
 
 
 @dataclass(frozen=True)
@@ -284,16 +339,17 @@ def final_figures(model, test, *, tolerance: float = 0.0, runs: int = 2000, max_
 
 def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, bins: int = 100,
                       target_accuracy: float | None = None, tolerance: float = 0.0, max_taps: int = 20,
-                      runs: int = 2000, seed: int = 0, fall_back: bool = True, log: Callable[[str], None] = print,
-                      **fit_options):
+                      runs: int = 2000, seed: int = 0, fall_back: bool = True, folds: int = HOLDOUT_FOLDS,
+                      log: Callable[[str], None] = print, **fit_options):
     """A model with its fixation, threshold and tempering chosen on taps it was not fitted on.
 
-    `carve_validation` holds one tap of each class out of the training taps; a model of ``kind`` is
-    fitted on the rest, and its fixation location, threshold and (calibrated kinds) tempering for
-    1-5 taps are chosen on the held-out taps (`choose_fixation`). That model is kept: the settings
-    were chosen for it. (Refitting on every tap and carrying the settings over would not do: a
-    calibrated kind's tempering is fitted with the model and differs between the two, by 4x on the
-    simulated station, and the carried-over factor then overshoots.) No test tap is read.
+    `cross_fitted_environment`: the training taps fall in ``folds`` folds (`holdout_folds`); each fold's
+    taps are scored by a model fitted on the others, and the fixation location, threshold and
+    (calibrated kinds) tempering for 1-5 taps are chosen on those out-of-fold scores (`choose_fixation`).
+    Fold 0's model, fitted on every tap but fold 0's, is kept with them: the settings were chosen for
+    models like it. (Refitting on every tap and carrying the settings over would not do: a calibrated
+    kind's tempering is fitted with the model, and on the simulated station the one of a model of half
+    the taps was 4x off the full one's, so the carried-over factor overshot.) No test tap is read.
 
     Parameters
     ----------
@@ -303,6 +359,8 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
         As `perception.train_model`.
     target_accuracy, tolerance, max_taps, runs, seed, fall_back
         As `choose_fixation`.
+    folds : int
+        Folds of the cross-fitting (models fitted: one per fold).
     log : callable
         Where the lines saying what was chosen go.
 
@@ -310,11 +368,13 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     -------
     perception.LikelihoodModel
     """
-    fit, validation = carve_validation(train, n_locations=n_locations)
-    log(f"choosing the fixation and threshold on {len(validation)} of the {len(train)} training taps, held out (one "
-        f"of each class); the model is fitted on the other {len(fit)}")
-    model = train_model(train.subset(fit), kind=kind, n_locations=n_locations, bins=bins, **fit_options)
-    chosen, _, line = choose_fixation(model, train.subset(validation), target_accuracy=target_accuracy,
+    log(f"choosing the fixation and threshold on the training taps held out in {folds} folds, each scored by a "
+        f"model fitted on the others ({folds} fits)")
+    model, environment = cross_fitted_environment(train, n_locations=n_locations, folds=folds, kind=kind, bins=bins,
+                                                  **fit_options)
+    log(f"{len(environment.test)} of the {len(train)} training taps held out; the model kept is fitted on "
+        f"{int(model.taps_per_class.sum())}")
+    chosen, _, line = choose_fixation(model, None, environment=environment, target_accuracy=target_accuracy,
                                       tolerance=tolerance, max_taps=max_taps, runs=runs, seed=seed, log=log,
                                       fall_back=fall_back)
     log(line)

@@ -177,7 +177,7 @@ class _SimPool:
 
 def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable[[str], None] = print) -> Path:
     """The whole calibration utility in one call: calibrate (unless calibrated), collect (resuming),
-    train and pick the fixation depth, threshold and tempering on a validation split of the training
+    train and pick the fixation depth, threshold and tempering on held-out folds of the training
     collection (`calibration.prepare_station_model`: no peeking at the test collection), then report
     the model's figures on the test collection, used once; returns the model path. ``tactip inspect --sim`` runs it on
     first use, and again after an interrupted first use (`model_is_prepared`).

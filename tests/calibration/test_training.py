@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from calibration import CalibrationError, carve_validation, recommend_fixation, train_station_model
+from calibration import (CalibrationError, carve_validation, cross_fitted_environment, holdout_folds,
+                         recommend_fixation, train_station_model)
 from perception import DEFAULT_THRESHOLDS, fit_model, load_model, save_dataset
 from tests.perception.synthetic import gap_dataset
 
@@ -54,30 +55,51 @@ def test_a_repeated_recommendation_is_the_same(files):
     assert first.recommended == again.recommended
 
 
-def test_the_validation_split_holds_out_one_tap_of_each_class(files):
+def test_the_holdout_folds_leave_every_class_in_every_fold(files):
     _, train = files                                      # 6 depths x 3 widths x 4 taps, depths 0..5 mm
+    fold = holdout_folds(train, n_locations=3, folds=4)
+    assert set(fold) == {-1, 0, 1, 2, 3}
+    # The extreme depths are never held out: every fold's model spans 0..5 mm, so it has the same classes.
+    assert (fold[(train.location == 0) | (train.location == 5)] == -1).all()
+    for k in range(4):
+        fit = fold != k
+        assert train.location[fit].min() == 0.0 and train.location[fit].max() == 5.0
+        for width in (1.0, 2.0, 3.0):
+            for band in ((0, 5 / 3), (5 / 3, 10 / 3), (10 / 3, 5.01)):   # each of the 3 x 3 classes
+                inside = (train.identity == width) & (train.location >= band[0]) & (train.location < band[1])
+                assert (inside & fit).any()                              # stays in every fold's fit
+                assert (inside & (fold >= 0)).any()                       # and has held-out taps
     fit, validation = carve_validation(train, n_locations=3)
-    assert len(np.intersect1d(fit, validation)) == 0 and len(fit) + len(validation) == len(train)
-    grid_classes = lambda part: {(int(min(2, d // (5 / 3))), w) for d, w in zip(train.location[part],
-                                                                                  train.identity[part])}
-    assert len(validation) == 9 and grid_classes(validation) == grid_classes(fit)       # one of each of 3 x 3
-    for part in (fit, validation):
-        assert sorted(set(train.identity[part])) == [1.0, 2.0, 3.0]
-    # The fitting part keeps the shallowest and deepest taps: its model has the very classes of the whole set.
-    assert train.location[fit].min() == 0.0 and train.location[fit].max() == 5.0
-    assert all(np.array_equal(a, b) for a, b in zip((fit, validation), carve_validation(train, n_locations=3)))
+    assert np.array_equal(validation, np.flatnonzero(fold == 0)) and len(fit) + len(validation) == len(train)
+    assert np.array_equal(fold, holdout_folds(train, n_locations=3, folds=4))                # deterministic
+
+
+def test_the_out_of_fold_likelihoods_come_from_models_that_never_saw_the_tap(files):
+    from perception import train_model
+
+    _, train = files
+    model, environment = cross_fitted_environment(train, n_locations=3, folds=4, kind="histogram", bins=20)
+    fold = holdout_folds(train, n_locations=3, folds=4)
+    held = np.flatnonzero(fold >= 0)
+    assert len(environment.test) == len(held)
+    for k in (0, 2):
+        other = train_model(train.subset(np.flatnonzero(fold != k)), kind="histogram", n_locations=3, bins=20)
+        rows = np.flatnonzero(fold[held] == k)
+        expected = other.log_likelihood_batch(train.taps[held[rows]]).reshape(len(rows), -1)
+        assert np.allclose(environment.log_likelihood[rows], expected)
+    assert int(model.taps_per_class.sum()) == int((fold != 0).sum())                      # fold 0's model is kept
 
 
 def test_a_class_with_one_tap_leaves_nothing_to_hold_out(files):
     _, train = files
     with pytest.raises(CalibrationError, match="has a single training tap"):
-        carve_validation(train.subset(np.arange(0, len(train), 4)), n_locations=6)
+        holdout_folds(train.subset(np.arange(0, len(train), 4)), n_locations=6)
 
 
 def test_the_station_model_is_chosen_without_the_test_collection(files):
-    """prepare_station_model reads no test taps: its settings are chosen on held-out training taps for the
-    model fitted on the others, which is the model kept; the test collection only reports (a test with
-    other taps reports other figures of the same model)."""
+    """prepare_station_model reads no test taps: its settings are chosen on training taps held out in folds,
+    scored by models fitted on the others, and fold 0's model is kept; the test collection only reports (a
+    test with other taps reports other figures of the same model)."""
     from calibration import final_figures, prepare_station_model
     from perception import load_dataset, train_model
 
@@ -85,10 +107,10 @@ def test_the_station_model_is_chosen_without_the_test_collection(files):
     lines = []
     model = prepare_station_model(root / "train.h5", root / "model.h5", kind="gaussian", n_locations=6,
                                   target_accuracy=0.9, tolerance=0.0, runs=300, log=lines.append)
-    assert "held out (one of each class)" in lines[0]
+    assert "held out in 4 folds" in lines[0]
     assert model.recommended["fixation_location"] > 2.5 and model.recommended["policy"] == "active"
-    fit, _ = carve_validation(train, n_locations=6)
-    fitted = train_model(train.subset(fit), kind="gaussian", n_locations=6)     # fitted on the other taps
+    fit = holdout_folds(train, n_locations=6) != 0
+    fitted = train_model(train.subset(np.flatnonzero(fit)), kind="gaussian", n_locations=6)   # all but fold 0
     assert np.allclose(model.class_means, fitted.class_means)
     assert np.array_equal(model.location_edges, train_model(train, kind="gaussian", n_locations=6).location_edges)
     assert load_model(root / "model.h5").recommended == model.recommended

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from calibration import carve_validation, choose_fixation
-from perception import load_model, save_dataset, train_model
+from calibration import choose_fixation, cross_fitted_environment
+from perception import load_model, save_dataset
 from tactip.cli import main
 from tests.perception.synthetic import gap_dataset
 
@@ -17,13 +17,12 @@ def test_train_chooses_the_fixation_on_its_own_validation_split(tmp_path, capsys
     assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "model.h5"), "--model", "gaussian",
                  "--locations", "6", "--choose-fixation", "--target-accuracy", "0.9"]) == 0
     out = capsys.readouterr().out
-    assert "on 18 of the 72 training taps, held out" in out
+    assert "held out in 4 folds" in out
     model = load_model(tmp_path / "model.h5")
     assert model.recommended["fixation_location"] > 2.5 and model.recommended["policy"] == "active"
-    # The model is the one fitted on the other taps, with the settings the held-out taps give it.
-    fit, validation = carve_validation(train, n_locations=6)
-    fitted = train_model(train.subset(fit), kind="gaussian", n_locations=6)
-    chosen, _, _ = choose_fixation(fitted, train.subset(validation), target_accuracy=0.9, log=lambda _: None)
+    # Fold 0's model, with the settings the out-of-fold scores of the held-out taps give it.
+    fitted, environment = cross_fitted_environment(train, n_locations=6, kind="gaussian")
+    chosen, _, _ = choose_fixation(fitted, None, environment=environment, target_accuracy=0.9, log=lambda _: None)
     assert model.recommended == chosen.recommended
     assert np.allclose(model.class_means, fitted.class_means) and model.tempering == chosen.tempering
 

@@ -86,7 +86,7 @@ def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station
     assert model.KIND == config.perception.likelihood == "gaussian"
     assert any("of decisions within 0.25 mm" in line or "no fixation depth reaches 0.95" in line for line in lines)
     # Chosen on a split of the training taps; the test collection gives the figures reported, once, at the end.
-    assert any("training taps, held out (one of each class)" in line for line in lines)
+    assert any("training taps held out in 4 folds" in line for line in lines)
     assert lines[-1].startswith("test collection (used once")
 
 
