@@ -173,10 +173,7 @@ def publish(tmp: pathlib.Path, path) -> None:
     path = pathlib.Path(path)
     try:
         if stream_target(path):
-            try:
-                out = _open_stream(path, tmp)
-            except OSError:
-                raise
+            out = _open_stream(path, tmp)
             try:
                 with open(tmp, "rb") as source, out:
                     shutil.copyfileobj(source, out)

@@ -61,8 +61,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--min-taps", type=int_at_least(1), default=1, metavar="N",
                         help="fewest training taps a class may have (default 1)")
     parser.add_argument("--choose-fixation", action="store_true",
-                        help="also choose the fixation, threshold and tempering on a validation split of the "
-                             "training taps (not the test set) and write them into the model")
+                        help="also choose the fixation, threshold and tempering on the training taps, each held "
+                             "out in 4 folds and scored by a model fitted on the others (never the test set), "
+                             "and write them into the model (which is fold 0's)")
     parser.add_argument("--target-accuracy", type=fraction, metavar="P",
                         help="with --choose-fixation: the threshold reaching this fraction of decisions within "
                              "--tolerance in the fewest taps (default: the lowest error within 12 taps)")
