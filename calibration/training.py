@@ -28,7 +28,7 @@ from typing import Callable
 import numpy as np
 
 from calibration.errors import CalibrationError
-from perception import (VirtualEnvironment, fixation_for_accuracy, fixation_sweep, load_dataset, load_model,
+from perception import (DEFAULT_THRESHOLDS, FixationPolicy, VirtualEnvironment, fit_policy_tempering, monte_carlo, fixation_for_accuracy, fixation_sweep, load_dataset, load_model,
                         make_policy, save_model, trace_beliefs, train_model)
 
 __all__ = ["train_station_model", "recommend_fixation", "choose_fixation", "carve_validation",
@@ -158,6 +158,9 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
                                    f"or --max-taps; nothing written")
         log(f"no fixation depth reaches {target_accuracy:g} of decisions within {tolerance:g} "
             f"{identity_unit}; choosing the lowest error within {tap_budget:g} taps instead")
+    # A recommended threshold is in (0, 1], as a station's key is: threshold 0 (decide after the first
+    # tap whatever the belief) is not a candidate here, although the papers' sweeps include it.
+    options.setdefault("thresholds", tuple(t for t in DEFAULT_THRESHOLDS if t > 0))
     sweep = fixation_sweep(environment, tap_budget=tap_budget, runs=runs, seed=seed, progress=progress,
                            max_taps=max_taps, **options)
     if not fall_back and sweep.taps[sweep.best] > tap_budget:
@@ -167,11 +170,23 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
                                f"{fewest:.2f}..{max_taps}; nothing written")
     if report is not None:
         report(sweep)
-    model = model.with_recommended(fixation_location=float(sweep.best_fixation),
-                                   decision_threshold=float(sweep.best_threshold), policy="active")
+    threshold, error, taps, tempering = sweep.best_threshold, sweep.errors[sweep.best], sweep.taps[sweep.best], ""
+    if target_accuracy is not None and model.temperable:
+        # The station's first use, its target missed: its beliefs are still calibrated at the fixation
+        # (as on the target's path), and the threshold chosen again on the calibrated beliefs.
+        policy = FixationPolicy(int(np.argmin(np.abs(model.location_centres - sweep.best_fixation))))
+        factor = fit_policy_tempering(environment, policy, runs=runs, seed=seed)
+        result = monte_carlo(environment.tempered(factor), policy, seed=seed, runs=runs, max_taps=max_taps,
+                             **{k: v for k, v in options.items() if k != "fixation_classes"})
+        k = result.best_within(tap_budget)
+        errors = result.mean_location_error if result.identity_error_map.shape[-1] == 1 else result.mean_identity_error
+        threshold, error, taps = float(result.thresholds[k]), float(errors[k]), float(result.mean_taps[k])
+        tempering = f", tempering {model.tempering:.4g} x {factor:.3g} for 1-5 taps"
+        model = model.tempered(factor)
+    model = model.with_recommended(fixation_location=float(sweep.best_fixation), decision_threshold=float(threshold),
+                                   policy="active")
     return model, sweep, (f"fixation depth {sweep.best_fixation:g} {unit}: mean width error "
-                          f"{sweep.errors[sweep.best]:.3f} {identity_unit} in {sweep.taps[sweep.best]:.1f} taps "
-                          f"(decision threshold {sweep.best_threshold:g})")
+                          f"{error:.3f} {identity_unit} in {taps:.1f} taps (decision threshold {threshold:g}{tempering})")
 
 
 #: Folds of the training taps the station's settings are chosen on (`holdout_folds`).

@@ -216,8 +216,10 @@ def test_torch_scores_a_tap_missing_values_on_its_conditional_mean(train, test, 
     np.testing.assert_allclose(model.log_likelihood_batch(test.taps),
                                model.log_likelihood_batch(imputed.reshape(test.taps.shape)), rtol=1e-6, atol=1e-6)
     save_model(tmp_path / "t.h5", model)
-    np.testing.assert_array_equal(load_model(tmp_path / "t.h5").log_likelihood_batch(test.taps),
-                                  model.log_likelihood_batch(test.taps))
+    # The same model to the last bits that matter (torch's summation order may differ with the arrays'
+    # alignment after loading: 3e-14 seen).
+    np.testing.assert_allclose(load_model(tmp_path / "t.h5").log_likelihood_batch(test.taps),
+                               model.log_likelihood_batch(test.taps), rtol=1e-12, atol=1e-12)
     old = dataclasses.replace(model, imputation_basis=None, imputation_variances=None, imputation_residual=np.nan)
     save_model(tmp_path / "old.h5", old)
     with pytest.raises(ModelError, match="train it again"):
