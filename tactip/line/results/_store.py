@@ -84,6 +84,9 @@ class ResultsStoreBase:
 
     path: str
     read_only: bool
+    #: Whether a reader polling the store should open it anew for each poll (SQLite) rather than keep
+    #: one connection (PostgreSQL, reconnected only when the server drops it).
+    reopen_to_poll = False
 
     # -- backend hooks -----------------------------------------------------------------------
     def _query(self, sql: str, params=()) -> list[tuple]:  # pragma: no cover - abstract

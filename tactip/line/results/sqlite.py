@@ -44,7 +44,6 @@ from tactip.line.results._store import SCHEMA_VERSION, ResultsError, ResultsStor
 
 __all__ = ["ResultsStore"]
 
-_SQLITE_MAGIC = b"SQLite format 3\x00"
 # Columns added after the first schema (nullable; added to older databases when a writer opens them).
 _ADDED_COLUMNS = {"pid": "INTEGER", "host": "TEXT"}
 
@@ -126,6 +125,12 @@ class ResultsStore(ResultsStoreBase):
     True
     """
 
+    #: A reader that polls must open the file anew for each poll (`tactip.line.dashboard.feed`): when the last
+    #: writer process exits, SQLite deletes the -wal and -shm files, and a connection kept open across that
+    #: (with every other connection of its process, which share its -shm mapping) goes on reading a stale
+    #: index: old rows, or "database disk image is malformed".
+    reopen_to_poll = True
+
     def __init__(self, path: str | Path, *, read_only: bool = False):
         self.path = str(path)
         self.read_only = bool(read_only)
@@ -185,11 +190,10 @@ class ResultsStore(ResultsStoreBase):
             return
         if not os.access(path, os.R_OK):
             raise PermissionError(errno.EACCES, f"permission denied reading {str(path)!r}")
-        with open(path, "rb") as f:
-            head = f.read(len(_SQLITE_MAGIC))
-        if head and head != _SQLITE_MAGIC:
-            raise ResultsError(f"{path} is not a tactip results database (not an SQLite file); it was left unchanged")
-        if head:
+        # SQLite reads the header, never open(): closing any descriptor of the file drops every POSIX lock this
+        # process holds on it, its connections' too; a writer process exiting then takes itself for the last one
+        # and deletes the -wal and -shm under them (a dashboard read "database disk image is malformed").
+        if path.stat().st_size:
             try:
                 with contextlib.closing(_connect_read_only(path)) as db:
                     tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
@@ -201,6 +205,9 @@ class ResultsStore(ResultsStoreBase):
                     columns = {t: {r[1] for r in db.execute(f"PRAGMA table_info({t})")}
                                for t in tables & set(_our_columns())}
             except sqlite3.Error as exc:
+                if "not a database" in str(exc):
+                    raise ResultsError(f"{path} is not a tactip results database (not an SQLite file); it was left "
+                                       f"unchanged") from None
                 raise self._error(exc, "reading") from None
             # A database whose creation was cut short (disk full) holds some of our tables, each with our
             # columns (older versions lack the added ones), and no schema row yet.

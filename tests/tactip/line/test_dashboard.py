@@ -103,6 +103,94 @@ def test_the_feed_misses_no_tap_committed_out_of_id_order(postgres_url):
     assert (first, second, third) == ([late], [early], [])
 
 
+_WRITER = """
+import sys
+from tactip.line.results import open_results
+with open_results(sys.argv[1]) as store:
+    i = store.start_inspection(sys.argv[2], nominal_width=1.0, tolerance=0.2, policy="active", station="cell-1")
+    for k in (1, 2):
+        store.record_tap(i, tap=k, depth_mm=2.0, identity_estimate=1.0, belief=0.5 * k)
+    store.finish_inspection(i, estimated_width=1.0, estimated_depth=2.0, belief=0.99, taps=2, decided=True)
+"""
+
+
+def test_the_feed_follows_station_runs_in_separate_processes_on_sqlite(tmp_path):
+    """Each writer process exits (SQLite deletes the -wal and -shm): the feed still sees every run, stays live."""
+    import asyncio
+    import os
+    import subprocess
+    import sys
+
+    from tactip.line.dashboard import LiveFeed
+
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        _verdict(store, "g00", 1.0)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+
+    async def watch():
+        feed = LiveFeed(lambda: open_results(db, read_only=True), poll_s=0.02)
+        queue = feed.subscribe()
+        feed.start()
+        seen, statuses = [], []
+        try:
+            for gap in ("g01", "g02", "g03"):
+                await asyncio.to_thread(subprocess.run, [sys.executable, "-c", _WRITER, str(db), gap], check=True,
+                                        env=env)
+                deadline = asyncio.get_running_loop().time() + 20
+                while not any(d.get("gap") == gap and d.get("status") == "done" for k, d in seen if k == "inspection"):
+                    kind, data = await asyncio.wait_for(queue.get(), deadline - asyncio.get_running_loop().time())
+                    (statuses if kind == "status" else seen).append((kind, data) if kind != "status" else data["feed"])
+        finally:
+            feed.stop()
+        return seen, statuses, feed.status
+
+    seen, statuses, status = asyncio.run(watch())
+    done = [d["gap"] for k, d in seen if k == "inspection" and d["status"] == "done"]
+    assert done == ["g01", "g02", "g03"]
+    for gap in done:                                                      # both taps, each before the verdict
+        mine = [(k, d.get("tap")) for k, d in seen if d.get("gap") == gap and (k == "tap" or d["status"] == "done")]
+        assert mine == [("tap", 1), ("tap", 2), ("inspection", None)]
+    assert status == "live" and all(s == "live" for s in statuses)
+
+
+def test_a_kept_reader_stays_right_while_stores_open_and_close_beside_it(tmp_path):
+    """Opening a store in the process used to read the file's header with open(); its close dropped the kept
+    reader's locks, the next writer to exit deleted the -wal and -shm under it, and it read stale rows."""
+    import os
+    import subprocess
+    import sys
+
+    db = tmp_path / "r.sqlite"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    subprocess.run([sys.executable, "-c", _WRITER, str(db), "g00"], check=True, env=env)
+    with open_results(db, read_only=True) as kept:
+        for k in range(1, 4):
+            subprocess.run([sys.executable, "-c", _WRITER, str(db), f"g0{k}"], check=True, env=env)
+            with open_results(db, read_only=True) as fresh:
+                assert len(fresh.inspections()) == k + 1
+            assert [r.gap for r in kept.inspections()] == [f"g0{j}" for j in range(k + 1)]
+
+
+def test_the_feed_sends_a_deciding_tap_before_the_next_inspection(tmp_path):
+    """One poll catching an inspection's last tap, its verdict and the next inspection's start sends them in
+    that order (it used to send the next 'running' first, and the page dropped the last tap as late)."""
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        first = store.start_inspection("g05", nominal_width=1.0, tolerance=0.2, policy="active", station="cell-1")
+        store.record_tap(first, tap=1, depth_mm=2.0, identity_estimate=1.0, belief=0.4)
+        with open_results(db, read_only=True) as reader:
+            feed = FeedState(reader)
+        store.record_tap(first, tap=2, depth_mm=2.0, identity_estimate=1.0, belief=0.99)
+        store.finish_inspection(first, estimated_width=1.0, estimated_depth=2.0, belief=0.99, taps=2, decided=True)
+        second = store.start_inspection("g06", nominal_width=1.0, tolerance=0.2, policy="active", station="cell-1")
+        store.record_tap(second, tap=1, depth_mm=2.0, identity_estimate=1.1, belief=0.3)
+    with open_results(db, read_only=True) as reader:
+        events = [(k, d.get("inspection_id", d.get("id")), d.get("tap", d.get("status"))) for k, d in feed.poll(reader)]
+    assert events == [("tap", first, 2), ("inspection", first, "done"), ("inspection", second, "running"),
+                      ("tap", second, 1)]
+
+
 def test_the_state_shows_the_history_with_the_station_stopped(tmp_path):
     db = tmp_path / "r.sqlite"
     with open_results(db) as store:
@@ -187,7 +275,8 @@ def test_taps_and_verdicts_stream_as_server_sent_events(tmp_path):
             i = _verdict(store, "door", 1.05)
         listener.join(20)
     kinds = [name for name, _ in events]
-    assert kinds[:3] == ["hello", "station", "inspection"] and kinds.count("tap") == 1   # an inspection before its tap
+    assert kinds[:2] == ["hello", "station"] and kinds.count("tap") == 1
+    assert kinds.index("tap") < len(kinds) - 1 and kinds[-1] == "inspection"     # the tap before the verdict
     assert events[1][1]["arm"] == "sim: ready" and events[1][1]["state"] == "ready"
     tap = events[kinds.index("tap")][1]
     assert (tap["inspection_id"], tap["tap"], tap["gap"], tap["station"], tap["what_belief"]) == \
@@ -235,3 +324,5 @@ def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path, s
         if serve.poll() is None:
             serve.kill()
     assert serve.returncode == 130 and err == "Stopped.\n"
+
+
