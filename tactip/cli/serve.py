@@ -20,7 +20,8 @@ import argparse
 import os
 from pathlib import Path
 
-from tactip.cli._types import int_in_range
+from tactip.cli._types import float_in_range, int_in_range
+from tactip.line import HEARTBEAT_S, OFFLINE_AFTER_S
 
 HELP = "serve the live dashboard of the results (browser page; read-only)"
 
@@ -40,6 +41,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="TCP port (0-65535, default 8050; 0 picks a free one)")
     parser.add_argument("--token", default=None,
                         help="require this token on every request (default: $TACTIP_SERVE_TOKEN)")
+    parser.add_argument("--offline-after", type=float_in_range(1.0, 3600.0), default=OFFLINE_AFTER_S, metavar="S",
+                        help=f"show a working station offline (red, in the alarms) when it has not sent its "
+                             f"heartbeat for S seconds (1-3600, default {OFFLINE_AFTER_S:g}; stations beat every "
+                             f"{HEARTBEAT_S:g} s while they inspect)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
         location, info = config.results, station_info(config)
     name = describe_location(location)
     app = make_app(lambda: open_results(location, read_only=True), token=token, station_info=info,
-                   results_name=name)
+                   results_name=name, offline_after_s=args.offline_after)
     server = DashboardServer(app, host=args.host, port=args.port)
     print(f"dashboard of {name} on {server.url}{'?token=...' if token else ''}  (Ctrl-C stops)", flush=True)
     server.serve_forever()

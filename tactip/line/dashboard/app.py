@@ -27,7 +27,7 @@ from typing import Callable
 from urllib.parse import parse_qs
 
 from tactip.line.dashboard.feed import POLL_S, LiveFeed
-from tactip.line.dashboard.summary import dashboard_state
+from tactip.line.dashboard.summary import OFFLINE_AFTER_S, dashboard_state
 
 __all__ = ["make_app", "KEEPALIVE_S"]
 
@@ -36,7 +36,7 @@ KEEPALIVE_S = 15.0
 
 
 def make_app(open_store: Callable, *, token: str | None = None, station_info: dict | None = None,
-             results_name: str = "", poll_s: float = POLL_S):
+             results_name: str = "", poll_s: float = POLL_S, offline_after_s: float = OFFLINE_AFTER_S):
     """The Starlette app of the dashboard.
 
     Parameters
@@ -52,6 +52,8 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
         The results location as it may be shown (no password).
     poll_s : float
         Time between two polls of the store by the live feed, s.
+    offline_after_s : float
+        A working station without a heartbeat for longer than this is shown offline, s.
     """
     from starlette.applications import Starlette
     from starlette.responses import HTMLResponse, JSONResponse, PlainTextResponse, Response, StreamingResponse
@@ -70,10 +72,12 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
             return PlainTextResponse(window if isinstance(window, str) else verdicts, status_code=400)
         try:
             with open_store() as store:
-                body = dashboard_state(store, verdicts=verdicts, window=window, station_info=station_info)
+                body = dashboard_state(store, verdicts=verdicts, window=window, station_info=station_info,
+                                       offline_after_s=offline_after_s)
         except Exception as exc:  # no database yet, or the server is unreachable: the page says so
             body = dict(error=" ".join(str(exc).split()), stations=[], current=[], verdicts=[], gaps=[],
-                        width_classes_mm=None, last_tap_id=0, station_info=station_info, window=window)
+                        width_classes_mm=None, last_tap_id=0, station_info=station_info, window=window, alarms=[],
+                        offline_after_s=offline_after_s)
         body.update(results=results_name, feed=feed.status)
         return JSONResponse(body, headers={"Cache-Control": "no-store"})
 

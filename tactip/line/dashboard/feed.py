@@ -37,7 +37,7 @@ class FeedState:
         # The taps within the look-back are history too: not to be sent again by the first poll.
         self.sent: set[int] = {t["id"] for t in store.taps_after(max(0, self.cursor - LOOKBACK_IDS))}
         self.inspections = {r.id: (r.status, r.taps) for r in store.inspections(limit=WATCHED_INSPECTIONS)}
-        self.stations = {s["name"]: s for s in store.stations()}
+        self.stations = {s["name"]: _status(s) for s in store.stations()}
 
     def poll(self, store) -> list[tuple[str, dict]]:
         """News since the last poll, as (event, data): ``station`` (changed status rows) first, then inspection
@@ -48,9 +48,9 @@ class FeedState:
         inspection of the station starts, even when one poll catches all of it.
         """
         events = []
-        for s in store.stations():
-            if self.stations.get(s["name"]) != s:
-                self.stations[s["name"]] = s
+        for s in store.stations():  # a heartbeat alone is no news: pages judge silence from their state reads
+            if self.stations.get(s["name"]) != _status(s):
+                self.stations[s["name"]] = _status(s)
                 events.append(("station", s))
         changed = {}
         for r in store.inspections(limit=WATCHED_INSPECTIONS):
@@ -177,6 +177,10 @@ class LiveFeed:
         if status != self.status:
             self.status = status
             self._publish([("status", {"feed": status, "live": status == "live"})])
+
+
+def _status(station: dict) -> dict:
+    return {k: v for k, v in station.items() if k != "heartbeat_at"}
 
 
 def _put(queue: asyncio.Queue, event) -> None:

@@ -27,7 +27,8 @@ taps
 stations
     one row per station, replaced as it works: ``name``, ``state`` (ready, inspecting, stopped[: reason]),
     ``arm`` (``BACKEND: ready`` or what stops it), ``frame_rate`` (camera, frames/s), ``model``,
-    ``host``, ``pid``, ``updated_at``.
+    ``host``, ``pid``, ``updated_at``, ``heartbeat_at`` (its last sign of life: written every few seconds
+    while it works; added to older databases by the first writer that opens them).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from tactip.line.results._store import SCHEMA_VERSION, ResultsError, ResultsStor
 __all__ = ["ResultsStore"]
 
 # Columns added after the first schema (nullable; added to older databases when a writer opens them).
-_ADDED_COLUMNS = {"pid": "INTEGER", "host": "TEXT"}
+_ADDED_COLUMNS = {"inspections": {"pid": "INTEGER", "host": "TEXT"}, "stations": {"heartbeat_at": "TEXT"}}
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -91,7 +92,8 @@ CREATE TABLE IF NOT EXISTS stations (
     model TEXT,
     host TEXT,
     pid INTEGER,
-    updated_at TEXT NOT NULL
+    updated_at TEXT NOT NULL,
+    heartbeat_at TEXT
 );
 """
 
@@ -154,11 +156,12 @@ class ResultsStore(ResultsStoreBase):
                 self._db.execute("PRAGMA busy_timeout=10000")  # concurrent inspections share the file
                 self._db.execute("PRAGMA journal_mode=WAL")
                 self._db.executescript(_SCHEMA)
-                columns = {row[1] for row in self._db.execute("PRAGMA table_info(inspections)")}
-                for name, kind in _ADDED_COLUMNS.items():
-                    if name not in columns:
-                        with contextlib.suppress(sqlite3.OperationalError):  # added by a concurrent writer
-                            self._db.execute(f"ALTER TABLE inspections ADD COLUMN {name} {kind}")
+                for table, added in _ADDED_COLUMNS.items():
+                    columns = {row[1] for row in self._db.execute(f"PRAGMA table_info({table})")}
+                    for name, kind in added.items():
+                        if name not in columns:
+                            with contextlib.suppress(sqlite3.OperationalError):  # added by a concurrent writer
+                                self._db.execute(f"ALTER TABLE {table} ADD COLUMN {name} {kind}")
                 version = self._db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()
                 if version is None:
                     self._db.execute("INSERT OR IGNORE INTO meta VALUES ('schema', ?)",
@@ -212,7 +215,7 @@ class ResultsStore(ResultsStoreBase):
             # A database whose creation was cut short (disk full) holds some of our tables, each with our
             # columns (older versions lack the added ones), and no schema row yet.
             stamped = schema is not None and str(schema).startswith("tactip-results/")
-            foreign = [t for t, have in columns.items() if not _our_columns()[t] - set(_ADDED_COLUMNS) <= have]
+            foreign = [t for t, have in columns.items() if not _our_columns()[t] - set(_ADDED_COLUMNS.get(t, ())) <= have]
             ours = stamped or (tables <= {*_our_columns(), "sqlite_sequence"} and not foreign)
             if tables - {"sqlite_sequence"} and not ours:
                 names = ", ".join(sorted(foreign or (tables - {"sqlite_sequence"}))[:5])

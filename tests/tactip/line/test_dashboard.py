@@ -78,8 +78,85 @@ def test_trends_use_the_newest_decided_inspections_of_each_gap(tmp_path):
     door, hood = gap_trends(rows, window=4)
     assert door["gap"] == "door" and [p["estimated_width"] for p in door["points"]] == widths[-4:]
     expected = process_capability(widths[-4:], nominal_mm=1.0, tolerance_mm=0.2)
-    assert door["capability"] == expected.as_dict()
+    assert door["capability"] == dict(expected.as_dict(), warning="n = 4 < 25: too few inspections to judge capability")
     assert (hood["nominal_mm"], hood["tolerance_mm"], hood["capability"]["n"]) == (2.0, 0.3, 1)
+
+
+def test_capability_per_gap_and_station_sorted_by_gap_with_a_warning_below_25(tmp_path):
+    rng = np.random.default_rng(7)
+    with open_results(tmp_path / "r.sqlite") as store:
+        widths = {("g20", "cell-1"): rng.normal(1.0, 0.05, 30), ("g05", "cell-1"): rng.normal(1.0, 0.05, 3),
+                  ("g05", "cell-2"): rng.normal(1.1, 0.05, 3), ("g5b", "cell-1"): rng.normal(1.0, 0.05, 2)}
+        for (gap, station), ws in widths.items():
+            for w in ws:
+                _verdict(store, gap, float(w), station=station)
+        rows = store.inspections()
+    trends = gap_trends(rows, window=50)
+    assert [g["gap"] for g in trends] == ["g05", "g5b", "g20"]                      # natural order, not text
+    g20, g05 = trends[2], trends[0]
+    assert g20["capability"]["n"] == 30 and g20["capability"]["warning"] is None
+    assert g05["capability"]["n"] == 6 and "n = 6 < 25" in g05["capability"]["warning"]
+    assert [s["station"] for s in g05["by_station"]] == ["cell-1", "cell-2"]
+    own = process_capability(widths[("g05", "cell-2")], nominal_mm=1.0, tolerance_mm=0.2)
+    assert g05["by_station"][1]["capability"]["cpk"] == pytest.approx(own.cpk)
+
+
+def test_a_working_station_without_heartbeat_is_offline_and_alarms_clear_when_it_is_back(tmp_path):
+    import datetime as dt
+
+    from tactip.line.dashboard import station_status
+
+    with open_results(tmp_path / "r.sqlite") as store:
+        store.update_station("cell-1", state="ready", arm="sim: ready")
+        killed = store.start_inspection("g01", nominal_width=1.0, tolerance=0.2, policy="active", station="cell-1")
+        store.heartbeat("cell-1")
+        store.update_station("cell-2", state="stopped", arm="sim: ready")        # stopped: silence is fine
+        store.update_station("cell-3", state="stopped: ArmError: protective stop", arm="ur: protective stop")
+        aborted = store.start_inspection("g02", nominal_width=1.0, tolerance=0.2, policy="active", station="cell-3")
+        store.abort_inspection(aborted, "ArmError: protective stop")
+        rows, beats = store.inspections(), store.stations()
+    beat = dt.datetime.fromisoformat(next(b for b in beats if b["name"] == "cell-1")["heartbeat_at"])
+    soon, later = (station_status(rows, heartbeats=beats, now=beat + dt.timedelta(seconds=s), offline_after_s=10)
+                   for s in (9, 11))
+    assert [s["offline"] for s in soon] == [False, False, False] and soon[0]["alarms"] == []
+    assert [s["offline"] for s in later] == [True, False, False]
+    assert later[0]["alarms"] == ["offline: no heartbeat for 11 s"] and later[0]["state"] == "inspecting"
+    assert later[2]["alarms"] == ["stopped: ArmError: protective stop",
+                                  f"inspection {aborted} (g02) aborted: ArmError: protective stop"]
+    with open_results(tmp_path / "r.sqlite") as store:                           # both are back
+        store.abort_inspection(killed, "stale: process ended without closing the inspection (killed?)")
+        store.update_station("cell-1", state="ready", arm="sim: ready")
+        store.start_inspection("g01", nominal_width=1.0, tolerance=0.2, policy="active", station="cell-1")
+        store.update_station("cell-3", state="inspecting", arm="ur: ready")
+        store.start_inspection("g02", nominal_width=1.0, tolerance=0.2, policy="active", station="cell-3")
+        rows, beats = store.inspections(), store.stations()
+    back = station_status(rows, heartbeats=beats, offline_after_s=10)
+    assert [s["alarms"] for s in back] == [[], [], []] and [s["offline"] for s in back] == [False] * 3
+
+
+def test_heartbeats_come_from_an_inspecting_station_and_old_databases_gain_the_column(tmp_path):
+    import sqlite3
+    import time
+
+    from tactip.station.heartbeat import Heartbeat
+
+    db = tmp_path / "old.sqlite"
+    with open_results(db) as store:
+        store.update_station("cell-1", state="ready")
+    with sqlite3.connect(db) as con:                                              # a database from before heartbeats
+        con.execute("ALTER TABLE stations DROP COLUMN heartbeat_at")
+    with open_results(db, read_only=True) as reader:                              # read as is, not changed
+        (old,) = reader.stations()
+    assert old["heartbeat_at"] == old["updated_at"]
+    with open_results(db) as store:                                               # a writer adds the column
+        first = store.stations()[0]["heartbeat_at"]
+    with Heartbeat(lambda: open_results(db), "cell-1", period_s=0.05) as beating:
+        deadline = time.monotonic() + 20
+        while beating.beats < 3 and time.monotonic() < deadline:
+            time.sleep(0.02)
+    with open_results(db, read_only=True) as reader:
+        (row,) = reader.stations()
+    assert beating.beats >= 3 and row["heartbeat_at"] > first and row["updated_at"] == old["updated_at"]
 
 
 def test_the_feed_misses_no_tap_committed_out_of_id_order(postgres_url):
@@ -215,8 +292,9 @@ def test_the_state_shows_the_history_with_the_station_stopped(tmp_path):
     assert state["stations"][2]["station_state"] == "stopped: protective stop"
     cell2 = next(c for c in state["current"] if c["station"] == "cell-2")
     assert cell2["tap_rows"][0]["what_belief"] == [0.4, 0.6] and state["results"] == str(db)
-    assert state["gaps"][0]["capability"] == process_capability([1.1, 0.9], nominal_mm=1.0,
-                                                                tolerance_mm=0.2).as_dict()
+    capability = dict(state["gaps"][0]["capability"])
+    assert capability.pop("warning").startswith("n = 2 < 25")
+    assert capability == process_capability([1.1, 0.9], nominal_mm=1.0, tolerance_mm=0.2).as_dict()
 
 
 def test_no_database_yet_is_said_on_the_page(tmp_path):
