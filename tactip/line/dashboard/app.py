@@ -27,12 +27,15 @@ from typing import Callable
 from urllib.parse import parse_qs
 
 from tactip.line.dashboard.feed import POLL_S, LiveFeed
+from tactip.line.dashboard.guard import check_token
 from tactip.line.dashboard.summary import OFFLINE_AFTER_S, dashboard_state
 
-__all__ = ["make_app", "KEEPALIVE_S"]
+__all__ = ["make_app", "KEEPALIVE_S", "MAX_STREAMS"]
 
 #: Time between keep-alive comments on an idle event stream, s.
 KEEPALIVE_S = 15.0
+#: Most event streams (live pages) at once; more are refused (503).
+MAX_STREAMS = 32
 
 
 def make_app(open_store: Callable, *, token: str | None = None, station_info: dict | None = None,
@@ -45,7 +48,7 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
         Returns a new read-only results store (`tactip.line.results.open_results` with ``read_only=True``);
         each request and the feed thread open their own.
     token : str, optional
-        Required on every request when given.
+        Required on every request when given; at least 16 characters (`guard.MIN_TOKEN_CHARS`).
     station_info : dict, optional
         Static facts about the station from its configuration (arm, camera frame rate, model).
     results_name : str
@@ -59,7 +62,9 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
     from starlette.responses import HTMLResponse, JSONResponse, PlainTextResponse, Response, StreamingResponse
     from starlette.routing import Route
 
+    check_token(token)
     feed = LiveFeed(open_store, poll_s=poll_s)
+    streams = [0]  # open event streams
     page = resources.files("tactip.line.dashboard").joinpath("page.html").read_text(encoding="utf-8")
 
     def index(request):
@@ -82,9 +87,12 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
         return JSONResponse(body, headers={"Cache-Control": "no-store"})
 
     async def events(request):
-        queue = feed.subscribe()
+        if streams[0] >= MAX_STREAMS:
+            return PlainTextResponse(f"too many live pages ({MAX_STREAMS}): close one", status_code=503)
 
-        async def stream():
+        async def stream():  # subscribed only once it runs: a page gone before it starts leaves nothing behind
+            queue = feed.subscribe()
+            streams[0] += 1
             try:
                 yield f"event: hello\ndata: {json.dumps({'feed': feed.status})}\n\n"
                 while True:
@@ -99,6 +107,7 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
                     yield f"event: {name}\ndata: {json.dumps(data)}\n\n"
             finally:
                 feed.unsubscribe(queue)
+                streams[0] -= 1
 
         return StreamingResponse(stream(), media_type="text/event-stream",
                                  headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})

@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import threading
 import time
+import urllib.error
 import urllib.request
 
 import numpy as np
@@ -39,6 +40,9 @@ class Client:
                 return response.status, response.read().decode()
         except HTTPError as exc:
             return exc.code, exc.read().decode()
+
+
+TOKEN = "s3cret-0123456789abcdef"
 
 
 def _verdict(store, gap, width, *, nominal=1.0, tolerance=0.2, decided=True, station="cell-1"):
@@ -306,21 +310,100 @@ def test_no_database_yet_is_said_on_the_page(tmp_path):
 
 
 def test_a_token_guards_every_route(tmp_path):
-    app = make_app(lambda: open_results(tmp_path / "r.sqlite", read_only=True), token="s3cret")
+    app = make_app(lambda: open_results(tmp_path / "r.sqlite", read_only=True), token=TOKEN)
     with DashboardServer(app, port=0) as server:
         client = Client(server)
         for path in ("/", "/api/state", "/api/events", "/healthz"):
             assert client.get(path)[0] == 401
             assert client.get(path, params={"token": "wrong"})[0] == 401
             if path != "/api/events":                                       # a stream does not end by itself
-                assert client.get(path, params={"token": "s3cret"})[0] == 200
-                assert client.get(path, headers={"Authorization": "Bearer s3cret"})[0] == 200
+                assert client.get(path, params={"token": TOKEN})[0] == 200
+                assert client.get(path, headers={"Authorization": f"Bearer {TOKEN}"})[0] == 200
     check_bind("127.0.0.1", None), check_bind("localhost", None), check_bind("::1", None)
-    check_bind("0.0.0.0", "s3cret")
+    check_bind("0.0.0.0", TOKEN)
     with pytest.raises(DashboardError, match="--host 0.0.0.0 is reachable from other machines: give --token"):
         check_bind("0.0.0.0", None)
     code, _, err = run_cli(["serve", "--db", tmp_path / "r.sqlite", "--host", "192.168.1.5"])
     assert code == 1 and err.count("\n") == 1 and "give --token" in err
+    with pytest.raises(DashboardError, match="at least 16 characters, got 1"):
+        check_bind("0.0.0.0", "x")
+    with pytest.raises(ValueError, match="at least 16 characters"):
+        make_app(lambda: None, token="short-token")
+    code, _, err = run_cli(["serve", "--db", tmp_path / "r.sqlite", "--token", "x"])
+    assert code == 1 and err.count("\n") == 1 and "at least 16 characters" in err
+
+
+def test_a_wrong_host_header_is_refused(tmp_path):
+    """DNS rebinding: a page of evil.example resolving its name to 127.0.0.1 sends Host: evil.example."""
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        _verdict(store, "door", 1.0)
+    with DashboardServer(make_app(lambda: open_results(db, read_only=True)), port=0) as server:
+        client = Client(server)
+        for host in (f"127.0.0.1:{server.port}", f"localhost:{server.port}", "localhost"):
+            assert client.get("/api/state", headers={"Host": host})[0] == 200
+        for host in ("evil.example.com", f"evil.example.com:{server.port}", "127.0.0.1.evil.example", "10.0.0.1"):
+            code, text = client.get("/api/state", headers={"Host": host})
+            assert code == 421 and "--allow-host" in text and "door" not in text
+    with DashboardServer(make_app(lambda: open_results(db, read_only=True)), port=0,
+                         allow_hosts=["station3.plant"]) as server:
+        assert Client(server).get("/healthz", headers={"Host": "Station3.plant:80"})[0] == 200
+        assert Client(server).get("/healthz", headers={"Host": "evil.example.com"})[0] == 421
+
+
+def test_a_connection_that_sends_no_request_is_closed(tmp_path):
+    import socket
+
+    app = make_app(lambda: open_results(tmp_path / "r.sqlite", read_only=True))
+    with DashboardServer(app, port=0, header_timeout_s=0.3) as server:
+        with socket.create_connection(("127.0.0.1", server.port), timeout=20) as idle, \
+                socket.create_connection(("127.0.0.1", server.port), timeout=20) as slow:
+            slow.sendall(b"GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\n")      # never finishes its head
+            assert idle.recv(100) == b"" and slow.recv(100) == b""             # closed by the server, in time
+        assert Client(server).get("/healthz")[0] == 200
+
+
+def test_a_flood_of_half_open_connections_starves_no_client(tmp_path):
+    """400 half-open connections to a server limited to 256 open files: a request with the token is still
+    answered within 2 s, and the console gets no 'Too many open files'."""
+    import resource
+    import socket
+    import subprocess
+    import sys
+
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        _verdict(store, "door", 1.0)
+
+    def limit_files():
+        resource.setrlimit(resource.RLIMIT_NOFILE, (256, 256))
+
+    serve = subprocess.Popen([sys.executable, "-m", "tactip.cli", "serve", "--db", str(db), "--port", "0",
+                              "--token", TOKEN], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=limit_files)
+    flood = []
+    try:
+        url = serve.stdout.readline().split(" on ")[1].split()[0].split("?")[0]
+        port = int(url.rsplit(":", 1)[1].strip("/"))
+        for k in range(400):
+            s = socket.socket()
+            s.setblocking(False)
+            s.connect_ex(("127.0.0.1", port))
+            flood.append(s)
+        for s in flood:
+            try:
+                s.send(b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n")             # and never the rest
+            except OSError:
+                pass                                                            # not accepted yet, or dropped
+        request = urllib.request.Request(url + "api/state", headers={"Authorization": f"Bearer {TOKEN}"})
+        with urllib.request.urlopen(request, timeout=2) as response:          # the bar: within 2 s
+            assert response.status == 200 and json.loads(response.read())["verdicts"][0]["gap"] == "door"
+    finally:
+        for s in flood:
+            s.close()
+        serve.terminate()
+        _, err = serve.communicate(timeout=20)
+    assert "Too many open files" not in err and "Traceback" not in err, err
 
 
 def test_taps_and_verdicts_stream_as_server_sent_events(tmp_path):
@@ -404,3 +487,26 @@ def test_tactip_serve_serves_until_ctrl_c_even_with_a_page_listening(tmp_path, s
     assert serve.returncode == 130 and err == "Stopped.\n"
 
 
+
+
+def test_token_without_a_value_is_generated_and_printed(tmp_path):
+    import subprocess
+    import sys
+
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        _verdict(store, "door", 1.0)
+    serve = subprocess.Popen([sys.executable, "-m", "tactip.cli", "serve", "--db", str(db), "--port", "0", "--token"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        address, said = serve.stdout.readline(), serve.stdout.readline()
+        token = said.split()[1]
+        assert said.startswith("token: ") and len(token) >= 16 and f"?token={token}" in address
+        url = address.split(" on ")[1].split("?")[0]
+        with urllib.request.urlopen(f"{url}healthz?token={token}", timeout=20) as response:
+            assert response.status == 200
+        with pytest.raises(urllib.error.HTTPError, match="401"):
+            urllib.request.urlopen(f"{url}healthz", timeout=20)
+    finally:
+        serve.terminate()
+        serve.communicate(timeout=20)
