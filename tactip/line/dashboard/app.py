@@ -7,8 +7,9 @@ Routes (all GET; the app never writes):
 ``/api/state?window=N&verdicts=M``
     `tactip.line.dashboard.summary.dashboard_state` as JSON (history: works with the station stopped).
 ``/api/events``
-    Server-sent events from the `LiveFeed`: ``tap``, ``inspection`` and ``station`` (JSON rows), a comment
-    every `KEEPALIVE_S`.
+    Server-sent events from the `LiveFeed`: ``tap``, ``inspection`` and ``station`` (JSON rows), ``status``
+    (the feed's: ``live`` or what keeps it from reading the store), a comment every `KEEPALIVE_S`; at most
+    `MAX_STREAMS` at once.
 ``/healthz``
     ``ok`` and the feed's status.
 
