@@ -510,3 +510,41 @@ def test_token_without_a_value_is_generated_and_printed(tmp_path):
     finally:
         serve.terminate()
         serve.communicate(timeout=20)
+
+
+def test_the_feed_reconnects_when_postgresql_drops_it(postgres_url):
+    """A restarted or failed-over server drops the feed's connection: it reconnects within the same poll,
+    stays live, and misses nothing written meanwhile."""
+    import asyncio
+
+    import psycopg
+
+    from tactip.line.dashboard import LiveFeed
+
+    with open_results(postgres_url) as store:
+        _verdict(store, "g01", 1.0)
+
+    async def watch():
+        feed = LiveFeed(lambda: open_results(postgres_url, read_only=True), poll_s=0.02)
+        queue = feed.subscribe()
+        feed.start()
+        seen = []
+        try:
+            loop = asyncio.get_running_loop()
+            deadline = loop.time() + 20
+            while feed.status != "live" and loop.time() < deadline:
+                await asyncio.sleep(0.02)
+            with psycopg.connect(postgres_url, autocommit=True) as admin:   # drop every reader connection
+                admin.execute("SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE pid <> pg_backend_pid() "
+                              "AND datname = current_database()")
+            with open_results(postgres_url) as store:
+                _verdict(store, "g02", 1.1)
+            while not any(k == "inspection" and d["gap"] == "g02" and d["status"] == "done" for k, d in seen):
+                seen.append(await asyncio.wait_for(queue.get(), deadline - loop.time()))
+        finally:
+            feed.stop()
+        return seen, feed.status
+
+    seen, status = asyncio.run(watch())
+    assert [d["tap"] for k, d in seen if k == "tap" and d["gap"] == "g02"] == [1]
+    assert status == "live" and all(d["feed"] == "live" for k, d in seen if k == "status")   # never not live

@@ -418,3 +418,23 @@ def test_the_layout_at_a_glance_on_a_desktop_a_laptop_and_a_phone(browser, tmp_p
         page.screenshot(path=str(artefacts / "dashboard-hover-1366x768.png"))
         page.close()
         assert errors == []
+
+
+def test_the_badge_never_says_live_over_an_unreadable_store(browser, tmp_path):
+    from tactip.line.dashboard import DashboardServer, make_app
+
+    db = tmp_path / "r.sqlite"
+    with open_results(db) as store:
+        store.update_station("cell-1", state="ready", arm="sim: ready")
+    app = make_app(lambda: open_results(db, read_only=True))
+    with DashboardServer(app, port=0) as server:
+        page, errors = _open(browser, server)
+        db.rename(tmp_path / "away.sqlite")                                 # the store cannot be read
+        page.wait_for_selector("#live.error", timeout=10_000)
+        assert page.locator("body[data-live='0']").count() == 1
+        assert "not live: cannot read the results database" in page.locator("#live").inner_text()
+        (tmp_path / "away.sqlite").rename(db)                               # back
+        page.wait_for_selector("#live.on", timeout=10_000)
+        assert page.locator("#live").inner_text() == "live"
+        page.close()
+    assert errors == []
