@@ -253,6 +253,7 @@ def test_a_station_killed_mid_inspection_shows_offline_and_clears_when_back(brow
         assert "alarm" in _tile(page).get_attribute("class")
         assert _tile(page).evaluate("e => getComputedStyle(e).backgroundColor") == "rgb(183, 28, 28)"
         assert "cell-1: offline: no heartbeat" in page.locator("#alarms").inner_text()
+        assert page.locator(".card[data-station='cell-1'] .current-verdict").last.inner_text() == "OFFLINE"
         page.screenshot(path=str(artefacts_dir("dashboard") / "offline-1366x768.png"))
         _inspect(toml, "--gap", "g06", "--seed", "4")                      # back: the alarm clears
         page.wait_for_function("!document.querySelector(\"#tiles .tile[data-station='cell-1']\")"
