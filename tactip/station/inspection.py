@@ -27,6 +27,7 @@ import numpy as np
 from tactip.station.config import GapConfig, StationConfig
 from tactip.errors import TactipError
 from tactip.line.results import ResultsError, ResultsStoreBase, open_results
+from tactip.station.heartbeat import Heartbeat
 
 __all__ = ["InspectionOutcome", "inspect_gap", "inspect_station", "load_station_model", "make_perceiver"]
 
@@ -201,8 +202,10 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
         store = open_results(config.results)
         model_name = str(config.perception.model)
         state = "stopped"
+        heartbeat = Heartbeat(lambda: open_results(config.results), config.name)
         try:
             store.update_station(config.name, state="ready", model=model_name, **station_status(open_station))
+            heartbeat.start()  # after the status row it stamps exists
             stale = store.close_stale_inspections(config.name)
             if stale:
                 log(f"closed {len(stale)} inspection(s) left 'running' by a process that ended without closing "
@@ -225,6 +228,7 @@ def inspect_station(config: StationConfig, *, policy: str | None = None, seed: i
             state = f"stopped: {interruption_reason(exc)}"
             raise
         finally:
+            heartbeat.stop()
             try:  # the station's last word; never in the way of the error being reported
                 store.update_station(config.name, state=state, model=model_name, **station_status(open_station))
             except (OSError, ResultsError):

@@ -1,9 +1,12 @@
 """The station's live dashboard (`tactip serve`): a read-only web page over the results database.
 
 It shows, live while `tactip inspect` runs (on this host or any station writing to the same
-PostgreSQL database), each tap as it is stored, the belief over widths, the verdicts, per-gap trend
-charts against the tolerance band and the process capability (Cp/Cpk); with the station stopped it
-shows the history. It reads only: the store is opened read-only and every route is a GET.
+PostgreSQL database), one tile per station with its last verdict, alarms (a stop, an aborted
+inspection, a station offline by its heartbeat), each tap as it is stored, the belief over widths,
+per-gap trend charts on a time axis against the tolerance band and control limits, and the process
+capability (Cp/Cpk) per gap and station; with the station stopped it shows the history. It reads
+only: the store is opened read-only and every route is a GET. `tactip.line.dashboard.guard` keeps
+strangers out (Host header, connection cap, header timeout, token length).
 
 Examples
 --------

@@ -7,8 +7,9 @@ Routes (all GET; the app never writes):
 ``/api/state?window=N&verdicts=M``
     `tactip.line.dashboard.summary.dashboard_state` as JSON (history: works with the station stopped).
 ``/api/events``
-    Server-sent events from the `LiveFeed`: ``tap``, ``inspection`` and ``station`` (JSON rows), a comment
-    every `KEEPALIVE_S`.
+    Server-sent events from the `LiveFeed`: ``tap``, ``inspection`` and ``station`` (JSON rows), ``status``
+    (the feed's: ``live`` or what keeps it from reading the store), a comment every `KEEPALIVE_S`; at most
+    `MAX_STREAMS` at once.
 ``/healthz``
     ``ok`` and the feed's status.
 
@@ -27,16 +28,19 @@ from typing import Callable
 from urllib.parse import parse_qs
 
 from tactip.line.dashboard.feed import POLL_S, LiveFeed
-from tactip.line.dashboard.summary import dashboard_state
+from tactip.line.dashboard.guard import check_token
+from tactip.line.dashboard.summary import OFFLINE_AFTER_S, dashboard_state
 
-__all__ = ["make_app", "KEEPALIVE_S"]
+__all__ = ["make_app", "KEEPALIVE_S", "MAX_STREAMS"]
 
 #: Time between keep-alive comments on an idle event stream, s.
 KEEPALIVE_S = 15.0
+#: Most event streams (live pages) at once; more are refused (503).
+MAX_STREAMS = 32
 
 
 def make_app(open_store: Callable, *, token: str | None = None, station_info: dict | None = None,
-             results_name: str = "", poll_s: float = POLL_S):
+             results_name: str = "", poll_s: float = POLL_S, offline_after_s: float = OFFLINE_AFTER_S):
     """The Starlette app of the dashboard.
 
     Parameters
@@ -45,19 +49,23 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
         Returns a new read-only results store (`tactip.line.results.open_results` with ``read_only=True``);
         each request and the feed thread open their own.
     token : str, optional
-        Required on every request when given.
+        Required on every request when given; at least 16 characters (`guard.MIN_TOKEN_CHARS`).
     station_info : dict, optional
         Static facts about the station from its configuration (arm, camera frame rate, model).
     results_name : str
         The results location as it may be shown (no password).
     poll_s : float
         Time between two polls of the store by the live feed, s.
+    offline_after_s : float
+        A working station without a heartbeat for longer than this is shown offline, s.
     """
     from starlette.applications import Starlette
     from starlette.responses import HTMLResponse, JSONResponse, PlainTextResponse, Response, StreamingResponse
     from starlette.routing import Route
 
+    check_token(token)
     feed = LiveFeed(open_store, poll_s=poll_s)
+    streams = [0]  # open event streams
     page = resources.files("tactip.line.dashboard").joinpath("page.html").read_text(encoding="utf-8")
 
     def index(request):
@@ -70,17 +78,22 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
             return PlainTextResponse(window if isinstance(window, str) else verdicts, status_code=400)
         try:
             with open_store() as store:
-                body = dashboard_state(store, verdicts=verdicts, window=window, station_info=station_info)
+                body = dashboard_state(store, verdicts=verdicts, window=window, station_info=station_info,
+                                       offline_after_s=offline_after_s)
         except Exception as exc:  # no database yet, or the server is unreachable: the page says so
             body = dict(error=" ".join(str(exc).split()), stations=[], current=[], verdicts=[], gaps=[],
-                        width_classes_mm=None, last_tap_id=0, station_info=station_info, window=window)
+                        width_classes_mm=None, last_tap_id=0, station_info=station_info, window=window, alarms=[],
+                        offline_after_s=offline_after_s)
         body.update(results=results_name, feed=feed.status)
         return JSONResponse(body, headers={"Cache-Control": "no-store"})
 
     async def events(request):
-        queue = feed.subscribe()
+        if streams[0] >= MAX_STREAMS:
+            return PlainTextResponse(f"too many live pages ({MAX_STREAMS}): close one", status_code=503)
 
-        async def stream():
+        async def stream():  # subscribed only once it runs: a page gone before it starts leaves nothing behind
+            queue = feed.subscribe()
+            streams[0] += 1
             try:
                 yield f"event: hello\ndata: {json.dumps({'feed': feed.status})}\n\n"
                 while True:
@@ -95,6 +108,7 @@ def make_app(open_store: Callable, *, token: str | None = None, station_info: di
                     yield f"event: {name}\ndata: {json.dumps(data)}\n\n"
             finally:
                 feed.unsubscribe(queue)
+                streams[0] -= 1
 
         return StreamingResponse(stream(), media_type="text/event-stream",
                                  headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})

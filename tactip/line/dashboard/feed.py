@@ -37,32 +37,47 @@ class FeedState:
         # The taps within the look-back are history too: not to be sent again by the first poll.
         self.sent: set[int] = {t["id"] for t in store.taps_after(max(0, self.cursor - LOOKBACK_IDS))}
         self.inspections = {r.id: (r.status, r.taps) for r in store.inspections(limit=WATCHED_INSPECTIONS)}
-        self.stations = {s["name"]: s for s in store.stations()}
+        self.stations = {s["name"]: _status(s) for s in store.stations()}
 
     def poll(self, store) -> list[tuple[str, dict]]:
-        """News since the last poll, as (event, data): ``station`` (a changed status row), ``inspection``
-        (new or changed), ``tap`` (new), in that order, so that a page knows an inspection before its taps.
+        """News since the last poll, as (event, data): ``station`` (changed status rows) first, then inspection
+        by inspection in id order, each as the page must see it: a new or running ``inspection`` row before its
+        new ``tap`` rows, a finished one (``done``, ``aborted``) after them.
+
+        So a page always has an inspection's deciding tap before its verdict, and the verdict before the next
+        inspection of the station starts, even when one poll catches all of it.
         """
         events = []
-        for s in store.stations():
-            if self.stations.get(s["name"]) != s:
-                self.stations[s["name"]] = s
+        for s in store.stations():  # a heartbeat alone is no news: pages judge silence from their state reads
+            if self.stations.get(s["name"]) != _status(s):
+                self.stations[s["name"]] = _status(s)
                 events.append(("station", s))
+        changed = {}
         for r in store.inspections(limit=WATCHED_INSPECTIONS):
             key = (r.status, r.taps)
             if self.inspections.get(r.id) != key:
                 self.inspections[r.id] = key
-                events.append(("inspection", r.as_dict()))
+                changed[r.id] = r.as_dict()
         if len(self.inspections) > 4 * WATCHED_INSPECTIONS:
             keep = sorted(self.inspections)[-2 * WATCHED_INSPECTIONS:]
             self.inspections = {k: self.inspections[k] for k in keep}
+        # Read after the inspections: every tap of an inspection seen finished is among these.
+        taps: dict[int, list[dict]] = {}
         for tap in store.taps_after(max(0, self.cursor - LOOKBACK_IDS)):
             if tap["id"] in self.sent or tap["id"] <= self.cursor - LOOKBACK_IDS:
                 continue
             self.sent.add(tap["id"])
             self.cursor = max(self.cursor, tap["id"])
-            events.append(("tap", tap))
+            taps.setdefault(tap["inspection_id"], []).append(tap)
         self.sent = {i for i in self.sent if i > self.cursor - LOOKBACK_IDS}
+        for inspection_id in sorted(set(changed) | set(taps)):
+            row = changed.get(inspection_id)
+            running = row is not None and row["status"] == "running"
+            if running:
+                events.append(("inspection", row))
+            events.extend(("tap", tap) for tap in sorted(taps.get(inspection_id, []), key=lambda t: t["tap"]))
+            if row is not None and not running:
+                events.append(("inspection", row))
         return events
 
 
@@ -125,13 +140,27 @@ class LiveFeed:
         store = state = None
         while not self._stop.is_set():
             try:
-                if store is None:
+                store = store or self._open_store()
+                try:
+                    state = state or FeedState(store)
+                    events = state.poll(store)
+                except Exception:
+                    if getattr(store, "reopen_to_poll", False):
+                        raise
+                    # A kept connection (PostgreSQL) that the server dropped: one more try on a new one.
+                    _close_quietly(store)
                     store = self._open_store()
-                    state = FeedState(store)
-                    self.status = "live"
-                events = state.poll(store)
+                    state = state or FeedState(store)
+                    events = state.poll(store)
+                if getattr(store, "reopen_to_poll", False):
+                    # SQLite: no connection outlives a poll, so a writer's exit (which deletes the -wal and
+                    # -shm files under a reader still holding them) can never leave this process reading stale
+                    # or "malformed" pages.
+                    _close_quietly(store)
+                    store = None
+                self._set_status("live")
             except Exception as exc:  # the database went away or is not there yet: say so and retry
-                self.status = f"waiting for the results database: {' '.join(str(exc).split())}"
+                self._set_status(f"cannot read the results database: {' '.join(str(exc).split())}")
                 if store is not None:
                     _close_quietly(store)
                 store = None
@@ -142,6 +171,16 @@ class LiveFeed:
             self._stop.wait(self.poll_s)
         if store is not None:
             _close_quietly(store)
+
+    def _set_status(self, status: str) -> None:
+        """Change `status`, telling every page (a ``status`` event) when it changes."""
+        if status != self.status:
+            self.status = status
+            self._publish([("status", {"feed": status, "live": status == "live"})])
+
+
+def _status(station: dict) -> dict:
+    return {k: v for k, v in station.items() if k != "heartbeat_at"}
 
 
 def _put(queue: asyncio.Queue, event) -> None:

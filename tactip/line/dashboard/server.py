@@ -8,8 +8,17 @@ import signal
 import threading
 
 from tactip.errors import TactipError
+from tactip.line.dashboard.guard import (ACCEPT_BATCH, HEADER_TIMEOUT_S, MAX_CONNECTIONS, HostGuard, allowed_hosts,
+                                         check_token, connection_cap, guarded_protocol)
 
-__all__ = ["DashboardServer", "check_bind", "DashboardError"]
+__all__ = ["DashboardServer", "check_bind", "DashboardError", "KEEP_ALIVE_S"]
+
+#: An idle keep-alive connection is closed after this long, s.
+KEEP_ALIVE_S = 5
+#: The largest request head accepted, bytes.
+MAX_HEAD_BYTES = 16 * 1024
+#: The kernel's queue of connections not yet accepted.
+LISTEN_BACKLOG = 1024
 
 
 class DashboardError(TactipError):
@@ -17,13 +26,17 @@ class DashboardError(TactipError):
 
 
 def check_bind(host: str, token: str | None) -> None:
-    """Refuse to serve on an address other than loopback without a token.
+    """Refuse to serve on an address other than loopback without a token, or with a short token.
 
     Raises
     ------
     DashboardError
-        ``--host X is not loopback: give --token ...``.
+        ``--host X is not loopback: give --token ...``; a token shorter than 16 characters.
     """
+    try:
+        check_token(token)
+    except ValueError as exc:
+        raise DashboardError(str(exc)) from None
     if token:
         return
     if host == "localhost":
@@ -40,6 +53,11 @@ def check_bind(host: str, token: str | None) -> None:
 class DashboardServer:
     """The dashboard app served by uvicorn in a background thread (``with`` starts and stops it).
 
+    Every request must name the bound address (or one of ``allow_hosts``) in its ``Host`` header
+    (`tactip.line.dashboard.guard.HostGuard`); connections are capped and must send their request head
+    within ``header_timeout_s`` (`tactip.line.dashboard.guard.guarded_protocol`), idle keep-alive ones
+    are closed after `KEEP_ALIVE_S`.
+
     Parameters
     ----------
     app : ASGI app
@@ -48,9 +66,16 @@ class DashboardServer:
         Address to bind (default loopback).
     port : int
         TCP port; 0 picks a free one (see `url`).
+    allow_hosts : sequence of str
+        More host names the page may be opened by (a DNS name of this machine, a proxy's name).
+    max_connections : int
+        Most connections open at once; lowered to fit the open-file limit (`guard.connection_cap`).
+    header_timeout_s : float
+        Time a connection may take to send a request's head, s.
     """
 
-    def __init__(self, app, *, host: str = "127.0.0.1", port: int = 8050):
+    def __init__(self, app, *, host: str = "127.0.0.1", port: int = 8050, allow_hosts=(),
+                 max_connections: int = MAX_CONNECTIONS, header_timeout_s: float = HEADER_TIMEOUT_S):
         import uvicorn
 
         family = socket.AF_INET6 if ":" in host else socket.AF_INET
@@ -58,18 +83,29 @@ class DashboardServer:
         self._socket.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             self._socket.bind((host, int(port)))
-            self._socket.listen(128)  # connections wait from now on, until the server takes them
+            self._socket.listen(LISTEN_BACKLOG)  # connections wait from now on, until the server takes them
         except OSError as exc:
             self._socket.close()
             raise DashboardError(f"cannot serve on {host}:{port} ({exc.strerror or exc}): is another "
                                  f"dashboard running there? choose another --port") from None
         self.host, self.port = host, self._socket.getsockname()[1]
-        config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2,
-                                access_log=False)
         feed = getattr(getattr(app, "state", None), "feed", None)
+        self.hosts = allowed_hosts(host, allow_hosts)
+        self.max_connections = connection_cap(max_connections)
+        protocol = guarded_protocol(max_connections=self.max_connections, header_timeout_s=header_timeout_s)
+        config = uvicorn.Config(HostGuard(app, self.hosts), log_level="warning", lifespan="on",
+                                timeout_graceful_shutdown=2, access_log=False, http=protocol, backlog=ACCEPT_BATCH,
+                                timeout_keep_alive=KEEP_ALIVE_S, h11_max_incomplete_event_size=MAX_HEAD_BYTES)
+        listen_socket = self._socket
 
         class Server(uvicorn.Server):
             stopped_by: int | None = None
+
+            async def startup(self, sockets=None):
+                await super().startup(sockets=sockets)
+                # asyncio listens with uvicorn's backlog, which is also how many it accepts per turn (kept
+                # small so that the cap applies before the open files run out); the kernel's queue stays long.
+                listen_socket.listen(LISTEN_BACKLOG)
 
             def handle_exit(self, sig, frame):  # Ctrl-C, SIGTERM: end the event streams, then stop
                 self.stopped_by = self.stopped_by or sig

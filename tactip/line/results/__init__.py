@@ -21,14 +21,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tactip.line.results._store import EXPORT_FIELDS, STATION_FIELDS, TAP_FIELDS, InspectionRow, ResultsError, ResultsStoreBase
+from tactip.line import HEARTBEAT_S
+from tactip.line.results._store import (EXPORT_FIELDS, STATION_FIELDS, TAP_FIELDS, InspectionRow, ResultsError,
+                                        ResultsStoreBase)
 from tactip.line.results.capability import process_capability
 from tactip.line.results.plot import plot_inspections
 from tactip.line.results.sqlite import ResultsStore
 
 __all__ = ["ResultsStore", "ResultsStoreBase", "PostgresResultsStore", "InspectionRow", "EXPORT_FIELDS",
            "TAP_FIELDS", "STATION_FIELDS", "ResultsError", "plot_inspections", "open_results", "is_database_url",
-           "describe_location", "process_capability"]
+           "describe_location", "process_capability", "HEARTBEAT_S"]
 
 _URL_SCHEMES = ("postgresql://", "postgres://")
 

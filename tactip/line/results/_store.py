@@ -34,7 +34,8 @@ EXPORT_FIELDS = (
 TAP_FIELDS = ("tap", "depth_mm", "location_estimate", "identity_estimate", "belief", "what_belief",
               "where_belief", "at")
 #: Columns of a station's status row (`ResultsStoreBase.update_station`, `ResultsStoreBase.stations`).
-STATION_FIELDS = ("name", "state", "arm", "frame_rate", "model", "host", "pid", "updated_at")
+STATION_FIELDS = ("name", "state", "arm", "frame_rate", "model", "host", "pid", "updated_at", "heartbeat_at")
+
 
 
 class ResultsError(TactipError):
@@ -84,6 +85,9 @@ class ResultsStoreBase:
 
     path: str
     read_only: bool
+    #: Whether a reader polling the store should open it anew for each poll (SQLite) rather than keep
+    #: one connection (PostgreSQL, reconnected only when the server drops it).
+    reopen_to_poll = False
 
     # -- backend hooks -----------------------------------------------------------------------
     def _query(self, sql: str, params=()) -> list[tuple]:  # pragma: no cover - abstract
@@ -213,20 +217,33 @@ class ResultsStoreBase:
             The perception model file in use.
         """
         self._refuse_if_read_only()
+        now = _now()
         self._write(
-            f"INSERT INTO stations ({', '.join(STATION_FIELDS)}) VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (name) "
+            f"INSERT INTO stations ({', '.join(STATION_FIELDS)}) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (name) "
             f"DO UPDATE SET {', '.join(f'{k} = excluded.{k}' for k in STATION_FIELDS[1:])}",
-            (name, state, arm, _opt(frame_rate), model, _HOST, os.getpid(), _now()),
+            (name, state, arm, _opt(frame_rate), model, _HOST, os.getpid(), now, now),
         )
+
+    def heartbeat(self, name: str) -> None:
+        """Say that station ``name`` is alive now (its row's ``heartbeat_at``); a working station calls it
+        every `HEARTBEAT_S` (`tactip.station.heartbeat.Heartbeat`), and a dashboard shows a station that
+        stopped beating while it should be working as offline."""
+        self._refuse_if_read_only()
+        self._write("UPDATE stations SET heartbeat_at = ? WHERE name = ?", (_now(), name))
 
     # -- reading -----------------------------------------------------------------------------
     def stations(self) -> list[dict]:
         """The stations' status rows (keys `STATION_FIELDS`), by name; [] for a database from before them."""
-        try:
-            rows = self._query(f"SELECT {', '.join(STATION_FIELDS)} FROM stations ORDER BY name")
-        except ResultsError:  # no stations table: written by an earlier version, opened read-only
-            return []
-        return [dict(zip(STATION_FIELDS, r)) for r in rows]
+        for fields in (STATION_FIELDS, STATION_FIELDS[:-1]):  # a database from before heartbeats, read-only
+            try:
+                rows = self._query(f"SELECT {', '.join(fields)} FROM stations ORDER BY name")
+            except ResultsError:
+                continue
+            out = [dict(zip(fields, r)) for r in rows]
+            for row in out:  # a status row of a version before heartbeats: its update was its last sign of life
+                row["heartbeat_at"] = row.get("heartbeat_at") or row["updated_at"]
+            return out
+        return []  # no stations table: written by an earlier version, opened read-only
 
     def inspections(self, *, limit: int | None = None, station: str | None = None) -> list[InspectionRow]:
         """Stored inspections, oldest first (the newest ``limit`` when given; of one ``station`` if given)."""

@@ -74,8 +74,10 @@ CREATE TABLE IF NOT EXISTS {SCHEMA_NAME}.stations (
     model TEXT,
     host TEXT,
     pid INTEGER,
-    updated_at TEXT NOT NULL
+    updated_at TEXT NOT NULL,
+    heartbeat_at TEXT
 );
+ALTER TABLE {SCHEMA_NAME}.stations ADD COLUMN IF NOT EXISTS heartbeat_at TEXT;
 """
 
 

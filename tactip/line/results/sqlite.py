@@ -27,7 +27,8 @@ taps
 stations
     one row per station, replaced as it works: ``name``, ``state`` (ready, inspecting, stopped[: reason]),
     ``arm`` (``BACKEND: ready`` or what stops it), ``frame_rate`` (camera, frames/s), ``model``,
-    ``host``, ``pid``, ``updated_at``.
+    ``host``, ``pid``, ``updated_at``, ``heartbeat_at`` (its last sign of life: written every few seconds
+    while it works; added to older databases by the first writer that opens them).
 """
 
 from __future__ import annotations
@@ -44,9 +45,8 @@ from tactip.line.results._store import SCHEMA_VERSION, ResultsError, ResultsStor
 
 __all__ = ["ResultsStore"]
 
-_SQLITE_MAGIC = b"SQLite format 3\x00"
 # Columns added after the first schema (nullable; added to older databases when a writer opens them).
-_ADDED_COLUMNS = {"pid": "INTEGER", "host": "TEXT"}
+_ADDED_COLUMNS = {"inspections": {"pid": "INTEGER", "host": "TEXT"}, "stations": {"heartbeat_at": "TEXT"}}
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -92,7 +92,8 @@ CREATE TABLE IF NOT EXISTS stations (
     model TEXT,
     host TEXT,
     pid INTEGER,
-    updated_at TEXT NOT NULL
+    updated_at TEXT NOT NULL,
+    heartbeat_at TEXT
 );
 """
 
@@ -126,6 +127,12 @@ class ResultsStore(ResultsStoreBase):
     True
     """
 
+    #: A reader that polls must open the file anew for each poll (`tactip.line.dashboard.feed`): when the last
+    #: writer process exits, SQLite deletes the -wal and -shm files, and a connection kept open across that
+    #: (with every other connection of its process, which share its -shm mapping) goes on reading a stale
+    #: index: old rows, or "database disk image is malformed".
+    reopen_to_poll = True
+
     def __init__(self, path: str | Path, *, read_only: bool = False):
         self.path = str(path)
         self.read_only = bool(read_only)
@@ -149,11 +156,12 @@ class ResultsStore(ResultsStoreBase):
                 self._db.execute("PRAGMA busy_timeout=10000")  # concurrent inspections share the file
                 self._db.execute("PRAGMA journal_mode=WAL")
                 self._db.executescript(_SCHEMA)
-                columns = {row[1] for row in self._db.execute("PRAGMA table_info(inspections)")}
-                for name, kind in _ADDED_COLUMNS.items():
-                    if name not in columns:
-                        with contextlib.suppress(sqlite3.OperationalError):  # added by a concurrent writer
-                            self._db.execute(f"ALTER TABLE inspections ADD COLUMN {name} {kind}")
+                for table, added in _ADDED_COLUMNS.items():
+                    columns = {row[1] for row in self._db.execute(f"PRAGMA table_info({table})")}
+                    for name, kind in added.items():
+                        if name not in columns:
+                            with contextlib.suppress(sqlite3.OperationalError):  # added by a concurrent writer
+                                self._db.execute(f"ALTER TABLE {table} ADD COLUMN {name} {kind}")
                 version = self._db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()
                 if version is None:
                     self._db.execute("INSERT OR IGNORE INTO meta VALUES ('schema', ?)",
@@ -185,11 +193,10 @@ class ResultsStore(ResultsStoreBase):
             return
         if not os.access(path, os.R_OK):
             raise PermissionError(errno.EACCES, f"permission denied reading {str(path)!r}")
-        with open(path, "rb") as f:
-            head = f.read(len(_SQLITE_MAGIC))
-        if head and head != _SQLITE_MAGIC:
-            raise ResultsError(f"{path} is not a tactip results database (not an SQLite file); it was left unchanged")
-        if head:
+        # SQLite reads the header, never open(): closing any descriptor of the file drops every POSIX lock this
+        # process holds on it, its connections' too; a writer process exiting then takes itself for the last one
+        # and deletes the -wal and -shm under them (a dashboard read "database disk image is malformed").
+        if path.stat().st_size:
             try:
                 with contextlib.closing(_connect_read_only(path)) as db:
                     tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
@@ -201,11 +208,14 @@ class ResultsStore(ResultsStoreBase):
                     columns = {t: {r[1] for r in db.execute(f"PRAGMA table_info({t})")}
                                for t in tables & set(_our_columns())}
             except sqlite3.Error as exc:
+                if "not a database" in str(exc):
+                    raise ResultsError(f"{path} is not a tactip results database (not an SQLite file); it was left "
+                                       f"unchanged") from None
                 raise self._error(exc, "reading") from None
             # A database whose creation was cut short (disk full) holds some of our tables, each with our
             # columns (older versions lack the added ones), and no schema row yet.
             stamped = schema is not None and str(schema).startswith("tactip-results/")
-            foreign = [t for t, have in columns.items() if not _our_columns()[t] - set(_ADDED_COLUMNS) <= have]
+            foreign = [t for t, have in columns.items() if not _our_columns()[t] - set(_ADDED_COLUMNS.get(t, ())) <= have]
             ours = stamped or (tables <= {*_our_columns(), "sqlite_sequence"} and not foreign)
             if tables - {"sqlite_sequence"} and not ours:
                 names = ", ".join(sorted(foreign or (tables - {"sqlite_sequence"}))[:5])

@@ -53,7 +53,7 @@ def test_the_same_writes_give_the_same_rows_in_sqlite_and_postgresql(tmp_path, p
             store.update_station("line-2", state="inspecting", arm="ur: ready", frame_rate=29.97)
             store.update_station("line-1", state="stopped: protective stop", arm="sim: protective stop",
                                  frame_rate=20.0, model="m.h5")             # one row per station, replaced
-            stations = [{k: v for k, v in s.items() if k not in ("updated_at", "host", "pid")}
+            stations = [{k: v for k, v in s.items() if k not in ("updated_at", "heartbeat_at", "host", "pid")}
                         for s in store.stations()]
             stored[str(where)] = (*_comparable(store), stations)
             assert [r.station for r in store.inspections(station="line-2")] == ["line-2"]
@@ -192,3 +192,19 @@ def test_sqlite_stays_the_default_and_refuses_other_urls(tmp_path):
     with pytest.raises(ConfigError, match="station.results must be a file path or a postgresql:// URL"):
         parse_station_config(table, base_dir=tmp_path)
     assert isinstance(open_results(tmp_path / "r.sqlite"), ResultsStore)
+
+
+def test_a_postgresql_database_from_before_heartbeats_is_read_and_gains_the_column(postgres_url):
+    import psycopg
+
+    with open_results(postgres_url) as store:
+        store.update_station("line-1", state="ready")
+    with psycopg.connect(postgres_url, autocommit=True) as db:                    # as an older version made it
+        db.execute("ALTER TABLE tactip.stations DROP COLUMN heartbeat_at")
+    with open_results(postgres_url, read_only=True) as reader:                    # read as is, not changed
+        (old,) = reader.stations()
+    assert old["heartbeat_at"] == old["updated_at"]
+    with open_results(postgres_url) as store:                                     # the next writer adds it
+        store.heartbeat("line-1")
+        (row,) = store.stations()
+    assert row["heartbeat_at"] > old["updated_at"] and row["updated_at"] == old["updated_at"]
