@@ -9,6 +9,9 @@ sweep: timed, as a first `tactip inspect --sim` would), then reports:
 3. live inspections of the 20 gaps on the simulated station, once per policy, from the same
    random start depths: mean absolute width error and mean taps.
 
+Fig. 9 is a fit, not a prediction: the skin's sag over a gap (`tactip.sim._pad.MEMBRANE_RHO_MM`, 8 -> 1 mm)
+was tuned so that the station reproduces it (`tactip reproduce 002` reports the figure with that note).
+
 The station is trained as in the figure, with the papers' histogram likelihood on one tap per depth,
 unless --likelihood and --repeats say otherwise (as tests/tactip/station/test_station_bar.py does); the
 preset's own default (gaussian, two repeats) decides in a few taps: bench_likelihoods.py measures it.

@@ -3,12 +3,12 @@
 `reproduce` runs one paper's experiment and returns a `Report`: JSON-ready rows (one per
 condition of the paper's figure) and comparisons of measured figures with the paper's numbers.
 Each simulated world was tuned only against the paper's first figure (001: fixed-position
-errors, Fig. 4 black; 003: Figs 5-6, passive; 004: passive perception); every other figure is a
-prediction. ``quick=True`` runs the same experiment with fewer runs and conditions (tests).
+errors, Fig. 4 black; 002: Fig. 9, the skin's sag over a gap; 003: Figs 5-6, passive; 004: passive
+perception); every other figure is a prediction. ``quick=True`` runs the same experiment with fewer runs and conditions (tests).
 
 - 000 (`tactip.reproduce.p000`): localisation acuity against class count, passive and active (Table II);
 - 001 (`tactip.reproduce.p001`): rods, joint decisions, 'boredom' deadline with random relocation;
-- 002: the inspection station (``bench/bench_station.py``; the CLI points there);
+- 002 (`tactip.reproduce.p002`): the inspection station, active / random / stationary perception (Fig. 9);
 - 003 (`tactip.reproduce.p003`): textures under depth uncertainty, passive / weakly / strongly active;
 - 004 (`tactip.reproduce.p004`): edge angle and position, contour following, adaptive prior.
 """
@@ -22,8 +22,8 @@ from tactip.reproduce.report import Comparison, Report
 __all__ = ["PAPERS", "Comparison", "Report", "reproduce"]
 
 #: Papers `reproduce` knows, with the module of each.
-PAPERS = {"000": "tactip.reproduce.p000", "001": "tactip.reproduce.p001", "003": "tactip.reproduce.p003",
-          "004": "tactip.reproduce.p004"}
+PAPERS = {"000": "tactip.reproduce.p000", "001": "tactip.reproduce.p001", "002": "tactip.reproduce.p002",
+          "003": "tactip.reproduce.p003", "004": "tactip.reproduce.p004"}
 
 
 def reproduce(paper: str, *, quick: bool = False, seed: int = 0, progress=None) -> Report:
@@ -31,7 +31,7 @@ def reproduce(paper: str, *, quick: bool = False, seed: int = 0, progress=None) 
 
     Parameters
     ----------
-    paper : {"000", "001", "003", "004"}
+    paper : {"000", "001", "002", "003", "004"}
     quick : bool
         Fewer runs and conditions (a few seconds to a minute), for tests.
     seed : int
@@ -49,5 +49,5 @@ def reproduce(paper: str, *, quick: bool = False, seed: int = 0, progress=None) 
         An unknown paper; the message lists the choices.
     """
     if paper not in PAPERS:
-        raise ValueError(f"unknown paper {paper!r}; choose from {', '.join(PAPERS)} (002: bench/bench_station.py)")
+        raise ValueError(f"unknown paper {paper!r}; choose from {', '.join(PAPERS)}")
     return importlib.import_module(PAPERS[paper]).run(quick=quick, seed=seed, progress=progress)
