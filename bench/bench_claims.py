@@ -1,0 +1,43 @@
+"""Each paper's headline claim over several seeds (`tactip.reproduce.seeds`): margins, 95 % interval, verdict.
+
+Runs ``tactip reproduce P --quick --seed S`` (or the full size with --full) for every paper and seed and
+judges each claim from its margins' interval, never from one seed (issue 25's bars).
+
+    python bench/bench_claims.py [--papers 000 001 002 003 004] [--seeds 0 1 2] [--full] [--json OUT]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+
+def main() -> None:
+    """Run the papers over the seeds and print one verdict per claim."""
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--papers", nargs="+", default=["000", "001", "002", "003", "004"])
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    parser.add_argument("--full", action="store_true", help="full-size runs (minutes each) instead of --quick")
+    parser.add_argument("--json", help="write the verdicts as JSON")
+    args = parser.parse_args()
+
+    from tactip.reproduce import reproduce
+    from tactip.reproduce.seeds import judge_claim
+
+    verdicts = []
+    for paper in args.papers:
+        started = time.monotonic()
+        rows = {seed: reproduce(paper, quick=not args.full, seed=seed).rows for seed in args.seeds}
+        verdict = judge_claim(paper, rows)
+        verdicts.append(verdict)
+        margins = ", ".join(f"{m:.3g}" for m in verdict.margins)
+        print(f"paper {paper} ({time.monotonic() - started:.0f} s, seeds {', '.join(map(str, args.seeds))}; "
+              f"margins {margins})\n{verdict.line()}", flush=True)
+    if args.json:
+        with open(args.json, "w") as out:
+            json.dump([v.json() for v in verdicts], out, indent=1)
+
+
+if __name__ == "__main__":
+    main()

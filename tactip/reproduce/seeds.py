@@ -1,0 +1,155 @@
+"""Each paper's headline claim judged over many seeds, from an interval and never from one seed.
+
+A claim is a function of one run's rows (`Report.rows`) that gives its *margin*: how far the
+simulated world is on the claim's side (> 0: the claim holds on that run), in the unit the claim
+names. Over N seeds, `judge_claim` takes the margins' mean and its 95 % interval (Student t), and says
+
+- **holds** when there are at least two seeds, the whole interval lies above 0 and every seed's
+  margin is above 0;
+- **partly holds** when the mean is above 0 but the interval reaches 0 or a seed fails;
+- **fails** when the mean is at or below 0.
+
+Claims (the issue's bars for paper comparisons):
+
+- 000: active perception's localisation error is no larger than passive's at every class count
+  (the fingertip's Table II; the margin is the smallest passive - active, mm);
+- 001: with a deadline of 5 taps the position error is lower and the shape error at most 5 % higher
+  than without one, at the highest threshold run (the smaller of the two relative margins);
+- 002: width error at 10 mean taps, active < random < stationary (the smaller gap, mm);
+- 003: strongly active <= half of passive and weakly active < passive (the smaller margin, classes);
+- 004: at threshold 0.5, the adaptive prior's angle error <= 0.9 x active's, with the contour closed
+  in at least half of the adaptive runs (the angle margin, deg; negative when the contour is open).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+__all__ = ["CLAIMS", "ClaimVerdict", "judge_claim", "claim_margin"]
+
+
+def _000(rows) -> float:
+    return min(r["passive_error_mm"] - r["active_error_mm"] for r in rows)
+
+
+def _001(rows) -> float:
+    top = max(r["threshold"] for r in rows)
+    at = {r["deadline"]: r for r in rows if r["threshold"] == top}
+    none, five = at[None], at[5]
+    position = (none["position_error_mm"] - five["position_error_mm"]) / none["position_error_mm"]
+    shape = 0.05 - (five["shape_error_mm"] - none["shape_error_mm"]) / none["shape_error_mm"]
+    return min(position, shape)
+
+
+def _002(rows) -> float:
+    at_10 = {}
+    for policy in ("active", "random", "stationary"):
+        mine = sorted((r for r in rows if r["policy"] == policy), key=lambda r: r["mean_taps"])
+        at_10[policy] = float(np.interp(10.0, [r["mean_taps"] for r in mine], [r["width_error_mm"] for r in mine]))
+    return min(at_10["random"] - at_10["active"], at_10["stationary"] - at_10["random"])
+
+
+def _003(rows) -> float:
+    error = {move: np.mean([r["texture_error_classes"] for r in rows if r["move_threshold"] == move])
+             for move in (1.5, 0.999, 0.05)}
+    return float(min(0.5 * error[1.5] - error[0.05], error[1.5] - error[0.999]))
+
+
+def _004(rows) -> float:
+    at = {r["method"]: r for r in rows if r["threshold"] == 0.5}
+    margin = 0.9 * at["active"]["angle_error_deg"] - at["adaptive"]["angle_error_deg"]
+    return margin if at["adaptive"]["closed_contour"] >= 0.5 else -abs(margin) - 1e-9
+
+
+#: The headline claim of each paper: (what it says, margin unit, margin of one run's rows).
+CLAIMS: dict[str, tuple[str, str, Callable]] = {
+    "000": ("active error <= passive error at every class count (fingertip)", "mm", _000),
+    "001": ("deadline 5 lowers the position error, shape error at most 5 % higher (highest threshold run)",
+            "fraction", _001),
+    "002": ("width error at 10 taps: active < random < stationary", "mm", _002),
+    "003": ("strongly active <= half of passive, weakly active < passive", "classes", _003),
+    "004": ("threshold 0.5: adaptive angle error <= 0.9 x active, contour closed", "deg", _004),
+}
+
+
+def claim_margin(paper: str, rows: list[dict]) -> float:
+    """The margin by which one run's rows are on the side of ``paper``'s claim (> 0: it holds)."""
+    if paper not in CLAIMS:
+        raise ValueError(f"no claim for paper {paper!r}; choose from {', '.join(CLAIMS)}")
+    return float(CLAIMS[paper][2](rows))
+
+
+@dataclass(frozen=True)
+class ClaimVerdict:
+    """A claim judged over seeds.
+
+    Attributes
+    ----------
+    paper, claim, unit : str
+    seeds : tuple of int
+    margins : (N,) ndarray
+        Each seed's margin (> 0: the claim holds on that seed).
+    mean : float
+    interval : (float, float)
+        95 % interval of the mean margin (Student t; the single value for one seed).
+    verdict : {"holds", "partly holds", "fails"}
+    """
+
+    paper: str
+    claim: str
+    unit: str
+    seeds: tuple
+    margins: np.ndarray
+    mean: float
+    interval: tuple
+    verdict: str
+
+    def line(self) -> str:
+        """One printed line."""
+        held = int((self.margins > 0).sum())
+        return (f"  claim: {self.claim}: {self.verdict} (margin {self.mean:.3g} {self.unit}, 95 % interval "
+                f"{self.interval[0]:.3g} to {self.interval[1]:.3g}; held on {held} of {len(self.margins)} seeds)")
+
+    def json(self) -> dict:
+        """JSON-ready fields."""
+        return {"paper": self.paper, "claim": self.claim, "unit": self.unit, "seeds": list(self.seeds),
+                "margins": [float(m) for m in self.margins], "mean": self.mean, "interval": list(self.interval),
+                "verdict": self.verdict}
+
+
+def judge_claim(paper: str, rows_per_seed: dict[int, list[dict]]) -> ClaimVerdict:
+    """Judge ``paper``'s claim from the rows of one run per seed.
+
+    Parameters
+    ----------
+    paper : str
+    rows_per_seed : dict of int -> list of dict
+        Each seed's `Report.rows`.
+
+    Returns
+    -------
+    ClaimVerdict
+    """
+    from scipy import stats
+
+    seeds = tuple(sorted(rows_per_seed))
+    if not seeds:
+        raise ValueError("no seeds to judge a claim on")
+    margins = np.array([claim_margin(paper, rows_per_seed[s]) for s in seeds])
+    mean = float(margins.mean())
+    if len(margins) > 1:
+        half = float(stats.t.ppf(0.975, len(margins) - 1) * margins.std(ddof=1) / np.sqrt(len(margins)))
+    else:
+        half = 0.0
+    interval = (mean - half, mean + half)
+    if mean <= 0:
+        verdict = "fails"
+    elif len(margins) >= 2 and interval[0] > 0 and (margins > 0).all():   # one seed is not a claim
+        verdict = "holds"
+    else:
+        verdict = "partly holds"
+    claim, unit, _ = CLAIMS[paper]
+    return ClaimVerdict(paper, claim, unit, seeds, margins, mean, interval, verdict)

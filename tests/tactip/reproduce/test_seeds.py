@@ -1,0 +1,51 @@
+"""tactip.reproduce.seeds: a claim is judged from its margins' interval over seeds, never from one seed."""
+
+import numpy as np
+import pytest
+
+from tactip.reproduce.seeds import CLAIMS, claim_margin, judge_claim
+
+
+def _003_rows(passive, weakly, strongly):
+    return [{"move_threshold": m, "texture_error_classes": e} for m, e in ((1.5, passive), (0.999, weakly),
+                                                                            (0.05, strongly))]
+
+
+def test_003_margin_is_the_smaller_of_its_two_conditions():
+    assert claim_margin("003", _003_rows(1.4, 1.2, 0.4)) == pytest.approx(min(0.7 - 0.4, 1.4 - 1.2))
+    assert claim_margin("003", _003_rows(1.4, 1.5, 0.4)) == pytest.approx(-0.1)     # weakly worse than passive
+
+
+def test_002_margin_compares_the_policies_at_10_taps():
+    rows = [{"policy": p, "mean_taps": t, "width_error_mm": e} for p, (e5, e15) in
+            {"active": (0.4, 0.2), "random": (0.6, 0.4), "stationary": (0.9, 0.7)}.items()
+            for t, e in ((5.0, e5), (15.0, e15))]
+    assert claim_margin("002", rows) == pytest.approx(0.2)                          # 0.3, 0.5, 0.8 at 10 taps
+
+
+def test_004_an_open_contour_fails_whatever_the_angle():
+    rows = [{"method": "active", "threshold": 0.5, "angle_error_deg": 10.0, "closed_contour": 1.0},
+            {"method": "adaptive", "threshold": 0.5, "angle_error_deg": 5.0, "closed_contour": 1.0}]
+    assert claim_margin("004", rows) == pytest.approx(4.0)
+    rows[1]["closed_contour"] = 0.2
+    assert claim_margin("004", rows) < 0
+
+
+def test_verdicts_come_from_the_interval():
+    # weakly active far below passive: the strongly active margin decides
+    held = judge_claim("003", {s: _003_rows(1.4, 0.5, 0.7 - m) for s, m in enumerate([0.3, 0.35, 0.25, 0.3])})
+    assert held.verdict == "holds" and np.allclose(held.margins, [0.3, 0.35, 0.25, 0.3])
+    assert held.mean == pytest.approx(0.3) and 0 < held.interval[0] < 0.3 < held.interval[1]
+    mixed = judge_claim("003", {s: _003_rows(1.4, 0.5, 0.7 - m) for s, m in enumerate([0.3, -0.05, 0.2])})
+    assert mixed.verdict == "partly holds" and mixed.mean > 0 and mixed.interval[0] < 0
+    failed = judge_claim("003", {s: _003_rows(1.4, 0.5, 0.7 - m) for s, m in enumerate([-0.1, 0.05, -0.2])})
+    assert failed.verdict == "fails"
+    one = judge_claim("003", {0: _003_rows(1.4, 1.2, 0.4)})
+    assert one.verdict == "partly holds" and one.interval == (one.mean, one.mean)   # one seed is not a claim
+    assert "held on 1 of 1 seeds" in one.line() and one.json()["verdict"] == "partly holds"
+
+
+def test_every_paper_has_a_claim():
+    assert set(CLAIMS) == {"000", "001", "002", "003", "004"}
+    with pytest.raises(ValueError, match="no claim"):
+        claim_margin("005", [])
