@@ -81,7 +81,7 @@ from tactip.replay.contacts import analyse, check_rest_frame
 from tactip.replay.result import ReplayResult
 from tactip.replay.writers import FORMAT, write_annotated, write_hdf5
 
-__all__ = ["ReplayResult", "replay_video", "track_video", "FORMAT", "check_rest_frame"]
+__all__ = ["ReplayResult", "replay_video", "track_video", "check_replay_options", "FORMAT", "check_rest_frame"]
 
 
 
@@ -188,20 +188,9 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
     >>> print(result.summary())                                                                   # doctest: +SKIP
     """
 
-    if int(rest_frame) != rest_frame or rest_frame < 0:
-        raise ValueError(f"rest_frame must be a non-negative integer, got {rest_frame}")
-    for name, value in (("pad_diameter_mm", pad_diameter_mm), ("mm_per_px", mm_per_px)):
-        if value is not None and not (value > 0 and math.isfinite(value)):
-            raise ValueError(f"{name} must be a finite number > 0, got {value}")
-    for name, value in (("n_pins", n_pins), ("pins_on_pad", pins_on_pad), ("expected_pins", expected_pins)):
-        if value is not None and (int(value) != value or value < 1):
-            raise ValueError(f"{name} must be a positive integer, got {value}")
-    if not (min_separation_mm >= 0 and math.isfinite(min_separation_mm)):
-        raise ValueError(f"min_separation_mm must be a finite number >= 0, got {min_separation_mm}")
-    if sensor is not None:
-        from pins import sensor_preset
-
-        sensor_preset(sensor)  # ValueError naming the choices
+    check_replay_options(rest_frame=rest_frame, pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px, n_pins=n_pins,
+                         pins_on_pad=pins_on_pad, expected_pins=expected_pins, min_separation_mm=min_separation_mm,
+                         sensor=sensor)
     cal, model, model_path = _load_station_files(calibration, model, decision_threshold, n_samples=n_samples,
                                                  given=dict(expected_pins=expected_pins, params=params,
                                                             mm_per_px=mm_per_px, sensor=sensor,
@@ -267,6 +256,32 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         expected_pins=expected_pins, warnings=list(analysis["warnings"]), decisions=decisions,
                         contact_kinds=list(analysis.get("kinds", [])),
                         pins_seen=[int(n) for n in track.pins_seen])
+
+
+def check_replay_options(*, rest_frame: int = 0, pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
+                         n_pins: int = 40, pins_on_pad: int | None = None, expected_pins: int | None = None,
+                         min_separation_mm: float = 4.0, sensor: str | None = None) -> None:
+    """Refuse `replay_video`'s options out of range, before any video is opened (a batch checks them once).
+
+    Raises
+    ------
+    ValueError
+        The first option out of range, named, with its value (an unknown sensor lists the choices).
+    """
+    if int(rest_frame) != rest_frame or rest_frame < 0:
+        raise ValueError(f"rest_frame must be a non-negative integer, got {rest_frame}")
+    for name, value in (("pad_diameter_mm", pad_diameter_mm), ("mm_per_px", mm_per_px)):
+        if value is not None and not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be a finite number > 0, got {value}")
+    for name, value in (("n_pins", n_pins), ("pins_on_pad", pins_on_pad), ("expected_pins", expected_pins)):
+        if value is not None and (int(value) != value or value < 1):
+            raise ValueError(f"{name} must be a positive integer, got {value}")
+    if not (min_separation_mm >= 0 and math.isfinite(min_separation_mm)):
+        raise ValueError(f"min_separation_mm must be a finite number >= 0, got {min_separation_mm}")
+    if sensor is not None:
+        from pins import sensor_preset
+
+        sensor_preset(sensor)  # ValueError naming the choices
 
 
 def track_video(video, *, calibration=None, params: DetectionParams | None = None, expected_pins: int | None = None,
