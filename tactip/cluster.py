@@ -28,10 +28,15 @@ from typing import Callable, Iterable, Iterator
 
 from tactip.errors import TactipError
 
-__all__ = ["open_client", "cluster_map", "default_workers"]
+__all__ = ["open_client", "cluster_map", "default_workers", "LOOPBACK_ONLY"]
 
 #: Seconds to wait for a scheduler named by its address before giving up.
 CONNECT_TIMEOUT_S = 10.0
+
+#: An embedded cluster listens on the loopback only: no dashboard, and the scheduler's own HTTP server
+#: (health checks, which it always starts, by default on port 8787 of its host) on a free loopback port.
+#: Worker processes reach the scheduler over TCP on 127.0.0.1; worker threads in process.
+LOOPBACK_ONLY = dict(dashboard_address=None, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
 
 
 def default_workers() -> int:
@@ -77,11 +82,9 @@ def open_client(scheduler: str | None = None, *, workers: int | None = None, pro
     if workers is not None and (int(workers) != workers or workers < 1):
         raise ValueError(f"workers must be a positive integer, got {workers}")
     if scheduler is None:
-        # Worker processes talk to the scheduler over TCP on the loopback only; worker threads in process.
-        where = dict(host="127.0.0.1") if processes else {}
         with LocalCluster(n_workers=int(workers or default_workers()), threads_per_worker=int(threads_per_worker),
-                          processes=processes, dashboard_address=None, silence_logs=40, **where) as cluster, \
-                Client(cluster) as client:
+                          processes=processes, silence_logs=40, **LOOPBACK_ONLY,
+                          **(dict(host="127.0.0.1") if processes else {})) as cluster, Client(cluster) as client:
             yield client
         return
     try:
@@ -117,7 +120,11 @@ def cluster_map(client, *, progress: Callable | None = None) -> Callable[[Callab
         from distributed import as_completed
 
         items = list(items)
-        futures = client.map(function, items, pure=False)
+        if not items:
+            return []
+        # The function (often a partial holding a whole environment) goes to the cluster once, not per item.
+        shared = client.scatter(function, broadcast=True, hash=False)
+        futures = client.map(_apply, items, function=shared, pure=False)
         bar = progress(total=len(items)) if progress is not None else None
         try:
             for future in as_completed(futures):
@@ -129,5 +136,11 @@ def cluster_map(client, *, progress: Callable | None = None) -> Callable[[Callab
             if bar is not None:
                 bar.close()
             client.cancel([f for f in futures if not f.done()])
+            client.cancel([shared])
 
     return map_fn
+
+
+def _apply(item, function):
+    """``function(item)`` on a worker (`cluster_map`'s task; the function arrives as scattered data)."""
+    return function(item)
