@@ -239,8 +239,8 @@ def _replay_one(video: str, target: str, options: dict) -> dict:
     from tactip.replay.video import replay_video
 
     started = time.perf_counter()
-    try:
-        result = replay_video(video, target, progress=False, **options)
+    try:  # one decoder thread: the cluster runs a replay per core already
+        result = replay_video(video, target, progress=False, decode_threads=1, **options)
     except Exception as exc:  # noqa: BLE001 - any error of one video is that video's, named in its row
         return _row(video, target, "failed", error=_one_line(exc), seconds=time.perf_counter() - started)
     return _row(video, target, "written", frames=result.frames, pins=result.pins, taps=len(result.tap_bounds),

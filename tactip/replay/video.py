@@ -113,7 +113,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                  min_separation_mm: float = 4.0, sensor: str | None = None, pins_on_pad: int | None = None,
                  pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
                  rest_frame: int = 0, calibration=None, model=None, decision_threshold: float | None = None,
-                 progress: bool = False) -> ReplayResult:
+                 progress: bool = False, decode_threads: int | None = None) -> ReplayResult:
     """Track the pins of a recorded video and write positions, displacements, lost masks and tap features to HDF5.
 
     Parameters
@@ -158,6 +158,9 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         theta_dec of the decision; default the model's recommended one, else 0.9.
     progress : bool
         Show a tqdm progress bar in frames (on stderr).
+    decode_threads : int, optional
+        Threads of the video decoder (default: every core but the one that tracks); a batch running
+        a replay per core gives each one (the output is the same whatever the count).
 
     Returns
     -------
@@ -208,7 +211,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         track, analysis, frame_size, frame_rate = track_video(
             video, calibration=cal, params=params, expected_pins=expected_pins, n_samples=n_samples,
             n_pins=n_pins, min_separation_mm=min_separation_mm, sensor=sensor, pins_on_pad=pins_on_pad,
-            pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px, rest_frame=rest_frame, progress=progress)
+            pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px, rest_frame=rest_frame, progress=progress,
+            decode_threads=decode_threads)
         # From here on the tracking is kept whatever happens: problems become warnings.
         bounds = analysis["bounds"]
         valid = track.valid if len(analysis["selected"]) else np.zeros(len(bounds), dtype=bool)
@@ -287,11 +291,12 @@ def check_replay_options(*, rest_frame: int = 0, pad_diameter_mm: float | None =
 def track_video(video, *, calibration=None, params: DetectionParams | None = None, expected_pins: int | None = None,
                 n_samples: int = 40, n_pins: int = 40, min_separation_mm: float = 4.0, sensor: str | None = None,
                 pins_on_pad: int | None = None, pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
-                rest_frame: int = 0, progress: bool = False) -> tuple:
+                rest_frame: int = 0, progress: bool = False, decode_threads: int | None = None) -> tuple:
     """Track the pins of a recording and find its contacts and their features (replay's work, no file written).
 
     The options are `replay_video`'s (checked there), except that `calibration` must be a loaded
-    `calibration.SensorCalibration` (or None). ``tactip dataset build`` calls it per recording.
+    `calibration.SensorCalibration` (or None), and ``decode_threads`` sets the decoder's threads
+    (default: every core but the one that tracks). ``tactip dataset build`` calls it per recording.
 
     Returns
     -------
@@ -317,7 +322,8 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
 
     # The decoder on one thread fewer than the cores: this thread tracks on the last one, and
     # FFmpeg's second thread on a 2-core machine only adds its own overhead to the contention.
-    with open_source(video, grey=True, decode_threads=_decode_threads()) as source:
+    threads = _decode_threads() if decode_threads is None else max(1, int(decode_threads))
+    with open_source(video, grey=True, decode_threads=threads) as source:
         if source.live:
             raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
         if calibration is not None and tuple(source.frame_size) != tuple(calibration.frame_size):
