@@ -9,7 +9,7 @@ torch = pytest.importorskip("torch")
 
 from pins import PinTracker, find_pin_field  # noqa: E402
 from pins._window import WindowCentroids  # noqa: E402
-from pins.accel import BatchedWindowCentroids, pick_device  # noqa: E402
+from pins.accel import BatchedWindowCentroids, WindowBatcher, pick_device  # noqa: E402
 from tactip.sim import PRESETS, Contact, SyntheticTacTip  # noqa: E402
 
 
@@ -89,3 +89,51 @@ def test_devices_and_shapes_are_checked():
         batched.measure(np.zeros((8, 8), np.uint8), [0], [[4.0, 4.0]], [2.0])
     with pytest.raises(ValueError, match=r"frame_index must be \(1,\)"):
         batched.measure(np.zeros((1, 8, 8), np.uint8), [0, 0], [[4.0, 4.0]], [2.0])
+
+
+def _tap_frames(preset: str, seed: int):
+    sensor = SyntheticTacTip.from_preset(preset, seed=seed)
+    frames = [f.image for f in sensor.tap(Contact(4.0, 2.0), frame_rate=20.0, rest_before_s=0.1, rest_after_s=0.1)]
+    return [f if f.ndim == 2 else cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
+
+
+def _track(frames, wrap=None):
+    field = find_pin_field(frames[0])
+    tracker = PinTracker(detection=field.params, disc=field.disc)
+    positions = [tracker.start(frames[0], field.centres)]
+    if wrap is not None:
+        tracker.windows = wrap(tracker.windows)
+    positions += [tracker.update(frame) for frame in frames[1:]]
+    return np.array(positions)
+
+
+def test_trackers_in_lockstep_measure_together_and_track_as_alone():
+    """Three videos (two pads, frames of two sizes, uneven lengths) tracked on threads through one batcher."""
+    import threading
+
+    videos = [_tap_frames("tactip-331", 1), _tap_frames("tactip-127", 2)[:-3], _tap_frames("small-pad-100", 3)]
+    alone = [_track(frames) for frames in videos]
+    batcher = WindowBatcher(device="cpu")
+    together, errors = [None] * len(videos), []
+
+    def run(k):
+        try:
+            with batcher.member():
+                together[k] = _track(videos[k], wrap=batcher.wrap)
+        except Exception as exc:  # noqa: BLE001 - re-raised below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(len(videos))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=120)
+    assert not errors and not any(thread.is_alive() for thread in threads)
+    for mine, theirs in zip(together, alone):
+        assert mine.shape == theirs.shape
+        assert np.array_equal(np.isnan(mine), np.isnan(theirs))
+        assert np.nanmax(np.abs(mine - theirs)) <= 0.01
+    # Windows of several videos were measured in one batch (three at first, fewer as videos end).
+    assert max(batcher.batches) == 3 and sum(batcher.batches) > 3 * len(videos[1])
+    with pytest.raises(ValueError, match="start it first"):
+        PinTracker().windows = None
