@@ -13,7 +13,12 @@ disturbed by other processes) and the ratio to one worker (bar on a 2-core machi
 >= 1.15x one), with each repeat's ratio, and the rerun: the same batch again into the same folder,
 which skips every finished file, as a fraction of the first run's time (bar: under 30 %).
 
+With ``--device cuda`` (or ``torch-cpu``) it also replays the archive on one worker with that
+device (``--together`` videos a task, tracked in lockstep, their pin windows measured in one torch
+batch) and prints its frames/s against one worker on the NumPy path, on the same files.
+
 Run: .venv/bin/python bench/bench_batch_replay.py [--files 16] [--repeats 3] [--workers 1 2 4]
+     .venv/bin/python bench/bench_batch_replay.py --workers 1 --device cuda --together 16
 """
 
 from __future__ import annotations
@@ -52,8 +57,10 @@ def main() -> None:
     parser.add_argument("--files", type=int, default=16, help="videos in the archive (default 16)")
     parser.add_argument("--repeats", type=int, default=3, help="runs per worker count (default 3)")
     parser.add_argument("--workers", type=int, nargs="+", help="worker counts (default 1, 2 and all cores)")
+    parser.add_argument("--device", choices=("cuda", "torch-cpu"), help="also the batched torch path on one worker")
+    parser.add_argument("--together", type=int, default=8, help="videos per task with --device (default 8)")
     args = parser.parse_args()
-    counts = args.workers or sorted({1, 2, default_workers()})
+    counts = sorted({1, *(args.workers or {1, 2, default_workers()})})
     with tempfile.TemporaryDirectory() as tmp:
         root = pathlib.Path(tmp)
         (root / "archive").mkdir()
@@ -76,12 +83,26 @@ def main() -> None:
                     assert all(r["status"] == "skipped" for r in again.rows)
                 runs.setdefault(workers, []).append(seconds)
                 best[workers] = min(best.get(workers, seconds), seconds)
+        if args.device:
+            batched = []
+            for repeat in range(args.repeats):
+                with open_client(workers=1) as client:
+                    client.wait_for_workers(1)
+                    started = time.perf_counter()
+                    result = replay_batch(videos, root / f"out-{args.device}-{repeat}", client=client,
+                                          device=args.device, together=args.together)
+                    batched.append(time.perf_counter() - started)
+                    assert not result.failed, result.failed
         print(f"{'workers':>7} {'files/s':>8} {'frames/s':>9} {'x 1 worker':>10}  each repeat x 1 worker   rerun/first")
         for workers in counts:
             ratio = best[1] / best[workers] if 1 in best else float("nan")
             each = " ".join(f"{a / b:.2f}" for a, b in zip(runs.get(1, []), runs[workers]))
             print(f"{workers:>7} {len(videos) / best[workers]:>8.2f} {len(videos) * per_file / best[workers]:>9.0f} "
                   f"{ratio:>10.2f}  {each:<22} {max(rerun[workers]):.1%} (worst)")
+        if args.device:
+            frames = len(videos) * per_file
+            print(f"1 worker, {args.device} batched ({args.together} videos a task): {frames / min(batched):.0f} "
+                  f"frames/s, {best[1] / min(batched):.2f}x the NumPy path's {frames / best[1]:.0f} frames/s")
 
 
 if __name__ == "__main__":

@@ -29,6 +29,8 @@ cluster (--workers N, default one per core) or a running cluster (--scheduler tc
 workers see the same paths). A video that fails is named at the end, after the others are done, and
 the command exits 1; a rerun skips the videos whose output is already in place (--overwrite replays
 them). OUT/summary.json has one row per video. One video without --out-dir replays as above.
+Where torch sees a GPU (tactip[accel]; --device auto, the default), each worker tracks --together
+videos at once and measures their pins' windows in one batch on the GPU: the same files.
 
 Example:
   tactip replay samples/synthetic_tap.mp4 --out out/replay.h5 --annotate out/annotated.mp4 --sensor tactip-331
@@ -74,6 +76,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        "instead (dask scheduler; dask worker tcp://HOST:PORT on each machine)")
     batch.add_argument("--overwrite", action="store_true", help="replay again videos whose output is in OUT "
                        "(default: skip them)")
+    batch.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
+                       help="cuda: track --together videos at once per worker, their pin windows measured in one "
+                       "torch batch on the GPU (tactip[accel]); cpu: each video on its own; auto (default): cuda "
+                       "where torch sees a GPU, else cpu. The files are the same")
+    batch.add_argument("--together", type=int_in_range(1, 256), default=8, metavar="N",
+                       help="videos tracked together per GPU task (default 8)")
     parser.add_argument("--annotate", type=output_file, metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
     add_sensor_arguments(parser)
@@ -123,10 +131,13 @@ def run(args: argparse.Namespace) -> int:
     if args.out_dir is not None:
         return _run_batch(args, params)
     batch_only = [flag for flag, value in (("--workers", args.workers), ("--scheduler", args.scheduler),
-                                           ("--overwrite", args.overwrite or None)) if value is not None]
+                                           ("--overwrite", args.overwrite or None),
+                                           ("--device", None if args.device == "auto" else args.device),
+                                           ("--together", None if args.together == 8 else args.together))
+                  if value is not None]
     if batch_only:
-        raise TactipError(f"{', '.join(batch_only)} go with --out-dir (a batch); one video with --out is "
-                          f"replayed here, its output replaced")
+        raise TactipError(f"{', '.join(batch_only)} {'goes' if len(batch_only) == 1 else 'go'} with --out-dir (a "
+                          f"batch); one video with --out is replayed here, its output replaced")
     if len(args.videos) > 1:
         raise TactipError(f"{len(args.videos)} videos need --out-dir OUT (one HDF5 file each); --out names one "
                           f"video's file")
@@ -160,9 +171,19 @@ def _run_batch(args: argparse.Namespace, params) -> int:
                               f"video and no annotated videos")
     if args.scheduler is not None and args.workers is not None:
         raise TactipError("--workers sizes the embedded local cluster; a --scheduler's cluster has its own workers")
+    if args.device == "cuda" and args.scheduler is None:  # the embedded cluster's GPU is this machine's
+        from pins.accel import pick_device
+
+        try:
+            pick_device("cuda")
+        except ImportError:
+            raise TactipError("--device cuda needs torch: pip install 'tactip[accel]'") from None
+        except ValueError as exc:
+            raise TactipError(f"--device cuda: {exc}") from None
     videos = expand_videos(args.videos)
     with open_client(args.scheduler, workers=args.workers) as client:
         result = replay_batch(videos, args.out_dir, client=client, overwrite=args.overwrite, progress=not args.quiet,
+                              device=args.device, together=args.together,
                               expected_pins=args.expected_pins, params=params, n_samples=args.samples,
                               n_pins=args.pins, min_separation_mm=args.min_separation_mm, sensor=args.sensor,
                               pins_on_pad=args.pins_on_pad, pad_diameter_mm=args.pad_diameter_mm,

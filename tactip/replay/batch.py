@@ -13,6 +13,9 @@ one recorded in it, so that a worker on any machine of the cluster finds it).
   is not replaced: that video fails, named.
 - ``OUT/summary.json`` has one row per video: its output, status (``written``, ``skipped`` or
   ``failed``), error, frames, pins, taps, warnings and the seconds its replay took.
+- On a GPU (``device="cuda"``, or ``auto`` where torch sees one) a task replays several videos
+  together (`replay_together`): their trackers step in lockstep on threads and their windowed pin
+  centroids are measured in one torch batch (`pins.accel.WindowBatcher`); the files are the same.
 
 `expand_videos` turns the command line's videos, folders and glob patterns into the list of videos.
 
@@ -35,9 +38,11 @@ import time
 
 from tactip.errors import SourceError, TactipError
 
-__all__ = ["BatchResult", "VIDEO_SUFFIXES", "expand_videos", "replay_batch", "output_path"]
+__all__ = ["BatchResult", "VIDEO_SUFFIXES", "expand_videos", "replay_batch", "replay_together", "output_path"]
 
 #: Files a folder given to a batch is searched for (a folder holding none is one recording: its frames).
+#: Videos a task tracks together on a GPU (`replay_together`).
+TOGETHER = 8
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv")
 SUMMARY = "summary.json"
 
@@ -127,7 +132,7 @@ class BatchResult:
 
 
 def replay_batch(videos, out_dir, *, client, overwrite: bool = False, progress: bool = False,
-                 **options) -> BatchResult:
+                 device: str = "cpu", together: int = TOGETHER, **options) -> BatchResult:
     """Replay every video into ``out_dir/<stem>.h5`` on a Dask client's workers; write ``out_dir/summary.json``.
 
     Parameters
@@ -142,6 +147,14 @@ def replay_batch(videos, out_dir, *, client, overwrite: bool = False, progress: 
         Replay videos whose output is already in place (default: skip them).
     progress : bool
         A tqdm bar of videos done, with the frames replayed (on stderr).
+    device : {"cpu", "auto", "cuda", "torch-cpu"}
+        ``cpu`` (default): each video on its own, the NumPy path. ``cuda``: `together` videos per task
+        tracked in lockstep, their windowed centroids measured in one torch batch on the worker's GPU
+        (`replay_together`); ``auto``: ``cuda`` where torch sees a GPU here, else ``cpu`` (torch not
+        needed). ``torch-cpu``: the batched path on the CPU's torch (slower than ``cpu``; for tests).
+        The files are the same whichever runs.
+    together : int
+        Videos per task on a GPU.
     **options
         `replay_video`'s options (not ``annotate_path``); ``calibration`` and ``model`` as paths.
         Checked once, before any video is sent.
@@ -165,6 +178,9 @@ def replay_batch(videos, out_dir, *, client, overwrite: bool = False, progress: 
 
     if "annotate_path" in options:
         raise TactipError("a batch writes no annotated videos: replay one video with --annotate")
+    if int(together) != together or together < 1:
+        raise ValueError(f"together must be a positive integer, got {together}")
+    torch_device = _torch_device(device)
     started = time.perf_counter()
     check_replay_options(**{k: options[k] for k in ("rest_frame", "pad_diameter_mm", "mm_per_px", "n_pins",
                                                     "pins_on_pad", "expected_pins", "min_separation_mm", "sensor")
@@ -186,7 +202,9 @@ def replay_batch(videos, out_dir, *, client, overwrite: bool = False, progress: 
         rows.append(row)
         if row is None:
             todo.append(len(rows) - 1)
-    _run(client, videos, targets, rows, todo, options, progress=progress)
+    size = 1 if torch_device is None else int(together)
+    _run(client, videos, targets, rows, [todo[k:k + size] for k in range(0, len(todo), size)], options,
+         torch_device=torch_device, progress=progress)
     result = BatchResult(out_dir, rows, time.perf_counter() - started)
     write_text_atomic(out_dir / SUMMARY, json.dumps({"videos": len(rows), "failed": len(result.failed),
                                                     "seconds": round(result.seconds, 3), "rows": rows},
@@ -255,27 +273,95 @@ def _one_line(exc: BaseException) -> str:
     return text if known and text else f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _run(client, videos, targets, rows, todo, options, *, progress: bool) -> None:
-    """Send the videos in ``todo`` to the workers; fill their rows as they finish."""
+def _run(client, videos, targets, rows, chunks, options, *, torch_device, progress: bool) -> None:
+    """Send the videos of each chunk to the workers (one task a chunk); fill their rows as they finish."""
     from distributed import as_completed
     from tqdm import tqdm
 
-    futures = {client.submit(_replay_one, str(videos[i]), str(targets[i]), options, pure=False,
-                             key=f"replay-{i}-{videos[i].name}"): i for i in todo}
-    bar = tqdm(total=len(rows), initial=len(rows) - len(todo), unit="video", desc="replay",
+    futures = {}
+    for chunk in chunks:
+        paths, outputs = [str(videos[i]) for i in chunk], [str(targets[i]) for i in chunk]
+        key = f"replay-{chunk[0]}-{videos[chunk[0]].name}"
+        future = (client.submit(_replay_one, paths[0], outputs[0], options, pure=False, key=key)
+                  if torch_device is None else
+                  client.submit(replay_together, paths, outputs, device=torch_device, pure=False, key=key, **options))
+        futures[future] = chunk
+    bar = tqdm(total=len(rows), initial=len(rows) - sum(map(len, chunks)), unit="video", desc="replay",
                disable=not progress, leave=False)
     frames = 0
     try:
         for future in as_completed(futures):
-            i = futures[future]
+            chunk = futures[future]
             try:
-                rows[i] = future.result()
-            except Exception as exc:  # noqa: BLE001 - a worker that died on this video (KilledWorker), say
-                rows[i] = _row(videos[i], targets[i], "failed", error=f"its worker failed: {_one_line(exc)}")
-            frames += rows[i]["frames"] or 0
+                done = future.result()
+                done = [done] if isinstance(done, dict) else done
+            except Exception as exc:  # noqa: BLE001 - a worker that died on these videos (KilledWorker), say
+                done = [_row(videos[i], targets[i], "failed", error=f"its worker failed: {_one_line(exc)}")
+                        for i in chunk]
+            for i, row in zip(chunk, done):
+                rows[i] = row
+                frames += row["frames"] or 0
             failed = sum(1 for r in rows if r is not None and r["status"] == "failed")
             bar.set_postfix_str(f"{frames} frames, {failed} failed", refresh=False)
-            bar.update(1)
+            bar.update(len(chunk))
     finally:
         bar.close()
         client.cancel([f for f in futures if not f.done()])
+
+
+def _torch_device(device: str) -> str | None:
+    """The torch device a batch tracks on, or None for the NumPy path (``auto`` without a GPU or torch)."""
+    if device == "cpu":
+        return None
+    if device == "torch-cpu":
+        return "cpu"
+    if device == "auto":
+        try:
+            import torch
+        except ImportError:  # the accel extra is not installed: nothing changes
+            return None
+        return "cuda" if torch.cuda.is_available() else None
+    if device == "cuda":
+        return "cuda"  # checked where the replays run: the workers' machines have the GPUs
+    raise ValueError(f"unknown device {device!r}; choose from auto, cpu, cuda")
+
+
+def replay_together(videos, targets, *, device: str = "auto", **options) -> list[dict]:
+    """Replay several videos at once, their trackers in lockstep (one thread each), windows measured in one batch.
+
+    Each video's tracker gives its windowed centroids to one `pins.accel.WindowBatcher`, which
+    measures every video's windows of a step together as torch tensors (on a GPU); each video's file is
+    the one `replay_video` writes alone. Needs torch (the ``accel`` extra).
+
+    Parameters
+    ----------
+    videos, targets : sequence of str
+        The videos and their output files.
+    device : str
+        ``auto`` (a GPU if torch sees one, else the CPU), ``cuda`` or ``cpu``.
+    **options
+        `replay_video`'s options.
+
+    Returns
+    -------
+    list of dict
+        One summary row per video (as in ``summary.json``); a failed video's row names its error.
+    """
+    import threading
+
+    from pins.accel import WindowBatcher
+
+    batcher = WindowBatcher(device=device)
+    rows: list = [None] * len(videos)
+
+    def replay(k: int) -> None:
+        with batcher.member():
+            rows[k] = _replay_one(videos[k], targets[k], dict(options, wrap_windows=batcher.wrap))
+
+    threads = [threading.Thread(target=replay, args=(k,), name=f"replay-{k}") for k in range(len(videos))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    return [row if row is not None else _row(video, target, "failed", error="its replay thread stopped")
+            for video, target, row in zip(videos, targets, rows)]

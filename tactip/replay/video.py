@@ -113,7 +113,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                  min_separation_mm: float = 4.0, sensor: str | None = None, pins_on_pad: int | None = None,
                  pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
                  rest_frame: int = 0, calibration=None, model=None, decision_threshold: float | None = None,
-                 progress: bool = False, decode_threads: int | None = None) -> ReplayResult:
+                 progress: bool = False, decode_threads: int | None = None, wrap_windows=None) -> ReplayResult:
     """Track the pins of a recorded video and write positions, displacements, lost masks and tap features to HDF5.
 
     Parameters
@@ -161,6 +161,10 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
     decode_threads : int, optional
         Threads of the video decoder (default: every core but the one that tracks); a batch running
         a replay per core gives each one (the output is the same whatever the count).
+    wrap_windows : callable, optional
+        Given the tracker's windowed centroids once it has started, returns their stand-in
+        (`pins.accel.WindowBatcher.wrap`: many videos' windows measured together on a GPU,
+        `tactip.replay.batch.replay_together`); the same positions.
 
     Returns
     -------
@@ -212,7 +216,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
             video, calibration=cal, params=params, expected_pins=expected_pins, n_samples=n_samples,
             n_pins=n_pins, min_separation_mm=min_separation_mm, sensor=sensor, pins_on_pad=pins_on_pad,
             pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px, rest_frame=rest_frame, progress=progress,
-            decode_threads=decode_threads)
+            decode_threads=decode_threads, wrap_windows=wrap_windows)
         # From here on the tracking is kept whatever happens: problems become warnings.
         bounds = analysis["bounds"]
         valid = track.valid if len(analysis["selected"]) else np.zeros(len(bounds), dtype=bool)
@@ -291,12 +295,13 @@ def check_replay_options(*, rest_frame: int = 0, pad_diameter_mm: float | None =
 def track_video(video, *, calibration=None, params: DetectionParams | None = None, expected_pins: int | None = None,
                 n_samples: int = 40, n_pins: int = 40, min_separation_mm: float = 4.0, sensor: str | None = None,
                 pins_on_pad: int | None = None, pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
-                rest_frame: int = 0, progress: bool = False, decode_threads: int | None = None) -> tuple:
+                rest_frame: int = 0, progress: bool = False, decode_threads: int | None = None,
+                wrap_windows=None) -> tuple:
     """Track the pins of a recording and find its contacts and their features (replay's work, no file written).
 
     The options are `replay_video`'s (checked there), except that `calibration` must be a loaded
-    `calibration.SensorCalibration` (or None), and ``decode_threads`` sets the decoder's threads
-    (default: every core but the one that tracks). ``tactip dataset build`` calls it per recording.
+    `calibration.SensorCalibration` (or None), ``decode_threads`` sets the decoder's threads
+    (default: every core but the one that tracks) and ``wrap_windows`` is `replay_video`'s. ``tactip dataset build`` calls it per recording.
 
     Returns
     -------
@@ -340,7 +345,7 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
             plan = _Plan(calibration=calibration, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),
                          sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
                          mm_per_px=mm_per_px, expected_pins=expected_pins, rest_frame=int(rest_frame))
-            start = _Start(params=params, expected_pins=expected_pins, calibration=calibration)
+            start = _Start(params=params, expected_pins=expected_pins, calibration=calibration, wrap=wrap_windows)
             try:
                 track = frames_to_features(reader, start=start, rest_frame=int(rest_frame), selected=plan.selected,
                                            contacts=plan.contacts, n_samples=int(n_samples), progress=progress,
@@ -401,16 +406,19 @@ def _load_station_files(calibration, model, decision_threshold, *, n_samples: in
 class _Start:
     """Starts the tracker on the rest frame (`tactip.pipeline.Start`)."""
 
-    def __init__(self, *, params, expected_pins, calibration):
+    def __init__(self, *, params, expected_pins, calibration, wrap=None):
         # Without parameters the polarity is decided from the rest frame, as `tactip detect` does.
         self.params = calibration.detection if calibration is not None else params
-        self.expected_pins, self.calibration = expected_pins, calibration
+        self.expected_pins, self.calibration, self.wrap = expected_pins, calibration, wrap
 
     def __call__(self, image):
         """(tracker, rest positions, pins found, detection params, field line, warnings) of the rest frame."""
         warnings: list[str] = []
         started = _start(image, params=self.params, expected_pins=self.expected_pins, calibration=self.calibration,
                          warnings=warnings)
+        tracker = started[0]
+        if self.wrap is not None and tracker.windows is not None:  # e.g. measured with other videos' windows
+            tracker.windows = self.wrap(tracker.windows)
         return (*started, warnings)
 
 

@@ -188,3 +188,27 @@ def test_cli_batch_on_a_dask_scheduler_and_worker(archive, scheduler, tmp_path, 
     before = _mtimes(out)
     assert main(["replay", str(folder / "tap*.mp4"), "--out-dir", str(out), "--scheduler", scheduler]) == 0
     assert "8 skipped" in capsys.readouterr().out and _mtimes(out) == before
+
+
+def test_videos_tracked_together_on_torch_write_the_same_files(archive, client, tmp_path):
+    """The batched torch path (CPU torch here): several videos a task, windows measured together, same bytes."""
+    pytest.importorskip("torch")
+    folder, expected = archive
+    videos = expand_videos([folder])
+    result = replay_batch(videos, tmp_path, client=client, device="torch-cpu", together=3)
+    assert {p.name: p.read_bytes() for p in tmp_path.glob("*.h5")} == expected
+    assert [r["status"] for r in result.rows] == ["failed"] + ["written"] * COUNT
+    assert "not a video" in result.rows[0]["error"]
+    with pytest.raises(ValueError, match="unknown device"):
+        replay_batch(videos, tmp_path, client=client, device="tpu")
+
+
+def test_cli_device_cuda_without_a_gpu_is_one_clear_error(archive, tmp_path, capsys):
+    torch = pytest.importorskip("torch")
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a GPU")
+    folder, _ = archive
+    assert main(["replay", str(folder), "--out-dir", str(tmp_path / "out"), "--device", "cuda", "--quiet"]) == 1
+    error = capsys.readouterr().err
+    assert error.startswith("tactip replay: error: --device cuda:") and "no GPU" in error and error.count("\n") == 1
+    assert not (tmp_path / "out").exists()
