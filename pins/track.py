@@ -360,6 +360,7 @@ class PinTracker:
 
     @windows.setter
     def windows(self, windows) -> None:
+        """Replace the refiner's windowed centroids (after `start`; `ValueError` before)."""
         if getattr(self, "_refiner", None) is None:
             raise ValueError("the tracker has no windows to replace: start it first (with refinement)")
         self._refiner.windows = windows
