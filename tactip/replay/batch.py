@@ -33,6 +33,7 @@ from __future__ import annotations
 import dataclasses
 import glob
 import json
+import os
 import pathlib
 import time
 
@@ -190,7 +191,7 @@ def replay_batch(videos, out_dir, *, client, overwrite: bool = False, progress: 
                         given={k: options.get(k) for k in ("expected_pins", "params", "mm_per_px", "sensor",
                                                            "pins_on_pad", "pad_diameter_mm")})
     for key in ("calibration", "model"):  # workers read them from their paths, wherever they run
-        if options.get(key) is not None:
+        if isinstance(options.get(key), (str, os.PathLike)):
             options[key] = str(pathlib.Path(options[key]).resolve())
     out_dir = pathlib.Path(out_dir).resolve()
     videos = [pathlib.Path(v).resolve() for v in videos]
