@@ -164,6 +164,10 @@ def scheduler(tmp_path):
         address = json.loads(info.read_text())["address"]
         started.append(_dask("worker", address, "--host", "127.0.0.1", "--nthreads", "1", "--nworkers", "1",
                              "--no-dashboard", "--local-directory", str(tmp_path / "worker"), env=env))
+        from distributed import Client
+
+        with Client(address, timeout=60) as client:  # a worker that cannot start fails here, not by hanging
+            client.wait_for_workers(1, timeout=60)
         yield address
     finally:
         for process in reversed(started):
