@@ -30,7 +30,7 @@ from tactip.errors import TactipError
 
 __all__ = ["open_client", "cluster_map", "default_workers", "LOOPBACK_ONLY"]
 
-#: Seconds to wait for a scheduler named by its address before giving up.
+#: Seconds to wait for a scheduler named by its address, and then for one of its workers, before giving up.
 CONNECT_TIMEOUT_S = 10.0
 
 #: An embedded cluster listens on the loopback only: no dashboard, and the scheduler's own HTTP server
@@ -73,7 +73,7 @@ def open_client(scheduler: str | None = None, *, workers: int | None = None, pro
     ValueError
         `workers` below 1, or given with `scheduler`.
     TactipError
-        The scheduler cannot be reached within `CONNECT_TIMEOUT_S`.
+        The scheduler cannot be reached, or has no worker, within `CONNECT_TIMEOUT_S`.
     """
     from distributed import Client, LocalCluster
 
@@ -94,6 +94,11 @@ def open_client(scheduler: str | None = None, *, workers: int | None = None, pro
                           f"{str(exc).splitlines()[0] if str(exc) else 'no answer'}); start one with "
                           f"'dask scheduler' and give its tcp://HOST:PORT") from None
     with client:
+        try:  # tasks sent to a cluster without workers would wait for ever
+            client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
+        except TimeoutError:
+            raise TactipError(f"the Dask scheduler at {scheduler} has no workers (none joined within "
+                              f"{CONNECT_TIMEOUT_S:g} s); start them with 'dask worker {scheduler}'") from None
         yield client
 
 

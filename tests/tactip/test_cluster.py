@@ -90,6 +90,16 @@ def test_an_unreachable_scheduler_is_one_clear_error(monkeypatch):
             pass
 
 
+def test_a_scheduler_without_workers_is_one_clear_error(monkeypatch):
+    import tactip.cluster
+
+    monkeypatch.setattr(tactip.cluster, "CONNECT_TIMEOUT_S", 0.5)
+    with LocalCluster(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1", **LOOPBACK_ONLY) as cluster:
+        with pytest.raises(TactipError, match="has no workers .*dask worker tcp://127.0.0.1"):
+            with open_client(cluster.scheduler_address):
+                pass
+
+
 def test_fixation_sweep_on_the_cluster_equals_a_run_here(client):
     model = fit_model(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=6)
     env = VirtualEnvironment(model, gap_dataset(seed=2, taps_per_class=10, **GRID))
