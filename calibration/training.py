@@ -117,7 +117,8 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
     progress, log : callable
         A tqdm-like progress factory; where a line saying that the target was missed goes.
     **options
-        Passed to the sweeps: ``thresholds``, ``deadline``, ``move_threshold``, ``shift_mode``.
+        Passed to the sweeps: ``thresholds``, ``deadline``, ``move_threshold``, ``shift_mode``, and
+        ``map_fn`` (the fixations run through it, e.g. on a Dask cluster: `tactip.cluster.cluster_map`).
 
     Returns
     -------

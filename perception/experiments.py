@@ -18,10 +18,13 @@ Example
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from _shared.mapping import map_pieces
 
 from .errors import DatasetError
 from .montecarlo import MonteCarloResult, VirtualEnvironment, monte_carlo
@@ -119,8 +122,13 @@ def _budget_figures(results, tap_budget):
     return errors, taps, thresholds
 
 
+def _fixation_run(fixation_class: int, *, environment: VirtualEnvironment, seed, options: dict) -> MonteCarloResult:
+    """The runs of one fixation (a piece of `fixation_sweep`; module level, so it travels to a worker)."""
+    return monte_carlo(environment, FixationPolicy(int(fixation_class)), seed=seed, **options)
+
+
 def fixation_sweep(environment: VirtualEnvironment, *, fixation_classes=None, tap_budget: float = TAP_BUDGET,
-                   seed=0, progress=None, **options) -> FixationSweep:
+                   seed=0, progress=None, map_fn=None, **options) -> FixationSweep:
     """Active ('fixation point') perception for each fixation location (paper 002 Fig. 10).
 
     Parameters
@@ -134,6 +142,10 @@ def fixation_sweep(environment: VirtualEnvironment, *, fixation_classes=None, ta
         Seed of every fixation's runs (same true classes and starting locations).
     progress : callable, optional
         Wraps the iterable of fixations (e.g. ``tqdm``).
+    map_fn : callable, optional
+        Runs the fixations: ``map_fn(function, fixation_classes)``, results in order (e.g.
+        `tactip.cluster.cluster_map` on a Dask cluster); the results are the same as run here
+        (default), since every fixation's runs use the same seed.
     **options
         Passed to `monte_carlo`.
 
@@ -146,8 +158,8 @@ def fixation_sweep(environment: VirtualEnvironment, *, fixation_classes=None, ta
     classes = np.arange(model.n_locations) if fixation_classes is None else np.asarray(fixation_classes, np.intp)
     if classes.ndim != 1 or classes.size == 0 or ((classes < 0) | (classes >= model.n_locations)).any():
         raise ValueError(f"fixation_classes must be location classes in [0, {model.n_locations}), got {classes}")
-    results = tuple(monte_carlo(environment, FixationPolicy(int(c)), seed=seed, **options)
-                    for c in (progress or _identity)(classes.tolist()))
+    run = functools.partial(_fixation_run, environment=environment, seed=seed, options=options)
+    results = tuple(map_pieces(run, classes.tolist(), map_fn=map_fn, progress=progress))
     errors, taps, thresholds = _budget_figures(results, tap_budget)
     best = int(np.lexsort((taps, errors))[0])
     return FixationSweep(model.location_centres[classes], results, float(tap_budget), errors, taps, thresholds, best)
@@ -173,8 +185,17 @@ class LateralSweep:
     ratio: np.ndarray
 
 
+def _lateral_run(sigma: float, *, environment: VirtualEnvironment, policy: Policy, seed, options: dict):
+    """The runs with test taps within [-sigma, sigma] mm (a piece of `lateral_sweep`)."""
+    try:
+        restricted = environment.restrict(np.abs(environment.lateral) <= sigma + 1e-9)
+    except DatasetError as exc:
+        raise DatasetError(f"lateral sigma {sigma:g} mm: {exc}") from None
+    return monte_carlo(restricted, policy, seed=seed, **options)
+
+
 def lateral_sweep(environment: VirtualEnvironment, policy: Policy, *, sigmas=(0.0, 0.25, 0.5, 1.0, 2.0),
-                  tap_budget: float = TAP_BUDGET, seed=0, progress=None, **options) -> LateralSweep:
+                  tap_budget: float = TAP_BUDGET, seed=0, progress=None, map_fn=None, **options) -> LateralSweep:
     """Robustness to lateral placement noise (paper 002 Fig. 11).
 
     For each sigma the runs draw test taps only among those with |lateral| <= sigma, i.e. with
@@ -189,6 +210,9 @@ def lateral_sweep(environment: VirtualEnvironment, policy: Policy, *, sigmas=(0.
     tap_budget : float
     seed : int
     progress : callable, optional
+    map_fn : callable, optional
+        Runs the sigmas: ``map_fn(function, sigmas)``, results in order (e.g. `tactip.cluster.cluster_map`);
+        the same results as run here (default).
     **options
         Passed to `monte_carlo`.
 
@@ -203,13 +227,8 @@ def lateral_sweep(environment: VirtualEnvironment, policy: Policy, *, sigmas=(0.
     sigmas = np.sort(np.asarray(sigmas, dtype=np.float64))
     if sigmas.ndim != 1 or sigmas.size == 0 or (sigmas < 0).any():
         raise ValueError(f"sigmas must be values >= 0, got {sigmas}")
-    results = []
-    for sigma in (progress or _identity)(sigmas.tolist()):
-        try:
-            restricted = environment.restrict(np.abs(environment.lateral) <= sigma + 1e-9)
-        except DatasetError as exc:
-            raise DatasetError(f"lateral sigma {sigma:g} mm: {exc}") from None
-        results.append(monte_carlo(restricted, policy, seed=seed, **options))
+    run = functools.partial(_lateral_run, environment=environment, policy=policy, seed=seed, options=options)
+    results = map_pieces(run, sigmas.tolist(), map_fn=map_fn, progress=progress)
     errors, _, _ = _budget_figures(results, tap_budget)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = errors / errors[0]

@@ -25,9 +25,12 @@ Example
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
+
+from _shared.mapping import map_pieces
 
 from . import bayes
 from .montecarlo import VirtualEnvironment
@@ -381,10 +384,23 @@ def _other_seed(seed):
     return seed
 
 
+def _accuracy_row(fixation_class, *, environment, runs, seed, max_taps, target, tolerance, options):
+    """(threshold, mean taps, accuracy) at one fixation: a piece of `fixation_for_accuracy` (module level, so
+    that it travels to a worker); NaN, NaN, the best accuracy reached when the target is not."""
+    from .policies import FixationPolicy
+
+    trace = trace_beliefs(environment, FixationPolicy(int(fixation_class)), runs=runs, max_taps=max_taps, seed=seed,
+                          **options)
+    decisions, best_accuracy = threshold_for_accuracy(trace, target, tolerance=tolerance)
+    if decisions is None:
+        return np.nan, np.nan, best_accuracy
+    return decisions.threshold, float(decisions.taps.mean()), float(decisions.within(tolerance).mean())
+
+
 def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tolerance: float = 0.0,
                           fixation_classes=None, runs: int = 2000, max_taps: int = 20, seed=0,
                           progress=None, temper: bool = False, confirm_runs: int | None = None,
-                          **options) -> AccuracySweep:
+                          map_fn=None, **options) -> AccuracySweep:
     """For each fixation location, the threshold whose decisions reach ``target`` accuracy in the fewest taps.
 
     Parameters
@@ -410,6 +426,9 @@ def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tol
         target on them reaches it less often on others (with 2000 runs on the simulated station: 80-95 %
         of live decisions within tolerance for a target of 95 %). Default ``max(runs, 10000)``; 0 keeps
         the sweep's choice.
+    map_fn : callable, optional
+        Runs the fixations: ``map_fn(function, fixation_classes)``, results in order (e.g.
+        `tactip.cluster.cluster_map` on a Dask cluster); the same results as run here (default).
     **options
         ``move_threshold``, ``shift_mode`` for `trace_beliefs`.
 
@@ -422,28 +441,24 @@ def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tol
     model = environment.model
     classes = np.arange(model.n_locations) if fixation_classes is None else np.asarray(fixation_classes, np.intp)
 
-    def row(env, c, runs=runs, seed=seed):
-        trace = trace_beliefs(env, FixationPolicy(int(c)), runs=runs, max_taps=max_taps, seed=seed, **options)
-        decisions, best_accuracy = threshold_for_accuracy(trace, target, tolerance=tolerance)
-        if decisions is None:
-            return np.nan, np.nan, best_accuracy
-        return decisions.threshold, float(decisions.taps.mean()), float(decisions.within(tolerance).mean())
-
-    rows = [row(environment, c) for c in (progress or (lambda x: x))(classes.tolist())]
+    row = functools.partial(_accuracy_row, runs=runs, seed=seed, max_taps=max_taps, target=target,
+                            tolerance=tolerance, options=options)
+    rows = map_pieces(functools.partial(row, environment=environment), classes.tolist(), map_fn=map_fn,
+                      progress=progress)
     thresholds, taps, accuracy = (np.array(column, dtype=np.float64) for column in zip(*rows))
     reached = np.isfinite(taps)
     best = int(np.nanargmin(taps)) if reached.any() else None
     factor = 1.0
     if temper and best is not None:
         fitted = fit_policy_tempering(environment, FixationPolicy(int(classes[best])), runs=runs, seed=seed, **options)
-        tempered = row(environment.tempered(fitted), classes[best])
+        tempered = row(classes[best], environment=environment.tempered(fitted))
         if np.isfinite(tempered[1]):  # the target is still reached (else keep the untempered model)
             factor = fitted
             thresholds[best], taps[best], accuracy[best] = tempered
     confirm_runs = max(runs, 10000) if confirm_runs is None else int(confirm_runs)
     if confirm_runs > 0 and best is not None:
         # The threshold again at the chosen fixation, on runs that did not choose it (another seed).
-        confirmed = row(environment.tempered(factor) if factor != 1.0 else environment, classes[best],
+        confirmed = row(classes[best], environment=environment.tempered(factor) if factor != 1.0 else environment,
                         runs=confirm_runs, seed=_other_seed(seed))
         if np.isfinite(confirmed[1]):
             thresholds[best], taps[best], accuracy[best] = confirmed

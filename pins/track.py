@@ -349,6 +349,23 @@ class PinTracker:
                 f"detect_every={self.detect_every}) [{state}]")
 
     @property
+    def windows(self):
+        """The refiner's windowed centroids (`pins._window.WindowCentroids`), None before `start` or without refinement.
+
+        Settable after `start`, to a stand-in with the same interface: `pins.accel.WindowBatcher.wrap`'s
+        measures the windows of many trackers' frames together (a GPU); positions are the same.
+        """
+        refiner = getattr(self, "_refiner", None)
+        return None if refiner is None else refiner.windows
+
+    @windows.setter
+    def windows(self, windows) -> None:
+        """Replace the refiner's windowed centroids (after `start`; `ValueError` before)."""
+        if getattr(self, "_refiner", None) is None:
+            raise ValueError("the tracker has no windows to replace: start it first (with refinement)")
+        self._refiner.windows = windows
+
+    @property
     def gate_px(self) -> float:
         """Gate of search and recovery, px (fraction of the pin spacing at start)."""
         return self.gate_fraction * self.spacing_px

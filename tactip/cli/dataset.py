@@ -19,6 +19,9 @@
       or unreadable file, empty label, a video without contact) is named and left out; nothing is
       written when nothing is left, and nothing half-written on an error or Ctrl-C. Existing outputs
       are kept unless --overwrite.
+      Many recordings: --workers N replays them on an embedded Dask cluster of N worker processes, or
+      --scheduler tcp://HOST:PORT on a running Dask cluster (as tactip replay --out-dir does); the
+      datasets are the same as made one recording after another (the default).
 
 Examples:
   tactip dataset build slides/labels.csv --out data/slides --label direction_deg --period 360
@@ -32,6 +35,8 @@ Examples:
 from __future__ import annotations
 
 import argparse
+import contextlib
+import functools
 from pathlib import Path
 
 from tactip.cli._types import float_in_range, int_in_range, output_folder, seed
@@ -71,13 +76,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="rows of an image's tap (its displacement repeated; default 1, or --samples when the set "
                             "also holds videos)")
     add_sensor_arguments(build)  # --expected-pins, --samples, --pins, --min-separation-mm, scale, --rest-frame, --dark-pins
+    build.add_argument("--workers", type=int_in_range(1, 1024), metavar="N",
+                       help="track the recordings on an embedded Dask cluster of N workers (default: one by one here)")
+    build.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                       help="track the recordings on this Dask cluster (its workers must see the same paths)")
     build.add_argument("--overwrite", action="store_true", help="replace existing outputs in DIR")
     build.add_argument("--quiet", action="store_true", help="no progress bars and no summary")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``tactip dataset build`` (`tactip.dataset.build_dataset`) and print its summary."""
-    from tactip.dataset import build_dataset
     from tactip.errors import TactipError
 
     if args.test_fraction >= 1.0:
@@ -90,14 +98,33 @@ def run(args: argparse.Namespace) -> int:
         if given:
             raise TactipError(f"{', '.join(given)} cannot be combined with --calibration (it sets detection, pins "
                               f"and scale)")
-    result = build_dataset(args.labels, args.out, label=args.label, classes=args.classes, period=args.period,
-                           unit=args.unit, split=args.split, test_fraction=args.test_fraction, seed=args.seed,
-                           rest=args.rest, calibration=args.calibration, expected_pins=args.expected_pins,
-                           n_pins=args.pins, min_separation_mm=args.min_separation_mm, sensor=args.sensor,
-                           pins_on_pad=args.pins_on_pad, pad_diameter_mm=args.pad_diameter_mm,
-                           mm_per_px=args.mm_per_px, dark_pins=True if args.dark_pins else None,
-                           n_samples=args.samples, image_samples=args.image_samples, rest_frame=args.rest_frame,
-                           overwrite=args.overwrite, progress=not args.quiet)
+    if args.workers is not None and args.scheduler is not None:
+        raise TactipError("--workers sizes the embedded Dask cluster; a --scheduler's cluster has its own workers")
+    with contextlib.ExitStack() as stack:
+        map_fn = None
+        if args.workers is not None or args.scheduler is not None:
+            from tqdm import tqdm
+
+            from tactip.cluster import cluster_map, open_client
+
+            client = stack.enter_context(open_client(args.scheduler, workers=args.workers))
+            map_fn = cluster_map(client, progress=functools.partial(tqdm, desc="recordings", unit="recording",
+                                                                    disable=args.quiet))
+        result = _build(args, map_fn)
     if not args.quiet:
         print(result.text())
     return 0
+
+
+def _build(args: argparse.Namespace, map_fn):
+    """`tactip.dataset.build_dataset` with the command's options."""
+    from tactip.dataset import build_dataset
+
+    return build_dataset(args.labels, args.out, label=args.label, classes=args.classes, period=args.period,
+                         unit=args.unit, split=args.split, test_fraction=args.test_fraction, seed=args.seed,
+                         rest=args.rest, calibration=args.calibration, expected_pins=args.expected_pins,
+                         n_pins=args.pins, min_separation_mm=args.min_separation_mm, sensor=args.sensor,
+                         pins_on_pad=args.pins_on_pad, pad_diameter_mm=args.pad_diameter_mm,
+                         mm_per_px=args.mm_per_px, dark_pins=True if args.dark_pins else None,
+                         n_samples=args.samples, image_samples=args.image_samples, rest_frame=args.rest_frame,
+                         overwrite=args.overwrite, progress=not args.quiet, map_fn=map_fn)

@@ -23,9 +23,20 @@ model. With --model as well, a passive perceiver decides the gap width from the 
 (the recording cannot move the sensor); the HDF5 file gets a 'decisions' group, each tap's
 estimate is printed, and the annotated video shows each tap's width estimate and belief.
 
+An archive: several videos, folders of videos or quoted glob patterns with --out-dir OUT write
+OUT/<stem>.h5 for each (the file a single replay writes), on Dask distributed: an embedded local
+cluster (--workers N, default one per core) or a running cluster (--scheduler tcp://HOST:PORT, whose
+workers see the same paths). A video that fails is named at the end, after the others are done, and
+the command exits 1; a rerun skips the videos whose output is already in place (--overwrite replays
+them). OUT/summary.json has one row per video. One video without --out-dir replays as above.
+Where torch sees a GPU (tactip[accel]; --device auto, the default), each worker tracks --together
+videos at once and measures their pins' windows in one batch on the GPU: the same files.
+
 Example:
   tactip replay samples/synthetic_tap.mp4 --out out/replay.h5 --annotate out/annotated.mp4 --sensor tactip-331
   tactip replay taps.mp4 --out out/replay.h5 --calibration data/calibration.h5 --model data/model.h5
+  tactip replay archive/ 'more/**/*.mp4' --out-dir out/archive --sensor tactip-331 --workers 2
+  tactip replay archive/ --out-dir /shared/out --scheduler tcp://10.0.0.5:8786
 """
 
 from __future__ import annotations
@@ -36,7 +47,7 @@ import math
 from _shared.ranges import MAX_SAMPLES
 from tactip.cli._scale import add_scale_arguments, pin_count
 from tactip.cli._types import (float_in_range, int_in_range, non_negative_float, non_negative_int,
-                               output_file)
+                               output_file, output_folder)
 
 HELP = "track the pins of a recorded video, find the taps and write positions and tap features to HDF5"
 
@@ -53,8 +64,24 @@ def _finite(parse):
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``tactip replay``."""
-    parser.add_argument("video", metavar="VIDEO", help="video file (or folder of frames) to replay")
-    parser.add_argument("--out", type=output_file, required=True, metavar="RESULT.h5", help="HDF5 file to write")
+    parser.add_argument("videos", nargs="+", metavar="VIDEO", help="video file (or folder of frames) to replay; "
+                        "with --out-dir: several, folders of videos or quoted glob patterns")
+    parser.add_argument("--out", type=output_file, metavar="RESULT.h5", help="HDF5 file to write (one video)")
+    batch = parser.add_argument_group("archives (several videos, on Dask distributed)")
+    batch.add_argument("--out-dir", type=output_folder, metavar="OUT", help="write OUT/<stem>.h5 per video and "
+                       "OUT/summary.json")
+    batch.add_argument("--workers", type=int_in_range(1, 1024), metavar="N",
+                       help="workers of the embedded local cluster (default: one per core)")
+    batch.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on the Dask cluster of this scheduler "
+                       "instead (dask scheduler; dask worker tcp://HOST:PORT on each machine)")
+    batch.add_argument("--overwrite", action="store_true", help="replay again videos whose output is in OUT "
+                       "(default: skip them)")
+    batch.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
+                       help="cuda: track --together videos at once per worker, their pin windows measured in one "
+                       "torch batch on the GPU (tactip[accel]); cpu: each video on its own; auto (default): cuda "
+                       "where torch sees a GPU, else cpu. The files are the same")
+    batch.add_argument("--together", type=int_in_range(1, 256), default=8, metavar="N",
+                       help="videos tracked together per GPU task (default 8)")
     parser.add_argument("--annotate", type=output_file, metavar="OUT.mp4", help="also write a video with pins, displacement "
                         "arrows (x3) and the tap state drawn on")
     add_sensor_arguments(parser)
@@ -94,16 +121,31 @@ def add_sensor_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Replay the video (`tactip.replay.video.replay_video`) and print what was found."""
+    """Replay the video (`tactip.replay.video.replay_video`) and print what was found; or a batch."""
     from pins import DetectionParams
-    from tactip.replay.video import replay_video
+    from tactip.errors import TactipError
 
     if args.decision_threshold is not None and args.model is None:
-        from tactip.errors import TactipError
-
         raise TactipError("--decision-threshold sets the model's decisions: it needs --model (and --calibration)")
     params = DetectionParams(dark_pins=True) if args.dark_pins and not args.calibration else None
-    result = replay_video(args.video, args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,
+    if args.out_dir is not None:
+        return _run_batch(args, params)
+    batch_only = [flag for flag, value in (("--workers", args.workers), ("--scheduler", args.scheduler),
+                                           ("--overwrite", args.overwrite or None),
+                                           ("--device", None if args.device == "auto" else args.device),
+                                           ("--together", None if args.together == 8 else args.together))
+                  if value is not None]
+    if batch_only:
+        raise TactipError(f"{', '.join(batch_only)} {'goes' if len(batch_only) == 1 else 'go'} with --out-dir (a "
+                          f"batch); one video with --out is replayed here, its output replaced")
+    if len(args.videos) > 1:
+        raise TactipError(f"{len(args.videos)} videos need --out-dir OUT (one HDF5 file each); --out names one "
+                          f"video's file")
+    if args.out is None:
+        raise TactipError("give --out RESULT.h5 (one video) or --out-dir OUT (one file per video)")
+    from tactip.replay.video import replay_video
+
+    result = replay_video(args.videos[0], args.out, annotate_path=args.annotate, expected_pins=args.expected_pins,
                           params=params, n_samples=args.samples,
                           n_pins=args.pins, min_separation_mm=args.min_separation_mm,
                           sensor=args.sensor, pins_on_pad=args.pins_on_pad,
@@ -112,4 +154,46 @@ def run(args: argparse.Namespace) -> int:
                           decision_threshold=args.decision_threshold, progress=not args.quiet)
     if not args.quiet:
         print(result.summary())
+    return 0
+
+
+def _run_batch(args: argparse.Namespace, params) -> int:
+    """--out-dir: every video on Dask (`tactip.replay.batch.replay_batch`); failed videos named, exit 1."""
+    import sys
+
+    from tactip.cluster import open_client
+    from tactip.errors import TactipError
+    from tactip.replay.batch import expand_videos, replay_batch
+
+    for flag, value in (("--out", args.out), ("--annotate", args.annotate)):
+        if value is not None:
+            raise TactipError(f"{flag} names one video's output; a batch (--out-dir) writes OUT/<stem>.h5 per "
+                              f"video and no annotated videos")
+    if args.scheduler is not None and args.workers is not None:
+        raise TactipError("--workers sizes the embedded local cluster; a --scheduler's cluster has its own workers")
+    if args.device == "cuda" and args.scheduler is None:  # the embedded cluster's GPU is this machine's
+        from pins.accel import pick_device
+
+        try:
+            pick_device("cuda")
+        except ImportError:
+            raise TactipError("--device cuda needs torch: pip install 'tactip[accel]'") from None
+        except ValueError as exc:
+            raise TactipError(f"--device cuda: {exc}") from None
+    videos = expand_videos(args.videos)
+    with open_client(args.scheduler, workers=args.workers) as client:
+        result = replay_batch(videos, args.out_dir, client=client, overwrite=args.overwrite, progress=not args.quiet,
+                              device=args.device, together=args.together,
+                              expected_pins=args.expected_pins, params=params, n_samples=args.samples,
+                              n_pins=args.pins, min_separation_mm=args.min_separation_mm, sensor=args.sensor,
+                              pins_on_pad=args.pins_on_pad, pad_diameter_mm=args.pad_diameter_mm,
+                              mm_per_px=args.mm_per_px, rest_frame=args.rest_frame, calibration=args.calibration,
+                              model=args.model, decision_threshold=args.decision_threshold)
+    if not args.quiet:
+        print(result.text())
+    for row in result.failed:
+        print(f"failed: {row['video']}: {row['error']}", file=sys.stderr)
+    if result.failed:
+        raise TactipError(f"{len(result.failed)} of {len(result.rows)} videos failed (named above); the others are "
+                          f"in {result.out_dir}")
     return 0

@@ -7,10 +7,14 @@ active) or 004 (edge angle and position, contour following, adaptive prior). Eac
 tuned against one figure of its paper (the report says which: a fit, not a prediction); the other
 figures are predictions. --quick runs the same
 experiment with fewer runs and conditions (seconds to a minute); the full run takes minutes.
+With --scheduler tcp://HOST:PORT the conditions (003: the simulator seeds; 001: the deadlines; 004:
+the methods and thresholds; 000: the class counts) run on that Dask cluster: the same figures, seed
+for seed, as a run here.
 
 Examples:
   tactip reproduce 001 --json results/001.json
   tactip reproduce 004 --quick
+  tactip reproduce 003 --scheduler tcp://10.0.0.5:8786
 """
 
 from __future__ import annotations
@@ -29,11 +33,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", type=output_file, metavar="OUT.json", help="write the rows of the paper's figures")
     parser.add_argument("--quick", action="store_true", help="fewer runs and conditions (for a quick look and tests)")
     parser.add_argument("--seed", type=seed, default=0, help="seed of the simulated sensor and runs, >= 0 (default 0)")
+    parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                        help="run the conditions on this Dask cluster (dask scheduler; dask worker on each machine)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the reproduction, print the report, write the JSON rows."""
+    import contextlib
     import functools
     import json
 
@@ -43,7 +50,13 @@ def run(args: argparse.Namespace) -> int:
     from tactip.reproduce import reproduce
 
     progress = functools.partial(tqdm, desc=f"paper {args.paper}", unit="condition", disable=args.quiet, leave=False)
-    report = reproduce(args.paper, quick=args.quick, seed=args.seed, progress=progress)
+    with contextlib.ExitStack() as stack:
+        map_fn = None
+        if args.scheduler is not None:
+            from tactip.cluster import cluster_map, open_client
+
+            map_fn = cluster_map(stack.enter_context(open_client(args.scheduler)), progress=progress)
+        report = reproduce(args.paper, quick=args.quick, seed=args.seed, progress=progress, map_fn=map_fn)
     print(report.text())
     if args.json is not None:
         write_text_atomic(args.json, json.dumps(report.json_rows(), indent=1) + "\n")

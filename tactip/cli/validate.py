@@ -23,6 +23,8 @@ With --target-accuracy P, --sweep-fixation instead picks the fixation and thresh
 are within --tolerance of the true identity in a fraction P of runs in the fewest mean taps; a
 calibrated model's tempering is then refitted at the best fixation, so that its beliefs after 1 to 5
 taps mean what they say (the taps of one run repeat each other's evidence), and written with them.
+With --scheduler tcp://HOST:PORT a sweep's fixations (or sigmas) run on that Dask cluster, one per
+worker at a time: the same seed gives the same figures as a run here.
 
 Calibration: for the active policy, the expected calibration error (ECE) of the identity belief
 after 1, 3 and 5 taps (a belief of 0.9 should be right 90 % of the time: ECE 0), and with --plot a
@@ -48,12 +50,14 @@ Examples:
   tactip validate models/gaps.h5 data/test_jitter.h5 --sweep-lateral 0.25 0.5 1 2 --plot out/lateral.png
   tactip validate models/gaussian.h5 data/test.h5 --compare models/histogram.h5 --policy active --plot out/models.png
   tactip validate models/gaussian.h5 data/test.h5 --sweep-fixation --target-accuracy 0.95 --tolerance 0.25
+  tactip validate models/gaps.h5 data/test.h5 --sweep-fixation --runs 20000 --scheduler tcp://10.0.0.5:8786
   tactip validate shapes/model.h5 shapes/test.h5 --baselines --train shapes/train.h5 --json out/shapes.json
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import json
 import pathlib
@@ -127,6 +131,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--plot", type=image_file, metavar="OUT.png",
                         help="plot error against mean taps (or against fixation); .png, .pdf, .svg ...")
     parser.add_argument("--seed", type=seed, default=0, help="random seed, >= 0 (default 0)")
+    parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                        help="run --sweep-fixation's fixations or --sweep-lateral's sigmas on this Dask cluster "
+                             "(dask scheduler; dask worker tcp://HOST:PORT on each machine); the same results as here")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -134,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the Monte Carlo validation and report it."""
     from tqdm import tqdm
 
-    from perception import DEFAULT_THRESHOLDS, VirtualEnvironment, load_dataset, load_model, make_policy
+    from perception import DEFAULT_THRESHOLDS, VirtualEnvironment, load_dataset, load_model
 
     from tactip.cli._types import check_memory
     from tactip.errors import TactipError
@@ -155,6 +162,8 @@ def run(args: argparse.Namespace) -> int:
     if args.compare and (args.sweep_fixation or args.sweep_lateral):
         raise TactipError("--compare works with the policy comparison only (not with --sweep-fixation or "
                           "--sweep-lateral)")
+    if args.scheduler is not None and not (args.sweep_fixation or args.sweep_lateral):
+        raise TactipError("--scheduler runs a sweep on a Dask cluster: it needs --sweep-fixation or --sweep-lateral")
     _check_baseline_options(args)
     # An output written over the model or the taps would destroy what it was computed from.
     refuse_overwriting_inputs([args.json, args.plot, _reliability_path(args.plot)],
@@ -177,28 +186,15 @@ def run(args: argparse.Namespace) -> int:
                    move_threshold=args.move_threshold, shift_mode=args.shift or model.shift_mode, seed=args.seed)
     print(model.summary())
     print(f"test: {len(test)} taps; {args.runs} runs per curve")
-    if args.sweep_fixation:
-        rows = _sweep_fixation(args, model, test, options, tqdm)
-    elif args.sweep_lateral:
-        from perception import lateral_sweep
+    with contextlib.ExitStack() as stack:
+        if args.scheduler is not None:  # the sweep's pieces on the cluster, with its own progress bar
+            from tactip.cluster import cluster_map, open_client
 
-        name = args.policy or "active"
-        policy = make_policy(name, fixation_class=model.fixation_class(args.fixation))
-        progress = functools.partial(tqdm, desc="sigmas", unit="sigma", disable=args.quiet)
-        sweep = lateral_sweep(environment, policy, sigmas=args.sweep_lateral, tap_budget=args.tap_budget,
-                              progress=progress, **options)
-        print(f"{name} policy; best error within {args.tap_budget:g} mean taps")
-        print(f"{'sigma':>8} {'error':>8} {'ratio':>6}")
-        for sigma, error, ratio in zip(sweep.sigmas, sweep.errors, sweep.ratio):
-            print(f"{sigma:>8.3g} {error:>8.3f} {ratio:>6.2f}")
-        rows = with_label_error(model, [{**row, "sigma": float(s)} for s, r in zip(sweep.sigmas, sweep.results)
-                                        for row in r.rows()])
-        if args.plot:
-            from perception.plots import plot_lateral_sweep
-
-            plot_lateral_sweep(sweep, args.plot)
-    else:
-        rows = _compare(args, model, environment, options, test, tqdm, train)
+            what = "fixation" if args.sweep_fixation else "sigma"
+            client = stack.enter_context(open_client(args.scheduler))
+            options["map_fn"] = cluster_map(client, progress=functools.partial(
+                tqdm, desc=f"{what}s on {args.scheduler}", unit=what, disable=args.quiet))
+        rows = _validate(args, model, test, train, environment, options, tqdm)
     if args.json:
         inputs = [args.model, args.test, *args.compare, *([args.train] if args.train else [])]
         write_text_atomic(args.json, json.dumps(rows, indent=1) + "\n", inputs=inputs)
@@ -206,6 +202,32 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         print(f"wrote {args.plot}")
     return 0
+
+
+def _validate(args, model, test, train, environment, options, tqdm) -> list[dict]:
+    """The sweep asked for (`_sweep_fixation`, the lateral sweep), else the policy comparison; the JSON rows."""
+    if args.sweep_fixation:
+        return _sweep_fixation(args, model, test, options, tqdm)
+    if not args.sweep_lateral:
+        return _compare(args, model, environment, options, test, tqdm, train)
+    from perception import lateral_sweep, make_policy
+
+    name = args.policy or "active"
+    policy = make_policy(name, fixation_class=model.fixation_class(args.fixation))
+    progress = functools.partial(tqdm, desc="sigmas", unit="sigma", disable=args.quiet)
+    sweep = lateral_sweep(environment, policy, sigmas=args.sweep_lateral, tap_budget=args.tap_budget,
+                          progress=progress, **options)
+    print(f"{name} policy; best error within {args.tap_budget:g} mean taps")
+    print(f"{'sigma':>8} {'error':>8} {'ratio':>6}")
+    for sigma, error, ratio in zip(sweep.sigmas, sweep.errors, sweep.ratio):
+        print(f"{sigma:>8.3g} {error:>8.3f} {ratio:>6.2f}")
+    rows = with_label_error(model, [{**row, "sigma": float(s)} for s, r in zip(sweep.sigmas, sweep.results)
+                                    for row in r.rows()])
+    if args.plot:
+        from perception.plots import plot_lateral_sweep
+
+        plot_lateral_sweep(sweep, args.plot)
+    return rows
 
 
 def _reliability_path(plot):
@@ -308,7 +330,7 @@ def _sweep_fixation(args, model, test, options, tqdm) -> list[dict]:
     progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
     unit, identity_unit = model.location_unit, model.identity_unit
     trained = model.tempering if model.temperable else None
-    sweep_options = {k: options[k] for k in ("move_threshold", "shift_mode")}
+    sweep_options = {k: options[k] for k in ("move_threshold", "shift_mode", "map_fn") if k in options}
     if args.target_accuracy is None:
         sweep_options.update(thresholds=options["thresholds"], deadline=options["deadline"])
     model, sweep = recommend_fixation(args.model, args.test, runs=args.runs, tap_budget=args.tap_budget,

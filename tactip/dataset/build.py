@@ -76,7 +76,7 @@ def build_dataset(labels_csv, out_dir, *, label: str | None = None, classes: int
                   sensor: str | None = None, pins_on_pad: int | None = None, pad_diameter_mm: float | None = None,
                   mm_per_px: float | None = None, dark_pins: bool | None = None, n_samples: int = 40,
                   image_samples: int | None = None, rest_frame: int = 0, overwrite: bool = False,
-                  progress: bool = False) -> BuildResult:
+                  progress: bool = False, map_fn=None) -> BuildResult:
     """Turn labelled recordings into ``calibration.h5``, ``train.h5``, ``test.h5`` and ``summary.json``.
 
     Parameters
@@ -118,6 +118,10 @@ def build_dataset(labels_csv, out_dir, *, label: str | None = None, classes: int
         Replace existing outputs in `out_dir`.
     progress : bool
         Show tqdm bars (recordings, and frames of each video).
+    map_fn : callable, optional
+        Runs the recordings: ``map_fn(function, rows)``, results in order (many recordings on a Dask
+        cluster: `tactip.cluster.cluster_map`, as ``tactip replay --out-dir`` runs an archive); the same
+        datasets as made here (default: one recording after another).
 
     Returns
     -------
@@ -185,7 +189,8 @@ def build_dataset(labels_csv, out_dir, *, label: str | None = None, classes: int
                                                         n_pins=n_pins, min_separation_mm=min_separation_mm,
                                                         labels_csv=labels_csv, left_out=left_out, **sensor_options)
     per_row = _taps_of_rows(labelled, cal, leave_out, rest=rest, n_samples=n_samples, image_samples=image_samples,
-                            rest_frame=rest_frame, progress=progress, labels_csv=labels_csv, warnings=warnings)
+                            rest_frame=rest_frame, progress=progress, labels_csv=labels_csv, warnings=warnings,
+                            map_fn=map_fn)
     if not per_row:
         raise LabelsError(_nothing_left(labels_csv, left_out))
     taps = np.concatenate([t.taps for _, _, t in per_row])
@@ -319,21 +324,35 @@ def _calibrate_first(labelled, leave_out, *, rest, rest_frame, labels_csv, left_
 
 
 def _taps_of_rows(labelled, cal, leave_out, *, rest, n_samples, image_samples, rest_frame, progress, labels_csv,
-                  warnings) -> list[tuple[LabelRow, float, RecordingTaps]]:
-    """Each usable row's taps, one recording after another (a tqdm bar over the recordings)."""
+                  warnings, map_fn=None) -> list[tuple[LabelRow, float, RecordingTaps]]:
+    """Each usable row's taps: one recording after another (a tqdm bar over them), or through ``map_fn``."""
+    import functools
+
     from tqdm import tqdm
 
+    from _shared import map_pieces
+
+    one = functools.partial(_row_taps, calibration=cal, rest=rest, n_samples=n_samples, image_samples=image_samples,
+                            rest_frame=rest_frame, progress=progress and map_fn is None)
+    bar = functools.partial(tqdm, desc="recordings", unit="recording", disable=not progress)
     done = []
-    for row, identity in tqdm(labelled, desc="recordings", unit="recording", disable=not progress):
-        try:
-            got = recording_taps(row.path, cal, rest=row.rest or rest, n_samples=n_samples,
-                                 image_samples=image_samples, rest_frame=rest_frame, progress=progress)
-        except _errors() as exc:
-            leave_out(row, " ".join(str(exc).split()))
+    for (row, identity), (got, problem) in zip(labelled, map_pieces(one, [row for row, _ in labelled],
+                                                                     map_fn=map_fn, progress=bar)):
+        if problem is not None:
+            leave_out(row, problem)
             continue
         warnings += [f"line {row.line} ({_shown(row.path, labels_csv)}): {w}" for w in got.warnings]
         done.append((row, identity, got))
     return done
+
+
+def _row_taps(row: LabelRow, *, calibration, rest, n_samples, image_samples, rest_frame, progress):
+    """(taps, None) of one row's recording, or (None, why it is left out): a piece that travels to a worker."""
+    try:
+        return recording_taps(row.path, calibration, rest=row.rest or rest, n_samples=n_samples,
+                              image_samples=image_samples, rest_frame=rest_frame, progress=progress), None
+    except _errors() as exc:
+        return None, " ".join(str(exc).split())
 
 
 def _nothing_left(labels_csv, left_out: list[dict]) -> str:

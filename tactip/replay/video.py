@@ -81,7 +81,7 @@ from tactip.replay.contacts import analyse, check_rest_frame
 from tactip.replay.result import ReplayResult
 from tactip.replay.writers import FORMAT, write_annotated, write_hdf5
 
-__all__ = ["ReplayResult", "replay_video", "track_video", "FORMAT", "check_rest_frame"]
+__all__ = ["ReplayResult", "replay_video", "track_video", "check_replay_options", "FORMAT", "check_rest_frame"]
 
 
 
@@ -113,7 +113,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                  min_separation_mm: float = 4.0, sensor: str | None = None, pins_on_pad: int | None = None,
                  pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
                  rest_frame: int = 0, calibration=None, model=None, decision_threshold: float | None = None,
-                 progress: bool = False) -> ReplayResult:
+                 progress: bool = False, decode_threads: int | None = None, wrap_windows=None) -> ReplayResult:
     """Track the pins of a recorded video and write positions, displacements, lost masks and tap features to HDF5.
 
     Parameters
@@ -158,6 +158,13 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         theta_dec of the decision; default the model's recommended one, else 0.9.
     progress : bool
         Show a tqdm progress bar in frames (on stderr).
+    decode_threads : int, optional
+        Threads of the video decoder (default: every core but the one that tracks); a batch running
+        a replay per core gives each one (the output is the same whatever the count).
+    wrap_windows : callable, optional
+        Given the tracker's windowed centroids once it has started, returns their stand-in
+        (`pins.accel.WindowBatcher.wrap`: many videos' windows measured together on a GPU,
+        `tactip.replay.batch.replay_together`); the same positions.
 
     Returns
     -------
@@ -188,20 +195,9 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
     >>> print(result.summary())                                                                   # doctest: +SKIP
     """
 
-    if int(rest_frame) != rest_frame or rest_frame < 0:
-        raise ValueError(f"rest_frame must be a non-negative integer, got {rest_frame}")
-    for name, value in (("pad_diameter_mm", pad_diameter_mm), ("mm_per_px", mm_per_px)):
-        if value is not None and not (value > 0 and math.isfinite(value)):
-            raise ValueError(f"{name} must be a finite number > 0, got {value}")
-    for name, value in (("n_pins", n_pins), ("pins_on_pad", pins_on_pad), ("expected_pins", expected_pins)):
-        if value is not None and (int(value) != value or value < 1):
-            raise ValueError(f"{name} must be a positive integer, got {value}")
-    if not (min_separation_mm >= 0 and math.isfinite(min_separation_mm)):
-        raise ValueError(f"min_separation_mm must be a finite number >= 0, got {min_separation_mm}")
-    if sensor is not None:
-        from pins import sensor_preset
-
-        sensor_preset(sensor)  # ValueError naming the choices
+    check_replay_options(rest_frame=rest_frame, pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px, n_pins=n_pins,
+                         pins_on_pad=pins_on_pad, expected_pins=expected_pins, min_separation_mm=min_separation_mm,
+                         sensor=sensor)
     cal, model, model_path = _load_station_files(calibration, model, decision_threshold, n_samples=n_samples,
                                                  given=dict(expected_pins=expected_pins, params=params,
                                                             mm_per_px=mm_per_px, sensor=sensor,
@@ -219,7 +215,8 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         track, analysis, frame_size, frame_rate = track_video(
             video, calibration=cal, params=params, expected_pins=expected_pins, n_samples=n_samples,
             n_pins=n_pins, min_separation_mm=min_separation_mm, sensor=sensor, pins_on_pad=pins_on_pad,
-            pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px, rest_frame=rest_frame, progress=progress)
+            pad_diameter_mm=pad_diameter_mm, mm_per_px=mm_per_px, rest_frame=rest_frame, progress=progress,
+            decode_threads=decode_threads, wrap_windows=wrap_windows)
         # From here on the tracking is kept whatever happens: problems become warnings.
         bounds = analysis["bounds"]
         valid = track.valid if len(analysis["selected"]) else np.zeros(len(bounds), dtype=bool)
@@ -269,14 +266,42 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                         pins_seen=[int(n) for n in track.pins_seen])
 
 
+def check_replay_options(*, rest_frame: int = 0, pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
+                         n_pins: int = 40, pins_on_pad: int | None = None, expected_pins: int | None = None,
+                         min_separation_mm: float = 4.0, sensor: str | None = None) -> None:
+    """Refuse `replay_video`'s options out of range, before any video is opened (a batch checks them once).
+
+    Raises
+    ------
+    ValueError
+        The first option out of range, named, with its value (an unknown sensor lists the choices).
+    """
+    if int(rest_frame) != rest_frame or rest_frame < 0:
+        raise ValueError(f"rest_frame must be a non-negative integer, got {rest_frame}")
+    for name, value in (("pad_diameter_mm", pad_diameter_mm), ("mm_per_px", mm_per_px)):
+        if value is not None and not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be a finite number > 0, got {value}")
+    for name, value in (("n_pins", n_pins), ("pins_on_pad", pins_on_pad), ("expected_pins", expected_pins)):
+        if value is not None and (int(value) != value or value < 1):
+            raise ValueError(f"{name} must be a positive integer, got {value}")
+    if not (min_separation_mm >= 0 and math.isfinite(min_separation_mm)):
+        raise ValueError(f"min_separation_mm must be a finite number >= 0, got {min_separation_mm}")
+    if sensor is not None:
+        from pins import sensor_preset
+
+        sensor_preset(sensor)  # ValueError naming the choices
+
+
 def track_video(video, *, calibration=None, params: DetectionParams | None = None, expected_pins: int | None = None,
                 n_samples: int = 40, n_pins: int = 40, min_separation_mm: float = 4.0, sensor: str | None = None,
                 pins_on_pad: int | None = None, pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
-                rest_frame: int = 0, progress: bool = False) -> tuple:
+                rest_frame: int = 0, progress: bool = False, decode_threads: int | None = None,
+                wrap_windows=None) -> tuple:
     """Track the pins of a recording and find its contacts and their features (replay's work, no file written).
 
     The options are `replay_video`'s (checked there), except that `calibration` must be a loaded
-    `calibration.SensorCalibration` (or None). ``tactip dataset build`` calls it per recording.
+    `calibration.SensorCalibration` (or None), ``decode_threads`` sets the decoder's threads
+    (default: every core but the one that tracks) and ``wrap_windows`` is `replay_video`'s. ``tactip dataset build`` calls it per recording.
 
     Returns
     -------
@@ -302,7 +327,8 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
 
     # The decoder on one thread fewer than the cores: this thread tracks on the last one, and
     # FFmpeg's second thread on a 2-core machine only adds its own overhead to the contention.
-    with open_source(video, grey=True, decode_threads=_decode_threads()) as source:
+    threads = _decode_threads() if decode_threads is None else max(1, int(decode_threads))
+    with open_source(video, grey=True, decode_threads=threads) as source:
         if source.live:
             raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
         if calibration is not None and tuple(source.frame_size) != tuple(calibration.frame_size):
@@ -319,7 +345,7 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
             plan = _Plan(calibration=calibration, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),
                          sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
                          mm_per_px=mm_per_px, expected_pins=expected_pins, rest_frame=int(rest_frame))
-            start = _Start(params=params, expected_pins=expected_pins, calibration=calibration)
+            start = _Start(params=params, expected_pins=expected_pins, calibration=calibration, wrap=wrap_windows)
             try:
                 track = frames_to_features(reader, start=start, rest_frame=int(rest_frame), selected=plan.selected,
                                            contacts=plan.contacts, n_samples=int(n_samples), progress=progress,
@@ -380,16 +406,19 @@ def _load_station_files(calibration, model, decision_threshold, *, n_samples: in
 class _Start:
     """Starts the tracker on the rest frame (`tactip.pipeline.Start`)."""
 
-    def __init__(self, *, params, expected_pins, calibration):
+    def __init__(self, *, params, expected_pins, calibration, wrap=None):
         # Without parameters the polarity is decided from the rest frame, as `tactip detect` does.
         self.params = calibration.detection if calibration is not None else params
-        self.expected_pins, self.calibration = expected_pins, calibration
+        self.expected_pins, self.calibration, self.wrap = expected_pins, calibration, wrap
 
     def __call__(self, image):
         """(tracker, rest positions, pins found, detection params, field line, warnings) of the rest frame."""
         warnings: list[str] = []
         started = _start(image, params=self.params, expected_pins=self.expected_pins, calibration=self.calibration,
                          warnings=warnings)
+        tracker = started[0]
+        if self.wrap is not None and tracker.windows is not None:  # e.g. measured with other videos' windows
+            tracker.windows = self.wrap(tracker.windows)
         return (*started, warnings)
 
 

@@ -26,7 +26,7 @@ PAPERS = {"000": "tactip.reproduce.p000", "001": "tactip.reproduce.p001", "002":
           "003": "tactip.reproduce.p003", "004": "tactip.reproduce.p004"}
 
 
-def reproduce(paper: str, *, quick: bool = False, seed: int = 0, progress=None) -> Report:
+def reproduce(paper: str, *, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Report:
     """Run paper ``paper``'s experiment on the simulator.
 
     Parameters
@@ -38,6 +38,10 @@ def reproduce(paper: str, *, quick: bool = False, seed: int = 0, progress=None) 
         Seed of the simulated sensor, its collections and the Monte Carlo.
     progress : callable, optional
         Wraps an iterable of conditions (e.g. ``tqdm``).
+    map_fn : callable, optional
+        Runs the conditions (001: deadlines, 003: simulator seeds, 004: methods and thresholds, 000:
+        class counts): ``map_fn(function, conditions)``, results in order (e.g. on a Dask cluster,
+        `tactip.cluster.cluster_map`); the same report as run here (default), seed for seed.
 
     Returns
     -------
@@ -50,4 +54,4 @@ def reproduce(paper: str, *, quick: bool = False, seed: int = 0, progress=None) 
     """
     if paper not in PAPERS:
         raise ValueError(f"unknown paper {paper!r}; choose from {', '.join(PAPERS)}")
-    return importlib.import_module(PAPERS[paper]).run(quick=quick, seed=seed, progress=progress)
+    return importlib.import_module(PAPERS[paper]).run(quick=quick, seed=seed, progress=progress, map_fn=map_fn)

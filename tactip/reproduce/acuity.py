@@ -19,10 +19,12 @@ Example
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
+from _shared import map_pieces
 from perception import Dataset, FixationPolicy, StationaryPolicy, VirtualEnvironment, compare_policies, fit_model
 
 __all__ = ["TABLE2_CLASSES", "TABLE3_CLASSES", "ACUITY_THRESHOLDS", "AcuityRow", "acuity_table"]
@@ -71,7 +73,7 @@ class AcuityRow:
 
 def acuity_table(train: Dataset, test: Dataset, *, class_counts=TABLE2_CLASSES, fixation_mm: float | None = None,
                  tap_budget: float = 2.0, runs: int = 5000, seed: int = 1, thresholds=ACUITY_THRESHOLDS,
-                 max_taps: int = 20, progress=None) -> list[AcuityRow]:
+                 max_taps: int = 20, progress=None, map_fn=None) -> list[AcuityRow]:
     """Passive and active localisation error for each number of location classes.
 
     Parameters
@@ -88,26 +90,33 @@ def acuity_table(train: Dataset, test: Dataset, *, class_counts=TABLE2_CLASSES, 
         Of `perception.monte_carlo` (both policies use the same starting classes).
     progress : callable, optional
         Wraps the iterable of class counts (e.g. ``tqdm``).
+    map_fn : callable, optional
+        Runs the class counts: ``map_fn(function, class_counts)``, results in order (e.g. on a Dask
+        cluster, `tactip.cluster.cluster_map`); the same rows as run here (default).
 
     Returns
     -------
     list of AcuityRow, in the order of ``class_counts``
     """
-    rows = []
-    for n in (progress or (lambda items: items))(list(class_counts)):
-        model = fit_model(train, n_locations=int(n))
-        environment = VirtualEnvironment(model, test)
-        centre = 0.5 * (model.location_edges[0] + model.location_edges[-1])
-        fixation = int(model.location_class(centre if fixation_mm is None else fixation_mm))
-        results = compare_policies(environment, [StationaryPolicy(), FixationPolicy(fixation)], seed=seed,
-                                   runs=runs, thresholds=thresholds, max_taps=max_taps, shift_mode="uniform")
-        passive, active = results["stationary"], results["active"]
-        p, a = passive.best_within(tap_budget), active.best_within(tap_budget)
-        rows.append(AcuityRow(
-            classes=int(n), class_width_mm=model.class_width,
-            passive_error_mm=float(passive.mean_location_error[p]), passive_taps=float(passive.mean_taps[p]),
-            passive_threshold=float(passive.thresholds[p]),
-            active_error_mm=float(active.mean_location_error[a]), active_taps=float(active.mean_taps[a]),
-            active_threshold=float(active.thresholds[a]),
-            passive_best_error_mm=float(passive.mean_location_error.min())))
-    return rows
+    row = functools.partial(_acuity_row, train=train, test=test, fixation_mm=fixation_mm, tap_budget=tap_budget,
+                            options=dict(seed=seed, runs=runs, thresholds=thresholds, max_taps=max_taps,
+                                         shift_mode="uniform"))
+    return map_pieces(row, list(class_counts), map_fn=map_fn, progress=progress)
+
+
+def _acuity_row(n: int, *, train, test, fixation_mm, tap_budget, options) -> AcuityRow:
+    """One row of `acuity_table`: ``n`` location classes (module level, so it travels to a worker)."""
+    model = fit_model(train, n_locations=int(n))
+    environment = VirtualEnvironment(model, test)
+    centre = 0.5 * (model.location_edges[0] + model.location_edges[-1])
+    fixation = int(model.location_class(centre if fixation_mm is None else fixation_mm))
+    results = compare_policies(environment, [StationaryPolicy(), FixationPolicy(fixation)], **options)
+    passive, active = results["stationary"], results["active"]
+    p, a = passive.best_within(tap_budget), active.best_within(tap_budget)
+    return AcuityRow(
+        classes=int(n), class_width_mm=model.class_width,
+        passive_error_mm=float(passive.mean_location_error[p]), passive_taps=float(passive.mean_taps[p]),
+        passive_threshold=float(passive.thresholds[p]),
+        active_error_mm=float(active.mean_location_error[a]), active_taps=float(active.mean_taps[a]),
+        active_threshold=float(active.thresholds[a]),
+        passive_best_error_mm=float(passive.mean_location_error.min()))

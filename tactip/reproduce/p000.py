@@ -16,7 +16,7 @@ __all__ = ["PAPER_TABLE2", "run"]
 PAPER_TABLE2 = {300: 0.12}
 
 
-def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
+def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Report:
     """Table II rows: ``classes, class_width_mm, passive_error_mm, active_error_mm, active_taps, acuity_mm``."""
     from tactip.taxel import TaxelSimulator, simulate_taxel_dataset, sweep_locations
     from tactip.reproduce.acuity import TABLE2_CLASSES, acuity_table
@@ -27,7 +27,7 @@ def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
     test = simulate_taxel_dataset(simulator, where, seed=(seed, 3), collection="test")
     counts = (30, 300) if quick else TABLE2_CLASSES
     table = acuity_table(train, test, class_counts=counts, fixation_mm=15.0, tap_budget=2.0,
-                         runs=1000 if quick else 5000, seed=seed + 1, progress=progress)
+                         runs=1000 if quick else 5000, seed=seed + 1, progress=progress, map_fn=map_fn)
     rows = [{"classes": r.classes, "class_width_mm": r.class_width_mm, "passive_error_mm": r.passive_error_mm,
              "active_error_mm": r.active_error_mm, "active_taps": r.active_taps, "acuity_mm": r.acuity_mm}
             for r in table]

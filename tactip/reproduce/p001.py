@@ -15,11 +15,14 @@ everything with a deadline.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
+from _shared import map_pieces
 from perception import StationaryPolicy, monte_carlo
 
-from tactip.reproduce.report import Comparison, Report, environment, identity
+from tactip.reproduce.report import Comparison, Report, environment
 
 __all__ = ["THRESHOLDS", "DEADLINES", "run"]
 
@@ -34,7 +37,14 @@ DEADLINES = (None, 5, 10)
 MAX_TAPS = 1000
 
 
-def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
+def _deadline_run(deadline, *, env, thresholds, quick: bool, runs: int, seed: int):
+    """The runs with one deadline (None: fixed position), a piece of `run` (module level: it travels to a worker)."""
+    levels = thresholds + (FIXED_EXTRA if deadline is None and not quick else ())
+    return monte_carlo(env, StationaryPolicy(), thresholds=levels, runs=runs, seed=seed + 1, deadline=deadline,
+                       max_taps=MAX_TAPS, decision_rule="joint", shift_mode="uniform")
+
+
+def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Report:
     """The experiment of paper 001; rows per deadline and threshold (see the module docstring)."""
     from tactip.reproduce.stimuli import make_stimulus
 
@@ -42,10 +52,9 @@ def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
     thresholds = QUICK_THRESHOLDS if quick else THRESHOLDS
     runs = 400 if quick else 2500
     rows, results = [], {}
-    for deadline in (progress or identity)(list(DEADLINES)):
-        levels = thresholds + (FIXED_EXTRA if deadline is None and not quick else ())
-        result = monte_carlo(env, StationaryPolicy(), thresholds=levels, runs=runs, seed=seed + 1,
-                             deadline=deadline, max_taps=MAX_TAPS, decision_rule="joint", shift_mode="uniform")
+    pieces = map_pieces(functools.partial(_deadline_run, env=env, thresholds=thresholds, quick=quick, runs=runs,
+                                          seed=seed), list(DEADLINES), map_fn=map_fn, progress=progress)
+    for deadline, result in zip(DEADLINES, pieces):
         results[deadline] = result
         for k, threshold in enumerate(result.thresholds):
             rows.append({"deadline": deadline, "threshold": float(threshold),

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tactip.reproduce.report import Comparison, Report, identity
+from tactip.reproduce.report import Comparison, Report
 
 __all__ = ["POLICIES", "PAPER_ERROR_MM", "run"]
 
@@ -64,7 +64,15 @@ def _at_taps(result, taps: float) -> float:
     return float(np.interp(taps, mean_taps, result.mean_identity_error[order]))
 
 
-def run(*, quick: bool = False, seed: int = 0, progress=None, data_dir: Path | None = None,
+def _policy_runs(name: str, environment, fixation: int, runs: int, seed: int):
+    """One policy's Monte Carlo on the test collection (a piece `map_pieces` may run elsewhere)."""
+    from perception import compare_policies, make_policy
+
+    policy = make_policy(name, fixation_class=fixation)
+    return compare_policies(environment, [policy], runs=runs, seed=seed, thresholds=THRESHOLDS, max_taps=20)[name]
+
+
+def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None, data_dir: Path | None = None,
         log=lambda line: None) -> Report:
     """The experiment of paper 002 on the simulated station; rows per policy and threshold.
 
@@ -76,6 +84,8 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, data_dir: Path | N
         Seed of the synthetic sensor, the collections, the arm and the Monte Carlo.
     progress : callable, optional
         Wraps the iterable of policies.
+    map_fn : callable, optional
+        Runs the three policies' Monte Carlo (`_shared.map_pieces`; the station is prepared here).
     data_dir : path, optional
         Where the station's calibration, collections and model are kept (reused when there); default
         a temporary folder removed afterwards.
@@ -84,8 +94,11 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, data_dir: Path | N
     """
     if data_dir is None:
         with tempfile.TemporaryDirectory(prefix="tactip-002-") as folder:
-            return run(quick=quick, seed=seed, progress=progress, data_dir=Path(folder), log=log)
-    from perception import VirtualEnvironment, compare_policies, load_dataset, load_model, make_policy
+            return run(quick=quick, seed=seed, progress=progress, map_fn=map_fn, data_dir=Path(folder), log=log)
+    import functools
+
+    from _shared.mapping import map_pieces
+    from perception import VirtualEnvironment, load_dataset, load_model
     from tactip.station.config import parse_station_config
     from tactip.station.procedures import prepare_model
 
@@ -97,11 +110,8 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, data_dir: Path | N
     environment = VirtualEnvironment(model, load_dataset(root / "datasets" / "test.h5"))
     fixation = model.fixation_class()
     runs = 1000 if quick else 5000
-    policies = [make_policy(name, fixation_class=fixation) for name in POLICIES]
-    results = {}
-    for policy in (progress or identity)(policies):
-        results.update(compare_policies(environment, [policy], runs=runs, seed=seed + 1, thresholds=THRESHOLDS,
-                                        max_taps=20))
+    piece = functools.partial(_policy_runs, environment=environment, fixation=fixation, runs=runs, seed=seed + 1)
+    results = dict(zip(POLICIES, map_pieces(piece, POLICIES, map_fn=map_fn, progress=progress)))
     rows = [{"seed": seed, "policy": name, "threshold": r["threshold"], "width_error_mm": r["mean_identity_error"],
              "mean_taps": r["mean_taps"], "accuracy": r["accuracy"]}
             for name, result in results.items() for r in result.rows()]

@@ -14,12 +14,14 @@ and over depth). Prediction: Fig. 7, active perception.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
+from _shared import map_pieces
 from perception import FixationPolicy, StationaryPolicy, VirtualEnvironment, fit_model, monte_carlo
 
-from tactip.reproduce.report import Comparison, Report, collections, identity
+from tactip.reproduce.report import Comparison, Report, collections
 
 __all__ = ["MOVE_THRESHOLDS", "run"]
 
@@ -41,7 +43,32 @@ def _single_depth(train, test, offset_mm: float, runs: int, seed: int):
     return monte_carlo(env, StationaryPolicy(), thresholds=[DECISION_THRESHOLD], runs=runs, seed=seed, max_taps=200)
 
 
-def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
+def _seed_run(s: int, *, stimulus, runs: int, first: int) -> tuple[list, list]:
+    """Rows (and, for the first seed, comparisons) of one simulator seed: a piece of `run` that travels to a worker."""
+    rows, comparisons = [], []
+    train, test = collections(stimulus, seed=s, taps_per_identity=150)
+    env = VirtualEnvironment(fit_model(train, n_locations=15), test)
+    options = dict(thresholds=[DECISION_THRESHOLD], runs=runs, seed=s + 1, max_taps=200, shift_mode="uniform")
+    for move in MOVE_THRESHOLDS:
+        result = (monte_carlo(env, StationaryPolicy(), **options) if move > 1 else
+                  monte_carlo(env, FixationPolicy(TARGET_CLASS), move_threshold=move, **options))
+        rows.append({"seed": s, "move_threshold": move, "texture_error_classes": float(result.mean_identity_error[0]),
+                     "mean_taps": float(result.mean_taps[0]), "forced_fraction": float(result.forced[0])})
+        if move > 1 and s == first:
+            depth_error = np.nanmean(result.identity_error_map[0], axis=1)      # (15,) over textures
+            comparisons += [Comparison("Fig. 6B passive, depths 0-1 mm: texture error", depth_error[:5].mean(),
+                                       3.0, "classes"),
+                            Comparison("Fig. 6B passive, depths 1.5-3 mm: texture error",
+                                       depth_error[7:].mean(), 0.5, "classes")]
+    if s == first:
+        for offset, paper in ((0.0, 0.4), (0.2, 1.0)):
+            single = _single_depth(train, test, offset, runs, s + 1)
+            comparisons.append(Comparison(f"Fig. 5 one depth class, test offset {offset:g} mm: texture error",
+                                          single.mean_identity_error[0], paper, "classes"))
+    return rows, comparisons
+
+
+def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Report:
     """The experiment of paper 003; rows per simulator seed and move threshold."""
     from tactip.reproduce.stimuli import make_stimulus
 
@@ -49,26 +76,11 @@ def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
     runs = 600 if quick else 2000
     seeds = (seed,) if quick else tuple(seed + s for s in SEEDS)
     rows, comparisons = [], []
-    for s in (progress or identity)(list(seeds)):
-        train, test = collections(stimulus, seed=s, taps_per_identity=150)
-        env = VirtualEnvironment(fit_model(train, n_locations=15), test)
-        options = dict(thresholds=[DECISION_THRESHOLD], runs=runs, seed=s + 1, max_taps=200, shift_mode="uniform")
-        for move in MOVE_THRESHOLDS:
-            result = (monte_carlo(env, StationaryPolicy(), **options) if move > 1 else
-                      monte_carlo(env, FixationPolicy(TARGET_CLASS), move_threshold=move, **options))
-            rows.append({"seed": s, "move_threshold": move, "texture_error_classes": float(result.mean_identity_error[0]),
-                         "mean_taps": float(result.mean_taps[0]), "forced_fraction": float(result.forced[0])})
-            if move > 1 and s == seeds[0]:
-                depth_error = np.nanmean(result.identity_error_map[0], axis=1)      # (15,) over textures
-                comparisons += [Comparison("Fig. 6B passive, depths 0-1 mm: texture error", depth_error[:5].mean(),
-                                           3.0, "classes"),
-                                Comparison("Fig. 6B passive, depths 1.5-3 mm: texture error",
-                                           depth_error[7:].mean(), 0.5, "classes")]
-        if s == seeds[0]:
-            for offset, paper in ((0.0, 0.4), (0.2, 1.0)):
-                single = _single_depth(train, test, offset, runs, s + 1)
-                comparisons.append(Comparison(f"Fig. 5 one depth class, test offset {offset:g} mm: texture error",
-                                              single.mean_identity_error[0], paper, "classes"))
+    pieces = map_pieces(functools.partial(_seed_run, stimulus=stimulus, runs=runs, first=seeds[0]), list(seeds),
+                        map_fn=map_fn, progress=progress)
+    for seed_rows, seed_comparisons in pieces:
+        rows += seed_rows
+        comparisons += seed_comparisons
     for move, paper, name in ((PASSIVE, 1.4, "passive"), (0.999, None, "weakly active"), (0.05, 0.4, "strongly active")):
         errors = [r["texture_error_classes"] for r in rows if r["move_threshold"] == move]
         comparisons.append(Comparison(f"Fig. 7 {name}: texture error (mean of {len(errors)} seeds)",

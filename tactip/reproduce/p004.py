@@ -14,8 +14,12 @@ deg). Predictions: contour closing, the adaptive prior's gain, the learned Delta
 
 from __future__ import annotations
 
+import functools
+
+from _shared import map_pieces
+
 from tactip.reproduce.contour import follow_contour
-from tactip.reproduce.report import Comparison, Report, environment, identity
+from tactip.reproduce.report import Comparison, Report, environment
 
 __all__ = ["THRESHOLDS", "METHODS", "run"]
 
@@ -27,7 +31,13 @@ METHODS = {"passive": dict(active=False), "active": dict(active=True),
            "adaptive_shift0": dict(active=True, adaptive=True, prior_shift=0)}
 
 
-def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
+def _condition_run(condition, *, env, seed: int, options: dict):
+    """Contour following by one (method, threshold), a piece of `run` (module level: it travels to a worker)."""
+    method, threshold = condition
+    return follow_contour(env, threshold=threshold, seed=seed + 1, **options, **METHODS[method])
+
+
+def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Report:
     """The experiment of paper 004; rows per method and threshold."""
     from tactip.reproduce.stimuli import make_stimulus
 
@@ -36,8 +46,9 @@ def run(*, quick: bool = False, seed: int = 0, progress=None) -> Report:
     options = dict(runs=24, decisions=40, max_taps=25) if quick else dict(runs=100, decisions=45, max_taps=50)
     rows, results = [], {}
     conditions = [(m, t) for t in thresholds for m in METHODS]
-    for method, threshold in (progress or identity)(conditions):
-        r = follow_contour(env, threshold=threshold, seed=seed + 1, **options, **METHODS[method])
+    pieces = map_pieces(functools.partial(_condition_run, env=env, seed=seed, options=options), conditions,
+                        map_fn=map_fn, progress=progress)
+    for (method, threshold), r in zip(conditions, pieces):
         results[method, threshold] = r
         rows.append({"method": method, "threshold": threshold, "angle_error_deg": r.angle_error_deg,
                      "position_error_mm": r.position_error_mm, "taps_per_decision": r.taps_per_decision,

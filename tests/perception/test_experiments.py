@@ -91,3 +91,47 @@ def test_sweeps_refuse_a_tap_budget_no_run_can_meet(env, lateral_env, budget):
         fixation_sweep(env, runs=10, tap_budget=budget)
     with pytest.raises(ValueError, match="tap_budget"):
         lateral_sweep(lateral_env, StationaryPolicy(), sigmas=[0.0], runs=10, tap_budget=budget)
+
+
+def assert_same(a, b, where="result"):
+    """Every field of two results equal (arrays exactly, NaN where NaN), recursing into tuples and dataclasses."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(a):
+        assert type(a) is type(b), where
+        for field in dataclasses.fields(a):
+            assert_same(getattr(a, field.name), getattr(b, field.name), f"{where}.{field.name}")
+    elif isinstance(a, (tuple, list)):
+        assert len(a) == len(b), where
+        for k, (x, y) in enumerate(zip(a, b)):
+            assert_same(x, y, f"{where}[{k}]")
+    elif isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        assert np.array_equal(a, b, equal_nan=True), where
+    else:
+        assert a == b or (a != a and b != b), where
+
+
+class ElsewhereMap:
+    """A map_fn as a cluster runs it: each piece pickled (another process), run in reverse order, results in order."""
+
+    def __init__(self):
+        self.calls = []
+
+    def __call__(self, function, items):
+        import pickle
+
+        self.calls.append(list(items))
+        function = pickle.loads(pickle.dumps(function))
+        return [pickle.loads(pickle.dumps(function(item))) for item in reversed(items)][::-1]
+
+
+def test_sweeps_through_a_map_fn_equal_the_sweeps_run_here(env, lateral_env):
+    mapped = ElsewhereMap()
+    options = dict(thresholds=[0.5, 0.9, 0.99], runs=300, seed=4)
+    assert_same(fixation_sweep(env, map_fn=mapped, **options), fixation_sweep(env, **options))
+    assert_same(lateral_sweep(lateral_env, FixationPolicy(5), sigmas=[0, 1, 2], map_fn=mapped, **options),
+                lateral_sweep(lateral_env, FixationPolicy(5), sigmas=[0, 1, 2], **options))
+    assert mapped.calls == [list(range(6)), [0.0, 1.0, 2.0]]
+    # A piece's error comes through the map as it would here.
+    with pytest.raises(DatasetError, match="lateral sigma 0.25 mm"):
+        lateral_sweep(lateral_env.restrict(lateral_env.lateral != 0), FixationPolicy(5), sigmas=[0.25], map_fn=mapped)

@@ -122,3 +122,13 @@ def test_policy_tempering_calibrates_an_overconfident_model_whatever_its_temperi
         assert before.calibration_error(taps) > 0.2 and after.calibration_error(taps) < 0.06
     with pytest.raises(perception.ModelError, match="no tempering"):
         fit_model(gap_dataset(seed=1, taps_per_class=2, **grid), n_locations=4, bins=10).tempered(2.0)
+
+
+def test_fixation_for_accuracy_through_a_map_fn_equals_a_run_here(environment):
+    from tests.perception.test_experiments import ElsewhereMap, assert_same
+
+    mapped = ElsewhereMap()
+    options = dict(target=0.8, tolerance=1.0, runs=300, max_taps=15, seed=2, confirm_runs=500)
+    assert_same(fixation_for_accuracy(environment, map_fn=mapped, **options),
+                fixation_for_accuracy(environment, **options))
+    assert mapped.calls == [list(range(5))]

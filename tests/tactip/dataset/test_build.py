@@ -209,3 +209,24 @@ def test_videos_and_images_mix_with_a_rest_column(press_videos, tmp_path):
     same = (taps == taps[:, :1]) | (np.isnan(taps) & np.isnan(taps[:, :1]))
     constant = same.all(axis=(1, 2))  # an image's tap: one displacement, held (NaN for a pin it lost)
     assert constant.sum() == 2
+
+
+def test_recordings_on_a_dask_cluster_build_the_same_datasets(press_videos, tmp_path):
+    """Many recordings tracked on Dask workers (`tactip.cluster`): the datasets of a build one by one, bad rows alike."""
+    from tactip.cluster import cluster_map, open_client
+
+    folder = tmp_path / "set"
+    shutil.copytree(press_videos.root, folder, ignore=shutil.ignore_patterns("*.csv"))
+    (folder / "broken.avi").write_bytes(b"not a video at all")
+    good = press_videos.labels.read_text().splitlines()[1:]
+    rows = ["path,depth_mm,operator", good[0], "broken.avi,3.0,op0", *good[1:]]
+    (folder / "labels.csv").write_text("\n".join(rows) + "\n")
+    options = dict(label="depth_mm", classes=3, split="group", seed=2, sensor="tactip-331")
+    here = build_dataset(folder / "labels.csv", tmp_path / "here", **options)
+    with open_client(workers=2, processes=False) as client:
+        there = build_dataset(folder / "labels.csv", tmp_path / "there", map_fn=cluster_map(client), **options)
+    assert there.summary == here.summary and [r["line"] for r in here.summary["left_out"]] == [3]
+    for name in ("train.h5", "test.h5"):
+        a, b = load_dataset(tmp_path / "here" / name), load_dataset(tmp_path / "there" / name)
+        assert len(a) == len(b) > 0
+        assert np.array_equal(a.taps, b.taps, equal_nan=True) and np.array_equal(a.identity, b.identity)

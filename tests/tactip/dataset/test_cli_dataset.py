@@ -111,3 +111,23 @@ def test_replay_with_the_built_calibration_and_model_decides_a_new_recording(sli
                  str(slides_model / "calibration.h5"), "--model", str(slides_model / "model.h5"), "--quiet"]) == 0
     with h5py.File(tmp_path / "new.h5") as h5:
         assert bool(h5["decisions"].attrs["decided"]) and h5["decisions"].attrs["identity_estimate"] == 135.0
+
+
+def test_build_on_a_dask_scheduler_gives_the_same_datasets(press_videos, tmp_path, capsys):
+    """`--scheduler` (a local cluster of worker threads on 127.0.0.1 here) builds what a build one by one builds."""
+    from distributed import LocalCluster
+
+    from tactip.cluster import LOOPBACK_ONLY
+
+    args = ["dataset", "build", str(press_videos.labels), "--label", "depth_mm", "--classes", "3", "--sensor",
+            "tactip-331", "--quiet"]
+    assert main([*args, "--out", str(tmp_path / "here")]) == 0
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp://", host="127.0.0.1",
+                      **LOOPBACK_ONLY) as cluster:
+        assert main([*args, "--out", str(tmp_path / "there"), "--scheduler", cluster.scheduler_address]) == 0
+    for name in ("train.h5", "test.h5"):
+        here, there = load_dataset(tmp_path / "here" / name), load_dataset(tmp_path / "there" / name)
+        assert len(here) > 0 and np.array_equal(here.taps, there.taps, equal_nan=True)
+        assert np.array_equal(here.identity, there.identity)
+    assert main([*args, "--out", str(tmp_path / "x"), "--workers", "2", "--scheduler", "tcp://127.0.0.1:9"]) == 1
+    assert "--workers sizes the embedded Dask cluster" in capsys.readouterr().err
