@@ -8,10 +8,14 @@ environment of the edge stimulus). One decision (the angle marginal crossing the
 4) is followed by a step of ``step_mm`` along the perceived tangent (counter-clockwise), so that
 on a perfect run the true angle turns by ``turn_classes`` angle classes per decision. Active
 perception moves the sensor to the target position (eqs. 5-6) after each undecided tap, along the
-normal of the last decided angle (the robot is placed facing the edge for the first decision); passive perception does not move between decisions. The adaptive prior
-(eq. 12) starts each decision from alpha x the last angle belief turned by Delta angle classes
-(the forward model predicts angles only, eq. 7; positions stay flat) + (1 - alpha) x flat, Delta learned by predicted information gain (`perception.ShiftLearner`) or
-fixed.
+normal of the last decided angle (the robot is placed facing the edge for the first decision);
+passive perception does not move between decisions. The adaptive prior (eq. 12) starts each
+decision from alpha x the predicted distribution + (1 - alpha) x flat, Delta learned by predicted
+information gain (`perception.ShiftLearner`) or fixed. The predicted distribution is eq. 7 as
+printed, the last decision's joint posterior with its angle classes shifted by Delta
+(``prior="joint"``: `perception.bayes.adaptive_prior`, as the live `perception.Perceiver` does); a
+variant, ``prior="angle_only"``, keeps only the angle marginal and spreads it flat over the positions
+(the paper says its forward model predicts angles only; the report names it as a variant).
 
 A run closes the contour when its true angle has gone once round (360 deg) within ``decisions``
 decisions, every decision was taken on the edge (|x| <= ``lost_mm``, 6 mm: beyond it the pad no
@@ -57,8 +61,8 @@ class ContourResult:
 def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, adaptive: bool = False,
                    prior_shift: int | None = None, runs: int = 200, decisions: int = 80, seed: int = 0,
                    radius_mm: float = 30.0, target_mm: float = 0.0, alpha: float = 0.5, max_taps: int = 50,
-                   lost_mm: float = 6.0, warmup: int = 10, turn_classes: int = 2,
-                   trace_mm: float = 2.0) -> ContourResult:
+                   lost_mm: float = 6.0, warmup: int = 0, turn_classes: int = 2,
+                   trace_mm: float = 2.0, prior: str = "joint") -> ContourResult:
     """Follow the circle with passive, active or adaptive perception (see the module docstring).
 
     Parameters
@@ -73,16 +77,21 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
         Start decisions from the adaptive prior; ``prior_shift`` fixes Delta (default: learned).
     trace_mm : float
         Largest distance of a traced edge point from the circle for a closed contour, mm.
+    prior : {"joint", "angle_only"}
+        The adaptive prior's predicted distribution: eq. 7 on the joint posterior (faithful), or the
+        angle marginal spread flat over positions (a variant).
     runs, decisions, seed, radius_mm, target_mm, alpha, max_taps, lost_mm, warmup, turn_classes
         Runs side by side, decisions per run, randomness, plate radius (mm), target position (mm),
         weight of the prediction, taps at which a decision is forced, edge-lost distance (mm),
-        decisions left out of the means while the adaptive prior learns, angle classes turned per
+        decisions left out of the means (default none: the paper leaves none out), angle classes turned per
         decision on a perfect run (the step is radius x that angle).
 
     Returns
     -------
     ContourResult
     """
+    if prior not in ("joint", "angle_only"):
+        raise ValueError(f"prior must be 'joint' or 'angle_only', got {prior!r}")
     model = env.model
     n_loc, n_id = model.n_locations, model.n_identities
     width, angle_step = model.class_width, 360.0 / n_id
@@ -110,11 +119,10 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
     for d in range(decisions):
         delta = learner.delta if prior_shift is None else np.full(runs, int(prior_shift))
         if adaptive and last is not None:
-            # the forward model predicts the angle only (paper 004: "predictions ... are for angle
-            # classes only"): the last angle marginal, spread evenly over the positions
-            angle_only = np.log(np.exp(last).sum(axis=1, keepdims=True) / n_loc)
-            log_belief = bayes.adaptive_prior(np.broadcast_to(angle_only, last.shape), alpha=alpha,
-                                              shift_classes=delta, circular=True)
+            predicted = last                                # eq. 7: the joint posterior, angles shifted by Delta
+            if prior == "angle_only":                       # variant: the angle marginal, flat over positions
+                predicted = np.broadcast_to(np.log(np.exp(last).sum(axis=1, keepdims=True) / n_loc), last.shape)
+            log_belief = bayes.adaptive_prior(predicted, alpha=alpha, shift_classes=delta, circular=True)
             if prior_shift is None:
                 delta_error[d] = np.abs(delta - turn_classes).mean()
         else:
