@@ -72,7 +72,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             "also holds videos)")
     add_sensor_arguments(build)  # --expected-pins, --samples, --pins, --min-separation-mm, scale, --rest-frame, --dark-pins
     build.add_argument("--overwrite", action="store_true", help="replace existing outputs in DIR")
-    build.add_argument("--quiet", action="store_true", help="no progress bars and no summary")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -321,7 +321,7 @@ def _calibrate_first(labelled, leave_out, *, rest, rest_frame, labels_csv, left_
 def _taps_of_rows(labelled, cal, leave_out, *, rest, n_samples, image_samples, rest_frame, progress, labels_csv,
                   warnings) -> list[tuple[LabelRow, float, RecordingTaps]]:
     """Each usable row's taps, one recording after another (a tqdm bar over the recordings)."""
-    from tqdm import tqdm
+    from _shared.progress import progress_bar as tqdm
 
     done = []
     for row, identity in tqdm(labelled, desc="recordings", unit="recording", disable=not progress):
