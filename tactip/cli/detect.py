@@ -38,8 +38,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from tactip.cli._scale import add_scale_arguments
-from tactip.cli._types import add_json_argument, output_file, positive_int
+from tactip.cli._scale import MAX_PINS, add_scale_arguments
+from tactip.cli._types import add_json_argument, int_in_range, output_file
 
 HELP = "find the pin field in one image (pins kept, blobs rejected and why; optional count check)"
 
@@ -53,9 +53,9 @@ _COUNT_WARNING = 0.1
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``tactip detect``."""
     parser.add_argument("image", metavar="IMAGE", help="image file (png, jpg, bmp, tif)")
-    parser.add_argument("--expected-pins", type=positive_int, metavar="N",
-                        help="the sensor's pin count (127, 331, 532 ...): confirms the pins found and says how "
-                             "far off they are; does not change what is found")
+    parser.add_argument("--expected-pins", type=int_in_range(1, MAX_PINS), metavar="N",
+                        help=f"the sensor's pin count (127, 331, 532 ...; 1..{MAX_PINS}): confirms the pins found "
+                             "and says how far off they are; does not change what is found")
     parser.add_argument("--dark-pins", action="store_true",
                         help="dark markers on a light membrane (default: the polarity is decided from the image)")
     add_json_argument(parser, '{"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": [[x, y, "reason"], '

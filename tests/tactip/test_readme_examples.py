@@ -31,9 +31,13 @@ from pathlib import Path
 import pytest
 
 from tests.tactip.conftest import built_once, run_cli, small_station_table, write_station
-from tests.tactip.dataset.conftest import press_videos, shape_images, slide_videos, slides_model  # noqa: F401
+from tests.tactip.dataset import conftest as _recordings
 
-ROOT = Path(__file__).resolve().parents[1]
+# The labelled recordings of the dataset tests, built once per session (fixtures of that folder's conftest).
+slide_videos, press_videos = _recordings.slide_videos, _recordings.press_videos
+shape_images, slides_model = _recordings.shape_images, _recordings.slides_model
+
+ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 
 #: Examples that need what a test machine does not have: a substring of the example -> why.
@@ -42,6 +46,8 @@ SKIPPED = {
                      "throwaway one of its own)",
     "tactip serve": "starts the dashboard, a web server that runs until stopped (tests/tactip/line/"
                     "test_dashboard.py drives it in a browser)",
+    "tactip record 0 ": "records camera 0, a real camera (tests/tactip/replay/test_record.py records fake and "
+                        "synthetic cameras)",
 }
 
 #: Flags whose value is a file or folder the example writes (never provided beforehand).
@@ -77,8 +83,7 @@ def test_the_readme_has_examples_of_every_command():
 
 
 @pytest.fixture(scope="session")
-def readme_inputs(sim_station, slide_videos, press_videos, shape_images, slides_model,  # noqa: F811
-                  tmp_path_factory):
+def readme_inputs(sim_station, slide_videos, press_videos, shape_images, slides_model, tmp_path_factory):
     """The files the examples read, built once: {path in the example's folder: source}."""
     with built_once(tmp_path_factory, "readme-inputs") as (root, build):
         if build:
