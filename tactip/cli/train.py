@@ -143,7 +143,8 @@ def _choose_fixation(args, dataset, options):
     try:
         return fit_with_fixation(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
                                  target_accuracy=args.target_accuracy, tolerance=args.tolerance, fall_back=False,
-                                 progress=None if args.quiet else functools.partial(progress_bar, leave=False),
+                                 progress=None if args.quiet else functools.partial(progress_bar, leave=False,
+                                                                                    desc="fixations"),
                                  **options)
     except (CalibrationError, DatasetError, ModelError) as exc:  # e.g. a class without taps in the split
         raise TactipError(f"--choose-fixation: {exc}") from None

@@ -222,7 +222,7 @@ def _progress(shown: bool):
 
     from _shared.progress import progress_bar
 
-    return functools.partial(progress_bar, leave=False)
+    return functools.partial(progress_bar, leave=False, desc="fixations", unit="fixation")
 
 
 def _require_model_kind(kind: str) -> None:

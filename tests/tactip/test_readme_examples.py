@@ -177,8 +177,13 @@ def _prepare(folder: Path, example: str, readme_inputs) -> dict:
             "TACTIP_SIM_DIR": str(sim), "HOME": str(folder / ".home"), "MPLBACKEND": "Agg"}
 
 
+def _example_id(example: str) -> str:
+    """The example's command without its comment, for the test's id."""
+    return " ".join(shlex.join(shlex.split(example, comments=True)).split())[:100]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("example", readme_examples())
+@pytest.mark.parametrize("example", readme_examples(), ids=_example_id)
 def test_a_readme_example_runs_as_written(example, readme_inputs, tmp_path):
     reason = next((why for key, why in SKIPPED.items() if key in example), None)
     if reason:
