@@ -144,6 +144,8 @@ def output_temporary(path, suffix: str | None = None) -> pathlib.Path:
     except FileExistsError:
         raise NotADirectoryError(errno.ENOTDIR, f"cannot write {str(path)!r}: {str(target.parent)!r} is a file, "
                                                 f"not a folder") from None
+    except OSError as exc:
+        raise OSError(exc.errno, f"cannot write {str(path)!r} ({exc.strerror})") from None
     return temporary_name(target, suffix)
 
 
