@@ -4,9 +4,10 @@
 - `_shared.toml`: one TOML reader with errors that name the file and what is wrong with it;
 - `_shared.ranges`: one range check, whose text every refusal of an out-of-range number uses;
 - `_shared.mapping`: independent pieces of work run in turn, or through a map-like callable (a cluster's).
+- `_shared.progress`: every progress bar (tqdm on a terminal, a plain line every few seconds elsewhere).
 
 So the logic lives once and no package reaches into another for it (`tests/test_layout.py` keeps
-it a leaf). It imports only the standard library (h5py inside the one helper that needs it).
+it a leaf). It imports only the standard library (h5py and tqdm inside the helpers that need them).
 """
 
 from _shared.files import (atomic_path, cut_short, discard_temporary, fsync_path, hdf5_in_memory, output_temporary, publish,

@@ -132,13 +132,21 @@ def stream_target(path) -> bool:
 
 def output_temporary(path, suffix: str | None = None) -> pathlib.Path:
     """Where an output is built before `publish`: ``.STEM.PID.partSUFFIX`` beside a file (same file
-    system, so the rename is atomic), or in a private temporary folder for a stream (nothing is ever
-    created beside ``/dev/null`` or a FIFO). A symlink to a file is followed."""
+    system, so the rename is atomic; missing folders are created), or in a private temporary folder for a
+    stream (nothing is ever created beside ``/dev/null`` or a FIFO). A symlink to a file is followed."""
     path = pathlib.Path(path)
     if stream_target(path):
         name = pathlib.Path("stdout" if str(path) == "-" else path.name)
         return pathlib.Path(tempfile.mkdtemp(prefix=_STREAM_FOLDER)) / temporary_name(name, suffix).name
-    return temporary_name(_followed(path), suffix)
+    target = _followed(path)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)   # `--out out/model.h5` in a fresh folder
+    except FileExistsError:
+        raise NotADirectoryError(errno.ENOTDIR, f"cannot write {str(path)!r}: {str(target.parent)!r} is a file, "
+                                                f"not a folder") from None
+    except OSError as exc:
+        raise OSError(exc.errno, f"cannot write {str(path)!r} ({exc.strerror})") from None
+    return temporary_name(target, suffix)
 
 
 def discard_temporary(tmp: pathlib.Path) -> None:

@@ -57,6 +57,16 @@ class StatusReport:
         ]
         return "\n".join(lines)
 
+    def to_dict(self) -> dict:
+        """The report as JSON-ready values: pose in mm and degrees of the work frame."""
+        p, state = self.pose, self.state
+        return {"backend": self.backend, "host": self.host or None, "ready": bool(self.ready),
+                "problem": None if self.ready else str(state.problem),
+                "pose": {"x_mm": p.x, "y_mm": p.y, "z_mm": p.z, "roll_deg": p.roll, "pitch_deg": p.pitch,
+                         "yaw_deg": p.yaw},
+                "robot_mode": str(state.robot_mode), "safety_mode": str(state.safety_mode),
+                "program_running": bool(state.program_running)}
+
 
 def arm_status(config: ArmConfig, **options) -> StatusReport:
     """Connect, read the TCP pose and the robot and safety state, disconnect.

@@ -1,4 +1,4 @@
-"""Issue 9's numbers: the fault cases the suite tries, and how many it handles.
+"""Issues 9 and 22: the fault cases the suite tries, and which it handles (one line per case with --run).
 
 Three counts, each from the test suite itself (nothing here is typed in by hand but the map below):
 
@@ -10,6 +10,7 @@ Three counts, each from the test suite itself (nothing here is typed in by hand 
 
     python bench/fault_cases.py          # collect only: cases tried, items, sweep values
     python bench/fault_cases.py --run    # also run the two fault files (and the mapped tests elsewhere)
+    python bench/fault_cases.py --run -n 2   # the same on two workers
 """
 
 from __future__ import annotations
@@ -109,6 +110,78 @@ ISSUE_CASES = [
 ]
 
 
+_B = "tests/tactip/test_bad_inputs.py::"
+_S = "tests/test_special_outputs.py::"
+_O = "tests/tactip/cli/test_cli_overwrite.py::"
+_J = "tests/tactip/cli/test_cli_json.py::"
+# Issue 22's cases (group, case, tests). A test named without its parameters stands for all of them.
+ISSUE22_CASES = [
+    ("special output", "results export --out /dev/null: a device written into, never replaced",
+     [f"{_S}test_a_character_device_is_written_into_and_a_block_device_refused"]),
+    ("special output", "--out /dev/stdout > file: the link written through, the file filled",
+     [f"{_S}test_a_link_to_standard_output_is_written_through_not_replaced"]),
+    ("special output", "--out FIFO and validate --json /dev/stdout | wc: no hang",
+     [f"{_S}test_a_fifo_with_a_reader_receives_the_output_and_stays_a_fifo",
+      f"{_S}test_a_fifo_nobody_reads_is_refused_at_once_and_the_result_kept", f"{_J}test_json_into_a_fifo_is_streamed"]),
+    ("our files", "results export --out model.h5, --json --out calibration.h5, train --out calibration.h5 / "
+                  "station.toml, validate --json model.h5: refused without --overwrite",
+     [f"{_O}test_the_issue_cases_are_refused_without_overwrite_and_leave_the_file",
+      f"{_O}test_each_kind_of_project_file_is_recognised_by_its_content"]),
+    ("our files", "--overwrite replaces; a foreign file, a new path, a stream written as before",
+     [f"{_O}test_with_overwrite_the_file_is_replaced",
+      f"{_O}test_a_foreign_file_a_new_path_and_a_stream_are_written_as_before",
+      f"{_O}test_every_command_that_writes_a_file_has_overwrite_and_the_common_flags"]),
+    ("our files", "a foreign SQLite refused before anything is added to it",
+     ["tests/tactip/line/test_results.py::test_a_foreign_database_with_tables_named_as_ours_is_refused_unchanged"]),
+    ("ignored input", "train --epsilon 1e308", [f"{_B}test_an_epsilon_that_drowns_the_counts_is_refused"]),
+    ("ignored input", "a model with taps_per_class = -3", [f"{_B}test_a_model_with_negative_tap_counts_is_refused"]),
+    ("ignored input", "[sensor] source = 7 or '/etc/passwd' on the simulated arm",
+     [f"{_B}test_a_source_the_simulated_arm_would_ignore_is_refused"]),
+    ("ignored input", "--data-dir without --sim", [f"{_B}test_data_dir_without_sim_is_refused_not_ignored"]),
+    ("ignored input", "replay --decision-threshold without --model",
+     [f"{_B}test_a_decision_threshold_without_a_model_is_refused_not_ignored"]),
+    ("ignored input", "likelihood = 'histogram' over a Gaussian model file",
+     [f"{_B}test_a_model_of_another_kind_than_the_station_names_is_refused"]),
+    ("ignored input", "record synthetic:2000000, record synthetic:0",
+     [f"{_B}test_a_synthetic_source_out_of_range_is_refused_before_recording"]),
+    ("ignored input", "detect --expected-pins 1e30", [f"{_B}test_an_expected_pin_count_beyond_any_pad_is_refused_not_warned_about"]),
+    ("traceback", "a PNG claiming 60000 x 60000 px (detect, replay)",
+     [f"{_B}test_an_image_claiming_more_pixels_than_the_decoder_takes_is_named"]),
+    ("traceback", "a symlink loop as an output", [f"{_B}test_a_symlink_loop_as_an_output_is_one_line"]),
+    ("cheap first", "inspect --sim --gap g99 refused before training",
+     [f"{_B}test_an_unknown_gap_is_refused_before_the_simulated_station_prepares"]),
+    ("cheap first", "the --sim station in one place whatever the folder",
+     [f"{_B}test_the_simulated_station_lives_in_one_place_whatever_the_folder"]),
+    ("scripting", "inspect --json and --fail-on fail|undecided set the exit status",
+     [f"{_J}test_inspect_json_is_alone_on_stdout_and_matches_the_stored_verdicts",
+      f"{_J}test_inspect_fail_on_sets_the_exit_status_from_the_verdicts",
+      f"{_J}test_the_exit_status_of_each_verdict_and_fail_on",
+      f"{_J}test_inspect_json_to_a_file_keeps_the_human_lines_on_stdout"]),
+    ("scripting", "--json [FILE|-] the same in detect, results list/export, validate, reproduce, arm status",
+     [f"{_J}test_results_list_and_export_json_to_stdout_or_a_file",
+      f"{_J}test_detect_json_to_stdout_alone_or_to_a_file_beside_the_summary",
+      f"{_J}test_validate_json_to_stdout_is_alone_there", f"{_J}test_arm_status_json",
+      f"{_J}test_reproduce_json_to_stdout"]),
+    ("scripting", "-q / -v on every command", [f"{_J}test_quiet_and_verbose_on_every_command_and_before_it"]),
+    ("scripting", "Ctrl-C exits 130",
+     ["tests/tactip/cli/test_cli_station.py::test_a_killed_collection_resumes_to_the_uninterrupted_dataset[SIGINT]"]),
+    ("scripting", "progress off a terminal: plain lines, at most one per few seconds",
+     ["tests/test_progress.py::test_off_a_terminal_a_bar_writes_whole_lines_only_at_its_start_and_end",
+      "tests/test_progress.py::test_off_a_terminal_the_interval_is_a_few_seconds_and_a_bar_left_off_still_ends_with_a_line"]),
+    ("scripting", "every README example runs as written (output folders created)",
+     ["tests/tactip/test_readme_examples.py::test_a_readme_example_runs_as_written",
+      "tests/tactip/test_readme_examples.py::test_the_readme_has_examples_of_every_command"]),
+    ("clock", "frame counts of the live camera and recorder from fake clocks",
+     ["tests/tactip/station/test_live_camera.py::test_a_tap_is_the_rest_frame_then_every_frame_until_release",
+      "tests/tactip/replay/test_record.py::test_a_live_camera_is_recorded_for_the_time_asked"]),
+]
+
+
+def _matching(node: str, items) -> list[str]:
+    """The collected items ``node`` names: itself, or every parametrised item of a test named without them."""
+    return [n for n in items if n == node or n.startswith(node + "[")]
+
+
 # The two sweeps: each item tries several values (counted by `sweep_values`).
 _SWEEPS = "::test_every_"
 
@@ -122,6 +195,9 @@ class _Recorder:
 
     def pytest_collection_finish(self, session):
         self.items = [item.nodeid for item in session.items]
+
+    def pytest_xdist_node_collection_finished(self, node, ids):    # with -n: the workers collect
+        self.items = sorted(set(self.items) | set(ids))
 
     def pytest_runtest_logreport(self, report):
         if report.failed:                                        # in setup, call or teardown
@@ -146,15 +222,18 @@ def main() -> None:
     """Print the counts."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--run", action="store_true", help="run the tests and count the cases handled")
+    parser.add_argument("-n", "--workers", type=int, default=0, help="pytest-xdist workers (default: none)")
     args = parser.parse_args()
     import pytest
 
-    mapped = sorted({node for _, _, nodes in ISSUE_CASES for node in nodes})
+    mapped = sorted({node for _, _, nodes in ISSUE_CASES + ISSUE22_CASES for node in nodes})
     elsewhere = [n for n in mapped if not n.startswith(FILES)]
     recorder = _Recorder()
     argv = ["-q", "-p", "no:cacheprovider", *FILES, *elsewhere]
+    if args.workers:
+        argv += ["-n", str(args.workers)]
     pytest.main(argv + ([] if args.run else ["--collect-only"]), plugins=[recorder])
-    missing = [n for n in mapped if n not in recorder.items]
+    missing = [n for n in mapped if not _matching(n, recorder.items)]
     if missing:
         sys.exit(f"mapped tests not collected (renamed?): {missing}")
     items = {f: sum(1 for n in recorder.items if n.startswith(f)) for f in FILES}
@@ -170,15 +249,21 @@ def main() -> None:
     if not args.run:
         return
     results = recorder.outcome
-    handled = [c for _, c, nodes in ISSUE_CASES if all(results.get(n) == "passed" for n in nodes)]
-    not_handled = [(c, {n: results.get(n) for n in nodes if results.get(n) != "passed"})
-                   for _, c, nodes in ISSUE_CASES if c not in handled]
     in_files = [n for n in recorder.items if n.startswith(FILES)]
     passed = sum(results.get(n) == "passed" for n in in_files)
     skipped = sum(results.get(n) == "skipped" for n in in_files)
-    print(f"issue 9's cases handled: {len(handled)} of {len(ISSUE_CASES)}")
-    for case, why in not_handled:
-        print(f"  not handled: {case}: {why}")
+    for issue, cases in (("9", ISSUE_CASES), ("22", ISSUE22_CASES)):
+        print(f"\nissue {issue}'s cases, one line each:")
+        handled = 0
+        for group, case, nodes in cases:
+            items = [n for node in nodes for n in _matching(node, recorder.items)]
+            # A README example skipped for want of hardware (its reason in the test) does not count against it.
+            bad = {n: results.get(n) for n in items if results.get(n) != "passed"
+                   and not (results.get(n) == "skipped" and "readme_example" in n)}
+            handled += not bad
+            print(f"  {'handled' if not bad else 'NOT HANDLED'}  [{group}] {case}"
+                  + ("" if not bad else f"  ({', '.join(f'{n.split(chr(58))[-1]}: {o}' for n, o in bad.items())})"))
+        print(f"issue {issue}'s cases handled: {handled} of {len(cases)}")
     print(f"pytest items passed: {passed} of {len(in_files)} ({skipped} skipped)")
 
 

@@ -155,7 +155,7 @@ def collect_datasets(tap: Callable[[PlannedTap], np.ndarray] | None, plan: dict[
     -------
     dict of set name -> dataset path
     """
-    from tqdm import tqdm
+    from _shared.progress import progress_bar as tqdm
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

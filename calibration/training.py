@@ -255,7 +255,8 @@ def carve_validation(dataset, n_locations: int = 11) -> tuple[np.ndarray, np.nda
     return np.flatnonzero(fold != 0), np.flatnonzero(fold == 0)
 
 
-def cross_fitted_environment(train, *, n_locations: int = 11, folds: int = HOLDOUT_FOLDS, **fit_options):
+def cross_fitted_environment(train, *, n_locations: int = 11, folds: int = HOLDOUT_FOLDS,
+                             progress: Callable | None = None, **fit_options):
     """A model fitted on most training taps, and the out-of-fold environment its settings are chosen in.
 
     Each fold of `holdout_folds` gets a model fitted on the other taps, which scores the fold's taps;
@@ -268,6 +269,8 @@ def cross_fitted_environment(train, *, n_locations: int = 11, folds: int = HOLDO
     train : perception.Dataset
     n_locations, folds, **fit_options
         As `holdout_folds` and `perception.train_model` (``kind``, ``bins``, ...).
+    progress : callable, optional
+        A tqdm-like wrapper of the iterable of folds (one model fitted per fold).
 
     Returns
     -------
@@ -279,7 +282,8 @@ def cross_fitted_environment(train, *, n_locations: int = 11, folds: int = HOLDO
     held = np.flatnonzero(fold >= 0)
     table = np.empty((len(held), 0))
     models = {}
-    for k in np.unique(fold[held]):
+    wrap = progress or (lambda items, **_: items)
+    for k in wrap(np.unique(fold[held]).tolist(), desc="fits", unit="fold"):
         models[k] = train_model(train.subset(np.flatnonzero(fold != k)), n_locations=n_locations, **fit_options)
         if table.shape[1] == 0:
             table = np.empty((len(held), models[k].n_classes))
@@ -356,7 +360,7 @@ def final_figures(model, test, *, tolerance: float = 0.0, runs: int = 2000, max_
 def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, bins: int = 100,
                       target_accuracy: float | None = None, tolerance: float = 0.0, max_taps: int = 20,
                       runs: int = 2000, seed: int = 0, fall_back: bool = True, folds: int = HOLDOUT_FOLDS,
-                      log: Callable[[str], None] = print, **fit_options):
+                      log: Callable[[str], None] = print, progress: Callable | None = None, **fit_options):
     """A model with its fixation, threshold and tempering chosen on taps it was not fitted on.
 
     `cross_fitted_environment`: the training taps fall in ``folds`` folds (`holdout_folds`); each fold's
@@ -379,6 +383,8 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
         Folds of the cross-fitting (models fitted: one per fold).
     log : callable
         Where the lines saying what was chosen go.
+    progress : callable, optional
+        A tqdm-like progress factory, wrapping the folds fitted and the fixations swept.
 
     Returns
     -------
@@ -387,12 +393,12 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     log(f"choosing the fixation and threshold on the training taps held out in {folds} folds, each scored by a "
         f"model fitted on the others ({folds} fits)")
     model, environment = cross_fitted_environment(train, n_locations=n_locations, folds=folds, kind=kind, bins=bins,
-                                                  **fit_options)
+                                                  progress=progress, **fit_options)
     log(f"{len(environment.test)} of the {len(train)} training taps held out; the model kept is fitted on "
         f"{int(model.taps_per_class.sum())}")
     chosen, _, line = choose_fixation(model, None, environment=environment, target_accuracy=target_accuracy,
                                       tolerance=tolerance, max_taps=max_taps, runs=runs, seed=seed, log=log,
-                                      fall_back=fall_back)
+                                      fall_back=fall_back, progress=progress)
     log(line)
     return chosen
 

@@ -148,7 +148,7 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
     PinsError
         ``start`` failed on the given rest frame, or on every frame when ``rest_frame`` is None.
     """
-    from tqdm import tqdm
+    from _shared.progress import progress_bar as tqdm
 
     tracker = rest = None
     detected, params, summary = 0, None, ""

@@ -6,9 +6,14 @@ Each subcommand lives in its own module of this package and exposes:
 - ``add_arguments(parser)``: fills an ``argparse`` parser (parsing only);
 - ``run(args) -> int``: calls the importable function that does the work, returns the exit code.
 
+Every command gets ``-q/--quiet`` and ``-v/--verbose`` (also accepted before the command), and every
+command that writes files gets ``--overwrite``: a file the project wrote is never replaced without it
+(checked here, before the command runs, for every argument parsed as an output file). With ``--json``
+to standard output, every other line goes to standard error.
+
 Heavy imports (OpenCV, h5py, torch) belong inside ``run`` so that ``tactip --help`` stays fast.
-Errors from any package become one line on stderr and a non-zero exit; Ctrl-C prints "Stopped."
-and exits 1; SIGTERM and SIGHUP (the terminal closed) are handled like Ctrl-C (work in progress is
+Errors from any package become one line on stderr and exit 1 (with -v/--verbose the traceback
+too); Ctrl-C prints "Stopped." and exits 130; SIGTERM and SIGHUP (the terminal closed) are handled like Ctrl-C (work in progress is
 closed as aborted, reason "terminated (SIGTERM)", temporary files removed) and exit 143 and 129. Output piped into ``head`` stops quietly; any other broken pipe (a
 worker pool, a robot socket) is an error like the others.
 """
@@ -75,6 +80,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
                "collect, train, validate --sweep-fixation, then inspect. 'tactip COMMAND --help' for each.",
     )
     parser.add_argument("--version", action="version", version=f"tactip {__version__}")
+    parser.add_argument("-q", "--quiet", dest="_quiet", action="store_true", help=_QUIET_HELP)
+    parser.add_argument("-v", "--verbose", dest="_verbose", action="store_true", help=_VERBOSE_HELP)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name, module_name in COMMANDS.items():
@@ -84,8 +91,42 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
                              formatter_class=argparse.RawDescriptionHelpFormatter)
         if only is None or name == only:
             module.add_arguments(cmd)
+            for leaf in _leaf_parsers(cmd):
+                _add_common_arguments(leaf)
         cmd.set_defaults(_run=module.run)
     return parser
+
+
+_QUIET_HELP = "no progress bars; only results, verdicts and warnings"
+_VERBOSE_HELP = "on an error, also print its traceback (for a bug report)"
+_EXIT_CODES = ("exit status: 0 done; 1 an error (one line on standard error); 2 a bad command line; "
+               "130 stopped by Ctrl-C (143 SIGTERM, 129 the terminal closed)")
+
+
+def _leaf_parsers(parser: argparse.ArgumentParser) -> list[argparse.ArgumentParser]:
+    """The parsers that take a command's options: ``parser`` itself, or those of its subcommands
+    (``tactip results list``), so that every command has the same common flags."""
+    groups = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not groups:
+        return [parser]
+    return [leaf for group in groups for child in dict.fromkeys(group.choices.values()) for leaf in _leaf_parsers(child)]
+
+
+def _add_common_arguments(parser: argparse.ArgumentParser) -> None:
+    """``-q``/``--quiet`` and ``-v``/``--verbose`` on every command, and ``--overwrite`` on every command
+    that writes a file (`tactip.cli._types.OutputPath`; a command writing a folder of outputs adds its own)."""
+    from tactip.cli._types import creatable_file, image_file, json_target, output_file
+
+    taken = set(parser._option_string_actions)
+    parser.add_argument("-q", "--quiet", action="store_true", help=_QUIET_HELP)
+    parser.add_argument("-v", "--verbose", action="store_true", help=_VERBOSE_HELP)
+    writes = any(a.type in (creatable_file, image_file, json_target, output_file) for a in parser._actions)
+    if writes and "--overwrite" not in taken:
+        parser.add_argument("--overwrite", action="store_true",
+                            help="replace a file tactip wrote (a model, calibration, collected taps, replay, "
+                                 "results database or station TOML); without it such a file is never replaced")
+    if parser.epilog is None:
+        parser.epilog = _EXIT_CODES
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -96,9 +137,13 @@ def main(argv: list[str] | None = None) -> int:
     command = next((str(w) for w in words if not str(w).startswith("-")), None)
     parser = build_parser(only=command if command in COMMANDS else "")
     args = parser.parse_args(argv)
+    args.quiet = bool(getattr(args, "quiet", False) or args._quiet)
+    args.verbose = bool(getattr(args, "verbose", False) or args._verbose)
     try:
         with terminate_like_ctrl_c():
-            return int(args._run(args) or 0)
+            _refuse_replacing_outputs(args)
+            with _json_on_stdout(args):
+                return int(args._run(args) or 0)
     except Terminated as exc:
         with contextlib.suppress(OSError):  # after a hang-up the terminal may be gone
             print("Stopped (terminated)." if exc.signum == signal.SIGTERM else
@@ -115,8 +160,38 @@ def main(argv: list[str] | None = None) -> int:
               f"process closed", file=sys.stderr)
         return 1
     except _known_errors() as exc:
+        if args.verbose:
+            import traceback
+
+            traceback.print_exc(file=sys.stderr)
         print(f"tactip {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
+
+
+def _refuse_replacing_outputs(args: argparse.Namespace) -> None:
+    """Before the command runs: no file the project wrote is among its outputs, unless --overwrite."""
+    from tactip._output import refuse_replacing_project_files
+    from tactip.cli._types import OutputPath
+
+    outputs = [value for value in vars(args).values() if isinstance(value, OutputPath)]
+    refuse_replacing_project_files(outputs, overwrite=bool(getattr(args, "overwrite", False)))
+
+
+@contextlib.contextmanager
+def _json_on_stdout(args: argparse.Namespace):
+    """With ``--json`` to standard output, every other line goes to standard error (the JSON is written by
+    `tactip._output.write_json` to the real standard output), so a script can parse standard output."""
+    if str(getattr(args, "json", None)) != "-":
+        yield
+        return
+    from tactip import _output
+
+    _output.JSON_STDOUT = sys.stdout
+    try:
+        with contextlib.redirect_stdout(sys.stderr):
+            yield
+    finally:
+        _output.JSON_STDOUT = None
 
 
 def _stdout_broken() -> bool:

@@ -11,12 +11,15 @@ import argparse
 
 from tactip.cli._types import float_in_range, int_in_range
 
-__all__ = ["add_scale_arguments", "pin_count"]
+__all__ = ["add_scale_arguments", "pin_count", "MAX_PINS"]
+
+#: Most pins of a pad (a dense one); a count above it is a typo (``--expected-pins 1e30``).
+MAX_PINS = 2000
 
 
 def pin_count(text: str) -> int:
     """An argparse type: a pin count of at least one ring and at most a dense pad (7..2000)."""
-    return int_in_range(7, 2000)(text)
+    return int_in_range(7, MAX_PINS)(text)
 
 
 def add_scale_arguments(parser: argparse.ArgumentParser) -> None:

@@ -3,8 +3,9 @@
 Every number is finite (``nan`` and ``inf`` are refused: they say nothing and poison what follows),
 whole numbers have an upper bound where a huge value would exhaust memory or time, and output files
 are checked before any work starts (an existing folder, a missing parent folder, a folder on a
-read-only file system or without write permission, an image format the plotting library cannot write,
-a file holding collected taps or inspection results, which no output may replace). `check_memory` refuses a job whose arrays cannot fit in memory.
+read-only file system or without write permission, an image format the plotting library cannot write;
+missing folders are created by the writer). A file the project wrote is replaced only with ``--overwrite``
+(`OutputPath`). `check_memory` refuses a job whose arrays cannot fit in memory.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ from _shared.ranges import MAX_SEED
 from tactip.errors import TactipError
 
 __all__ = ["int_at_least", "int_in_range", "positive_int", "non_negative_int", "seed", "finite_float",
-           "float_in_range", "positive_float", "non_negative_float", "fraction", "fractions", "output_file", "creatable_file", "output_folder",
+           "float_in_range", "positive_float", "non_negative_float", "fraction", "fractions", "output_file", "creatable_file",
+           "OutputPath", "json_target", "add_json_argument", "output_folder",
            "image_file", "worker_count", "check_memory", "available_memory_bytes", "format_bytes"]
 
 
@@ -101,51 +103,39 @@ def fractions(text: str) -> list[float]:
 
 
 def output_file(text: str) -> Path:
-    """An argparse type: a file to write in an existing folder; refused when it names a folder.
-    ``-`` (standard output), ``/dev/null``, a terminal or a FIFO are written into as streams."""
-    path = creatable_file(text)
-    if _stream(path, text):
-        return path
-    if not path.parent.is_dir():
-        raise argparse.ArgumentTypeError(f"the folder {str(path.parent)!r} of {text!r} does not exist")
-    _writable(path.parent, text)
-    return path
+    """An argparse type: a file to write (its missing folders are created, so ``--out out/model.h5`` works
+    in a fresh folder); refused when it names a folder. ``-`` (standard output), ``/dev/null``, a terminal
+    or a FIFO are written into as streams."""
+    return creatable_file(text)
 
 
-def _not_recorded_data(path: Path, text: str) -> None:
-    """Refuse an output over collected taps (a tactip-dataset file) or a results database: records that
-    took hours of collecting or inspecting, which no command of the project writes over."""
-    if not path.is_file():
-        return  # missing (the usual case), or not a regular file: nothing recorded in it (and reading a FIFO or a
-        # terminal would wait for ever)
-    try:
-        with open(path, "rb") as f:
-            head = f.read(16)
-    except OSError:
-        return  # unreadable: the writer reports what it meets
-    what = None
-    if head.startswith(b"SQLite format 3\0"):
-        what = "an SQLite database (inspection results?)"
-    elif head.startswith(b"\x89HDF\r\n\x1a\n"):
-        import h5py
+def json_target(text: str) -> "OutputPath":
+    """An argparse type for ``--json [FILE|-]``: ``-`` (standard output) or a file to write, whose missing
+    folders are created (as `creatable_file`)."""
+    return OutputPath("-") if text == "-" else creatable_file(text)
 
-        try:
-            with h5py.File(path, "r") as f:
-                schema = f.attrs.get("schema")
-            schema = schema.decode() if isinstance(schema, bytes) else schema
-        except (OSError, ValueError):
-            schema = None
-        if schema == "tactip-dataset/1":
-            what = "collected taps (a tactip-dataset/1 file)"
-    if what:
-        raise argparse.ArgumentTypeError(f"{text!r} holds {what}; writing over it would destroy them: choose "
-                                         f"another name")
+
+def add_json_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """Add ``--json [FILE|-]``, the same in every command that reports: with no value or ``-`` the JSON goes
+    to standard output (and every other line to standard error), with FILE to that file (written atomically;
+    a FIFO or a device is streamed into)."""
+    parser.add_argument("--json", type=json_target, nargs="?", const=OutputPath("-"), default=None,
+                        metavar="FILE|-", help=f"{what} as JSON: to standard output (no value or -; other lines "
+                                               f"go to standard error) or to FILE")
+
+
+class OutputPath(type(Path())):
+    """A path parsed as a file the command writes: `tactip.cli.main` refuses, before the command runs, to
+    replace a file the project wrote there (a model, collected taps ...) unless ``--overwrite`` is given
+    (`tactip._output.refuse_replacing_project_files`)."""
+
+    __slots__ = ()
 
 
 def creatable_file(text: str) -> Path:
     """An argparse type: a file to write whose missing folders the writer creates; refused when it names a
-    folder, when one of its folders is a file or cannot be written, or when it holds collected taps or
-    inspection results."""
+    folder, or when one of its folders is a file or cannot be written. (A file the project wrote there is
+    replaced only with ``--overwrite``: `OutputPath`.)"""
     if not text.strip():
         raise argparse.ArgumentTypeError("must name a file, got ''")
     path = Path(text)
@@ -153,10 +143,9 @@ def creatable_file(text: str) -> Path:
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name")
     if _stream(path, text):      # streamed into, never replaced: nothing to check in its folder, nothing to read
-        return path
+        return OutputPath(path)
     _writable(_folders_or_missing(path.parent, text), text)
-    _not_recorded_data(path, text)
-    return path
+    return OutputPath(path)
 
 
 def _stream(path: Path, text: str) -> bool:

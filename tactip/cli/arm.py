@@ -6,7 +6,7 @@ reference, mm and degrees; a positive tap depth goes down into the part.
 
   tactip arm status --config station.toml
       Connect, print the TCP pose in the work frame and the robot and safety state.
-      Exit status 0 only when the arm is ready to move.
+      Exit status 0 only when the arm is ready to move. --json [FILE|-]: the same as JSON.
 
   tactip arm tap --config station.toml --depth 1.5 --at 30 0
       One slow tap at (30, 0) mm of the work frame, down to 1.5 mm below the surface
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import argparse
 
-from tactip.cli._types import finite_float, positive_float
+from tactip.cli._types import add_json_argument, finite_float, positive_float
 
 HELP = "check the arm of a station (status) and try one slow tap (tap)"
 
@@ -34,6 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                             description="Connect to the arm, print the TCP pose in the work frame and the robot "
                                         "and safety state. Exit status 0 only when the arm is ready to move.")
     status.add_argument("--config", required=True, metavar="TOML", help="station configuration with an [arm] table")
+    add_json_argument(status, "the backend, pose, modes and readiness")
     tap = sub.add_parser("tap", help="one slow tap at a point of the work frame",
                          description="One slow tap to check a new set-up. The depth and the point are checked "
                                      "against the [arm] limits before anything moves.")
@@ -53,7 +54,12 @@ def run(args: argparse.Namespace) -> int:
     config = load_arm_config(args.config)
     if args.arm_command == "status":
         report = arm_status(config)
-        print(report.format())
+        if args.json is not None:
+            from tactip._output import write_json
+
+            write_json(args.json, report.to_dict(), inputs=[args.config])
+        if str(args.json) != "-":
+            print(report.format())
         return 0 if report.ready else 1
     x, y = args.at
     event = check_tap(config, depth_mm=args.depth, x_mm=x, y_mm=y, speed_mm_s=args.speed,

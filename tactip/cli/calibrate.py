@@ -8,6 +8,7 @@ The scale (mm/px) is derived as `tactip detect` and `tactip replay` derive it: t
 so). Feature pins that cannot be [sensor] min_separation_mm apart are taken as far apart as the pad
 allows, as replay takes them, and the summary gives the separation reached.
 Refuses with a clear message when the frame shows no sensor or the pin count is far from [sensor] pins.
+An existing calibration is replaced only with --overwrite.
 
 Examples:
   tactip calibrate --config samples/station_sim.toml
@@ -38,8 +39,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip calibrate`."""
+    from tactip._output import refuse_replacing_project_files
     from tactip.station.config import load_station_config
-    from tactip.station.procedures import calibrate_station
+    from tactip.station.procedures import calibrate_station, calibration_path
 
-    calibrate_station(load_station_config(args.config), rest_frames=args.rest_frames, out=args.out)
+    config = load_station_config(args.config)
+    refuse_replacing_project_files([args.out or calibration_path(config)], overwrite=args.overwrite)
+    calibrate_station(config, rest_frames=args.rest_frames, out=args.out)
     return 0

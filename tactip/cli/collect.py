@@ -28,7 +28,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--workers", type=worker_count, default=None,
                         help="processes rendering taps on the simulated station, 1..4 x CPU count "
                              "(default: CPU count, at most 4)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -81,7 +81,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     build.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                        help="track the recordings on this Dask cluster (its workers must see the same paths)")
     build.add_argument("--overwrite", action="store_true", help="replace existing outputs in DIR")
-    build.add_argument("--quiet", action="store_true", help="no progress bars and no summary")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -103,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     with contextlib.ExitStack() as stack:
         map_fn = None
         if args.workers is not None or args.scheduler is not None:
-            from tqdm import tqdm
+            from _shared.progress import progress_bar as tqdm
 
             from tactip.cluster import cluster_map, open_client
 

@@ -12,7 +12,7 @@ the sensor's pin pitch in mm (--sensor, or --pins-on-pad / --expected-pins / the
 --pad-diameter-mm, default 40) over the central pin pitch in px (the median nearest-neighbour distance of
 the pins near the field's centre; the one pitch printed). The summary says how it was derived.
 
-With --json the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
+With --json [FILE|-] (standard output with no value or -) the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
 "rejected": [[x, y, "reason"], ...], "dark_pins": bool, "scale": {"mm_per_px", "pitch_px", "pitch_mm",
 "source", "sensor"}} in px (x to the right, y down; "scale" is null with fewer than two pins), plus
 "expected_pins" and "count_error" (found minus expected) with --expected-pins.
@@ -36,11 +36,10 @@ Examples:
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
-from tactip.cli._scale import add_scale_arguments
-from tactip.cli._types import output_file, positive_int
+from tactip.cli._scale import MAX_PINS, add_scale_arguments
+from tactip.cli._types import add_json_argument, int_in_range, output_file
 
 HELP = "find the pin field in one image (pins kept, blobs rejected and why; optional count check)"
 
@@ -54,15 +53,13 @@ _COUNT_WARNING = 0.1
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments of ``tactip detect``."""
     parser.add_argument("image", metavar="IMAGE", help="image file (png, jpg, bmp, tif)")
-    parser.add_argument("--expected-pins", type=positive_int, metavar="N",
-                        help="the sensor's pin count (127, 331, 532 ...): confirms the pins found and says how "
-                             "far off they are; does not change what is found")
+    parser.add_argument("--expected-pins", type=int_in_range(1, MAX_PINS), metavar="N",
+                        help=f"the sensor's pin count (127, 331, 532 ...; 1..{MAX_PINS}): confirms the pins found "
+                             "and says how far off they are; does not change what is found")
     parser.add_argument("--dark-pins", action="store_true",
                         help="dark markers on a light membrane (default: the polarity is decided from the image)")
-    parser.add_argument("--json", action="store_true",
-                        help='print {"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": '
-                             '[[x, y, "reason"], ...], "dark_pins": bool, "scale": {"mm_per_px": s, "source": "how", '
-                             '...}} (px)')
+    add_json_argument(parser, '{"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": [[x, y, "reason"], '
+                              '...], "dark_pins": bool, "scale": {"mm_per_px": s, "source": "how", ...}} (px)')
     parser.add_argument("--annotate", type=output_file, metavar="OUT.png",
                         help="also write a picture: kept pins green, rejected blobs coloured by reason, legend")
     add_scale_arguments(parser)  # --sensor, --pins-on-pad, --pad-diameter-mm, --mm-per-px (as tactip replay)
@@ -71,12 +68,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read the image, find the pin field, print it (and draw it)."""
     from pins import draw_pin_field, find_pin_field
-    from tactip._output import atomic_output, refuse_overwriting_inputs
+    from tactip._output import atomic_output, refuse_overwriting_inputs, write_json
     from tactip.errors import SourceError
     from tactip.sources import ImageFolderSource
 
+    refuse_overwriting_inputs([args.annotate, args.json], [args.image])
     if args.annotate:
-        refuse_overwriting_inputs([args.annotate], [args.image])
         if args.annotate.suffix.lower() not in _PICTURE_SUFFIXES:
             raise SourceError(f"cannot write the picture {str(args.annotate)!r}: use a .png, .jpg, .bmp or .tif name")
     with ImageFolderSource(args.image) as source:
@@ -100,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
         with atomic_output(args.annotate, inputs=[args.image]) as tmp:
             with open(tmp, "wb") as f:
                 f.write(data.tobytes())
-    if args.json:
+    if args.json is not None:
         data = {"count": field.count, "pins": [[round(x, 3), round(y, 3)] for x, y in field.centres.tolist()],
                 "pitch_px": None if field.count < 2 else round(field.pitch_px, 3),
                 "rejected": [[round(float(x), 3), round(float(y), 3), str(reason)]
@@ -109,8 +106,8 @@ def run(args: argparse.Namespace) -> int:
                 "scale": None if scale is None else scale.to_dict()}
         if args.expected_pins:
             data.update(expected_pins=field.expected_pins, count_error=field.count_error)
-        print(json.dumps(data))
-    else:
+        write_json(args.json, data, inputs=[args.image], indent=None)
+    if str(args.json) != "-":
         _print_summary(args, field, scale, reason)
     if args.expected_pins and abs(field.count_error) > _COUNT_WARNING * args.expected_pins:
         why = ("pins hidden or out of focus, something touching the pad, or a wrong count?" if field.count_error < 0

@@ -11,9 +11,19 @@ An arm fault stops the arm, records the inspection as aborted with the reason, a
 trains and picks the fixation depth (a few minutes), keeping everything in --data-dir (default
 $TACTIP_SIM_DIR, else ~/.local/share/tactip/sim, whatever the current folder; the first line says where).
 
+For a script: --json [FILE|-] writes the verdicts as JSON (to standard output with no value or '-',
+every other line then going to standard error), and --fail-on sets the exit status:
+
+  0  every inspection finished, and none is a verdict --fail-on names
+  1  an error (bad input, an arm fault: the inspection is stored as aborted)
+  2  a bad command line
+  3  --fail-on fail: some gap FAILED; --fail-on undecided: some gap FAILED or stayed UNDECIDED
+  130  stopped by Ctrl-C
+
 Examples:
   tactip inspect --sim
   tactip inspect --sim --policy stationary --seed 3
+  tactip inspect --sim --gap g01 --gap g02 --json --fail-on undecided > verdicts.json
   tactip inspect --config station.toml --gap door-left
 """
 
@@ -24,7 +34,10 @@ import shlex
 from pathlib import Path
 
 from perception.choices import POLICIES
-from tactip.cli._types import finite_float, seed
+from tactip.cli._types import add_json_argument, finite_float, seed
+
+#: Exit status when a verdict named by --fail-on is met (1 is an error, 2 a bad command line).
+EXIT_VERDICT = 3
 
 HELP = "inspect the configured gaps (or --sim: the simulated station, no hardware)"
 
@@ -44,11 +57,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="inspect only this gap (repeatable)")
     parser.add_argument("--start-depth", type=finite_float, default=None, metavar="MM",
                         help="start every inspection at this depth instead of a random one")
-    parser.add_argument("--quiet", action="store_true", help="print only the verdicts")
+    add_json_argument(parser, "the verdicts (gap, nominal and estimated width in mm, belief, taps, verdict, "
+                              "result id)")
+    parser.epilog = (f"exit status: 0 done (whatever the verdicts, without --fail-on); 1 an error; 2 a bad command "
+                     f"line; {EXIT_VERDICT} a verdict --fail-on names; 130 stopped by Ctrl-C")
+    parser.add_argument("--fail-on", choices=("fail", "undecided"), default=None,
+                        help=f"exit {EXIT_VERDICT} when a gap FAILED (fail), or FAILED or stayed UNDECIDED "
+                             f"(undecided); default: exit 0 whatever the verdicts")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run `tactip inspect`; exit 0 when every inspection finished (pass, fail or undecided)."""
+    """Run `tactip inspect`; exit 0 when every inspection finished (3 when --fail-on meets its verdict)."""
     import time
 
     from tactip.station.config import load_station_config, simulated_station_config
@@ -90,7 +109,27 @@ def run(args: argparse.Namespace) -> int:
 
     where = describe_location(config.results)
     print(f"results: {where}  (tactip results list --db {shlex.quote(where)})")
-    return 0
+    if args.json is not None:
+        from tactip._output import write_json
+
+        write_json(args.json, [verdict_row(o) for o in outcomes])
+    return exit_status(outcomes, args.fail_on)
+
+
+def verdict_row(outcome) -> dict:
+    """One inspection as JSON-ready values (widths in mm, belief 0-1)."""
+    gap = outcome.gap
+    return {"gap": gap.name, "verdict": outcome.verdict, "nominal_width_mm": gap.nominal_width,
+            "tolerance_mm": gap.tolerance, "estimated_width_mm": round(float(outcome.estimated_width), 6),
+            "belief": round(float(outcome.belief), 6), "taps": int(outcome.taps), "decided": bool(outcome.decided),
+            "duration_s": round(float(outcome.duration_s), 3), "result_id": int(outcome.inspection_id)}
+
+
+def exit_status(outcomes, fail_on: str | None) -> int:
+    """0, or `EXIT_VERDICT` when a verdict ``fail_on`` names is among ``outcomes`` (``"fail"``: FAIL;
+    ``"undecided"``: FAIL or UNDECIDED)."""
+    gating = {None: (), "fail": ("FAIL",), "undecided": ("FAIL", "UNDECIDED")}[fail_on]
+    return EXIT_VERDICT if any(o.verdict in gating for o in outcomes) else 0
 
 
 def summary(outcomes, elapsed_s: float) -> str:

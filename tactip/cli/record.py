@@ -33,7 +33,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="fixed camera exposure, where the driver allows")
     parser.add_argument("--overwrite", action="store_true",
                         help="replace an existing --out file (without it an earlier recording is never replaced)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:

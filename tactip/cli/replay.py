@@ -92,7 +92,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--decision-threshold", type=float_in_range(0, 1, low_open=True), metavar="P",
                         help="decision threshold on the width belief, (0, 1] (default: the model's recommended, "
                              "else 0.9)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
 
 def add_sensor_arguments(parser: argparse.ArgumentParser) -> None:

@@ -13,7 +13,7 @@ for seed, as a run here.
 
 Examples:
   tactip reproduce 001 --json results/001.json
-  tactip reproduce 004 --quick
+  tactip reproduce 004 --quick --json > out/004.json
   tactip reproduce 003 --scheduler tcp://10.0.0.5:8786
 """
 
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import argparse
 
-from tactip.cli._types import output_file, seed
+from tactip.cli._types import add_json_argument, seed
 
 HELP = "run a paper's experiment (000-004) on the simulator, figures beside the paper's"
 
@@ -30,26 +30,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the parser of ``tactip reproduce``."""
     parser.add_argument("paper", choices=("000", "001", "002", "003", "004"), metavar="PAPER",
                         help="paper number: 000, 001, 002, 003 or 004")
-    parser.add_argument("--json", type=output_file, metavar="OUT.json", help="write the rows of the paper's figures")
+    add_json_argument(parser, "the rows of the paper's figures")
     parser.add_argument("--quick", action="store_true", help="fewer runs and conditions (for a quick look and tests)")
     parser.add_argument("--seed", type=seed, default=0, help="seed of the simulated sensor and runs, >= 0 (default 0)")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                         help="run the conditions on this Dask cluster (dask scheduler; dask worker on each machine)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the reproduction, print the report, write the JSON rows."""
     import contextlib
     import functools
-    import json
 
-    from tqdm import tqdm
-
-    from tactip._output import write_text_atomic
+    from _shared.progress import progress_bar
+    from tactip._output import write_json
     from tactip.reproduce import reproduce
 
-    progress = functools.partial(tqdm, desc=f"paper {args.paper}", unit="condition", disable=args.quiet, leave=False)
+    progress = functools.partial(progress_bar, desc=f"paper {args.paper}", unit="condition", disable=args.quiet,
+                                 leave=False)
     with contextlib.ExitStack() as stack:
         map_fn = None
         if args.scheduler is not None:
@@ -59,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
         report = reproduce(args.paper, quick=args.quick, seed=args.seed, progress=progress, map_fn=map_fn)
     print(report.text())
     if args.json is not None:
-        write_text_atomic(args.json, json.dumps(report.json_rows(), indent=1) + "\n")
-        print(f"wrote {len(report.rows)} rows to {args.json}")
+        write_json(args.json, report.json_rows())
+        if str(args.json) != "-":
+            print(f"wrote {len(report.rows)} rows to {args.json}")
     return 0

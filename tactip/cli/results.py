@@ -3,13 +3,15 @@
 The station writes every inspection (and every tap, with its beliefs) to its results database as it
 happens: an SQLite file, or a PostgreSQL database shared by a line of stations. Name the database
 with --config (the station's [station] results) or --db (a file, or a postgresql:// URL); --station
-keeps one station's rows.
+keeps one station's rows. --json [FILE|-] writes JSON (list and export), to standard output with no
+value or '-', else to FILE (like export's --out).
 
 Examples:
   tactip results list --config samples/station_sim.toml
   tactip results list --db ~/.local/share/tactip/sim/results.sqlite --limit 20
   tactip results export --config samples/station_sim.toml --csv --out results.csv
   tactip results export --db results.sqlite --json
+  tactip results list --config samples/station_sim.toml --json > out/results.json
   tactip results plot --config samples/station_sim.toml --out widths.png --last 20
   tactip results list --db postgresql://tactip@db.plant/line3 --station cell-2
 """
@@ -17,10 +19,11 @@ Examples:
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
-from tactip.cli._types import image_file, int_at_least, output_file
+from tactip.cli._types import add_json_argument, image_file, int_at_least, json_target, output_file
 
 HELP = "list or export stored inspection results (SQLite or PostgreSQL)"
 
@@ -41,6 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         if name == "list":
             p.add_argument("--limit", type=int_at_least(1), default=None, metavar="N",
                            help="show only the newest N inspections (N >= 1)")
+            add_json_argument(p, "the inspections (instead of the table)")
         elif name == "plot":
             p.add_argument("--out", type=image_file, required=True, help="image file (.png, .pdf, .svg)")
             p.add_argument("--last", type=int_at_least(1), default=None, metavar="N",
@@ -48,7 +52,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         else:
             fmt = p.add_mutually_exclusive_group(required=True)
             fmt.add_argument("--csv", action="store_true", help="comma-separated values with a header")
-            fmt.add_argument("--json", action="store_true", help="a JSON list of objects")
+            fmt.add_argument("--json", type=json_target, nargs="?", const=json_target("-"), default=None,
+                             metavar="FILE|-", help="a JSON list of objects, to standard output (no value or -) "
+                                                    "or to FILE")
             p.add_argument("--out", type=output_file, default=None, help="output file (default: standard output)")
 
 
@@ -61,8 +67,14 @@ def run(args: argparse.Namespace) -> int:
         from tactip.station.config import load_station_config
 
         path = load_station_config(args.config).results
-    out = getattr(args, "out", None)
-    if out is not None:
+    from tactip.errors import TactipError
+
+    if args.action == "export" and args.json is not None and str(args.json) != "-" and args.out is not None:
+        raise TactipError("give the JSON file once: --json FILE or --json --out FILE")
+    if args.action == "export" and args.json is not None and str(args.json) != "-":
+        args.out = args.json
+    out = getattr(args, "out", None) or (args.json if args.action == "list" else None)
+    if out is not None and str(out) != "-":
         from tactip._output import refuse_overwriting_inputs
 
         # The database and its WAL companions are inputs: an output over one of them would destroy it.
@@ -71,7 +83,13 @@ def run(args: argparse.Namespace) -> int:
     inputs = [] if is_database_url(path) else [path]
     with open_results(path, read_only=True) as store:
         if args.action == "list":
-            print(format_table(store.inspections(limit=args.limit, station=args.station)))
+            rows = store.inspections(limit=args.limit, station=args.station)
+            if args.json is None:
+                print(format_table(rows))
+            else:
+                from tactip._output import write_json
+
+                write_json(args.json, json.loads(store.export_json(rows)), inputs=inputs)
             return 0
         if args.action == "plot":
             from tactip.line.results import plot_inspections
@@ -81,7 +99,11 @@ def run(args: argparse.Namespace) -> int:
             return 0
         rows = store.inspections(station=args.station)
         text = store.export_csv(rows) if args.csv else store.export_json(rows) + "\n"
-    if args.out is None:
+    if args.out is None and args.json is not None:                      # JSON to standard output
+        from tactip._output import write_json
+
+        write_json("-", json.loads(text))
+    elif args.out is None:
         sys.stdout.write(text)
     else:
         from tactip._output import write_text_atomic

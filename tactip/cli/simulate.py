@@ -65,7 +65,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     taxel.add_argument("--stimulus", choices=("rod", "rods", "textures", "edge"), default="rod",
                        help="rod: paper 000's 8 mm rod or sphere (default); rods: paper 001; textures: 003; edge: 004")
     taxel.add_argument("--csv", action="store_true", help="also write the raw test stream to DIR/test_stream.csv")
-    taxel.add_argument("--quiet", action="store_true", help="no progress bars")
+    taxel.add_argument("--overwrite", action="store_true", help="replace DIR/train.h5 and DIR/test.h5 if they exist")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -75,6 +75,9 @@ def run(args: argparse.Namespace) -> int:
     from tactip.taxel import simulate_taxel_datasets, write_taxel_test_stream
     from tactip.taxel.collect import DEFAULT_TAPS
 
+    from tactip._output import refuse_replacing_project_files
+
+    refuse_replacing_project_files([args.out / "train.h5", args.out / "test.h5"], overwrite=args.overwrite)
     if args.stimulus != "rod":
         return _run_stimulus(args)
     locations = DEFAULT_TAPS[args.sensor] if args.locations is None else args.locations

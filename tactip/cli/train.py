@@ -132,6 +132,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _choose_fixation(args, dataset, options):
     """--choose-fixation: a model fitted on most training taps, its settings chosen on the others."""
+    import functools
+
+    from _shared.progress import progress_bar
     from calibration import CalibrationError, fit_with_fixation
     from perception.errors import DatasetError, ModelError
 
@@ -140,6 +143,8 @@ def _choose_fixation(args, dataset, options):
     try:
         return fit_with_fixation(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
                                  target_accuracy=args.target_accuracy, tolerance=args.tolerance, fall_back=False,
+                                 progress=None if args.quiet else functools.partial(progress_bar, leave=False,
+                                                                                    desc="fixations"),
                                  **options)
     except (CalibrationError, DatasetError, ModelError) as exc:  # e.g. a class without taps in the split
         raise TactipError(f"--choose-fixation: {exc}") from None

@@ -59,14 +59,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import functools
-import json
 import pathlib
 
 from _shared.ranges import MAX_TAPS
 from perception.choices import POLICIES, SHIFT_MODES
 from tactip.cli._validate_report import KEEP_THRESHOLD, with_label_error
-from tactip.cli._types import (finite_float, float_in_range, fraction, fractions, image_file, int_in_range,
-                               non_negative_float, output_file, seed)
+from tactip.cli._types import (add_json_argument, finite_float, float_in_range, fraction, fractions, image_file, int_in_range,
+                               non_negative_float, seed)
 
 #: Most Monte Carlo runs per policy (and most taps per run, `_shared.ranges.MAX_TAPS`): beyond them a validation takes hours.
 MAX_RUNS = 10_000_000
@@ -125,21 +124,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--train", metavar="TRAIN.h5",
                         help="with --baselines: the dataset the model was trained on (the model file does not hold "
                              "its taps); the baselines are fitted on it, never on the test taps")
-    parser.add_argument("--json", type=output_file, metavar="OUT.json",
-                        help="write one entry per policy and threshold (with --baselines, also one per baseline and "
-                             "a verdict per model)")
+    add_json_argument(parser, "one entry per policy and threshold (with --baselines, also one per baseline and "
+                              "a verdict per model)")
     parser.add_argument("--plot", type=image_file, metavar="OUT.png",
                         help="plot error against mean taps (or against fixation); .png, .pdf, .svg ...")
     parser.add_argument("--seed", type=seed, default=0, help="random seed, >= 0 (default 0)")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                         help="run --sweep-fixation's fixations or --sweep-lateral's sigmas on this Dask cluster "
                              "(dask scheduler; dask worker tcp://HOST:PORT on each machine); the same results as here")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the Monte Carlo validation and report it."""
-    from tqdm import tqdm
+    from _shared.progress import progress_bar as tqdm
 
     from perception import DEFAULT_THRESHOLDS, VirtualEnvironment, load_dataset, load_model
 
@@ -153,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
                           f"({args.max_taps})")
     if args.deadline is not None and args.deadline > args.max_taps:
         raise TactipError(f"--deadline {args.deadline} is out of range: it must lie in 1..--max-taps ({args.max_taps})")
-    from tactip._output import refuse_overwriting_inputs, write_text_atomic
+    from tactip._output import refuse_overwriting_inputs, write_json
 
     if args.target_accuracy is not None and not args.sweep_fixation:
         raise TactipError("--target-accuracy needs --sweep-fixation")
@@ -197,8 +194,9 @@ def run(args: argparse.Namespace) -> int:
         rows = _validate(args, model, test, train, environment, options, tqdm)
     if args.json:
         inputs = [args.model, args.test, *args.compare, *([args.train] if args.train else [])]
-        write_text_atomic(args.json, json.dumps(rows, indent=1) + "\n", inputs=inputs)
-        print(f"wrote {args.json}")
+        write_json(args.json, rows, inputs=inputs)
+        if str(args.json) != "-":
+            print(f"wrote {args.json}")
     if args.plot:
         print(f"wrote {args.plot}")
     return 0

@@ -328,7 +328,7 @@ def _taps_of_rows(labelled, cal, leave_out, *, rest, n_samples, image_samples, r
     """Each usable row's taps: one recording after another (a tqdm bar over them), or through ``map_fn``."""
     import functools
 
-    from tqdm import tqdm
+    from _shared.progress import progress_bar as tqdm
 
     from _shared import map_pieces
 

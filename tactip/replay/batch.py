@@ -277,7 +277,7 @@ def _one_line(exc: BaseException) -> str:
 def _run(client, videos, targets, rows, chunks, options, *, torch_device, progress: bool) -> None:
     """Send the videos of each chunk to the workers (one task a chunk); fill their rows as they finish."""
     from distributed import as_completed
-    from tqdm import tqdm
+    from _shared.progress import progress_bar as tqdm
 
     futures = {}
     for chunk in chunks:

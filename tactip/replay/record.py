@@ -83,7 +83,7 @@ def record_video(spec, out_path, *, seconds: float | None = None, frames: int | 
         The output cannot be written (checked before recording).
     """
     import cv2
-    from tqdm import tqdm
+    from _shared.progress import progress_bar as tqdm
 
     from tactip.sources import ThreadedReader, open_source
 

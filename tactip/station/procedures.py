@@ -208,10 +208,21 @@ def prepare_model(config: StationConfig, *, progress: bool = True, log: Callable
         log(f"training the model ({p.likelihood} likelihood) ...")
         model = prepare_station_model(paths["train"], partial, kind=p.likelihood, n_locations=p.locations,
                                       bins=p.bins, target_accuracy=target, tolerance=tolerance, max_taps=p.max_taps,
-                                      log=log)
+                                      log=log, progress=_progress(progress))
     # The test collection, used once: the figures of the model as the station will run it.
     log(final_figures(model, load_dataset(paths["test"]), tolerance=tolerance, max_taps=p.max_taps).describe(model))
     return model_path
+
+
+def _progress(shown: bool):
+    """The progress factory of the training and fixation sweep (`_shared.progress.progress_bar`), or None."""
+    if not shown:
+        return None
+    import functools
+
+    from _shared.progress import progress_bar
+
+    return functools.partial(progress_bar, leave=False, desc="fixations", unit="fixation")
 
 
 def _require_model_kind(kind: str) -> None:

@@ -102,7 +102,7 @@ def simulate_taxel_datasets(out_dir, *, sensor: str = "fingertip", seed: int = 0
     --------
     >>> paths = simulate_taxel_datasets("data/fingertip", sensor="fingertip", seed=1)   # doctest: +SKIP
     """
-    from tqdm import tqdm
+    from _shared.progress import progress_bar as tqdm
 
     simulator, where = _plan(sensor, seed, locations, taps_per_location)
     out = pathlib.Path(out_dir)

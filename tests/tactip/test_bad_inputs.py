@@ -125,3 +125,30 @@ def test_a_decision_threshold_without_a_model_is_refused_not_ignored(tmp_path, c
     assert main(["replay", str(video), "--out", str(tmp_path / "r.h5"), "--decision-threshold", "0.8"]) == 1
     assert "--decision-threshold sets the model's decisions: it needs --model" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("count", ["1e30", "1000000000000000000000000000000", "0"])
+def test_an_expected_pin_count_beyond_any_pad_is_refused_not_warned_about(capsys, count):
+    from pathlib import Path
+
+    frame = Path(__file__).resolve().parents[2] / "samples" / "synthetic_frame.png"
+    with pytest.raises(SystemExit) as exit_:
+        main(["detect", str(frame), "--expected-pins", count])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_.value.code == 2 and "--expected-pins" in err[-1] and "%" not in err[-1]
+
+
+@pytest.mark.parametrize("argv", [["detect", "{frame}", "--annotate", "{loop}"], ["detect", "{frame}", "--json", "{loop}"],
+                                  ["record", "synthetic", "--frames", "2", "--out", "{loop}"]])
+def test_a_symlink_loop_as_an_output_is_one_line(tmp_path, capsys, argv):
+    from pathlib import Path
+
+    frame = Path(__file__).resolve().parents[2] / "samples" / "synthetic_frame.png"
+    (tmp_path / "a.png").symlink_to(tmp_path / "b.png")
+    (tmp_path / "b.png").symlink_to(tmp_path / "a.png")
+    words = [w.format(frame=frame, loop=tmp_path / "a.png") for w in argv]
+    with pytest.raises(SystemExit) as exit_:
+        main(words)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_.value.code == 2 and "Too many levels of symbolic links" in err[-1] and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png", "b.png"]

@@ -121,7 +121,10 @@ def test_train_refuses_to_write_the_model_over_its_dataset(sim_station, tmp_path
     model = tmp_path / "model.h5"
     shutil.copy(sim_station.model, model)
     result = run_tactip_in_process("train", "model.h5", "--out", "model.h5", cwd=tmp_path, inputs=[model])
-    assert_refused(result, "model.h5", "input")
+    assert_refused(result, "model.h5", "trained model", "--overwrite")    # ours: replaced only when asked
+    result = run_tactip_in_process("train", "model.h5", "--out", "model.h5", "--overwrite", cwd=tmp_path,
+                                   inputs=[model])
+    assert_refused(result, "model.h5", "input")                           # asked, but it is the input
     assert len(load_dataset(data)) == len(load_dataset(sim_station.train))
 
 
@@ -154,10 +157,9 @@ def test_validate_refuses_json_or_plot_over_its_model_or_test_set(sim_station, t
 
 def test_an_output_over_collected_taps_or_results_is_refused(sim_station, inspected, tmp_path, capsys):
     """Nothing overwritten: a typo naming a collection or the results database as an output is refused
-    while parsing (they are not the command's inputs, but hours of collecting or inspecting); in-process,
-    as the refusal is argparse's (the subprocess case is `test_train_refuses_to_write_the_model_over_its_dataset`)."""
-    from tactip.cli import main
-
+    before any work (they are not the command's inputs, but hours of collecting or inspecting) unless
+    --overwrite is given; in-process (the subprocess case is
+    `test_train_refuses_to_write_the_model_over_its_dataset`)."""
     data, db = tmp_path / "test.h5", tmp_path / "results.sqlite"
     shutil.copy(sim_station.test, data)
     shutil.copy(inspected, db)
@@ -167,11 +169,10 @@ def test_an_output_over_collected_taps_or_results_is_refused(sim_station, inspec
                        (("replay", video, "--out", data, "--quiet"), "collected taps"),
                        (("calibrate", "--config", sim_station.toml, "--out", data), "collected taps"),
                        (("validate", sim_station.model, sim_station.test, "--json", data), "collected taps"),
-                       (("results", "export", "--db", inspected, "--csv", "--out", db), "SQLite database")):
-        with pytest.raises(SystemExit) as exit_:
-            main([str(a) for a in argv])
-        err = capsys.readouterr().err
-        assert exit_.value.code == 2 and "destroy" in err and what in err and "Traceback" not in err, (argv, err)
+                       (("results", "export", "--db", inspected, "--csv", "--out", db), "inspection results")):
+        code, _, err = run_cli(argv)
+        assert code == 1 and "destroy" in err and what in err and "--overwrite" in err, (argv, err)
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
     assert {p: digest(p) for p in (data, db)} == before and not leftover_temporaries(tmp_path)
 
 
@@ -190,7 +191,7 @@ def test_record_and_calibrate_refuse_outputs_over_their_inputs(sim_station, tmp_
     toml = station_copy(sim_station, tmp_path / "station", datasets=False)
     for k, out in enumerate((toml, tmp_path / "station" / "model.h5")):
         run = run_tactip if k == 0 else run_tactip_in_process
-        result = run("calibrate", "--config", toml, "--out", out, cwd=tmp_path, inputs=[toml, out])
+        result = run("calibrate", "--config", toml, "--out", out, "--overwrite", cwd=tmp_path, inputs=[toml, out])
         assert_refused(result, out.name, "input")
 
 

@@ -48,7 +48,7 @@ def test_taps_missing_5_of_40_pins_are_classified_as_well_as_complete_ones(tmp_p
         save_dataset(tmp_path / "missing.h5", lose_pins(test, seed))
         save_dataset(tmp_path / "train.h5", lose_pins(train, seed + 50))   # training taps miss pins as well
         assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "model.h5"), "--locations", "4",
-                     "--model", kind]) == 0
+                     "--model", kind, "--overwrite"]) == 0                    # the last seed's model is replaced
         complete = accuracy(tmp_path, tmp_path / "model.h5", tmp_path / "complete.h5", seed)
         missing = accuracy(tmp_path, tmp_path / "model.h5", tmp_path / "missing.h5", seed)
         drops.append(complete - missing)

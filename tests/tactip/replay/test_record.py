@@ -57,9 +57,12 @@ def test_bad_outputs_are_one_line_errors(tmp_path, capsys):
     assert main(["record", "synthetic", "--out", str(tmp_path / "x.mkv"), "--quiet"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "use a .mp4 or .avi" in err[0]
-    # a missing folder is refused while parsing, before the source opens
-    with pytest.raises(SystemExit) as exit_:
-        main(["record", "synthetic", "--out", str(tmp_path / "missing" / "x.mp4"), "--quiet"])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert exit_.value.code == 2 and "argument --out" in err[-1] and "does not exist" in err[-1]
     assert not list(tmp_path.iterdir())
+    # a folder that is a file is refused while parsing, before the source opens (a missing one is created)
+    (tmp_path / "file").write_text("")
+    with pytest.raises(SystemExit) as exit_:
+        main(["record", "synthetic", "--out", str(tmp_path / "file" / "x.mp4"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_.value.code == 2 and "argument --out" in err[-1] and "Not a directory" in err[-1]
+    assert main(["record", "synthetic", "--out", str(tmp_path / "missing" / "x.mp4"), "--frames", "3", "-q"]) == 0
+    assert (tmp_path / "missing" / "x.mp4").is_file()

@@ -120,11 +120,12 @@ def test_unwritable_output_fails_before_processing(tmp_path, monkeypatch):
         raise AssertionError("the video was opened before the output was checked")
 
     monkeypatch.setattr(tactip.sources, "open_source", never)
+    (tmp_path / "file").write_text("")                               # a folder that is a file (a missing one is made)
     with pytest.raises(OSError, match="cannot write"):
-        replay_video(SAMPLE, tmp_path / "missing" / "r.h5")
+        replay_video(SAMPLE, tmp_path / "file" / "r.h5")
     with pytest.raises(OSError, match="cannot write"):
-        replay_video(SAMPLE, tmp_path / "r.h5", annotate_path=tmp_path / "missing" / "a.mp4")
-    assert list(tmp_path.iterdir()) == []
+        replay_video(SAMPLE, tmp_path / "r.h5", annotate_path=tmp_path / "file" / "sub" / "a.mp4")
+    assert [p.name for p in tmp_path.iterdir()] == ["file"]
 
 
 def _write_video(path, frames):
@@ -248,7 +249,9 @@ def test_cli_sensor_and_scale_options(tmp_path, capsys):
     assert "tactip-331: 331 pins on a 40 mm pad" in printed and "Lost pins per frame" in printed
     with h5py.File(out) as h5:
         assert json.loads(h5.attrs["scale"])["sensor"]["name"] == "tactip-331" and len(h5["selected_pins"]) == 12
-    assert main(["replay", str(SAMPLE), "--out", str(out), "--mm-per-px", "0.2", "--quiet"]) == 0
+    assert main(["replay", str(SAMPLE), "--out", str(out), "--mm-per-px", "0.2", "--quiet"]) == 1   # a replay: ours
+    assert "--overwrite" in capsys.readouterr().err
+    assert main(["replay", str(SAMPLE), "--out", str(out), "--mm-per-px", "0.2", "--quiet", "--overwrite"]) == 0
     with h5py.File(out) as h5:
         assert h5.attrs["mm_per_px"] == 0.2
     for bad in (["--mm-per-px", "inf"], ["--sensor", "nope"], ["--pins-on-pad", "3"]):
