@@ -111,8 +111,15 @@ def output_file(text: str) -> Path:
 
 def json_target(text: str) -> "OutputPath":
     """An argparse type for ``--json [FILE|-]``: ``-`` (standard output) or a file to write, whose missing
-    folders are created (as `creatable_file`)."""
-    return OutputPath("-") if text == "-" else creatable_file(text)
+    folders are created (as `creatable_file`). An existing file that is not ``.json`` is refused: ``--json``
+    takes an optional value, so ``detect --json FRAME.png OTHER.png`` would otherwise write over the frame."""
+    if text == "-":
+        return OutputPath("-")
+    path = creatable_file(text)
+    if path.suffix.lower() != ".json" and path.is_file() and not path.is_symlink():
+        raise argparse.ArgumentTypeError(f"{text!r} exists and is not a .json file: --json would replace it (put the "
+                                         f"command's inputs before --json, or name a .json file)")
+    return path
 
 
 def add_json_argument(parser: argparse.ArgumentParser, what: str) -> None:

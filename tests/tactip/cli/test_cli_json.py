@@ -92,6 +92,22 @@ def test_detect_json_to_stdout_alone_or_to_a_file_beside_the_summary(tmp_path):
     assert json.loads((tmp_path / "pins.json").read_text()) == found
 
 
+def test_json_never_replaces_an_existing_file_that_is_not_json(tmp_path, capsys):
+    # --json takes an optional value: 'detect --json FRAME.png OTHER.png' must not write over the frame
+    from tactip.cli import main
+
+    frame = tmp_path / "frame.png"
+    shutil.copy(FRAME, frame)
+    before = frame.read_bytes()
+    with pytest.raises(SystemExit) as refused:
+        main(["detect", "--json", str(frame), str(FRAME)])
+    assert refused.value.code == 2 and "not a .json file" in capsys.readouterr().err
+    assert frame.read_bytes() == before
+    (tmp_path / "old.json").write_text("{}")                     # a .json file of one's own is replaced as asked
+    code, _, err = run_cli(["detect", FRAME, "--json", tmp_path / "old.json"])
+    assert code == 0 and json.loads((tmp_path / "old.json").read_text())["count"] == 331, err
+
+
 def test_validate_json_to_stdout_is_alone_there(sim_station):
     code, out, err = run_cli(["validate", sim_station.model, sim_station.test, "--runs", "20", "--thresholds", "0.9",
                               "--json", "-"])
