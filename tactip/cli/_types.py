@@ -116,8 +116,11 @@ def json_target(text: str) -> "OutputPath":
     if text == "-":
         return OutputPath("-")
     path = creatable_file(text)
-    if path.suffix.lower() != ".json" and path.is_file() and not path.is_symlink():
-        raise argparse.ArgumentTypeError(f"{text!r} exists and is not a .json file: --json would replace it (put the "
+    from tactip._output import project_file
+
+    # (A file the project wrote is left to `refuse_replacing_project_files`, which names what it holds.)
+    if path.suffix.lower() != ".json" and path.is_file() and not path.is_symlink() and not project_file(path):
+        raise argparse.ArgumentTypeError(f"{text!r} exists and is not a .json file: --json would destroy it (put the "
                                          f"command's inputs before --json, or name a .json file)")
     return path
 

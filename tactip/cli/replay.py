@@ -74,8 +74,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="workers of the embedded local cluster (default: one per core)")
     batch.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on the Dask cluster of this scheduler "
                        "instead (dask scheduler; dask worker tcp://HOST:PORT on each machine)")
-    batch.add_argument("--overwrite", action="store_true", help="replay again videos whose output is in OUT "
-                       "(default: skip them)")
+    batch.add_argument("--overwrite", action="store_true", help="one video: replace a replay file at --out; a "
+                       "batch: replay again videos whose output is in OUT (default: skip them)")
     batch.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
                        help="cuda: track --together videos at once per worker, their pin windows measured in one "
                        "torch batch on the GPU (tactip[accel]); cpu: each video on its own; auto (default): cuda "
@@ -130,7 +130,6 @@ def run(args: argparse.Namespace) -> int:
     if args.out_dir is not None:
         return _run_batch(args, params)
     batch_only = [flag for flag, value in (("--workers", args.workers), ("--scheduler", args.scheduler),
-                                           ("--overwrite", args.overwrite or None),
                                            ("--device", None if args.device == "auto" else args.device),
                                            ("--together", None if args.together == 8 else args.together))
                   if value is not None]

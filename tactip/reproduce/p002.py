@@ -25,12 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
+from perception.choices import POLICIES
 from tactip.reproduce.report import Comparison, Report
 
-__all__ = ["POLICIES", "PAPER_ERROR_MM", "run"]
+__all__ = ["PAPER_ERROR_MM", "run"]
 
-#: Policies of Fig. 9 and the paper's width error after 8-12 taps, mm.
-POLICIES = ("active", "random", "stationary")
+#: The paper's width error after 8-12 taps of each policy of Fig. 9 (`perception.POLICIES`), mm.
 PAPER_ERROR_MM = {"active": 0.35, "random": 0.6, "stationary": 0.8}
 #: Mean taps at which the policies are compared (the paper: 8-12 taps).
 COMPARED_AT_TAPS = 10.0

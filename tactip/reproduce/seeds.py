@@ -28,6 +28,8 @@ from typing import Callable
 
 import numpy as np
 
+from perception.choices import POLICIES
+
 __all__ = ["CLAIMS", "ClaimVerdict", "judge_claim", "claim_margin"]
 
 
@@ -46,7 +48,7 @@ def _001(rows) -> float:
 
 def _002(rows) -> float:
     at_10 = {}
-    for policy in ("active", "random", "stationary"):
+    for policy in POLICIES:
         mine = sorted((r for r in rows if r["policy"] == policy), key=lambda r: r["mean_taps"])
         at_10[policy] = float(np.interp(10.0, [r["mean_taps"] for r in mine], [r["width_error_mm"] for r in mine]))
     return min(at_10["random"] - at_10["active"], at_10["stationary"] - at_10["random"])

@@ -48,6 +48,8 @@ SKIPPED = {
                     "test_dashboard.py drives it in a browser)",
     "tactip record 0 ": "records camera 0, a real camera (tests/tactip/replay/test_record.py records fake and "
                         "synthetic cameras)",
+    "--scheduler tcp://HEAD": "needs a Dask cluster on other machines (tests/tactip/replay/test_batch.py starts a "
+                              "dask scheduler and a dask worker of its own)",
 }
 
 #: Flags whose value is a file or folder the example writes (never provided beforehand).
@@ -160,6 +162,10 @@ def _prepare(folder: Path, example: str, readme_inputs) -> dict:
     if any(name.endswith(".csv") and name in example for name in inputs):
         for name, source in recordings.items():
             shutil.copy(source, folder / name)
+    if "archive/" in example and "--out-dir" in words:            # an archive of recordings, one in a subfolder
+        for name in ("archive/tap_a.mp4", "archive/tap_b.mp4", "more/day1/tap_c.mp4"):
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy(ROOT / "samples" / "synthetic_tap.mp4", folder / name)
     if "station.toml" in example:
         _station_toml(folder)
         new_station = "calibrate" in words                        # a new station: not calibrated yet

@@ -8,6 +8,8 @@ call returns.
 
 from __future__ import annotations
 
+import errno
+
 import csv
 import datetime as _dt
 import io
@@ -194,10 +196,18 @@ class ResultsStoreBase:
         self._refuse_if_read_only()
         started = self._query("SELECT started_at FROM inspections WHERE id = ?", (inspection_id,))[0][0]
         finished = _now()
-        self._write(
-            "UPDATE inspections SET status='aborted', reason=?, finished_at=?, duration_s=? WHERE id=?",
-            (reason, finished, _seconds(started, finished), inspection_id),
-        )
+        update = ("UPDATE inspections SET status='aborted', reason=?, finished_at=?, duration_s=? WHERE id=?",
+                  (reason, finished, _seconds(started, finished), inspection_id))
+        try:
+            self._write(*update)
+        except OSError as exc:
+            if exc.errno != errno.ENOSPC or not self._make_room():
+                raise
+            self._write(*update)     # the row says why it stopped, on a full disk too
+
+    def _make_room(self) -> bool:
+        """Free what the backend can of its own files on a full disk; whether a write may be tried again."""
+        return False
 
     def update_station(self, name: str, *, state: str, arm: str | None = None, frame_rate: float | None = None,
                        model: str | None = None) -> None:

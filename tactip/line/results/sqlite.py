@@ -239,6 +239,15 @@ class ResultsStore(ResultsStoreBase):
             return ResultsError(f"{self.path} is not a tactip results database ({exc})")
         return ResultsError(f"{self.path}: {exc}")
 
+    def _make_room(self) -> bool:
+        """On a full disk: checkpoint the write-ahead log into the database and truncate it, so that the last
+        word of an inspection (its row closed as aborted) finds room in it again."""
+        try:
+            busy, _, _ = self._db.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()
+        except sqlite3.Error:
+            return False
+        return not busy
+
     def _write(self, sql: str, params=()) -> list[tuple]:
         self._refuse_if_read_only()
         try:
