@@ -189,9 +189,10 @@ Presets
 """
 
 from tactip.sim.contact import Contact, SyntheticFrame, tap_profile
-from tactip.sim.presets import PRESETS, preset_names
+from tactip.sim.presets import GEL_PRESETS, PRESETS, preset_names
 from tactip.sim.sequence import ContactEvent, ContactSequence, Stroke
 from tactip.sim.synthetic import SyntheticTacTip
+from tactip.sim.gel import SyntheticGel
 
-__all__ = ["Contact", "ContactEvent", "ContactSequence", "PRESETS", "Stroke", "SyntheticFrame", "SyntheticTacTip",
-           "preset_names", "tap_profile"]
+__all__ = ["Contact", "ContactEvent", "ContactSequence", "GEL_PRESETS", "PRESETS", "Stroke", "SyntheticFrame",
+           "SyntheticGel", "SyntheticTacTip", "preset_names", "tap_profile"]
