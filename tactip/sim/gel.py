@@ -4,7 +4,7 @@ The GelSight-Mini-like sensor of ``tactip.sim`` ("Flat gels"): no pad, no disc, 
 fills the whole frame, lit in colour from three sides.
 
 >>> frame = SyntheticGel(seed=0).render(Contact(indentation_mm=3.0, slide_x_mm=1.0))
->>> frame.image.shape, frame.visible.sum() >= 70
+>>> frame.image.shape, int(frame.visible.sum()) >= 70
 ((240, 320, 3), True)
 """
 

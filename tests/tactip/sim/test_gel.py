@@ -141,3 +141,12 @@ def test_invalid_options_name_the_parameter(options, name):
         SyntheticGel(**options)
     with pytest.raises(ValueError, match="unknown synthetic gel preset 'nope'.*gelsight-mini"):
         SyntheticGel.from_preset("nope")
+
+
+def test_docstring_examples_run():
+    import doctest
+
+    import tactip.sim.gel
+
+    result = doctest.testmod(tactip.sim.gel, optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0 and result.failed == 0
