@@ -150,3 +150,13 @@ def test_docstring_examples_run():
 
     result = doctest.testmod(tactip.sim.gel, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_a_synthetic_source_of_the_flat_gel():
+    from tactip.sources import open_source
+
+    with open_source("synthetic:gelsight-mini", taps=[Contact(3.0)], rest_s=0.1) as source:
+        frames = list(source)
+        assert source.name == "synthetic:gelsight-mini" and source.frame_rate == 25.0
+        assert source.truth.visible.sum() >= 75
+    assert frames[0].image.shape == (240, 320, 3) and len(frames) == int((0.1 + 0.75 + 0.1) * 25) + 1
