@@ -160,3 +160,10 @@ def test_a_synthetic_source_of_the_flat_gel():
         assert source.name == "synthetic:gelsight-mini" and source.frame_rate == 25.0
         assert source.truth.visible.sum() >= 75
     assert frames[0].image.shape == (240, 320, 3) and len(frames) == int((0.1 + 0.75 + 0.1) * 25) + 1
+
+
+def test_the_package_names_the_simulated_sensors():
+    import tactip
+
+    assert tactip.SyntheticGel is SyntheticGel and tactip.Contact is Contact
+    assert tactip.SyntheticTacTip.__name__ == "SyntheticTacTip"
