@@ -70,7 +70,9 @@ the whole frame (`pins.frame_region`, a `SensorDisc` with ``whole_frame=True`` t
 takes as a disc) and the one whose lattice stands out more (pins x their median contrast: the noise
 of a bright gel makes a fine, faint lattice of its own) competes with the disc's by pin count. A
 forced polarity with no disc is searched over the whole frame when the other polarity shows no disc
-either. Steps 1-5 are the same: a square grid is a lattice of mirror images as hexagons are. Markers
+either. Over the whole frame, a sensor's pins must lie on a regular lattice: the median ratio of each
+pin's second- to first-nearest-neighbour distance at most 1.15 (a gel's grid, pressed or sheared:
+1.00-1.08; blobs of camera noise that pass the lattice judgement: 1.19-1.28). Steps 1-5 are the same: a square grid is a lattice of mirror images as hexagons are. Markers
 cut by the frame's edge lean inwards (1.7 px for one cut through its centre): a pin whose disc (the
 pins' radius from their mean radial profile, plus half a px of edge) reaches more than half a px
 beyond the frame is left out (``outside field``), so those kept are measured within about 0.1 px.
@@ -271,10 +273,11 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
             find_sensor_disc(grey, dark_pins=not start.dark_pins)
         except NoSensorError:
             field = _search(grey, frame_region(grey.shape), start, params is not None, expected_pins)
-            if field.count >= MIN_SENSOR_PINS:
+            if field.count >= MIN_SENSOR_PINS and not _irregular(field):
                 return field
-            raise NoSensorError(f"{exc}; nor a pin lattice filling the frame ({field.count} pins, need "
-                                f"{MIN_SENSOR_PINS})") from None
+            raise NoSensorError(f"{exc}; nor a pin lattice filling the frame ({field.count} pins"
+                                + (", not on a regular lattice" if field.count >= MIN_SENSOR_PINS else
+                                   f", need {MIN_SENSOR_PINS}") + ")") from None
         raise
     return _search(grey, disc, start, params is not None, expected_pins)
 
@@ -320,11 +323,15 @@ def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc 
         signal = {}
         for dark, name in ((False, _POLARITIES[False]), (True, _POLARITIES[True])):
             field = _search(grey, region, start.replace(dark_pins=dark), False, expected_pins)
+            if _irregular(field):
+                why.append(f"{name} over the whole frame: {field.count} blobs, but not on a regular lattice")
+                continue
             fields.append(field)
             signal[id(field)] = field.count * _median_contrast(grey, field)
             why.append(f"{name} over the whole frame: {field.count} pins form a lattice")
-        whole = max((f for f in fields if id(f) in signal), key=lambda f: signal[id(f)])
-        fields = [f for f in fields if id(f) not in signal] + [whole]
+        if signal:
+            whole = max((f for f in fields if id(f) in signal), key=lambda f: signal[id(f)])
+            fields = [f for f in fields if id(f) not in signal] + [whole]
     best = max(fields, key=lambda f: f.count, default=None)
     if best is None or best.count < MIN_SENSOR_PINS:
         raise NoSensorError(f"no sensor in the frame: no pin lattice of at least {MIN_SENSOR_PINS} pins ("
@@ -391,6 +398,21 @@ def _spills_over(grey: np.ndarray, field: PinField) -> bool:
     reach = field.field_disc.radius_px + field.pitch_px
     outside = np.hypot(blobs.centres[:, 0] - field.disc.cx, blobs.centres[:, 1] - field.disc.cy) > reach
     return int(outside.sum()) >= max(_SPILL_MIN, _SPILL_SHARE * field.count)
+
+
+# A whole frame's pins whose median ratio of second- to first-nearest-neighbour distance exceeds
+# this are no lattice: a grid gives about 1 (1.00-1.08 on a pressed or sheared gel), blobs of camera
+# noise that pass the lattice judgement 1.19-1.28.
+_MAX_NEIGHBOUR_RATIO = 1.15
+
+
+def _irregular(field: PinField) -> bool:
+    """Whether a field searched over the whole frame is not on a regular lattice (noise, texture):
+    its pins' second-nearest neighbours are not as near as their nearest (`_MAX_NEIGHBOUR_RATIO`)."""
+    if field.count < 3:
+        return False
+    distance = cKDTree(field.centres).query(field.centres, k=3)[0]
+    return float(np.median(distance[:, 2] / np.maximum(distance[:, 1], 1e-9))) > _MAX_NEIGHBOUR_RATIO
 
 
 def _median_contrast(grey: np.ndarray, field: PinField) -> float:

@@ -89,3 +89,12 @@ def test_a_blank_frame_is_no_sensor_even_over_the_whole_frame():
         find_pin_field(np.full((240, 320, 3), 140, np.uint8))
     with pytest.raises(NoSensorError, match="nor a pin lattice filling the frame"):
         find_pin_field(np.full((240, 320), 140, np.uint8), dark_pins=True)
+
+
+def test_camera_noise_filling_the_frame_is_no_sensor(seed=0):
+    """Blobs of noise pass the lattice judgement in thousands, but lie on no regular lattice."""
+    noise = np.random.default_rng(seed).integers(0, 256, (240, 320), dtype=np.uint8)
+    with pytest.raises(NoSensorError, match="not on a regular lattice"):
+        find_pin_field(noise)
+    with pytest.raises(NoSensorError, match="not on a regular lattice"):
+        find_pin_field(noise, dark_pins=True)
