@@ -7,6 +7,8 @@ Nothing here imports the rest of `tactip`, so `pins`' tests and doctests can dra
 - `tactip.sim.sequence`: `SyntheticTacTip.sequence`, ``slides`` and ``taps``: presses and slides with
   short rests between them, and their ground truth (`ContactEvent`: frame bounds, kind, direction, depth).
 - `tactip.sim.source`: `SyntheticSource`, a frame source of rendered taps (``synthetic:`` specs).
+- `tactip.sim.gel`, `tactip.sim._gel`: `SyntheticGel`, a flat gel with a grid of dark markers filling the
+  frame (GelSight-Mini-like; "Flat gels" below), with the same ground truth and sequences.
 - `tactip.sim._pad`, `tactip.sim._slide`, `tactip.sim._render`, `tactip.sim._scene`: the pad's geometry
   and contact mechanics, the skin's slide under a sticking plate, the painting, and the light inside the pad.
 
