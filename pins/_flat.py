@@ -3,12 +3,11 @@
 A flat gel (GelSight and its kind) films dark markers on a rectangular grid filling the frame: no
 disc, no casing. These helpers say whether the pins go on beyond a disc found (a false disc), whether
 a whole-frame field lies on a regular lattice (not camera noise), how strongly it stands out (to
-choose the polarity), and which markers the frame's edge cuts too deeply to measure.
+choose the polarity), and which markers the frame's edge cuts too deeply to measure. ``field``
+arguments are `pins.PinField` s (not imported: `pins.lattice` imports this module).
 """
 
 from __future__ import annotations
-
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -18,9 +17,6 @@ from ._judge import _MIN_PINS
 from .detect import _detect
 from .disc import frame_region
 
-if TYPE_CHECKING:
-    from .lattice import PinField
-
 
 # A sensor disc whose pins go on beyond it: at least this many pin-like blobs outside its pin field,
 # and this share of the pins inside.
@@ -28,7 +24,7 @@ _SPILL_MIN = 10
 _SPILL_SHARE = 0.25
 
 
-def _spills_over(grey: np.ndarray, field: PinField) -> bool:
+def _spills_over(grey: np.ndarray, field) -> bool:
     """Whether the frame holds many pin-like blobs (the field's parameters, over the whole frame)
     beyond the field's circle grown by a pitch: the markers of a flat gel go on past a false disc,
     while a TacTip's casing round its disc holds none."""
@@ -46,7 +42,7 @@ def _spills_over(grey: np.ndarray, field: PinField) -> bool:
 _MAX_NEIGHBOUR_RATIO = 1.15
 
 
-def _irregular(field: PinField) -> bool:
+def _irregular(field) -> bool:
     """Whether a field searched over the whole frame is not on a regular lattice (noise, texture):
     its pins' second-nearest neighbours are not as near as their nearest (`_MAX_NEIGHBOUR_RATIO`)."""
     if field.count < 3:
@@ -55,7 +51,7 @@ def _irregular(field: PinField) -> bool:
     return float(np.median(distance[:, 2] / np.maximum(distance[:, 1], 1e-9))) > _MAX_NEIGHBOUR_RATIO
 
 
-def _median_contrast(grey: np.ndarray, field: PinField) -> float:
+def _median_contrast(grey: np.ndarray, field) -> float:
     """Median contrast of a field's pins, grey levels: the lightly blurred frame at each pin less its
     mean over a square of 1.5 pitches (the polarity's sign: bright pins above, dark below); 0 without pins."""
     if field.count < 2 or not np.isfinite(field.pitch_px):
