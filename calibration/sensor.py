@@ -30,7 +30,7 @@ import numpy as np
 
 from _shared import cut_short
 from pins import (DetectionParams, NoSensorError, PinsError, SensorDescription, SensorDisc, as_grey, detect_pins,
-                  find_pin_field, find_sensor_disc, match_to_blobs, median_spacing_px, select_feature_pins,
+                  find_pin_field, match_to_blobs, median_spacing_px, select_feature_pins,
                   sensor_scale)
 
 from .errors import CalibrationError
@@ -159,8 +159,8 @@ def calibrate_sensor(rest_frames: Sequence[np.ndarray], *, expected_pins: int, p
     mean = np.rint(np.mean(np.stack(greys), axis=0)).astype(np.uint8)
 
     try:
-        disc = None if dark_pins is None else find_sensor_disc(mean, dark_pins=dark_pins)
-        field = find_pin_field(mean, expected_pins=expected_pins, disc=disc, dark_pins=dark_pins)
+        # find_pin_field finds the disc of the polarity (or takes the whole frame for a flat gel)
+        field = find_pin_field(mean, expected_pins=expected_pins, dark_pins=dark_pins)
     except NoSensorError as exc:
         raise CalibrationError(f"no sensor in view: {exc} (is the camera the TacTip's, and its LEDs on?)") from None
     disc = field.disc
@@ -201,6 +201,8 @@ def save_calibration(path: str | Path, calibration: SensorCalibration) -> None:
         f.attrs["detection"] = json.dumps(calibration.detection.to_dict())
         d = calibration.disc
         f.attrs["disc"] = np.array([d.cx, d.cy, d.radius_px], dtype=np.float64)
+        if d.whole_frame:  # a flat gel: the sensing region is the whole frame (absent: a disc)
+            f.attrs["disc_whole_frame"] = True
         f.attrs["mm_per_px"] = float(calibration.mm_per_px)
         f.attrs["expected_pins"] = int(calibration.expected_pins)
         f.attrs["frame_size"] = np.array(calibration.frame_size, dtype=np.int64)
@@ -234,7 +236,7 @@ def load_calibration(path: str | Path) -> SensorCalibration:
                 cx, cy, r = (float(v) for v in f.attrs["disc"])
                 calibration = SensorCalibration(
                     detection=DetectionParams(**json.loads(f.attrs["detection"])),
-                    disc=SensorDisc(cx, cy, r),
+                    disc=SensorDisc(cx, cy, r, whole_frame=bool(f.attrs.get("disc_whole_frame", False))),
                     reference_pins=np.asarray(f["reference_pins"][()], dtype=np.float64),
                     selected_pins=np.asarray(f["selected_pins"][()], dtype=np.intp),
                     mm_per_px=float(f.attrs["mm_per_px"]),

@@ -4,7 +4,7 @@ Pure array code: nothing here opens a camera, a file or an arm.
 """
 
 from .detect import Blobs, DetectionParams, detect_blobs, detect_pins
-from .disc import SensorDisc, as_grey, find_sensor_disc
+from .disc import SensorDisc, as_grey, find_sensor_disc, frame_region
 from .displacement import displacement_from_rest, displacement_magnitude, integrate_flow
 from .errors import NoSensorError, PinsError, ShapeError
 from .lattice import MIN_SENSOR_PINS, REJECTION_REASONS, PinField, draw_pin_field, find_pin_field
@@ -20,7 +20,7 @@ from .propagate import match_by_propagation
 
 __all__ = [
     "PinsError", "NoSensorError", "ShapeError", "LostPinError",
-    "SensorDisc", "find_sensor_disc", "as_grey",
+    "SensorDisc", "find_sensor_disc", "frame_region", "as_grey",
     "DetectionParams", "Blobs", "detect_pins", "detect_blobs",
     "find_pin_field", "PinField", "REJECTION_REASONS", "draw_pin_field", "MIN_SENSOR_PINS",
     "LKParams", "track_pins", "match_to_blobs", "PinTracker", "match_by_propagation",

@@ -229,6 +229,8 @@ class Refiner:
         tip = np.sqrt(np.where(area > 0, area, np.nan) / np.pi)
         self._radius_cap = np.where(np.isfinite(tip), _TIP_REACH * tip + _TIP_MARGIN_PX, np.inf)
         tip_px = tip[np.isfinite(tip)]
+        #: Median radius of the tips at rest, px (their area above the window's threshold), nan without tips.
+        self.tip_radius_px = float(np.median(tip_px)) if tip_px.size else float("nan")
         self.windows.above_mean |= bool(tip_px.size and np.median(tip_px) < _SMALL_TIP_PX)
         # Fractions of the spacing, with floors in px for the smallest pads (tips of 1 px, 4 px apart,
         # whose centroids scatter by a few tenths of a px in camera noise).

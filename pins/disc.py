@@ -14,6 +14,10 @@ outline, accepted when the region fills the circle's part inside the frame and l
 way the rim is then refined to a sub-pixel circle on rays from the centre (again, for a cut disc,
 until it settles).
 
+A flat gel (GelSight: markers on a gel filling the frame, no casing) shows no disc: its sensing
+region is the whole frame, `frame_region`, a `SensorDisc` holding every pixel (``whole_frame``);
+`pins.find_pin_field` falls back to it when no disc is found.
+
 Inside the disc a black rim ring (the casing lip) may lie between the pin field and the disc edge;
 `pins.find_pin_field` searches for pins inside its inner edge (`_rim_ring_inner_px`, here with the
 rest of the pad's outline).
@@ -21,6 +25,7 @@ rest of the pad's outline).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -28,7 +33,7 @@ import numpy as np
 
 from .errors import NoSensorError, ShapeError
 
-__all__ = ["SensorDisc", "find_sensor_disc", "as_grey"]
+__all__ = ["SensorDisc", "find_sensor_disc", "frame_region", "as_grey"]
 
 # Grey-level difference between membrane and surround below which there is no disc to see.
 _MIN_CONTRAST = 30.0
@@ -56,11 +61,15 @@ class SensorDisc:
         Centre of the disc, px.
     radius_px : float
         Radius of the disc, px.
+    whole_frame : bool
+        The sensing region is the whole frame (a flat gel filling the view, `frame_region`): the
+        disc is the circle about the frame's centre that holds every pixel, and no casing frames it.
     """
 
     cx: float
     cy: float
     radius_px: float
+    whole_frame: bool = False
 
     def mask(self, shape: tuple[int, int], *, margin_px: float = 0.0) -> np.ndarray:
         """Boolean image that is True inside the disc shrunk by `margin_px`.
@@ -97,6 +106,31 @@ class SensorDisc:
         points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         radius = max(self.radius_px - margin_px, 0.0)
         return np.hypot(points[:, 0] - self.cx, points[:, 1] - self.cy) <= radius
+
+
+def frame_region(shape: tuple[int, ...]) -> SensorDisc:
+    """The whole frame as the sensing region, for a flat gel whose markers fill the view (no disc, no casing).
+
+    Parameters
+    ----------
+    shape : (height, width[, channels])
+        Shape of the frame, px.
+
+    Returns
+    -------
+    region : SensorDisc
+        The circle about the frame's centre through its corners, grown by 1 px, with
+        ``whole_frame=True``: its mask is every pixel, so every caller that takes a disc searches,
+        tracks and draws over the whole frame.
+
+    Examples
+    --------
+    >>> region = frame_region((240, 320))
+    >>> bool(region.mask((240, 320)).all()), region.whole_frame
+    (True, True)
+    """
+    height, width = shape[:2]
+    return SensorDisc((width - 1) / 2.0, (height - 1) / 2.0, math.hypot(width, height) / 2.0 + 1.0, whole_frame=True)
 
 
 def as_grey(frame: np.ndarray) -> np.ndarray:
@@ -288,10 +322,16 @@ def _refine_rim(grey: np.ndarray, cx: float, cy: float, radius: float, *, rays: 
     # LED glare lights the membrane inside the rim and pulls the crossing inwards on its rays:
     # keep rays near the median rim radius, then those near the fitted circle.
     keep = np.abs(rim_r - np.median(rim_r)) < max(4.0, 0.02 * radius)
+    fr = np.nan
     for _ in range(3):
+        if keep.sum() < 3:  # no circle through the crossings (a frame without a rim: a flat gel)
+            fr = np.nan
+            break
         fx, fy, fr = _fit_circle(xs[keep], ys[keep])
         residual = np.abs(np.hypot(xs - fx, ys - fy) - fr)
         keep = residual < max(3.0 * 1.4826 * np.median(residual[keep]), 0.3)
+    if not (np.isfinite(fr) and fr >= _MIN_RADIUS_FRACTION * min(grey.shape)):
+        raise NoSensorError(f"no sensor disc in the frame: the rim fits no circle (radius {fr:.0f} px)")
     return SensorDisc(cx=float(fx), cy=float(fy), radius_px=float(fr))
 
 

@@ -6,7 +6,8 @@ makes a pin a pin is that it belongs to the lattice: it sits at a lattice site, 
 the lattice pitch, and its size, contrast and sharpness are like its neighbours'. `find_pin_field`
 finds that lattice without being told the pin count:
 
-0. the search region: the sensor disc, or, when a black rim ring (the casing lip) lies between
+0. the search region: the sensor disc (or the whole frame, `pins.frame_region`, for a flat gel
+   whose markers fill the view: see below), or, when a black rim ring (the casing lip) lies between
    the pin field and the disc edge, the disc inside the ring's inner edge: an outer annulus whose
    dark grey level over nearly all azimuths is at most half the membrane's just inside it, and
    darker than the membrane's of the inner half of the disc. Like
@@ -61,6 +62,21 @@ keeps more pins wins (a polarity without a disc of its own, white pins on a dark
 casing, is searched in the other's disc when that one's lattice is sparse); a frame where neither
 keeps `MIN_SENSOR_PINS` shows no sensor (`NoSensorError`, saying why for each). `tactip detect` and `tactip replay` both decide so.
 
+Sensors without a disc (a flat gel such as GelSight's: dark markers on a rectangular grid filling the
+frame, on a colour gradient, no casing). When neither polarity shows a sensor disc, or the pins go on
+beyond the disc found (pin-like blobs with the field's parameters beyond its circle: a gradient
+across a gel can pass for a disc; a TacTip's casing holds none), both polarities are searched over
+the whole frame (`pins.frame_region`, a `SensorDisc` with ``whole_frame=True`` that every caller
+takes as a disc) and the one whose lattice stands out more (pins x their median contrast: the noise
+of a bright gel makes a fine, faint lattice of its own) competes with the disc's by pin count. A
+forced polarity with no disc is searched over the whole frame when the other polarity shows no disc
+either. Over the whole frame, a sensor's pins must lie on a regular lattice: the median ratio of each
+pin's second- to first-nearest-neighbour distance at most 1.15 (a gel's grid, pressed or sheared:
+1.00-1.08; blobs of camera noise that pass the lattice judgement: 1.19-1.28). Steps 1-5 are the same: a square grid is a lattice of mirror images as hexagons are. Markers
+cut by the frame's edge lean inwards (1.7 px for one cut through its centre): a pin whose disc (the
+pins' radius from their mean radial profile, plus half a px of edge) reaches more than half a px
+beyond the frame is left out (``outside field``), so those kept are measured within about 0.1 px.
+
 A known pin count does not steer the search: it is compared with the result (`count_error`).
 `draw_pin_field` pictures what was kept and what was rejected, coloured by reason.
 """
@@ -77,7 +93,8 @@ from ._draw import draw_pin_field
 from ._rescue import fill_lattice_holes
 from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _sharpness
 from .detect import Blobs, DetectionParams, _detect
-from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc
+from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
+from ._flat import _cut_by_frame, _irregular, _median_contrast, _pin_radius_px, _spills_over
 from .errors import NoSensorError
 from .scale import central_spacing_px
 
@@ -126,7 +143,7 @@ class PinField:
         leaves out the membrane beyond the pin field (a rim ring and its glare).
     disc : SensorDisc
         The sensor disc, px (the pins were searched inside it, or inside a black rim ring's inner
-        edge when there is one).
+        edge when there is one); ``disc.whole_frame`` when the sensing region is the whole frame.
     pitch_px : float
         The pin pitch, px: median nearest-neighbour distance of the kept pins near the field's centre
         (`pins.central_spacing_px`, the pitch the scale `pins.pad_scale` divides by; nan with fewer
@@ -135,7 +152,7 @@ class PinField:
         Centres of the candidate blobs rejected, px.
     rejected_reason : (M,) ndarray of str
         Why each was rejected: one of `REJECTION_REASONS` ("outside field": beyond the lattice, such
-        as glare round the rim or pins a rim ring cuts; "off lattice": too close to a stronger pin,
+        as glare round the rim or pins a rim ring cuts, or cut by the frame's edge too deeply to measure; "off lattice": too close to a stronger pin,
         such as a speck or a light patch of skin between pins, or at no lattice site and unlike its
         neighbours; "size": much smaller or larger than its neighbours; "contrast": much fainter
         than its neighbours, or with a much softer edge).
@@ -217,9 +234,10 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     Raises
     ------
     NoSensorError
-        When `disc` is not given and the frame shows no sensor disc (of the polarity asked, or of
-        either when deciding), or when deciding and no polarity forms a pin lattice of at least
-        `MIN_SENSOR_PINS` pins. The message says why for each polarity.
+        When `disc` is not given and the frame shows no sensor disc of the polarity asked while the
+        other polarity shows one, or neither shows one and no lattice of at least `MIN_SENSOR_PINS`
+        pins fills the frame; or when deciding and no polarity forms a pin lattice of at least
+        `MIN_SENSOR_PINS` pins, in a disc or over the whole frame. The message says why for each.
     ValueError
         `expected_pins` is not a positive integer.
 
@@ -245,8 +263,23 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
         return _decide_polarity(grey, start, disc, expected_pins)
     if dark_pins is not None:
         start = start.replace(dark_pins=bool(dark_pins))
-    if disc is None:
+    if disc is not None:
+        return _search(grey, disc, start, params is not None, expected_pins)
+    try:
         disc = find_sensor_disc(grey, dark_pins=start.dark_pins)
+    except NoSensorError as exc:
+        # No disc of this polarity: a flat gel fills the frame when the other polarity shows none
+        # either (a pad of the other polarity means these markers are not there).
+        try:
+            find_sensor_disc(grey, dark_pins=not start.dark_pins)
+        except NoSensorError:
+            field = _search(grey, frame_region(grey.shape), start, params is not None, expected_pins)
+            if field.count >= MIN_SENSOR_PINS and not _irregular(field):
+                return field
+            raise NoSensorError(f"{exc}; nor a pin lattice filling the frame ({field.count} pins"
+                                + (", not on a regular lattice" if field.count >= MIN_SENSOR_PINS else
+                                   f", need {MIN_SENSOR_PINS}") + ")") from None
+        raise
     return _search(grey, disc, start, params is not None, expected_pins)
 
 
@@ -280,6 +313,26 @@ def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc 
         field = _search(grey, grown, start.replace(dark_pins=other), False, expected_pins)
         fields.append(field)
         why.append(f"{_POLARITIES[other]} in the other's disc: {field.count} pins form a lattice")
+    if disc is None and (not fields or _spills_over(grey, max(fields, key=lambda f: f.count))):
+        # Neither polarity shows a disc, or the pins go on beyond the one found (a gradient across a
+        # flat gel can pass for a disc): a flat gel whose markers fill the frame (no casing round
+        # them) is searched over the whole frame, in both polarities.
+        # Without a membrane's level to tell them apart, the polarity is the one whose lattice stands
+        # out more (pins x their contrast): the noise of a bright gel forms a fine, faint lattice
+        # of its own.
+        region = frame_region(grey.shape)
+        signal = {}
+        for dark, name in ((False, _POLARITIES[False]), (True, _POLARITIES[True])):
+            field = _search(grey, region, start.replace(dark_pins=dark), False, expected_pins)
+            if _irregular(field):
+                why.append(f"{name} over the whole frame: {field.count} blobs, but not on a regular lattice")
+                continue
+            fields.append(field)
+            signal[id(field)] = field.count * _median_contrast(grey, field)
+            why.append(f"{name} over the whole frame: {field.count} pins form a lattice")
+        if signal:
+            whole = max((f for f in fields if id(f) in signal), key=lambda f: signal[id(f)])
+            fields = [f for f in fields if id(f) not in signal] + [whole]
     best = max(fields, key=lambda f: f.count, default=None)
     if best is None or best.count < MIN_SENSOR_PINS:
         raise NoSensorError(f"no sensor in the frame: no pin lattice of at least {MIN_SENSOR_PINS} pins ("
@@ -304,7 +357,7 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
     # like the surround, must neither make blobs (its glare) nor darken the threshold's
     # neighbourhood means (the membrane along its edge would pass for pins).
     pitches = disc.radius_px * np.array(_PITCH_FRACTIONS)
-    ring = _rim_ring_inner_px(grey, disc, start.dark_pins)
+    ring = np.inf if disc.whole_frame else _rim_ring_inner_px(grey, disc, start.dark_pins)
     search = disc if not np.isfinite(ring) else SensorDisc(disc.cx, disc.cy, max(ring - _RING_INSET_PX, 1.0))
     # The rim margin is measured from the sensor disc's rim (the ring's inner edge is sharp: the
     # pins next to it are whole).
@@ -341,6 +394,13 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
         apart = cKDTree(extra).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
         rejected, reason = rejected[apart], reason[apart]
+    if disc.whole_frame and len(centres):
+        # Markers cut by the frame's edge: their centroids lean inwards; only those with enough in
+        # view to measure stay (`_cut_by_frame`).
+        cut = _cut_by_frame(centres, _pin_radius_px(grey, centres, run.pitch, start.dark_pins), grey.shape)
+        rejected = np.vstack([rejected, centres[cut]])
+        reason = np.concatenate([reason, np.full(int(cut.sum()), REJECTION_REASONS.index("outside field"))])
+        centres = centres[~cut]
     final = _final_params(runs[later], centres, disc, run.pitch, search.radius_px)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=disc,

@@ -21,6 +21,11 @@ innermost at ``max(1, spokes / 2 pi)`` pitches so that its neighbours are one pi
 ``pitch_mm = R * radians(field_polar_deg) / (max(1, spokes / 2 pi) + rings - 1)``. Millimetres
 are pad-surface mm at the apex, the scale of the paper's "4 mm apart".
 
+A flat gel (GelSight and its kind: dark markers on a rectangular grid on a gel filling the frame)
+has no pad to derive a pitch from: its description gives the marker pitch in mm outright
+(``marker_pitch_mm``), with its grid (rows x columns in view) and frame rate; the rule is the same,
+``mm_per_px = pitch_mm / pitch_px`` (on a square grid the nearest neighbour is one pitch away).
+
 Named sensors (`SENSOR_PRESETS`) give pin count, pad diameter and the field's extent in one word;
 `pad_scale` turns any of these (or an explicit ``mm_per_px``) into a `PadScale` that says how it
 was derived. `sensor_scale` is the one rule ``tactip detect``, ``tactip calibrate`` and ``tactip
@@ -86,21 +91,27 @@ def pin_pitch_mm(pins: int, pad_diameter_mm: float, *, field_polar_deg: float = 
 
 @dataclass(frozen=True)
 class SensorDescription:
-    """What `pad_scale` needs to know about a TacTip.
+    """What `pad_scale` needs to know about a sensor: a TacTip's pad, or a flat gel's marker grid.
 
     Attributes
     ----------
     name : str
     pins : int
-        Pins on the whole pad.
+        Pins on the whole pad (a flat gel: markers in view, rows x columns).
     pad_diameter_mm : float
-        Diameter of the hemispherical pad, mm.
+        Diameter of the hemispherical pad, mm (a flat gel: 0, it has no pad).
     field_polar_deg : float
         Polar angle of the outermost ring of pins, degrees.
     rings, spokes : int
         A radial layout's rings and spokes (0: hexagonal rings, the pitch from the pin count).
     note : str
         Where the sensor comes from.
+    marker_pitch_mm : float
+        A flat gel's marker pitch, mm: the scale's pitch, given outright (0: a TacTip's, from its pad).
+    grid : (int, int)
+        A flat gel's markers in view, (rows, columns) ((0, 0) for a TacTip).
+    frame_rate : float
+        The camera's frames per second (0: not known; a video's own rate wins).
     """
 
     name: str
@@ -110,19 +121,40 @@ class SensorDescription:
     rings: int = 0
     spokes: int = 0
     note: str = ""
+    marker_pitch_mm: float = 0.0
+    grid: tuple[int, int] = (0, 0)
+    frame_rate: float = 0.0
+
+    @property
+    def flat(self) -> bool:
+        """Whether this is a flat gel (a marker grid with its pitch given), not a TacTip's pad."""
+        return self.marker_pitch_mm > 0
 
     @property
     def pitch_mm(self) -> float:
-        """Pin pitch along the pad surface, mm (`pin_pitch_mm`, or the radial layout's ring spacing)."""
+        """Pin pitch along the pad surface, mm (`pin_pitch_mm`, or the radial layout's ring spacing), or
+        a flat gel's marker pitch."""
+        if self.flat:
+            return float(self.marker_pitch_mm)
         if self.spokes:
             span = max(1.0, self.spokes / (2 * math.pi)) + self.rings - 1
             return self.pad_diameter_mm / 2.0 * math.radians(self.field_polar_deg) / span
         return pin_pitch_mm(self.pins, self.pad_diameter_mm, field_polar_deg=self.field_polar_deg)
 
     def describe(self) -> str:
-        """One line: pins, pad and pitch."""
+        """One line: pins, pad (or a flat gel's grid), pitch and frame rate when known."""
+        rate = f", {self.frame_rate:g} frames/s" if self.frame_rate else ""
+        if self.flat:
+            return (f"{self.name}: flat gel, {self.grid[0]} x {self.grid[1]} markers, pitch "
+                    f"{self.pitch_mm:.2f} mm{rate}")
         return (f"{self.name}: {self.pins} pins on a {self.pad_diameter_mm:g} mm pad, pitch "
-                f"{self.pitch_mm:.2f} mm")
+                f"{self.pitch_mm:.2f} mm{rate}")
+
+    def brief(self) -> str:
+        """A few words for a list of sensors: "331 pins, 40 mm pad" or "flat gel, 8 x 10 markers 1.8 mm apart"."""
+        if self.flat:
+            return f"flat gel, {self.grid[0]} x {self.grid[1]} markers {self.pitch_mm:g} mm apart"
+        return f"{self.pins} pins, {self.pad_diameter_mm:g} mm pad"
 
 
 SENSOR_PRESETS: dict[str, SensorDescription] = {d.name: d for d in (
@@ -139,6 +171,8 @@ SENSOR_PRESETS: dict[str, SensorDescription] = {d.name: d for d in (
     SensorDescription("white-dark-331", 331, 40.0, note="331 white pins on a dark membrane in a dark casing"),
     SensorDescription("small-pad-100", 100, 40.0, note="100-pin pad, small in the image"),
     SensorDescription("dense-1000", 1000, 40.0, note="dense 1000-pin pad"),
+    SensorDescription("gelsight-mini", 80, 0.0, marker_pitch_mm=1.8, grid=(8, 10), frame_rate=25.0,
+                      note="GelSight-Mini-like flat gel: 8 x 10 dark markers 1.8 mm apart, 320x240 at 25 frames/s"),
 )}
 
 
@@ -289,6 +323,8 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
         raise PinsError("fewer than two distinct rest pins: cannot measure the pin pitch; give mm_per_px")
     pitch_mm = description.pitch_mm
     what = f"{description.pins} pins{' detected' if counted else ''} on a {description.pad_diameter_mm:g} mm pad"
+    if description.flat:
+        what = f"flat gel, {description.grid[0]} x {description.grid[1]} markers"
     if description.name:
         what = f"{description.name}: {what}"
     source = f"pin pitch {pitch_mm:.3f} mm ({what}) / central pin pitch {pitch_px:.2f} px measured"
@@ -296,6 +332,10 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
             "field_polar_deg": description.field_polar_deg, "pins_counted": counted}
     if description.spokes:
         info.update(rings=description.rings, spokes=description.spokes)
+    if description.flat:
+        info.update(marker_pitch_mm=description.marker_pitch_mm, grid=list(description.grid))
+    if description.frame_rate:
+        info["frame_rate"] = description.frame_rate
     if description.name:
         info["name"] = description.name
     return PadScale(pitch_mm / pitch_px, pitch_px, pitch_mm, source, info)

@@ -335,6 +335,7 @@ class PinTracker:
         self._lost_run: np.ndarray | None = None
         self._origin = np.zeros(2)
         self._crop = (slice(None), slice(None))
+        self._pad = 0                                 # px of replicated border round a whole-frame crop
         self._last_seen: np.ndarray | None = None
         self._refiner: Refiner | None = None
         self._surround = None                         # (flat indices, membrane level) in the crop
@@ -409,7 +410,7 @@ class PinTracker:
             # A window a little wider than a pin and narrower than the spacing sees one pin.
             self.lk = LKParams(window_px=int(np.clip(2 * round(0.3 * self.spacing_px) + 1, 7, 31)))
         self._set_crop(grey.shape, pins)
-        self._previous = grey[self._crop].copy()
+        self._previous = self._cropped(grey)
         self._surround = None
         if self.refine and self.disc is not None:
             self._surround = self._surround_pixels(self._previous, pins)
@@ -440,8 +441,18 @@ class PinTracker:
         return self.positions.copy()
 
     def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:
-        """LK works on the part of the frame the pins can reach (the disc, else the pins' box)."""
+        """LK works on the part of the frame the pins can reach (the disc, else the pins' box).
+
+        A sensing region that is the whole frame (a flat gel) is the frame grown by a pin spacing of
+        replicated border: the windows of markers next to the frame's edge stay in the crop.
+        """
         margin = self.lk.window_px * 2 ** self.lk.levels + 2
+        if self.disc is not None and self.disc.whole_frame:
+            self._pad = int(np.ceil(self.spacing_px)) + 2
+            self._crop = (slice(None), slice(None))
+            self._origin = np.array([-self._pad, -self._pad], dtype=np.float64)
+            return
+        self._pad = 0
         if self.disc is not None:
             low = np.array([self.disc.cx, self.disc.cy]) - self.disc.radius_px
             high = np.array([self.disc.cx, self.disc.cy]) + self.disc.radius_px
@@ -451,6 +462,29 @@ class PinTracker:
         x1, y1 = np.ceil(high).astype(int) + margin + 1
         self._crop = (slice(y0, min(y1, shape[0])), slice(x0, min(x1, shape[1])))
         self._origin = np.array([x0, y0], dtype=np.float64)
+
+    def _off_frame(self, positions: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+        """Positions with those cut by the frame's edge lost (NaN): a marker whose tip (its rest
+        radius) reaches beyond the frame leans on the replicated border, and is not measured."""
+        radius = self._refiner.tip_radius_px
+        if not np.isfinite(radius):
+            return positions
+        height, width = shape[:2]
+        x, y = positions[:, 0], positions[:, 1]
+        with np.errstate(invalid="ignore"):
+            room = np.minimum(np.minimum(x + 0.5, width - 0.5 - x), np.minimum(y + 0.5, height - 0.5 - y))
+            cut = room < radius
+        if not cut.any():
+            return positions
+        positions = positions.copy()
+        positions[cut] = np.nan
+        return positions
+
+    def _cropped(self, grey: np.ndarray) -> np.ndarray:
+        """The crop of a grey frame that tracking works on (a copy)."""
+        if self._pad:
+            return cv2.copyMakeBorder(grey, *(self._pad,) * 4, cv2.BORDER_REPLICATE)
+        return grey[self._crop].copy()
 
     def update(self, frame: np.ndarray) -> np.ndarray:
         """Track the pins into the next frame.
@@ -468,7 +502,7 @@ class PinTracker:
         if self._previous is None:
             raise PinsError("PinTracker.update called before start()")
         grey = as_grey(frame)
-        current = grey[self._crop].copy()
+        current = self._cropped(grey)
         if current.shape != self._previous.shape:
             raise ShapeError(f"frame size changed: expected the crop {self._previous.shape}, got {current.shape}")
         origin = self._origin
@@ -481,6 +515,8 @@ class PinTracker:
             moved, _ = _track(self._previous, current, self._reference - origin, self.lk, guess=guess - origin)
             positions = moved + origin
             blank = self._too_few(positions)
+        if self._pad and self.refine:
+            positions = self._off_frame(positions, grey.shape)
         self.frames += 1
         self.blank = blank
         if blank:

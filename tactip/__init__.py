@@ -10,7 +10,7 @@ from tactip.errors import ConfigError, SourceError, TactipError
 
 # Public name -> the module of this package that defines it (imported when the name is first used).
 _LAZY = {
-    **dict.fromkeys(("Contact", "SyntheticFrame", "SyntheticTacTip", "tap_profile"), ".synthetic"),
+    **dict.fromkeys(("Contact", "SyntheticFrame", "SyntheticTacTip", "SyntheticGel", "tap_profile"), ".sim"),
     **dict.fromkeys(("Frame", "FrameSource", "open_source", "ThreadedReader", "CameraSource", "VideoSource",
                      "ImageFolderSource", "SyntheticSource"), ".sources"),
     **dict.fromkeys(("TaxelSensor", "taxel_sensor", "TaxelSimulator", "simulate_taxel_datasets", "TapSegmenter",

@@ -27,9 +27,8 @@ def add_scale_arguments(parser: argparse.ArgumentParser) -> None:
     from pins import SENSOR_PRESETS
 
     parser.add_argument("--sensor", choices=sorted(SENSOR_PRESETS), metavar="NAME",
-                        help="the sensor, for the scale from its pin pitch: "
-                        + "; ".join(f"{d.name} ({d.pins} pins, {d.pad_diameter_mm:g} mm pad)"
-                                    for d in SENSOR_PRESETS.values()))
+                        help="the sensor, for the scale from its pin (or marker) pitch: "
+                        + "; ".join(f"{d.name} ({d.brief()})" for d in SENSOR_PRESETS.values()))
     parser.add_argument("--pins-on-pad", type=pin_count, metavar="N",
                         help="pins on the whole pad, in view or not, for the pin pitch (default: the sensor's, "
                         "else --expected-pins, else the pins detected)")

@@ -10,9 +10,13 @@ allows, as replay takes them, and the summary gives the separation reached.
 Refuses with a clear message when the frame shows no sensor or the pin count is far from [sensor] pins.
 An existing calibration is replaced only with --overwrite.
 
+--sensor NAME names the sensor instead of [sensor] preset (its pin count and pitch; e.g. gelsight-mini
+for a flat gel whose markers fill the frame).
+
 Examples:
   tactip calibrate --config samples/station_sim.toml
   tactip calibrate --config station.toml --rest-frames 30
+  tactip calibrate --config gel_station.toml --sensor gelsight-mini
 """
 
 from __future__ import annotations
@@ -35,6 +39,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"frames off contact to average, 1..{MAX_REST_FRAMES} (default 10)")
     parser.add_argument("--out", type=creatable_file, default=None,
                         help="calibration file (default: [sensor] calibration or DATA_DIR/calibration.h5)")
+    from pins import SENSOR_PRESETS
+
+    parser.add_argument("--sensor", choices=sorted(SENSOR_PRESETS), metavar="NAME",
+                        help="the sensor, instead of [sensor] preset: its pins (markers in view on a flat gel) are "
+                        "the count expected and its pin (or marker) pitch gives the scale: "
+                        + "; ".join(f"{d.name} ({d.brief()})" for d in SENSOR_PRESETS.values()))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -44,6 +54,22 @@ def run(args: argparse.Namespace) -> int:
     from tactip.station.procedures import calibrate_station, calibration_path
 
     config = load_station_config(args.config)
+    if args.sensor:
+        config = with_sensor(config, args.sensor)
     refuse_replacing_project_files([args.out or calibration_path(config)], overwrite=args.overwrite)
     calibrate_station(config, rest_frames=args.rest_frames, out=args.out)
     return 0
+
+
+def with_sensor(config, name: str):
+    """The station configuration with ``[sensor]`` describing the named sensor (`pins.SENSOR_PRESETS`):
+    its preset, its pin count (a flat gel's: the markers in view) and its pad diameter (a TacTip's)."""
+    import dataclasses
+
+    from pins import sensor_preset
+
+    description = sensor_preset(name)
+    changes = {"preset": name, "pins": description.pins}
+    if not description.flat:
+        changes["pad_diameter_mm"] = description.pad_diameter_mm
+    return dataclasses.replace(config, sensor=dataclasses.replace(config.sensor, **changes))

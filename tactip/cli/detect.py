@@ -1,6 +1,7 @@
 """Find the pins in one TacTip image and print them.
 
-Finds the sensor disc, then the pin field inside it: the blobs that form the pin lattice
+Finds the sensor disc (or, for a flat gel whose markers fill the frame, such as a GelSight's, takes the
+whole frame: see the README, "Flat-gel sensors"), then the pin field inside it: the blobs that form the pin lattice
 (neighbours at the lattice pitch, size, contrast and sharpness like their neighbours'), without
 being told the pin count. The other blobs are rejected and counted by reason: "outside field"
 (beyond the lattice: glare on a rim ring), "off lattice" (specks, light patches of skin between
@@ -31,6 +32,7 @@ Examples:
   tactip detect frame.png --expected-pins 331 --annotate out/frame_pins.png
   tactip detect frame.png --dark-pins --json
   tactip detect frame.png --sensor radial-120
+  tactip detect gel_frame.png --sensor gelsight-mini
 """
 
 from __future__ import annotations
@@ -132,8 +134,9 @@ def _scale(args: argparse.Namespace, field):
 def _print_summary(args: argparse.Namespace, field, scale, reason: str) -> None:
     disc, params = field.field_disc, field.params
     polarity = "dark markers on a light membrane" if params.dark_pins else "bright pins on a dark membrane"
-    print(f"{field.count} pins in {args.image} ({polarity}; pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, "
-          f"radius {disc.radius_px:.1f} px)")
+    region = ("sensing region: the whole frame, no disc" if field.disc.whole_frame else
+              f"pin field centre ({disc.cx:.1f}, {disc.cy:.1f}) px, radius {disc.radius_px:.1f} px")
+    print(f"{field.count} pins in {args.image} ({polarity}; {region})")
     if field.count:
         low, high = field.centres.min(axis=0), field.centres.max(axis=0)
         print(f"x {low[0]:.1f}..{high[0]:.1f} px, y {low[1]:.1f}..{high[1]:.1f} px")

@@ -99,7 +99,9 @@ class ReplayResult:
         scale = self.scale.describe() if self.scale is not None else f"{self.mm_per_px:.4f} mm/px (calibration)"
         lines = [
             f"Replayed {self.video}: {self.frames} frames{rate}",
-            f"Pins: {self.pins} tracked ({detected}); disc radius {self.disc.radius_px:.1f} px",
+            f"Pins: {self.pins} tracked ({detected}); "
+            + ("sensing region: the whole frame (no disc)" if getattr(self.disc, "whole_frame", False)
+               else f"disc radius {self.disc.radius_px:.1f} px"),
             f"Scale: {scale}",
             self._losses(),
             f"Taps: {len(self.tap_bounds)} (frames {taps}); features of "

@@ -7,6 +7,8 @@ Nothing here imports the rest of `tactip`, so `pins`' tests and doctests can dra
 - `tactip.sim.sequence`: `SyntheticTacTip.sequence`, ``slides`` and ``taps``: presses and slides with
   short rests between them, and their ground truth (`ContactEvent`: frame bounds, kind, direction, depth).
 - `tactip.sim.source`: `SyntheticSource`, a frame source of rendered taps (``synthetic:`` specs).
+- `tactip.sim.gel`, `tactip.sim._gel`: `SyntheticGel`, a flat gel with a grid of dark markers filling the
+  frame (GelSight-Mini-like; "Flat gels" below), with the same ground truth and sequences.
 - `tactip.sim._pad`, `tactip.sim._slide`, `tactip.sim._render`, `tactip.sim._scene`: the pad's geometry
   and contact mechanics, the skin's slide under a sticking plate, the painting, and the light inside the pad.
 
@@ -150,6 +152,46 @@ an option (all off by default, so the default frames are unchanged byte for byte
   apart); rendering stays vectorised: about 3x the default 331-pin frame for 1000 pins at 1280x720
   (15-20 ms), 4x for a textured colour frame at 640x480 (20-30 ms; ``bench/bench_render.py``).
 
+Flat gels (`tactip.sim.gel`, `tactip.sim._gel`)
+----------------------------------------------
+The other large family of optical tactile sensors films a flat gel carrying a grid of dark markers
+(GelSight Mini: 320x240 at 25 frames/s, about 8 x 10 dots). `SyntheticGel` draws one: no pad, no
+disc, no casing; the gel fills the frame and the whole frame is the sensing area (its ``disc`` is
+the circle about the frame's centre through its corners, which detection's whole-frame region is too).
+
+- Geometry: markers on a square grid of pitch ``pitch_mm`` (1.8 mm), the frame showing ``grid``
+  (rows, columns) pitches at most along each side (30 px at 320x240 for 8 x 10); the grid goes on
+  one row and column beyond every edge, offset from the frame's centre by a seeded phase of up to
+  0.2 pitch (so the outermost markers are whole, cut by the frame's edge or out of view, depending on
+  the seed), each marker jittered by 1 % of the pitch. Markers are round (the gel is seen square on,
+  at a fixed scale ``mm_per_px``), of radius ``marker_fraction`` x the pitch (4.2 px), drawn with
+  the TacTip's anti-aliased 1 px edge ramp, so a marker's darkness-weighted centroid against the gel
+  drawn without it is its true centre (within 0.05 px, gradient and shading included).
+- Press (`_gel.outward_flow_mm`): the indenter at the frame's centre makes a patch of radius
+  ``a = sqrt(2.5 d)`` mm (3.5 mm at d = 5 mm) and squeezes the gel outward round it:
+  ``u_r = 0.1 d (r / a) exp((1 - r^2 / a^2) / 2)``, zero at the centre, 0.1 d (8 px at 5 mm) at the
+  patch edge, fading beyond (the markers 9 mm away move under 1.5 px). The map never folds.
+- Shear (`_gel.slide_share`): ``Contact.slide_x_mm``, ``slide_y_mm`` drag the patch by the whole
+  slide and the gel round it by a raised cosine falling to zero over ``max(6 mm, 4 |S|)``: markers
+  stay at least 0.6 pitch apart (Jacobian >= 1 - pi / 8); the press then acts where the patch now is.
+  A gap in the plate (``gap_width_mm``) is not modelled on a flat gel.
+- Light (`_gel.gel_light`, `_gel.shading`): BGR frames, each channel lit from one side (B from the
+  left, G from the top, R from the right): ``gel_level`` (150) at the centre, ``+- gradient / 2``
+  (80) across, ``vignette`` (30) grey lost in the corners; markers reflect ``marker_reflectance``
+  (0.3) of the light on them (about 45 grey). The pressed gel is shaded as GelSight's photometric
+  image: each channel gains ``shading`` (25) grey levels per unit slope of the dent facing its light
+  (a Gaussian dome of depth d, sigma 0.6 a, moving with the slide); image-fixed, it slopes the
+  background under the markers near the contact. At ``shading=40`` the steepest flanks (d = 3 mm)
+  pull two markers' detected centroids by 0.5-0.7 px (detection RMSE 0.08-0.10 px over all markers).
+- Noise ``noise_sigma`` (3), optional blur and JPEG, 25 frames/s.
+
+Ground truth: ``visible`` markers are whole in the frame (ramp included, a px clear of the edge),
+``partial`` ones are cut by the frame's edge, the others are out of view. Sequences (``slides``,
+``taps``, ``sequence``) and `SyntheticTacTip.tap` work as for the TacTip. Preset (`GEL_PRESETS`):
+``gelsight-mini``: 8 x 10 markers 1.8 mm apart at 320x240, 25 frames/s (120 markers on the gel, about
+80 whole in view). ``SyntheticGel.from_preset`` builds it; the TacTip's `PRESETS` leave it out, so
+the tests parametrised over them are the TacTip's.
+
 Ground truth and scoring
 ------------------------
 ``SyntheticFrame.centres`` holds every pin's true tip centre. ``visible`` marks pins whose whole tip
@@ -189,9 +231,10 @@ Presets
 """
 
 from tactip.sim.contact import Contact, SyntheticFrame, tap_profile
-from tactip.sim.presets import PRESETS, preset_names
+from tactip.sim.presets import GEL_PRESETS, PRESETS, preset_names
 from tactip.sim.sequence import ContactEvent, ContactSequence, Stroke
 from tactip.sim.synthetic import SyntheticTacTip
+from tactip.sim.gel import SyntheticGel
 
-__all__ = ["Contact", "ContactEvent", "ContactSequence", "PRESETS", "Stroke", "SyntheticFrame", "SyntheticTacTip",
-           "preset_names", "tap_profile"]
+__all__ = ["Contact", "ContactEvent", "ContactSequence", "GEL_PRESETS", "PRESETS", "Stroke", "SyntheticFrame",
+           "SyntheticGel", "SyntheticTacTip", "preset_names", "tap_profile"]

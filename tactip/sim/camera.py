@@ -13,6 +13,8 @@ import numpy as np
 
 from tactip.errors import TactipError
 from tactip.sim.contact import Contact
+from tactip.sim.gel import SyntheticGel
+from tactip.sim.presets import GEL_PRESETS
 from tactip.sim.synthetic import SyntheticTacTip
 
 __all__ = ["SimulatedCamera"]
@@ -33,11 +35,19 @@ class SimulatedCamera:
         Camera noise, grey levels.
     seed : int
         Seed of the sensor (pin layout and noise).
+    preset : str
+        A flat gel's preset (`tactip.sim.GEL_PRESETS`, e.g. "gelsight-mini") to film instead of a
+        TacTip of ``pins`` pins ("" or any other name: the TacTip). A gap in the plate is not
+        modelled on a flat gel: its frames show the press only.
     """
 
     def __init__(self, *, pins: int = 331, frame_rate: float = 20.0, tap_speed_mm_s: float = 20.0,
-                 dwell_s: float = 0.25, approach_height_mm: float = 5.0, noise_sigma: float = 4.0, seed: int = 0):
-        self.sensor = SyntheticTacTip(pins=pins, noise_sigma=noise_sigma, seed=seed)
+                 dwell_s: float = 0.25, approach_height_mm: float = 5.0, noise_sigma: float = 4.0, seed: int = 0,
+                 preset: str = ""):
+        if preset in GEL_PRESETS:
+            self.sensor = SyntheticGel.from_preset(preset, seed=seed)
+        else:
+            self.sensor = SyntheticTacTip(pins=pins, noise_sigma=noise_sigma, seed=seed)
         self.frame_rate = float(frame_rate)
         self.tap_speed_mm_s = float(tap_speed_mm_s)
         self.dwell_s = float(dwell_s)

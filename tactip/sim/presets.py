@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from types import MappingProxyType
 
-__all__ = ["PRESETS", "preset_names"]
+__all__ = ["GEL_PRESETS", "PRESETS", "preset_names"]
 
 #: Named sensors: constructor options of `SyntheticTacTip` for each (see the module docstring, "Presets").
 PRESETS = MappingProxyType({
@@ -40,3 +40,10 @@ def preset_names() -> tuple[str, ...]:
     ('tactip-331', 'tactip-127', 'tactip-532')
     """
     return tuple(PRESETS)
+
+
+#: Named flat gels: constructor options of `tactip.sim.gel.SyntheticGel` (see `tactip.sim`, "Flat gels").
+GEL_PRESETS = MappingProxyType({
+    "gelsight-mini": MappingProxyType({"grid": (8, 10), "pitch_mm": 1.8, "image_size": (320, 240),
+                                       "frame_rate": 25.0}),
+})

@@ -8,6 +8,8 @@ import numpy as np
 
 from tactip.errors import SourceError
 from tactip.sim.contact import Contact, SyntheticFrame, tap_profile
+from tactip.sim.gel import SyntheticGel
+from tactip.sim.presets import GEL_PRESETS
 from tactip.sim.synthetic import SyntheticTacTip
 from tactip.sources.base import FrameSourceBase
 
@@ -44,7 +46,8 @@ class SyntheticSource(FrameSourceBase):
     seed : int
         Seed when ``sensor`` is None.
     preset : str or None
-        A `tactip.sim.synthetic.PRESETS` name (e.g. "rim-ring-331") when ``sensor`` is None; it wins over ``pins``.
+        A `tactip.sim.synthetic.PRESETS` name (e.g. "rim-ring-331") or a flat gel's (`GEL_PRESETS`,
+        "gelsight-mini") when ``sensor`` is None; it wins over ``pins``.
 
     Examples
     --------
@@ -61,7 +64,8 @@ class SyntheticSource(FrameSourceBase):
         super().__init__(grey=grey)
         if sensor is None and preset is not None:
             try:
-                sensor = SyntheticTacTip.from_preset(preset, seed=seed)
+                maker = SyntheticGel if preset in GEL_PRESETS else SyntheticTacTip  # a flat gel, or a TacTip
+                sensor = maker.from_preset(preset, seed=seed)
             except ValueError as exc:
                 raise SourceError(str(exc)) from None
         self.sensor = sensor if sensor is not None else SyntheticTacTip(pins=pins, seed=seed)

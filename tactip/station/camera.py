@@ -107,5 +107,5 @@ def make_camera(config: StationConfig) -> Camera:
         return SimulatedCamera(pins=config.sensor.pins, frame_rate=config.sensor.frame_rate,
                                tap_speed_mm_s=tap.speed_mm_s, dwell_s=tap.dwell_s,
                                approach_height_mm=tap.approach_height_mm, noise_sigma=config.sim.noise_sigma,
-                               seed=config.sim.seed)
+                               seed=config.sim.seed, preset=config.sensor.preset)
     return LiveCamera(config.sensor.source)

@@ -40,6 +40,9 @@ shape_images, slides_model = _recordings.shape_images, _recordings.slides_model
 ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 
+_GEL = ("needs flat-gel recordings (tests/tactip/dataset/test_flat_gel_dataset.py runs detect, replay, dataset "
+        "build, train and validate with --sensor gelsight-mini on synthetic GelSight-Mini videos)")
+
 #: Examples that need what a test machine does not have: a substring of the example -> why.
 SKIPPED = {
     "postgresql://": "needs the line's PostgreSQL server (tests/tactip/line/test_results_postgres.py runs a "
@@ -48,6 +51,7 @@ SKIPPED = {
                     "test_dashboard.py drives it in a browser)",
     "tactip record 0 ": "records camera 0, a real camera (tests/tactip/replay/test_record.py records fake and "
                         "synthetic cameras)",
+    "gel_frame.png": _GEL, "gel_video.avi": _GEL, "gel/labels.csv": _GEL, "data/gel/": _GEL,
     "--scheduler tcp://HEAD": "needs a Dask cluster on other machines (tests/tactip/replay/test_batch.py starts a "
                               "dask scheduler and a dask worker of its own)",
 }
