@@ -39,23 +39,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"frames off contact to average, 1..{MAX_REST_FRAMES} (default 10)")
     parser.add_argument("--out", type=creatable_file, default=None,
                         help="calibration file (default: [sensor] calibration or DATA_DIR/calibration.h5)")
-    from pins import SENSOR_PRESETS
-
-    parser.add_argument("--sensor", choices=sorted(SENSOR_PRESETS), metavar="NAME",
+    # The names are checked when the command runs (`pins.sensor_preset`): building this parser imports no
+    # package, so a bad station file is reported at once (`tactip detect --help` lists the sensors).
+    parser.add_argument("--sensor", metavar="NAME",
                         help="the sensor, instead of [sensor] preset: its pins (markers in view on a flat gel) are "
-                        "the count expected and its pin (or marker) pitch gives the scale: "
-                        + "; ".join(f"{d.name} ({d.brief()})" for d in SENSOR_PRESETS.values()))
+                        "the count expected and its pin (or marker) pitch gives the scale (e.g. gelsight-mini, "
+                        "tactip-331; 'tactip detect --help' lists them)")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run `tactip calibrate`."""
     from tactip._output import refuse_replacing_project_files
+    from tactip.errors import TactipError
     from tactip.station.config import load_station_config
     from tactip.station.procedures import calibrate_station, calibration_path
 
     config = load_station_config(args.config)
     if args.sensor:
-        config = with_sensor(config, args.sensor)
+        try:
+            config = with_sensor(config, args.sensor)
+        except ValueError as exc:
+            raise TactipError(f"--sensor: {exc}") from None
     refuse_replacing_project_files([args.out or calibration_path(config)], overwrite=args.overwrite)
     calibrate_station(config, rest_frames=args.rest_frames, out=args.out)
     return 0
