@@ -202,6 +202,7 @@ def build_dataset(labels_csv, out_dir, *, label: str | None = None, classes: int
         test = group_split(identity, recording, test_fraction=test_fraction, seed=seed)
     else:
         test = column_split([row.split for row, _, t in per_row for _ in range(len(t.taps))])
+    warnings += _shared_recordings(recording, test, split)
     for side, mask in (("training", ~test), ("test", test)):
         if not mask.any():
             raise LabelsError(f"the {side} set would be empty (split {split} of {len(test)} taps): "
@@ -321,6 +322,18 @@ def _calibrate_first(labelled, leave_out, *, rest, rest_frame, labels_csv, left_
             continue
         return cal, {"line": row.line, "path": _shown(row.path, labels_csv)}, labelled[k:]
     raise LabelsError(f"no recording could be calibrated on: {_nothing_left(labels_csv, left_out)}")
+
+
+def _shared_recordings(recording: np.ndarray, test: np.ndarray, split: str) -> list[str]:
+    """A warning when recordings have taps on both sides: the test figures then score taps of recordings
+    the model was trained on (taps of one recording are alike), and flatter a model on new recordings."""
+    both = np.intersect1d(recording[test], recording[~test])
+    if not both.size:
+        return []
+    total = len(np.unique(recording))
+    advice = "--split group keeps each recording on one side" if split != "group" else ""
+    return [f"{both.size} of {total} recordings have taps in both training and test: the test figures score "
+            f"recordings the model has seen and flatter it on new ones" + (f" ({advice})" if advice else "")]
 
 
 def _taps_of_rows(labelled, cal, leave_out, *, rest, n_samples, image_samples, rest_frame, progress, labels_csv,

@@ -29,6 +29,9 @@ def test_slide_videos_become_angle_identities_with_a_period(slides_model):
     # 4 slides per video, alternating: 2 training and 2 test taps per direction
     assert [(c["train"], c["test"]) for c in summary["classes"]] == [(2, 2)] * len(DIRECTIONS)
     assert summary["pins"]["feature_pins"] == 40 and summary["recordings"] == {"used": 8, "left_out": 0}
+    # every video's taps on both sides: the summary says the test figures score recordings the model has seen
+    assert any(w.startswith("8 of 8 recordings have taps in both training and test") and "--split group" in w
+               for w in summary["warnings"])
     # one calibration for the set: its feature pins are the datasets' columns
     calibration = load_calibration(slides_model / "calibration.h5")
     assert calibration.n_selected * 2 == train.dims and train.sensor["selected_pins"] == calibration.n_selected
@@ -47,6 +50,7 @@ def test_press_videos_binned_into_depth_classes_with_a_group_split(press_videos,
     for row in summary["rows"]:
         assert row["taps"] == 3 and sorted([row["train"], row["test"]]) == [0, 3]
     assert all((c["train"], c["test"], c["recordings"]) == (3, 3, 2) for c in summary["classes"])
+    assert not any("in both training and test" in w for w in summary["warnings"])
     # each depth class holds the presses of its true depth (the label noise of +-0.2 mm never crosses a bin)
     truth = {row["path"]: float(row["path"].split("_")[1]) for row in summary["rows"]}
     for row in summary["rows"]:
