@@ -52,6 +52,8 @@ SKIPPED = {
     "tactip record 0 ": "records camera 0, a real camera (tests/tactip/replay/test_record.py records fake and "
                         "synthetic cameras)",
     "gel_frame.png": _GEL, "gel_video.avi": _GEL, "gel/labels.csv": _GEL, "data/gel/": _GEL,
+    "tactip reproduce 00": "tests/tactip/reproduce/test_reproduce.py runs 'tactip reproduce PAPER' for every paper "
+                           "with --quick and checks its figures (full sizes: bench/bench_reproduce.py)",
     "--scheduler tcp://HEAD": "needs a Dask cluster on other machines (tests/tactip/replay/test_batch.py starts a "
                               "dask scheduler and a dask worker of its own)",
 }
