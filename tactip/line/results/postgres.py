@@ -81,6 +81,16 @@ ALTER TABLE {SCHEMA_NAME}.stations ADD COLUMN IF NOT EXISTS heartbeat_at TEXT;
 """
 
 
+def _stamped(db, psycopg) -> bool:
+    """Whether the ``tactip.meta`` table holds this project's schema row (False on any error)."""
+    try:
+        with db.transaction():  # a savepoint: a foreign meta's error leaves the outer transaction usable
+            row = db.execute(f"SELECT value FROM {SCHEMA_NAME}.meta WHERE key = 'schema'").fetchone()
+    except psycopg.Error:
+        return False
+    return bool(row) and str(row[0]).startswith("tactip-results/")
+
+
 def redact_url(url: str) -> str:
     """``url`` with its password replaced by ``***`` (for messages and logs)."""
     parts = urlsplit(url)
@@ -132,6 +142,7 @@ class PostgresResultsStore(ResultsStoreBase):
             else:
                 with self._db.transaction():
                     self._db.execute("SELECT pg_advisory_xact_lock(%s)", (_SCHEMA_LOCK_KEY,))
+                    self._refuse_a_foreign_schema()        # before anything is created or altered in it
                     self._db.execute(_SCHEMA)
                     self._db.execute(f"INSERT INTO {SCHEMA_NAME}.meta VALUES ('schema', %s) ON CONFLICT DO NOTHING",
                                      (f"tactip-results/{SCHEMA_VERSION}",))
@@ -150,6 +161,15 @@ class PostgresResultsStore(ResultsStoreBase):
             self._db.close()
             raise ResultsError(f"{self.path} holds results schema {version[0]!r}; "
                                f"this version reads tactip-results/{SCHEMA_VERSION}")
+
+    def _refuse_a_foreign_schema(self) -> None:
+        """A ``tactip`` schema that holds tables but no tactip schema row is someone else's: refused with
+        nothing written to it (as a foreign SQLite file is)."""
+        tables = sorted(r[0] for r in self._db.execute(
+            "SELECT table_name FROM information_schema.tables WHERE table_schema = %s", (SCHEMA_NAME,)).fetchall())
+        if tables and not ("meta" in tables and _stamped(self._db, self._psycopg)):
+            raise ResultsError(f"{self.path}: its schema {SCHEMA_NAME!r} holds other tables ({', '.join(tables[:5])}), "
+                               f"not tactip results; it was left unchanged: choose another database")
 
     def _error(self, exc, doing: str) -> ResultsError:
         """A driver error as one line naming the database (never its password)."""

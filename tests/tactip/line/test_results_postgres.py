@@ -208,3 +208,27 @@ def test_a_postgresql_database_from_before_heartbeats_is_read_and_gains_the_colu
         store.heartbeat("line-1")
         (row,) = store.stations()
     assert row["heartbeat_at"] > old["updated_at"] and row["updated_at"] == old["updated_at"]
+
+
+def test_a_foreign_tactip_schema_is_refused_before_anything_is_written(postgres_url):
+    import psycopg
+
+    with psycopg.connect(postgres_url, autocommit=True) as db:                    # someone else's 'tactip' schema
+        db.execute("CREATE SCHEMA tactip")
+        db.execute("CREATE TABLE tactip.inspections (id INT PRIMARY KEY, owner TEXT)")
+        db.execute("CREATE TABLE tactip.meta (key TEXT PRIMARY KEY, value TEXT)")
+        db.execute("INSERT INTO tactip.inspections VALUES (1, 'them')")
+
+    def schema():
+        with psycopg.connect(postgres_url, autocommit=True) as db:
+            columns = db.execute("SELECT table_name, column_name FROM information_schema.columns "
+                                 "WHERE table_schema = 'tactip' ORDER BY 1, 2").fetchall()
+            return columns, db.execute("SELECT * FROM tactip.inspections").fetchall(), \
+                db.execute("SELECT * FROM tactip.meta").fetchall()
+
+    before = schema()
+    with pytest.raises(ResultsError, match="other tables .*inspections.*left unchanged"):
+        open_results(postgres_url)
+    assert schema() == before                                                     # no table, column or row added
+    code, _, err = run_cli(["results", "list", "--db", postgres_url])
+    assert code == 1 and ("left unchanged" in err or "no tactip results" in err), err   # a reader: refused too
