@@ -16,7 +16,7 @@ import numpy as np
 
 from tactip.sim import _gel, _render
 from tactip.sim.contact import Contact, SyntheticFrame
-from tactip.sim.presets import GEL_PRESETS
+from tactip.sim.presets import GEL_PRESETS, build_preset
 from tactip.sim.sequence import ContactSequences
 from tactip.sim.synthetic import SyntheticTacTip
 
@@ -162,11 +162,7 @@ class SyntheticGel(ContactSequences):
         >>> SyntheticGel.from_preset("gelsight-mini").grid
         (8, 10)
         """
-        if name not in GEL_PRESETS:
-            raise ValueError(f"unknown synthetic gel preset {name!r}; choose from {', '.join(GEL_PRESETS)}")
-        sensor = cls(**{**GEL_PRESETS[name], **overrides})
-        sensor.preset = name
-        return sensor
+        return build_preset(cls, GEL_PRESETS, "synthetic gel", name, overrides)
 
     @property
     def n_pins(self) -> int:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from types import MappingProxyType
 
-__all__ = ["GEL_PRESETS", "PRESETS", "preset_names"]
+__all__ = ["GEL_PRESETS", "PRESETS", "preset_names", "build_preset"]
 
 #: Named sensors: constructor options of `SyntheticTacTip` for each (see the module docstring, "Presets").
 PRESETS = MappingProxyType({
@@ -47,3 +47,13 @@ GEL_PRESETS = MappingProxyType({
     "gelsight-mini": MappingProxyType({"grid": (8, 10), "pitch_mm": 1.8, "image_size": (320, 240),
                                        "frame_rate": 25.0}),
 })
+
+
+def build_preset(cls, table, what: str, name: str, overrides: dict):
+    """``cls(**table[name], **overrides)`` with its ``preset`` name set; `ValueError` naming the choices
+    (``what``: e.g. "synthetic TacTip") when ``name`` is not in ``table``."""
+    if name not in table:
+        raise ValueError(f"unknown {what} preset {name!r}; choose from {', '.join(table)}")
+    sensor = cls(**{**table[name], **overrides})
+    sensor.preset = name
+    return sensor

@@ -12,7 +12,7 @@ import numpy as np
 
 from tactip.sim import _options, _pad, _render, _scene, _slide
 from tactip.sim.contact import Contact, SyntheticFrame, tap_profile
-from tactip.sim.presets import PRESETS
+from tactip.sim.presets import PRESETS, build_preset
 from tactip.sim.sequence import ContactSequences
 
 __all__ = ["SyntheticTacTip"]
@@ -253,11 +253,7 @@ class SyntheticTacTip(ContactSequences):
         >>> sensor.n_pins, sensor.frame_rate
         (120, 120.0)
         """
-        if name not in PRESETS:
-            raise ValueError(f"unknown synthetic TacTip preset {name!r}; choose from {', '.join(PRESETS)}")
-        sensor = cls(**{**PRESETS[name], **overrides})
-        sensor.preset = name
-        return sensor
+        return build_preset(cls, PRESETS, "synthetic TacTip", name, overrides)
 
     def _skin_spots(self, rng: np.random.Generator):
         """Material points of the skin texture between the pins: x, y (mm), sigma (px), amplitude (grey)."""

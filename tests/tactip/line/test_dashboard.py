@@ -366,44 +366,15 @@ def test_a_connection_that_sends_no_request_is_closed(tmp_path):
 def test_a_flood_of_half_open_connections_starves_no_client(tmp_path):
     """400 half-open connections to a server limited to 256 open files: a request with the token is still
     answered within 2 s, and the console gets no 'Too many open files'."""
-    import resource
-    import socket
-    import subprocess
-    import sys
+    from tests.tactip.line.flood import served_under_a_half_open_flood
 
     db = tmp_path / "r.sqlite"
     with open_results(db) as store:
         _verdict(store, "door", 1.0)
-
-    def limit_files():
-        resource.setrlimit(resource.RLIMIT_NOFILE, (256, 256))
-
-    serve = subprocess.Popen([sys.executable, "-m", "tactip.cli", "serve", "--db", str(db), "--port", "0",
-                              "--token", TOKEN], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             preexec_fn=limit_files)
-    flood = []
-    try:
-        url = serve.stdout.readline().split(" on ")[1].split()[0].split("?")[0]
-        port = int(url.rsplit(":", 1)[1].strip("/"))
-        for k in range(400):
-            s = socket.socket()
-            s.setblocking(False)
-            s.connect_ex(("127.0.0.1", port))
-            flood.append(s)
-        for s in flood:
-            try:
-                s.send(b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n")             # and never the rest
-            except OSError:
-                pass                                                            # not accepted yet, or dropped
+    with served_under_a_half_open_flood(db, TOKEN) as url:
         request = urllib.request.Request(url + "api/state", headers={"Authorization": f"Bearer {TOKEN}"})
         with urllib.request.urlopen(request, timeout=2) as response:          # the bar: within 2 s
             assert response.status == 200 and json.loads(response.read())["verdicts"][0]["gap"] == "door"
-    finally:
-        for s in flood:
-            s.close()
-        serve.terminate()
-        _, err = serve.communicate(timeout=20)
-    assert "Too many open files" not in err and "Traceback" not in err, err
 
 
 def test_taps_and_verdicts_stream_as_server_sent_events(tmp_path):

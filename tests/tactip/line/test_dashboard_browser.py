@@ -319,32 +319,16 @@ def test_a_dns_rebinding_host_is_refused_in_the_browser(browser, tmp_path):
 def test_a_half_open_flood_does_not_starve_a_client(browser, tmp_path):
     """Bar: 400 half-open connections to `tactip serve` at ulimit -n 256; a request with the token answers
     within 2 s, and the page loads and goes live."""
-    import resource
-    import socket
     import time
     import urllib.request
+
+    from tests.tactip.line.flood import served_under_a_half_open_flood
 
     db = tmp_path / "r.sqlite"
     with open_results(db) as store:
         done = store.start_inspection("g01", nominal_width=1.0, tolerance=0.2, policy="active", station="cell-1")
         store.finish_inspection(done, estimated_width=1.0, estimated_depth=2.0, belief=0.97, taps=1, decided=True)
-    serve = subprocess.Popen([sys.executable, "-m", "tactip.cli", "serve", "--db", str(db), "--port", "0",
-                              "--token", TOKEN], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_NOFILE, (256, 256)))
-    flood = []
-    try:
-        url = serve.stdout.readline().split(" on ")[1].split("?")[0]
-        port = int(url.rstrip("/").rsplit(":", 1)[1])
-        for _ in range(400):
-            s = socket.socket()
-            s.setblocking(False)
-            s.connect_ex(("127.0.0.1", port))
-            flood.append(s)
-        for s in flood:
-            try:
-                s.send(b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n")          # and never the rest
-            except OSError:
-                pass
+    with served_under_a_half_open_flood(db, TOKEN) as url:
         request = urllib.request.Request(url + "api/state", headers={"Authorization": f"Bearer {TOKEN}"})
         started = time.monotonic()
         with urllib.request.urlopen(request, timeout=2) as response:              # the bar: within 2 s
@@ -355,12 +339,6 @@ def test_a_half_open_flood_does_not_starve_a_client(browser, tmp_path):
         page.goto(f"{url}?token={TOKEN}")
         page.wait_for_selector("#tiles .tile[data-station='cell-1']", timeout=10_000)
         page.close()
-    finally:
-        for s in flood:
-            s.close()
-        serve.terminate()
-        _, err = serve.communicate(timeout=20)
-    assert "Too many open files" not in err and "Traceback" not in err, err
 
 
 def test_the_layout_at_a_glance_on_a_desktop_a_laptop_and_a_phone(browser, tmp_path):
