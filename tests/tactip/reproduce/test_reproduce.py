@@ -1,5 +1,7 @@
 """`tactip reproduce PAPER --quick` end to end: JSON rows and the bars of issue 10."""
 
+import contextlib
+import io
 import json
 
 import numpy as np
@@ -16,27 +18,52 @@ def _rows(tmp_path, paper, capsys):
     return json.loads(out.read_text()), text
 
 
-def test_001_deadline_and_relocation(tmp_path, capsys):
-    rows, _ = _rows(tmp_path, "001", capsys)
+@pytest.fixture(scope="module")
+def run_001(tmp_path_factory):
+    out = tmp_path_factory.mktemp("001") / "001.json"
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        assert main(["reproduce", "001", "--quick", "--quiet", "--json", str(out)]) == 0
+    return json.loads(out.read_text()), text.getvalue()
+
+
+def test_001_deadline_and_relocation(run_001):
+    rows, text = run_001
     keys = {"deadline", "threshold", "shape_error_mm", "position_error_mm", "reaction_taps", "null_fraction",
             "forced_fraction"}
     assert all(set(r) == keys for r in rows)
     by = {d: sorted((r for r in rows if r["deadline"] == d), key=lambda r: r["threshold"]) for d in (None, 5, 10)}
-    assert all(r["position_error_mm"] < 1.0 for r in rows)                     # hyperacuity: < 1 mm
-    assert all(r["forced_fraction"] < 0.05 for r in rows)
+    assert by[None][-1]["threshold"] >= 0.99                                   # the paper's thresholds
+    assert all(r["position_error_mm"] < 1.0 for r in rows if r["position_error_mm"] is not None)   # hyperacuity
+    assert all(r["forced_fraction"] < 0.05 for r in by[None])                  # no cap: fixed runs decide
     assert all(r["null_fraction"] == 0 for r in by[None])
-    for d in (5, 10):                                                          # Fig. 6: rises with theta ...
-        assert np.all(np.diff([r["null_fraction"] for r in by[d]]) > 0)
+    for d in (5, 10):
+        # a deadline run either decides (every mean defined) or its rod never decides (means undefined)
+        for r in by[d]:
+            assert (r["forced_fraction"] == 0) == (r["shape_error_mm"] is not None) == (r["reaction_taps"] is not None)
+        nulls = [r["null_fraction"] for r in by[d]]                            # Fig. 6: rises with theta ...
+        assert np.all(np.diff(nulls) >= 0) and nulls[-1] > nulls[0]
     for short, long in zip(by[5], by[10]):                                     # ... and with shorter deadlines
         assert short["null_fraction"] >= long["null_fraction"]
-    assert by[5][-1]["null_fraction"] > by[10][-1]["null_fraction"]
     # Fig. 5: at a matched mean reaction time, deadline 5 lowers both errors
     fixed_taps = [r["reaction_taps"] for r in by[None]]
-    matched = [r for r in by[5] if r["null_fraction"] > 0.1 and fixed_taps[0] <= r["reaction_taps"] <= fixed_taps[-1]]
+    matched = [r for r in by[5] if r["reaction_taps"] is not None and r["null_fraction"] > 0.1
+               and fixed_taps[0] <= r["reaction_taps"] <= fixed_taps[-1]]
     assert matched
     for r in matched:
         for error in ("shape_error_mm", "position_error_mm"):
             assert r[error] < np.interp(r["reaction_taps"], fixed_taps, [f[error] for f in by[None]])
+    assert "never decide" in text
+
+
+@pytest.mark.xfail(strict=False, reason="issue 25, the simulated rods give ~0.15 nats per tap (fixed perception needs "
+                                        "~44 taps to reach 0.99): at theta >= 0.99 most rods never decide within a "
+                                        "5-tap attempt (seed 0: 3 of 5 in 2000 attempts each), so deadline-5 runs "
+                                        "on them never end and the paper's comparison has no value")
+def test_001_deadline_5_lowers_the_position_error_at_the_paper_thresholds(run_001):
+    from tactip.reproduce.seeds import claim_margin
+
+    assert claim_margin("001", run_001[0]) > 0
 
 
 def test_003_active_touch_beats_passive(tmp_path, capsys):
