@@ -66,6 +66,49 @@ def test_001_deadline_5_lowers_the_position_error_at_the_paper_thresholds(run_00
     assert claim_margin("001", run_001[0]) > 0
 
 
+@pytest.fixture(scope="module")
+def rows_000(tmp_path_factory):
+    out = tmp_path_factory.mktemp("000") / "000.json"
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        assert main(["reproduce", "000", "--quick", "--quiet", "--json", str(out)]) == 0
+    assert "Table III" in text.getvalue()
+    return json.loads(out.read_text())
+
+
+def test_000_tables_ii_and_iii_rows(rows_000):
+    from tactip.reproduce.acuity import TABLE3_CLASSES
+
+    keys = {"sensor", "classes", "class_width_mm", "policy", "error_mm", "mean_taps", "threshold", "fixation_mm"}
+    assert all(set(r) == keys for r in rows_000)
+    by = {(r["sensor"], r["classes"], r["policy"]): r for r in rows_000}
+    assert len(by) == len(rows_000)
+    skin = sorted({n for s, n, _ in by if s == "skin"})
+    assert skin == sorted(TABLE3_CLASSES)                                      # every count of Table III
+    for sensor, fixation, budget in (("fingertip", 15.0, 2.0), ("skin", 37.0, 4.0)):   # the paper's protocol
+        counts = {n for s, n, _ in by if s == sensor}
+        for n in counts:
+            passive, active = by[sensor, n, "passive"], by[sensor, n, "active"]
+            assert passive["fixation_mm"] is None and active["fixation_mm"] == fixation
+            assert passive["mean_taps"] <= budget and active["mean_taps"] <= budget
+            assert active["class_width_mm"] == pytest.approx((30.0 if sensor == "fingertip" else 50.0) / n, rel=1e-3)
+    # Table II: active perception is hyperacute on the fingertip, passive is not (paper: 0.12 against 4.5 mm)
+    assert by["fingertip", 300, "active"]["error_mm"] <= 0.2
+    assert by["fingertip", 300, "passive"]["error_mm"] >= 10 * by["fingertip", 300, "active"]["error_mm"]
+    # Table III: the skin is hyperacute too (sub-mm against a 4 mm taxel spacing), active or passive
+    assert all(by["skin", n, p]["error_mm"] < 1.0 for n in skin for p in ("passive", "active"))
+
+
+@pytest.mark.xfail(strict=False, reason="issue 25, the simulated skin has no sweet spot (its passive acuity is about "
+                                        "the same everywhere), so fixating at the paper's 37 mm gains 0-10 %, within "
+                                        "Monte Carlo noise at fine class counts: seed 0 quick, 250 classes, active "
+                                        "0.354 against passive 0.343 mm (5000 runs: 0.346 against 0.365)")
+def test_000_skin_active_no_worse_than_passive_at_every_class_count(rows_000):
+    from tactip.reproduce.seeds import claim_margin
+
+    assert claim_margin("000", rows_000) >= 0
+
+
 def test_003_active_touch_beats_passive(tmp_path, capsys):
     rows, text = _rows(tmp_path, "003", capsys)
     error = {r["move_threshold"]: r["texture_error_classes"] for r in rows}

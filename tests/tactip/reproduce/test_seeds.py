@@ -49,3 +49,25 @@ def test_every_paper_has_a_claim():
     assert set(CLAIMS) == {"000", "001", "002", "003", "004"}
     with pytest.raises(ValueError, match="no claim"):
         claim_margin("005", [])
+
+
+def test_000_margin_is_the_skin_rows_smallest_gain():
+    rows = [{"sensor": s, "classes": n, "policy": p, "error_mm": e} for s, n, p, e in (
+        ("skin", 25, "passive", 0.10), ("skin", 25, "active", 0.02), ("skin", 500, "passive", 0.80),
+        ("skin", 500, "active", 0.75), ("fingertip", 300, "passive", 4.0), ("fingertip", 300, "active", 4.5))]
+    assert claim_margin("000", rows) == pytest.approx(0.05)                         # the fingertip does not count
+    rows[3]["error_mm"] = 0.85
+    assert claim_margin("000", rows) == pytest.approx(-0.05)
+
+
+def _001_rows(fixed, five):
+    return [{"deadline": d, "threshold": t, "shape_error_mm": s, "position_error_mm": p, "forced_fraction": f}
+            for d, errors in ((None, fixed), (5, five)) for t, (s, p, f) in errors.items()]
+
+
+def test_001_margin_is_the_worst_threshold_at_or_above_0_99():
+    fixed = {0.5: (2.3, 0.2, 0.0), 0.99: (2.3, 0.2, 0.0), 0.999: (2.2, 0.2, 0.0)}
+    five = {0.5: (9.0, 9.0, 0.0), 0.99: (2.3, 0.1, 0.0), 0.999: (2.2 * 1.02, 0.15, 0.0)}   # 0.5 is not judged
+    assert claim_margin("001", _001_rows(fixed, five)) == pytest.approx(0.03)       # 0.05 - 0.02 shape at 0.999
+    five[0.99] = (float("nan"), float("nan"), 0.6)                                  # runs that never decide
+    assert claim_margin("001", _001_rows(fixed, five)) == pytest.approx(-0.6)
