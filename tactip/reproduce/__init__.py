@@ -2,11 +2,13 @@
 
 `reproduce` runs one paper's experiment and returns a `Report`: JSON-ready rows (one per
 condition of the paper's figure) and comparisons of measured figures with the paper's numbers.
-Each simulated world was tuned only against the paper's first figure (001: fixed-position
-errors, Fig. 4 black; 002: Fig. 9, the skin's sag over a gap; 003: Figs 5-6, passive; 004: passive
-perception); every other figure is a prediction. ``quick=True`` runs the same experiment with fewer runs and conditions (tests).
+Each simulated world was tuned only against one of the paper's figures (000: Table II; 001:
+fixed-position errors, Fig. 4 black; 002: Fig. 9, the skin's sag over a gap; 003: Figs 5-6,
+passive; 004: passive and active single decisions); `tactip.reproduce.fits.FITS` lists every tuned
+parameter beside its figure, and the report marks those figures as fits. Every other figure is a
+prediction. ``quick=True`` runs the same experiment with fewer runs and conditions (tests).
 
-- 000 (`tactip.reproduce.p000`): localisation acuity against class count, passive and active (Table II);
+- 000 (`tactip.reproduce.p000`): localisation acuity against class count, passive and active (Tables II, III);
 - 001 (`tactip.reproduce.p001`): rods, joint decisions, 'boredom' deadline with random relocation;
 - 002 (`tactip.reproduce.p002`): the inspection station, active / random / stationary perception (Fig. 9);
 - 003 (`tactip.reproduce.p003`): textures under depth uncertainty, passive / weakly / strongly active;
@@ -52,6 +54,9 @@ def reproduce(paper: str, *, quick: bool = False, seed: int = 0, progress=None, 
     ValueError
         An unknown paper; the message lists the choices.
     """
+    from tactip.reproduce.fits import mark_fits
+
     if paper not in PAPERS:
         raise ValueError(f"unknown paper {paper!r}; choose from {', '.join(PAPERS)}")
-    return importlib.import_module(PAPERS[paper]).run(quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+    report = importlib.import_module(PAPERS[paper]).run(quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+    return mark_fits(report)

@@ -29,17 +29,21 @@ class Comparison:
     paper : float or None
         The paper's number (None where the paper gives a trend, not a number).
     unit : str
+    fit : bool
+        The world was tuned against this figure (`tactip.reproduce.fits`): it reproduces it by
+        construction, so it is not a prediction.
     """
 
     figure: str
     measured: float
     paper: float | None
     unit: str = ""
+    fit: bool = False
 
     def line(self) -> str:
-        """One printed line."""
+        """One printed line (a fitted figure ends with '(fit)')."""
         paper = "trend" if self.paper is None else f"{self.paper:g}"
-        return f"  {self.figure:<58} {self.measured:8.3g}  paper {paper:>6} {self.unit}".rstrip()
+        return f"  {self.figure:<58} {self.measured:8.3g}  paper {paper:>6} {self.unit}{' (fit)' if self.fit else ''}".rstrip()
 
 
 @dataclass(frozen=True)
