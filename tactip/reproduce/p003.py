@@ -9,6 +9,12 @@ the rows), weakly active 0.999, strongly active 0.05. Runs start at random depth
 
 Tuned: the texture world (`Textures` docstring) against Figs 5-6 (passive perception at one depth
 and over depth). Prediction: Fig. 7, active perception.
+
+Weakly active perception is barely better than passive here (1-3 %, quick seeds 0-2), by the paper's
+own mechanism: it moves only once the depth marginal passes 0.999, and with 15 depth classes of
+0.2 mm that rarely happens before the texture marginal passes 0.5 (2000 runs, seeds 0-2: 1.8-3.2 % of
+the weakly active runs move before deciding, against 89-90 % of the strongly active ones). The paper
+gives no number for weakly active perception (Fig. 7B), only that it lies between the two.
 """
 
 from __future__ import annotations
