@@ -11,11 +11,13 @@ Rows: one per sensor, class count and policy, ``sensor, classes, class_width_mm,
 mean_taps, threshold, fixation_mm`` (``fixation_mm`` is None for passive perception).
 
 The simulator's read noise was calibrated against Table II (`tactip.taxel.sim`); Table III is a
-prediction. The simulated skin has no sweet spot: its taxels (a 5 mm lattice, receptive fields 16 mm
-across) all see a point contact through smooth overlapping fields, so its passive acuity is about the
-same everywhere, and fixating at 37 mm gains little over staying put (the paper's skin "usually has
-a strong contact on just one taxel" and reads well only at a few places such as 35-38 mm, a property
-of the real sensor's data that the simulator does not model).
+prediction. The simulated skin has no sweet spot at 37 mm: its taxels (a 5 mm lattice, receptive
+fields 16 mm across) all see a point contact through smooth overlapping fields, so its passive acuity
+varies little and at random from place to place (per-taxel gains differ from sensor to sensor), and
+fixating at 37 mm gains 0-10 % on most simulated sensors and loses on some (seed 8: the 36-38 mm class
+is its worst). The paper's skin "usually has a strong contact on just one taxel" and reads well only
+at a few places such as 35-38 mm, a property of the real sensor's data that the simulator does not
+model.
 """
 
 from __future__ import annotations
@@ -83,7 +85,8 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Re
              "errors at the best threshold within the tap budget (fingertip 2 taps, skin 4).",
              "fixation: fingertip 15 mm, skin 37 mm (the paper's; 37 mm is the real skin's sweet spot).",
              "tuned: the simulator's read noise against Table II (a fit); Table III is a prediction.",
-             "the simulated skin reads about equally well everywhere (no sweet spot), so active perception "
-             "gains little over passive there; the paper's gain comes from its real skin's uneven acuity."]
+             "the simulated skin has no sweet spot at 37 mm (its acuity varies little, and at random between "
+             "simulated sensors), so active perception gains little over passive there, and loses on some "
+             "sensors; the paper's gain comes from its real skin's uneven acuity."]
     return Report("000", "tactile hyperacuity: localisation error against class count (Tables II and III)", rows,
                   comparisons, notes)
