@@ -49,12 +49,13 @@ def _table(rows, sensor: str):
             ax.plot([r["classes"] for r in mine], [r["error_mm"] for r in mine], "o-", color=COLOURS[policy],
                     label=f"{policy} (simulated)")
         ref = paper[policy]
-        ax.plot(list(ref), list(ref.values()), "s", mfc="none", mec=COLOURS[policy], ms=7,
-                label=f"{policy} (paper)", **{k: v for k, v in PAPER_STYLE.items() if k != "color"})
+        ax.plot(list(ref), list(ref.values()), "s", mfc="none", ms=7, label=f"{policy} (paper)",
+                **{**PAPER_STYLE, "color": COLOURS[policy]})
     classes = sorted(set(paper["active"]) | {r["classes"] for r in rows if r["sensor"] == sensor})
     ax.plot(classes, [paper["range_mm"] / c for c in classes], color="0.6", lw=1, label="class width")
     ax.set_xscale("log")
     ax.set_yscale("symlog", linthresh=0.01)
+    ax.set_ylim(bottom=0)
     ax.set_xlabel("location classes")
     ax.set_ylabel("mean location error (mm)")
     legend(ax)

@@ -114,9 +114,11 @@ def test_002_fig9_is_marked_a_fit_and_figs_10_11_need_their_runs(tmp_path):
     x, y = line(figures["fig10"], "within 12 mean taps (simulated)")
     np.testing.assert_allclose(x, [0.25, 2.5, 4.75])
     np.testing.assert_allclose(y, [1 / 12.25, 1 / 14.5, 1 / 16.75])
-    x, y = line(figures["fig11"], "stationary (simulated)")
+    x, y = line(figures["fig11"], "stationary (simulated)", 0)
     np.testing.assert_allclose(x, [0.0, 0.5, 2.0])
     np.testing.assert_allclose(y, [1.0, 1.5, 3.0])
+    x, y = line(figures["fig11"], "stationary (simulated)", 1)            # B: the errors themselves
+    np.testing.assert_allclose(y, [0.1, 0.15, 0.3])
     for path in save_figures(figures, tmp_path, paper="002"):
         assert_png(path)
 
@@ -169,3 +171,79 @@ def test_004_curves_per_method_and_the_learning_curve():
 def test_unknown_rows_keys_fail_loudly():
     with pytest.raises(KeyError):
         make_figures(Report("001", "t", [{"deadline": None, "threshold": 0.5}]))
+
+
+# -- tactip reproduce: where the figures go ---------------------------------------------------------------
+
+
+@pytest.fixture
+def fake_001(monkeypatch):
+    """`reproduce` returns a small 001 report at once (the CLI's figure handling is what is tested here), and
+    the figures the CLI draws are kept to compare with its JSON rows."""
+    import tactip.reproduce
+    import tactip.reproduce.figures
+
+    report = Report("001", "t", _rows_001(), [Comparison("Fig. 4 fixed, theta 0.9: shape error", 2.0, 2.2, "mm")])
+    monkeypatch.setattr(tactip.reproduce, "reproduce", lambda paper, **options: report)
+    drawn = {}
+
+    def spy(*args, **options):
+        drawn.update(make(*args, **options))
+        return drawn
+
+    make = tactip.reproduce.figures.make_figures
+    monkeypatch.setattr(tactip.reproduce.figures, "make_figures", spy)
+    return drawn
+
+
+def test_cli_figures_go_beside_the_json_and_plot_its_rows(tmp_path, capsys, fake_001):
+    import json
+
+    from tactip.cli import main
+
+    out = tmp_path / "results" / "001.json"
+    out.parent.mkdir()
+    assert main(["reproduce", "001", "--quick", "--quiet", "--json", str(out)]) == 0
+    assert f"wrote 4 figures to {out.parent}" in capsys.readouterr().out
+    assert sorted(p.name for p in out.parent.glob("*.png")) == ["001_fig4.png", "001_fig5.png", "001_fig6.png",
+                                                               "001_fig7b.png"]
+    for path in out.parent.glob("*.png"):
+        assert_png(path)
+    rows = [r for r in json.loads(out.read_text()) if r["deadline"] == 5]
+    rows.sort(key=lambda r: r["threshold"])
+    x, y = line(fake_001["fig5"], "deadline 5 taps", 1)
+    np.testing.assert_allclose(x, [r["reaction_taps"] for r in rows])
+    np.testing.assert_allclose(y, [r["position_error_mm"] for r in rows])
+
+
+def test_cli_figures_folder_default_and_none(tmp_path, capsys, monkeypatch, fake_001):
+    from tactip.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["reproduce", "001", "--quick", "--quiet", "--json", "-"]) == 0     # JSON on stdout
+    assert (tmp_path / "out" / "reproduce" / "001" / "001_fig4.png").is_file()
+    assert main(["reproduce", "001", "--quick", "--quiet", "--figures", "figs"]) == 0
+    assert (tmp_path / "figs" / "001_fig7b.png").is_file()
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exit_:
+        main(["reproduce", "001", "--no-figures", "--figures", "x"])
+    assert exit_.value.code == 2 and "not allowed with" in capsys.readouterr().err
+    empty = tmp_path / "none"
+    empty.mkdir()
+    assert main(["reproduce", "001", "--quick", "--quiet", "--no-figures", "--json", str(empty / "a.json")]) == 0
+    assert not list(empty.glob("*.png")) and "figures to" not in capsys.readouterr().out
+
+
+def test_cli_refuses_a_figures_folder_that_is_a_file_before_the_work(tmp_path, capsys, monkeypatch):
+    import tactip.reproduce
+    from tactip.cli import main
+
+    monkeypatch.setattr(tactip.reproduce, "reproduce", lambda *a, **k: pytest.fail("ran the work"))
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(SystemExit) as exit_:
+        main(["reproduce", "001", "--figures", str(blocker)])
+    assert exit_.value.code == 2 and "is a file, not a folder" in capsys.readouterr().err
+    assert main(["reproduce", "001", "--figures", str(blocker / "sub")]) == 1
+    assert "is a file" in capsys.readouterr().err
+
