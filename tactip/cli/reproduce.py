@@ -12,7 +12,7 @@ the methods and thresholds; 000: the class counts) run on that Dask cluster: the
 for seed, as a run here.
 
 Each reproduced figure is saved as a PNG, the paper's numbers drawn on the same axes, in --figures DIR
-(default: beside the --json FILE, else out/reproduce/PAPER/), named PAPER_FIGURE.png (e.g.
+(default: beside the --json FILE, else out/reproduce/PAPER/, also when the JSON goes to a stream), named PAPER_FIGURE.png (e.g.
 002_fig9.png); --no-figures skips them. A figure a world was tuned on says "FIT" in its title. Four
 figures need runs of their own, made with --figure-runs: paper 002 Figs 10 (fixation depth) and 11
 (lateral noise: new test collections, the slowest, about a minute quick) and paper 004 Fig. 7 over
@@ -71,9 +71,19 @@ def _figures_folder(args: argparse.Namespace) -> Path | None:
         return None
     if args.figures is not None:
         return args.figures
-    if args.json is not None and str(args.json) != "-" and Path(args.json).parent.is_dir():
+    if args.json is not None and not _streamed(args.json) and Path(args.json).parent.is_dir():
         return Path(args.json).parent
     return Path("out") / "reproduce" / args.paper
+
+
+def _streamed(path) -> bool:
+    """Whether the JSON goes to a stream (``-``, ``/dev/null``, a FIFO ...): no folder to put figures beside."""
+    from _shared import stream_target
+
+    try:
+        return str(path) == "-" or stream_target(path)
+    except OSError:                     # a block device or a socket: the JSON writer reports it
+        return True
 
 
 def _check_figures_folder(folder: Path | None) -> None:

@@ -222,6 +222,9 @@ def test_cli_figures_folder_default_and_none(tmp_path, capsys, monkeypatch, fake
     monkeypatch.chdir(tmp_path)
     assert main(["reproduce", "001", "--quick", "--quiet", "--json", "-"]) == 0     # JSON on stdout
     assert (tmp_path / "out" / "reproduce" / "001" / "001_fig4.png").is_file()
+    (tmp_path / "out" / "reproduce" / "001" / "001_fig4.png").unlink()
+    assert main(["reproduce", "001", "--quick", "--quiet", "--json", "/dev/null"]) == 0   # never beside a device
+    assert (tmp_path / "out" / "reproduce" / "001" / "001_fig4.png").is_file()
     assert main(["reproduce", "001", "--quick", "--quiet", "--figures", "figs"]) == 0
     assert (tmp_path / "figs" / "001_fig7b.png").is_file()
     capsys.readouterr()
