@@ -131,6 +131,8 @@ def run(args: argparse.Namespace) -> int:
             report, extra = reproduce(args.paper, quick=args.quick, seed=args.seed, progress=progress,
                                       map_fn=map_fn), {}
     print(report.text())
+    if args.figure_runs and not extra:
+        print(f"  note: --figure-runs: every figure of paper {args.paper} comes from its rows; no runs of its own")
     if args.json is not None:
         write_json(args.json, report.json_rows())
         if str(args.json) != "-":

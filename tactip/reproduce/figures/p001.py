@@ -23,6 +23,14 @@ def _curves(rows):
     return {d: sorted((r for r in rows if r["deadline"] == d), key=lambda r: r["threshold"]) for d in deadlines}
 
 
+def _threshold_axis(ax, rows) -> None:
+    """Thresholds up to 0.99999 (the paper's range) on a logit axis, where 0.9, 0.99 ... are evenly spaced."""
+    thresholds = [r["threshold"] for r in rows]
+    if thresholds and 0 < min(thresholds) and max(thresholds) < 1 and max(thresholds) > 0.95:
+        ax.set_xscale("logit")
+    ax.set_xlabel("belief threshold")
+
+
 def _style(deadline, k: int) -> dict:
     if deadline is None:
         return dict(color="black", label="fixed (no deadline)")
@@ -36,7 +44,10 @@ def _errors(report, x: str, name: str, title: str):
             ax.plot(values(mine, x), values(mine, error), "o-", ms=3, **_style(deadline, k))
         if x == "threshold":
             paper_lines(ax, report.comparisons, prefix="Fig. 4", contains=what, at_theta=True)
-        ax.set_xlabel("belief threshold" if x == "threshold" else "mean reaction time (taps)")
+        if x == "threshold":
+            _threshold_axis(ax, report.rows)
+        else:
+            ax.set_xlabel("mean reaction time (taps)")
         ax.set_ylabel(f"mean {what} error (mm)")
         ax.set_title(f"({'AB'[what == 'position']}) {what}", fontsize=9)
         legend(ax)
@@ -47,7 +58,7 @@ def _against_threshold(report, key: str, label: str, title: str):
     fig, (ax,) = new_figure(title=title)
     for k, (deadline, mine) in enumerate(_curves(report.rows).items()):
         ax.plot(values(mine, "threshold"), values(mine, key), "o-", ms=3, **_style(deadline, k))
-    ax.set_xlabel("belief threshold")
+    _threshold_axis(ax, report.rows)
     ax.set_ylabel(label)
     legend(ax)
     return fig

@@ -13,13 +13,15 @@ import numpy as np
 
 from tactip.reproduce.figures import legend, new_figure, values
 
-__all__ = ["NAMES", "figures"]
+__all__ = ["NAMES", "PAPER_CHANCE_CLASSES", "figures"]
 
 #: The figures this module may draw (`make_figures` keys).
 NAMES = ("fig5", "fig6b", "fig7")
 
 #: Move threshold -> name, in the order of Fig. 7 (1.5 stands for the paper's ">1", never moves).
 _POLICIES = {1.5: "passive (>1)", 0.999: "weakly active (0.999)", 0.05: "strongly active (0.05)"}
+#: Paper 003 Fig. 5 (text): texture error at chance, reached beyond +-0.6 mm of offset, classes.
+PAPER_CHANCE_CLASSES = 3.2
 _PAPER_FIG7 = {"passive": 1.5, "weakly active": 0.999, "strongly active": 0.05}
 
 
@@ -31,6 +33,7 @@ def _fig5(report):
     ax.plot([o for o, _ in found], [c.measured for _, c in found], "o-", color="tab:red", label="passive (simulated)")
     paper = [(o, c.paper) for o, c in found if c.paper is not None]
     ax.plot([o for o, _ in paper], [p for _, p in paper], "s:", mfc="none", color="0.35", label="paper")
+    ax.axhline(PAPER_CHANCE_CLASSES, color="0.6", lw=1, label=f"chance (paper: {PAPER_CHANCE_CLASSES:g} classes)")
     ax.set_xlabel("test depth offset from training (mm)")
     ax.set_ylabel("mean texture error (classes)")
     legend(ax)
@@ -56,8 +59,8 @@ def _fig6b(report):
 
 
 def _fig7(report):
-    fig, (ax,) = new_figure(title="paper 003 Fig. 7: texture error, passive and active (mean over seeds, "
-                                  "dots: seeds)", width_in=6.0)
+    fig, (ax,) = new_figure(title="paper 003 Fig. 7: mean texture error, passive and active (bars: mean over "
+                                  "seeds, dots: seeds; the paper's panels show the error frequencies)", width_in=6.0)
     moves = [m for m in _POLICIES if any(r["move_threshold"] == m for r in report.rows)]
     per_seed = [values([r for r in report.rows if r["move_threshold"] == m], "texture_error_classes") for m in moves]
     paper = {}

@@ -88,6 +88,13 @@ def test_001_curves_per_deadline_and_the_papers_numbers_at_their_threshold():
     assert line(figures["fig4"], "paper: Fig. 4 fixed, theta 0.9: shape error = 2.2 mm", 0) == ([0.9], [2.2])
     assert line(figures["fig4"], "paper: Fig. 4 deadline 5, theta 0.9: position error = 0.1 mm", 1) == ([0.9], [0.1])
     assert not [ln for ln in figures["fig4"].axes[1].get_lines() if "shape" in ln.get_label()]
+    assert figures["fig4"].axes[0].get_xscale() == "linear"
+    # the paper's high thresholds (0.99 ... 0.99999) are spread on a logit axis, the data unchanged
+    high = [dict(r, threshold=1 - (1 - r["threshold"]) / 1000) for r in rows]
+    figures = make_figures(Report("001", "t", high))
+    assert {ax.get_xscale() for name in ("fig4", "fig6", "fig7b") for ax in figures[name].axes} == {"logit"}
+    mine = sorted((r for r in high if r["deadline"] == 10), key=lambda r: r["threshold"])
+    np.testing.assert_allclose(line(figures["fig6"], "deadline 10 taps")[0], [r["threshold"] for r in mine])
 
 
 def test_002_fig9_is_marked_a_fit_and_figs_10_11_need_their_runs(tmp_path):
