@@ -54,8 +54,12 @@ def _table(rows, sensor: str):
     classes = sorted(set(paper["active"]) | {r["classes"] for r in rows if r["sensor"] == sensor})
     ax.plot(classes, [paper["range_mm"] / c for c in classes], color="0.6", lw=1, label="class width")
     ax.set_xscale("log")
+    ax.set_xticks(classes, [str(c) for c in classes], fontsize=8)
+    ax.minorticks_off()
     ax.set_yscale("symlog", linthresh=0.01)
-    ax.set_ylim(bottom=0)
+    highest = max([r["error_mm"] for r in rows if r["sensor"] == sensor and r["error_mm"] is not None] +
+                  list(paper["passive"].values()))
+    ax.set_ylim(0, 1.6 * highest)
     ax.set_xlabel("location classes")
     ax.set_ylabel("mean location error (mm)")
     legend(ax)
