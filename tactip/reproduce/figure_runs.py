@@ -13,8 +13,9 @@ Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved besi
   the angle-only variant over a sweep of belief thresholds (the paper's beta); the adaptive runs'
   learned shift error at every decision is Fig. 8.
 
-``quick`` keeps each to seconds or a minute (002 Fig. 11 taps new collections: the slowest); every
-run is seeded from ``seed``, as the reproduction it accompanies.
+``quick`` keeps each to seconds or a minute (002 prepares the station again, with the reproduction's
+seed, and Fig. 11 taps new collections: the slowest); every run is seeded from ``seed``, as the
+reproduction it accompanies.
 """
 
 from __future__ import annotations
@@ -185,8 +186,11 @@ def _p002_rows(root: Path, *, quick: bool, seed: int, progress=None, map_fn=None
     from perception import VirtualEnvironment, load_dataset, load_model
     from tactip.reproduce.p002 import _station_table
     from tactip.station.config import parse_station_config
+    from tactip.station.procedures import prepare_model
 
     config = parse_station_config(_station_table(root, quick=quick, seed=seed), base_dir=root)
+    if not config.perception.model.exists():
+        prepare_model(config, progress=progress is not None, log=log)
     model = load_model(config.perception.model)
     test = load_dataset(root / "datasets" / "test.h5")
     runs = 300 if quick else 2000
@@ -214,15 +218,15 @@ def run_with_figure_runs(paper: str, *, quick: bool = False, seed: int = 0, prog
     """
     from tactip.reproduce import reproduce
 
+    report = reproduce(paper, quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+    extra = {}
     if paper == "002":
-        from tactip.reproduce import p002
-
-        with tempfile.TemporaryDirectory(prefix="tactip-002-") as folder:
-            report = p002.run(quick=quick, seed=seed, progress=progress, map_fn=map_fn, data_dir=Path(folder))
+        # the station again, as `p002.run` prepares it (the same seed: the same taps and model), kept here
+        # for the figure runs; the reproduction itself goes through `reproduce`, like every other paper
+        with tempfile.TemporaryDirectory(prefix="tactip-002-figures-") as folder:
             extra = _p002_rows(Path(folder), quick=quick, seed=seed, progress=progress, map_fn=map_fn)
-    else:
-        report = reproduce(paper, quick=quick, seed=seed, progress=progress, map_fn=map_fn)
-        extra = _p004_rows(quick=quick, seed=seed, progress=progress, map_fn=map_fn) if paper == "004" else {}
+    elif paper == "004":
+        extra = _p004_rows(quick=quick, seed=seed, progress=progress, map_fn=map_fn)
     return report, {name: _json_ready(rows) for name, rows in extra.items()}
 
 

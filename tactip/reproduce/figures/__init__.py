@@ -54,7 +54,31 @@ def make_figures(report, extra: dict | None = None) -> dict:
         Figure name (``"fig9"``, ``"table2"`` ...) -> the figure, in the paper's order.
     """
     module = importlib.import_module(f"tactip.reproduce.figures.p{report.paper}")
-    return module.figures(report, extra or {})
+    figures = module.figures(report, extra or {})
+    mark_fits(figures, report.comparisons)
+    return figures
+
+
+def figure_label(name: str) -> str:
+    """The paper's name of figure ``name``: ``"fig7b"`` -> ``"Fig. 7B"``, ``"table3"`` -> ``"Table III"``."""
+    import re
+
+    if name.startswith("table"):
+        return "Table " + {"1": "I", "2": "II", "3": "III", "4": "IV"}[name[5:]]
+    number = re.match(r"fig(\d+)([a-z]?)", name)
+    return f"Fig. {number.group(1)}{number.group(2).upper()}"
+
+
+def mark_fits(figures: dict, comparisons) -> None:
+    """Say "FIT" in the title of every figure a comparison marks as tuned on (``Comparison.fit``): the world
+    reproduces it by construction, so it is not a prediction."""
+    for name, fig in figures.items():
+        label = figure_label(name)
+        fitted = [c for c in comparisons if getattr(c, "fit", False) and
+                  (c.figure == label or c.figure.startswith((label + " ", label + ":")))]
+        title = fig._suptitle.get_text() if fig._suptitle is not None else ""
+        if fitted and "FIT" not in title:
+            fig.suptitle(title + "\n(a FIT: the simulated world was tuned on this figure)", fontsize=10)
 
 
 def figure_names(paper: str) -> tuple[str, ...]:

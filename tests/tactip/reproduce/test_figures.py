@@ -257,3 +257,25 @@ def test_cli_refuses_a_figures_folder_that_is_a_file_before_the_work(tmp_path, c
     assert main(["reproduce", "001", "--figures", str(blocker / "sub")]) == 1
     assert "is a file" in capsys.readouterr().err
 
+
+
+def test_a_figure_the_world_was_tuned_on_says_fit_in_its_title():
+    from types import SimpleNamespace
+
+    from tactip.reproduce.figures import figure_label
+
+    assert [figure_label(n) for n in ("fig7b", "fig10", "table3", "fig7_sweep")] == \
+        ["Fig. 7B", "Fig. 10", "Table III", "Fig. 7"]
+    wide = [{"classes": 30, "class_width_mm": 1.0, "passive_error_mm": 4.0, "active_error_mm": 0.01,
+             "active_taps": 2.0, "acuity_mm": 1.0}]
+    tuned = SimpleNamespace(figure="Table II 300 classes: active error", measured=0.1, paper=0.12, unit="mm", fit=True)
+    free = SimpleNamespace(figure="Table III 500 classes: active error", measured=0.2, paper=0.24, unit="mm",
+                           fit=False)
+    skin = [{"sensor": "skin", "classes": 50, "policy": "active", "error_mm": 0.1, "mean_taps": 4.0}]
+    figures = make_figures(Report("000", "t", wide + skin, [tuned, free]))
+    assert "FIT" in figures["table2"]._suptitle.get_text()
+    assert "FIT" not in figures["table3"]._suptitle.get_text()
+    rows = _rows_001()
+    fig4 = SimpleNamespace(figure="Fig. 4 fixed, theta 0.9: shape error", measured=2.0, paper=2.2, unit="mm", fit=True)
+    figures = make_figures(Report("001", "t", rows, [fig4]))
+    assert ["FIT" in f._suptitle.get_text() for f in figures.values()] == [True, False, False, False]
