@@ -5,8 +5,8 @@ the JSON rows) and, where a figure needs its own small experiment (002 Figs 10-1
 sweep and 8; `tactip.reproduce.figure_runs`), from that experiment's rows. The paper's values are
 drawn on the same axes (dotted, grey or hollow markers), from the numbers the reproduction holds
 for comparison (`Report.comparisons`) or, for whole tables, from the paper's text (000 Tables II
-and III). A figure a world was tuned against says "fit" in its title. `save_figures` writes them
-(Agg backend, no display), each atomically.
+and III). A figure a world was tuned against says "FIT" in its title (002 Fig. 9, and any figure a
+comparison marks with ``fit``). `save_figures` writes them (Agg backend, no display), each atomically.
 
 One module per paper draws its figures (``tactip.reproduce.figures.p000`` ... ``p004``); every
 function returns a `matplotlib.figure.Figure` whose lines carry the plotted rows, so that a test can
@@ -25,7 +25,8 @@ import importlib
 import math
 import pathlib
 
-__all__ = ["make_figures", "save_figures", "figure_names", "figure_path", "new_figure", "paper_lines", "values"]
+__all__ = ["make_figures", "save_figures", "figure_names", "figure_path", "figure_label", "mark_fits", "new_figure",
+           "paper_lines", "values", "legend"]
 
 #: Dots per inch of the saved PNGs (a 10 x 4 in figure is 1000 x 400 px).
 DPI = 100
@@ -45,7 +46,7 @@ def make_figures(report, extra: dict | None = None) -> dict:
     report : tactip.reproduce.Report
         A paper's reproduction (its ``paper``, ``rows`` and ``comparisons`` are drawn).
     extra : dict of str -> list of dict, optional
-        Rows of the small experiments only figures need (`tactip.reproduce.figure_runs.figure_rows`),
+        Rows of the small experiments only figures need (`tactip.reproduce.figure_runs.run_with_figure_runs`),
         by figure name; the figures they feed are drawn only when given.
 
     Returns
