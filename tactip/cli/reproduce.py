@@ -11,14 +11,15 @@ With --scheduler tcp://HOST:PORT the conditions (003: the simulator seeds; 001: 
 the methods and thresholds; 000: the class counts) run on that Dask cluster: the same figures, seed
 for seed, as a run here.
 
-Each reproduced figure is saved as a PNG, the paper's numbers drawn on the same axes, in --figures DIR
-(default: beside the --json FILE, else out/reproduce/PAPER/, also when the JSON goes to a stream), named PAPER_FIGURE.png (e.g.
-002_fig9.png); --no-figures skips them. A figure a world was tuned on says "FIT" in its title. Four
-figures need runs of their own, made with --figure-runs: paper 002 Figs 10 (fixation depth) and 11
-(lateral noise: new test collections, the slowest, about a minute quick) and paper 004 Fig. 7 over
-a threshold sweep and Fig. 8 (the learned shift); their rows are saved as PAPER_figure_runs.json
-beside the PNGs. Figures and JSON reports are rewritten by a new run (a file tactip wrote otherwise,
-such as a model, is never replaced without --overwrite).
+Each reproduced figure is saved as a PNG, the paper's numbers drawn on the same axes, in
+--figures DIR (default: beside the --json FILE; out/reproduce/PAPER/ without one or when the JSON
+goes to a stream), named PAPER_FIGURE.png (e.g. 002_fig9.png); --no-figures skips them. A figure a
+world was tuned on says "FIT" in its title. Four figures need runs of their own, made with
+--figure-runs: paper 002 Figs 10 (fixation depth) and 11 (lateral noise: the station is prepared
+again and a noisy test collection tapped per sigma, a few minutes even with --quick) and paper 004
+Fig. 7 over a threshold sweep and Fig. 8 (the learned shift, about a minute with --quick); their rows
+are saved as PAPER_figure_runs.json beside the PNGs. Figures and JSON reports are rewritten by a new
+run (a file tactip wrote otherwise, such as a model, is never replaced without --overwrite).
 
 Examples:
   tactip reproduce 001 --json results/001.json           (figures in results/: 001_fig4.png ...)
@@ -71,7 +72,7 @@ def _figures_folder(args: argparse.Namespace) -> Path | None:
         return None
     if args.figures is not None:
         return args.figures
-    if args.json is not None and not _streamed(args.json) and Path(args.json).parent.is_dir():
+    if args.json is not None and not _streamed(args.json):
         return Path(args.json).parent
     return Path("out") / "reproduce" / args.paper
 

@@ -208,8 +208,7 @@ def test_cli_figures_go_beside_the_json_and_plot_its_rows(tmp_path, capsys, fake
 
     from tactip.cli import main
 
-    out = tmp_path / "results" / "001.json"
-    out.parent.mkdir()
+    out = tmp_path / "results" / "001.json"                              # a folder the writers create
     assert main(["reproduce", "001", "--quick", "--quiet", "--json", str(out)]) == 0
     assert f"wrote 4 figures to {out.parent}" in capsys.readouterr().out
     assert sorted(p.name for p in out.parent.glob("*.png")) == ["001_fig4.png", "001_fig5.png", "001_fig6.png",
