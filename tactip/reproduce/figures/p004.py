@@ -33,7 +33,7 @@ def _methods(rows):
 
 
 def _fig7(rows, comparisons, title: str):
-    fig, axes = new_figure(3, title=title, width_in=4.6)
+    fig, axes = new_figure(3, title=title, width_in=4.6, height_in=4.4)
     for ax, (key, label, prefix) in zip(axes, _PANELS):
         for method in _methods(rows):
             mine = sorted((r for r in rows if r["method"] == method), key=lambda r: r["threshold"])
@@ -43,7 +43,11 @@ def _fig7(rows, comparisons, title: str):
         ax.set_xlabel("belief threshold")
         ax.set_ylabel(label)
         ax.set_title(prefix, fontsize=9)
-        legend(ax)
+        papers = [(h, t) for h, t in zip(*ax.get_legend_handles_labels()) if t.startswith("paper:")]
+        if papers:                                              # the paper's numbers: on their own panel
+            ax.legend(*zip(*papers), fontsize=6)
+    methods = [(h, t) for h, t in zip(*axes[0].get_legend_handles_labels()) if not t.startswith("paper:")]
+    fig.legend(*zip(*methods), loc="outside lower center", ncol=len(methods), fontsize=7)
     return fig
 
 
