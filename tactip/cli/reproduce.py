@@ -117,8 +117,9 @@ def run(args: argparse.Namespace) -> int:
     if folder is not None:                  # before the work, as for every output of the CLI
         _refuse_replacing_figures(folder, args.paper, overwrite=args.overwrite)
 
-    progress = functools.partial(progress_bar, desc=f"paper {args.paper}", unit="condition", disable=args.quiet,
-                                 leave=False)
+    # --quiet: no progress at all (None also keeps the station's collection bars of 002 and its figure runs off)
+    progress = None if args.quiet else functools.partial(progress_bar, desc=f"paper {args.paper}",
+                                                          unit="condition", leave=False)
     with contextlib.ExitStack() as stack:
         map_fn = None
         if args.scheduler is not None:
