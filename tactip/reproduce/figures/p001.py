@@ -28,6 +28,9 @@ def _threshold_axis(ax, rows) -> None:
     thresholds = [r["threshold"] for r in rows]
     if thresholds and 0 < min(thresholds) and max(thresholds) < 1 and max(thresholds) > 0.95:
         ax.set_xscale("logit")
+        ticks = sorted(set(thresholds))
+        ax.set_xticks(ticks, [f"{t:g}" for t in ticks], fontsize=7, rotation=45)
+        ax.minorticks_off()
     ax.set_xlabel("belief threshold")
 
 
