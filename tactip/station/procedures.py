@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -83,7 +83,7 @@ def protocol_description(config: StationConfig) -> dict:
 
 
 def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = True, workers: int | None = None,
-                    log: Callable[[str], None] = print) -> dict[str, Path]:
+                    log: Callable[[str], None] = print, sets: Sequence[str] = ("train", "test")) -> dict[str, Path]:
     """Collect ``out_dir/train.h5`` and ``out_dir/test.h5`` by the configured protocol (resumable).
 
     Parameters
@@ -95,6 +95,9 @@ def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = Tr
     workers : int, optional
         Processes rendering taps on the simulated station (default: the CPU count, at most 4);
         a real station always taps one at a time.
+    sets : sequence of str
+        The collections to take (e.g. only ``("test",)``: a test set with lateral placement noise for
+        paper 002 Fig. 11, beside a model trained without it).
 
     Returns
     -------
@@ -104,12 +107,12 @@ def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = Tr
 
     from tactip._output import refuse_overwriting_inputs
 
-    refuse_overwriting_inputs([Path(out_dir) / "train.h5", Path(out_dir) / "test.h5"],
+    refuse_overwriting_inputs([Path(out_dir) / f"{name}.h5" for name in sets],
                               [config.path, calibration_path(config), config.perception.model, config.results])
     calibration = load_station_calibration(config)
     p = config.protocol
     plan = collection_plan(config.gaps, p.depths, repeats=p.repeats, lateral_jitter_mm=p.lateral_jitter_mm,
-                           seed=p.seed)
+                           seed=p.seed, sets=tuple(sets))
     total = sum(len(v) for v in plan.values())
     log(f"collecting {total} taps: {len(config.gaps)} gaps x {len(p.depths)} depths "
         f"({p.depth_min:g}-{p.depth_max:g} mm at {p.depth_step:g} mm) x {p.repeats} repeat(s) x {len(plan)} sets "

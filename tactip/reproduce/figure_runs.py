@@ -1,0 +1,239 @@
+"""The small experiments that only figures need: paper 002 Figs 10-11 and paper 004 Figs 7 (sweep) and 8.
+
+Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved beside the PNGs:
+
+- 002 Fig. 10 (`fixation_rows`): active perception at every fixation depth of the station's model,
+  the best width error within 2, 4, 8 and 12 mean taps (`perception.fixation_sweep`), on the same test
+  collection as Fig. 9;
+- 002 Fig. 11 (`lateral_rows`): a test collection per lateral noise sigma (offsets uniform over
+  [-sigma, sigma] mm, ``[protocol] lateral_jitter_mm``) tapped on the same simulated station, the model
+  trained without noise; each policy's width error at 10 mean taps (as Fig. 9) over the error at
+  sigma 0;
+- 004 Figs 7 and 8 (`beta_sweep_rows`): contour following by active, adaptive (eq. 7 as printed) and
+  the angle-only variant over a sweep of belief thresholds (the paper's beta); the adaptive runs'
+  learned shift error at every decision is Fig. 8.
+
+``quick`` keeps each to seconds or a minute (002 prepares the station again, with the reproduction's
+seed, and Fig. 11 taps new collections: the slowest); every run is seeded from ``seed``, as the
+reproduction it accompanies.
+"""
+
+from __future__ import annotations
+
+import functools
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from _shared import map_pieces
+
+__all__ = ["TAP_BUDGETS", "beta_sweep_rows", "fixation_rows", "lateral_rows", "run_with_figure_runs"]
+
+#: Mean-tap budgets of 002 Fig. 10 (the paper's grey shading of decision times; its optimum: 12 taps).
+TAP_BUDGETS = (2.0, 4.0, 8.0, 12.0)
+#: Lateral noise sigmas of 002 Fig. 11, mm (quick: two of them).
+SIGMAS_MM = (0.25, 0.5, 1.0, 2.0)
+QUICK_SIGMAS_MM = (0.5, 2.0)
+#: Methods and belief thresholds of the 004 sweep (the paper: 0 to 1 in steps of 0.05).
+SWEEP_METHODS = ("active", "adaptive", "adaptive_angle_only")
+SWEEP_THRESHOLDS = tuple(np.round(np.arange(0.1, 0.95, 0.1), 2))
+QUICK_SWEEP_THRESHOLDS = (0.1, 0.3, 0.5, 0.7, 0.9)
+#: Thresholds whose learning curves make 004 Fig. 8.
+FIG8_THRESHOLDS = (0.5, 0.9)
+
+
+def fixation_rows(environment, *, runs: int, seed: int, progress=None, map_fn=None) -> list[dict]:
+    """002 Fig. 10: ``{fixation_mm, tap_budget, width_error_mm, mean_taps}`` per fixation and budget.
+
+    Parameters
+    ----------
+    environment : perception.VirtualEnvironment
+        The station's model and test collection.
+    runs : int
+        Monte Carlo runs per threshold and fixation.
+    seed : int
+    progress, map_fn : callable, optional
+        As `perception.fixation_sweep`.
+    """
+    from perception import fixation_sweep
+    from tactip.reproduce.p002 import THRESHOLDS
+
+    sweep = fixation_sweep(environment, thresholds=THRESHOLDS, runs=runs, seed=seed, max_taps=20, progress=progress,
+                           map_fn=map_fn)
+    rows = []
+    for fixation, result in zip(sweep.fixations, sweep.results):
+        for budget in TAP_BUDGETS:
+            k = result.best_within(budget)
+            rows.append({"fixation_mm": float(fixation), "tap_budget": budget,
+                         "width_error_mm": float(result.mean_identity_error[k]), "mean_taps": float(result.mean_taps[k])})
+    return rows
+
+
+def _policy_error(environment, fixation: int, runs: int, seed: int) -> dict:
+    """Each policy's width error at the compared mean taps (002 Fig. 9's measure) on one test collection."""
+    from perception.choices import POLICIES
+    from tactip.reproduce.p002 import COMPARED_AT_TAPS, _at_taps, _policy_runs
+
+    return {name: _at_taps(_policy_runs(name, environment, fixation, runs, seed), COMPARED_AT_TAPS)
+            for name in POLICIES}
+
+
+def lateral_rows(config, model, test, *, sigmas_mm, runs: int, seed: int, progress: bool = False,
+                 log=lambda line: None) -> list[dict]:
+    """002 Fig. 11: ``{policy, sigma_mm, width_error_mm, ratio}``, sigma 0 first (ratio 1).
+
+    Parameters
+    ----------
+    config : tactip.station.config.StationConfig
+        The simulated station the model was prepared on; a test collection per sigma is tapped on it,
+        under ``data_dir/lateral-SIGMA`` (reused when there).
+    model : perception model
+        Trained without lateral noise.
+    test : perception.Dataset
+        The noise-free test collection (sigma 0).
+    sigmas_mm : sequence of float
+    runs, seed : int
+    progress : bool
+        Progress bars of the collections.
+    log : callable
+        Where the collections' lines go.
+    """
+    import dataclasses
+
+    from perception import VirtualEnvironment, load_dataset
+    from tactip.station.procedures import collect_station
+
+    fixation = model.fixation_class()
+    rows = []
+    base = None
+    for sigma in (0.0, *sigmas_mm):
+        if sigma == 0:
+            collection = test
+        else:
+            noisy = dataclasses.replace(config, protocol=dataclasses.replace(config.protocol,
+                                                                             lateral_jitter_mm=float(sigma)))
+            paths = collect_station(noisy, config.data_dir / f"lateral-{sigma:g}", progress=progress, log=log,
+                                    sets=("test",))
+            collection = load_dataset(paths["test"])
+        errors = _policy_error(VirtualEnvironment(model, collection), fixation, runs, seed)
+        base = base or errors
+        rows += [{"policy": name, "sigma_mm": float(sigma), "width_error_mm": error,
+                  "ratio": error / base[name] if base[name] > 0 else float("nan")} for name, error in errors.items()]
+    return rows
+
+
+def _sweep_run(condition, *, env, options: dict, seed: int):
+    """One (method, threshold) of the 004 sweep (module level: it travels to a worker)."""
+    from tactip.reproduce.contour import follow_contour
+    from tactip.reproduce.p004 import METHODS
+
+    method, threshold = condition
+    return follow_contour(env, threshold=threshold, seed=seed + 1, **options, **METHODS[method])
+
+
+def beta_sweep_rows(env, *, thresholds, runs: int, decisions: int, max_taps: int, seed: int, progress=None,
+                    map_fn=None) -> tuple[list[dict], list[dict]]:
+    """004 Figs 7 and 8: contour following over a sweep of belief thresholds.
+
+    Parameters
+    ----------
+    env : perception.VirtualEnvironment
+        The edge world of `tactip.reproduce.p004`.
+    thresholds : sequence of float
+    runs, decisions, max_taps : int
+        As `tactip.reproduce.contour.follow_contour`.
+    seed : int
+    progress, map_fn : callable, optional
+        As `_shared.map_pieces`, over the (method, threshold) conditions.
+
+    Returns
+    -------
+    sweep : list of dict
+        ``{method, threshold, angle_error_deg, position_error_mm, taps_per_decision, closed_contour}``.
+    learning : list of dict
+        ``{method, threshold, decision, delta_error_classes}`` of the adaptive methods at the thresholds
+        of `FIG8_THRESHOLDS` in the sweep (NaN as None; decision 0 has no prediction yet).
+    """
+    conditions = [(m, float(t)) for t in thresholds for m in SWEEP_METHODS]
+    options = dict(runs=runs, decisions=decisions, max_taps=max_taps)
+    results = map_pieces(functools.partial(_sweep_run, env=env, options=options, seed=seed), conditions,
+                         map_fn=map_fn, progress=progress)
+    sweep, learning = [], []
+    for (method, threshold), r in zip(conditions, results):
+        sweep.append({"method": method, "threshold": threshold, "angle_error_deg": r.angle_error_deg,
+                      "position_error_mm": r.position_error_mm, "taps_per_decision": r.taps_per_decision,
+                      "closed_contour": r.closed_contour})
+        if method != "active" and any(np.isclose(threshold, FIG8_THRESHOLDS)):
+            learning += [{"method": method, "threshold": threshold, "decision": d,
+                          "delta_error_classes": None if np.isnan(e) else float(e)}
+                         for d, e in enumerate(r.delta_error_by_decision)]
+    return sweep, learning
+
+
+def _p004_rows(*, quick: bool, seed: int, progress=None, map_fn=None) -> dict:
+    from tactip.reproduce.report import environment
+    from tactip.reproduce.stimuli import make_stimulus
+
+    env = environment(make_stimulus("edge"), seed=seed, taps_per_identity=90, n_locations=18)
+    options = dict(runs=12, decisions=40, max_taps=25) if quick else dict(runs=50, decisions=45, max_taps=50)
+    sweep, learning = beta_sweep_rows(env, thresholds=QUICK_SWEEP_THRESHOLDS if quick else SWEEP_THRESHOLDS,
+                                      seed=seed, progress=progress, map_fn=map_fn, **options)
+    return {"fig7_sweep": sweep, "fig8": learning}
+
+
+def _p002_rows(root: Path, *, quick: bool, seed: int, progress=None, map_fn=None, log=lambda line: None) -> dict:
+    from perception import VirtualEnvironment, load_dataset, load_model
+    from tactip.reproduce.p002 import _station_table
+    from tactip.station.config import parse_station_config
+    from tactip.station.procedures import prepare_model
+
+    config = parse_station_config(_station_table(root, quick=quick, seed=seed), base_dir=root)
+    if not config.perception.model.exists():
+        prepare_model(config, progress=progress is not None, log=log)
+    model = load_model(config.perception.model)
+    test = load_dataset(root / "datasets" / "test.h5")
+    runs = 300 if quick else 2000
+    return {"fig10": fixation_rows(VirtualEnvironment(model, test), runs=runs, seed=seed + 1, progress=progress,
+                                   map_fn=map_fn),
+            "fig11": lateral_rows(config, model, test, sigmas_mm=QUICK_SIGMAS_MM if quick else SIGMAS_MM,
+                                  runs=runs, seed=seed + 1, progress=progress is not None, log=log)}
+
+
+def run_with_figure_runs(paper: str, *, quick: bool = False, seed: int = 0, progress=None, map_fn=None):
+    """A paper's reproduction and the runs its figures need beyond it.
+
+    Parameters
+    ----------
+    paper : {"000", "001", "002", "003", "004"}
+    quick, seed, progress, map_fn
+        As `tactip.reproduce.reproduce`.
+
+    Returns
+    -------
+    report : tactip.reproduce.Report
+    extra : dict of str -> list of dict
+        Figure name -> JSON-ready rows (NaN as None; empty for papers whose figures all come from the
+        report's rows).
+    """
+    from tactip.reproduce import reproduce
+
+    report = reproduce(paper, quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+    extra = {}
+    if paper == "002":
+        # the station again, as `p002.run` prepares it (the same seed: the same taps and model), kept here
+        # for the figure runs; the reproduction itself goes through `reproduce`, like every other paper
+        with tempfile.TemporaryDirectory(prefix="tactip-002-figures-") as folder:
+            extra = _p002_rows(Path(folder), quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+    elif paper == "004":
+        extra = _p004_rows(quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+    return report, {name: _json_ready(rows) for name, rows in extra.items()}
+
+
+def _json_ready(rows: list[dict]) -> list[dict]:
+    """NaN as None and numpy scalars as Python numbers (strict JSON)."""
+    def clean(v):
+        if isinstance(v, (float, np.floating)):
+            return None if np.isnan(v) else float(v)
+        return int(v) if isinstance(v, np.integer) else v
+    return [{k: clean(v) for k, v in row.items()} for row in rows]
