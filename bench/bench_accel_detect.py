@@ -27,7 +27,7 @@ from tactip.sim import Contact, SyntheticTacTip
 
 
 def _bench(preset: str, args) -> None:
-    sensor = SyntheticTacTip.from_preset(preset, seed=1)
+    sensor = SyntheticTacTip.from_preset(preset, seed=args.seed)
     frames = []
     for k in range(args.frames):
         image = sensor.render(Contact(5.0 * k / max(args.frames - 1, 1), 2.0)).image
@@ -71,6 +71,7 @@ def main() -> None:
     parser.add_argument("--together", type=int, default=16)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--device", default="auto")
+    parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args()
     for preset in args.preset or ["tactip-331", "dense-1000"]:
         _bench(preset, args)

@@ -233,6 +233,16 @@ def detect_pins_batched(frames, *, params: DetectionParams | None = None, disc: 
     -------
     pins : list of (N, 2) ndarray of float64
         Each frame's pins (x, y), px, sorted by y then x: what `pins.detect_pins` gives.
+
+    Examples
+    --------
+    >>> from pins import detect_pins
+    >>> from tactip.sim import Contact, SyntheticTacTip
+    >>> sensor = SyntheticTacTip(pins=331, seed=0)
+    >>> frames = [sensor.render(Contact(depth_mm, 2.0)).image for depth_mm in (0.0, 4.0)]
+    >>> found = detect_pins_batched(frames, device="cpu", together=2)
+    >>> all(np.array_equal(pins, detect_pins(frame)) for pins, frame in zip(found, frames))
+    True
     """
     from .disc import find_sensor_disc
 

@@ -62,3 +62,21 @@ def test_no_gpu_means_no_torch_and_a_bad_batch_size_is_refused(shape_images, tmp
     with pytest.raises(LabelsError, match="together"):
         build_dataset(shape_images.labels, tmp_path / "bad", rest=shape_images.rest, sensor="tactip-127",
                       device="torch-cpu", together=0)
+
+
+def test_cli_device_cuda_without_a_gpu_is_one_clear_error(shape_images, tmp_path, capsys):
+    import torch
+
+    from tactip.cli import main
+
+    if torch.cuda.is_available():
+        pytest.skip("this machine has a GPU")
+    code = main(["dataset", "build", str(shape_images.labels), "--out", str(tmp_path / "out"), "--rest",
+                 str(shape_images.rest), "--device", "cuda", "--quiet"])
+    error = capsys.readouterr().err
+    assert code == 1 and error.startswith("tactip dataset: error: --device cuda:") and "no GPU" in error
+    assert error.count("\n") == 1 and not (tmp_path / "out").exists()
+    # --together is checked by the parser, naming the flag.
+    with pytest.raises(SystemExit):
+        main(["dataset", "build", str(shape_images.labels), "--out", str(tmp_path / "out"), "--together", "0"])
+    assert "--together" in capsys.readouterr().err
