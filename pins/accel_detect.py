@@ -3,9 +3,11 @@
 `pins.detect` finds the pins of one frame in two stages: image operations over the whole disc (the
 grey image zeroed outside it, a Gaussian blur, the neighbourhood means of the adaptive threshold),
 then the blobs (connected components, the split of touching pins, the intensity-weighted centres).
-`BatchedDetector` runs the first stage on a batch of frames as tensor operations, on a GPU where
-there is one: kornia's separable filter (`kornia.filters.filter2d_separable`) for the blur and the
-box sums. The second stage runs per frame on the CPU with `pins.detect`'s own code.
+`BatchedDetector` runs both on a batch of frames as tensor operations, on a GPU where there is one:
+kornia's separable filter (`kornia.filters.filter2d_separable`) for the blur and the box sums, kornia's
+label propagation (`kornia.contrib.connected_components`) for the components, scatter reductions for
+their stats and weighted sums (`pins._accel_blobs`); the per-blob decisions (which may be touching
+pins, which look like pins) run on the CPU on small arrays, with `pins.detect`'s own code.
 
 The blur and the means equal OpenCV's bit for bit, so the positions equal the NumPy path's
 (`tests/pins/test_accel_detect.py`: every synthetic preset, CPU torch; the bar is 0.01 px):
@@ -17,11 +19,11 @@ The blur and the means equal OpenCV's bit for bit, so the positions equal the Nu
   (its vector lanes, 4 columns at a time) and in double for the last width % 4 columns: so here.
 - The inverse coverage of the disc (a per-disc constant) is `pins.detect`'s own array.
 
-Connected components stay on the CPU (OpenCV's labelling, the split of touching pins and the
-centroid sums as `pins.detect` does them): `kornia.contrib.connected_components` propagates labels
-for a fixed number of iterations and can leave a long component in pieces, and the centres must be
-the NumPy path's. torch and kornia are optional (the ``accel`` extra, pinned): imported when a
-`BatchedDetector` is made, never by ``import pins``.
+The blob stage follows OpenCV's too: the label propagation is run until it converges (a fixed
+number of iterations could leave a long blob in pieces), components are numbered as OpenCV numbers them,
+and a frame where `pins.detect._split_touching` splits touching pins is detected on the CPU whole
+(`labelling="cpu"` does so for every frame). torch and kornia are optional (the ``accel`` extra,
+pinned): imported when a `BatchedDetector` is made, never by ``import pins``.
 
 Example
 -------
@@ -95,19 +97,27 @@ class BatchedDetector:
         Detection parameters (default ``DetectionParams()``).
     device : str
         ``auto`` (default: a GPU if torch sees one, else the CPU), ``cuda`` or ``cpu``.
+    labelling : {"auto", "tensor", "cpu"}
+        Where the blob stage runs: ``tensor``: the components, their stats and weighted sums on the
+        device (`pins._accel_blobs`), the per-blob decisions on the CPU; ``cpu``: each frame's blobs on
+        the CPU with `pins.detect`'s code; ``auto`` (default): ``tensor`` on a GPU, ``cpu`` on the CPU
+        (where the label propagation's many poolings cost more than OpenCV's labelling). The same blobs.
     """
 
     def __init__(self, disc: SensorDisc, frame_shape: tuple[int, int], params: DetectionParams | None = None, *,
-                 device: str = "auto") -> None:
+                 device: str = "auto", labelling: str = "auto") -> None:
         import kornia
         import torch
 
         from .accel import pick_device
 
+        if labelling not in ("auto", "tensor", "cpu"):
+            raise ValueError(f"unknown labelling {labelling!r}; choose from auto, tensor, cpu")
         self.torch, self.kornia = torch, kornia
         self.disc, self.params = disc, params or DetectionParams()
         self.frame_shape = (int(frame_shape[0]), int(frame_shape[1]))
         self.device = pick_device(device)
+        self.labelling = labelling if labelling != "auto" else "cpu" if self.device.type == "cpu" else "tensor"
         on = dict(device=self.device)
         self.x0, self.y0, mask = _roi(disc, self.frame_shape)
         height, width = mask.shape
@@ -127,7 +137,7 @@ class BatchedDetector:
 
     def __repr__(self) -> str:
         return (f"BatchedDetector(disc={self.disc!r}, frame_shape={self.frame_shape}, params={self.params!r}, "
-                f"device={str(self.device)!r})")
+                f"device={str(self.device)!r}, labelling={self.labelling!r})")
 
     def filtered(self, frames):
         """The image operations of a batch: the disc's image, its blur and its neighbourhood means.
@@ -181,7 +191,12 @@ class BatchedDetector:
         blobs : list of Blobs
             One per frame, in order.
         """
-        image, smooth, mean = (t.cpu().numpy() for t in self.filtered(frames))
+        tensors = self.filtered(frames)
+        if self.labelling == "tensor":
+            from ._accel_blobs import blobs_on_device
+
+            return blobs_on_device(self.torch, self.kornia, *tensors, self.disc, self.params, self.x0, self.y0)
+        image, smooth, mean = (t.cpu().numpy() for t in tensors)
         return [_blobs(image[k], smooth[k], mean[k], self.disc, self.params, self.x0, self.y0)
                 for k in range(len(image))]
 

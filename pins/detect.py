@@ -279,6 +279,16 @@ def _blobs(image: np.ndarray, smooth: np.ndarray, mean: np.ndarray, disc: Sensor
     # Intensity-weighted centroids of all components at once: sums by label.
     weight = np.maximum(image.ravel()[index] - background[lab], 0.0)
     total, sum_x, sum_y = _weighted_sums(index, lab, weight, width, count)
+    return _kept(area, box_w, box_h, total, sum_x, sum_y, disc, params, x0, y0)
+
+
+def _kept(area: np.ndarray, box_w: np.ndarray, box_h: np.ndarray, total: np.ndarray, sum_x: np.ndarray,
+          sum_y: np.ndarray, disc: SensorDisc, params: DetectionParams, x0: int, y0: int) -> Blobs:
+    """The components (label 0 the background) that look like pins, as Blobs: their weighted centres, px.
+
+    `total`, `sum_x`, `sum_y` are each component's sums of weight, weight * x and weight * y (x, y in the
+    disc's box, px); the box's corner (x0, y0) px moves the centres into the frame.
+    """
     with np.errstate(divide="ignore", invalid="ignore"):
         fill = area / (box_w * box_h)
         aspect = np.maximum(box_w, box_h) / np.minimum(box_w, box_h)
@@ -291,7 +301,7 @@ def _blobs(image: np.ndarray, smooth: np.ndarray, mean: np.ndarray, disc: Sensor
     centres = centres[inside]
     order = np.lexsort((centres[:, 0], centres[:, 1]))
     areas = area[keep][order]
-    return Blobs(centres=centres[order], areas=areas, fills=fill[keep][order], candidates=count - 1,
+    return Blobs(centres=centres[order], areas=areas, fills=fill[keep][order], candidates=len(area) - 1,
                  contrasts=total[keep][order] / np.maximum(areas, 1))
 
 

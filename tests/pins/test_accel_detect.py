@@ -33,15 +33,19 @@ def test_batched_detection_equals_the_numpy_path_on_every_preset(preset):
         sensor = _sensor(preset, seed)
         frames = [sensor.render(Contact(depth, 2.0)) for depth in (0.0, 3.0, 5.0)]
         field = find_pin_field(_grey(frames[0].image))
-        detector = BatchedDetector(field.disc, _grey(frames[0].image).shape, field.params, device="cpu")
         # BGR frames go in as they come from the camera; the batch converts them to grey as OpenCV does.
-        got = detector.detect_blobs([frame.image for frame in frames])
-        for frame, blobs in zip(frames, got):
-            expected = detect_blobs(frame.image, params=field.params, disc=field.disc)
-            assert blobs.centres.shape == expected.centres.shape and len(expected.centres) > 0
-            assert np.abs(blobs.centres - expected.centres).max() <= 0.01
-            np.testing.assert_array_equal(blobs.areas, expected.areas)
-            assert blobs.candidates == expected.candidates
+        # The blob stage on the tensors (default), and (first seed) on the CPU with pins.detect's code.
+        for labelling in ("tensor", "cpu") if seed == 0 else ("tensor",):
+            detector = BatchedDetector(field.disc, _grey(frames[0].image).shape, field.params, device="cpu",
+                                       labelling=labelling)
+            got = detector.detect_blobs([frame.image for frame in frames])
+            for frame, blobs in zip(frames, got):
+                expected = detect_blobs(frame.image, params=field.params, disc=field.disc)
+                assert blobs.centres.shape == expected.centres.shape and len(expected.centres) > 0
+                assert np.abs(blobs.centres - expected.centres).max() <= 0.01
+                np.testing.assert_array_equal(blobs.areas, expected.areas)
+                np.testing.assert_allclose(blobs.contrasts, expected.contrasts, rtol=1e-9)
+                assert blobs.candidates == expected.candidates
         # And both are where the pins are drawn (the NumPy path's own bars are in test_detect.py).
         recall, precision, rmse = score(got[0].centres, frames[0])
         assert recall >= 0.9 and precision >= 0.9 and rmse < 0.5, (recall, precision, rmse)
@@ -65,6 +69,27 @@ def test_image_operations_are_opencvs_bit_for_bit(sigma_px, shape):
             np.testing.assert_array_equal(image[k].numpy(), expected_image)
             np.testing.assert_array_equal(smooth[k].numpy(), expected_smooth)
             np.testing.assert_array_equal(mean[k].numpy(), expected_mean)
+
+
+def test_a_pixel_between_two_blobs_goes_to_opencvs_higher_label():
+    """OpenCV numbers components by their first 2x2 block; the growth gives a pixel between two blobs to the higher.
+
+    The tall blob starts first (label 1) but ends last (the highest raster index, which label propagation
+    keeps); the short one starts later (label 2). The pixels between them weigh on the short one's centre.
+    """
+    image = np.full((48, 48), 20, np.uint8)
+    image[2:11, 5:10] = 200    # tall: rows 2-10
+    image[4:8, 11:14] = 200    # short: rows 4-7, one column apart
+    image[3:9, 10] = 110       # the column between: below the threshold, above the background
+    disc = SensorDisc(23.5, 23.5, 40.0)
+    params = DetectionParams(blur_sigma_px=0.0, block_size_px=15, offset=60.0, split_radius_px=0.0, rim_margin_px=0.0)
+    expected = detect_blobs(image, params=params, disc=disc)
+    got = BatchedDetector(disc, image.shape, params, device="cpu", labelling="tensor").detect_blobs(image[None])[0]
+    assert len(expected.centres) == 2
+    np.testing.assert_allclose(got.centres, expected.centres, rtol=0, atol=1e-9)
+    # The short blob's centre is pulled towards the column (x < 12, its middle), as OpenCV's numbering says.
+    short, tall = expected.centres[np.argmin(expected.areas)], expected.centres[np.argmax(expected.areas)]
+    assert short[0] < 11.9 and tall[0] == 7.0
 
 
 def test_fixed_point_kernel():
@@ -107,7 +132,17 @@ def test_many_frames_in_batches_with_progress_and_empty_frames():
 def test_shapes_and_settings_are_checked():
     disc = SensorDisc(30.0, 30.0, 25.0)
     detector = BatchedDetector(disc, (60, 64), device="cpu")
-    assert "BatchedDetector(" in repr(detector) and "device='cpu'" in repr(detector)
+    # On the CPU the blobs are labelled by OpenCV unless asked (label propagation is for a GPU).
+    assert "BatchedDetector(" in repr(detector) and "device='cpu'" in repr(detector) and "labelling='cpu'" in \
+        repr(detector)
+    on_tensors = BatchedDetector(disc, (60, 64), device="cpu", labelling="tensor")
+    assert on_tensors.labelling == "tensor"
+    # Nothing above the threshold, and no frames: empty answers.
+    blank = on_tensors.detect_blobs(np.full((2, 60, 64), 90, np.uint8))
+    assert [b.centres.shape for b in blank] == [(0, 2), (0, 2)] and [b.candidates for b in blank] == [0, 0]
+    assert on_tensors.detect_pins(np.zeros((0, 60, 64), np.uint8)) == []
+    with pytest.raises(ValueError, match="unknown labelling"):
+        BatchedDetector(disc, (60, 64), device="cpu", labelling="gpu")
     with pytest.raises(ValueError, match=r"\(B, 60, 64\) uint8, got \(2, 60, 65\)"):
         detector.filtered(np.zeros((2, 60, 65), np.uint8))
     with pytest.raises(ValueError, match="uint8"):
