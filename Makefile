@@ -8,6 +8,7 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test bench clean services
 
+# '.[test]' brings the optional extras the tests exercise: line, learned and accel (torch==2.13.0, kornia).
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip

@@ -201,6 +201,16 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: 
     `cache` (one per image and disc) keeps the blurred disc and its neighbourhood means between
     parameter sets that share the blur, polarity and block (`pins.find_pin_field`'s candidates).
     """
+    x0, y0, image, smooth, mean = _filtered(grey, disc, params, cache)
+    return _blobs(image, smooth, mean, disc, params, x0, y0)
+
+
+def _filtered(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict | None = None):
+    """Steps 1-3 up to the threshold: the disc's box corner (x0, y0) px, its grey image (inverted for dark
+    pins, zero outside the disc), the blurred image (uint8) and the neighbourhood means (float32).
+
+    `pins.accel_detect` computes the same three arrays, bit for bit, for many frames at once.
+    """
     x0, y0, roi_mask = _roi(disc, grey.shape)
     height, width = roi_mask.shape
     key = (params.dark_pins, params.blur_sigma_px)
@@ -214,7 +224,7 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: 
         # (normalised box filter), so it neither makes pins nor hides the pins near the rim.
         image = cv2.copyTo(image, roi_mask, np.zeros_like(image))
         if params.blur_sigma_px > 0:
-            k = 2 * int(np.ceil(2.5 * params.blur_sigma_px)) + 1
+            k = _blur_size_px(params.blur_sigma_px)
             smooth = cv2.GaussianBlur(image, (k, k), params.blur_sigma_px)
         else:
             smooth = image
@@ -228,6 +238,18 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: 
         mean *= _inverse_coverage(disc, grey.shape, params.block_size_px)
         if cache is not None:
             cache[key + (params.block_size_px,)] = mean
+    return x0, y0, image, smooth, mean
+
+
+def _blur_size_px(sigma_px: float) -> int:
+    """Side of the Gaussian blur's kernel for `sigma_px`, px (odd: 2.5 sigma each side)."""
+    return 2 * int(np.ceil(2.5 * sigma_px)) + 1
+
+
+def _blobs(image: np.ndarray, smooth: np.ndarray, mean: np.ndarray, disc: SensorDisc, params: DetectionParams,
+           x0: int, y0: int) -> Blobs:
+    """Steps 3-5 on `_filtered`'s arrays: threshold, components, split, sub-pixel centres (px in the frame)."""
+    width = image.shape[1]
     foreground = smooth > mean + np.float32(params.offset)
     binary = foreground.view(np.uint8)
     count, labels, stats, _ = cv2.connectedComponentsWithStatsWithAlgorithm(binary, 8, cv2.CV_32S, cv2.CCL_GRANA)
@@ -257,6 +279,16 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: 
     # Intensity-weighted centroids of all components at once: sums by label.
     weight = np.maximum(image.ravel()[index] - background[lab], 0.0)
     total, sum_x, sum_y = _weighted_sums(index, lab, weight, width, count)
+    return _kept(area, box_w, box_h, total, sum_x, sum_y, disc, params, x0, y0)
+
+
+def _kept(area: np.ndarray, box_w: np.ndarray, box_h: np.ndarray, total: np.ndarray, sum_x: np.ndarray,
+          sum_y: np.ndarray, disc: SensorDisc, params: DetectionParams, x0: int, y0: int) -> Blobs:
+    """The components (label 0 the background) that look like pins, as Blobs: their weighted centres, px.
+
+    `total`, `sum_x`, `sum_y` are each component's sums of weight, weight * x and weight * y (x, y in the
+    disc's box, px); the box's corner (x0, y0) px moves the centres into the frame.
+    """
     with np.errstate(divide="ignore", invalid="ignore"):
         fill = area / (box_w * box_h)
         aspect = np.maximum(box_w, box_h) / np.minimum(box_w, box_h)
@@ -269,7 +301,7 @@ def _detect(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: 
     centres = centres[inside]
     order = np.lexsort((centres[:, 0], centres[:, 1]))
     areas = area[keep][order]
-    return Blobs(centres=centres[order], areas=areas, fills=fill[keep][order], candidates=count - 1,
+    return Blobs(centres=centres[order], areas=areas, fills=fill[keep][order], candidates=len(area) - 1,
                  contrasts=total[keep][order] / np.maximum(areas, 1))
 
 

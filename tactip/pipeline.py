@@ -116,8 +116,8 @@ class PinTrack:
         return self.tracker.disc
 
 
-def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None, progress: bool = False,
-               total: int | None = None) -> PinTrack:
+def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
+               progress: bool | Callable[[int], None] = False, total: int | None = None) -> PinTrack:
     """Follow the pins through ``frames`` from their rest frame.
 
     Parameters
@@ -131,8 +131,9 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
     rest_frame : int, optional
         Index of the rest frame; its start's error propagates. None: the first frame ``start``
         succeeds on (a blank frame is skipped, as at the start of a live tap).
-    progress : bool
-        Show a tqdm bar in frames (on stderr).
+    progress : bool or callable
+        Show a tqdm bar in frames (on stderr); or a callable, called with the number of frames read
+        since its last call, every `_TICK_FRAMES` frames and at the end (a batch's workers report so).
     total : int, optional
         Frames expected, for the bar.
 
@@ -158,7 +159,8 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
     failed: list[tuple[int, str]] = []  # frames the tracker raised on: (index, message)
     start_error: PinsError | None = None
     iterator = iter(frames)
-    with tqdm(total=total, unit="frame", disable=not progress, desc="replay", mininterval=0.5) as bar:
+    bar_options = dict(total=total, unit="frame", desc="replay", mininterval=0.5)
+    with (_Ticks(progress) if callable(progress) else tqdm(disable=not progress, **bar_options)) as bar:
         while True:
             try:
                 frame = next(iterator)
@@ -226,6 +228,31 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
                     detection=params, pins_detected=int(detected), pin_field=summary, warnings=warnings)
 
 
+# Frames between two calls of a callable progress (`track_pins`): few messages, a live count.
+_TICK_FRAMES = 10
+
+
+class _Ticks:
+    """A stand-in for `track_pins`'s tqdm bar that passes frame counts to a callable, `_TICK_FRAMES` at a time."""
+
+    def __init__(self, report: Callable[[int], None]) -> None:
+        self.report, self.pending = report, 0
+
+    def update(self, frames: int = 1) -> None:
+        self.pending += frames
+        if self.pending >= _TICK_FRAMES:
+            self.report(self.pending)
+            self.pending = 0
+
+    def __enter__(self) -> _Ticks:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.pending:  # the last frames, also those before an error
+            self.report(self.pending)
+            self.pending = 0
+
+
 def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selected: np.ndarray, *,
                      n_samples: int = 40) -> PinTrack:
     """``track`` with the features of each contact's feature pins (`pins.tap_features`).
@@ -282,8 +309,8 @@ def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selec
 
 def frames_to_features(frames: Iterable, *, start: Start, selected: np.ndarray | Callable[[PinTrack], np.ndarray],
                        contacts: Sequence[tuple[int, int]] | Callable[[PinTrack], Sequence[tuple[int, int]]] | None = None,
-                       n_samples: int = 40, rest_frame: int | None = None, progress: bool = False,
-                       total: int | None = None) -> PinTrack:
+                       n_samples: int = 40, rest_frame: int | None = None,
+                       progress: bool | Callable[[int], None] = False, total: int | None = None) -> PinTrack:
     """Frames in, pins tracked, contacts and their features out: the station's and replay's one path.
 
     Parameters

@@ -22,6 +22,8 @@
       Many recordings: --workers N replays them on an embedded Dask cluster of N worker processes, or
       --scheduler tcp://HOST:PORT on a running Dask cluster (as tactip replay --out-dir does); the
       datasets are the same as made one recording after another (the default).
+      Many images: where torch sees a GPU (tactip[accel]; --device auto, the default) their pins are
+      detected --together images at a time as tensors on the GPU (pins.accel_detect); the same datasets.
 
 Examples:
   tactip dataset build slides/labels.csv --out data/slides --label direction_deg --period 360
@@ -81,6 +83,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     build.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                        help="track the recordings on this Dask cluster (its workers must see the same paths)")
     build.add_argument("--overwrite", action="store_true", help="replace existing outputs in DIR")
+    build.add_argument("--device", choices=("auto", "cpu", "cuda"), default="auto",
+                       help="cuda: detect the images' pins --together at a time as torch tensors on the GPU "
+                            "(tactip[accel]); cpu: one image at a time; auto (default): cuda where torch sees a GPU, "
+                            "else cpu. The datasets are the same")
+    build.add_argument("--together", type=int_in_range(1, 1024), default=32, metavar="N",
+                       help="images detected together on the GPU (default 32)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -99,6 +107,15 @@ def run(args: argparse.Namespace) -> int:
                               f"and scale)")
     if args.workers is not None and args.scheduler is not None:
         raise TactipError("--workers sizes the embedded Dask cluster; a --scheduler's cluster has its own workers")
+    if args.device == "cuda":  # the images are detected here, on this machine's GPU
+        from pins.accel import pick_device
+
+        try:
+            pick_device("cuda")
+        except ImportError:
+            raise TactipError("--device cuda needs torch and kornia: pip install 'tactip[accel]'") from None
+        except ValueError as exc:
+            raise TactipError(f"--device cuda: {exc}") from None
     with contextlib.ExitStack() as stack:
         map_fn = None
         if args.workers is not None or args.scheduler is not None:
@@ -126,4 +143,5 @@ def _build(args: argparse.Namespace, map_fn):
                          pins_on_pad=args.pins_on_pad, pad_diameter_mm=args.pad_diameter_mm,
                          mm_per_px=args.mm_per_px, dark_pins=True if args.dark_pins else None,
                          n_samples=args.samples, image_samples=args.image_samples, rest_frame=args.rest_frame,
-                         overwrite=args.overwrite, progress=not args.quiet, map_fn=map_fn)
+                         overwrite=args.overwrite, progress=not args.quiet, map_fn=map_fn, device=args.device,
+                         together=args.together)

@@ -76,7 +76,7 @@ def build_dataset(labels_csv, out_dir, *, label: str | None = None, classes: int
                   sensor: str | None = None, pins_on_pad: int | None = None, pad_diameter_mm: float | None = None,
                   mm_per_px: float | None = None, dark_pins: bool | None = None, n_samples: int = 40,
                   image_samples: int | None = None, rest_frame: int = 0, overwrite: bool = False,
-                  progress: bool = False, map_fn=None) -> BuildResult:
+                  progress: bool = False, map_fn=None, device: str = "cpu", together: int = 32) -> BuildResult:
     """Turn labelled recordings into ``calibration.h5``, ``train.h5``, ``test.h5`` and ``summary.json``.
 
     Parameters
@@ -122,6 +122,13 @@ def build_dataset(labels_csv, out_dir, *, label: str | None = None, classes: int
         Runs the recordings: ``map_fn(function, rows)``, results in order (many recordings on a Dask
         cluster: `tactip.cluster.cluster_map`, as ``tactip replay --out-dir`` runs an archive); the same
         datasets as made here (default: one recording after another).
+    device : {"cpu", "auto", "cuda", "torch-cpu"}
+        Where the images' pins are detected: ``cpu`` (default) each image in its turn, OpenCV; ``cuda``
+        `together` images at once as torch tensors on the GPU (`pins.accel_detect`, the ``accel`` extra);
+        ``auto``: ``cuda`` where torch sees a GPU, else ``cpu`` (torch not needed); ``torch-cpu``: the
+        batched path on the CPU (tests). The same datasets.
+    together : int
+        Images detected together on the GPU (>= 1).
 
     Returns
     -------
@@ -188,9 +195,10 @@ def build_dataset(labels_csv, out_dir, *, label: str | None = None, classes: int
         cal, calibrated_on, labelled = _calibrate_first(labelled, leave_out, rest=rest, rest_frame=rest_frame,
                                                         n_pins=n_pins, min_separation_mm=min_separation_mm,
                                                         labels_csv=labels_csv, left_out=left_out, **sensor_options)
+    image_pins = _detect_images(labelled, cal, device=device, together=together, progress=progress)
     per_row = _taps_of_rows(labelled, cal, leave_out, rest=rest, n_samples=n_samples, image_samples=image_samples,
                             rest_frame=rest_frame, progress=progress, labels_csv=labels_csv, warnings=warnings,
-                            map_fn=map_fn)
+                            map_fn=map_fn, image_pins=image_pins)
     if not per_row:
         raise LabelsError(_nothing_left(labels_csv, left_out))
     taps = np.concatenate([t.taps for _, _, t in per_row])
@@ -336,9 +344,50 @@ def _shared_recordings(recording: np.ndarray, test: np.ndarray, split: str) -> l
             f"recordings the model has seen and flatter it on new ones" + (f" ({advice})" if advice else "")]
 
 
+def _detect_images(labelled, cal, *, device: str, together: int, progress: bool) -> dict:
+    """The pins of the image rows' images, detected `together` at a time on a torch device: {line: (M, 2) px}.
+
+    Empty for the NumPy path (``device`` cpu, or auto without a GPU), and without images. An image
+    that cannot be read or has another size than the calibration's frames is left to its row, which
+    fails on it with the usual error.
+    """
+    from tactip.replay.batch import _torch_device
+
+    if int(together) != together or together < 1:
+        raise LabelsError(f"together must be a positive integer, got {together}")
+    torch_device = _torch_device(device)
+    rows = [row for row, _ in labelled if is_image(row.path)]
+    if torch_device is None or not rows:
+        return {}
+    from _shared.progress import progress_bar as tqdm
+    from pins.accel_detect import detect_pins_batched
+
+    from tactip.dataset.recording import read_grey_image
+
+    lines = []
+
+    def images():
+        for row in rows:
+            try:
+                image = read_grey_image(row.path)
+            except _errors():
+                continue
+            if (image.shape[1], image.shape[0]) == tuple(cal.frame_size):
+                lines.append(row.line)
+                yield image
+
+    with tqdm(total=len(rows), desc=f"images ({torch_device})", unit="image", disable=not progress) as bar:
+        found = detect_pins_batched(images(), params=cal.detection, disc=cal.disc, device=torch_device,
+                                    together=int(together), progress=bar.update)
+    return dict(zip(lines, found))
+
+
 def _taps_of_rows(labelled, cal, leave_out, *, rest, n_samples, image_samples, rest_frame, progress, labels_csv,
-                  warnings, map_fn=None) -> list[tuple[LabelRow, float, RecordingTaps]]:
-    """Each usable row's taps: one recording after another (a tqdm bar over them), or through ``map_fn``."""
+                  warnings, map_fn=None, image_pins=None) -> list[tuple[LabelRow, float, RecordingTaps]]:
+    """Each usable row's taps: one recording after another (a tqdm bar over them), or through ``map_fn``.
+
+    ``image_pins`` ({line: pins}, `_detect_images`) are the pins of images already detected.
+    """
     import functools
 
     from _shared.progress import progress_bar as tqdm
@@ -349,8 +398,8 @@ def _taps_of_rows(labelled, cal, leave_out, *, rest, n_samples, image_samples, r
                             rest_frame=rest_frame, progress=progress and map_fn is None)
     bar = functools.partial(tqdm, desc="recordings", unit="recording", disable=not progress)
     done = []
-    for (row, identity), (got, problem) in zip(labelled, map_pieces(one, [row for row, _ in labelled],
-                                                                     map_fn=map_fn, progress=bar)):
+    pieces = [(row, (image_pins or {}).get(row.line)) for row, _ in labelled]
+    for (row, identity), (got, problem) in zip(labelled, map_pieces(one, pieces, map_fn=map_fn, progress=bar)):
         if problem is not None:
             leave_out(row, problem)
             continue
@@ -359,11 +408,16 @@ def _taps_of_rows(labelled, cal, leave_out, *, rest, n_samples, image_samples, r
     return done
 
 
-def _row_taps(row: LabelRow, *, calibration, rest, n_samples, image_samples, rest_frame, progress):
-    """(taps, None) of one row's recording, or (None, why it is left out): a piece that travels to a worker."""
+def _row_taps(piece, *, calibration, rest, n_samples, image_samples, rest_frame, progress):
+    """(taps, None) of one row's recording, or (None, why it is left out): a piece that travels to a worker.
+
+    ``piece`` is (row, its image's pins already detected or None).
+    """
+    row, image_pins = piece
     try:
         return recording_taps(row.path, calibration, rest=row.rest or rest, n_samples=n_samples,
-                              image_samples=image_samples, rest_frame=rest_frame, progress=progress), None
+                              image_samples=image_samples, rest_frame=rest_frame, progress=progress,
+                              image_pins=image_pins), None
     except _errors() as exc:
         return None, " ".join(str(exc).split())
 

@@ -108,7 +108,7 @@ def rest_frame_of(path, *, rest=None, rest_frame: int = 0) -> np.ndarray:
 
 
 def recording_taps(path, calibration, *, rest=None, n_samples: int = 40, image_samples: int = 1,
-                   rest_frame: int = 0, progress: bool = False) -> RecordingTaps:
+                   rest_frame: int = 0, progress: bool = False, image_pins=None) -> RecordingTaps:
     """The taps of one recording, made with a sensor calibration.
 
     Parameters
@@ -127,6 +127,9 @@ def recording_taps(path, calibration, *, rest=None, n_samples: int = 40, image_s
         A video's rest frame (off contact).
     progress : bool
         Show a tqdm bar in frames (videos).
+    image_pins : (M, 2) ndarray, optional
+        An image's pins (x, y), px, already detected with the calibration's detection and disc (many
+        images at once: `pins.accel_detect`); detected here when not given.
 
     Returns
     -------
@@ -142,7 +145,7 @@ def recording_taps(path, calibration, *, rest=None, n_samples: int = 40, image_s
         No sensor in the rest frame.
     """
     if is_image(path):
-        return _image_taps(path, rest, calibration, samples=int(image_samples))
+        return _image_taps(path, rest, calibration, samples=int(image_samples), image_pins=image_pins)
     from tactip.replay.video import track_video
 
     track, analysis, _, _ = track_video(path, calibration=calibration, n_samples=int(n_samples),
@@ -173,7 +176,7 @@ def _direction(kind) -> float:
     return math.nan if value is None else float(value)
 
 
-def _image_taps(path, rest, calibration, *, samples: int) -> RecordingTaps:
+def _image_taps(path, rest, calibration, *, samples: int, image_pins=None) -> RecordingTaps:
     """One tap: the feature pins' displacement from the rest image to the image.
 
     The two images are one large step apart (a deep press moves rim pins by most of a pitch), so the
@@ -194,7 +197,8 @@ def _image_taps(path, rest, calibration, *, samples: int) -> RecordingTaps:
             raise CalibrationError(f"the {name} is {image.shape[1]}x{image.shape[0]} px, the calibration's frames "
                                    f"{width}x{height} px")
     at_rest = place_reference_pins(calibration, before)
-    blobs = detect_pins(after, params=calibration.detection, disc=calibration.disc)
+    blobs = (detect_pins(after, params=calibration.detection, disc=calibration.disc) if image_pins is None
+             else np.asarray(image_pins, dtype=np.float64).reshape(-1, 2))
     found = match_by_propagation(at_rest, blobs, spacing_px=median_spacing_px(at_rest))
     chosen = np.asarray(calibration.selected_pins, dtype=np.intp)
     moved = (found - at_rest)[chosen]  # (P, 2) px, NaN where unmatched

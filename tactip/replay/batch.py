@@ -13,6 +13,8 @@ one recorded in it, so that a worker on any machine of the cluster finds it).
   is not replaced: that video fails, named.
 - ``OUT/summary.json`` has one row per video: its output, status (``written``, ``skipped`` or
   ``failed``), error, frames, pins, taps, warnings and the seconds its replay took.
+- A progress bar counts the videos done and the frames read so far: each replay reports its frames
+  every few frames as Dask events (``Worker.log_event``) that the bar's client subscribes to.
 - On a GPU (``device="cuda"``, or ``auto`` where torch sees one) a task replays several videos
   together (`replay_together`): their trackers step in lockstep on threads and their windowed pin
   centroids are measured in one torch batch (`pins.accel.WindowBatcher`); the files are the same.
@@ -147,7 +149,7 @@ def replay_batch(videos, out_dir, *, client, overwrite: bool = False, progress: 
     overwrite : bool
         Replay videos whose output is already in place (default: skip them).
     progress : bool
-        A tqdm bar of videos done, with the frames replayed (on stderr).
+        A tqdm bar of videos done, with the frames read so far (reported by the workers as they go; on stderr).
     device : {"cpu", "auto", "cuda", "torch-cpu"}
         ``cpu`` (default): each video on its own, the NumPy path. ``cuda``: `together` videos per task
         tracked in lockstep, their windowed centroids measured in one torch batch on the worker's GPU
@@ -253,17 +255,36 @@ def _finished_row(video: pathlib.Path, target: pathlib.Path) -> dict:
     return _row(video, target, "skipped", frames=int(frames), pins=int(pins), taps=int(taps), warnings=warnings)
 
 
-def _replay_one(video: str, target: str, options: dict) -> dict:
-    """One video's replay on a worker: its summary row, an error as a row (the batch goes on)."""
+def _replay_one(video: str, target: str, options: dict, topic: str | None = None) -> dict:
+    """One video's replay on a worker: its summary row, an error as a row (the batch goes on).
+
+    With a `topic`, the frames read are reported to it as they go (`_report_frames`).
+    """
     from tactip.replay.video import replay_video
 
     started = time.perf_counter()
     try:  # one decoder thread: the cluster runs a replay per core already
-        result = replay_video(video, target, progress=False, decode_threads=1, **options)
+        result = replay_video(video, target, progress=_report_frames(topic), decode_threads=1, **options)
     except Exception as exc:  # noqa: BLE001 - any error of one video is that video's, named in its row
         return _row(video, target, "failed", error=_one_line(exc), seconds=time.perf_counter() - started)
     return _row(video, target, "written", frames=result.frames, pins=result.pins, taps=len(result.tap_bounds),
                 warnings=result.warnings, seconds=time.perf_counter() - started)
+
+
+def _report_frames(topic: str | None):
+    """A callable that logs frame counts as events of the Dask `topic` (the batch's bar subscribes), or False.
+
+    False (no progress) without a topic or outside a Dask worker.
+    """
+    if topic is None:
+        return False
+    from distributed import get_worker
+
+    try:
+        worker = get_worker()
+    except ValueError:  # not on a worker (a direct call)
+        return False
+    return lambda frames: worker.log_event(topic, int(frames))
 
 
 def _one_line(exc: BaseException) -> str:
@@ -276,20 +297,39 @@ def _one_line(exc: BaseException) -> str:
 
 def _run(client, videos, targets, rows, chunks, options, *, torch_device, progress: bool) -> None:
     """Send the videos of each chunk to the workers (one task a chunk); fill their rows as they finish."""
+    import threading
+    import uuid
+
     from distributed import as_completed
     from _shared.progress import progress_bar as tqdm
 
+    bar = tqdm(total=len(rows), initial=len(rows) - sum(map(len, chunks)), unit="video", desc="replay",
+               disable=not progress, leave=False)
+    frames, failed, lock = 0, 0, threading.Lock()
+    # Frames as the workers read them (each video's replay logs its count every few frames): the bar's
+    # frame count moves while the videos are long, not only when one finishes.
+    topic = f"tactip-replay-frames-{uuid.uuid4().hex}" if progress else None
+    live = {"frames": 0}
+
+    def show() -> None:
+        bar.set_postfix_str(f"{max(live['frames'], frames)} frames, {failed} failed")
+
+    def on_frames(event) -> None:
+        with lock:
+            live["frames"] += int(event[1])
+            show()
+
+    if topic is not None:
+        client.subscribe_topic(topic, on_frames)
     futures = {}
     for chunk in chunks:
         paths, outputs = [str(videos[i]) for i in chunk], [str(targets[i]) for i in chunk]
         key = f"replay-{chunk[0]}-{videos[chunk[0]].name}"
-        future = (client.submit(_replay_one, paths[0], outputs[0], options, pure=False, key=key)
+        future = (client.submit(_replay_one, paths[0], outputs[0], options, topic, pure=False, key=key)
                   if torch_device is None else
-                  client.submit(replay_together, paths, outputs, device=torch_device, pure=False, key=key, **options))
+                  client.submit(replay_together, paths, outputs, device=torch_device, pure=False, key=key,
+                                topic=topic, **options))
         futures[future] = chunk
-    bar = tqdm(total=len(rows), initial=len(rows) - sum(map(len, chunks)), unit="video", desc="replay",
-               disable=not progress, leave=False)
-    frames = 0
     try:
         for future in as_completed(futures):
             chunk = futures[future]
@@ -302,10 +342,13 @@ def _run(client, videos, targets, rows, chunks, options, *, torch_device, progre
             for i, row in zip(chunk, done):
                 rows[i] = row
                 frames += row["frames"] or 0
-            failed = sum(1 for r in rows if r is not None and r["status"] == "failed")
-            bar.set_postfix_str(f"{frames} frames, {failed} failed", refresh=False)
-            bar.update(len(chunk))
+            with lock:
+                failed = sum(1 for r in rows if r is not None and r["status"] == "failed")
+                show()
+                bar.update(len(chunk))
     finally:
+        if topic is not None:
+            client.unsubscribe_topic(topic)
         bar.close()
         client.cancel([f for f in futures if not f.done()])
 
@@ -327,7 +370,7 @@ def _torch_device(device: str) -> str | None:
     raise ValueError(f"unknown device {device!r}; choose from auto, cpu, cuda")
 
 
-def replay_together(videos, targets, *, device: str = "auto", **options) -> list[dict]:
+def replay_together(videos, targets, *, device: str = "auto", topic: str | None = None, **options) -> list[dict]:
     """Replay several videos at once, their trackers in lockstep (one thread each), windows measured in one batch.
 
     Each video's tracker gives its windowed centroids to one `pins.accel.WindowBatcher`, which
@@ -340,6 +383,8 @@ def replay_together(videos, targets, *, device: str = "auto", **options) -> list
         The videos and their output files.
     device : str
         ``auto`` (a GPU if torch sees one, else the CPU), ``cuda`` or ``cpu``.
+    topic : str, optional
+        The Dask event topic each video's frames read are reported to (a batch's progress bar).
     **options
         `replay_video`'s options.
 
@@ -357,7 +402,7 @@ def replay_together(videos, targets, *, device: str = "auto", **options) -> list
 
     def replay(k: int) -> None:
         with batcher.member():
-            rows[k] = _replay_one(videos[k], targets[k], dict(options, wrap_windows=batcher.wrap))
+            rows[k] = _replay_one(videos[k], targets[k], dict(options, wrap_windows=batcher.wrap), topic)
 
     threads = [threading.Thread(target=replay, args=(k,), name=f"replay-{k}") for k in range(len(videos))]
     for thread in threads:

@@ -113,7 +113,7 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                  min_separation_mm: float = 4.0, sensor: str | None = None, pins_on_pad: int | None = None,
                  pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
                  rest_frame: int = 0, calibration=None, model=None, decision_threshold: float | None = None,
-                 progress: bool = False, decode_threads: int | None = None, wrap_windows=None) -> ReplayResult:
+                 progress=False, decode_threads: int | None = None, wrap_windows=None) -> ReplayResult:
     """Track the pins of a recorded video and write positions, displacements, lost masks and tap features to HDF5.
 
     Parameters
@@ -156,8 +156,9 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
         The station's model (needs `calibration`): decide the gap width from the taps.
     decision_threshold : float in [0, 1], optional
         theta_dec of the decision; default the model's recommended one, else 0.9.
-    progress : bool
-        Show a tqdm progress bar in frames (on stderr).
+    progress : bool or callable
+        Show a tqdm progress bar in frames (on stderr); or a callable given the frames read, a few at a
+        time (`tactip.pipeline.track_pins`; a batch's workers report to its bar so).
     decode_threads : int, optional
         Threads of the video decoder (default: every core but the one that tracks); a batch running
         a replay per core gives each one (the output is the same whatever the count).
@@ -295,7 +296,7 @@ def check_replay_options(*, rest_frame: int = 0, pad_diameter_mm: float | None =
 def track_video(video, *, calibration=None, params: DetectionParams | None = None, expected_pins: int | None = None,
                 n_samples: int = 40, n_pins: int = 40, min_separation_mm: float = 4.0, sensor: str | None = None,
                 pins_on_pad: int | None = None, pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
-                rest_frame: int = 0, progress: bool = False, decode_threads: int | None = None,
+                rest_frame: int = 0, progress=False, decode_threads: int | None = None,
                 wrap_windows=None) -> tuple:
     """Track the pins of a recording and find its contacts and their features (replay's work, no file written).
 

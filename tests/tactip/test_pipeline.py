@@ -76,6 +76,11 @@ def test_tracking_is_the_same_whatever_feeds_the_frames(sim_station, tap):
     np.testing.assert_array_equal(one.positions, two.positions)
     assert two.contacts == [(2, 9)] and two.features.shape == (1, 10, 2 * len(sim_station.calibration.selected_pins))
     assert one.features is None and two.valid.all()
+    # A callable progress hears of every frame read, ten at a time and the rest at the end; the same track.
+    counts = []
+    three = track_pins(stream, start=start, progress=counts.append)
+    np.testing.assert_array_equal(three.positions, one.positions)
+    assert sum(counts) == len(stream) and counts[:-1] == [10] * (len(counts) - 1) and 0 < counts[-1] <= 10
 
 
 @pytest.mark.parametrize("seed", [0, 1])

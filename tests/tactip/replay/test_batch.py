@@ -89,6 +89,27 @@ def test_batch_writes_single_replays_names_the_corrupt_file_and_resumes(archive,
     assert (out / "tap0.h5").stat().st_mtime_ns != before["tap0.h5"]
 
 
+def test_the_bar_hears_of_frames_as_the_workers_read_them(archive, client, tmp_path, monkeypatch):
+    """With progress, each replay reports its frames as Dask events the batch's bar subscribes to."""
+    events = []
+    subscribe = client.subscribe_topic
+
+    def spy(topic, handler):
+        def record(event):
+            events.append(event[1])
+            handler(event)
+        subscribe(topic, record)
+
+    monkeypatch.setattr(client, "subscribe_topic", spy)
+    folder, _ = archive
+    result = replay_batch(expand_videos([folder / "tap0.mp4", folder / "tap1.mp4"]), tmp_path, client=client,
+                          progress=True)
+    frames = sum(r["frames"] for r in result.rows)
+    # Reported a few frames at a time (events still in flight when the batch ends are not waited for).
+    assert events and all(0 < n <= 10 for n in events) and sum(events) <= frames
+    assert len(events) >= 2  # more than one report per batch: the count moves while the videos replay
+
+
 def test_batch_options_reach_every_replay(archive, client, tmp_path):
     folder, _ = archive
     result = replay_batch([folder / "tap3.mp4"], tmp_path, client=client, n_samples=12, n_pins=10, rest_frame=1)
