@@ -265,6 +265,11 @@ class Refiner:
         self._jitter_seen = np.zeros(len(positions))
         self._jitter_floor = 0.0  # the median pin's, updated every `_FLOOR_EVERY` frames
         self._observed = 0
+        # The scatter of each pin's window at its rest position about where its still neighbours place
+        # it, px^2, learnt by `snap_to_rest`: a pin it places there moves with its neighbours, so its
+        # steps (`observe_still`) do not show its own window's noise, which its calm test bounds.
+        self._rest_scatter_sq = np.zeros(len(positions))
+        self._rest_scatter_seen = np.zeros(len(positions))
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
@@ -593,8 +598,8 @@ class Refiner:
         window at its rest position (its centroid less the rest offset). A pin far from rest or
         missing is placed there when the window settles within the search's bound on a tip like its
         own at rest. A *calm* pin (its still neighbours' median displacement within a few tenths of a
-        px, and its window within `_CALM_BOUND` times its learnt scatter, `observe_still`, of where
-        they place it) is placed where they place it, its tip shown by its contrast. A pin placed
+        px, and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its
+        steps, `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip shown by its contrast. A pin placed
         near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
         the check costs a few vector operations per frame.
 
@@ -644,13 +649,18 @@ class Refiner:
         # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
         shift = self.neighbour_median(positions - self.rest_positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
-        residual = centres - rest - shift
-        calm = quiet & (_squared_norm(residual)
-                        <= _CALM_BOUND ** 2 * np.maximum(self._jitter_sq[look], self._jitter_floor))
+        residual = _squared_norm(centres - rest - shift)
+        scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]), self._jitter_floor)
+        calm = quiet & (residual <= _CALM_BOUND ** 2 * scatter)
         bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
         # A calm pin's window need only show a tip (its contrast): its area and compactness near the
         # rim's veil swing with the noise of its top pixels.
-        like = np.where(calm, measures[1] >= self._at_least[1, look], self._like_at_rest(measures, look))
+        tip = measures[1] >= self._at_least[1, look]
+        like = np.where(calm, tip, self._like_at_rest(measures, look))
+        # This window's own scatter about where the still neighbours place the pin, learnt after the
+        # test (a window never widens its own bound): a faint tip in the veil scatters by tenths of a
+        # px, and its learnt steps, taken with its neighbours, do not show it.
+        self._learn_rest_scatter(look, residual, quiet & tip & (residual <= (2.0 * self._settled_px) ** 2))
         found = (_squared_norm(centres - rest) <= bound ** 2) & like
         # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
         found &= calm | ~(distance[look] <= self.gate_px ** 2)
@@ -659,6 +669,17 @@ class Refiner:
         positions = positions.copy()
         positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
+
+    def _learn_rest_scatter(self, look: np.ndarray, residual_sq: np.ndarray, learn: np.ndarray) -> None:
+        """Running mean square of windows' residuals at rest, px^2, for pins `look` where `learn`:
+        the mean of the first `_JITTER_FIRST`, then weight `_JITTER_RATE`."""
+        pins, value = look[learn], residual_sq[learn]
+        if pins.size == 0:
+            return
+        seen = self._rest_scatter_seen[pins]
+        rate = np.where(seen < _JITTER_FIRST, 1.0 / (seen + 1.0), _JITTER_RATE)
+        self._rest_scatter_sq[pins] += rate * (value - self._rest_scatter_sq[pins])
+        self._rest_scatter_seen[pins] = seen + 1
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.
