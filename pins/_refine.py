@@ -655,15 +655,15 @@ class Refiner:
         bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
         # A calm pin's window need only show a tip (its contrast): its area and compactness near the
         # rim's veil swing with the noise of its top pixels.
-        tip = measures[1] >= self._at_least[1, look]
-        like = np.where(calm, tip, self._like_at_rest(measures, look))
-        # This window's own scatter about where the still neighbours place the pin, learnt after the
-        # test (a window never widens its own bound): a faint tip in the veil scatters by tenths of a
-        # px, and its learnt steps, taken with its neighbours, do not show it.
-        self._learn_rest_scatter(look, residual, quiet & tip & (residual <= (2.0 * self._settled_px) ** 2))
+        like = np.where(calm, measures[1] >= self._at_least[1, look], self._like_at_rest(measures, look))
         found = (_squared_norm(centres - rest) <= bound ** 2) & like
         # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
         found &= calm | ~(distance[look] <= self.gate_px ** 2)
+        # The window's own scatter about where its still neighbours place the pin, learnt from the
+        # windows that showed it here, after the test (a window never widens its own bound): a faint
+        # tip in the veil scatters by tenths of a px, and its steps, taken with its neighbours once
+        # it is placed where they say, do not show that.
+        self._learn_rest_scatter(look, residual, quiet & found)
         if not found.any():
             return positions
         positions = positions.copy()
@@ -672,12 +672,17 @@ class Refiner:
 
     def _learn_rest_scatter(self, look: np.ndarray, residual_sq: np.ndarray, learn: np.ndarray) -> None:
         """Running mean square of windows' residuals at rest, px^2, for pins `look` where `learn`:
-        the mean of the first `_JITTER_FIRST`, then weight `_JITTER_RATE`."""
-        pins, value = look[learn], residual_sq[learn]
+        the mean of the first `_JITTER_FIRST`, then weight `_JITTER_RATE` (for residuals within
+        `_JITTER_BOUND` times the scatter so far)."""
+        seen = self._rest_scatter_seen[look]
+        # As `observe_still`: after the first few, a residual counts only within `_JITTER_BOUND` times
+        # the scatter so far (a pin that begins to move with a contact is no noise).
+        first = seen < _JITTER_FIRST
+        learn = learn & (first | (residual_sq <= _JITTER_BOUND ** 2 * self._rest_scatter_sq[look]))
+        pins, value, seen, first = look[learn], residual_sq[learn], seen[learn], first[learn]
         if pins.size == 0:
             return
-        seen = self._rest_scatter_seen[pins]
-        rate = np.where(seen < _JITTER_FIRST, 1.0 / (seen + 1.0), _JITTER_RATE)
+        rate = np.where(first, 1.0 / (seen + 1.0), _JITTER_RATE)
         self._rest_scatter_sq[pins] += rate * (value - self._rest_scatter_sq[pins])
         self._rest_scatter_seen[pins] = seen + 1
 
