@@ -65,6 +65,7 @@ neighbours). Gates below half the pin spacing and one-to-one assignments keep id
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
@@ -128,6 +129,20 @@ _JITTER_BOUND = 3.0
 # neighbours place it (the scatter of its steps misses the constant part: its rest offset's noise).
 _CALM_BOUND = 5.0
 _FLOOR_EVERY = 8
+# Draws of noise that measure each rest window's scatter before any is learnt.
+_NOISE_DRAWS = 4
+
+
+def noise_sigma(image: np.ndarray) -> float:
+    """Standard deviation of a grey image's pixel noise, grey levels (Immerkaer's Laplacian-difference
+    estimator made robust: the median absolute response over 6 sigma, so that edges and tips, a
+    minority of pixels, do not count; saturated or flat regions, which show none, are left out)."""
+    kernel = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
+    response = np.abs(cv2.filter2D(image.astype(np.float32), -1, kernel))
+    # A saturated surround (and its clipped fringe) or a black margin shows no noise, or less.
+    clipped = cv2.dilate(((image <= 2) | (image >= 253)).astype(np.uint8), np.ones((5, 5), np.uint8))
+    response = response[1:-1, 1:-1][clipped[1:-1, 1:-1] == 0]
+    return float(np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
 
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
@@ -270,6 +285,9 @@ class Refiner:
         # steps (`observe_still`) do not show its own window's noise, which its calm test bounds.
         self._rest_scatter_sq = np.zeros(len(positions))
         self._rest_scatter_seen = np.zeros(len(positions))
+        # ... and, before any is learnt (the first frames), what the camera's noise does to it: the
+        # windows at rest measured again under noise like the rest frame's (`_noise_scatter_sq`).
+        self._noise_scatter_sq = self._noise_scatter_sq_px2(rest_crop, positions)
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
@@ -277,6 +295,22 @@ class Refiner:
         self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
                                    _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
         self._area_at_most = _AREA_RATIO[1] * area
+
+    def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """Each rest window's mean square displacement, px^2 (N,), under `_NOISE_DRAWS` draws of Gaussian
+        noise of the rest crop's own level (`noise_sigma`) added to it: how far one frame's noise
+        moves the window (a faint tip in glare: tenths of a px; a crisp one: hundredths)."""
+        sigma = noise_sigma(rest_crop)
+        if not sigma > 0:
+            return np.zeros(len(positions))
+        points, radius = positions - self.origin, self.window_radius(positions)
+        base = self.windows.measure(rest_crop, points, radius)[0]
+        rng = np.random.default_rng(0)  # a fixed draw: the same rest frame, the same bound
+        total = np.zeros(len(positions))
+        for _ in range(_NOISE_DRAWS):
+            noisy = np.clip(rest_crop + rng.normal(0.0, sigma, rest_crop.shape), 0, 255).astype(np.uint8)
+            total += _squared_norm(self.windows.measure(noisy, points, radius)[0] - base)
+        return np.where(np.isfinite(total), total / _NOISE_DRAWS, 0.0)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
@@ -650,7 +684,8 @@ class Refiner:
         shift = self.neighbour_median(positions - self.rest_positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
         residual = _squared_norm(centres - rest - shift)
-        scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]), self._jitter_floor)
+        scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
+                             np.maximum(self._noise_scatter_sq[look], self._jitter_floor))
         calm = quiet & (residual <= _CALM_BOUND ** 2 * scatter)
         bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
         # A calm pin's window need only show a tip (its contrast): its area and compactness near the
