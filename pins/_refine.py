@@ -65,6 +65,7 @@ neighbours). Gates below half the pin spacing and one-to-one assignments keep id
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
@@ -128,6 +129,20 @@ _JITTER_BOUND = 3.0
 # neighbours place it (the scatter of its steps misses the constant part: its rest offset's noise).
 _CALM_BOUND = 5.0
 _FLOOR_EVERY = 8
+# Draws of noise that measure each rest window's scatter before any is learnt.
+_NOISE_DRAWS = 4
+
+
+def noise_sigma(image: np.ndarray) -> float:
+    """Standard deviation of a grey image's pixel noise, grey levels (Immerkaer's Laplacian-difference
+    estimator made robust: the median absolute response over 6 sigma, so that edges and tips, a
+    minority of pixels, do not count; saturated or flat regions, which show none, are left out)."""
+    kernel = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
+    response = np.abs(cv2.filter2D(image.astype(np.float32), -1, kernel))
+    # A saturated surround (and its clipped fringe) or a black margin shows no noise, or less.
+    clipped = cv2.dilate(((image <= 2) | (image >= 253)).astype(np.uint8), np.ones((5, 5), np.uint8))
+    response = response[1:-1, 1:-1][clipped[1:-1, 1:-1] == 0]
+    return float(np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
 
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
@@ -265,6 +280,14 @@ class Refiner:
         self._jitter_seen = np.zeros(len(positions))
         self._jitter_floor = 0.0  # the median pin's, updated every `_FLOOR_EVERY` frames
         self._observed = 0
+        # The scatter of each pin's window at its rest position about where its still neighbours place
+        # it, px^2, learnt by `snap_to_rest`: a pin it places there moves with its neighbours, so its
+        # steps (`observe_still`) do not show its own window's noise, which its calm test bounds.
+        self._rest_scatter_sq = np.zeros(len(positions))
+        self._rest_scatter_seen = np.zeros(len(positions))
+        # ... and, before any is learnt (the first frames), what the camera's noise does to it: the
+        # windows at rest measured again under noise like the rest frame's (`_noise_scatter_sq`).
+        self._noise_scatter_sq = self._noise_scatter_sq_px2(rest_crop, positions)
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
@@ -272,6 +295,22 @@ class Refiner:
         self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
                                    _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
         self._area_at_most = _AREA_RATIO[1] * area
+
+    def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """Each rest window's mean square displacement, px^2 (N,), under `_NOISE_DRAWS` draws of Gaussian
+        noise of the rest crop's own level (`noise_sigma`) added to it: how far one frame's noise
+        moves the window (a faint tip in glare: tenths of a px; a crisp one: hundredths)."""
+        sigma = noise_sigma(rest_crop)
+        if not sigma > 0:
+            return np.zeros(len(positions))
+        points, radius = positions - self.origin, self.window_radius(positions)
+        base = self.windows.measure(rest_crop, points, radius)[0]
+        rng = np.random.default_rng(0)  # a fixed draw: the same rest frame, the same bound
+        total = np.zeros(len(positions))
+        for _ in range(_NOISE_DRAWS):
+            noisy = np.clip(rest_crop + rng.normal(0.0, sigma, rest_crop.shape), 0, 255).astype(np.uint8)
+            total += _squared_norm(self.windows.measure(noisy, points, radius)[0] - base)
+        return np.where(np.isfinite(total), total / _NOISE_DRAWS, 0.0)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
@@ -593,8 +632,8 @@ class Refiner:
         window at its rest position (its centroid less the rest offset). A pin far from rest or
         missing is placed there when the window settles within the search's bound on a tip like its
         own at rest. A *calm* pin (its still neighbours' median displacement within a few tenths of a
-        px, and its window within `_CALM_BOUND` times its learnt scatter, `observe_still`, of where
-        they place it) is placed where they place it, its tip shown by its contrast. A pin placed
+        px, and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its
+        steps, `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip shown by its contrast. A pin placed
         near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
         the check costs a few vector operations per frame.
 
@@ -644,9 +683,10 @@ class Refiner:
         # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
         shift = self.neighbour_median(positions - self.rest_positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
-        residual = centres - rest - shift
-        calm = quiet & (_squared_norm(residual)
-                        <= _CALM_BOUND ** 2 * np.maximum(self._jitter_sq[look], self._jitter_floor))
+        residual = _squared_norm(centres - rest - shift)
+        scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
+                             np.maximum(self._noise_scatter_sq[look], self._jitter_floor))
+        calm = quiet & (residual <= _CALM_BOUND ** 2 * scatter)
         bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
         # A calm pin's window need only show a tip (its contrast): its area and compactness near the
         # rim's veil swing with the noise of its top pixels.
@@ -654,11 +694,32 @@ class Refiner:
         found = (_squared_norm(centres - rest) <= bound ** 2) & like
         # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
         found &= calm | ~(distance[look] <= self.gate_px ** 2)
+        # The window's own scatter about where its still neighbours place the pin, learnt from the
+        # windows that showed it here, after the test (a window never widens its own bound): a faint
+        # tip in the veil scatters by tenths of a px, and its steps, taken with its neighbours once
+        # it is placed where they say, do not show that.
+        self._learn_rest_scatter(look, residual, quiet & found)
         if not found.any():
             return positions
         positions = positions.copy()
         positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
+
+    def _learn_rest_scatter(self, look: np.ndarray, residual_sq: np.ndarray, learn: np.ndarray) -> None:
+        """Running mean square of windows' residuals at rest, px^2, for pins `look` where `learn`:
+        the mean of the first `_JITTER_FIRST`, then weight `_JITTER_RATE` (for residuals within
+        `_JITTER_BOUND` times the scatter so far)."""
+        seen = self._rest_scatter_seen[look]
+        # As `observe_still`: after the first few, a residual counts only within `_JITTER_BOUND` times
+        # the scatter so far (a pin that begins to move with a contact is no noise).
+        first = seen < _JITTER_FIRST
+        learn = learn & (first | (residual_sq <= _JITTER_BOUND ** 2 * self._rest_scatter_sq[look]))
+        pins, value, seen, first = look[learn], residual_sq[learn], seen[learn], first[learn]
+        if pins.size == 0:
+            return
+        rate = np.where(first, 1.0 / (seen + 1.0), _JITTER_RATE)
+        self._rest_scatter_sq[pins] += rate * (value - self._rest_scatter_sq[pins])
+        self._rest_scatter_seen[pins] = seen + 1
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.

@@ -137,6 +137,12 @@ class WindowCentroids:
 
     def measure(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """As `__call__`: the centroids (N, 2), px, and (area, contrast, compactness) stacked (3, N)."""
+        # Empty windows and flat planes divide by zero (NaN and inf are the answers there): one
+        # error state for the whole measurement, which runs a few times a frame on a few windows.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self._measure(image, points, radius_px)
+
+    def _measure(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         half, side = self.half_px, 2 * self.half_px + 1
         n = len(points)
         if n == 0:
@@ -173,8 +179,7 @@ class WindowCentroids:
         # fifth of the way up), and there the plane is mostly noise, the pin's own shadow or the
         # skin's texture: the rise shrinks by that much (soft threshold), to nothing for most windows.
         rise = plane[:, 1:]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            shrink = _FLAT_RISE * contrast / np.sqrt(np.einsum("ij,ij->i", rise, rise))
+        shrink = _FLAT_RISE * contrast / np.sqrt(_squared_norm(rise))
         # (Windows without a tip of some contrast, a lost pin's empty window, need no plane.)
         sloped = np.flatnonzero((shrink < 1.0) & (contrast > self.least_contrast))  # NaN compares False
         lift = self.threshold_fraction * np.maximum(contrast, 0.0)
@@ -222,13 +227,12 @@ class WindowCentroids:
                 np.matmul(weights[row:row + rows], self._moments, out=moments[row:row + rows])
         moments = moments.astype(np.float64)
         mass = moments[:, 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            moments[:, 1:] /= mass[:, None]  # centroid offset (x, y) and mean r^2
-            offset = moments[:, 1:3]
-            np.divide(mass, top - level, out=area)
-            # Mean squared distance from the centroid; a disc of area A has A / (2 pi).
-            spread = moments[:, 3] - _squared_norm(offset)
-            np.divide(area, 2 * np.pi * spread, out=compactness)
+        moments[:, 1:] /= mass[:, None]  # centroid offset (x, y) and mean r^2
+        offset = moments[:, 1:3]
+        np.divide(mass, top - level, out=area)
+        # Mean squared distance from the centroid; a disc of area A has A / (2 pi).
+        spread = moments[:, 3] - _squared_norm(offset)
+        np.divide(area, 2 * np.pi * spread, out=compactness)
         centres = anchor + offset
         centres[~fits | (mass <= 0)] = np.nan
         return centres, measures

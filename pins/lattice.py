@@ -50,6 +50,9 @@ finds that lattice without being told the pin count:
    cannot suit every pin of a pad whose light varies, and a pin on an LED reflection inside the pad
    (a brighter background, less contrast) or a faint spoke end under the veil is lost by the
    winner's and found by another's;
+5c. centres: each kept pin is placed by fitting its tip as an opaque ellipse over a quadratic
+   background (`pins._tipfit`): the blobs' centroids lean towards the bright side of a sloped
+   membrane (a reflection's flank, the veil, shading) by up to 0.7 px on small tips;
 6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
    pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
    rim margin that leaves out the membrane half a pitch beyond the outermost pin and the rim
@@ -91,6 +94,7 @@ from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
 from ._rescue import fill_lattice_holes
+from ._tipfit import fit_tip_centres
 from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _sharpness
 from .detect import Blobs, DetectionParams, _detect
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
@@ -401,6 +405,11 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         rejected = np.vstack([rejected, centres[cut]])
         reason = np.concatenate([reason, np.full(int(cut.sum()), REJECTION_REASONS.index("outside field"))])
         centres = centres[~cut]
+    # The blobs' centroids lean towards the bright side of a sloped membrane (an LED reflection, a
+    # veil, shading): each tip is placed by fitting it as an opaque ellipse over a curved background.
+    if len(centres):
+        centres = fit_tip_centres(grey, centres, _pin_radius_px(grey, centres, run.pitch, start.dark_pins),
+                                  dark_pins=start.dark_pins)
     final = _final_params(runs[later], centres, disc, run.pitch, search.radius_px)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=disc,

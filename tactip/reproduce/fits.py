@@ -47,7 +47,7 @@ class Fit:
 #: Paper -> its world's fits.
 FITS: dict[str, tuple[Fit, ...]] = {
     "000": (Fit("tactip.taxel.sim.TaxelSimulator white_noise_counts, common_noise_counts", "0.5, 0.3 counts",
-                "Table II (fingertip, active error <= 0.2 mm at 300 classes on seeds 0-9)", ("Table II",)),),
+                "Table II (fingertip, active error <= 0.2 mm at 300 classes on seeds 0-9)", ("Table II ",)),),
     "001": (Fit("tactip.reproduce.stimuli.Rods session_depth_mm, session_tilt, session_shift_mm",
                 "0.1 mm, 0.03 mm/mm, 0.15 mm", "Fig. 4 black (fixed position: ~2.2 mm shape, ~0.6 mm position)",
                 ("Fig. 4 fixed",)),),

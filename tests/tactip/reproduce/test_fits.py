@@ -20,3 +20,9 @@ def test_fitted_figures_are_marked_and_predictions_are_not():
     assert text.count("(fit)") == 2 and "a note" in text
     assert "fit: tactip.reproduce.stimuli.Textures" in text and "tuned on Figs 5 and 6B" in text
     assert not any(c.fit for c in report.comparisons)                         # the report itself is unchanged
+
+
+def test_the_skins_table_iii_is_a_prediction_though_its_name_starts_like_table_ii():
+    report = Report("000", "t", [], [Comparison("Table II fingertip 300 classes: active error", 0.2, 0.2, "mm"),
+                                      Comparison("Table III skin 100 classes: active error", 0.6, 0.6, "mm")], [])
+    assert [c.fit for c in mark_fits(report).comparisons] == [True, False]

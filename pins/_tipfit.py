@@ -1,0 +1,190 @@
+"""Pin centres by fitting each tip as an opaque ellipse over a curved local background.
+
+An intensity-weighted centroid assumes the tip adds light to a flat background. A pin tip is paint:
+it hides the membrane behind it, and whatever light lies on the membrane (an LED reflection, a bright
+surround's veil, a glare gradient, the gel's shading) shows round the tip but not through it. On
+such a slope no background subtracted before a centroid is right for the tip and its surround at
+once, and small tips (radius 2 px) on the flank of a reflection were placed 0.2-0.7 px off.
+
+Here each tip is modelled in its own window as what the camera sees::
+
+    m(x) = (1 - c(x)) * s(x) + c(x) * (L + D * q(x))
+
+- ``c``: the tip's coverage, an ellipse ``q(x) = (x - mu)^T Q (x - mu) <= 1`` with a soft edge
+  (an error function of the distance beyond the boundary along the ray from the centre, `_EDGE_PX`);
+- ``s``: the membrane behind it, a quadratic surface (a reflection's or a veil's flank, curved);
+- ``L + D q``: the tip's own grey level, slightly domed.
+
+The linear parameters (surface, level, dome) are solved in closed form for each guess of the centre
+and ellipse (variable projection), and those five are refined by damped Gauss-Newton with analytic
+derivatives, all windows at once as (N, P) arrays. Noise on faint tips would let the ellipse wander,
+so a second pass fixes each tip's ellipse to the median of its neighbours' (foreshortening changes
+smoothly over the pad, and under a contact) and fits the centre alone.
+
+A fit that fails (moves beyond `_REACH_PX` of its start, an ellipse outside [0.5, 2] times the pin
+radius, not finite) keeps the starting centre.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+from scipy.special import erf
+
+__all__ = ["fit_tip_centres"]
+
+_EDGE_PX = 0.55  # soft edge of the coverage: erf of (distance beyond the boundary) / this, px
+_REACH_PX = 0.8  # a fitted centre farther than this from its start is not trusted, px
+_AXIS_RANGE = (0.5, 2.0)  # fitted semi-axes within these factors of the pin radius
+_FULL_PASSES = 3  # damped Gauss-Newton passes with the ellipse free ...
+_CENTRE_PASSES = 3  # ... then with each ellipse fixed to its neighbours' median
+_SHAPE_NEIGHBOURS = 7  # tips (with itself) whose median ellipse a tip takes
+_MARGIN_PX = 1.0  # the window reaches this far beyond 1.5 pin radii (the tip's foot and a ring of membrane)
+
+
+def fit_tip_centres(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
+    """Sub-pixel centres of pin tips, each fitted as an opaque ellipse over a quadratic background.
+
+    Parameters
+    ----------
+    grey : (H, W) ndarray of uint8
+        Grey frame.
+    centres : (N, 2) ndarray
+        Starting centres (x, y), px (blob centroids: within a few tenths of a px).
+    radius_px : float
+        Pin tip radius, px (half-height radius; the fit finds each tip's own ellipse).
+    dark_pins : bool
+        Dark markers on a light membrane (the image is inverted).
+
+    Returns
+    -------
+    centres : (N, 2) ndarray of float64
+        Fitted centres, px; a starting centre is kept where its fit fails. Fewer than two pins, or a
+        radius that is not positive: the starting centres.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from tactip.sim import SyntheticTacTip
+    >>> sensor = SyntheticTacTip(pins=127, seed=0)
+    >>> frame = sensor.render()
+    >>> truth = frame.centres[frame.visible]
+    >>> fitted = fit_tip_centres(frame.image, truth + 0.3, sensor.pin_radius_px)
+    >>> error_px = np.hypot(*(fitted - truth).T)
+    >>> bool(np.sqrt(np.mean(error_px ** 2)) < 0.05)
+    True
+    """
+    start = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
+    if len(start) < 2 or not (np.isfinite(radius_px) and radius_px > 0):
+        return start.copy()
+    image = grey.astype(np.float64)
+    if dark_pins:
+        image = 255.0 - image
+    tree = cKDTree(start)
+    distance, index = tree.query(start, min(8, len(start)))
+    nearest = distance[:, 1]
+    reach = np.minimum(1.5 * radius_px + 1.0 + _MARGIN_PX, nearest - 0.5 * radius_px)
+    window = _Windows(image, start, reach, start[index[:, 1:]], nearest)
+    theta = np.zeros((len(start), 5))
+    theta[:, :2] = start
+    theta[:, 2] = theta[:, 4] = 1.0 / radius_px ** 2
+    theta = _gauss_newton(window, theta, start, radius_px, free=5, passes=_FULL_PASSES)
+    _, near = tree.query(theta[:, :2], min(_SHAPE_NEIGHBOURS, len(start)))
+    fixed = theta.copy()
+    fixed[:, :2] = start
+    fixed[:, 2:] = np.median(theta[near, 2:], axis=1)
+    fixed = _gauss_newton(window, fixed, start, radius_px, free=2, passes=_CENTRE_PASSES)
+    return fixed[:, :2].copy()
+
+
+class _Windows:
+    """The pixels round each tip: grey levels (N, P), coordinates (N, P) and which may count."""
+
+    def __init__(self, image, start, reach, neighbours, nearest):
+        height, width = image.shape
+        half = int(np.ceil(reach.max())) + 1
+        offsets = np.arange(-half, half + 1)
+        gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
+        disc = np.hypot(gx, gy) <= half  # no pixel beyond the reach counts: the square's corners are left out
+        gx, gy = gx[disc], gy[disc]
+        anchor = np.rint(start).astype(np.intp)
+        self.x = (anchor[:, 0, None] + gx[None]).astype(np.float64)
+        self.y = (anchor[:, 1, None] + gy[None]).astype(np.float64)
+        inside = (self.x >= 0) & (self.x <= width - 1) & (self.y >= 0) & (self.y <= height - 1)
+        self.values = image[np.clip(self.y, 0, height - 1).astype(np.intp), np.clip(self.x, 0, width - 1).astype(np.intp)]
+        # A pixel counts when it lies in the image and nearer to its own tip than half the distance
+        # to the nearest neighbour from every neighbour (no neighbour's foot), within the reach.
+        own = np.full(self.x.shape, np.inf)
+        for k in range(neighbours.shape[1]):
+            np.minimum(own, np.hypot(self.x - neighbours[:, k, 0, None], self.y - neighbours[:, k, 1, None]), out=own)
+        self.usable = inside & (own > 0.5 * nearest[:, None])
+        self.reach = reach
+
+
+def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius_px: float, *, free: int,
+                  passes: int) -> np.ndarray:
+    """Refine the first `free` of (mu_x, mu_y, Q_xx, Q_xy, Q_yy) by damped Gauss-Newton (N, 5)."""
+    damping = np.full(len(theta), 1e-3)
+    lowest, highest = (1.0 / (_AXIS_RANGE[1] * radius_px) ** 2, 1.0 / (_AXIS_RANGE[0] * radius_px) ** 2)
+    eye = np.eye(free)
+    basis = np.empty((len(theta), 8, window.x.shape[1]))
+    weighted, surface_rows = np.empty_like(basis), np.empty((len(theta), 6, window.x.shape[1]))
+    ridge = 1e-6 * np.eye(8)
+    for _ in range(passes):
+        ex, ey = window.x - theta[:, 0, None], window.y - theta[:, 1, None]
+        length = np.hypot(ex, ey)
+        weight = (window.usable & (length <= window.reach[:, None])).astype(np.float64)
+        qx = theta[:, 2, None] * ex + theta[:, 3, None] * ey  # (Q e)_x
+        qy = theta[:, 3, None] * ex + theta[:, 4, None] * ey
+        q = np.maximum(ex * qx + ey * qy, 1e-12)
+        root = np.sqrt(q)
+        beyond = length * (1.0 - root) / root  # distance inside the boundary along the ray, px
+        coverage = 0.5 + 0.5 * erf(beyond / _EDGE_PX)
+        dome = np.minimum(q, 1.0)
+        # Linear parameters: quadratic background behind the tip, the tip's level and dome: the basis
+        # (N, 8, P), filled in place (one allocation for all passes).
+        rows = basis[:, :6]
+        rows[:, 0] = 1.0
+        rows[:, 1], rows[:, 2] = ex, ey
+        np.multiply(ex, ex, out=rows[:, 3])
+        np.multiply(ex, ey, out=rows[:, 4])
+        np.multiply(ey, ey, out=rows[:, 5])
+        surface_rows[...] = rows
+        rows *= (1.0 - coverage)[:, None, :]
+        basis[:, 6] = coverage
+        np.multiply(coverage, dome, out=basis[:, 7])
+        np.multiply(basis, weight[:, None, :], out=weighted)
+        normal = weighted @ basis.transpose(0, 2, 1) + ridge
+        beta = np.linalg.solve(normal, weighted @ window.values[..., None])[..., 0]
+        model = np.einsum("nkp,nk->np", basis, beta)
+        residual = window.values - model
+        surface = np.einsum("nkp,nk->np", surface_rows, beta[:, :6])
+        tip = beta[:, 6, None] + beta[:, 7, None] * dome
+        # d m / d beyond, and d beyond / d theta (q's own derivatives: dq/dmu = -2 Q e, dq/dQ = e e^T).
+        slope = (tip - surface) * np.exp(-(beyond / _EDGE_PX) ** 2) / (np.sqrt(np.pi) * _EDGE_PX)
+        per_q = -length / (2.0 * q * root)
+        safe = np.maximum(length, 1e-9)
+        factor = 1.0 / root - 1.0
+        under = beta[:, 7, None] * coverage * (q < 1.0)  # the dome's own change
+        grads = [slope * (-ex / safe * factor) - 2.0 * qx * (slope * per_q + under),
+                 slope * (-ey / safe * factor) - 2.0 * qy * (slope * per_q + under)]
+        if free == 5:
+            for dq in (ex * ex, 2.0 * ex * ey, ey * ey):
+                grads.append((slope * per_q + under) * dq)
+        jacobian = np.stack(grads, axis=1)  # (N, free, P)
+        jw = jacobian * weight[:, None, :]
+        hessian = jw @ jacobian.transpose(0, 2, 1)
+        hessian = hessian + damping[:, None, None] * np.diagonal(hessian, axis1=1, axis2=2)[:, :, None] * eye
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            step = np.linalg.solve(hessian + 1e-9 * eye, jw @ residual[..., None])[..., 0]
+        step[:, :2] = np.clip(step[:, :2], -0.5, 0.5)
+        new = theta.copy()
+        new[:, :free] += step
+        trace = new[:, 2] + new[:, 4]
+        det = new[:, 2] * new[:, 4] - new[:, 3] ** 2
+        spread = np.sqrt(np.maximum(trace * trace / 4.0 - det, 0.0))
+        bad = (~np.isfinite(new).all(axis=1) | (det <= 0) | (trace / 2.0 - spread < lowest)
+               | (trace / 2.0 + spread > highest) | (np.hypot(*(new[:, :2] - start).T) > _REACH_PX))
+        theta[~bad] = new[~bad]
+        damping = np.where(bad, damping * 10.0, damping / 3.0)
+    return theta
