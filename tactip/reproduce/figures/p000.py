@@ -8,21 +8,20 @@ Reads either row layout of `tactip.reproduce.p000`: one row per (sensor, classes
 from __future__ import annotations
 
 from tactip.reproduce.figures import COLOURS, PAPER_STYLE, legend, new_figure
+from tactip.reproduce.p000 import PAPER_PASSIVE_MM, PAPER_TABLE2, PAPER_TABLE3
 
 __all__ = ["NAMES", "PAPER_TABLES", "figures", "table_rows"]
 
 #: The figures this module may draw (`make_figures` keys).
 NAMES = ("table2", "table3")
 
-#: Paper 000 Tables II (fingertip, 30 mm, 2 taps) and III (skin, 50 mm, 4 taps): classes -> mean error (mm).
+#: Paper 000 Tables II (fingertip, 30 mm, 2 taps) and III (skin, 50 mm, 4 taps): classes -> mean error (mm),
+#: the numbers `tactip.reproduce.p000` compares with.
 PAPER_TABLES = {
-    "fingertip": {"table": "table2", "range_mm": 30.0, "taps": 2,
-                  "active": {10: 0.0, 15: 0.0, 30: 0.01, 60: 0.04, 100: 0.07, 150: 0.08, 300: 0.12},
-                  "passive": {c: 4.5 for c in (10, 15, 30, 60, 100, 150, 300)}},
-    "skin": {"table": "table3", "range_mm": 50.0, "taps": 4,
-             "active": {25: 0.01, 50: 0.05, 100: 0.11, 200: 0.20, 250: 0.18, 500: 0.24},
-             "passive": {c: 0.4 for c in (25, 50, 100, 200, 250, 500)}},
-}
+    sensor: {"table": table, "range_mm": range_mm, "taps": taps, "active": active,
+             "passive": {c: PAPER_PASSIVE_MM[sensor] for c in active}}
+    for sensor, table, range_mm, taps, active in (("fingertip", "table2", 30.0, 2, PAPER_TABLE2),
+                                                   ("skin", "table3", 50.0, 4, PAPER_TABLE3))}
 
 
 def table_rows(rows) -> list[dict]:
