@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tactip.dataset.labels import LabelRow, LabelScheme, LabelsError, read_labels
-from tactip.dataset.recording import RecordingTaps, is_image, recording_taps, rest_frame_of
+from tactip.dataset.recording import RecordingTaps, is_image, recording_errors, recording_taps, rest_frame_of
+from tactip.dataset.images import detect_images
 from tactip.dataset.split import SPLITS, alternate_split, column_split, group_split
 
 __all__ = ["BuildResult", "build_dataset", "OUTPUTS", "make_calibration"]
@@ -195,7 +196,7 @@ def build_dataset(labels_csv, out_dir, *, label: str | None = None, classes: int
         cal, calibrated_on, labelled = _calibrate_first(labelled, leave_out, rest=rest, rest_frame=rest_frame,
                                                         n_pins=n_pins, min_separation_mm=min_separation_mm,
                                                         labels_csv=labels_csv, left_out=left_out, **sensor_options)
-    image_pins = _detect_images(labelled, cal, device=device, together=together, progress=progress)
+    image_pins = detect_images([row for row, _ in labelled], cal, device=device, together=together, progress=progress)
     per_row = _taps_of_rows(labelled, cal, leave_out, rest=rest, n_samples=n_samples, image_samples=image_samples,
                             rest_frame=rest_frame, progress=progress, labels_csv=labels_csv, warnings=warnings,
                             map_fn=map_fn, image_pins=image_pins)
@@ -309,23 +310,13 @@ def _row_problem(row: LabelRow, labels_csv: pathlib.Path, *, split: str, rest) -
     return ""
 
 
-def _errors() -> tuple:
-    """The errors a recording may raise that leave it out (and not the build)."""
-    from pins import PinsError
-
-    from calibration import CalibrationError
-    from tactip.errors import TactipError
-
-    return (TactipError, PinsError, CalibrationError, OSError, ValueError)
-
-
 def _calibrate_first(labelled, leave_out, *, rest, rest_frame, labels_csv, left_out, **options):
     """The calibration made on the first row whose rest frame shows the sensor; rows before it left out."""
     for k, (row, _) in enumerate(labelled):
         try:
             frame = rest_frame_of(row.path, rest=row.rest or rest, rest_frame=rest_frame)
             cal = make_calibration(frame, source=f"tactip dataset build {labels_csv.name}", **options)
-        except _errors() as exc:
+        except recording_errors() as exc:
             leave_out(row, f"cannot calibrate on its rest frame ({' '.join(str(exc).split())})")
             continue
         return cal, {"line": row.line, "path": _shown(row.path, labels_csv)}, labelled[k:]
@@ -344,49 +335,11 @@ def _shared_recordings(recording: np.ndarray, test: np.ndarray, split: str) -> l
             f"recordings the model has seen and flatter it on new ones" + (f" ({advice})" if advice else "")]
 
 
-def _detect_images(labelled, cal, *, device: str, together: int, progress: bool) -> dict:
-    """The pins of the image rows' images, detected `together` at a time on a torch device: {line: (M, 2) px}.
-
-    Empty for the NumPy path (``device`` cpu, or auto without a GPU), and without images. An image
-    that cannot be read or has another size than the calibration's frames is left to its row, which
-    fails on it with the usual error.
-    """
-    from tactip.replay.batch import _torch_device
-
-    if int(together) != together or together < 1:
-        raise LabelsError(f"together must be a positive integer, got {together}")
-    torch_device = _torch_device(device)
-    rows = [row for row, _ in labelled if is_image(row.path)]
-    if torch_device is None or not rows:
-        return {}
-    from _shared.progress import progress_bar as tqdm
-    from pins.accel_detect import detect_pins_batched
-
-    from tactip.dataset.recording import read_grey_image
-
-    lines = []
-
-    def images():
-        for row in rows:
-            try:
-                image = read_grey_image(row.path)
-            except _errors():
-                continue
-            if (image.shape[1], image.shape[0]) == tuple(cal.frame_size):
-                lines.append(row.line)
-                yield image
-
-    with tqdm(total=len(rows), desc=f"images ({torch_device})", unit="image", disable=not progress) as bar:
-        found = detect_pins_batched(images(), params=cal.detection, disc=cal.disc, device=torch_device,
-                                    together=int(together), progress=bar.update)
-    return dict(zip(lines, found))
-
-
 def _taps_of_rows(labelled, cal, leave_out, *, rest, n_samples, image_samples, rest_frame, progress, labels_csv,
                   warnings, map_fn=None, image_pins=None) -> list[tuple[LabelRow, float, RecordingTaps]]:
     """Each usable row's taps: one recording after another (a tqdm bar over them), or through ``map_fn``.
 
-    ``image_pins`` ({line: pins}, `_detect_images`) are the pins of images already detected.
+    ``image_pins`` ({line: pins}, `tactip.dataset.images.detect_images`) are the pins of images already detected.
     """
     import functools
 
@@ -418,7 +371,7 @@ def _row_taps(piece, *, calibration, rest, n_samples, image_samples, rest_frame,
         return recording_taps(row.path, calibration, rest=row.rest or rest, n_samples=n_samples,
                               image_samples=image_samples, rest_frame=rest_frame, progress=progress,
                               image_pins=image_pins), None
-    except _errors() as exc:
+    except recording_errors() as exc:
         return None, " ".join(str(exc).split())
 
 

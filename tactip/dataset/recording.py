@@ -29,7 +29,7 @@ from tactip.errors import SourceError
 
 
 
-__all__ = ["RecordingTaps", "recording_taps", "is_image", "rest_frame_of", "read_grey_image"]
+__all__ = ["RecordingTaps", "recording_taps", "is_image", "rest_frame_of", "read_grey_image", "recording_errors"]
 
 
 @dataclass
@@ -210,3 +210,13 @@ def _image_taps(path, rest, calibration, *, samples: int, image_pins=None) -> Re
     tap = np.tile(np.concatenate([moved[:, 0], moved[:, 1]])[None, :], (samples, 1)).astype(np.float32)
     return RecordingTaps(taps=tap[None], pins_seen=np.array([int(seen.sum())]), kinds=["image"],
                          directions_deg=[math.nan], contacts=1)
+
+
+def recording_errors() -> tuple:
+    """The errors a recording may raise that leave it out (and not the build)."""
+    from pins import PinsError
+
+    from calibration import CalibrationError
+    from tactip.errors import TactipError
+
+    return (TactipError, PinsError, CalibrationError, OSError, ValueError)

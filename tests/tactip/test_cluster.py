@@ -6,6 +6,7 @@ the Python API, and on TCP bound to 127.0.0.1 (no dashboard) where the CLI needs
 
 import json
 
+import numpy as np
 import pytest
 from distributed import LocalCluster
 
@@ -115,7 +116,9 @@ def test_reproduce_on_the_cluster_equals_a_run_here(client, paper):
     here = reproduce(paper, quick=True, seed=3)
     there = reproduce(paper, quick=True, seed=3, map_fn=cluster_map(client))
     assert there.json_rows() == here.json_rows() and len(here.rows) >= 2
-    assert [(c.figure, c.measured) for c in there.comparisons] == [(c.figure, c.measured) for c in here.comparisons]
+    # measured is NaN where no run decides (001's deadline at 0.99): equal as NaN
+    np.testing.assert_equal([(c.figure, c.measured) for c in there.comparisons],
+                            [(c.figure, c.measured) for c in here.comparisons])
 
 
 def test_cli_sweep_fixation_and_reproduce_with_scheduler(address, tmp_path, capsys):

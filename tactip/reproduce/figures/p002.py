@@ -9,6 +9,8 @@ width_error_mm, ratio``) come from their own runs (`tactip.reproduce.figure_runs
 
 from __future__ import annotations
 
+from perception.choices import POLICIES
+
 from tactip.reproduce.figures import COLOURS, PAPER_STYLE, legend, new_figure, values
 
 __all__ = ["NAMES", "PAPER_FIXATION_MM", "PAPER_LATERAL_RATIO", "figures"]
@@ -27,7 +29,7 @@ def _fig9(report):
 
     fig, (ax,) = new_figure(title="paper 002 Fig. 9 (a FIT: MEMBRANE_RHO_MM 8 -> 1 mm tuned on it): "
                                   "gap width error against decision time", width_in=7.0)
-    for policy in ("active", "random", "stationary"):
+    for policy in POLICIES:
         mine = sorted((r for r in report.rows if r["policy"] == policy), key=lambda r: r["mean_taps"])
         if not mine:
             continue
@@ -61,7 +63,7 @@ def _fig11(rows):
     fig, axes = new_figure(2, title="paper 002 Fig. 11: width error against lateral placement noise (A: the "
                                     "paper's ratio to the noise-free error, B: the errors themselves)")
     for ax, key in zip(axes, ("ratio", "width_error_mm")):
-        for policy in ("active", "random", "stationary"):
+        for policy in POLICIES:
             mine = sorted((r for r in rows if r["policy"] == policy), key=lambda r: r["sigma_mm"])
             if mine:
                 ax.plot(values(mine, "sigma_mm"), values(mine, key), "o-", color=COLOURS[policy],

@@ -157,6 +157,6 @@ def test_reproduce_json_to_stdout(tmp_path, monkeypatch):
 
     report = SimpleNamespace(text=lambda: "report text", json_rows=lambda: [{"figure": "1", "value": 0.5}], rows=[1])
     monkeypatch.setattr(tactip.reproduce, "reproduce", lambda *a, **k: report)
-    code, out, err = run_cli(["reproduce", "004", "--quick", "--json"])
+    code, out, err = run_cli(["reproduce", "004", "--quick", "--json", "--no-figures"])
     assert code == 0 and json.loads(out) == [{"figure": "1", "value": 0.5}] and "report text" in err
     shutil.rmtree(tmp_path, ignore_errors=True)
