@@ -10,7 +10,7 @@ calibration error after 1, 3 and 5 taps, the accuracy and mean belief there, and
 the same distinct test taps (each right with the probability it states), i.e. what the test
 collection's size alone costs.
 
-    python bench/bench_torch_calibration.py [--seeds 0 1 2] [--repeats 2] [--kind torch] [--runs 1000]
+    python bench/bench_torch_calibration.py [--seeds 0 1 2] [--repeats 2] [--kind torch] [--runs 1000] [--packaged]
 
 Measured 2026-11-28 (2 busy cores; 2-6 min a seed), ``--kind torch``: repeats 2, seeds 0/1/2:
 ECE 0.112/0.179/0.136 after 1 tap (floor 0.045-0.055), 0.000/0.053/0.045 after 3, 0.000/0.076/0.022
@@ -30,6 +30,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+#: The packaged simulated station's gaps (samples/station_sim.toml: 0.25-5 mm).
+PACKAGED_GAPS = tuple(f"g{k:02d}" for k in range(1, 21))
+
 
 def one_tap_floor(model, environment, *, draws: int = 500, seed: int = 0) -> float:
     """Mean ECE of a perfectly calibrated model with these 1-tap beliefs over the distinct test taps."""
@@ -46,7 +49,7 @@ def one_tap_floor(model, environment, *, draws: int = 500, seed: int = 0) -> flo
                           for _ in range(draws)]))
 
 
-def measure(seed: int, repeats: int, kind: str, runs: int, root: Path) -> str:
+def measure(seed: int, repeats: int, kind: str, runs: int, root: Path, *, packaged: bool = False) -> str:
     """One line of figures for one collection seed."""
     from calibration import fit_with_fixation
     from perception import VirtualEnvironment, load_dataset, make_policy, trace_beliefs
@@ -54,7 +57,8 @@ def measure(seed: int, repeats: int, kind: str, runs: int, root: Path) -> str:
     from tactip.station.procedures import calibrate_station, collect_station
     from tests.tactip.conftest import small_station_table
 
-    table = small_station_table(root, repeats=repeats, protocol={"seed": seed}, sim={"seed": seed})
+    options = dict(gaps=PACKAGED_GAPS, depth_step=0.25) if packaged else {}
+    table = small_station_table(root, repeats=repeats, protocol={"seed": seed}, sim={"seed": seed}, **options)
     config = parse_station_config(table, base_dir=root)
     calibrate_station(config, log=lambda line: None)
     paths = collect_station(config, root / "datasets", progress=False, workers=2, log=lambda line: None)
@@ -80,17 +84,19 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=2, help="taps per depth and gap in each collection")
     parser.add_argument("--kind", default="torch", help="likelihood kind (perception.MODEL_KINDS)")
     parser.add_argument("--runs", type=int, default=1000, help="Monte Carlo runs of the trace")
+    parser.add_argument("--packaged", action="store_true",
+                        help="the packaged station's 20 gaps and 0.25 mm depth step instead of the tests' small one")
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     if args.kind == "torch":
         import torch
 
         torch.set_num_threads(2)
-    print(f"{args.kind} likelihood, {args.repeats} repeats per depth; ECE / accuracy / belief after 1 / 3 / 5 taps")
+    print(f"{args.kind} likelihood, {'packaged' if args.packaged else 'small'} station, {args.repeats} repeats per depth; ECE / accuracy / belief after 1 / 3 / 5 taps")
     for seed in args.seeds:
         start = time.perf_counter()
         with tempfile.TemporaryDirectory() as tmp:
-            line = measure(seed, args.repeats, args.kind, args.runs, Path(tmp))
+            line = measure(seed, args.repeats, args.kind, args.runs, Path(tmp), packaged=args.packaged)
         print(f"{line} ({time.perf_counter() - start:.0f} s)", flush=True)
     return 0
 
