@@ -94,7 +94,9 @@ def main(argv=None) -> int:
         import torch
 
         torch.set_num_threads(2)
-    print(f"{args.kind} likelihood, {'packaged' if args.packaged else 'small'} station, {args.repeats} repeats per depth; ECE / accuracy / belief after 1 / 3 / 5 taps")
+    station = "packaged" if args.packaged else "small"
+    print(f"{args.kind} likelihood, {station} station, {args.repeats} repeats per depth; "
+          f"ECE / accuracy / belief after 1 / 3 / 5 taps")
     for seed in args.seeds:
         start = time.perf_counter()
         with tempfile.TemporaryDirectory() as tmp:

@@ -22,7 +22,8 @@ the networks learn the spread of each class, not its one or two taps. Why: on th
 station (96 training taps, 44 classes) the networks trained on the taps alone memorised their noise,
 and taps in air, where the four gaps cannot be told apart, were given one gap at a belief of 0.99-1.00
 (out-of-fold, a median 54-96 nats between the gaps); with the deviations 0.32-0.55 (0.5-2.2 nats,
-measured when the early-stopping fold lent its deviations too; the Gaussian 0.27-0.28). On the test collection, at the settings chosen out-of-fold, the active policy's
+measured when the early-stopping fold lent its deviations too; the Gaussian 0.27-0.28). On the test
+collection, at the settings chosen out-of-fold, the active policy's
 accuracy after 3 / 5 taps went from 0.66 / 0.67, 0.77 / 0.84, 0.73 / 0.66 to 1.00 / 1.00, 0.93 / 0.90,
 0.95 / 0.97 (collection seeds 0, 1, 2). Early stopping waits 25 epochs rather than 10: the augmented
 held-out loss is noisier, and with 10 seed 1 stopped at 50 epochs (accuracy 0.67 / 0.66); seeds 0
