@@ -9,7 +9,13 @@ k-nearest neighbours, logistic and ridge regression fitted on the same features
 (`perception.baselines`). Prints the means over seeds and how often each model is worse than the
 best baseline at 1 tap (by more than 5 %) and well below it at 0.9 (<= 0.75x).
 
-    python bench/bench_baselines.py [--seeds 5] [--runs 2000] [--unseen 0.1]
+    python bench/bench_baselines.py [--seeds 5] [--runs 2000] [--unseen 0.1] [--test-per-class 400] [--kinds ...]
+
+Measured 2026-11-28, 5 seeds, 400 test taps per class (1-tap error, model / best baseline): circular
+3.05 / 5.77 deg (ridge), numeric 0.025 / 0.116 mm (ridge), named 0.094 / 0.098 (logistic; the
+Gaussian worse on 0 of 5 seeds), and at threshold 0.9 0.07-0.14x the baseline's. The named case's
+"1.2x logistic" (0.088 / 0.073, worse on 4 of 5 seeds) came from 30 test taps per class: one tap
+moves the error by 0.0067, more than the 5 % the bar resolves (0.0045). On xor every likelihood kind is at chance (0.49) and kNN is not (0.012).
 """
 
 from __future__ import annotations
@@ -69,20 +75,25 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--runs", type=int, default=2000)
     parser.add_argument("--unseen", type=float, default=0.1, help="probability that a pin is unseen for a tap")
+    parser.add_argument("--test-per-class", type=int, default=400,
+                        help="test taps per class (default 400: with the 30 of training, a 150-tap test set of 5 "
+                             "classes moves the error by 0.0067 a tap, more than the 5 %% the bar asks for)")
+    parser.add_argument("--kinds", nargs="+", default=list(KINDS), help="likelihood kinds (torch: slow, needs torch)")
     parser.add_argument("--cases", nargs="+", default=[*CASES, "xor"], choices=[*CASES, "xor"])
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     print(f"{'label':<9} {'model':<21} {'1 tap':>7} {'best bl':>8} {'ratio':>6} {'at 0.9':>7} {'taps':>5} "
           f"{'ratio':>6} {'worse':>6} {'well below':>10}  best baselines")
     for case in args.cases:
-        table = {kind: [] for kind in KINDS}
+        table = {kind: [] for kind in args.kinds}
         for seed in range(args.seeds):
             if case == "xor":
-                train, test = xor_pairs(seed), xor_pairs(seed + 100)
+                train, test = xor_pairs(seed), xor_pairs(seed + 100, per_class=args.test_per_class)
             else:
                 options = dict(CASES[case], noise=1.0, unseen=args.unseen, structure_seed=seed)
-                train, test = labelled_taps(seed=seed, **options), labelled_taps(seed=seed + 100, **options)
-            for kind in KINDS:
+                train = labelled_taps(seed=seed, **options)
+                test = labelled_taps(seed=seed + 100, **{**options, "per_class": args.test_per_class})
+            for kind in args.kinds:
                 table[kind].append(measure(train, test, kind, args.runs, seed))
         for kind, rows in table.items():
             rows = [r for r in rows if r is not None]

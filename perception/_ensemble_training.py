@@ -82,7 +82,7 @@ def _tempered_losses(torch, scores, truth):
 
 
 def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden: int, weight_decay: float,
-                   seed: int, epochs, held=None, patience: int | None = None):
+                   seed: int, epochs, held=None, patience: int | None = None, residuals=None):
     """Train M members together; keep each at its best held-out epoch, or at its own epoch count.
 
     Parameters
@@ -106,6 +106,10 @@ def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden:
         temperature (`_tempered_losses`).
     patience : int, optional
         With ``held``: stop once no member has lowered its held-out loss for this many epochs.
+    residuals : (K, inputs) float array, optional
+        Within-class deviations: each tap of a minibatch is moved by one of them, drawn afresh at every
+        step (`perception.learned.within_class_residuals`), so that the members learn the spread of a
+        class rather than its few taps.
 
     Returns
     -------
@@ -131,11 +135,17 @@ def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden:
         held_class = torch.as_tensor(np.asarray(held[1]), dtype=torch.long)
         held_scores = np.zeros((members, len(held[1]), n_classes))
     batch_size = max(min(BATCH, len(inputs) // MIN_STEPS), 1)
+    noise = None
+    if residuals is not None and len(residuals):
+        noise = torch.as_tensor(np.asarray(residuals), dtype=torch.float32)
     for epoch in range(1, int(stop.max()) + 1):
         order = torch.stack([torch.randperm(len(inputs), generator=generator) for _ in range(members)])
         for batch in order.split(batch_size, dim=1):           # (M, b): a minibatch of its own per member
             optimiser.zero_grad()
-            logits = _forward(torch, weights, inputs[batch])
+            batch_inputs = inputs[batch]
+            if noise is not None:   # each tap moved by a within-class deviation of another
+                batch_inputs = batch_inputs + noise[torch.randint(len(noise), batch.shape, generator=generator)]
+            logits = _forward(torch, weights, batch_inputs)
             # Sum over members of each member's mean cross-entropy: the members' gradients stay apart.
             loss = torch.nn.functional.cross_entropy(logits.reshape(-1, n_classes), targets[batch].reshape(-1),
                                                      reduction="sum") / batch.shape[1]

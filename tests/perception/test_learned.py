@@ -119,3 +119,37 @@ def test_training_uses_every_core_and_gives_the_callers_threads_back(monkeypatch
         assert seen == [os.cpu_count()] * 2 and torch.get_num_threads() == 1
     finally:
         torch.set_num_threads(before)
+
+
+def test_within_class_residuals_are_each_taps_unbiased_deviation_from_its_class_mean():
+    from perception.learned import within_class_residuals
+
+    rng = np.random.default_rng(0)
+    tap_class = np.array([0, 0, 0, 1, 2, 2, 3, 3, 3, 3])   # class 1 has a single tap: no deviation to give
+    x = rng.normal(size=(len(tap_class), 5)) + 10.0 * tap_class[:, None]
+    expected = []
+    for i, c in enumerate(tap_class):   # the plain loop
+        members = x[tap_class == c]
+        if len(members) > 1:
+            expected.append((x[i] - members.mean(axis=0)) * np.sqrt(len(members) / (len(members) - 1)))
+    residuals = within_class_residuals(x, tap_class)
+    np.testing.assert_allclose(residuals, np.array(expected), atol=1e-12)
+    # Scaled so that their mean square is the classes' unbiased variance, free of the class offsets (10 apart).
+    assert abs(residuals.std() - 1.0) < 0.5 and np.abs(residuals).max() < 5.0
+
+
+def test_training_draws_deviations_only_when_augmenting(monkeypatch):
+    from perception import _ensemble_training
+    from perception.learned import fit_torch
+
+    given = []
+    real = _ensemble_training.train_ensemble
+    monkeypatch.setattr(_ensemble_training, "train_ensemble",
+                        lambda *a, residuals=None, **k: given.append(residuals) or real(*a, residuals=residuals, **k))
+    data = gap_dataset(seed=1, taps_per_class=4, **GRID)
+    fit_torch(data, n_locations=3, max_epochs=3, augment=False)
+    assert given == [None, None]
+    given.clear()
+    fit_torch(data, n_locations=3, max_epochs=3)
+    # Early stopping: the deviations of the taps it trains on (fewer than all); the final fit: every tap's.
+    assert len(given) == 2 and 0 < len(given[0]) < len(given[1]) == len(data)
