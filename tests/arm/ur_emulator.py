@@ -26,10 +26,13 @@ through a pipe.
 
 from __future__ import annotations
 
+import fcntl
 import multiprocessing
+import os
 import re
 import socket
 import struct
+import tempfile
 import threading
 import time
 
@@ -251,10 +254,18 @@ def run_emulator(options: Options, pipe) -> None:
     pipe.send(None)
 
 
+#: A lock file that the emulators of one machine take turns on: the UR ports are fixed (ur-rtde cannot
+#: be pointed at others), so two test processes (pytest-xdist workers) wait for each other instead of
+#: one of them skipping its tests.
+PORTS_LOCK = os.path.join(tempfile.gettempdir(), "tactip-ur-emulator-ports.lock")
+
+
 class UrEmulator:
     """The emulator process, seen from a test: ``with UrEmulator() as emu: ...``.
 
-    Raises `PortsBusy` when the UR ports cannot be bound (the tests skip with that reason).
+    Holds `PORTS_LOCK` (waiting for another test process's emulator to close) while it runs. Raises
+    `PortsBusy` when the UR ports cannot be bound even so: something else on this machine has them
+    (the tests skip with that reason).
     """
 
     def __init__(self, **options):
@@ -264,15 +275,25 @@ class UrEmulator:
         self._process = context.Process(target=run_emulator, args=(self.options, child), daemon=True)
 
     def __enter__(self) -> UrEmulator:
-        self._process.start()
-        if not self._pipe.poll(30):
-            self._process.kill()
-            raise RuntimeError("the UR emulator did not start")
-        status, message = self._pipe.recv()
-        if status == "error":
-            self._process.join(5)
-            raise PortsBusy(message)
+        self._lock = open(PORTS_LOCK, "a")
+        fcntl.flock(self._lock, fcntl.LOCK_EX)  # another test process's emulator: wait for it to close
+        try:
+            self._process.start()
+            if not self._pipe.poll(30):
+                self._process.kill()
+                raise RuntimeError("the UR emulator did not start")
+            status, message = self._pipe.recv()
+            if status == "error":
+                self._process.join(5)
+                raise PortsBusy(message)
+        except BaseException:
+            self._release()
+            raise
         return self
+
+    def _release(self) -> None:
+        fcntl.flock(self._lock, fcntl.LOCK_UN)
+        self._lock.close()
 
     def __exit__(self, *exc_info) -> None:
         if self._process.is_alive():
@@ -284,6 +305,8 @@ class UrEmulator:
         self._process.join(5)
         if self._process.is_alive():
             self._process.kill()
+            self._process.join(5)
+        self._release()
 
     def _ask(self, request: str, argument=None):
         self._pipe.send((request, argument))
