@@ -145,6 +145,21 @@ def noise_sigma(image: np.ndarray) -> float:
     return float(np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
 
 
+def _learn_mean_square(mean_sq: np.ndarray, seen: np.ndarray, index, value: np.ndarray, candidate: np.ndarray) -> None:
+    """Update running mean squares in place: ``mean_sq[index]`` (px^2) with ``value`` where ``candidate``.
+
+    The first `_JITTER_FIRST` values of each entry are averaged; later ones count, with weight
+    `_JITTER_RATE`, only within `_JITTER_BOUND` times the mean so far (a pin that begins to move with a
+    contact is no noise). ``seen[index]`` counts the values learnt; NaN values learn nothing.
+    """
+    so_far, count = mean_sq[index], seen[index]
+    first = count < _JITTER_FIRST
+    learn = candidate & (first | (value <= _JITTER_BOUND ** 2 * so_far))
+    rate = np.where(first, 1.0 / (count + 1.0), _JITTER_RATE)
+    mean_sq[index] = so_far + np.where(learn, rate * (value - so_far), 0.0)
+    seen[index] = count + learn
+
+
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
     """One-to-one nearest blob for each point, within a gate.
 
@@ -603,17 +618,9 @@ class Refiner:
         half = _squared_norm(steps)
         still = half <= self._settled_px ** 2  # NaN (lost) compares False
         half *= 0.5
-        # The first `_JITTER_FIRST` still steps are averaged; later ones count only when they lie within
-        # `_JITTER_BOUND` times the scatter so far: slow motion (a tap's onset) is no noise.
+        # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
+        _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
         seen, jitter = self._jitter_seen, self._jitter_sq
-        first = seen < _JITTER_FIRST
-        learn = still & (first | (half <= _JITTER_BOUND ** 2 * jitter))
-        rate = np.where(first, 1.0 / (seen + 1.0), _JITTER_RATE)
-        rate *= learn
-        half -= jitter
-        half *= rate
-        jitter += np.where(learn, half, 0.0)  # NaN steps (lost pins) learn nothing
-        seen += learn
         self._observed += 1
         if self._observed % _FLOOR_EVERY == 1:
             learnt = jitter[seen >= _JITTER_FIRST]
@@ -698,28 +705,12 @@ class Refiner:
         # windows that showed it here, after the test (a window never widens its own bound): a faint
         # tip in the veil scatters by tenths of a px, and its steps, taken with its neighbours once
         # it is placed where they say, do not show that.
-        self._learn_rest_scatter(look, residual, quiet & found)
+        _learn_mean_square(self._rest_scatter_sq, self._rest_scatter_seen, look, residual, quiet & found)
         if not found.any():
             return positions
         positions = positions.copy()
         positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
-
-    def _learn_rest_scatter(self, look: np.ndarray, residual_sq: np.ndarray, learn: np.ndarray) -> None:
-        """Running mean square of windows' residuals at rest, px^2, for pins `look` where `learn`:
-        the mean of the first `_JITTER_FIRST`, then weight `_JITTER_RATE` (for residuals within
-        `_JITTER_BOUND` times the scatter so far)."""
-        seen = self._rest_scatter_seen[look]
-        # As `observe_still`: after the first few, a residual counts only within `_JITTER_BOUND` times
-        # the scatter so far (a pin that begins to move with a contact is no noise).
-        first = seen < _JITTER_FIRST
-        learn = learn & (first | (residual_sq <= _JITTER_BOUND ** 2 * self._rest_scatter_sq[look]))
-        pins, value, seen, first = look[learn], residual_sq[learn], seen[learn], first[learn]
-        if pins.size == 0:
-            return
-        rate = np.where(first, 1.0 / (seen + 1.0), _JITTER_RATE)
-        self._rest_scatter_sq[pins] += rate * (value - self._rest_scatter_sq[pins])
-        self._rest_scatter_seen[pins] = seen + 1
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.
