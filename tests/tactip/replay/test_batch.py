@@ -57,8 +57,10 @@ def client():
 
 
 def _h5_differences(a: bytes, b: bytes, limit: int = 8) -> list[str]:
-    """What differs between two HDF5 files given as bytes: the datasets and attributes, by name (for the
-    message of a failed byte-for-byte comparison, so that an intermittent difference says where it is)."""
+    """What differs between two HDF5 files given as bytes: their datasets and attributes, by name (empty
+    when they hold the same). Not their bytes: HDF5 writes some blocks with memory it never cleared
+    (a clean-clone run's batch tap0.h5 held the same datasets and attributes as its single replay and
+    differed in 224 bytes of such padding, pointer-like values), so equal contents may differ in layout."""
     import io
 
     import h5py
@@ -66,7 +68,7 @@ def _h5_differences(a: bytes, b: bytes, limit: int = 8) -> list[str]:
     found = []
     with h5py.File(io.BytesIO(a), "r") as fa, h5py.File(io.BytesIO(b), "r") as fb:
         def items(f):
-            out = {}
+            out = {"/": f}  # the file's own attributes too
             f.visititems(lambda name, obj: out.__setitem__(name, obj))
             return out
 
@@ -84,7 +86,7 @@ def _h5_differences(a: bytes, b: bytes, limit: int = 8) -> list[str]:
                 if np.shape(da) != np.shape(db) or not np.array_equal(da, db, equal_nan=da.dtype.kind == "f"):
                     where = "" if np.shape(da) != np.shape(db) else f", first at {np.argwhere(da != db)[:3].tolist()}"
                     found.append(f"{name}: {np.shape(da)} vs {np.shape(db)}{where}")
-    return found[:limit] or ["same datasets and attributes: the files differ in layout only"]
+    return found[:limit]
 
 
 def _mtimes(out):
@@ -100,9 +102,8 @@ def test_batch_writes_single_replays_names_the_corrupt_file_and_resumes(archive,
     # Every good video's output is byte for byte its single replay; the corrupt one is named, nothing of it written.
     written = {p.name: p.read_bytes() for p in out.glob("*.h5")}
     assert set(written) == set(expected)
-    differing = {name: _h5_differences(written[name], expected[name]) for name in expected
-                 if written[name] != expected[name]}
-    assert not differing, differing
+    differing = {name: _h5_differences(written[name], expected[name]) for name in expected}
+    assert not any(differing.values()), differing
     assert [(r["video"], r["status"]) for r in first.failed] == [(str(folder / "bad.mp4"), "failed")]
     assert "not a video" in first.failed[0]["error"]
     assert not list(out.glob(".*part*"))
@@ -120,7 +121,7 @@ def test_batch_writes_single_replays_names_the_corrupt_file_and_resumes(archive,
     # --overwrite replays them again, to the same bytes.
     third = replay_batch(videos[1:3], out, client=client, overwrite=True)
     assert [r["status"] for r in third.rows] == ["written", "written"] and not third.failed
-    assert (out / "tap0.h5").read_bytes() == expected["tap0.h5"]
+    assert not _h5_differences((out / "tap0.h5").read_bytes(), expected["tap0.h5"])
     assert (out / "tap0.h5").stat().st_mtime_ns != before["tap0.h5"]
 
 
@@ -151,7 +152,7 @@ def test_batch_options_reach_every_replay(archive, client, tmp_path):
     single = replay_video(str((folder / "tap3.mp4").resolve()), tmp_path / "single.h5", n_samples=12, n_pins=10,
                           rest_frame=1)
     assert result.rows[0]["status"] == "written" and single.frames == 20
-    assert (tmp_path / "tap3.h5").read_bytes() == (tmp_path / "single.h5").read_bytes()
+    assert not _h5_differences((tmp_path / "tap3.h5").read_bytes(), (tmp_path / "single.h5").read_bytes())
     with pytest.raises(ValueError, match="n_pins"):
         replay_batch([folder / "tap3.mp4"], tmp_path / "never", client=client, n_pins=0)
     assert not (tmp_path / "never").exists()
@@ -165,7 +166,7 @@ def test_an_output_made_from_another_video_is_not_replaced(archive, client, tmp_
     replay_batch([folder / "tap0.mp4"], tmp_path / "out", client=client)
     result = replay_batch([other / "tap0.mp4"], tmp_path / "out", client=client)
     assert result.failed and "made from" in result.failed[0]["error"] and "--overwrite" in result.failed[0]["error"]
-    assert (tmp_path / "out" / "tap0.h5").read_bytes() == expected["tap0.h5"]
+    assert not _h5_differences((tmp_path / "out" / "tap0.h5").read_bytes(), expected["tap0.h5"])
 
 
 def test_expand_videos_and_clashing_names(archive, client, tmp_path):
