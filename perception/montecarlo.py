@@ -136,7 +136,9 @@ class MonteCarloResult:
     units; location class centres in location units), averaged over runs. ``accuracy`` is the
     fraction of runs whose decided identity class is exactly right (location class, for a model
     with a single identity). The maps hold the same means per starting (location, identity)
-    class (NaN for classes no run started in).
+    class (NaN for classes no run started in). ``identity_error_runs`` and ``taps_runs`` keep each
+    run's identity error and decision taps, for figures of their distributions (paper 001 Fig. 7A,
+    003 Fig. 7, 000 Fig. 8B).
     """
 
     policy: str
@@ -155,6 +157,8 @@ class MonteCarloResult:
     taps_map: np.ndarray              # (K, L, I)
     runs: int
     final_location: np.ndarray | None = None  # (K, runs) true location class of each run at its decision
+    identity_error_runs: np.ndarray | None = None  # (K, runs) each run's identity error (figures: histograms)
+    taps_runs: np.ndarray | None = None            # (K, runs) each run's decision taps (figures: histograms)
 
     def rows(self) -> list[dict]:
         """One JSON-ready dict per threshold: policy, threshold, errors, accuracy, mean taps, forced and null."""
@@ -337,4 +341,4 @@ def _summarise(model, name, thresholds, start, identity, out, period=None) -> Mo
         decided_identity_error=decided_identity, decided_location_error=decided_location,
         identity_error_map=per_class(identity_error),
         location_error_map=per_class(location_error), taps_map=per_class(out["taps"]), runs=len(start),
-        final_location=out["true_location"])
+        final_location=out["true_location"], identity_error_runs=identity_error, taps_runs=out["taps"])

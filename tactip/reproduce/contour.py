@@ -48,6 +48,9 @@ class ContourResult:
         Mean |Delta - turn_classes| at the last decision, angle classes (NaN without a learned Delta).
     delta_error_by_decision : (D,) ndarray
         The same at every decision (Fig. 8).
+    traced_mm : (N, D, 2) ndarray
+        The traced contour of the first N runs (``traces``): the edge point (x, y) each decision
+        perceives, mm (Fig. 6); (0, D, 2) unless asked for.
     """
 
     angle_error_deg: float
@@ -56,13 +59,14 @@ class ContourResult:
     closed_contour: float
     delta_error_classes: float
     delta_error_by_decision: np.ndarray
+    traced_mm: np.ndarray | None = None
 
 
 def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, adaptive: bool = False,
                    prior_shift: int | None = None, runs: int = 200, decisions: int = 80, seed: int = 0,
                    radius_mm: float = 30.0, target_mm: float = 0.0, alpha: float = 0.5, max_taps: int = 50,
                    lost_mm: float = 6.0, warmup: int = 0, turn_classes: int = 2,
-                   trace_mm: float = 2.0, prior: str = "joint") -> ContourResult:
+                   trace_mm: float = 2.0, prior: str = "joint", traces: int = 0) -> ContourResult:
     """Follow the circle with passive, active or adaptive perception (see the module docstring).
 
     Parameters
@@ -80,6 +84,8 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
     prior : {"joint", "angle_only"}
         The adaptive prior's predicted distribution: eq. 7 on the joint posterior (faithful), or the
         angle marginal spread flat over positions (a variant).
+    traces : int
+        Keep the traced contour of the first ``traces`` runs (``ContourResult.traced_mm``, Fig. 6).
     runs, decisions, seed, radius_mm, target_mm, alpha, max_taps, lost_mm, warmup, turn_classes
         Runs side by side, decisions per run, randomness, plate radius (mm), target position (mm),
         weight of the prediction, taps at which a decision is forced, edge-lost distance (mm),
@@ -108,6 +114,8 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
     last = last_evidence = None
     errors = {"angle": [], "position": [], "taps": []}
     delta_error = np.full(decisions, np.nan)
+    traces = min(int(traces), runs)
+    traced_mm = np.zeros((traces, decisions, 2))
     edges = model.location_edges
 
     def truth(p):
@@ -161,6 +169,7 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
         normal = np.radians(decided[:, 1] * angle_step)
         traced = p_decided - model.location_centres[decided[:, 0]][:, None] * np.stack([np.cos(normal),
                                                                                          np.sin(normal)], axis=1)
+        traced_mm[:, d] = traced[:traces]
         lost |= (np.abs(x_true) > lost_mm) | (np.abs(np.hypot(traced[:, 0], traced[:, 1]) - radius_mm) > trace_mm)
         angle_error = np.abs((decided[:, 1] * angle_step - phi_true + 180.0) % 360.0 - 180.0)
         if d >= warmup:
@@ -179,4 +188,5 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
     closed = (turned >= 2 * np.pi - 1e-9) & ~lost
     final = np.abs(learner.delta - turn_classes).mean() if adaptive and prior_shift is None else np.nan
     return ContourResult(float(np.mean(errors["angle"])), float(np.mean(errors["position"])),
-                         float(np.mean(errors["taps"])), float(closed.mean()), float(final), delta_error)
+                         float(np.mean(errors["taps"])), float(closed.mean()), float(final), delta_error,
+                         traced_mm)

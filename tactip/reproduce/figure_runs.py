@@ -1,4 +1,4 @@
-"""The small experiments that only figures need: paper 002 Figs 10-11 and paper 004 Figs 7 (sweep) and 8.
+"""The small experiments that only figures need: 000 Figs 7, 8B, 10, 11; 002 Figs 10-11; 003 Fig. 5; 004 Figs 6-8.
 
 Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved beside the PNGs:
 
@@ -9,6 +9,10 @@ Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved besi
   [-sigma, sigma] mm, ``[protocol] lateral_jitter_mm``) tapped on the same simulated station, the model
   trained without noise; each policy's width error at 10 mean taps (as Fig. 9) over the error at
   sigma 0;
+- 000 Figs 7, 8B, 10 and 11 on the simulated fingertip (`tactip.reproduce.taxel_runs`);
+- 003 Fig. 5 over a sweep of test depth offsets (`tactip.reproduce.figure_samples.fig5_sweep_rows`);
+- 004 Fig. 6, the traced contours of passive, active and adaptive perception at thresholds 0.2 and 0.9
+  (`tactip.reproduce.figure_samples.traced_contour_samples`);
 - 004 Figs 7 and 8 (`beta_sweep_rows`): contour following by active, adaptive (eq. 7 as printed) and
   the angle-only variant over a sweep of belief thresholds (the paper's beta); the adaptive runs'
   learned shift error at every decision is Fig. 8.
@@ -172,6 +176,7 @@ def beta_sweep_rows(env, *, thresholds, runs: int, decisions: int, max_taps: int
 
 
 def _p004_rows(*, quick: bool, seed: int, progress=None, map_fn=None) -> dict:
+    from tactip.reproduce.figure_samples import traced_contour_samples
     from tactip.reproduce.report import environment
     from tactip.reproduce.stimuli import make_stimulus
 
@@ -179,7 +184,19 @@ def _p004_rows(*, quick: bool, seed: int, progress=None, map_fn=None) -> dict:
     options = dict(runs=12, decisions=40, max_taps=25) if quick else dict(runs=50, decisions=45, max_taps=50)
     sweep, learning = beta_sweep_rows(env, thresholds=QUICK_SWEEP_THRESHOLDS if quick else SWEEP_THRESHOLDS,
                                       seed=seed, progress=progress, map_fn=map_fn, **options)
-    return {"fig7_sweep": sweep, "fig8": learning}
+    # Fig. 6: the paper's runs go about 40 decisions round its plate; the traces of 3 runs per condition
+    traced = traced_contour_samples(env, traces=3, seed=seed, **options)
+    return {"fig6_traced": traced, "fig7_sweep": sweep, "fig8": learning}
+
+
+def _p003_rows(*, quick: bool, seed: int) -> dict:
+    from tactip.reproduce.figure_samples import FIG5_OFFSETS_MM, QUICK_FIG5_OFFSETS_MM, fig5_sweep_rows
+    from tactip.reproduce.report import collections
+    from tactip.reproduce.stimuli import make_stimulus
+
+    train, test = collections(make_stimulus("textures"), seed=seed, taps_per_identity=150)
+    return {"fig5_sweep": fig5_sweep_rows(train, test, offsets_mm=QUICK_FIG5_OFFSETS_MM if quick else FIG5_OFFSETS_MM,
+                                          runs=600 if quick else 2000, seed=seed + 1)}
 
 
 def _p002_rows(root: Path, *, quick: bool, seed: int, progress=None, map_fn=None, log=lambda line: None) -> dict:
@@ -227,6 +244,12 @@ def run_with_figure_runs(paper: str, *, quick: bool = False, seed: int = 0, prog
             extra = _p002_rows(Path(folder), quick=quick, seed=seed, progress=progress, map_fn=map_fn)
     elif paper == "004":
         extra = _p004_rows(quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+    elif paper == "003":
+        extra = _p003_rows(quick=quick, seed=seed)
+    elif paper == "000":
+        from tactip.reproduce.taxel_runs import taxel_figure_rows
+
+        extra = taxel_figure_rows(quick=quick, seed=seed, progress=progress)
     return report, {name: _json_ready(rows) for name, rows in extra.items()}
 
 

@@ -136,14 +136,21 @@ def deadline_runs(env, deadline: int, *, thresholds, attempts: int, seed) -> Dea
 
 
 def _deadline_run(deadline, *, env, thresholds, runs: int, seed: int):
-    """The runs with one deadline (None: fixed position), a piece of `run` (module level: it travels to a worker)."""
+    """The runs with one deadline (None: fixed position), a piece of `run` (module level: it travels to a worker).
+
+    Returns the rows and, with a deadline, its `DeadlineRuns`; without, the samples of Figs 7A and 8
+    (`tactip.reproduce.figure_samples.p001_samples`).
+    """
+    from tactip.reproduce.figure_samples import p001_samples
+
     if deadline is None:
         result = monte_carlo(env, StationaryPolicy(), thresholds=thresholds, runs=runs, seed=seed + 1, max_taps=None,
                              decision_rule="joint", shift_mode="uniform")
         return [{"deadline": None, "threshold": float(t), "shape_error_mm": float(result.decided_identity_error[k]),
                  "position_error_mm": float(result.decided_location_error[k]),
                  "reaction_taps": float(result.mean_taps[k]), "null_fraction": 0.0,
-                 "forced_fraction": float(result.forced[k])} for k, t in enumerate(result.thresholds)], None
+                 "forced_fraction": float(result.forced[k])} for k, t in enumerate(result.thresholds)], \
+            p001_samples(result, env.model)
     runs_d = deadline_runs(env, deadline, thresholds=thresholds, attempts=runs, seed=(seed, 1, deadline))
     return [{"deadline": deadline, "threshold": float(t), "shape_error_mm": float(runs_d.shape_error_mm[k]),
              "position_error_mm": float(runs_d.position_error_mm[k]), "reaction_taps": float(runs_d.reaction_taps[k]),
@@ -203,4 +210,4 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Re
              "minimum errors within 5-10 taps), so a 5-tap attempt rarely reaches theta >= 0.9 and for most rods never "
              "reaches 0.99: the world, not the deadline, is what fails the paper's comparison at its highest thresholds."]
     return Report("001", "embodied hyperacuity: rod shape x position, deadline and random relocation", rows,
-                  comparisons, notes)
+                  comparisons, notes, samples=pieces[0][1])

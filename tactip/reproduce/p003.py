@@ -49,9 +49,14 @@ def _single_depth(train, test, offset_mm: float, runs: int, seed: int):
     return monte_carlo(env, StationaryPolicy(), thresholds=[DECISION_THRESHOLD], runs=runs, seed=seed, max_taps=200)
 
 
-def _seed_run(s: int, *, stimulus, runs: int, first: int) -> tuple[list, list]:
-    """Rows (and, for the first seed, comparisons) of one simulator seed: a piece of `run` that travels to a worker."""
-    rows, comparisons = [], []
+def _seed_run(s: int, *, stimulus, runs: int, first: int) -> tuple[list, list, dict]:
+    """Rows (and, for the first seed, comparisons) of one simulator seed: a piece of `run` that travels to a worker.
+
+    The third element holds the seed's samples for Figs 6A and 7 (`tactip.reproduce.figure_samples`).
+    """
+    from tactip.reproduce.figure_samples import p003_fig6a, texture_error_counts
+
+    rows, comparisons, samples = [], [], {"fig7_hist": {}}
     train, test = collections(stimulus, seed=s, taps_per_identity=150)
     env = VirtualEnvironment(fit_model(train, n_locations=15), test)
     options = dict(thresholds=[DECISION_THRESHOLD], runs=runs, seed=s + 1, max_taps=200, shift_mode="uniform")
@@ -60,6 +65,9 @@ def _seed_run(s: int, *, stimulus, runs: int, first: int) -> tuple[list, list]:
                   monte_carlo(env, FixationPolicy(TARGET_CLASS), move_threshold=move, **options))
         rows.append({"seed": s, "move_threshold": move, "texture_error_classes": float(result.mean_identity_error[0]),
                      "mean_taps": float(result.mean_taps[0]), "forced_fraction": float(result.forced[0])})
+        samples["fig7_hist"][move] = texture_error_counts(result, env.model.n_identities)
+        if move > 1:
+            samples["fig6a"] = p003_fig6a(result, env.model)
         if move > 1 and s == first:
             depth_error = np.nanmean(result.identity_error_map[0], axis=1)      # (15,) over textures
             comparisons += [Comparison("Fig. 6B passive, depths 0-1 mm: texture error", depth_error[:5].mean(),
@@ -71,7 +79,7 @@ def _seed_run(s: int, *, stimulus, runs: int, first: int) -> tuple[list, list]:
             single = _single_depth(train, test, offset, runs, s + 1)
             comparisons.append(Comparison(f"Fig. 5 one depth class, test offset {offset:g} mm: texture error",
                                           single.mean_identity_error[0], paper, "classes"))
-    return rows, comparisons
+    return rows, comparisons, samples
 
 
 def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Report:
@@ -84,9 +92,12 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Re
     rows, comparisons = [], []
     pieces = map_pieces(functools.partial(_seed_run, stimulus=stimulus, runs=runs, first=seeds[0]), list(seeds),
                         map_fn=map_fn, progress=progress)
-    for seed_rows, seed_comparisons in pieces:
+    for seed_rows, seed_comparisons, _ in pieces:
         rows += seed_rows
         comparisons += seed_comparisons
+    # Fig. 7 as the paper draws it: error frequencies, summed over the seeds; Fig. 6A: each seed's map
+    samples = {"fig7_hist": {move: sum(p[2]["fig7_hist"][move] for p in pieces) for move in MOVE_THRESHOLDS},
+               "fig6a": [dict(p[2]["fig6a"], seed=s) for s, p in zip(seeds, pieces)]}
     for move, paper, name in ((PASSIVE, 1.4, "passive"), (0.999, None, "weakly active"), (0.05, 0.4, "strongly active")):
         errors = [r["texture_error_classes"] for r in rows if r["move_threshold"] == move]
         comparisons.append(Comparison(f"Fig. 7 {name}: texture error (mean of {len(errors)} seeds)",
@@ -94,4 +105,4 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None) -> Re
     notes = [f"{runs} runs per condition; simulator seeds {', '.join(map(str, seeds))}; stop at 'what' > 0.5.",
              "tuned: the texture world against Figs 5-6 (passive); Fig. 7 (active) is a prediction.",
              f"move_threshold {PASSIVE} stands for the paper's '>1' (never moves)."]
-    return Report("003", "active touch: texture under depth uncertainty", rows, comparisons, notes)
+    return Report("003", "active touch: texture under depth uncertainty", rows, comparisons, notes, samples=samples)

@@ -59,6 +59,10 @@ class Report:
     comparisons : list of Comparison
     notes : list of str
         What was tuned, what is a prediction, departures from the paper.
+    samples : dict of str -> object
+        Per-run or per-class samples that only figures draw (distributions, maps, traced contours;
+        `tactip.reproduce.figure_samples`), by figure name. Not written to the JSON, whose fields
+        stay the rows'.
     """
 
     paper: str
@@ -66,6 +70,7 @@ class Report:
     rows: list[dict]
     comparisons: list[Comparison] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    samples: dict = field(default_factory=dict, repr=False, compare=False)
 
     def text(self) -> str:
         """The printed report."""
