@@ -121,8 +121,10 @@ def save_figures(figures: dict, folder, *, paper: str) -> list[pathlib.Path]:
     return written
 
 
-def new_figure(panels: int = 1, *, title: str, width_in: float = 5.0, height_in: float = 4.0):
-    """A figure of ``panels`` side-by-side axes (Agg canvas: no display, no pyplot state).
+def new_figure(panels: int = 1, *, title: str, width_in: float = 5.0, height_in: float = 4.0, rows: int = 1):
+    """A figure of ``panels`` axes side by side, in ``rows`` rows (Agg canvas: no display, no pyplot state).
+
+    ``width_in`` and ``height_in`` are one panel's size, inches.
 
     Returns
     -------
@@ -132,12 +134,13 @@ def new_figure(panels: int = 1, *, title: str, width_in: float = 5.0, height_in:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width_in * panels, height_in), layout="constrained")
+    columns = -(-panels // rows)
+    fig = Figure(figsize=(width_in * columns, height_in * rows), layout="constrained")
     FigureCanvasAgg(fig)
-    axes = [fig.add_subplot(1, panels, k + 1) for k in range(panels)]
+    axes = [fig.add_subplot(rows, columns, k + 1) for k in range(panels)]
     import textwrap
 
-    fig.suptitle(textwrap.fill(title, int(11 * width_in * panels)), fontsize=10)
+    fig.suptitle(textwrap.fill(title, int(11 * width_in * columns)), fontsize=10)
     for ax in axes:
         ax.grid(alpha=0.3)
     return fig, axes

@@ -2,7 +2,9 @@
 
 Reads either row layout of `tactip.reproduce.p000`: one row per (sensor, classes, policy) with
 ``error_mm`` (issue 25), or one row per class count with ``passive_error_mm`` and ``active_error_mm``
-(the fingertip only). The paper's tables are drawn beside, from its text.
+(the fingertip only). The paper's tables are drawn beside, from its text. With the rows of
+`tactip.reproduce.taxel_runs` (``--figure-runs``), Figs 7, 8B, 10 and 11 of the simulated fingertip
+(`tactip.reproduce.figures.taxel`).
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from tactip.reproduce.p000 import PAPER_PASSIVE_MM, PAPER_TABLE2, PAPER_TABLE3
 __all__ = ["NAMES", "PAPER_TABLES", "figures", "table_rows"]
 
 #: The figures this module may draw (`make_figures` keys).
-NAMES = ("table2", "table3")
+NAMES = ("table2", "table3", "fig7", "fig8b", "fig10", "fig11")
 
 #: Paper 000 Tables II (fingertip, 30 mm, 2 taps) and III (skin, 50 mm, 4 taps): classes -> mean error (mm),
 #: the numbers `tactip.reproduce.p000` compares with.
@@ -66,7 +68,11 @@ def _table(rows, sensor: str):
 
 
 def figures(report, extra: dict) -> dict:
-    """Table II, and Table III when the rows hold the skin."""
+    """Table II, Table III when the rows hold the skin, and Figs 7, 8B, 10 and 11 when their runs' rows are given
+    (`tactip.reproduce.taxel_runs`, drawn by `tactip.reproduce.figures.taxel`)."""
+    from tactip.reproduce.figures.taxel import taxel_figures
+
     rows = table_rows(report.rows)
-    return {PAPER_TABLES[s]["table"]: _table(rows, s) for s in ("fingertip", "skin")
-            if any(r["sensor"] == s for r in rows)}
+    out = {PAPER_TABLES[s]["table"]: _table(rows, s) for s in ("fingertip", "skin")
+           if any(r["sensor"] == s for r in rows)}
+    return {**out, **taxel_figures(extra)}

@@ -2,7 +2,8 @@
 
 One curve per deadline (black: fixed perception, no deadline) from the rows of `tactip.reproduce.p001`
 (``deadline, threshold, shape_error_mm, position_error_mm, reaction_taps, null_fraction``); the
-paper's numbers (Fig. 4 comparisons) dotted.
+paper's numbers (Fig. 4 comparisons) dotted. Figs 7A (reaction-time histograms) and 8 (per-class maps)
+from the samples the reproduction keeps (``Report.samples``, `tactip.reproduce.figures.samples`).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from tactip.reproduce.figures import legend, new_figure, paper_lines, values
 __all__ = ["NAMES", "figures"]
 
 #: The figures this module may draw (`make_figures` keys).
-NAMES = ("fig4", "fig5", "fig6", "fig7b")
+NAMES = ("fig4", "fig5", "fig6", "fig7a", "fig7b", "fig8")
 
 _DEADLINE_COLOURS = ("tab:orange", "tab:blue", "tab:green", "tab:purple", "tab:brown")
 
@@ -68,11 +69,19 @@ def _against_threshold(report, key: str, label: str, title: str):
 
 
 def figures(report, extra: dict) -> dict:
-    """Figs 4, 5, 6 and 7B."""
-    return {"fig4": _errors(report, "threshold", "fig4", "paper 001 Fig. 4: decision errors against belief threshold"),
+    """Figs 4, 5, 6 and 7B, and Figs 7A and 8 when the report holds their samples (``Report.samples``)."""
+    from tactip.reproduce.figures.samples import fig7a_001, fig8_001
+
+    samples = getattr(report, "samples", {}) or {}
+    out = {"fig4": _errors(report, "threshold", "fig4", "paper 001 Fig. 4: decision errors against belief threshold"),
             "fig5": _errors(report, "reaction_taps", "fig5",
                             "paper 001 Fig. 5: decision errors against mean reaction time"),
             "fig6": _against_threshold(report, "null_fraction", "proportion of null decisions (moves)",
                                        "paper 001 Fig. 6: move requests against belief threshold"),
             "fig7b": _against_threshold(report, "reaction_taps", "mean reaction time (taps)",
                                         "paper 001 Fig. 7B: reaction time against belief threshold")}
+    if samples.get("fig7a"):
+        out["fig7a"] = fig7a_001(samples["fig7a"])
+    if samples.get("fig8"):
+        out["fig8"] = fig8_001(samples["fig8"])
+    return {name: out[name] for name in NAMES if name in out}

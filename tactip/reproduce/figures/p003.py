@@ -3,6 +3,9 @@
 Fig. 7 from the rows of `tactip.reproduce.p003` (``seed, move_threshold, texture_error_classes``): one
 bar per move threshold (the mean over the seeds, each seed a dot), the paper's errors as hollow bars.
 Figs 5 and 6B from the report's comparisons (measured beside the paper's, at the depths compared).
+From the report's samples (``Report.samples``): Fig. 6A (texture error per depth and texture) and Fig. 7
+as the paper draws it, error frequencies (``fig7_hist``); with ``--figure-runs``, Fig. 5 over a sweep of
+offsets (``fig5_sweep``). Drawn by `tactip.reproduce.figures.samples`.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from tactip.reproduce.figures import legend, new_figure, values
 __all__ = ["NAMES", "PAPER_CHANCE_CLASSES", "figures"]
 
 #: The figures this module may draw (`make_figures` keys).
-NAMES = ("fig5", "fig6b", "fig7")
+NAMES = ("fig5", "fig5_sweep", "fig6a", "fig6b", "fig7", "fig7_hist")
 
 #: Move threshold -> name, in the order of Fig. 7 (1.5 stands for the paper's ">1", never moves).
 _POLICIES = {1.5: "passive (>1)", 0.999: "weakly active (0.999)", 0.05: "strongly active (0.05)"}
@@ -77,5 +80,17 @@ def _fig7(report):
 
 
 def figures(report, extra: dict) -> dict:
-    """Figs 5, 6B and 7."""
-    return {"fig5": _fig5(report), "fig6b": _fig6b(report), "fig7": _fig7(report)}
+    """Figs 5, 6B and 7; Figs 6A and 7 as histograms from the report's samples; Fig. 5 over offsets from its runs."""
+    from tactip.reproduce.figures.samples import fig5_sweep_003, fig6a_003, fig7_hist_003
+
+    samples = getattr(report, "samples", {}) or {}
+    out = {"fig5": _fig5(report), "fig6b": _fig6b(report), "fig7": _fig7(report)}
+    if extra.get("fig5_sweep"):
+        out["fig5_sweep"] = fig5_sweep_003(extra["fig5_sweep"], report.comparisons, PAPER_CHANCE_CLASSES)
+    if samples.get("fig6a"):
+        out["fig6a"] = fig6a_003(samples["fig6a"])
+    if samples.get("fig7_hist"):
+        paper = {move: next((c.paper for c in report.comparisons if c.figure.startswith(f"Fig. 7 {name}:")), None)
+                 for name, move in _PAPER_FIG7.items()}
+        out["fig7_hist"] = fig7_hist_003(samples["fig7_hist"], _POLICIES, paper)
+    return {name: out[name] for name in NAMES if name in out}

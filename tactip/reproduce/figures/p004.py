@@ -1,10 +1,10 @@
 """Paper 004's Figs 6-8: contour following with passive, active and adaptive perception.
 
 From the rows of `tactip.reproduce.p004` (``method, threshold, angle_error_deg, position_error_mm,
-taps_per_decision, closed_contour``): Fig. 6 as the fraction of runs that close the contour (the
-traced contours themselves are not kept), Fig. 7 (angle error, position error, taps per decision
+taps_per_decision, closed_contour``): Fig. 6 as the fraction of runs that close the contour, Fig. 7 (angle error, position error, taps per decision
 against the belief threshold, one curve per method). With the runs of `tactip.reproduce.figure_runs`:
-Fig. 7 over a dense threshold sweep (``fig7_sweep``) and Fig. 8, the learned shift's error against the
+Fig. 6's traced contours (``fig6_traced``: ``method, threshold, run, decision, x_mm, y_mm``, drawn by
+`tactip.reproduce.figures.samples`), Fig. 7 over a dense threshold sweep (``fig7_sweep``) and Fig. 8, the learned shift's error against the
 decision (``method, threshold, decision, delta_error_classes``). ``adaptive`` is eq. 7 as printed;
 ``adaptive_angle_only`` is a variant and ``adaptive_shift0`` a control, named so in the legends.
 """
@@ -18,7 +18,7 @@ from tactip.reproduce.figures import COLOURS, legend, new_figure, paper_lines, v
 __all__ = ["NAMES", "figures"]
 
 #: The figures this module may draw (`make_figures` keys).
-NAMES = ("fig6", "fig7", "fig7_sweep", "fig8")
+NAMES = ("fig6", "fig6_traced", "fig7", "fig7_sweep", "fig8")
 
 _LABELS = {"passive": "passive", "active": "active", "adaptive": "adaptive (eq. 7 as printed)",
            "adaptive_angle_only": "adaptive, angle-only (a variant)", "adaptive_shift0": "adaptive, Delta = 0 (control)"}
@@ -87,9 +87,13 @@ def figures(report, extra: dict) -> dict:
     out = {"fig6": _fig6(report.rows),
            "fig7": _fig7(report.rows, report.comparisons, "paper 004 Fig. 7: contour following, errors and taps "
                                                           "against belief threshold")}
+    if extra.get("fig6_traced"):
+        from tactip.reproduce.figures.samples import fig6_traced_004
+
+        out["fig6_traced"] = fig6_traced_004(extra["fig6_traced"])
     if extra.get("fig7_sweep"):
         out["fig7_sweep"] = _fig7(extra["fig7_sweep"], report.comparisons,
                                   "paper 004 Fig. 7 (threshold sweep): active and adaptive perception")
     if extra.get("fig8"):
         out["fig8"] = _fig8(extra["fig8"])
-    return out
+    return {name: out[name] for name in NAMES if name in out}
