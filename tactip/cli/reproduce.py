@@ -14,11 +14,18 @@ for seed, as a run here.
 Each reproduced figure is saved as a PNG, the paper's numbers drawn on the same axes, in
 --figures DIR (default: beside the --json FILE; out/reproduce/PAPER/ without one or when the JSON
 goes to a stream), named PAPER_FIGURE.png (e.g. 002_fig9.png); --no-figures skips them. A figure a
-world was tuned on says "FIT" in its title. Four figures need runs of their own, made with
---figure-runs: paper 002 Figs 10 (fixation depth) and 11 (lateral noise: the station is prepared
-again and a noisy test collection tapped per sigma, a few minutes even with --quick) and paper 004
-Fig. 7 over a threshold sweep and Fig. 8 (the learned shift, about a minute with --quick); their rows
-are saved as PAPER_figure_runs.json beside the PNGs. Figures and JSON reports are rewritten by a new
+world was tuned on says "FIT" in its title. Figures per paper (PNG names; [R]: only with --figure-runs):
+  000: table2, table3 (error against class count); [R] fig7 (example trajectories), fig8b (decision-time
+       histograms), fig10 (passive error and time against location), fig11 (error and time against
+       threshold, passive and active, per class count) on the simulated fingertip
+  001: fig4, fig5, fig6, fig7a (reaction-time histograms), fig7b, fig8 (errors and times per test class)
+  002: fig9 (a fit); [R] fig10 (fixation depth), fig11 (lateral noise: the station is prepared again and
+       a noisy test collection tapped per sigma, a few minutes even with --quick)
+  003: fig5, fig6a (error per texture and depth), fig6b, fig7 (mean errors), fig7_hist (error
+       frequencies, as the paper's bars); [R] fig5_sweep (a sweep of test depth offsets)
+  004: fig6 (runs closing the contour), fig7; [R] fig6_traced (the traced contours), fig7_sweep (a
+       threshold sweep), fig8 (the learned shift)
+The rows of the --figure-runs are saved as PAPER_figure_runs.json beside the PNGs. Figures and JSON reports are rewritten by a new
 run (a file tactip wrote otherwise, such as a model, is never replaced without --overwrite).
 
 Examples:
@@ -51,7 +58,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                               "out/reproduce/PAPER)")
     figures.add_argument("--no-figures", action="store_true", help="no PNG figures")
     parser.add_argument("--figure-runs", action="store_true",
-                        help="also run the experiments only figures need (002 Figs 10-11, 004 Figs 7 sweep and 8)")
+                        help="also run the experiments only figures need (000 Figs 7, 8B, 10, 11; 002 Figs 10-11; "
+                             "003 Fig. 5 sweep; 004 Figs 6 traced, 7 sweep and 8)")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                         help="run the conditions on this Dask cluster (dask scheduler; dask worker on each machine)")
 

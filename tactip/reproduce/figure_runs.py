@@ -10,7 +10,7 @@ Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved besi
   trained without noise; each policy's width error at 10 mean taps (as Fig. 9) over the error at
   sigma 0;
 - 000 Figs 7, 8B, 10 and 11 on the simulated fingertip (`tactip.reproduce.taxel_runs`);
-- 003 Fig. 5 over a sweep of test depth offsets (`tactip.reproduce.figure_samples.fig5_sweep_rows`);
+- 003 Fig. 5 over a sweep of test depth offsets (`fig5_sweep_rows`);
 - 004 Fig. 6, the traced contours of passive, active and adaptive perception at thresholds 0.2 and 0.9
   (`tactip.reproduce.figure_samples.traced_contour_samples`);
 - 004 Figs 7 and 8 (`beta_sweep_rows`): contour following by active, adaptive (eq. 7 as printed) and
@@ -32,7 +32,7 @@ import numpy as np
 
 from _shared import map_pieces
 
-__all__ = ["TAP_BUDGETS", "beta_sweep_rows", "fixation_rows", "lateral_rows", "run_with_figure_runs"]
+__all__ = ["TAP_BUDGETS", "beta_sweep_rows", "fig5_sweep_rows", "fixation_rows", "lateral_rows", "run_with_figure_runs"]
 
 #: Mean-tap budgets of 002 Fig. 10 (the paper's grey shading of decision times; its optimum: 12 taps).
 TAP_BUDGETS = (2.0, 4.0, 8.0, 12.0)
@@ -43,6 +43,9 @@ QUICK_SIGMAS_MM = (0.5, 2.0)
 SWEEP_METHODS = ("active", "adaptive", "adaptive_angle_only")
 SWEEP_THRESHOLDS = tuple(np.round(np.arange(0.1, 0.95, 0.1), 2))
 QUICK_SWEEP_THRESHOLDS = (0.1, 0.3, 0.5, 0.7, 0.9)
+#: Paper 003 Fig. 5: test depth offsets, mm (the paper: up to +-0.6 mm and beyond, to chance).
+FIG5_OFFSETS_MM = tuple(np.round(np.arange(-1.0, 0.81, 0.1), 2))
+QUICK_FIG5_OFFSETS_MM = (-0.6, -0.4, -0.2, 0.0, 0.2, 0.4, 0.6)
 #: Thresholds whose learning curves make 004 Fig. 8.
 FIG8_THRESHOLDS = (0.5, 0.9)
 
@@ -189,8 +192,33 @@ def _p004_rows(*, quick: bool, seed: int, progress=None, map_fn=None) -> dict:
     return {"fig6_traced": traced, "fig7_sweep": sweep, "fig8": learning}
 
 
+def fig5_sweep_rows(train, test, *, offsets_mm, runs: int, seed: int) -> list[dict]:
+    """003 Fig. 5 over a sweep of offsets: a model of one depth class (2.0-2.2 mm), tested deeper or shallower.
+
+    Parameters
+    ----------
+    train, test : perception.Dataset
+        The texture sessions of `tactip.reproduce.p003`.
+    offsets_mm : sequence of float
+        Test depth minus training depth, mm (the test taps must reach 2.0 + offset .. 2.2 + offset mm).
+    runs, seed : int
+
+    Returns
+    -------
+    list of dict
+        ``{offset_mm, texture_error_classes, mean_taps}``, in the order of ``offsets_mm``.
+    """
+    from tactip.reproduce.p003 import _single_depth
+
+    rows = []
+    for offset in offsets_mm:
+        result = _single_depth(train, test, float(offset), runs, seed)
+        rows.append({"offset_mm": float(offset), "texture_error_classes": float(result.mean_identity_error[0]),
+                     "mean_taps": float(result.mean_taps[0])})
+    return rows
+
+
 def _p003_rows(*, quick: bool, seed: int) -> dict:
-    from tactip.reproduce.figure_samples import FIG5_OFFSETS_MM, QUICK_FIG5_OFFSETS_MM, fig5_sweep_rows
     from tactip.reproduce.report import collections
     from tactip.reproduce.stimuli import make_stimulus
 

@@ -1,4 +1,4 @@
-"""Samples that only figures draw: distributions, per-class maps, offset sweeps and traced contours.
+"""Samples that only figures draw: distributions, per-class maps and traced contours.
 
 The paper runners keep, beside their JSON rows, what some figures need from the same runs
 (`Report.samples`, never written to the JSON):
@@ -11,28 +11,22 @@ The paper runners keep, beside their JSON rows, what some figures need from the 
   per move threshold, summed over the simulator seeds (the paper's bar charts of error frequencies);
 - 003 Fig. 6A (`p003_fig6a`): passive texture error per (depth, texture) class, each seed's map.
 
-and, with ``--figure-runs`` (JSON rows, `tactip.reproduce.figure_runs`):
-
-- 003 Fig. 5 over a sweep of test depth offsets (`fig5_sweep_rows`);
-- 004 Fig. 6, the traced contours (`traced_contour_samples`): the edge points the first runs
-  perceive, for passive and active perception at the paper's thresholds 0.2 and 0.9 (and the
-  adaptive prior beside them).
+and, for ``--figure-runs`` (JSON rows, `tactip.reproduce.figure_runs`), 004 Fig. 6's traced contours
+(`traced_contour_samples`): the edge points the first runs perceive, passive and active perception at
+the paper's thresholds 0.2 and 0.9, with the adaptive prior beside them.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["FIG7A_THRESHOLDS", "FIG8_THRESHOLD", "FIG5_OFFSETS_MM", "QUICK_FIG5_OFFSETS_MM", "FIG6_CONDITIONS",
-           "p001_samples", "texture_error_counts", "p003_fig6a", "fig5_sweep_rows", "traced_contour_samples"]
+__all__ = ["FIG7A_THRESHOLDS", "FIG8_THRESHOLD", "FIG6_CONDITIONS", "p001_samples", "texture_error_counts",
+           "p003_fig6a", "traced_contour_samples"]
 
 #: Paper 001 Fig. 7A: the thresholds of its reaction-time histograms (grey 0.9, white 0.999).
 FIG7A_THRESHOLDS = (0.9, 0.999)
 #: Paper 001 Fig. 8: the threshold of its per-class maps.
 FIG8_THRESHOLD = 0.9
-#: Paper 003 Fig. 5: test depth offsets, mm (the paper: up to +-0.6 mm and beyond, to chance).
-FIG5_OFFSETS_MM = tuple(np.round(np.arange(-1.0, 0.81, 0.1), 2))
-QUICK_FIG5_OFFSETS_MM = (-0.6, -0.4, -0.2, 0.0, 0.2, 0.4, 0.6)
 #: Paper 004 Fig. 6: (method, threshold) of its panels A-D (passive and active at 0.2 and 0.9), and adaptive.
 FIG6_CONDITIONS = (("passive", 0.2), ("passive", 0.9), ("active", 0.2), ("active", 0.9),
                    ("adaptive", 0.2), ("adaptive", 0.9))
@@ -99,32 +93,6 @@ def p003_fig6a(result, model) -> dict:
     """
     return {"depths_mm": np.asarray(model.location_centres, float), "textures": np.asarray(model.identities, float),
             "texture_error_classes": np.asarray(result.identity_error_map[0], float)}
-
-
-def fig5_sweep_rows(train, test, *, offsets_mm, runs: int, seed: int) -> list[dict]:
-    """003 Fig. 5 over a sweep of offsets: a model of one depth class (2.0-2.2 mm), tested deeper or shallower.
-
-    Parameters
-    ----------
-    train, test : perception.Dataset
-        The texture sessions of `tactip.reproduce.p003`.
-    offsets_mm : sequence of float
-        Test depth minus training depth, mm (the test taps must reach 2.0 + offset .. 2.2 + offset mm).
-    runs, seed : int
-
-    Returns
-    -------
-    list of dict
-        ``{offset_mm, texture_error_classes, mean_taps}``, in the order of ``offsets_mm``.
-    """
-    from tactip.reproduce.p003 import _single_depth
-
-    rows = []
-    for offset in offsets_mm:
-        result = _single_depth(train, test, float(offset), runs, seed)
-        rows.append({"offset_mm": float(offset), "texture_error_classes": float(result.mean_identity_error[0]),
-                     "mean_taps": float(result.mean_taps[0])})
-    return rows
 
 
 def traced_contour_samples(env, *, conditions=FIG6_CONDITIONS, traces: int, runs: int, decisions: int, max_taps: int,

@@ -96,7 +96,11 @@ def fig6a_003(maps: list[dict]):
     fig, (ax,) = new_figure(title=f"paper 003 Fig. 6A: passive texture error per texture and depth (mean of "
                                   f"{len(maps)} seed{'s' * (len(maps) > 1)}: {', '.join(map(str, seeds))})",
                             width_in=7.0)
-    mean = np.nanmean(np.stack([np.asarray(m["texture_error_classes"], float) for m in maps]), axis=0)   # (L, I)
+    import warnings
+
+    with warnings.catch_warnings():                 # a class no run started in on any seed stays NaN (blank)
+        warnings.simplefilter("ignore", RuntimeWarning)
+        mean = np.nanmean(np.stack([np.asarray(m["texture_error_classes"], float) for m in maps]), axis=0)  # (L, I)
     _map(fig, ax, mean.T, x=maps[0]["depths_mm"], y=maps[0]["textures"], vmax=3.0,
          label="mean texture error (classes)")
     ax.set_xlabel("depth (mm)")

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from perception import StationaryPolicy, VirtualEnvironment, fit_model, monte_carlo
-from tactip.reproduce import Comparison, Report, figure_samples, taxel_runs
+from tactip.reproduce import Comparison, Report, figure_runs, figure_samples, taxel_runs
 from tactip.reproduce.figures import make_figures, save_figures
 from tests.perception.synthetic import gap_dataset
 from tests.tactip.reproduce.test_figures import assert_png, line
@@ -111,7 +111,7 @@ def test_003_fig5_sweep_rows_are_one_depth_runs_at_each_offset():
     from tactip.reproduce.stimuli import make_stimulus
 
     train, test = collections(make_stimulus("textures"), seed=1, taps_per_identity=150)
-    rows = figure_samples.fig5_sweep_rows(train, test, offsets_mm=(-0.4, 0.0, 0.4), runs=300, seed=6)
+    rows = figure_runs.fig5_sweep_rows(train, test, offsets_mm=(-0.4, 0.0, 0.4), runs=300, seed=6)
     assert [r["offset_mm"] for r in rows] == [-0.4, 0.0, 0.4]
     for r in rows:
         again = _single_depth(train, test, r["offset_mm"], 300, 6)
@@ -141,7 +141,10 @@ def test_004_traced_contours_are_the_edge_points_each_decision_perceives(edge_en
     mine = [r for r in rows if r["method"] == "active"]
     assert len(mine) == 4 * 12 and {r["closed_contour"] for r in mine} == {traced.closed_contour}
     np.testing.assert_array_equal([[r["x_mm"], r["y_mm"]] for r in mine], traced.traced_mm.reshape(-1, 2))
-    figures = make_figures(Report("004", "t", []), {"fig6_traced": rows})
+    row = {"method": "active", "threshold": 0.5, "angle_error_deg": 3.0, "position_error_mm": 1.0,
+           "taps_per_decision": 4.0, "closed_contour": 0.5}
+    figures = make_figures(Report("004", "t", [row]), {"fig6_traced": rows})
+    assert list(figures) == ["fig6", "fig6_traced", "fig7"]
     for run in range(4):
         x, y = line(figures["fig6_traced"], f"_run{run}", panel=0)
         np.testing.assert_array_equal(np.stack([x, y], 1), traced.traced_mm[run])
