@@ -27,8 +27,12 @@ _PAPER_FIG8_RANGES = {"shape_error_mm": 4.0, "position_error_mm": 2.0, "reaction
 
 def _map(fig, ax, data, *, x, y, vmax: float, label: str):
     """A (len(y), len(x)) map as an image with a colour bar (light: small, dark: large, as the paper)."""
+    from matplotlib import colormaps
+
     data = np.asarray(data, float)
-    image = ax.imshow(data, origin="lower", aspect="auto", cmap="Greys", vmin=0.0,
+    if np.isnan(data).any():
+        ax.set_title(ax.get_title() + "\n(pink: no run started in that class)", fontsize=8)
+    image = ax.imshow(data, origin="lower", aspect="auto", cmap=colormaps["Greys"].with_extremes(bad="pink"), vmin=0.0,
                       vmax=max(vmax, float(np.nanmax(data)) if np.isfinite(data).any() else vmax),
                       extent=(x[0] - 0.5 * _step(x), x[-1] + 0.5 * _step(x), y[0] - 0.5 * _step(y), y[-1] + 0.5 * _step(y)))
     fig.colorbar(image, ax=ax, label=label, shrink=0.85)
@@ -61,11 +65,11 @@ def fig8_001(samples: dict):
     for ax, (key, label, panel) in zip(axes, (("shape_error_mm", "mean shape error (mm)", "A"),
                                               ("position_error_mm", "mean position error (mm)", "B"),
                                               ("reaction_taps", "mean reaction time (taps)", "C"))):
+        ax.set_title(f"({panel}) paper's range 0-{_PAPER_FIG8_RANGES[key]:g}", fontsize=9)
         _map(fig, ax, np.asarray(samples[key], float).T, x=samples["positions_mm"], y=samples["shapes_mm"],
              vmax=_PAPER_FIG8_RANGES[key], label=label)
         ax.set_xlabel("position (mm)")
         ax.set_ylabel("rod diameter (mm)")
-        ax.set_title(f"({panel}) paper's range 0-{_PAPER_FIG8_RANGES[key]:g}", fontsize=9)
         ax.grid(False)
     return fig
 
