@@ -143,12 +143,17 @@ def fig7_hist_003(counts: dict, names: dict, paper: dict):
     return fig
 
 
-def fig6_traced_004(rows, *, radius_mm: float = 30.0):
-    """004 Fig. 6: the traced contours, one panel per (method, threshold), the plate's circle beside."""
+def fig6_traced_004(rows, *, radius_mm: float = 30.0, trace_mm: float = 2.0):
+    """004 Fig. 6: the traced contours, one panel per (method, threshold), the plate's circle beside.
+
+    A run closes the contour only if every traced point lies within ``trace_mm`` of the plate
+    (`tactip.reproduce.contour.follow_contour`); each panel says how many of the runs shown do not.
+    """
     conditions = list(dict.fromkeys((r["method"], r["threshold"]) for r in rows))
     fig, axes = new_figure(len(conditions), rows=2 if len(conditions) > 3 else 1, width_in=3.4, height_in=3.6,
                            title="paper 004 Fig. 6: contours traced by the first runs (points: the edge each "
-                                 "decision perceives; grey: the plate)")
+                                 "decision perceives; grey: the plate; a closed contour keeps every point within "
+                                 f"{trace_mm:g} mm of it)")
     circle = np.linspace(0, 2 * np.pi, 181)
     for ax, (method, threshold) in zip(axes, conditions):
         mine = [r for r in rows if (r["method"], r["threshold"]) == (method, threshold)]
@@ -157,7 +162,11 @@ def fig6_traced_004(rows, *, radius_mm: float = 30.0):
             trace = sorted((r for r in mine if r["run"] == run), key=lambda r: r["decision"])
             ax.plot(values(trace, "x_mm"), values(trace, "y_mm"), "o-", ms=3, lw=0.6, alpha=0.8,
                     color=COLOURS.get(method), label=f"_run{run}")
-        ax.set_title(f"{method}, threshold {threshold:g}: {mine[0]['closed_contour']:.0%} of runs close", fontsize=8)
+        shown = sorted({r["run"] for r in mine})
+        off = sum(any(abs(np.hypot(r["x_mm"], r["y_mm"]) - radius_mm) > trace_mm for r in mine if r["run"] == run)
+                  for run in shown)
+        ax.set_title(f"{method}, threshold {threshold:g}: {mine[0]['closed_contour']:.0%} of all runs close;\n"
+                     f"{off} of the {len(shown)} shown trace a point > {trace_mm:g} mm off the plate", fontsize=8)
         ax.set_aspect("equal")
         limit = 1.6 * radius_mm
         ax.set_xlim(-limit, limit)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from tactip.reproduce.figures import PAPER_STYLE, legend, new_figure, values
+from tactip.reproduce.taxel_runs import MAX_TAPS
 
 __all__ = ["fig7", "fig8b", "fig10", "fig11", "taxel_figures", "PAPER_FIG10_BEST_MM"]
 
@@ -37,7 +38,8 @@ def _shade(policy: str, k: int, n: int):
 def fig7(rows):
     """Fig. 7: each run's location at every tap until its decision (a marker at the decision)."""
     fig, axes = new_figure(2, title="paper 000 Fig. 7: example trajectories of the simulated fingertip (A passive: "
-                                    "the sensor stays; B active: it moves to the 15 mm fixation point)")
+                                    "the sensor stays; B active: it moves to the 15 mm fixation point; dots: "
+                                    f"decisions, runs still undecided are decided at the cap of {MAX_TAPS} taps)")
     for ax, policy in zip(axes, ("passive", "active")):
         mine = [r for r in rows if r["policy"] == policy]
         for run in sorted({r["run"] for r in mine}):
@@ -54,7 +56,9 @@ def fig7(rows):
 def fig8b(rows):
     """Fig. 8B: how many runs decided after each number of taps, one line per threshold."""
     fig, (ax,) = new_figure(title="paper 000 Fig. 8B: decision-time histograms, passive perception, 30 classes "
-                                  "(the peak moves to longer times as the threshold rises)", width_in=7.0)
+                                  "(paper: the peak moves to longer times as the threshold rises). The spike at "
+                                  f"{MAX_TAPS} taps: runs still undecided at the cap, most at the ends of the range "
+                                  "where the simulated rod gives no signal", width_in=7.0)
     thresholds = sorted({r["threshold"] for r in rows})
     for k, t in enumerate(thresholds):
         mine = sorted((r for r in rows if r["threshold"] == t), key=lambda r: r["taps"])
@@ -69,9 +73,13 @@ def fig8b(rows):
 
 def fig10(rows):
     """Fig. 10: passive error and decision time against the sensor location, one curve per threshold."""
-    fig, axes = new_figure(2, title="paper 000 Fig. 10: passive perception against sensor location (30 classes; "
-                                    "darker: higher threshold)")
     thresholds = sorted({r["threshold"] for r in rows})
+    locations = sorted({r["location_mm"] for r in rows})
+    exact = [x for x in locations if all(r["error_mm"] == 0 for r in rows if r["location_mm"] == x and r["threshold"] > 0)]
+    fig, axes = new_figure(2, title="paper 000 Fig. 10: passive perception against sensor location (30 classes; "
+                                    f"darker: higher threshold; runs capped at {MAX_TAPS} taps). The simulated "
+                                    f"fingertip is cleaner than the paper's: {len(exact)} of {len(locations)} "
+                                    "locations decide with 0 mm error at every threshold > 0")
     for ax, key, label in zip(axes, ("error_mm", "decision_taps"), ("mean location error (mm)",
                                                                     "mean decision time (taps)")):
         for k, t in enumerate(thresholds):
@@ -91,7 +99,8 @@ def fig11(rows):
     from tactip.reproduce.p000 import PAPER_PASSIVE_MM, PAPER_TABLE2
 
     fig, axes = new_figure(3, title="paper 000 Fig. 11: fingertip, passive (red) and active (green, fixation 15 mm), "
-                                    "darker: more location classes", width_in=4.6, height_in=4.2)
+                                    f"darker: more location classes; runs capped at {MAX_TAPS} taps",
+                           width_in=4.6, height_in=4.2)
     classes = sorted({r["classes"] for r in rows})
     for policy in ("passive", "active"):
         for k, n in enumerate(classes):
