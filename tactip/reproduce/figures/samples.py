@@ -51,7 +51,10 @@ def fig7a_001(samples: dict):
         counts = np.bincount(np.asarray(taps, np.intp))
         ax.step(np.arange(len(counts)), counts, where="mid", color=("0.55", "0.0")[k % 2],
                 label=f"threshold {threshold:g} (mean {np.mean(taps):.1f} taps, {len(taps)} runs)")
-    ax.set_xlabel("reaction time (taps)")
+    longest = max(int(np.max(taps)) for taps in samples["taps"])
+    cut = float(max(np.percentile(np.concatenate([np.asarray(t, float) for t in samples["taps"]]), 99), 10))
+    ax.set_xlim(0, cut)
+    ax.set_xlabel(f"reaction time (taps; cut at the 99th percentile, the longest: {longest} taps)")
     ax.set_ylabel("runs")
     legend(ax)
     return fig
