@@ -211,3 +211,14 @@ def test_cli_figure_runs_write_every_figure_and_the_rows(tmp_path, capsys, monke
         f"003_{n}.png" for n in ("fig5", "fig5_sweep", "fig6a", "fig6b", "fig7", "fig7_hist"))
     assert json.loads(out.read_text()) == report.json_rows()            # the samples are not in the JSON
     assert json.loads((tmp_path / "003_figure_runs.json").read_text()) == extra
+
+
+def test_003_figure_runs_sweep_holds_the_reproductions_own_two_offsets():
+    report, extra = figure_runs.run_with_figure_runs("003", quick=True, seed=1)
+    assert list(extra) == ["fig5_sweep"]
+    sweep = {r["offset_mm"]: r["texture_error_classes"] for r in extra["fig5_sweep"]}
+    assert list(sweep) == list(figure_runs.QUICK_FIG5_OFFSETS_MM)
+    for offset in (0.0, 0.2):                                            # the same sessions, runs and seed
+        compared, = [c for c in report.comparisons if c.figure.startswith(f"Fig. 5 one depth class, test offset "
+                                                                          f"{offset:g} mm")]
+        assert sweep[offset] == pytest.approx(compared.measured, abs=1e-12)
