@@ -11,8 +11,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from tactip.reproduce.figures import PAPER_STYLE, legend, new_figure, values
 from tactip.reproduce.taxel_runs import MAX_TAPS
 

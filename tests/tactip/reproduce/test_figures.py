@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from tactip.reproduce import Comparison, Report
-from tactip.reproduce.figures import figure_names, make_figures, save_figures
+from tactip.reproduce.figures import make_figures, save_figures
 from tactip.reproduce.figures.p000 import PAPER_TABLES
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
