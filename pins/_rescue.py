@@ -90,53 +90,14 @@ def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts:
     first_new = len(pins)
     for round_ in range(_ROUNDS):
         hood = _Neighbourhood(pins)
-        k = hood.near.shape[1] - 1
-        if k < 2:
+        if hood.near.shape[1] < 3:
             break
         area_ref, contrast_ref = _row_median(np.stack([pin_areas, pin_contrasts])[:, hood.near])
-        source = np.repeat(np.arange(len(pins)), k)
-        through = hood.near[:, 1:].ravel()
-        length = hood.dist[:, 1:].ravel()
-        # Links about a pitch long (not the long links of a radial layout's lone centre pin).
-        link = hood.link.ravel() & (length <= _SHORT_LINK * hood.pitch[source])
-        if round_ > 0:  # only the pins taken back predict anew
-            link &= (source >= first_new) | (through >= first_new)
-        source, through, length = source[link], through[link], length[link]
-        sites = 2.0 * pins[through] - pins[source]
-        tolerance = _MIRROR * length
-        # Never beyond the field: glare on the rim lies a pitch past the outermost pins, the next row
-        # of a hexagonal lattice 0.87 pitch past the judged pins' hull, the end of a radial spoke whose
-        # outermost pin is missing about half a pitch past it.
-        inside = (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1])
-                  <= field_reach + _BEYOND * hood.pitch[through])
-        sites, tolerance, through = sites[inside], tolerance[inside], through[inside]
+        # Only the pins taken back in the round before predict anew.
+        sites, tolerance, through = _holes(pins, hood, centre, field_reach, _BEYOND,
+                                           fresh=first_new if round_ > 0 else None)
         if not len(sites):
             break
-        # Holes: sites no pin occupies.
-        occupied = np.isfinite(cKDTree(pins).query(sites, distance_upper_bound=tolerance.max())[0])
-        occupied &= cKDTree(pins).query(sites)[0] <= tolerance
-        sites, tolerance, through = sites[~occupied], tolerance[~occupied], through[~occupied]
-        # A hole inside the lattice has pins on opposite sides along a row (predicted from both
-        # directions, or with a pin beyond it); the outer end of a lone row (a radial spoke whose rim pin is under the veil) is
-        # predicted once, from inside. Not the next row of a hexagonal lattice (predicted twice, from
-        # one side: skin and glare beyond the field), nor the inner end of a radial spoke (the empty
-        # zone round the lone centre pin).
-        if not len(sites):
-            break
-        ahead = sites - pins[through]
-        ahead /= np.maximum(np.hypot(*ahead.T), 1e-9)[:, None]
-        groups = cKDTree(sites).query_ball_point(sites, tolerance)
-        predictions = np.array([len(g) for g in groups])
-        opposite = np.array([np.min(ahead[g] @ ahead[i]) < _OPPOSITE for i, g in enumerate(groups)])
-        # ... or a pin beyond it along the row (the next one, whose own predictor is missing).
-        opposite |= cKDTree(pins).query(2.0 * sites - pins[through])[0] <= tolerance
-        outward = (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1])
-                   > np.hypot(pins[through, 0] - centre[0], pins[through, 1] - centre[1]))
-        # A lone row's end has one pin within a pitch (the next along the row); the next row of a
-        # hexagonal lattice has two.
-        lone = np.array([len(g) for g in cKDTree(pins).query_ball_point(sites, _LONE * tolerance / _MIRROR)]) == 1
-        plausible = opposite | ((predictions == 1) & outward & lone)
-        sites, tolerance, through = sites[plausible], tolerance[plausible], through[plausible]
         new = []
         for site, reach, near_pin in zip(sites, tolerance, through):
             if len(new) and np.min(np.hypot(*(np.array([centres[i] for i in new]) - site).T)) <= reach:
@@ -169,3 +130,89 @@ def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts:
         pin_areas = np.append(pin_areas, areas[filled])
         pin_contrasts = np.append(pin_contrasts, contrasts[filled])
     return taken
+
+
+def _holes(pins: np.ndarray, hood: _Neighbourhood, centre: tuple[float, float], field_reach: float, beyond: float,
+           fresh: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The lattice sites `pins` predict and none occupies (the module docstring).
+
+    Parameters
+    ----------
+    pins : (N, 2) ndarray of float64
+        The pins (x, y), px; `hood` is their `_Neighbourhood`.
+    centre : (float, float)
+        The sensor disc's centre (x, y), px.
+    field_reach : float
+        Distance from `centre` of the farthest pin that may predict, px: no site lies farther than
+        this plus `beyond` local pitches.
+    fresh : int or None
+        Only links with a pin of index `fresh` or more predict (the pins taken back in the round before).
+
+    Returns
+    -------
+    sites : (H, 2) ndarray of float64
+        Predicted sites (x, y), px, one per prediction (a hole predicted from several pins appears
+        several times).
+    tolerance : (H,) ndarray of float64
+        How far from its site a hole's pin may lie, px (`_MIRROR` of the link length).
+    through : (H,) ndarray of int
+        The pin next to each site (the one the link runs through).
+    """
+    empty = np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=int)
+    k = hood.near.shape[1] - 1
+    if k < 2:
+        return empty
+    source = np.repeat(np.arange(len(pins)), k)
+    through = hood.near[:, 1:].ravel()
+    length = hood.dist[:, 1:].ravel()
+    # Links about a pitch long (not the long links of a radial layout's lone centre pin).
+    link = hood.link.ravel() & (length <= _SHORT_LINK * hood.pitch[source])
+    if fresh is not None:
+        link &= (source >= fresh) | (through >= fresh)
+    source, through, length = source[link], through[link], length[link]
+    sites = 2.0 * pins[through] - pins[source]
+    tolerance = _MIRROR * length
+    # Never beyond the field: glare on the rim lies a pitch past the outermost pins, the next row
+    # of a hexagonal lattice 0.87 pitch past the judged pins' hull, the end of a radial spoke whose
+    # outermost pin is missing about half a pitch past it.
+    inside = np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1]) <= field_reach + beyond * hood.pitch[through]
+    sites, tolerance, through = sites[inside], tolerance[inside], through[inside]
+    if not len(sites):
+        return empty
+    # Holes: sites no pin occupies.
+    tree = cKDTree(pins)
+    hole = tree.query(sites)[0] > tolerance
+    sites, tolerance, through = sites[hole], tolerance[hole], through[hole]
+    if not len(sites):
+        return empty
+    # A hole inside the lattice has pins on opposite sides along a row (predicted from both
+    # directions, or with a pin beyond it); the outer end of a lone row (a radial spoke whose rim pin
+    # is under the veil) is predicted once, from inside. Not the next row of a hexagonal lattice
+    # (predicted twice, from one side: skin and glare beyond the field), nor the inner end of a radial
+    # spoke (the empty zone round the lone centre pin).
+    ahead = sites - pins[through]
+    ahead /= np.maximum(np.hypot(*ahead.T), 1e-9)[:, None]
+    groups = cKDTree(sites).query_ball_point(sites, tolerance)
+    predictions = np.array([len(g) for g in groups])
+    opposite = np.array([np.min(ahead[g] @ ahead[i]) < _OPPOSITE for i, g in enumerate(groups)])
+    # ... or a pin beyond it along the row (the next one, whose own predictor is missing).
+    opposite |= tree.query(2.0 * sites - pins[through])[0] <= tolerance
+    outward = (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1])
+               > np.hypot(pins[through, 0] - centre[0], pins[through, 1] - centre[1]))
+    # A lone row's end has one pin within a pitch (the next along the row); the next row of a
+    # hexagonal lattice has two.
+    close = tree.query_ball_point(sites, _LONE * tolerance / _MIRROR)
+    lone = np.array([len(g) for g in close]) == 1
+    # A gap in a curved row (a radial layout's innermost ring, whose mirror images through a
+    # neighbour miss the next site by 0.4 pitch): two pins within a pitch, on opposite sides.
+    flanked = np.array([_opposite_pair(pins[g] - site) for g, site in zip(close, sites)])
+    plausible = opposite | flanked | ((predictions == 1) & outward & lone)
+    return sites[plausible], tolerance[plausible], through[plausible]
+
+
+def _opposite_pair(offsets: np.ndarray) -> bool:
+    """Whether two of `offsets` (M, 2), px, point in opposite directions (cosine below `_OPPOSITE`)."""
+    if len(offsets) < 2:
+        return False
+    unit = offsets / np.maximum(np.hypot(*offsets.T), 1e-9)[:, None]
+    return bool(np.min(unit @ unit.T) < _OPPOSITE)
