@@ -48,6 +48,14 @@ _BEYOND = 0.3
 _OPPOSITE = -0.5
 # The outer end of a lone row has one pin (the row's) within this many link lengths.
 _LONE = 1.3
+# Probing the image at the holes no blob filled: a pin's core at least this many standard errors
+# above the membrane's quadratic fit, with `_MIN_CONTRAST` of the median contrast of the
+# `_PROBE_NEIGHBOURS` pins round it; the holes no farther than `_PROBE_BEYOND` pitches past the
+# outermost pin (the rim glare lies a pitch past it).
+_SIGNIFICANCE = 5.0
+_PROBE_NEIGHBOURS = 6
+_PROBE_BEYOND = 0.1
+_SATURATED = 254.0
 
 
 def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts: np.ndarray,
@@ -216,3 +224,165 @@ def _opposite_pair(offsets: np.ndarray) -> bool:
         return False
     unit = offsets / np.maximum(np.hypot(*offsets.T), 1e-9)[:, None]
     return bool(np.min(unit @ unit.T) < _OPPOSITE)
+
+
+def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float, float], radius_px: float, *,
+                        dark_pins: bool = False) -> np.ndarray:
+    """Pins at lattice holes that no blob filled, found by looking at the image there.
+
+    A faint pin (the outermost ring under the veil and the rim glare, 10-15 grey above noise of 5)
+    makes a blob in no candidate set, or one too small to judge. At each hole of the lattice of
+    `pins` (`_holes`, reaching no farther than the farthest pin plus `_PROBE_BEYOND` pitches) the
+    brightest tip-sized spot within the hole's tolerance is a pin when its core stands at least
+    `_SIGNIFICANCE` standard errors above a quadratic fit of the membrane round it (a reflection's
+    or the veil's flank is curved, not a tip), with at least `_MIN_CONTRAST` of the contrast of the
+    pins round it, measured the same way, and no closer than `_APART` local pitches to a pin.
+
+    Parameters
+    ----------
+    grey : (H, W) ndarray of uint8
+        Grey frame.
+    pins : (N, 2) ndarray
+        The pins found so far (x, y), px.
+    centre : (float, float)
+        The sensor disc's centre (x, y), px.
+    radius_px : float
+        Pin tip radius, px.
+    dark_pins : bool
+        Dark markers on a light membrane (the image is inverted).
+
+    Returns
+    -------
+    found : (M, 2) ndarray of float64
+        The pins found at holes (x, y), px (the centroid of the core above the membrane's fit: the
+        tip fit places them); empty (0, 2) when there are none, fewer than 7 pins, or no radius.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pitch = 10.0
+    >>> grid = pitch * np.array([(x, y) for y in range(-4, 5) for x in range(-4, 5)], float) + 50.0
+    >>> yy, xx = np.mgrid[0:100, 0:100]
+    >>> image = np.full((100, 100), 100.0)
+    >>> for x, y in grid:
+    ...     image += 40.0 * (np.hypot(xx - x, yy - y) <= 2.0)
+    >>> kept = np.delete(grid, 40, axis=0)  # the centre pin, at (50, 50), not found
+    >>> probe_lattice_holes(image.astype(np.uint8), kept, (50.0, 50.0), 2.0).round(1)
+    array([[50., 50.]])
+    """
+    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
+    none = np.zeros((0, 2))
+    if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
+        return none
+    image = grey.astype(np.float32)
+    if dark_pins:
+        image = 255.0 - image
+    hood = _Neighbourhood(pins)
+    field_reach = float(np.max(np.hypot(pins[:, 0] - centre[0], pins[:, 1] - centre[1])))
+    sites, tolerance, through = _holes(pins, hood, centre, field_reach, _PROBE_BEYOND)
+    if not len(sites):
+        return none
+    spots = _brightest_spots(image, sites, tolerance, radius_px)
+    contrast, error, position = _core_above_membrane(image, spots, radius_px, pins)
+    # The pins round each hole, measured the same way.
+    _, near = cKDTree(pins).query(spots, min(_PROBE_NEIGHBOURS, len(pins)))
+    used = np.unique(near)
+    reference = np.full(len(pins), np.nan)
+    reference[used] = _core_above_membrane(image, pins[used], radius_px, pins)[0]
+    with np.errstate(invalid="ignore"):
+        typical = np.nanmedian(reference[near], axis=1)
+        good = ((contrast >= _SIGNIFICANCE * error) & (contrast >= _MIN_CONTRAST * typical)
+                & (cKDTree(pins).query(position)[0] >= _APART * hood.pitch[through]))
+    # One pin per hole (several links predict it): the most significant first.
+    found: list[int] = []
+    for i in np.flatnonzero(good)[np.argsort(-(contrast / error)[good], kind="stable")]:
+        if not found or np.min(np.hypot(*(position[found] - position[i]).T)) >= _APART * hood.pitch[through[i]]:
+            found.append(int(i))
+    return position[np.sort(found)] if found else none
+
+
+def _disc_offsets(reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Integer pixel offsets (dx, dy) within `reach` px of the origin."""
+    half = int(np.ceil(reach))
+    dy, dx = np.mgrid[-half:half + 1, -half:half + 1]
+    inside = np.hypot(dx, dy) <= reach
+    return dx[inside].astype(np.float64), dy[inside].astype(np.float64)
+
+
+def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Grey levels at integer pixel coordinates (any shape, clipped to the image) and whether inside."""
+    height, width = image.shape
+    inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
+    values = image[np.clip(y, 0, height - 1).astype(np.intp), np.clip(x, 0, width - 1).astype(np.intp)]
+    return values.astype(np.float64), inside
+
+
+def _brightest_spots(image: np.ndarray, sites: np.ndarray, tolerance: np.ndarray, radius_px: float) -> np.ndarray:
+    """Per site, the pixel within its tolerance (px) where a tip-sized disc stands most above the ring
+    round it (a linear slope cancels in the difference), (S, 2) px."""
+    cx, cy = _disc_offsets(float(tolerance.max()))
+    core_x, core_y = _disc_offsets(radius_px)
+    ring_x, ring_y = _disc_offsets(radius_px + 2.0)
+    ring = np.hypot(ring_x, ring_y) > radius_px + 1.0
+    ring_x, ring_y = ring_x[ring], ring_y[ring]
+    anchor = np.rint(sites)
+    px = anchor[:, 0, None] + cx[None]  # (S, C) candidate pixels
+    py = anchor[:, 1, None] + cy[None]
+    core, _ = _gather(image, px[..., None] + core_x, py[..., None] + core_y)
+    around, _ = _gather(image, px[..., None] + ring_x, py[..., None] + ring_y)
+    response = core.mean(axis=2) - around.mean(axis=2)
+    response[np.hypot(px - sites[:, 0, None], py - sites[:, 1, None]) > tolerance[:, None]] = -np.inf
+    best = np.argmax(response, axis=1)
+    rows = np.arange(len(sites))
+    return np.column_stack([px[rows, best], py[rows, best]])
+
+
+def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
+                         pins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How far the core of a tip at each point stands above a quadratic fit of the membrane round it.
+
+    The membrane is the ring 1.5-3.5 px beyond the tip radius (pixels at the foot of another pin of
+    `pins` left out); the core is the disc of the tip radius less half a pixel (at least 1 px).
+
+    Returns
+    -------
+    contrast : (P,) ndarray
+        Mean core grey level minus the fit's mean over the core, grey levels (nan: too little membrane).
+    error : (P,) ndarray
+        Its standard error: the membrane's scatter about the fit (residual standard deviation, grey
+        levels) over the square root of the core's pixel count.
+    position : (P, 2) ndarray
+        Centroid of the core's grey levels above the fit, px (the point where none stands above).
+    """
+    dx, dy = _disc_offsets(radius_px + 3.5)
+    distance = np.hypot(dx, dy)
+    core = distance <= max(radius_px - 0.5, 1.0)
+    ring = distance >= radius_px + 1.5
+    anchor = np.rint(points)
+    x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
+    values, inside = _gather(image, x, y)
+    # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
+    foot, owner = cKDTree(pins).query(np.column_stack([x.ravel(), y.ravel()]), 2)
+    own_pin = cKDTree(pins).query(points)
+    foot, owner = foot.reshape(*x.shape, 2), owner.reshape(*x.shape, 2)
+    is_self = (owner == own_pin[1][:, None, None]) & (own_pin[0][:, None, None] < 0.5 * radius_px)
+    other = np.where(is_self[..., 0], foot[..., 1], foot[..., 0])
+    # Saturated pixels (the surround's veil near the rim) show no membrane level.
+    weight = (ring[None] & inside & (other > radius_px + 1.5) & (values < _SATURATED)).astype(np.float64)
+    scale = radius_px + 3.5
+    u, v = dx / scale, dy / scale
+    basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
+    normal = np.einsum("pk,ki,kj->pij", weight, basis, basis) + 1e-9 * np.eye(6)
+    beta = np.linalg.solve(normal, np.einsum("pk,ki,pk->pi", weight, basis, values)[..., None])[..., 0]
+    residual = values - beta @ basis.T
+    dof = weight.sum(axis=1) - 6.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        variance = np.where(dof >= 6.0, np.sum(weight * residual ** 2, axis=1) / dof, np.nan)
+        # The core mean's standard error, its pixels scattering about the fit as the membrane's do.
+        error = np.sqrt(variance / core.sum())
+        contrast = np.where(np.isfinite(variance), residual[:, core].mean(axis=1), np.nan)
+        above = np.clip(residual[:, core], 0.0, None)
+        total = above.sum(axis=1)
+        shift = np.column_stack([above @ dx[core], above @ dy[core]]) / total[:, None]
+    position = anchor + np.where(total[:, None] > 0, shift, 0.0)
+    return contrast, error, position

@@ -93,7 +93,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
-from ._rescue import fill_lattice_holes
+from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _sharpness
 from .detect import Blobs, DetectionParams, _detect
@@ -398,6 +398,15 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
         apart = cKDTree(extra).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
         rejected, reason = rejected[apart], reason[apart]
+    if not disc.whole_frame and len(centres):
+        # Holes no blob filled (a faint spoke end under the veil): the image itself, looked at there.
+        probed = probe_lattice_holes(grey, centres, (disc.cx, disc.cy),
+                                     _pin_radius_px(grey, centres, run.pitch, start.dark_pins), dark_pins=start.dark_pins)
+        if len(probed):
+            centres = np.vstack([centres, probed])
+            centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
+            apart = cKDTree(probed).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
+            rejected, reason = rejected[apart], reason[apart]
     if disc.whole_frame and len(centres):
         # Markers cut by the frame's edge: their centroids lean inwards; only those with enough in
         # view to measure stay (`_cut_by_frame`).
