@@ -23,6 +23,7 @@ pitches, so that no chain reaches the glare on the rim.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -48,6 +49,8 @@ _BEYOND = 0.3
 _OPPOSITE = -0.5
 # The outer end of a lone row has one pin (the row's) within this many link lengths.
 _LONE = 1.3
+# At most this many pins lie within `_LONE` link lengths of a site.
+_CLOSE_PINS = 8
 # Probing the image at the holes no blob filled: a pin's core at least this many standard errors
 # above the membrane's quadratic fit, with `_MIN_CONTRAST` of the median contrast of the
 # `_PROBE_NEIGHBOURS` pins round it; the holes no farther than `_PROBE_BEYOND` pitches past the
@@ -56,6 +59,10 @@ _SIGNIFICANCE = 5.0
 _PROBE_NEIGHBOURS = 6
 _PROBE_BEYOND = 0.1
 _SATURATED = 254.0
+# ... and at most this many times their contrast (the bright surround's edge, a glare spot).
+_MAX_CONTRAST = 2.0
+# The pins whose feet are left out of the membrane round a point: its nearest this many.
+_FOOT_PINS = 9
 
 
 def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts: np.ndarray,
@@ -209,25 +216,22 @@ def _holes(pins: np.ndarray, hood: _Neighbourhood, centre: tuple[float, float], 
                > np.hypot(pins[through, 0] - centre[0], pins[through, 1] - centre[1]))
     # A lone row's end has one pin within a pitch (the next along the row); the next row of a
     # hexagonal lattice has two.
-    close = tree.query_ball_point(sites, _LONE * tolerance / _MIRROR)
-    lone = np.array([len(g) for g in close]) == 1
+    k = min(_CLOSE_PINS, len(pins))
+    gap, close = tree.query(sites, k, distance_upper_bound=float(np.max(_LONE * tolerance / _MIRROR)))
+    gap, close = gap.reshape(len(sites), k), close.reshape(len(sites), k)
+    within = gap <= (_LONE * tolerance / _MIRROR)[:, None]
+    lone = within.sum(axis=1) == 1
     # A gap in a curved row (a radial layout's innermost ring, whose mirror images through a
     # neighbour miss the next site by 0.4 pitch): two pins within a pitch, on opposite sides.
-    flanked = np.array([_opposite_pair(pins[g] - site) for g, site in zip(close, sites)])
+    unit = (pins[np.minimum(close, len(pins) - 1)] - sites[:, None]) / np.maximum(gap, 1e-9)[..., None]
+    cosine = np.where(within[:, :, None] & within[:, None, :], unit @ unit.transpose(0, 2, 1), 1.0)
+    flanked = cosine.min(axis=(1, 2)) < _OPPOSITE
     plausible = opposite | flanked | ((predictions == 1) & outward & lone)
     return sites[plausible], tolerance[plausible], through[plausible]
 
 
-def _opposite_pair(offsets: np.ndarray) -> bool:
-    """Whether two of `offsets` (M, 2), px, point in opposite directions (cosine below `_OPPOSITE`)."""
-    if len(offsets) < 2:
-        return False
-    unit = offsets / np.maximum(np.hypot(*offsets.T), 1e-9)[:, None]
-    return bool(np.min(unit @ unit.T) < _OPPOSITE)
-
-
 def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float, float], radius_px: float, *,
-                        dark_pins: bool = False) -> np.ndarray:
+                        disc_radius_px: float = np.inf, dark_pins: bool = False) -> np.ndarray:
     """Pins at lattice holes that no blob filled, found by looking at the image there.
 
     A faint pin (the outermost ring under the veil and the rim glare, 10-15 grey above noise of 5)
@@ -248,6 +252,9 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
         The sensor disc's centre (x, y), px.
     radius_px : float
         Pin tip radius, px.
+    disc_radius_px : float
+        The sensor disc's radius, px: a pin's tip and the membrane just round it (1.5 px beyond the
+        tip) lie inside it (beyond it is the surround, no membrane).
     dark_pins : bool
         Dark markers on a light membrane (the image is inverted).
 
@@ -280,9 +287,15 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     hood = _Neighbourhood(pins)
     field_reach = float(np.max(np.hypot(pins[:, 0] - centre[0], pins[:, 1] - centre[1])))
     sites, tolerance, through = _holes(pins, hood, centre, field_reach, _PROBE_BEYOND)
+    # A site nearer a pin than a pin's own neighbours are is that pin's (an irregular patch of lattice).
+    far = cKDTree(pins).query(sites)[0] >= _APART * hood.pitch[through]
+    sites, tolerance, through = sites[far], tolerance[far], through[far]
     if not len(sites):
         return none
     spots = _brightest_spots(image, sites, tolerance, radius_px)
+    # A hole predicted by several links is measured once.
+    spots, first = np.unique(spots, axis=0, return_index=True)
+    through = through[first]
     contrast, error, position = _core_above_membrane(image, spots, radius_px, pins)
     # The pins round each hole, measured the same way.
     _, near = cKDTree(pins).query(spots, min(_PROBE_NEIGHBOURS, len(pins)))
@@ -292,6 +305,8 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     with np.errstate(invalid="ignore"):
         typical = np.nanmedian(reference[near], axis=1)
         good = ((contrast >= _SIGNIFICANCE * error) & (contrast >= _MIN_CONTRAST * typical)
+                & (contrast <= _MAX_CONTRAST * typical)
+                & (np.hypot(position[:, 0] - centre[0], position[:, 1] - centre[1]) <= disc_radius_px - radius_px - 1.5)
                 & (cKDTree(pins).query(position)[0] >= _APART * hood.pitch[through]))
     # One pin per hole (several links predict it): the most significant first.
     found: list[int] = []
@@ -320,19 +335,26 @@ def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray
 def _brightest_spots(image: np.ndarray, sites: np.ndarray, tolerance: np.ndarray, radius_px: float) -> np.ndarray:
     """Per site, the pixel within its tolerance (px) where a tip-sized disc stands most above the ring
     round it (a linear slope cancels in the difference), (S, 2) px."""
-    cx, cy = _disc_offsets(float(tolerance.max()))
     core_x, core_y = _disc_offsets(radius_px)
     ring_x, ring_y = _disc_offsets(radius_px + 2.0)
     ring = np.hypot(ring_x, ring_y) > radius_px + 1.0
-    ring_x, ring_y = ring_x[ring], ring_y[ring]
+    half = int(np.ceil(radius_px + 2.0))
+    kernel = np.zeros((2 * half + 1, 2 * half + 1), np.float32)
+    kernel[(core_y + half).astype(int), (core_x + half).astype(int)] = 1.0 / len(core_x)
+    kernel[(ring_y[ring] + half).astype(int), (ring_x[ring] + half).astype(int)] = -1.0 / ring.sum()
+    # The response over the sites' bounding box only (a few pads' worth of pixels at most).
+    reach = int(np.ceil(tolerance.max())) + half + 1
+    x0, y0 = np.maximum(np.floor(sites.min(axis=0)).astype(int) - reach, 0)
+    x1, y1 = np.ceil(sites.max(axis=0)).astype(int) + reach + 1
+    response = cv2.filter2D(image[y0:y1, x0:x1], cv2.CV_32F, kernel, borderType=cv2.BORDER_REPLICATE)
+    cx, cy = _disc_offsets(float(tolerance.max()))
     anchor = np.rint(sites)
     px = anchor[:, 0, None] + cx[None]  # (S, C) candidate pixels
     py = anchor[:, 1, None] + cy[None]
-    core, _ = _gather(image, px[..., None] + core_x, py[..., None] + core_y)
-    around, _ = _gather(image, px[..., None] + ring_x, py[..., None] + ring_y)
-    response = core.mean(axis=2) - around.mean(axis=2)
-    response[np.hypot(px - sites[:, 0, None], py - sites[:, 1, None]) > tolerance[:, None]] = -np.inf
-    best = np.argmax(response, axis=1)
+    height, width = response.shape
+    values = response[np.clip(py - y0, 0, height - 1).astype(np.intp), np.clip(px - x0, 0, width - 1).astype(np.intp)]
+    values[np.hypot(px - sites[:, 0, None], py - sites[:, 1, None]) > tolerance[:, None]] = -np.inf
+    best = np.argmax(values, axis=1)
     rows = np.arange(len(sites))
     return np.column_stack([px[rows, best], py[rows, best]])
 
@@ -362,18 +384,17 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
     x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
     values, inside = _gather(image, x, y)
     # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
-    foot, owner = cKDTree(pins).query(np.column_stack([x.ravel(), y.ravel()]), 2)
-    own_pin = cKDTree(pins).query(points)
-    foot, owner = foot.reshape(*x.shape, 2), owner.reshape(*x.shape, 2)
-    is_self = (owner == own_pin[1][:, None, None]) & (own_pin[0][:, None, None] < 0.5 * radius_px)
-    other = np.where(is_self[..., 0], foot[..., 1], foot[..., 0])
+    gap, near = cKDTree(pins).query(points, min(_FOOT_PINS, len(pins)))
+    others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near])  # (P, F, 2)
+    other = np.min(np.hypot(x[:, :, None] - others[:, None, :, 0], y[:, :, None] - others[:, None, :, 1]), axis=2)
     # Saturated pixels (the surround's veil near the rim) show no membrane level.
     weight = (ring[None] & inside & (other > radius_px + 1.5) & (values < _SATURATED)).astype(np.float64)
     scale = radius_px + 3.5
     u, v = dx / scale, dy / scale
     basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
-    normal = np.einsum("pk,ki,kj->pij", weight, basis, basis) + 1e-9 * np.eye(6)
-    beta = np.linalg.solve(normal, np.einsum("pk,ki,pk->pi", weight, basis, values)[..., None])[..., 0]
+    weighted = weight[:, :, None] * basis[None]  # (P, K, 6)
+    normal = weighted.transpose(0, 2, 1) @ basis + 1e-9 * np.eye(6)
+    beta = np.linalg.solve(normal, (weighted.transpose(0, 2, 1) @ values[..., None]))[..., 0]
     residual = values - beta @ basis.T
     dof = weight.sum(axis=1) - 6.0
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -401,7 +401,8 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
     if not disc.whole_frame and len(centres):
         # Holes no blob filled (a faint spoke end under the veil): the image itself, looked at there.
         probed = probe_lattice_holes(grey, centres, (disc.cx, disc.cy),
-                                     _pin_radius_px(grey, centres, run.pitch, start.dark_pins), dark_pins=start.dark_pins)
+                                     _pin_radius_px(grey, centres, run.pitch, start.dark_pins),
+                                     disc_radius_px=search.radius_px, dark_pins=start.dark_pins)
         if len(probed):
             centres = np.vstack([centres, probed])
             centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
