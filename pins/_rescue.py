@@ -59,10 +59,14 @@ _SIGNIFICANCE = 5.0
 _PROBE_NEIGHBOURS = 6
 _PROBE_BEYOND = 0.1
 _SATURATED = 254.0
+# A kept pin whose core stands neither this many standard errors above the membrane's fit nor this
+# fraction of its neighbours' contrast is no tip (an LED reflection's flat top): `flat_pins`.
+_FLAT_SIGNIFICANCE = 2.5
+_FLAT_CONTRAST = 0.2
 # ... and at most this many times their contrast (the bright surround's edge, a glare spot).
 _MAX_CONTRAST = 2.0
-# The pins whose feet are left out of the membrane round a point: its nearest this many.
-_FOOT_PINS = 9
+# The pins whose feet are left out of the membrane round a point: its nearest this many (itself included).
+_FOOT_PINS = 7
 
 
 def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts: np.ndarray,
@@ -385,16 +389,18 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
     values, inside = _gather(image, x, y)
     # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
     gap, near = cKDTree(pins).query(points, min(_FOOT_PINS, len(pins)))
-    others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near])  # (P, F, 2)
-    other = np.min(np.hypot(x[:, :, None] - others[:, None, :, 0], y[:, :, None] - others[:, None, :, 1]), axis=2)
+    others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near]).astype(np.float32)  # (P, F, 2)
+    xs, ys = x.astype(np.float32), y.astype(np.float32)
+    other = np.sqrt(np.min((xs[:, :, None] - others[:, None, :, 0]) ** 2 + (ys[:, :, None] - others[:, None, :, 1]) ** 2,
+                           axis=2))
     # Saturated pixels (the surround's veil near the rim) show no membrane level.
     weight = (ring[None] & inside & (other > radius_px + 1.5) & (values < _SATURATED)).astype(np.float64)
     scale = radius_px + 3.5
     u, v = dx / scale, dy / scale
     basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
-    weighted = weight[:, :, None] * basis[None]  # (P, K, 6)
-    normal = weighted.transpose(0, 2, 1) @ basis + 1e-9 * np.eye(6)
-    beta = np.linalg.solve(normal, (weighted.transpose(0, 2, 1) @ values[..., None]))[..., 0]
+    # Weighted least squares for every point at once, as two matrix products over the pixels.
+    normal = (weight @ (basis[:, :, None] * basis[:, None, :]).reshape(len(basis), 36)).reshape(-1, 6, 6)
+    beta = np.linalg.solve(normal + 1e-9 * np.eye(6), ((weight * values) @ basis)[..., None])[..., 0]
     residual = values - beta @ basis.T
     dof = weight.sum(axis=1) - 6.0
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -407,3 +413,42 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
         shift = np.column_stack([above @ dx[core], above @ dy[core]]) / total[:, None]
     position = anchor + np.where(total[:, None] > 0, shift, 0.0)
     return contrast, error, position
+
+
+def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
+    """Which pins (N,) bool show no tip: a core that stands neither `_FLAT_SIGNIFICANCE` standard errors
+    above a quadratic fit of the membrane round it nor `_FLAT_CONTRAST` of its neighbours' contrast.
+
+    The flat top of an LED reflection inside the pad, at a lattice site, is a blob as large and as
+    bright above the threshold's neighbourhood mean as a pin, but round it the membrane rises to the
+    same level: above the fit it stands 0.7-1.8 standard errors and 0.03-0.08 of its neighbours'
+    contrast, where the faintest pins under the veil stand 3.3 and 0.14 (radial-led-120, seeds 0-11).
+    A pin whose membrane cannot be fitted (too little of it round the pin) is not judged.
+
+    Parameters
+    ----------
+    grey : (H, W) ndarray of uint8
+        Grey frame.
+    pins : (N, 2) ndarray
+        Pins (x, y), px.
+    radius_px : float
+        Pin tip radius, px.
+    dark_pins : bool
+        Dark markers on a light membrane (the image is inverted).
+
+    Returns
+    -------
+    flat : (N,) ndarray of bool
+        All False for fewer than 7 pins or no radius.
+    """
+    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
+    if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
+        return np.zeros(len(pins), bool)
+    image = grey.astype(np.float32)
+    if dark_pins:
+        image = 255.0 - image
+    contrast, error, _ = _core_above_membrane(image, pins, radius_px, pins)
+    _, near = cKDTree(pins).query(pins, min(_PROBE_NEIGHBOURS + 1, len(pins)))
+    with np.errstate(invalid="ignore"):
+        typical = np.nanmedian(contrast[near[:, 1:]], axis=1)
+        return (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)

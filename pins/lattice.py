@@ -93,7 +93,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
-from ._rescue import fill_lattice_holes, probe_lattice_holes
+from ._rescue import fill_lattice_holes, flat_pins, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _sharpness
 from .detect import Blobs, DetectionParams, _detect
@@ -399,9 +399,15 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         apart = cKDTree(extra).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
         rejected, reason = rejected[apart], reason[apart]
     if not disc.whole_frame and len(centres):
+        radius_px = _pin_radius_px(grey, centres, run.pitch, start.dark_pins)
+        # A reflection's flat top at a lattice site: no tip stands above the membrane round it.
+        flat = flat_pins(grey, centres, radius_px, dark_pins=start.dark_pins)
+        if flat.any():
+            rejected = np.vstack([rejected, centres[flat]])
+            reason = np.concatenate([reason, np.full(int(flat.sum()), REJECTION_REASONS.index("contrast"))])
+            centres = centres[~flat]
         # Holes no blob filled (a faint spoke end under the veil): the image itself, looked at there.
-        probed = probe_lattice_holes(grey, centres, (disc.cx, disc.cy),
-                                     _pin_radius_px(grey, centres, run.pitch, start.dark_pins),
+        probed = probe_lattice_holes(grey, centres, (disc.cx, disc.cy), radius_px,
                                      disc_radius_px=search.radius_px, dark_pins=start.dark_pins)
         if len(probed):
             centres = np.vstack([centres, probed])
