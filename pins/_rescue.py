@@ -18,7 +18,16 @@ speck), at least `_MIN_CONTRAST` of their contrast and a box filled like a disc'
 (the most confident), then the nearest. Sites are predicted by the judged pins, and then by the pins
 taken back (several pins missing in a row along a spoke that crosses a reflection), through links of
 about one pitch, never farther from the disc centre than the outermost judged pin plus `_BEYOND`
-pitches, so that no chain reaches the glare on the rim.
+pitches, so that no chain reaches the glare on the rim. A gap in a curved row (a radial layout's
+innermost ring, where a mirror image through a neighbour misses the next site by 0.4 pitch) is a
+hole too when two pins within a pitch flank it on opposite sides.
+
+Some pins make a blob in no candidate set (the outermost ring under the veil, 10-15 grey above noise
+of 5): `probe_lattice_holes` looks at the image itself at the holes left, no farther out than the
+outermost pin plus `_PROBE_BEYOND` pitches, and takes a pin where a tip-sized core stands clearly
+above a quadratic fit of the membrane round it (`_core_above_membrane`). The same measure tells a
+kept blob that is no tip (`flat_pins`): an LED reflection's flat top at a lattice site stands no
+higher than the membrane round it.
 """
 
 from __future__ import annotations

@@ -49,7 +49,9 @@ finds that lattice without being told the pin count:
    filled with a pin-like blob another candidate set found there (`pins._rescue`): one threshold
    cannot suit every pin of a pad whose light varies, and a pin on an LED reflection inside the pad
    (a brighter background, less contrast) or a faint spoke end under the veil is lost by the
-   winner's and found by another's;
+   winner's and found by another's; a kept pin whose core stands no higher than a quadratic fit of
+   the membrane round it (an LED reflection's flat top) is rejected (``contrast``), and at the holes
+   still left (not on a flat gel) the image itself is probed for a faint tip;
 5c. centres: each kept pin is placed by fitting its tip as an opaque ellipse over a quadratic
    background (`pins._tipfit`): the blobs' centroids lean towards the bright side of a sloped
    membrane (a reflection's flank, the veil, shading) by up to 0.7 px on small tips;

@@ -370,7 +370,8 @@ def test_radial_layout_with_led_reflections_keeps_the_pins_on_them(seed):
     contrast ~35 against ~50) are kept and the reflections are not; the count is within 3 % of the pins
     drawn whole (the outermost ring under the veil and the rim glare is the faintest: a few of its pins
     stand 10-15 grey above noise of 5 and may be lost). Before the lattice holes were filled, 108-114
-    of 120 were found and 8 of 119 pins on reflections (6 seeds) were lost."""
+    of 120 were found and 8 of 119 pins on reflections (6 seeds) were lost; before they were probed and
+    reflections' flat tops rejected, 35 of 2880 pins were missed and 2 reflections kept (seeds 0-11)."""
     sensor = preset_sensor("radial-led-120", seed)
     on_reflection = found_on_reflection = 0
     for contact in (None, TAP):
@@ -487,3 +488,21 @@ def test_probing_adds_no_pin_off_the_pad(name):
             drawn = f.centres[f.visible | f.partial]
             assert np.all(cKDTree(drawn).query(found)[0] < _gate_px(f)), (seed, contact, found)
             assert np.all(cKDTree(field.centres).query(found)[0] < 1.0) if len(found) else True
+
+
+def test_radial_layout_with_led_reflections_count_over_many_seeds():
+    """Issue 20, outcome 7, over seeds 0-11 at rest and under a 5 mm tap: the count within 3 % on every
+    frame, no reflection (nor anything else) kept, 99 % of the pins found; the bar of 1 % is met on most
+    frames (17 of 24 when this was written; the rest miss 2-3 faint outer-ring tips, `NOT_YET_MET`)."""
+    within_bar = missed = drawn = 0
+    for seed in range(12):
+        for contact in (None, TAP):
+            f = preset_frame("radial-led-120", contact, seed=seed)
+            field = find_pin_field(f.image)
+            recall, precision, _ = score(field.centres, f, gate_px=_gate_px(f))
+            visible = int(f.visible.sum())
+            assert precision == 1.0 and abs(field.count - visible) <= 0.03 * visible, (seed, contact, field.summary())
+            within_bar += abs(field.count - visible) <= 0.01 * visible
+            missed += round((1.0 - recall) * visible)
+            drawn += visible
+    assert missed <= 0.01 * drawn and within_bar >= 12, (missed, within_bar)
