@@ -15,7 +15,7 @@ For each seed (rest and a 5 mm tap) prints, px:
 Measured and from-truth near each other and above the bound by well under 2x: the centres are at the
 noise limit of a per-pin estimate, and a lower RMSE needs a prior across pins (a smooth displacement
 field), not a better tip fit. Also prints the time of `probe_lattice_holes` and `flat_pins` per
-preset (the checks `find_pin_field` added for this pad), ms, median of a few runs.
+preset (the checks `find_pin_field` added for this pad) beside find_pin_field's own, ms, mean of 3 runs.
 
 Run: .venv/bin/python bench/bench_tip_bound.py [--seeds N]
 """
@@ -103,7 +103,7 @@ def main() -> None:
             from_truth = float(np.sqrt(np.mean(np.sum((fitted - truth) ** 2, axis=1))))
             print(f"{seed:>4} {'tap' if contact else 'rest':>7} {bound:7.3f} {measured:9.3f} {from_truth:11.3f}",
                   flush=True)
-    print("\nfind_pin_field's added checks, ms (median of 3 runs, rest frame, seed 0)")
+    print("\nfind_pin_field's added checks, ms per find_pin_field (mean of 3, rest frame, seed 0)")
     for name in preset_names():
         frame = SyntheticTacTip.from_preset(name, seed=0).render()
         spent = {"probe_lattice_holes": [], "flat_pins": []}

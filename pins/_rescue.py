@@ -391,19 +391,21 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
     """
     dx, dy = _disc_offsets(radius_px + 3.5)
     distance = np.hypot(dx, dy)
-    core = distance <= max(radius_px - 0.5, 1.0)
-    ring = distance >= radius_px + 1.5
+    used = (distance <= max(radius_px - 0.5, 1.0)) | (distance >= radius_px + 1.5)  # the tip's edge: neither
+    dx, dy, distance = dx[used], dy[used], distance[used]
+    core, ring = distance < radius_px + 1.5, distance >= radius_px + 1.5
     anchor = np.rint(points)
     x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
     values, inside = _gather(image, x, y)
     # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
     gap, near = cKDTree(pins).query(points, min(_FOOT_PINS, len(pins)))
     others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near]).astype(np.float32)  # (P, F, 2)
-    xs, ys = x.astype(np.float32), y.astype(np.float32)
+    xs, ys = x[:, ring].astype(np.float32), y[:, ring].astype(np.float32)
     other = np.sqrt(np.min((xs[:, :, None] - others[:, None, :, 0]) ** 2 + (ys[:, :, None] - others[:, None, :, 1]) ** 2,
                            axis=2))
     # Saturated pixels (the surround's veil near the rim) show no membrane level.
-    weight = (ring[None] & inside & (other > radius_px + 1.5) & (values < _SATURATED)).astype(np.float64)
+    weight = np.zeros(values.shape)
+    weight[:, ring] = inside[:, ring] & (other > radius_px + 1.5) & (values[:, ring] < _SATURATED)
     scale = radius_px + 3.5
     u, v = dx / scale, dy / scale
     basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
