@@ -18,11 +18,21 @@ speck), at least `_MIN_CONTRAST` of their contrast and a box filled like a disc'
 (the most confident), then the nearest. Sites are predicted by the judged pins, and then by the pins
 taken back (several pins missing in a row along a spoke that crosses a reflection), through links of
 about one pitch, never farther from the disc centre than the outermost judged pin plus `_BEYOND`
-pitches, so that no chain reaches the glare on the rim.
+pitches, so that no chain reaches the glare on the rim. A gap in a curved row (a radial layout's
+innermost ring, where a mirror image through a neighbour misses the next site by 0.4 pitch) is a
+hole too when two pins within a pitch flank it on opposite sides.
+
+Some pins make a blob in no candidate set (the outermost ring under the veil, 10-15 grey above noise
+of 5): `probe_lattice_holes` looks at the image itself at the holes left, no farther out than the
+outermost pin plus `_PROBE_BEYOND` pitches, and takes a pin where a tip-sized core stands clearly
+above a quadratic fit of the membrane round it (`_core_above_membrane`). The same measure tells a
+kept blob that is no tip (`flat_pins`): an LED reflection's flat top at a lattice site stands no
+higher than the membrane round it.
 """
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -48,6 +58,24 @@ _BEYOND = 0.3
 _OPPOSITE = -0.5
 # The outer end of a lone row has one pin (the row's) within this many link lengths.
 _LONE = 1.3
+# At most this many pins lie within `_LONE` link lengths of a site.
+_CLOSE_PINS = 8
+# Probing the image at the holes no blob filled: a pin's core at least this many standard errors
+# above the membrane's quadratic fit, with `_MIN_CONTRAST` of the median contrast of the
+# `_PROBE_NEIGHBOURS` pins round it; the holes no farther than `_PROBE_BEYOND` pitches past the
+# outermost pin (the rim glare lies a pitch past it).
+_SIGNIFICANCE = 5.0
+_PROBE_NEIGHBOURS = 6
+_PROBE_BEYOND = 0.1
+_SATURATED = 254.0
+# A kept pin whose core stands neither this many standard errors above the membrane's fit nor this
+# fraction of its neighbours' contrast is no tip (an LED reflection's flat top): `flat_pins`.
+_FLAT_SIGNIFICANCE = 2.5
+_FLAT_CONTRAST = 0.2
+# ... and at most this many times their contrast (the bright surround's edge, a glare spot).
+_MAX_CONTRAST = 2.0
+# The pins whose feet are left out of the membrane round a point: its nearest this many (itself included).
+_FOOT_PINS = 7
 
 
 def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts: np.ndarray,
@@ -90,53 +118,14 @@ def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts:
     first_new = len(pins)
     for round_ in range(_ROUNDS):
         hood = _Neighbourhood(pins)
-        k = hood.near.shape[1] - 1
-        if k < 2:
+        if hood.near.shape[1] < 3:
             break
         area_ref, contrast_ref = _row_median(np.stack([pin_areas, pin_contrasts])[:, hood.near])
-        source = np.repeat(np.arange(len(pins)), k)
-        through = hood.near[:, 1:].ravel()
-        length = hood.dist[:, 1:].ravel()
-        # Links about a pitch long (not the long links of a radial layout's lone centre pin).
-        link = hood.link.ravel() & (length <= _SHORT_LINK * hood.pitch[source])
-        if round_ > 0:  # only the pins taken back predict anew
-            link &= (source >= first_new) | (through >= first_new)
-        source, through, length = source[link], through[link], length[link]
-        sites = 2.0 * pins[through] - pins[source]
-        tolerance = _MIRROR * length
-        # Never beyond the field: glare on the rim lies a pitch past the outermost pins, the next row
-        # of a hexagonal lattice 0.87 pitch past the judged pins' hull, the end of a radial spoke whose
-        # outermost pin is missing about half a pitch past it.
-        inside = (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1])
-                  <= field_reach + _BEYOND * hood.pitch[through])
-        sites, tolerance, through = sites[inside], tolerance[inside], through[inside]
+        # Only the pins taken back in the round before predict anew.
+        sites, tolerance, through = _holes(pins, hood, centre, field_reach, _BEYOND,
+                                           fresh=first_new if round_ > 0 else None)
         if not len(sites):
             break
-        # Holes: sites no pin occupies.
-        occupied = np.isfinite(cKDTree(pins).query(sites, distance_upper_bound=tolerance.max())[0])
-        occupied &= cKDTree(pins).query(sites)[0] <= tolerance
-        sites, tolerance, through = sites[~occupied], tolerance[~occupied], through[~occupied]
-        # A hole inside the lattice has pins on opposite sides along a row (predicted from both
-        # directions, or with a pin beyond it); the outer end of a lone row (a radial spoke whose rim pin is under the veil) is
-        # predicted once, from inside. Not the next row of a hexagonal lattice (predicted twice, from
-        # one side: skin and glare beyond the field), nor the inner end of a radial spoke (the empty
-        # zone round the lone centre pin).
-        if not len(sites):
-            break
-        ahead = sites - pins[through]
-        ahead /= np.maximum(np.hypot(*ahead.T), 1e-9)[:, None]
-        groups = cKDTree(sites).query_ball_point(sites, tolerance)
-        predictions = np.array([len(g) for g in groups])
-        opposite = np.array([np.min(ahead[g] @ ahead[i]) < _OPPOSITE for i, g in enumerate(groups)])
-        # ... or a pin beyond it along the row (the next one, whose own predictor is missing).
-        opposite |= cKDTree(pins).query(2.0 * sites - pins[through])[0] <= tolerance
-        outward = (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1])
-                   > np.hypot(pins[through, 0] - centre[0], pins[through, 1] - centre[1]))
-        # A lone row's end has one pin within a pitch (the next along the row); the next row of a
-        # hexagonal lattice has two.
-        lone = np.array([len(g) for g in cKDTree(pins).query_ball_point(sites, _LONE * tolerance / _MIRROR)]) == 1
-        plausible = opposite | ((predictions == 1) & outward & lone)
-        sites, tolerance, through = sites[plausible], tolerance[plausible], through[plausible]
         new = []
         for site, reach, near_pin in zip(sites, tolerance, through):
             if len(new) and np.min(np.hypot(*(np.array([centres[i] for i in new]) - site).T)) <= reach:
@@ -169,3 +158,308 @@ def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts:
         pin_areas = np.append(pin_areas, areas[filled])
         pin_contrasts = np.append(pin_contrasts, contrasts[filled])
     return taken
+
+
+def _holes(pins: np.ndarray, hood: _Neighbourhood, centre: tuple[float, float], field_reach: float, beyond: float,
+           fresh: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The lattice sites `pins` predict and none occupies (the module docstring).
+
+    Parameters
+    ----------
+    pins : (N, 2) ndarray of float64
+        The pins (x, y), px; `hood` is their `_Neighbourhood`.
+    centre : (float, float)
+        The sensor disc's centre (x, y), px.
+    field_reach : float
+        Distance from `centre` of the farthest pin that may predict, px: no site lies farther than
+        this plus `beyond` local pitches.
+    fresh : int or None
+        Only links with a pin of index `fresh` or more predict (the pins taken back in the round before).
+
+    Returns
+    -------
+    sites : (H, 2) ndarray of float64
+        Predicted sites (x, y), px, one per prediction (a hole predicted from several pins appears
+        several times).
+    tolerance : (H,) ndarray of float64
+        How far from its site a hole's pin may lie, px (`_MIRROR` of the link length).
+    through : (H,) ndarray of int
+        The pin next to each site (the one the link runs through).
+    """
+    empty = np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=int)
+    k = hood.near.shape[1] - 1
+    if k < 2:
+        return empty
+    source = np.repeat(np.arange(len(pins)), k)
+    through = hood.near[:, 1:].ravel()
+    length = hood.dist[:, 1:].ravel()
+    # Links about a pitch long (not the long links of a radial layout's lone centre pin).
+    link = hood.link.ravel() & (length <= _SHORT_LINK * hood.pitch[source])
+    if fresh is not None:
+        link &= (source >= fresh) | (through >= fresh)
+    source, through, length = source[link], through[link], length[link]
+    sites = 2.0 * pins[through] - pins[source]
+    tolerance = _MIRROR * length
+    # Never beyond the field: glare on the rim lies a pitch past the outermost pins, the next row
+    # of a hexagonal lattice 0.87 pitch past the judged pins' hull, the end of a radial spoke whose
+    # outermost pin is missing about half a pitch past it.
+    inside = np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1]) <= field_reach + beyond * hood.pitch[through]
+    sites, tolerance, through = sites[inside], tolerance[inside], through[inside]
+    if not len(sites):
+        return empty
+    # Holes: sites no pin occupies.
+    tree = cKDTree(pins)
+    hole = tree.query(sites)[0] > tolerance
+    sites, tolerance, through = sites[hole], tolerance[hole], through[hole]
+    if not len(sites):
+        return empty
+    # A hole inside the lattice has pins on opposite sides along a row (predicted from both
+    # directions, or with a pin beyond it); the outer end of a lone row (a radial spoke whose rim pin
+    # is under the veil) is predicted once, from inside. Not the next row of a hexagonal lattice
+    # (predicted twice, from one side: skin and glare beyond the field), nor the inner end of a radial
+    # spoke (the empty zone round the lone centre pin).
+    ahead = sites - pins[through]
+    ahead /= np.maximum(np.hypot(*ahead.T), 1e-9)[:, None]
+    groups = cKDTree(sites).query_ball_point(sites, tolerance)
+    predictions = np.array([len(g) for g in groups])
+    opposite = np.array([np.min(ahead[g] @ ahead[i]) < _OPPOSITE for i, g in enumerate(groups)])
+    # ... or a pin beyond it along the row (the next one, whose own predictor is missing).
+    opposite |= tree.query(2.0 * sites - pins[through])[0] <= tolerance
+    outward = (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1])
+               > np.hypot(pins[through, 0] - centre[0], pins[through, 1] - centre[1]))
+    # A lone row's end has one pin within a pitch (the next along the row); the next row of a
+    # hexagonal lattice has two.
+    k = min(_CLOSE_PINS, len(pins))
+    gap, close = tree.query(sites, k, distance_upper_bound=float(np.max(_LONE * tolerance / _MIRROR)))
+    gap, close = gap.reshape(len(sites), k), close.reshape(len(sites), k)
+    within = gap <= (_LONE * tolerance / _MIRROR)[:, None]
+    lone = within.sum(axis=1) == 1
+    # A gap in a curved row (a radial layout's innermost ring, whose mirror images through a
+    # neighbour miss the next site by 0.4 pitch): two pins within a pitch, on opposite sides.
+    unit = (pins[np.minimum(close, len(pins) - 1)] - sites[:, None]) / np.maximum(gap, 1e-9)[..., None]
+    cosine = np.where(within[:, :, None] & within[:, None, :], unit @ unit.transpose(0, 2, 1), 1.0)
+    flanked = cosine.min(axis=(1, 2)) < _OPPOSITE
+    plausible = opposite | flanked | ((predictions == 1) & outward & lone)
+    return sites[plausible], tolerance[plausible], through[plausible]
+
+
+def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float, float], radius_px: float, *,
+                        disc_radius_px: float = np.inf, dark_pins: bool = False) -> np.ndarray:
+    """Pins at lattice holes that no blob filled, found by looking at the image there.
+
+    A faint pin (the outermost ring under the veil and the rim glare, 10-15 grey above noise of 5)
+    makes a blob in no candidate set, or one too small to judge. At each hole of the lattice of
+    `pins` (`_holes`, reaching no farther than the farthest pin plus `_PROBE_BEYOND` pitches) the
+    brightest tip-sized spot within the hole's tolerance is a pin when its core stands at least
+    `_SIGNIFICANCE` standard errors above a quadratic fit of the membrane round it (a reflection's
+    or the veil's flank is curved, not a tip), with at least `_MIN_CONTRAST` of the contrast of the
+    pins round it, measured the same way, and no closer than `_APART` local pitches to a pin.
+
+    Parameters
+    ----------
+    grey : (H, W) ndarray of uint8
+        Grey frame.
+    pins : (N, 2) ndarray
+        The pins found so far (x, y), px.
+    centre : (float, float)
+        The sensor disc's centre (x, y), px.
+    radius_px : float
+        Pin tip radius, px.
+    disc_radius_px : float
+        The sensor disc's radius, px: a pin's tip and the membrane just round it (1.5 px beyond the
+        tip) lie inside it (beyond it is the surround, no membrane).
+    dark_pins : bool
+        Dark markers on a light membrane (the image is inverted).
+
+    Returns
+    -------
+    found : (M, 2) ndarray of float64
+        The pins found at holes (x, y), px (the centroid of the core above the membrane's fit: the
+        tip fit places them); empty (0, 2) when there are none, fewer than 7 pins, or no radius.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pitch = 10.0
+    >>> grid = pitch * np.array([(x, y) for y in range(-4, 5) for x in range(-4, 5)], float) + 50.0
+    >>> yy, xx = np.mgrid[0:100, 0:100]
+    >>> image = np.full((100, 100), 100.0)
+    >>> for x, y in grid:
+    ...     image += 40.0 * (np.hypot(xx - x, yy - y) <= 2.0)
+    >>> kept = np.delete(grid, 40, axis=0)  # the centre pin, at (50, 50), not found
+    >>> probe_lattice_holes(image.astype(np.uint8), kept, (50.0, 50.0), 2.0).round(1)
+    array([[50., 50.]])
+    """
+    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
+    none = np.zeros((0, 2))
+    if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
+        return none
+    image = grey.astype(np.float32)
+    if dark_pins:
+        image = 255.0 - image
+    hood = _Neighbourhood(pins)
+    field_reach = float(np.max(np.hypot(pins[:, 0] - centre[0], pins[:, 1] - centre[1])))
+    sites, tolerance, through = _holes(pins, hood, centre, field_reach, _PROBE_BEYOND)
+    # A site nearer a pin than a pin's own neighbours are is that pin's (an irregular patch of lattice).
+    far = cKDTree(pins).query(sites)[0] >= _APART * hood.pitch[through]
+    sites, tolerance, through = sites[far], tolerance[far], through[far]
+    if not len(sites):
+        return none
+    spots = _brightest_spots(image, sites, tolerance, radius_px)
+    # A hole predicted by several links is measured once.
+    spots, first = np.unique(spots, axis=0, return_index=True)
+    through = through[first]
+    contrast, error, position = _core_above_membrane(image, spots, radius_px, pins)
+    # The pins round each hole, measured the same way.
+    _, near = cKDTree(pins).query(spots, min(_PROBE_NEIGHBOURS, len(pins)))
+    used = np.unique(near)
+    reference = np.full(len(pins), np.nan)
+    reference[used] = _core_above_membrane(image, pins[used], radius_px, pins)[0]
+    with np.errstate(invalid="ignore"):
+        typical = np.nanmedian(reference[near], axis=1)
+        good = ((contrast >= _SIGNIFICANCE * error) & (contrast >= _MIN_CONTRAST * typical)
+                & (contrast <= _MAX_CONTRAST * typical)
+                & (np.hypot(position[:, 0] - centre[0], position[:, 1] - centre[1]) <= disc_radius_px - radius_px - 1.5)
+                & (cKDTree(pins).query(position)[0] >= _APART * hood.pitch[through]))
+    # One pin per hole (several links predict it): the most significant first.
+    found: list[int] = []
+    for i in np.flatnonzero(good)[np.argsort(-(contrast / error)[good], kind="stable")]:
+        if not found or np.min(np.hypot(*(position[found] - position[i]).T)) >= _APART * hood.pitch[through[i]]:
+            found.append(int(i))
+    return position[np.sort(found)] if found else none
+
+
+def _disc_offsets(reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Integer pixel offsets (dx, dy) within `reach` px of the origin."""
+    half = int(np.ceil(reach))
+    dy, dx = np.mgrid[-half:half + 1, -half:half + 1]
+    inside = np.hypot(dx, dy) <= reach
+    return dx[inside].astype(np.float64), dy[inside].astype(np.float64)
+
+
+def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Grey levels at integer pixel coordinates (any shape, clipped to the image) and whether inside."""
+    height, width = image.shape
+    inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
+    values = image[np.clip(y, 0, height - 1).astype(np.intp), np.clip(x, 0, width - 1).astype(np.intp)]
+    return values.astype(np.float64), inside
+
+
+def _brightest_spots(image: np.ndarray, sites: np.ndarray, tolerance: np.ndarray, radius_px: float) -> np.ndarray:
+    """Per site, the pixel within its tolerance (px) where a tip-sized disc stands most above the ring
+    round it (a linear slope cancels in the difference), (S, 2) px."""
+    core_x, core_y = _disc_offsets(radius_px)
+    ring_x, ring_y = _disc_offsets(radius_px + 2.0)
+    ring = np.hypot(ring_x, ring_y) > radius_px + 1.0
+    half = int(np.ceil(radius_px + 2.0))
+    kernel = np.zeros((2 * half + 1, 2 * half + 1), np.float32)
+    kernel[(core_y + half).astype(int), (core_x + half).astype(int)] = 1.0 / len(core_x)
+    kernel[(ring_y[ring] + half).astype(int), (ring_x[ring] + half).astype(int)] = -1.0 / ring.sum()
+    # The response over the sites' bounding box only (a few pads' worth of pixels at most).
+    reach = int(np.ceil(tolerance.max())) + half + 1
+    x0, y0 = np.maximum(np.floor(sites.min(axis=0)).astype(int) - reach, 0)
+    x1, y1 = np.ceil(sites.max(axis=0)).astype(int) + reach + 1
+    response = cv2.filter2D(image[y0:y1, x0:x1], cv2.CV_32F, kernel, borderType=cv2.BORDER_REPLICATE)
+    cx, cy = _disc_offsets(float(tolerance.max()))
+    anchor = np.rint(sites)
+    px = anchor[:, 0, None] + cx[None]  # (S, C) candidate pixels
+    py = anchor[:, 1, None] + cy[None]
+    height, width = response.shape
+    values = response[np.clip(py - y0, 0, height - 1).astype(np.intp), np.clip(px - x0, 0, width - 1).astype(np.intp)]
+    values[np.hypot(px - sites[:, 0, None], py - sites[:, 1, None]) > tolerance[:, None]] = -np.inf
+    best = np.argmax(values, axis=1)
+    rows = np.arange(len(sites))
+    return np.column_stack([px[rows, best], py[rows, best]])
+
+
+def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
+                         pins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How far the core of a tip at each point stands above a quadratic fit of the membrane round it.
+
+    The membrane is the ring 1.5-3.5 px beyond the tip radius (pixels at the foot of another pin of
+    `pins` left out); the core is the disc of the tip radius less half a pixel (at least 1 px).
+
+    Returns
+    -------
+    contrast : (P,) ndarray
+        Mean core grey level minus the fit's mean over the core, grey levels (nan: too little membrane).
+    error : (P,) ndarray
+        Its standard error: the membrane's scatter about the fit (residual standard deviation, grey
+        levels) over the square root of the core's pixel count.
+    position : (P, 2) ndarray
+        Centroid of the core's grey levels above the fit, px (the point where none stands above).
+    """
+    dx, dy = _disc_offsets(radius_px + 3.5)
+    distance = np.hypot(dx, dy)
+    used = (distance <= max(radius_px - 0.5, 1.0)) | (distance >= radius_px + 1.5)  # the tip's edge: neither
+    dx, dy, distance = dx[used], dy[used], distance[used]
+    core, ring = distance < radius_px + 1.5, distance >= radius_px + 1.5
+    anchor = np.rint(points)
+    x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
+    values, inside = _gather(image, x, y)
+    # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
+    gap, near = cKDTree(pins).query(points, min(_FOOT_PINS, len(pins)))
+    others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near]).astype(np.float32)  # (P, F, 2)
+    xs, ys = x[:, ring].astype(np.float32), y[:, ring].astype(np.float32)
+    other = np.sqrt(np.min((xs[:, :, None] - others[:, None, :, 0]) ** 2 + (ys[:, :, None] - others[:, None, :, 1]) ** 2,
+                           axis=2))
+    # Saturated pixels (the surround's veil near the rim) show no membrane level.
+    weight = np.zeros(values.shape)
+    weight[:, ring] = inside[:, ring] & (other > radius_px + 1.5) & (values[:, ring] < _SATURATED)
+    scale = radius_px + 3.5
+    u, v = dx / scale, dy / scale
+    basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
+    # Weighted least squares for every point at once, as two matrix products over the pixels.
+    normal = (weight @ (basis[:, :, None] * basis[:, None, :]).reshape(len(basis), 36)).reshape(-1, 6, 6)
+    beta = np.linalg.solve(normal + 1e-9 * np.eye(6), ((weight * values) @ basis)[..., None])[..., 0]
+    residual = values - beta @ basis.T
+    dof = weight.sum(axis=1) - 6.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        variance = np.where(dof >= 6.0, np.sum(weight * residual ** 2, axis=1) / dof, np.nan)
+        # The core mean's standard error, its pixels scattering about the fit as the membrane's do.
+        error = np.sqrt(variance / core.sum())
+        contrast = np.where(np.isfinite(variance), residual[:, core].mean(axis=1), np.nan)
+        above = np.clip(residual[:, core], 0.0, None)
+        total = above.sum(axis=1)
+        shift = np.column_stack([above @ dx[core], above @ dy[core]]) / total[:, None]
+    position = anchor + np.where(total[:, None] > 0, shift, 0.0)
+    return contrast, error, position
+
+
+def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
+    """Which pins (N,) bool show no tip: a core that stands neither `_FLAT_SIGNIFICANCE` standard errors
+    above a quadratic fit of the membrane round it nor `_FLAT_CONTRAST` of its neighbours' contrast.
+
+    The flat top of an LED reflection inside the pad, at a lattice site, is a blob as large and as
+    bright above the threshold's neighbourhood mean as a pin, but round it the membrane rises to the
+    same level: above the fit it stands 0.7-1.8 standard errors and 0.03-0.08 of its neighbours'
+    contrast, where the faintest pins under the veil stand 3.3 and 0.14 (radial-led-120, seeds 0-11).
+    A pin whose membrane cannot be fitted (too little of it round the pin) is not judged.
+
+    Parameters
+    ----------
+    grey : (H, W) ndarray of uint8
+        Grey frame.
+    pins : (N, 2) ndarray
+        Pins (x, y), px.
+    radius_px : float
+        Pin tip radius, px.
+    dark_pins : bool
+        Dark markers on a light membrane (the image is inverted).
+
+    Returns
+    -------
+    flat : (N,) ndarray of bool
+        All False for fewer than 7 pins or no radius.
+    """
+    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
+    if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
+        return np.zeros(len(pins), bool)
+    image = grey.astype(np.float32)
+    if dark_pins:
+        image = 255.0 - image
+    contrast, error, _ = _core_above_membrane(image, pins, radius_px, pins)
+    _, near = cKDTree(pins).query(pins, min(_PROBE_NEIGHBOURS + 1, len(pins)))
+    with np.errstate(invalid="ignore"):
+        typical = np.nanmedian(contrast[near[:, 1:]], axis=1)
+        return (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)

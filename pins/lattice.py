@@ -49,7 +49,9 @@ finds that lattice without being told the pin count:
    filled with a pin-like blob another candidate set found there (`pins._rescue`): one threshold
    cannot suit every pin of a pad whose light varies, and a pin on an LED reflection inside the pad
    (a brighter background, less contrast) or a faint spoke end under the veil is lost by the
-   winner's and found by another's;
+   winner's and found by another's; a kept pin whose core stands no higher than a quadratic fit of
+   the membrane round it (an LED reflection's flat top) is rejected (``contrast``), and at the holes
+   still left (not on a flat gel) the image itself is probed for a faint tip;
 5c. centres: each kept pin is placed by fitting its tip as an opaque ellipse over a quadratic
    background (`pins._tipfit`): the blobs' centroids lean towards the bright side of a sloped
    membrane (a reflection's flank, the veil, shading) by up to 0.7 px on small tips;
@@ -93,7 +95,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
-from ._rescue import fill_lattice_holes
+from ._rescue import fill_lattice_holes, flat_pins, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._judge import _KEPT, _MIN_PINS, REJECTION_REASONS, _judge_lattice, _sharpness
 from .detect import Blobs, DetectionParams, _detect
@@ -398,6 +400,22 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
         apart = cKDTree(extra).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
         rejected, reason = rejected[apart], reason[apart]
+    if not disc.whole_frame and len(centres):
+        radius_px = _pin_radius_px(grey, centres, run.pitch, start.dark_pins)
+        # A reflection's flat top at a lattice site: no tip stands above the membrane round it.
+        flat = flat_pins(grey, centres, radius_px, dark_pins=start.dark_pins)
+        if flat.any():
+            rejected = np.vstack([rejected, centres[flat]])
+            reason = np.concatenate([reason, np.full(int(flat.sum()), REJECTION_REASONS.index("contrast"))])
+            centres = centres[~flat]
+        # Holes no blob filled (a faint spoke end under the veil): the image itself, looked at there.
+        probed = probe_lattice_holes(grey, centres, (disc.cx, disc.cy), radius_px,
+                                     disc_radius_px=search.radius_px, dark_pins=start.dark_pins)
+        if len(probed):
+            centres = np.vstack([centres, probed])
+            centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
+            apart = cKDTree(probed).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
+            rejected, reason = rejected[apart], reason[apart]
     if disc.whole_frame and len(centres):
         # Markers cut by the frame's edge: their centroids lean inwards; only those with enough in
         # view to measure stay (`_cut_by_frame`).

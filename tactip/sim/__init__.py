@@ -220,8 +220,10 @@ Presets
   frame height in a near-saturated surround (245) with strong glare and a veil, noise 5, 120 frames/s.
 - ``radial-led-120``: the real home-built pad of issue 20: ``radial-120`` with a grey membrane (100)
   and pins (180), four LED reflections (50 grey) inside the pad, a glare gradient (25 grey) and shimmer 1.
-  Detection finds 108-114 of the 120 pins today (3 seeds, rest and a 5 mm tap): the pins on the
-  reflections are rejected, as on the real recordings.
+  Detection finds 117-120 of the 120 pins and no reflection (seeds 0-11, rest and a 5 mm tap), and
+  all 233 pins on the reflections: 21 of the 23 it misses are outermost-ring tips under the veil (-8
+  to 16 grey above the membrane round them, noise 5), two are second-ring pins under the tap. On the
+  real recordings the pins on the reflections were rejected.
 - ``white-dark-331``: white pins on a dark membrane in a dark (matt black, 30 grey) casing, the six LED
   glare spots on the rim: no bright surround frames the disc. Today ``tactip detect`` refuses it ("no sensor
   disc ... not a disc"), while ``tactip replay`` falls back to dark markers, finds a false disc and tracks

@@ -9,7 +9,7 @@ import importlib
 import pytest
 
 MODULES = ["pins.detect", "pins.disc", "pins.lattice", "pins.track", "pins.displacement", "pins.select",
-           "pins.scale", "pins.features", "pins.segment", "pins.accel_detect", "pins._tipfit"]
+           "pins.scale", "pins.features", "pins.segment", "pins.accel_detect", "pins._tipfit", "pins._rescue"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -370,7 +370,8 @@ def test_radial_layout_with_led_reflections_keeps_the_pins_on_them(seed):
     contrast ~35 against ~50) are kept and the reflections are not; the count is within 3 % of the pins
     drawn whole (the outermost ring under the veil and the rim glare is the faintest: a few of its pins
     stand 10-15 grey above noise of 5 and may be lost). Before the lattice holes were filled, 108-114
-    of 120 were found and 8 of 119 pins on reflections (6 seeds) were lost."""
+    of 120 were found and 8 of 119 pins on reflections (6 seeds) were lost; before they were probed and
+    reflections' flat tops rejected, 35 of 2880 pins were missed and 2 reflections kept (seeds 0-11)."""
     sensor = preset_sensor("radial-led-120", seed)
     on_reflection = found_on_reflection = 0
     for contact in (None, TAP):
@@ -431,3 +432,77 @@ def test_lattice_holes_are_filled_only_at_lattice_sites_inside_the_field():
     inner = blobs([pitch * 1.7 * np.cos(angles[0]), pitch * 1.7 * np.sin(angles[0])])
     assert fill_lattice_holes(radial, areas, contrasts, [(*outer, 15.0)], (0.0, 0.0)) == [(0, 0)]
     assert fill_lattice_holes(radial, areas, contrasts, [(*inner, 15.0)], (0.0, 0.0)) == []
+
+
+def test_probing_the_holes_finds_a_faint_pin_and_nothing_else():
+    """probe_lattice_holes takes a faint pin (20 grey, its neighbours 45, noise 3) at a lattice hole, and nothing at a hole
+    under a smooth bright hump (an LED reflection without its pin), nor past the outermost ring."""
+    from pins._rescue import probe_lattice_holes
+
+    rng = np.random.default_rng(7)
+    pitch, radius = 10.0, 2.0
+    grid = pitch * np.array([(x, y) for y in range(-4, 5) for x in range(-4, 5) if np.hypot(x, y) <= 4.05], float) + 60.0
+    yy, xx = np.mgrid[0:120, 0:120]
+
+    def render(pins, faint=(), hump=None):
+        image = np.full((120, 120), 100.0)
+        for x, y in pins:
+            image += 45.0 * (np.hypot(xx - x, yy - y) <= radius)
+        for x, y in faint:
+            image += 20.0 * (np.hypot(xx - x, yy - y) <= radius)
+        if hump is not None:
+            image += 60.0 * 2.0 ** -(np.hypot(xx - hump[0], yy - hump[1]) / 8.0) ** 4
+        return np.clip(image + rng.normal(0.0, 3.0, image.shape), 0, 255).astype(np.uint8)
+
+    hole = int(np.argmin(np.hypot(*(grid - 60.0).T)))  # the centre site, (60, 60)
+    kept = np.delete(grid, hole, axis=0)
+    found = probe_lattice_holes(render(kept, faint=[grid[hole]]), kept, (60.0, 60.0), radius)
+    assert len(found) == 1 and np.hypot(*(found[0] - grid[hole])) < 0.5
+    assert len(probe_lattice_holes(render(kept, hump=grid[hole]), kept, (60.0, 60.0), radius)) == 0
+    # Nothing past the field (a spot a pitch beyond the outermost pins), nor at an empty hole.
+    assert len(probe_lattice_holes(render(kept, faint=[[60.0, 110.0]]), kept, (60.0, 60.0), radius)) == 0
+    assert len(probe_lattice_holes(render(kept), kept, (60.0, 60.0), radius)) == 0
+
+
+@pytest.mark.parametrize("name", ["radial-led-120", "radial-120", "small-pad-100", "tactip-331"])
+def test_probing_adds_no_pin_off_the_pad(name):
+    """Over several seeds, rest and tap, every pin the probe takes is a pin drawn there."""
+    import pins.lattice as lattice
+
+    taken = []
+    probe = lattice.probe_lattice_holes
+
+    def spy(*args, **kwargs):
+        found = probe(*args, **kwargs)
+        taken.append(found)
+        return found
+
+    for seed in range(3):
+        for contact in (None, TAP):
+            f = preset_frame(name, contact, seed=seed)
+            taken.clear()
+            with pytest.MonkeyPatch.context() as patch:
+                patch.setattr(lattice, "probe_lattice_holes", spy)
+                field = lattice.find_pin_field(f.image, dark_pins=False)
+            found = np.vstack(taken) if taken else np.zeros((0, 2))
+            drawn = f.centres[f.visible | f.partial]
+            assert np.all(cKDTree(drawn).query(found)[0] < _gate_px(f)), (seed, contact, found)
+            assert np.all(cKDTree(field.centres).query(found)[0] < 1.0) if len(found) else True
+
+
+def test_radial_layout_with_led_reflections_count_over_many_seeds():
+    """Issue 20, outcome 7, over seeds 0-11 at rest and under a 5 mm tap: the count within 3 % on every
+    frame, no reflection (nor anything else) kept, 99 % of the pins found; the bar of 1 % is met on most
+    frames (17 of 24 when this was written; the rest miss 2-3 faint outer-ring tips, `NOT_YET_MET`)."""
+    within_bar = missed = drawn = 0
+    for seed in range(12):
+        for contact in (None, TAP):
+            f = preset_frame("radial-led-120", contact, seed=seed)
+            field = find_pin_field(f.image)
+            recall, precision, _ = score(field.centres, f, gate_px=_gate_px(f))
+            visible = int(f.visible.sum())
+            assert precision == 1.0 and abs(field.count - visible) <= 0.03 * visible, (seed, contact, field.summary())
+            within_bar += abs(field.count - visible) <= 0.01 * visible
+            missed += round((1.0 - recall) * visible)
+            drawn += visible
+    assert missed <= 0.01 * drawn and within_bar >= 12, (missed, within_bar)
