@@ -21,6 +21,9 @@ _SINGLE_THREAD_MACS = 262_143
 _FLAT_RISE = 0.1
 # The background of a window's side is its darkest run of this many pixels (the mean of a run).
 _SIDE_RUN = 4
+# Windows x pixels up to which one float32 product sums the windows' pixels (fewer NumPy calls);
+# beyond, reductions of the gathered pixels cost less (measured at 9x9 and 19x19 windows).
+_PRODUCT_PIXELS = 4096
 
 class WindowCentroids:
     """Centroids of pin tips in square windows of side ``2 * half_px + 1`` around guesses.
@@ -89,11 +92,6 @@ class WindowCentroids:
         sums[self._sides, 1 + (run % runs) * 4 + run // runs] = 1.0
         sums[:, -1] = 1.0
         self._sums = sums
-        self._runs_end = sums.shape[1] - 1
-        # Without the mean, only the pixels the other columns sum are gathered.
-        self._summed = np.flatnonzero(sums[:, :-1].any(axis=1))
-        self._summed_sums = np.ascontiguousarray(sums[self._summed, :-1])
-        self._summed_rows = max(1, _SINGLE_THREAD_MACS // self._summed_sums.size)
         self._sum_rows = max(1, _SINGLE_THREAD_MACS // (sums.shape[1] * gx.size))
         # The mask index (radius, phase y, phase x) from the phases (x, y) in quarter px and the radius.
         self._phase_steps = np.array([1.0, float(self._n_phases)])
@@ -176,6 +174,26 @@ class WindowCentroids:
             self._layouts[shape] = layout
         return layout
 
+    def _sums_of(self, patches: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Of (N, P) uint8 windows: the tip's top (the mean of the five centre pixels, (N,)), the darkest
+        run of `_SIDE_RUN` pixels along each side (left, right, top, bottom; their sums, (N, 4)) and,
+        with `above_mean`, the window's mean (N,, else None), float64, grey levels.
+
+        A few windows (most calls): one float32 product gives every sum (exact: integers below 2^24),
+        in a few NumPy calls; many pixels: reductions of the pixels gathered, cheaper per pixel.
+        """
+        n, pixels = patches.shape
+        if n * pixels <= _PRODUCT_PIXELS:
+            sums = _dot(patches.astype(np.float32), self._sums, self._sum_rows).astype(np.float64)
+            darkest = np.minimum.reduce(sums[:, 1:-1].reshape(n, -1, 4), axis=1)
+            return sums[:, 0] / len(self._top), darkest, sums[:, -1] / pixels if self.above_mean else None
+        top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)
+        # (Gathered contiguous: reductions over strided sides cost several times more.)
+        runs = np.add.reduce(patches[:, self._sides].reshape(n, 4, -1, _SIDE_RUN), axis=3, dtype=np.uint16)
+        darkest = np.minimum.reduce(runs, axis=2).astype(np.float64)
+        mean = np.add.reduce(patches, axis=1, dtype=np.float64) / pixels if self.above_mean else None
+        return top, darkest, mean
+
     def _measure(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         half = self.half_px
         n = len(points)
@@ -190,29 +208,20 @@ class WindowCentroids:
         corner -= half
         # A negative corner, read as unsigned, lies beyond either bound: one comparison a side.
         inside = corner.view(np.uintp) <= bounds
-        fits = inside[:, 0] & inside[:, 1]
-        everywhere = fits.all()
+        everywhere = inside.all()
         if not everywhere:
+            fits = inside[:, 0] & inside[:, 1]
             corner *= fits[:, None]  # a window that does not fit: the image's corner's (its centre NaN)
         # All windows at once: a (H - side + 1, W - side + 1, side, side) sliding view, fancy-indexed.
         view = np.ndarray(view_shape, np.uint8, image, 0, image.strides * 2)
         patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)  # (N, P) copy
-        # One product gives every sum of pixels needed (exact: integers below 2^24 in float32): the
-        # five centre pixels (the tip's top), the runs of `_SIDE_RUN` pixels along each side, and
-        # with `above_mean` all of them (the window's mean).
-        if self.above_mean:
-            sums = _dot(patches.astype(np.float32), self._sums, self._sum_rows)
-        else:
-            sums = _dot(patches[:, self._summed].astype(np.float32), self._summed_sums, self._summed_rows)
-        sums = sums.astype(np.float64)  # (N, 1 + 4 x runs [+ 1])
-        top = sums[:, 0] / len(self._top)  # the tip's top: the mean of the five centre pixels
+        top, darkest, mean = self._sums_of(patches)
         # The local background: a plane through the darkest of the runs of `_SIDE_RUN` pixels along
         # each of the window's sides (left, right, top, bottom), where no neighbour's foot or glare
         # lies, a run averaging the noise down. Judged above that plane, a tip on the slope of an LED
         # reflection or of a bright surround's veil is weighed as on a flat membrane: its centroid
         # is not pulled towards the bright side, nor is its contrast taken from a darkest pixel far
         # below it. The plane: its level at the centre and its rise across half the window (x, y).
-        darkest = np.minimum.reduce(sums[:, 1:self._runs_end].reshape(n, -1, 4), axis=1)  # (N, 4)
         plane = np.matmul(darkest, self._side_plane)  # (N, 3)
         background = plane[:, 0]
         measures = np.empty((3, n))  # area, contrast, compactness
@@ -229,7 +238,6 @@ class WindowCentroids:
         if self.above_mean:
             # Above the window's mean too (over the plane, whose mean over the window is its centre
             # value): on a textured or shadowed skin the membrane's texture must not count.
-            mean = sums[:, -1] / patches.shape[1]
             lift = np.minimum(np.maximum(lift, mean - background), positive)
         level = background + lift  # the threshold at the window's centre, <= top
         # Windows on a slope (few) weigh their pixels above the threshold plane, in whole grey
