@@ -92,7 +92,7 @@ class WindowCentroids:
         sums[self._sides, 1 + (run % runs) * 4 + run // runs] = 1.0
         sums[:, -1] = 1.0
         self._sums = sums
-        self._sum_rows = max(1, _SINGLE_THREAD_MACS // (sums.shape[1] * gx.size))
+        self._product_pixels = min(_PRODUCT_PIXELS, _SINGLE_THREAD_MACS // sums.shape[1])
         # The mask index (radius, phase y, phase x) from the phases (x, y) in quarter px and the radius.
         self._phase_steps = np.array([1.0, float(self._n_phases)])
         self._mask_base = float((_PHASES // 2) * (self._n_phases + 1) - self._n_phases ** 2)
@@ -183,8 +183,9 @@ class WindowCentroids:
         in a few NumPy calls; many pixels: reductions of the pixels gathered, cheaper per pixel.
         """
         n, pixels = patches.shape
-        if n * pixels <= _PRODUCT_PIXELS:
-            sums = _dot(patches.astype(np.float32), self._sums, self._sum_rows).astype(np.float64)
+        if n * pixels <= self._product_pixels:
+            # (Few enough multiply-adds for one BLAS thread.)
+            sums = np.dot(patches.astype(np.float32), self._sums).astype(np.float64)
             darkest = np.minimum.reduce(sums[:, 1:-1].reshape(n, -1, 4), axis=1)
             return sums[:, 0] / len(self._top), darkest, sums[:, -1] / pixels if self.above_mean else None
         top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)
@@ -222,7 +223,7 @@ class WindowCentroids:
         # reflection or of a bright surround's veil is weighed as on a flat membrane: its centroid
         # is not pulled towards the bright side, nor is its contrast taken from a darkest pixel far
         # below it. The plane: its level at the centre and its rise across half the window (x, y).
-        plane = np.matmul(darkest, self._side_plane)  # (N, 3)
+        plane = np.dot(darkest, self._side_plane)  # (N, 3)
         background = plane[:, 0]
         measures = np.empty((3, n))  # area, contrast, compactness
         contrast = np.subtract(top, background, out=measures[1])  # the tip's height above the local background
@@ -246,7 +247,7 @@ class WindowCentroids:
             coefficients = np.empty((sloped.size, 3), np.float32)  # level, slope x, y (grey levels per px)
             coefficients[:, 0] = level[sloped]
             coefficients[:, 1:] = rise[sloped] * ((1.0 - np.maximum(shrink[sloped], 0.0)) / half)[:, None]
-            tilted = np.rint(np.matmul(coefficients, self._plane))  # (k, P) threshold plane
+            tilted = np.rint(np.dot(coefficients, self._plane))  # (k, P) threshold plane
             np.subtract(patches[sloped], tilted, out=tilted)
             np.maximum(tilted, 0.0, out=tilted)
         # Positive part of (pixel - threshold), in place, without leaving uint8.
