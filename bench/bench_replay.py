@@ -23,7 +23,13 @@ each repeat so that machine load falls on both alike:
 Prints seconds, ms/frame, and the ratios replay / decode (the bar) and tracker / decode, from
 the best of the repeats (the run least disturbed by other processes); then replay / decode of each
 repeat on its own (decode and replay run back to back): median and range, since on a shared or
-virtual machine single runs of a two-thread replay vary by +-20 %.
+virtual machine single runs of a two-thread replay vary by +-20 %. Then CPU time, ms/frame (best of
+the repeats), which other processes disturb far less than the clock: decoding alone; replay's main
+thread (field, tracking, taps, features, the HDF5 file) and its decode thread (the process's CPU
+less the main thread's); the field and the tracker alone; and the tracker's window measurements
+(`WindowCentroids.measure`) per frame. Replay can cost about the larger of its two threads only
+while two cores are free for it: the CPU of its busier thread over decoding's is the ratio a quiet
+2-core machine would reach, whatever the load when the bench ran.
 
 With ``--slides N`` the video is instead issue 20's real-like slide video (bar: replay / decode
 <= 1.5): ``radial-led-120`` (about 120 small pins in radial spokes, four LED reflections inside the
@@ -37,6 +43,7 @@ Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeat
 from __future__ import annotations
 
 import argparse
+import os
 import pathlib
 import tempfile
 import time
@@ -107,17 +114,26 @@ def decode(path: pathlib.Path) -> list:
         return [frame.image for frame in source]
 
 
-def field_and_track(images: list) -> tuple[float, float]:
-    """Seconds of `find_pin_field` on the first frame, and of `PinTracker.update` over the others."""
-    start = time.perf_counter()
+def field_and_track(images: list) -> tuple[float, float, float, float, int]:
+    """`find_pin_field` on the first frame and `PinTracker.update` over the others: (seconds, CPU
+    seconds) of each, and the tracker's window measurements (`WindowCentroids.measure` calls)."""
+    start, cpu = time.perf_counter(), time.process_time()
     field = find_pin_field(images[0])
-    found = time.perf_counter() - start
+    found, found_cpu = time.perf_counter() - start, time.process_time() - cpu
     tracker = PinTracker(detection=field.params, disc=field.disc)
     tracker.start(images[0], field.centres)
-    start = time.perf_counter()
+    windows, calls = tracker.windows, [0]
+    measure = windows.measure
+
+    def counted(*args):
+        calls[0] += 1
+        return measure(*args)
+
+    windows.measure = counted  # on this tracker's windows only: replay's are not counted
+    start, cpu = time.perf_counter(), time.process_time()
     for image in images[1:]:
         tracker.update(image)
-    return found, time.perf_counter() - start
+    return found, found_cpu, time.perf_counter() - start, time.process_time() - cpu, calls[0]
 
 
 def main() -> None:
@@ -138,18 +154,27 @@ def main() -> None:
         frames = (write_slides(video, args.preset, args.slides, codec=args.codec) if args.slides
                   else write_video(video, args.preset, args.taps, codec=args.codec))
         times: dict[str, list[float]] = {"decode": [], "replay": [], "field": [], "tracker": []}
+        cpu: dict[str, list[float]] = {"decode": [], "replay main": [], "replay decode": [], "field": [],
+                                       "tracker": []}
         for repeat in range(args.repeats):
-            start = time.perf_counter()
+            start, process = time.perf_counter(), time.process_time()
             images = decode(video)
             times["decode"].append(time.perf_counter() - start)
-            start = time.perf_counter()
+            cpu["decode"].append(time.process_time() - process)
+            start, process, main = time.perf_counter(), time.process_time(), time.thread_time()
             sensor = None if args.slides else args.preset  # a home-built pad: no named sensor
             result = replay_video(video, pathlib.Path(folder) / f"replay{repeat}.h5", sensor=sensor)
             times["replay"].append(time.perf_counter() - start)
-            found, tracked = field_and_track(images)
+            main = time.thread_time() - main
+            cpu["replay main"].append(main)
+            cpu["replay decode"].append(time.process_time() - process - main)
+            found, found_cpu, tracked, tracked_cpu, calls = field_and_track(images)
             times["field"].append(found)
             times["tracker"].append(tracked)
+            cpu["field"].append(found_cpu)
+            cpu["tracker"].append(tracked_cpu)
         best = {name: min(values) for name, values in times.items()}
+        least = {name: min(values) for name, values in cpu.items()}
     width, height = SyntheticTacTip.from_preset(args.preset).image_size
     print(f"{args.preset}: {frames} frames {width}x{height} {args.codec}, {result.pins} pins; "
           f"lost per frame median {np.median(result.lost_per_frame):g}, max {result.lost_per_frame.max()}; "
@@ -164,6 +189,13 @@ def main() -> None:
     paired = np.array(times["replay"]) / np.array(times["decode"])
     print(f"replay / decode per repeat: median {np.median(paired):.2f}, range {paired.min():.2f}-{paired.max():.2f} "
           f"({args.repeats} repeats)")
+    print(f"CPU, best of {args.repeats}: {'ms/frame':>10s}{'/ decode':>10s}")
+    for name, value in least.items():
+        print(f"{name:16s}{value / frames * 1e3:18.2f}{value / least['decode']:10.2f}")
+    two_cores = max(least["replay main"], least["replay decode"]) / least["decode"]
+    print(f"window measurements {calls / (frames - 1):.2f} per frame; replay's busier thread / decode = "
+          f"{two_cores:.2f} (what two free cores would give); load average "
+          f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
 
 
 if __name__ == "__main__":

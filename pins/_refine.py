@@ -413,7 +413,7 @@ class Refiner:
         missing = np.isnan(guess[:, 0])
         lost = missing.nonzero()[0]
         if lost.size == 0:
-            filled, which, n = guess, np.arange(len(guess)), len(guess)
+            filled, which, n = guess, self._every, len(guess)
         else:
             filled = guess.copy()
             filled[lost] = self._predict(guess, lost, last_seen)
@@ -434,7 +434,6 @@ class Refiner:
         done[n:] = False  # a lost pin's prediction is no guess: two passes
         positions = np.full(guess.shape, np.nan)
         positions[which[done]] = placed_at[done]
-        moved = _squared_norm(placed_at - start)
         # Second and third passes: pins that moved but not far re-centred on their last centroid;
         # a pin with a guess that found no tip near it searched for from its prediction from the
         # pins just placed (its neighbours' guesses held: a lone pin that vanished, or that moved

@@ -21,6 +21,9 @@ _SINGLE_THREAD_MACS = 262_143
 _FLAT_RISE = 0.1
 # The background of a window's side is its darkest run of this many pixels (the mean of a run).
 _SIDE_RUN = 4
+# Windows x pixels up to which one float32 product sums the windows' pixels (fewer NumPy calls);
+# beyond, reductions of the gathered pixels cost less (measured at 9x9 and 19x19 windows).
+_PRODUCT_PIXELS = 4096
 
 class WindowCentroids:
     """Centroids of pin tips in square windows of side ``2 * half_px + 1`` around guesses.
@@ -79,9 +82,21 @@ class WindowCentroids:
         self._side_plane = np.array([[0.25, -0.5, 0.0], [0.25, 0.5, 0.0], [0.25, 0.0, -0.5], [0.25, 0.0, 0.5]]) / _SIDE_RUN
         self._plane = np.stack([np.ones_like(gx), gx, gy]).astype(np.float32)  # (3, P): 1, x and y of each pixel
         # Rows of the moment product per call: OpenBLAS keeps to one thread below 2^18 multiply-adds
-        # (4 moments of P pixels a row). Threaded, this tiny product costs 20 ms on a busy machine
-        # instead of 0.2.
+        # (4 moments of P pixels a row; `_dot`).
         self._moment_rows = max(1, _SINGLE_THREAD_MACS // (4 * gx.size))
+        # Columns summing the five centre pixels, the sides' runs (run by run, each of the sides left,
+        # right, top, bottom) and the whole window: (P, 1 + runs x 4 + 1), float32.
+        sums = np.zeros((gx.size, 2 + len(self._sides) // _SIDE_RUN), np.float32)
+        sums[self._top, 0] = 1.0
+        run = np.arange(len(self._sides)) // _SIDE_RUN  # (side, run along it), side-major
+        sums[self._sides, 1 + (run % runs) * 4 + run // runs] = 1.0
+        sums[:, -1] = 1.0
+        self._sums = sums
+        self._product_pixels = min(_PRODUCT_PIXELS, _SINGLE_THREAD_MACS // sums.shape[1])
+        # The mask index (radius, phase y, phase x) from the phases (x, y) in quarter px and the radius.
+        self._phase_steps = np.array([1.0, float(self._n_phases)])
+        self._mask_base = float((_PHASES // 2) * (self._n_phases + 1) - self._n_phases ** 2)
+        self._layouts: dict = {}
 
     def __repr__(self) -> str:
         return (f"WindowCentroids(half_px={self.half_px}, threshold_fraction={self.threshold_fraction}, "
@@ -142,39 +157,76 @@ class WindowCentroids:
         with np.errstate(divide="ignore", invalid="ignore"):
             return self._measure(image, points, radius_px)
 
+    def _layout(self, shape: tuple[int, int]) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+        """Per image size (H, W): the bounds (2,) of a window's corner (x, y), px, as uintp, and the
+        shape of the image's sliding-window view (H - side + 1, W - side + 1, side, side). Cached.
+
+        Raises ValueError when the image is smaller than a window.
+        """
+        layout = self._layouts.get(shape)
+        if layout is None:
+            side = 2 * self.half_px + 1
+            height, width = shape
+            if height < side or width < side:
+                raise ValueError(f"image of {width}x{height} px is smaller than a window of {side}x{side} px "
+                                 f"(half_px={self.half_px})")
+            layout = (np.array((width - side, height - side), np.uintp), (height - side + 1, width - side + 1, side, side))
+            self._layouts[shape] = layout
+        return layout
+
+    def _sums_of(self, patches: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Of (N, P) uint8 windows: the tip's top (the mean of the five centre pixels, (N,)), the darkest
+        run of `_SIDE_RUN` pixels along each side (left, right, top, bottom; their sums, (N, 4)) and,
+        with `above_mean`, the window's mean (N,, else None), float64, grey levels.
+
+        A few windows (most calls): one float32 product gives every sum (exact: integers below 2^24),
+        in a few NumPy calls; many pixels: reductions of the pixels gathered, cheaper per pixel.
+        """
+        n, pixels = patches.shape
+        if n * pixels <= self._product_pixels:
+            # (Few enough multiply-adds for one BLAS thread.)
+            sums = np.dot(patches.astype(np.float32), self._sums).astype(np.float64)
+            darkest = np.minimum.reduce(sums[:, 1:-1].reshape(n, -1, 4), axis=1)
+            return sums[:, 0] / len(self._top), darkest, sums[:, -1] / pixels if self.above_mean else None
+        top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)
+        # (Gathered contiguous: reductions over strided sides cost several times more.)
+        runs = np.add.reduce(patches[:, self._sides].reshape(n, 4, -1, _SIDE_RUN), axis=3, dtype=np.uint16)
+        darkest = np.minimum.reduce(runs, axis=2).astype(np.float64)
+        mean = np.add.reduce(patches, axis=1, dtype=np.float64) / pixels if self.above_mean else None
+        return top, darkest, mean
+
     def _measure(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        half, side = self.half_px, 2 * self.half_px + 1
+        half = self.half_px
         n = len(points)
         if n == 0:
             return np.empty((0, 2)), np.empty((3, 0))
         # Called a few times a frame, mostly on a few dozen windows: each NumPy call's own cost
-        # counts, so ufuncs and their reductions are called directly (not through array methods).
+        # counts, so the work is in as few calls as possible (ufuncs and np.dot called directly).
         image = np.ascontiguousarray(image)
-        height, width = image.shape
+        bounds, view_shape = self._layout(image.shape)
         anchor = np.rint(points)
         corner = anchor.astype(np.intp)
         corner -= half
         # A negative corner, read as unsigned, lies beyond either bound: one comparison a side.
-        inside = corner.view(np.uintp) <= np.array((width - side, height - side), np.uintp)
-        fits = inside[:, 0] & inside[:, 1]
-        corner *= fits[:, None]
+        inside = corner.view(np.uintp) <= bounds
+        everywhere = inside.all()
+        if not everywhere:
+            fits = inside[:, 0] & inside[:, 1]
+            corner *= fits[:, None]  # a window that does not fit: the image's corner's (its centre NaN)
         # All windows at once: a (H - side + 1, W - side + 1, side, side) sliding view, fancy-indexed.
-        view = np.ndarray((height - side + 1, width - side + 1, side, side), np.uint8, image, 0, image.strides * 2)
+        view = np.ndarray(view_shape, np.uint8, image, 0, image.strides * 2)
         patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)  # (N, P) copy
-        top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)  # their mean
+        top, darkest, mean = self._sums_of(patches)
         # The local background: a plane through the darkest of the runs of `_SIDE_RUN` pixels along
         # each of the window's sides (left, right, top, bottom), where no neighbour's foot or glare
-        # lies, a run averaging the noise down (gathered contiguous: reductions over strided sides
-        # cost several times more). Judged above that plane, a tip on the slope of an LED
+        # lies, a run averaging the noise down. Judged above that plane, a tip on the slope of an LED
         # reflection or of a bright surround's veil is weighed as on a flat membrane: its centroid
         # is not pulled towards the bright side, nor is its contrast taken from a darkest pixel far
         # below it. The plane: its level at the centre and its rise across half the window (x, y).
-        runs = np.add.reduce(patches[:, self._sides].reshape(n, 4, -1, _SIDE_RUN), axis=3, dtype=np.uint16)
-        plane = np.matmul(np.minimum.reduce(runs, axis=2).astype(np.float64), self._side_plane)  # (N, 3)
+        plane = np.dot(darkest, self._side_plane)  # (N, 3)
         background = plane[:, 0]
         measures = np.empty((3, n))  # area, contrast, compactness
-        area, contrast, compactness = measures
-        np.subtract(top, background, out=contrast)  # the tip's height above the local background
+        contrast = np.subtract(top, background, out=measures[1])  # the tip's height above the local background
         # A rise below `_FLAT_RISE` of the tip's contrast pulls no centroid (the threshold lies a
         # fifth of the way up), and there the plane is mostly noise, the pin's own shadow or the
         # skin's texture: the rise shrinks by that much (soft threshold), to nothing for most windows.
@@ -182,12 +234,12 @@ class WindowCentroids:
         shrink = _FLAT_RISE * contrast / np.sqrt(_squared_norm(rise))
         # (Windows without a tip of some contrast, a lost pin's empty window, need no plane.)
         sloped = np.flatnonzero((shrink < 1.0) & (contrast > self.least_contrast))  # NaN compares False
-        lift = self.threshold_fraction * np.maximum(contrast, 0.0)
+        positive = np.maximum(contrast, 0.0)
+        lift = self.threshold_fraction * positive
         if self.above_mean:
             # Above the window's mean too (over the plane, whose mean over the window is its centre
             # value): on a textured or shadowed skin the membrane's texture must not count.
-            mean = np.add.reduce(patches, axis=1, dtype=np.float64) / patches.shape[1]
-            lift = np.minimum(np.maximum(lift, mean - background), np.maximum(contrast, 0.0))
+            lift = np.minimum(np.maximum(lift, mean - background), positive)
         level = background + lift  # the threshold at the window's centre, <= top
         # Windows on a slope (few) weigh their pixels above the threshold plane, in whole grey
         # levels so that weights stay integers; the others above a flat threshold, in uint8.
@@ -195,47 +247,53 @@ class WindowCentroids:
             coefficients = np.empty((sloped.size, 3), np.float32)  # level, slope x, y (grey levels per px)
             coefficients[:, 0] = level[sloped]
             coefficients[:, 1:] = rise[sloped] * ((1.0 - np.maximum(shrink[sloped], 0.0)) / half)[:, None]
-            tilted = np.rint(np.matmul(coefficients, self._plane))  # (k, P) threshold plane
+            tilted = np.rint(np.dot(coefficients, self._plane))  # (k, P) threshold plane
             np.subtract(patches[sloped], tilted, out=tilted)
             np.maximum(tilted, 0.0, out=tilted)
-        threshold = np.rint(level).astype(np.uint8)
         # Positive part of (pixel - threshold), in place, without leaving uint8.
-        below = threshold[:, None]
+        below = np.rint(level).astype(np.uint8)[:, None]
         np.maximum(patches, below, out=patches)
         np.subtract(patches, below, out=patches)
         # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
         # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x).
         phase = np.rint((points - anchor) * _PHASES)
-        radius = np.rint(np.asarray(radius_px, dtype=np.float64) * _PHASES)
+        radius = np.rint(np.multiply(radius_px, float(_PHASES)))
         np.fmin(np.maximum(radius, 1.0, out=radius), float(len(self._radii)), out=radius)  # NaN: the widest
-        phases = self._n_phases
-        mask = (radius * phases + phase[:, 1]) * phases + phase[:, 0]
         # Phases run from -_PHASES // 2 and radius indices from 1 (the mask of radius r/4 is row r - 1).
-        mask += (_PHASES // 2) * (phases + 1) - phases * phases
+        mask = np.dot(phase, self._phase_steps)
+        mask += radius * self._n_phases ** 2 + self._mask_base
         masks = self._masks[mask.astype(np.intp)]
         np.multiply(patches, masks, out=patches)
         weights = patches.astype(np.float32)
         if sloped.size:
             weights[sloped] = tilted * masks[sloped]
-        # (N, 4): mass, sum x, sum y, sum r^2; in blocks of rows that keep OpenBLAS on one thread.
-        rows = self._moment_rows
-        if n <= rows:
-            moments = np.matmul(weights, self._moments)
-        else:
-            moments = np.empty((n, 4), np.float32)
-            for row in range(0, n, rows):
-                np.matmul(weights[row:row + rows], self._moments, out=moments[row:row + rows])
-        moments = moments.astype(np.float64)
+        # (N, 4): mass, sum x, sum y, sum r^2.
+        moments = _dot(weights, self._moments, self._moment_rows).astype(np.float64)
         mass = moments[:, 0]
-        moments[:, 1:] /= mass[:, None]  # centroid offset (x, y) and mean r^2
+        # Centroid offset (x, y) and mean r^2; an empty window (no mass) gives NaN.
+        moments[:, 1:] /= mass[:, None]
         offset = moments[:, 1:3]
-        np.divide(mass, top - level, out=area)
+        np.divide(mass, top - level, out=measures[0])
         # Mean squared distance from the centroid; a disc of area A has A / (2 pi).
         spread = moments[:, 3] - _squared_norm(offset)
-        np.divide(area, 2 * np.pi * spread, out=compactness)
+        np.divide(measures[0], 2 * np.pi * spread, out=measures[2])
         centres = anchor + offset
-        centres[~fits | (mass <= 0)] = np.nan
+        if not everywhere:
+            centres[~fits] = np.nan
         return centres, measures
+
+
+def _dot(a: np.ndarray, b: np.ndarray, rows: int) -> np.ndarray:
+    """``a @ b`` of float32 matrices, in blocks of `rows` rows of `a` that keep OpenBLAS on one thread.
+
+    Threaded, these tiny products cost 20 ms on a busy machine instead of 0.2.
+    """
+    if len(a) <= rows:
+        return np.dot(a, b)
+    out = np.empty((len(a), b.shape[1]), np.float32)
+    for row in range(0, len(a), rows):
+        np.dot(a[row:row + rows], b, out=out[row:row + rows])
+    return out
 
 
 def _squared_norm(vectors: np.ndarray) -> np.ndarray:
