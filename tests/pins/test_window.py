@@ -9,7 +9,7 @@ import pins._refine
 from pins import DetectionParams, PinTracker, SensorDisc
 from pins.disc import as_grey
 from pins._window import _FLAT_RISE, _PHASES, _SIDE_RUN, WindowCentroids, _squared_norm
-from tests.pins.conftest import frame, preset_sensor
+from tests.pins.conftest import preset_sensor
 
 
 class ReferenceWindows(WindowCentroids):
