@@ -81,7 +81,7 @@ def main() -> None:
     args = parser.parse_args()
 
     print("1. quick size (1000 runs): margin passive - active (min over class counts, mm) under Monte Carlo seeds")
-    for seed in args.seeds[:2]:
+    for seed in args.seeds[:2] if args.mc_seeds > 0 else ():
         train, test = skin_collections(seed)
         values = [margin(train, test, runs=1000, mc_seed=seed + 1 + 100 * k, fixation_mm=SKIN["fixation_mm"])[0]
                   for k in range(args.mc_seeds)]
