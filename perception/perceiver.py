@@ -326,6 +326,10 @@ class Perceiver:
     def moved(self, offset: float) -> None:
         """Report the move the sensor actually made; the beliefs shift by whole classes.
 
+        After a decision (before `reset`), the move shifts the decision's posterior too, the one the
+        adaptive prior starts the next decision from (paper 004 eq. 7 predicts the identity's change,
+        not the sensor's move: that is known and shifts the location classes like any other move).
+
         Parameters
         ----------
         offset : float
@@ -339,4 +343,6 @@ class Perceiver:
         classes = int(np.rint(offset / width)) if width > 0 else 0
         self._log_posterior = bayes.shift(self._log_posterior, classes, mode=self.shift_mode)
         self._log_evidence = bayes.shift(self._log_evidence, classes, mode=self.shift_mode)
+        if self._decided:
+            self._last_decision = self._log_posterior
         self._pending_move = 0

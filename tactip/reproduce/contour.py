@@ -22,6 +22,12 @@ decisions, every decision was taken on the edge (|x| <= ``lost_mm``, 6 mm: beyon
 longer reaches the edge) and every traced point, the edge point the decision perceives (sensor
 place minus the decided position along the decided normal; Fig. 6), lies within ``trace_mm``
 (2 mm) of the circle.
+
+Diagnostics (`bench/bench_004_mechanism.py`; never in the paper's runs): ``step="arc"`` removes the
+radial drift of the straight tangent step (on a circle of radius R a step s along the tangent ends
+sqrt(R^2 + s^2) - R further out: 0.45 mm for 5.2 mm on 30 mm), keeping the same angular progress, so
+the sensor's distance to the edge changes only by the active moves; ``learn_delta=True`` learns
+Delta by predicted information gain from runs that do not use it (e.g. active runs).
 """
 
 from __future__ import annotations
@@ -51,6 +57,15 @@ class ContourResult:
     traced_mm : (N, D, 2) ndarray
         The traced contour of the first N runs (``traces``): the edge point (x, y) each decision
         perceives, mm (Fig. 6); (0, D, 2) unless asked for.
+    delta_right : float
+        Fraction of the decisions after the first that started with the learned Delta equal to
+        ``turn_classes`` (NaN without a learned Delta).
+    edge_lost : float
+        Fraction of runs where some decision was taken off the edge (|x| > ``lost_mm``).
+    trace_lost : float
+        Fraction of runs where some traced point lies further than ``trace_mm`` from the circle.
+    trace_error_mm : float
+        Mean distance of the traced points from the circle, mm.
     """
 
     angle_error_deg: float
@@ -60,13 +75,18 @@ class ContourResult:
     delta_error_classes: float
     delta_error_by_decision: np.ndarray
     traced_mm: np.ndarray | None = None
+    delta_right: float = float("nan")
+    edge_lost: float = float("nan")
+    trace_lost: float = float("nan")
+    trace_error_mm: float = float("nan")
 
 
 def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, adaptive: bool = False,
                    prior_shift: int | None = None, runs: int = 200, decisions: int = 80, seed: int = 0,
                    radius_mm: float = 30.0, target_mm: float = 0.0, alpha: float = 0.5, max_taps: int = 50,
                    lost_mm: float = 6.0, warmup: int = 0, turn_classes: int = 2,
-                   trace_mm: float = 2.0, prior: str = "joint", traces: int = 0) -> ContourResult:
+                   trace_mm: float = 2.0, prior: str = "joint", step: str = "tangent",
+                   learn_delta: bool | None = None, traces: int = 0) -> ContourResult:
     """Follow the circle with passive, active or adaptive perception (see the module docstring).
 
     Parameters
@@ -84,6 +104,11 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
     prior : {"joint", "angle_only"}
         The adaptive prior's predicted distribution: eq. 7 on the joint posterior (faithful), or the
         angle marginal spread flat over positions (a variant).
+    step : {"tangent", "arc"}
+        The step between decisions: straight along the perceived tangent (the paper), or a
+        diagnostic with the same angular progress and no radial drift (the module docstring).
+    learn_delta : bool, optional
+        Learn Delta by predicted information gain; default: when the adaptive prior's Delta is not fixed.
     traces : int
         Keep the traced contour of the first ``traces`` runs (``ContourResult.traced_mm``, Fig. 6).
     runs, decisions, seed, radius_mm, target_mm, alpha, max_taps, lost_mm, warmup, turn_classes
@@ -98,6 +123,9 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
     """
     if prior not in ("joint", "angle_only"):
         raise ValueError(f"prior must be 'joint' or 'angle_only', got {prior!r}")
+    if step not in ("tangent", "arc"):
+        raise ValueError(f"step must be 'tangent' or 'arc', got {step!r}")
+    learn = adaptive and prior_shift is None if learn_delta is None else bool(learn_delta)
     model = env.model
     n_loc, n_id = model.n_locations, model.n_identities
     width, angle_step = model.class_width, 360.0 / n_id
@@ -110,7 +138,9 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
     learner = ShiftLearner(n_id, alpha=alpha, circular=True, runs=runs)
     heading = np.degrees(start)         # normal the active moves follow: the last decided angle, deg
     turned = np.zeros(runs)
-    lost = np.zeros(runs, bool)
+    edge_lost = np.zeros(runs, bool)
+    trace_lost = np.zeros(runs, bool)
+    trace_error, delta_right = [], []
     last = last_evidence = None
     errors = {"angle": [], "position": [], "taps": []}
     delta_error = np.full(decisions, np.nan)
@@ -126,13 +156,14 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
 
     for d in range(decisions):
         delta = learner.delta if prior_shift is None else np.full(runs, int(prior_shift))
+        if learn and last is not None:
+            delta_error[d] = np.abs(learner.delta - turn_classes).mean()
+            delta_right.append((learner.delta == turn_classes).mean())
         if adaptive and last is not None:
             predicted = last                                # eq. 7: the joint posterior, angles shifted by Delta
             if prior == "angle_only":                       # variant: the angle marginal, flat over positions
                 predicted = np.broadcast_to(np.log(np.exp(last).sum(axis=1, keepdims=True) / n_loc), last.shape)
             log_belief = bayes.adaptive_prior(predicted, alpha=alpha, shift_classes=delta, circular=True)
-            if prior_shift is None:
-                delta_error[d] = np.abs(delta - turn_classes).mean()
         else:
             log_belief = flat.copy()
         evidence = flat.copy()
@@ -170,23 +201,31 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
         traced = p_decided - model.location_centres[decided[:, 0]][:, None] * np.stack([np.cos(normal),
                                                                                          np.sin(normal)], axis=1)
         traced_mm[:, d] = traced[:traces]
-        lost |= (np.abs(x_true) > lost_mm) | (np.abs(np.hypot(traced[:, 0], traced[:, 1]) - radius_mm) > trace_mm)
+        off_circle = np.abs(np.hypot(traced[:, 0], traced[:, 1]) - radius_mm)
+        edge_lost |= np.abs(x_true) > lost_mm
+        trace_lost |= off_circle > trace_mm
+        trace_error.append(off_circle.mean())
         angle_error = np.abs((decided[:, 1] * angle_step - phi_true + 180.0) % 360.0 - 180.0)
         if d >= warmup:
             errors["angle"].append(angle_error.mean())
             errors["position"].append(np.abs(model.location_centres[decided[:, 0]] - x_true).mean())
             errors["taps"].append(taps.mean())
-        if adaptive and prior_shift is None and last_evidence is not None:
+        if learn and last_evidence is not None:
             learner.observe(np.exp(last_evidence).sum(axis=1), np.exp(final_evidence).sum(axis=1))
         last, last_evidence = posterior, final_evidence
         # step along the perceived tangent (counter-clockwise)
         heading = decided[:, 1] * angle_step
         tangent = np.radians(heading + 90.0)
         before = np.arctan2(p[:, 1], p[:, 0])
-        p = p + step_mm * np.stack([np.cos(tangent), np.sin(tangent)], axis=1)
+        stepped = p + step_mm * np.stack([np.cos(tangent), np.sin(tangent)], axis=1)
+        if step == "arc":                   # diagnostic: the same progress, the distance to the centre kept
+            stepped *= (np.hypot(p[:, 0], p[:, 1]) / np.hypot(stepped[:, 0], stepped[:, 1]))[:, None]
+        p = stepped
         turned += (np.arctan2(p[:, 1], p[:, 0]) - before + np.pi) % (2 * np.pi) - np.pi
-    closed = (turned >= 2 * np.pi - 1e-9) & ~lost
-    final = np.abs(learner.delta - turn_classes).mean() if adaptive and prior_shift is None else np.nan
+    closed = (turned >= 2 * np.pi - 1e-9) & ~edge_lost & ~trace_lost
+    final = np.abs(learner.delta - turn_classes).mean() if learn else np.nan
     return ContourResult(float(np.mean(errors["angle"])), float(np.mean(errors["position"])),
                          float(np.mean(errors["taps"])), float(closed.mean()), float(final), delta_error,
-                         traced_mm)
+                         traced_mm, delta_right=float(np.mean(delta_right)) if delta_right else np.nan,
+                         edge_lost=float(edge_lost.mean()), trace_lost=float(trace_lost.mean()),
+                         trace_error_mm=float(np.mean(trace_error)))

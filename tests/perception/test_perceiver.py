@@ -191,6 +191,19 @@ def test_joint_rule_stops_when_a_joint_class_crosses(model, taps):
         Perceiver(model, decision_rule="any")
 
 
+def test_a_move_after_the_decision_shifts_the_adaptive_prior(model, taps):
+    """The sensor moves between decisions: the next decision's prior is the last posterior moved with it."""
+    perceiver = Perceiver(model, decision_threshold=0.0, adaptive_prior=True, prior_shift=0, shift_mode="uniform")
+    step = perceiver.observe(taps.taps[30])
+    assert step.decided
+    perceiver.moved(2 * model.class_width)                  # two location classes up, after the decision
+    moved = np.exp(shift(np.log(step.posterior), 2, mode="uniform"))
+    assert not np.allclose(moved, step.posterior, atol=1e-3)  # the move changes the belief
+    np.testing.assert_allclose(perceiver.posterior, moved, atol=1e-12)
+    perceiver.reset()
+    np.testing.assert_allclose(perceiver.posterior, 0.5 * moved + 0.5 / 18, atol=1e-12)
+
+
 def test_adaptive_prior_learns_the_shift_between_decisions():
     """Identities move by one class between decisions; the perceiver learns Delta = 1 (paper 004)."""
     data = gap_dataset(depths=2, widths=6, taps_per_class=6, samples=10, dims=8, seed=1, noise=0.1, contact_floor=1.0)
