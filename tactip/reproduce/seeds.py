@@ -1,13 +1,13 @@
 """Each paper's headline claim judged over many seeds, from an interval and never from one seed.
 
 A claim is a function of one run's rows (`Report.rows`) that gives its *margin*: how far the
-simulated world is on the claim's side (> 0: the claim holds on that run), in the unit the claim
-names. Over N seeds, `judge_claim` takes the margins' mean and its 95 % interval (Student t), and says
+simulated world is on the claim's side (> 0: the claim holds on that run; exactly 0 holds too for a
+claim of "no larger than", `TIES_HOLD`), in the unit the claim names. Over N seeds, `judge_claim` takes the margins' mean and its 95 % interval (Student t), and says
 
 - **holds** when there are at least two seeds, the whole interval lies above 0 and every seed's
-  margin is above 0;
+  margin is above 0 (for a `TIES_HOLD` claim: at or above 0);
 - **partly holds** when the mean is above 0 but the interval reaches 0 or a seed fails;
-- **fails** when the mean is at or below 0.
+- **fails** when the mean is below 0, or at 0 for a claim that 0 does not satisfy.
 
 Claims (the issue's bars for paper comparisons):
 
@@ -31,7 +31,7 @@ import numpy as np
 
 from perception.choices import POLICIES
 
-__all__ = ["CLAIMS", "ClaimVerdict", "judge_claim", "claim_margin"]
+__all__ = ["CLAIMS", "TIES_HOLD", "ClaimVerdict", "judge_claim", "claim_margin"]
 
 
 def _000(rows) -> float:
@@ -84,6 +84,12 @@ CLAIMS: dict[str, tuple[str, str, Callable]] = {
 }
 
 
+#: Claims of "no larger than" (000: active <= passive; 004: adaptive <= 0.9 x active), which a margin of
+#: exactly 0 satisfies. The others hold only above 0: 001 and 002 say "lowers" and "<", and 003's
+#: margin is the smaller of a "<=" and a "<".
+TIES_HOLD = frozenset({"000", "004"})
+
+
 def claim_margin(paper: str, rows: list[dict]) -> float:
     """The margin by which one run's rows are on the side of ``paper``'s claim (> 0: it holds)."""
     if paper not in CLAIMS:
@@ -100,11 +106,13 @@ class ClaimVerdict:
     paper, claim, unit : str
     seeds : tuple of int
     margins : (N,) ndarray
-        Each seed's margin (> 0: the claim holds on that seed).
+        Each seed's margin (> 0: the claim holds on that seed; 0 too where ``ties_hold``).
     mean : float
     interval : (float, float)
         95 % interval of the mean margin (Student t; the single value for one seed).
     verdict : {"holds", "partly holds", "fails"}
+    ties_hold : bool
+        Whether a margin of exactly 0 satisfies the claim (`TIES_HOLD`).
     """
 
     paper: str
@@ -115,10 +123,15 @@ class ClaimVerdict:
     mean: float
     interval: tuple
     verdict: str
+    ties_hold: bool = False
+
+    def held(self) -> np.ndarray:
+        """(N,) bool: the seeds on which the claim holds."""
+        return self.margins >= 0 if self.ties_hold else self.margins > 0
 
     def line(self) -> str:
         """One printed line."""
-        held = int((self.margins > 0).sum())
+        held = int(self.held().sum())
         return (f"  claim: {self.claim}: {self.verdict} (margin {self.mean:.3g} {self.unit}, 95 % interval "
                 f"{self.interval[0]:.3g} to {self.interval[1]:.3g}; held on {held} of {len(self.margins)} seeds)")
 
@@ -154,11 +167,14 @@ def judge_claim(paper: str, rows_per_seed: dict[int, list[dict]]) -> ClaimVerdic
     else:
         half = 0.0
     interval = (mean - half, mean + half)
-    if mean <= 0:
+    ties_hold = paper in TIES_HOLD
+    held = margins >= 0 if ties_hold else margins > 0
+    above = (lambda value: value >= 0) if ties_hold else (lambda value: value > 0)
+    if not above(mean):
         verdict = "fails"
-    elif len(margins) >= 2 and interval[0] > 0 and (margins > 0).all():   # one seed is not a claim
+    elif len(margins) >= 2 and above(interval[0]) and held.all():   # one seed is not a claim
         verdict = "holds"
     else:
         verdict = "partly holds"
     claim, unit, _ = CLAIMS[paper]
-    return ClaimVerdict(paper, claim, unit, seeds, margins, mean, interval, verdict)
+    return ClaimVerdict(paper, claim, unit, seeds, margins, mean, interval, verdict, ties_hold)

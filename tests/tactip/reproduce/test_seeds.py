@@ -45,6 +45,24 @@ def test_verdicts_come_from_the_interval():
     assert "held on 1 of 1 seeds" in one.line() and one.json()["verdict"] == "partly holds"
 
 
+def _000_rows(passive, active):
+    return [{"sensor": "skin", "classes": 25, "policy": "passive", "error_mm": passive},
+            {"sensor": "skin", "classes": 25, "policy": "active", "error_mm": active}]
+
+
+def test_a_tie_holds_a_claim_of_no_larger_than_and_not_a_strict_one():
+    # 000 says active <= passive: equal errors on a seed hold it.
+    ties = judge_claim("000", {s: _000_rows(0.3, 0.3 - m) for s, m in enumerate([0.0, 0.0, 0.0])})
+    assert ties.verdict == "holds" and ties.held().all() and "held on 3 of 3 seeds" in ties.line()
+    one_tie = judge_claim("000", {s: _000_rows(0.3, 0.3 - m) for s, m in enumerate([0.0, 0.02, 0.04])})
+    assert one_tie.held().all() and one_tie.verdict == "partly holds"      # the interval reaches below 0
+    worse = judge_claim("000", {s: _000_rows(0.3, 0.3 - m) for s, m in enumerate([0.0, -0.01, 0.0])})
+    assert worse.verdict == "fails" and worse.held().sum() == 2
+    # 003's weakly active must be below passive: a tie does not hold it.
+    strict = judge_claim("003", {s: _003_rows(1.4, 1.4, 0.4) for s in range(3)})
+    assert not strict.held().any() and strict.verdict == "fails"
+
+
 def test_every_paper_has_a_claim():
     assert set(CLAIMS) == {"000", "001", "002", "003", "004"}
     with pytest.raises(ValueError, match="no claim"):
