@@ -21,8 +21,9 @@ recommended settings (used by the station). --sweep-lateral gives the error when
 lateral placement is within [-SIGMA, SIGMA] mm, relative to the smallest SIGMA (paper 002 Fig. 11).
 With --target-accuracy P, --sweep-fixation instead picks the fixation and threshold whose decisions
 are within --tolerance of the true identity in a fraction P of runs in the fewest mean taps; a
-calibrated model's tempering is then refitted at the best fixation, so that its beliefs after 1 to 5
-taps mean what they say (the taps of one run repeat each other's evidence), and written with them.
+calibrated model then gets a tap tempering g1..g5 fitted at the best fixation (the t-th tap's log
+likelihood times g_t, beyond the 5th times g5), so that its beliefs after each of taps 1 to 5 mean what
+they say (the taps of one run repeat each other's evidence); the factors are printed and written.
 With --scheduler tcp://HOST:PORT a sweep's fixations (or sigmas) run on that Dask cluster, one per
 worker at a time: the same seed gives the same figures as a run here.
 
