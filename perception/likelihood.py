@@ -20,8 +20,8 @@ log P(z | x_l, w_i) of every joint class c = (location l, identity i), c = l * n
 
 `LikelihoodModel` implements everything but the likelihood itself once, for frozen dataclasses
 holding the fields ``location_edges, identities, front_end, samples, dim_names, sensor,
-location_unit, identity_unit, taps_per_class, recommended`` (and ``tap_tempering``, default empty). Each kind of model (``KIND``) adds
-its parameters and how they are stored (`perception.model.save_model` / `load_model`).
+location_unit, identity_unit, taps_per_class, recommended`` (and ``tap_tempering``, default empty).
+Each kind of model (``KIND``) adds its parameters and how they are stored (`perception.model.save_model` / `load_model`).
 `fit_class_grid` derives the classes from a training dataset; every kind is fitted on it.
 
 Kinds: ``histogram`` (the papers' model, `perception.histogram`), ``calibrated-histogram``

@@ -466,8 +466,8 @@ def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tol
     confirm_runs = max(runs, 10000) if confirm_runs is None else int(confirm_runs)
     if confirm_runs > 0 and best is not None:
         # The threshold again at the chosen fixation, on runs that did not choose it (another seed).
-        confirmed = row(classes[best], environment=environment.with_tap_tempering(schedule) if schedule else environment,
-                        runs=confirm_runs, seed=_other_seed(seed))
+        chosen = environment.with_tap_tempering(schedule) if schedule else environment
+        confirmed = row(classes[best], environment=chosen, runs=confirm_runs, seed=_other_seed(seed))
         if np.isfinite(confirmed[1]):
             thresholds[best], taps[best], accuracy[best] = confirmed
     return AccuracySweep(model.location_centres[classes], thresholds, taps, accuracy, float(target), float(tolerance),
