@@ -270,6 +270,10 @@ def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int 
                        model.identity_period if n_id > 1 else None)
 
 
+#: Ranges (log10) `fit_tap_tempering` searches for g_1 and for g_2, g_3, ...
+_LOG10_FIRST_TAP, _LOG10_LATER_TAPS = (-2.0, 2.0), (-2.0, 0.0)
+
+
 def fit_tap_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: int = CALIBRATION_TAPS[-1],
                       runs: int = 2000, seed=0, **options) -> tuple[float, ...]:
     """The tap tempering schedule (g_1, ..., g_taps) that calibrates the beliefs of this policy's runs tap by tap.
@@ -282,6 +286,12 @@ def fit_tap_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: 
     before it (the same depth of the same gap gives nearly the same tap). Taps beyond the last take
     g_taps. (The log loss is ruled by the few runs confidently wrong, and its factors leave the common
     beliefs underconfident.) Any schedule the environment's model has is replaced, not built on.
+
+    g_1 is searched over 0.01..100 (it also corrects the one-tap tempering, fitted by log loss on
+    single taps, for the Brier score and the policy's first tap); g_2, g_3, ... over 0.01..1: a later
+    tap is worth at most an independent one. Without that bound, when every held-out run is right
+    after tap t the Brier score falls as g_t grows and the fit runs to the end of its range (g = 100 on
+    the simulated station's 52 held-out taps), which makes one later mistake a certainty.
 
     Parameters
     ----------
@@ -313,8 +323,12 @@ def fit_tap_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: 
         return float(((trace.belief[:, -1] - right) ** 2).mean())
 
     for t in range(1, int(taps) + 1):
-        result = minimize_scalar(brier, bounds=(-2.0, 2.0), args=(t,), method="bounded", options={"xatol": 2e-3})
-        schedule.append(float(10.0 ** result.x))
+        bounds = _LOG10_FIRST_TAP if t == 1 else _LOG10_LATER_TAPS
+        result = minimize_scalar(brier, bounds=bounds, args=(t,), method="bounded", options={"xatol": 2e-3})
+        factor = 10.0 ** result.x
+        if t > 1 and brier(0.0, t) <= result.fun:   # the bounded search never evaluates its end: g_t = 1 itself
+            factor = 1.0
+        schedule.append(float(factor))
     return tuple(schedule)
 
 

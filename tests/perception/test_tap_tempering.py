@@ -157,3 +157,15 @@ def test_the_accuracy_sweep_fits_the_schedule_at_its_best_fixation(gaussian):
 def test_the_papers_histogram_model_runs_as_before_without_a_schedule():
     model = fit_model(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=4, bins=10)
     assert model.tap_tempering == () and "tap tempering" not in model.summary()
+
+
+def test_a_later_tap_is_worth_at_most_an_independent_one():
+    # Taps easy to tell apart: every run is right after its second tap, so the Brier score keeps falling as
+    # g_t grows; the fit stops at 1 (a later tap worth one independent tap) instead of running away.
+    easy = dict(GRID, noise=0.05)
+    model = train_model(gap_dataset(seed=1, taps_per_class=6, **easy), kind="gaussian", n_locations=4)
+    environment = VirtualEnvironment(model, gap_dataset(seed=2, taps_per_class=6, **easy))
+    trace = trace_beliefs(environment, FixationPolicy(3), runs=500, max_taps=5, seed=0)
+    assert (trace.estimate[:, 1:] == trace.truth[:, 1:]).all()
+    schedule = fit_tap_tempering(environment, FixationPolicy(3), runs=500, seed=0)
+    assert schedule[1:] == (1.0, 1.0, 1.0, 1.0), schedule
