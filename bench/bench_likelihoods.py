@@ -74,7 +74,7 @@ def compare_models(config, runs: int, seed: int) -> None:
           f"{'error <= 6 taps':>22}")
     for kind in (*kinds(), "station"):
         started = time.monotonic()
-        if kind == "station":  # the station's own model: its tempering refitted for 1-5 taps when it was prepared
+        if kind == "station":  # the station's own model: its tap tempering g1..g5 fitted when it was prepared
             model, kind = station_model, f"station ({station_model.KIND})"
         else:
             model = train_model(train, kind=kind, n_locations=config.perception.locations, bins=config.perception.bins)

@@ -8,9 +8,9 @@ with the decision threshold that reaches it; or, given a target accuracy, the de
 whose decisions are within a tolerance of the true width in that fraction of runs in the fewest
 taps (a calibrated model's belief means what it says, so its threshold is an accuracy). Both are
 written into the model's recommended settings, which the station uses unless its configuration
-overrides them. With a target accuracy, a calibrated kind's tempering is refitted at the chosen depth
-for the beliefs after 1 to 5 taps of active perception (`perception.fit_policy_tempering`): the taps
-of one inspection repeat each other's evidence, which a tempering fitted on single taps ignores.
+overrides them. With a target accuracy, a calibrated kind gets a tap tempering schedule fitted at the
+chosen depth, one factor g_t for each of taps 1 to 5 of active perception (`perception.fit_tap_tempering`):
+the taps of one inspection repeat each other's evidence, which a tempering fitted on single taps ignores.
 
 No peeking (`fit_with_fixation`, `prepare_station_model`): the station's fixation depth, threshold and
 tempering are chosen on training taps held out in folds (`holdout_folds`), each scored by a model
@@ -28,7 +28,7 @@ from typing import Callable
 import numpy as np
 
 from calibration.errors import CalibrationError
-from perception import (DEFAULT_THRESHOLDS, FixationPolicy, VirtualEnvironment, fit_policy_tempering, monte_carlo, fixation_for_accuracy, fixation_sweep, load_dataset, load_model,
+from perception import (DEFAULT_THRESHOLDS, FixationPolicy, VirtualEnvironment, fit_tap_tempering, monte_carlo, fixation_for_accuracy, fixation_sweep, load_dataset, load_model,
                         make_policy, save_model, trace_beliefs, train_model)
 
 __all__ = ["train_station_model", "recommend_fixation", "choose_fixation", "carve_validation",
@@ -92,8 +92,8 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
 
     Without ``target_accuracy``: the lowest mean width error within ``tap_budget`` mean taps (paper 002).
     With it: the fewest mean taps whose decisions are within ``tolerance`` (identity units) of the
-    true width in a fraction ``target_accuracy`` of runs, with the tempering of a calibrated kind
-    refitted there for the beliefs after 1 to 5 taps (the model returned is tempered accordingly).
+    true width in a fraction ``target_accuracy`` of runs, with a calibrated kind's tap tempering schedule
+    fitted there for the beliefs after each of taps 1 to 5 (the model returned carries it).
 
     Parameters
     ----------
@@ -146,9 +146,9 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
             best = sweep.best
             fixation, threshold = float(sweep.fixations[best]), float(sweep.thresholds[best])
             tempering = ""
-            if model.temperable:
-                tempering = f", tempering {model.tempering:.4g} x {sweep.tempering:.3g} for 1-5 taps"
-                model = model.tempered(sweep.tempering)
+            if sweep.tap_tempering:
+                tempering = f", tap tempering {_schedule_text(sweep.tap_tempering)}"
+                model = model.with_tap_tempering(sweep.tap_tempering)
             model = model.with_recommended(fixation_location=fixation, decision_threshold=threshold, policy="active")
             return model, sweep, (f"fixation depth {fixation:g} {unit}: {sweep.accuracy[best]:.3f} of decisions within "
                                   f"{tolerance:g} {identity_unit} in {sweep.taps[best]:.1f} taps (decision threshold "
@@ -176,18 +176,23 @@ def choose_fixation(model, dataset, *, runs: int = 2000, tap_budget: float = 12.
         # The station's first use, its target missed: its beliefs are still calibrated at the fixation
         # (as on the target's path), and the threshold chosen again on the calibrated beliefs.
         policy = FixationPolicy(int(np.argmin(np.abs(model.location_centres - sweep.best_fixation))))
-        factor = fit_policy_tempering(environment, policy, runs=runs, seed=seed)
-        result = monte_carlo(environment.tempered(factor), policy, seed=seed, runs=runs, max_taps=max_taps,
+        schedule = fit_tap_tempering(environment, policy, runs=runs, seed=seed)
+        result = monte_carlo(environment.with_tap_tempering(schedule), policy, seed=seed, runs=runs, max_taps=max_taps,
                              **{k: v for k, v in options.items() if k != "fixation_classes"})
         k = result.best_within(tap_budget)
         errors = result.mean_location_error if result.identity_error_map.shape[-1] == 1 else result.mean_identity_error
         threshold, error, taps = float(result.thresholds[k]), float(errors[k]), float(result.mean_taps[k])
-        tempering = f", tempering {model.tempering:.4g} x {factor:.3g} for 1-5 taps"
-        model = model.tempered(factor)
+        tempering = f", tap tempering {_schedule_text(schedule)}"
+        model = model.with_tap_tempering(schedule)
     model = model.with_recommended(fixation_location=float(sweep.best_fixation), decision_threshold=float(threshold),
                                    policy="active")
     return model, sweep, (f"fixation depth {sweep.best_fixation:g} {unit}: mean width error "
                           f"{error:.3f} {identity_unit} in {taps:.1f} taps (decision threshold {threshold:g}{tempering})")
+
+
+def _schedule_text(schedule) -> str:
+    """A tap tempering schedule as printed: ``"g1..g5 0.91, 0.52, 0.4, 0.33, 0.3"``."""
+    return f"g1..g{len(schedule)} " + ", ".join(f"{g:.3g}" for g in schedule)
 
 
 #: Folds of the training taps the station's settings are chosen on (`holdout_folds`).
@@ -365,7 +370,7 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
 
     `cross_fitted_environment`: the training taps fall in ``folds`` folds (`holdout_folds`); each fold's
     taps are scored by a model fitted on the others, and the fixation location, threshold and
-    (calibrated kinds) tempering for 1-5 taps are chosen on those out-of-fold scores (`choose_fixation`).
+    (calibrated kinds) tap tempering g1..g5 for taps 1-5 are chosen on those out-of-fold scores (`choose_fixation`).
     Fold 0's model, fitted on every tap but fold 0's, is kept with them: the settings were chosen for
     models like it. (Refitting on every tap and carrying the settings over would not do: a calibrated
     kind's tempering is fitted with the model, and on the simulated station the one of a model of half

@@ -2,6 +2,9 @@
 
 Pure functions in the shape of filterpy's discrete Bayes: `normalize`, `update`, `shift`
 (filterpy's ``predict`` for a known move), plus the 'where'/'what' `marginals` and the priors.
+`tap_update` is `update` with the t-th tap's log likelihood tempered by a per-tap-count factor g_t
+(a model's ``tap_tempering`` schedule): the taps of one decision repeat each other's evidence, so
+treating them as independent makes the beliefs after a few taps overconfident.
 A belief is an array of log probabilities whose last two axes are (location, identity);
 leading axes are a batch (e.g. Monte Carlo runs), so every function works on ``(L, I)`` and
 ``(R, L, I)`` alike. The log domain keeps a long run of confident taps from underflowing.
@@ -23,7 +26,8 @@ from scipy.special import logsumexp
 
 from .choices import DECISION_RULES, SHIFT_MODES
 
-__all__ = ["SHIFT_MODES", "DECISION_RULES", "normalize", "update", "shift", "shift_identity", "marginals",
+__all__ = ["SHIFT_MODES", "DECISION_RULES", "normalize", "update", "tap_update", "tap_factor",
+           "check_tap_tempering", "shift", "shift_identity", "marginals",
            "decide", "flat_prior", "adaptive_prior"]
 
 _CLASSES = (-2, -1)
@@ -61,6 +65,91 @@ def update(log_likelihood, log_prior) -> np.ndarray:
     """
     # P(c|z_1:t) = P(z_t|c) P(c|z_1:t-1) / P(z_t|z_1:t-1),  P(z_t|z_1:t-1) = sum_c P(z_t|c) P(c|z_1:t-1)
     return normalize(np.add(log_likelihood, log_prior))
+
+
+def check_tap_tempering(schedule) -> tuple[float, ...]:
+    """A tap tempering schedule (g_1, ..., g_K) checked and as a tuple of floats.
+
+    Parameters
+    ----------
+    schedule : sequence of float
+        g_t > 0 and finite multiplies the log likelihood of the t-th tap of a decision; the last one is
+        used for every tap beyond the K-th. Empty: no tempering (every g_t = 1).
+
+    Returns
+    -------
+    tuple of float
+
+    Raises
+    ------
+    ValueError
+        Not a flat sequence of finite numbers > 0 (the message names ``tap_tempering``).
+
+    Examples
+    --------
+    >>> check_tap_tempering([1, 0.5, 0.25])
+    (1.0, 0.5, 0.25)
+    """
+    try:
+        values = np.asarray(schedule if schedule is not None else (), dtype=np.float64)
+    except (TypeError, ValueError):
+        values = np.full((1, 1), np.nan)
+    if values.ndim != 1 or not (np.isfinite(values) & (values > 0)).all():
+        raise ValueError(f"tap_tempering must be a sequence of finite numbers > 0, got {schedule!r}")
+    return tuple(float(v) for v in values)
+
+
+def tap_factor(taps, schedule) -> np.ndarray:
+    """g_t: the factor on the log likelihood of the ``taps``-th tap of a decision.
+
+    Parameters
+    ----------
+    taps : int or (...) int array, >= 1
+        Count of the tap in its decision (1 for the first tap after a flat or restarted prior).
+    schedule : sequence of float
+        (g_1, ..., g_K), checked by `check_tap_tempering`; taps beyond K take g_K; empty: 1.
+
+    Returns
+    -------
+    float64 ndarray of the shape of ``taps``
+
+    Examples
+    --------
+    >>> tap_factor([1, 2, 3, 7], (1.0, 0.5, 0.25)).tolist()
+    [1.0, 0.5, 0.25, 0.25]
+    """
+    taps = np.asarray(taps)
+    if taps.size and taps.min() < 1:
+        raise ValueError(f"taps must be >= 1, got {taps.min()}")
+    if len(schedule) == 0:
+        return np.ones(taps.shape)
+    return np.asarray(schedule, dtype=np.float64)[np.minimum(taps, len(schedule)) - 1]
+
+
+def tap_update(log_likelihood, log_prior, taps, schedule=()) -> np.ndarray:
+    """Bayes' rule for the ``taps``-th tap of a decision, its log likelihood tempered by g_t.
+
+    Parameters
+    ----------
+    log_likelihood : (..., L, I) array
+        log P(z_t | x_l, w_i) of the new tap.
+    log_prior : (..., L, I) array
+        log P(x_l, w_i | z_1:t-1).
+    taps : int or (...) int array, >= 1
+        t, the count of this tap in its decision (one per belief of a batch).
+    schedule : sequence of float
+        (g_1, ..., g_K) (see `tap_factor`); empty: `update` itself.
+
+    Returns
+    -------
+    (..., L, I) float64 ndarray
+        log P(x_l, w_i | z_1:t).
+    """
+    if len(schedule) == 0:
+        return update(log_likelihood, log_prior)
+    factor = tap_factor(taps, schedule)[..., None, None]
+    # P(c|z_1:t) proportional to P(z_t|c)^g_t P(c|z_1:t-1)
+    return normalize(np.add(factor * np.asarray(log_likelihood, dtype=np.float64), log_prior))
 
 
 def shift(log_belief, offset_classes, *, mode: str = "edge") -> np.ndarray:

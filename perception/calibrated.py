@@ -57,9 +57,9 @@ class CalibratedHistogramModel(HistogramModel):
         if not (np.isfinite(self.tempering) and self.tempering > 0):
             raise ModelError(f"tempering must be a finite number > 0, got {self.tempering!r}")
 
-    def summary(self) -> str:
+    def _kind_summary(self) -> str:
         """One line: front end, class grid, tap shape, bins, tempering."""
-        return f"{super().summary()}; calibrated histogram, tempering {self.tempering:.4g}"
+        return f"{super()._kind_summary()}; calibrated histogram, tempering {self.tempering:.4g}"
 
     def log_likelihood(self, tap) -> np.ndarray:
         """beta x the histogram model's mean log likelihood of one tap.

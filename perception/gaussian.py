@@ -107,6 +107,7 @@ class GaussianModel(LikelihoodModel):
     recommended: dict = field(default_factory=dict)
     identity_period: float | None = None   # circular identity (e.g. 360 deg), from the training dataset
     identity_names: tuple[str, ...] = ()   # class names of a named identity, from the training dataset
+    tap_tempering: tuple[float, ...] = ()  # g_1..g_K on the t-th tap's log likelihood (`perception.bayes.tap_factor`)
     residual_variance: float = float("nan")
 
     KIND = "gaussian"
@@ -125,13 +126,14 @@ class GaussianModel(LikelihoodModel):
         if not (np.isfinite(self.tempering) and self.tempering > 0):
             raise ModelError(f"tempering must be a finite number > 0, got {self.tempering!r}")
         self._check_recommended()
+        self._check_tap_tempering()
 
     @property
     def n_components(self) -> int:
         """Principal components K."""
         return self.transform.shape[1]
 
-    def summary(self) -> str:
+    def _kind_summary(self) -> str:
         """One line: front end, class grid, tap shape, components, tempering."""
         return (f"{self._grid_summary()}; gaussian on {self.n_components} whitened components "
                 f"(shrinkage {self.shrinkage:g}), tempering {self.tempering:.4g}")

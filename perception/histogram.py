@@ -96,6 +96,7 @@ class HistogramModel(LikelihoodModel):
     recommended: dict = field(default_factory=dict)
     identity_period: float | None = None   # circular identity (e.g. 360 deg), from the training dataset
     identity_names: tuple[str, ...] = ()   # class names of a named identity, from the training dataset
+    tap_tempering: tuple[float, ...] = ()  # g_1..g_K on the t-th tap's log likelihood (`perception.bayes.tap_factor`)
 
     def __post_init__(self):
         dims, _, classes = self.log_probability.shape
@@ -107,6 +108,7 @@ class HistogramModel(LikelihoodModel):
         if not (isinstance(self.epsilon, (int, float, np.floating)) and np.isfinite(self.epsilon) and self.epsilon > 0):
             raise ModelError(f"epsilon must be a finite number > 0, got {self.epsilon!r}")
         self._check_recommended()
+        self._check_tap_tempering()
 
     KIND = "histogram"
 
@@ -123,7 +125,7 @@ class HistogramModel(LikelihoodModel):
         """Value bins per dimension."""
         return self.log_probability.shape[1]
 
-    def summary(self) -> str:
+    def _kind_summary(self) -> str:
         """One line: front end, class grid, tap shape, bins."""
         return f"{self._grid_summary()}; {self.bins} bins"
 

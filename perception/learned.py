@@ -140,6 +140,7 @@ class TorchModel(LikelihoodModel):
     recommended: dict = field(default_factory=dict)
     identity_period: float | None = None   # circular identity (e.g. 360 deg), from the training dataset
     identity_names: tuple[str, ...] = ()   # class names of a named identity, from the training dataset
+    tap_tempering: tuple[float, ...] = ()  # g_1..g_K on the t-th tap's log likelihood (`perception.bayes.tap_factor`)
     imputation_basis: np.ndarray | None = None
     imputation_variances: np.ndarray | None = None
     imputation_residual: float = float("nan")
@@ -168,13 +169,14 @@ class TorchModel(LikelihoodModel):
         if not (np.isfinite(self.tempering) and self.tempering > 0):
             raise ModelError(f"tempering must be a finite number > 0, got {self.tempering!r}")
         self._check_recommended()
+        self._check_tap_tempering()
 
     @property
     def members(self) -> int:
         """Networks M in the ensemble."""
         return self.hidden_bias.shape[0]
 
-    def summary(self) -> str:
+    def _kind_summary(self) -> str:
         """One line: front end, class grid, tap shape, members, hidden units, tempering."""
         return (f"{self._grid_summary()}; torch ensemble of {self.members} networks of {self.hidden_bias.shape[1]} "
                 f"hidden units, up to {self.epochs} epochs, tempering {self.tempering:.4g}")

@@ -14,12 +14,14 @@ log P(z | x_l, w_i) of every joint class c = (location l, identity i), c = l * n
   ``fixation_class``;
 - what the taps must be: ``front_end``, ``samples``, ``dims``, ``dim_names``, ``sensor``, units,
   ``check_dataset``;
-- the recommended station settings: ``recommended``, ``with_recommended``; and ``summary``.
+- the recommended station settings: ``recommended``, ``with_recommended``; and ``summary``;
+- the tap tempering schedule ``tap_tempering`` (g_1..g_K, empty: none) that the belief update applies
+  to the t-th tap of a decision (`perception.bayes.tap_update`), ``with_tap_tempering``.
 
 `LikelihoodModel` implements everything but the likelihood itself once, for frozen dataclasses
 holding the fields ``location_edges, identities, front_end, samples, dim_names, sensor,
-location_unit, identity_unit, taps_per_class, recommended``. Each kind of model (``KIND``) adds
-its parameters and how they are stored (`perception.model.save_model` / `load_model`).
+location_unit, identity_unit, taps_per_class, recommended`` (and ``tap_tempering``, default empty).
+Each kind of model (``KIND``) adds its parameters and how they are stored (`perception.model.save_model` / `load_model`).
 `fit_class_grid` derives the classes from a training dataset; every kind is fitted on it.
 
 Kinds: ``histogram`` (the papers' model, `perception.histogram`), ``calibrated-histogram``
@@ -34,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .bayes import check_tap_tempering
 from .choices import POLICIES
 from .dataset import Dataset
 from .errors import DatasetError, ModelError
@@ -159,9 +162,16 @@ class LikelihoodModel:
                 f"({lo:g}..{hi:g} {self.location_unit}) x {self.n_identities} identities "
                 f"{identities}; taps of {self.samples} samples x {self.dims} dims")
 
-    def summary(self) -> str:
-        """One line: kind, front end, class grid, tap shape."""
+    def _kind_summary(self) -> str:
+        """What `summary` says of the kind (each kind its own)."""
         return f"{self._grid_summary()}; {self.KIND} likelihood"
+
+    def summary(self) -> str:
+        """One line: kind, front end, class grid, tap shape, and the tap tempering schedule if any."""
+        schedule = ""
+        if self.tap_tempering:
+            schedule = "; tap tempering " + ", ".join(f"{g:.3g}" for g in self.tap_tempering) + " (taps 1, 2, ...)"
+        return self._kind_summary() + schedule
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.summary()}>"
@@ -189,6 +199,24 @@ class LikelihoodModel:
         if not (np.isfinite(factor) and factor > 0):
             raise ValueError(f"factor must be a finite number > 0, got {factor!r}")
         return dataclasses.replace(self, tempering=float(self.tempering * factor))
+
+    def with_tap_tempering(self, schedule):
+        """A copy whose t-th tap of a decision has its log likelihood multiplied by g_t.
+
+        Parameters
+        ----------
+        schedule : sequence of float
+            (g_1, ..., g_K), each finite and > 0; taps beyond K take g_K; empty: no tap tempering.
+            (`perception.reliability.fit_tap_tempering` fits one.)
+        """
+        return dataclasses.replace(self, tap_tempering=tuple(schedule))
+
+    def _check_tap_tempering(self) -> None:
+        """The tap tempering schedule is finite numbers > 0, stored as a tuple of floats."""
+        try:
+            object.__setattr__(self, "tap_tempering", check_tap_tempering(self.tap_tempering))
+        except ValueError as exc:
+            raise ModelError(str(exc)) from None
 
     def with_recommended(self, **settings):
         """A copy of the model with some recommended settings replaced.
@@ -349,9 +377,13 @@ class ClassGrid(LikelihoodModel):
     recommended: dict = field(default_factory=dict)
     identity_period: float | None = None   # circular identity (e.g. 360 deg), from the training dataset
     identity_names: tuple[str, ...] = ()   # class names of a named identity, from the training dataset
+    tap_tempering: tuple[float, ...] = ()  # g_1..g_K on the t-th tap's log likelihood (`perception.bayes.tap_factor`)
 
-    def summary(self) -> str:
-        """One line: front end, class grid, tap shape."""
+    def __post_init__(self):
+        self._check_tap_tempering()
+
+    def _kind_summary(self) -> str:
+        """Front end, class grid, tap shape."""
         return self._grid_summary()
 
 

@@ -146,6 +146,8 @@ def save_model(path, model: LikelihoodModel, *, inputs=()) -> None:
                 f.attrs["identity_period"] = float(model.identity_period)
             if model.identity_names:
                 f.attrs["identity_names"] = list(model.identity_names)
+            if model.tap_tempering:  # optional: a file without it has no tap tempering (every g_t = 1)
+                f.attrs["tap_tempering"] = np.asarray(model.tap_tempering, dtype=np.float64)
             for name, value in attrs.items():
                 f.attrs[name] = value
 
@@ -211,6 +213,11 @@ def load_model(path) -> LikelihoodModel:
         except (TypeError, ValueError) as exc:
             raise ModelError(f"{path}: unreadable settings ({exc})") from None
         common["dim_names"] = tuple(str(n) for n in np.atleast_1d(f.attrs["dim_names"]))
+        if "tap_tempering" in f.attrs:  # optional (older files: no tap tempering); checked by the model
+            value = np.atleast_1d(f.attrs["tap_tempering"])
+            if value.dtype.kind not in "fiu":
+                raise ModelError(f"{path}: tap_tempering does not hold numbers")
+            common["tap_tempering"] = tuple(float(g) for g in value)
         try:  # optional: the label's period and class names (absent: a plain number)
             common["identity_period"], common["identity_names"] = check_identity_labels(
                 f.attrs["identity_period"] if "identity_period" in f.attrs else None,

@@ -111,6 +111,17 @@ class VirtualEnvironment:
         """
         return VirtualEnvironment(self.model.tempered(factor), self.test, _log_likelihood=factor * self.log_likelihood)
 
+    def with_tap_tempering(self, schedule) -> VirtualEnvironment:
+        """The environment of ``model.with_tap_tempering(schedule)``: the same test taps and log likelihoods,
+        the t-th tap of a run tempered by g_t in the belief update.
+
+        Parameters
+        ----------
+        schedule : sequence of float > 0
+        """
+        return VirtualEnvironment(self.model.with_tap_tempering(schedule), self.test,
+                                  _log_likelihood=self.log_likelihood)
+
     def draw(self, tap_class, rng: np.random.Generator) -> np.ndarray:
         """Indices of test taps drawn uniformly within each requested class.
 
@@ -274,8 +285,9 @@ def _simulate(env, policy, thresholds, start, identity, rng, *, move_threshold, 
     attempt = np.zeros(runs, np.intp)
     table = env.log_likelihood.reshape(-1, n_loc, n_id)
     for tap in range(1, max_taps + 1):
-        log_belief = bayes.update(table[env.draw(location * n_id + identity, rng)], log_belief)
         attempt += 1
+        log_belief = bayes.tap_update(table[env.draw(location * n_id + identity, rng)], log_belief, attempt,
+                                      model.tap_tempering)
         where, what = bayes.marginals(log_belief)
         estimate = where.argmax(axis=1)
         if decision_rule == "joint":

@@ -276,11 +276,14 @@ class Perceiver:
                                   "(moved(0.0) if the sensor did not move)")
         model = self.model
         log_likelihood = model.log_likelihood(tap)
-        self._log_prior = self._log_posterior
-        self._log_posterior = bayes.update(log_likelihood, self._log_prior)
-        self._log_evidence = bayes.update(log_likelihood, self._log_evidence)
         self._taps += 1
         self._attempt_taps += 1
+        self._log_prior = self._log_posterior
+        # the t-th tap of this attempt, tempered by the model's g_t (its taps repeat each other's evidence)
+        self._log_posterior = bayes.tap_update(log_likelihood, self._log_prior, self._attempt_taps,
+                                               model.tap_tempering)
+        self._log_evidence = bayes.tap_update(log_likelihood, self._log_evidence, self._attempt_taps,
+                                              model.tap_tempering)
         posterior = np.exp(self._log_posterior)
         where, what = posterior.sum(axis=1), posterior.sum(axis=0)
         belief, location_class, identity_class = (x.item() for x in bayes.decide(self._log_posterior,

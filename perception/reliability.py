@@ -11,10 +11,10 @@ depend on the decision threshold, so one trace gives:
 - the decision at any threshold (`BeliefTrace.decisions`): taps, decided identity, error, and the
   fraction of decisions within a tolerance;
 - the threshold that reaches a target accuracy in the fewest taps (`threshold_for_accuracy`);
-- the tempering that calibrates the beliefs of a policy's runs after 1 to 5 taps
-  (`fit_policy_tempering`): a model's tempering is fitted on single held-out taps, but the taps of
-  one run are not independent evidence (the same depth of the same gap gives nearly the same tap),
-  so their product is overconfident after a few taps unless the tempering allows for it.
+- the tap tempering schedule that calibrates the beliefs of a policy's runs after each of taps 1 to 5
+  (`fit_tap_tempering`): a model's tempering is fitted on single held-out taps, but the taps of one
+  run are not independent evidence (the same depth of the same gap gives nearly the same tap), so
+  their product is overconfident after a few taps unless the t-th tap is tempered by its own g_t.
 
 Example
 -------
@@ -38,10 +38,10 @@ from .perceiver import clamp_move
 from .policies import Policy
 
 __all__ = ["BeliefTrace", "Decisions", "AccuracySweep", "trace_beliefs", "expected_calibration_error", "reliability_bins",
-           "threshold_for_accuracy", "fixation_for_accuracy", "fit_policy_tempering", "CALIBRATION_TAPS"]
+           "threshold_for_accuracy", "fixation_for_accuracy", "fit_tap_tempering", "CALIBRATION_TAPS"]
 
 #: Taps after which the calibration of the identity belief is reported: one tap (the likelihood alone), a few,
-#: and the last tap whose belief `fit_policy_tempering` calibrates by default.
+#: and the last tap whose belief `fit_tap_tempering` calibrates by default.
 CALIBRATION_TAPS = (1, 3, 5)
 
 #: Thresholds `threshold_for_accuracy` chooses from: 0.3..0.99 in 0.005 steps and the 0.999x tail. With
@@ -253,7 +253,8 @@ def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int 
     estimate = np.empty((runs, max_taps), np.intp)
     truth = np.empty((runs, max_taps), np.intp)
     for tap in range(max_taps):
-        log_belief = bayes.update(table[environment.draw(location * n_id + identity, rng)], log_belief)
+        log_belief = bayes.tap_update(table[environment.draw(location * n_id + identity, rng)], log_belief, tap + 1,
+                                      model.tap_tempering)
         where, what = bayes.marginals(log_belief)
         decision = what if n_id > 1 else where
         belief[:, tap] = decision.max(axis=1)
@@ -269,24 +270,37 @@ def trace_beliefs(environment: VirtualEnvironment, policy: Policy, *, runs: int 
                        model.identity_period if n_id > 1 else None)
 
 
-def fit_policy_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: int = CALIBRATION_TAPS[-1],
-                         runs: int = 2000, seed=0, **options) -> float:
-    """The factor on the model's log likelihood that calibrates the beliefs of this policy's runs.
+#: Ranges (log10) `fit_tap_tempering` searches for g_1 and for g_2, g_3, ...
+_LOG10_FIRST_TAP, _LOG10_LATER_TAPS = (-2.0, 2.0), (-2.0, 0.0)
 
-    Temperature scaling (Guo et al. 2017) on the test taps of ``environment``, for the beliefs the
-    perceiver holds after 1 to ``taps`` taps rather than after one: the factor f minimises the Brier
-    score of the decision's confidence (`BeliefTrace.brier_score`) over t = 1..taps of Monte Carlo runs
-    (`trace_beliefs`, the same seed for every f) in which every log likelihood is multiplied by f.
-    f < 1 when a run's taps repeat each other's evidence. (The log loss is ruled by the few runs
-    confidently wrong, and its f leaves the common beliefs underconfident.)
+
+def fit_tap_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: int = CALIBRATION_TAPS[-1],
+                      runs: int = 2000, seed=0, **options) -> tuple[float, ...]:
+    """The tap tempering schedule (g_1, ..., g_taps) that calibrates the beliefs of this policy's runs tap by tap.
+
+    Temperature scaling (Guo et al. 2017) of each tap of a decision in turn: the t-th tap's log
+    likelihood is multiplied by g_t (`perception.bayes.tap_update`), and g_1, then g_2 given g_1, ...
+    minimise the Brier score of the decision's confidence after tap t (belief in the decided class
+    against 1 if it is right, else 0) over Monte Carlo runs of ``environment`` (`trace_beliefs`, the
+    same seed for every candidate). g_t < 1 where a run's t-th tap repeats the evidence of the taps
+    before it (the same depth of the same gap gives nearly the same tap). Taps beyond the last take
+    g_taps. (The log loss is ruled by the few runs confidently wrong, and its factors leave the common
+    beliefs underconfident.) Any schedule the environment's model has is replaced, not built on.
+
+    g_1 is searched over 0.01..100 (it also corrects the one-tap tempering, fitted by log loss on
+    single taps, for the Brier score and the policy's first tap); g_2, g_3, ... over 0.01..1: a later
+    tap is worth at most an independent one. Without that bound, when every held-out run is right
+    after tap t the Brier score falls as g_t grows and the fit runs to the end of its range (g = 100 on
+    the simulated station's 52 held-out taps), which makes one later mistake a certainty.
 
     Parameters
     ----------
     environment : VirtualEnvironment
-        Its model must have a tempering (`LikelihoodModel.temperable`).
+        Taps independent of those the model was fitted on (e.g. out-of-fold training taps), not the
+        test collection whose figures are reported.
     policy : Policy
     taps : int
-        Last tap whose belief counts, >= 1.
+        Taps fitted, >= 1: the length of the schedule.
     runs : int
     seed : int
     **options
@@ -294,20 +308,28 @@ def fit_policy_tempering(environment: VirtualEnvironment, policy: Policy, *, tap
 
     Returns
     -------
-    float > 0; ``environment.model.tempered(f)`` is the calibrated model
+    tuple of float > 0; ``environment.model.with_tap_tempering(schedule)`` is the calibrated model
     """
     from scipy.optimize import minimize_scalar
 
-    if not environment.model.temperable:
-        environment.model.tempered(1.0)  # raises the ModelError naming the kind
+    if int(taps) != taps or taps < 1:
+        raise ValueError(f"taps must be an integer >= 1, got {taps}")
+    schedule: list[float] = []
 
-    def loss(log10_factor: float) -> float:
-        trace = trace_beliefs(environment.tempered(10.0 ** log10_factor), policy, runs=runs, max_taps=taps,
-                              seed=seed, **options)
-        return trace.brier_score(taps)
+    def brier(log10_factor: float, t: int) -> float:
+        trace = trace_beliefs(environment.with_tap_tempering((*schedule, 10.0 ** log10_factor)), policy, runs=runs,
+                              max_taps=t, seed=seed, **options)
+        right = trace.estimate[:, -1] == trace.truth[:, -1]
+        return float(((trace.belief[:, -1] - right) ** 2).mean())
 
-    result = minimize_scalar(loss, bounds=(-2.0, 2.0), method="bounded", options={"xatol": 2e-3})
-    return float(10.0 ** result.x)
+    for t in range(1, int(taps) + 1):
+        bounds = _LOG10_FIRST_TAP if t == 1 else _LOG10_LATER_TAPS
+        result = minimize_scalar(brier, bounds=bounds, args=(t,), method="bounded", options={"xatol": 2e-3})
+        factor = 10.0 ** result.x
+        if t > 1 and brier(0.0, t) <= result.fun:   # the bounded search never evaluates its end: g_t = 1 itself
+            factor = 1.0
+        schedule.append(float(factor))
+    return tuple(schedule)
 
 
 def threshold_for_accuracy(trace: BeliefTrace, target: float, *, tolerance: float = 0.0, thresholds=None):
@@ -362,9 +384,9 @@ class AccuracySweep:
     target, tolerance : float
     best : int or None
         Index of the fixation reaching the target in the fewest mean taps (None: no fixation does).
-    tempering : float
-        Factor on the model's log likelihood at the best fixation, whose threshold, taps and accuracy
-        are those of the tempered model (`fit_policy_tempering`; 1: not refitted).
+    tap_tempering : tuple of float
+        The tap tempering schedule g_1..g_5 fitted at the best fixation, whose threshold, taps and
+        accuracy are those of the model with it (`fit_tap_tempering`; empty: not fitted).
     """
 
     fixations: np.ndarray
@@ -374,7 +396,7 @@ class AccuracySweep:
     target: float
     tolerance: float
     best: int | None
-    tempering: float = 1.0
+    tap_tempering: tuple[float, ...] = ()
 
 
 def _other_seed(seed):
@@ -417,8 +439,8 @@ def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tol
     progress : callable, optional
         Wraps the iterable of fixations (e.g. ``tqdm``).
     temper : bool
-        Refit the tempering at the best fixation (`fit_policy_tempering`: beliefs after 1 to 5 taps) and
-        choose its threshold again on the calibrated beliefs; the model must be `temperable`. (Tempering
+        Fit the tap tempering schedule at the best fixation (`fit_tap_tempering`: beliefs after each of
+        taps 1 to 5) and choose its threshold again on the calibrated beliefs. (Tempering
         relabels the beliefs rather than reorders the runs' decisions, so the fixation is chosen before.)
     confirm_runs : int, optional
         The best fixation's threshold is chosen again on this many fresh runs (another seed): the
@@ -448,19 +470,19 @@ def fixation_for_accuracy(environment: VirtualEnvironment, *, target: float, tol
     thresholds, taps, accuracy = (np.array(column, dtype=np.float64) for column in zip(*rows))
     reached = np.isfinite(taps)
     best = int(np.nanargmin(taps)) if reached.any() else None
-    factor = 1.0
+    schedule = ()
     if temper and best is not None:
-        fitted = fit_policy_tempering(environment, FixationPolicy(int(classes[best])), runs=runs, seed=seed, **options)
-        tempered = row(classes[best], environment=environment.tempered(fitted))
-        if np.isfinite(tempered[1]):  # the target is still reached (else keep the untempered model)
-            factor = fitted
+        fitted = fit_tap_tempering(environment, FixationPolicy(int(classes[best])), runs=runs, seed=seed, **options)
+        tempered = row(classes[best], environment=environment.with_tap_tempering(fitted))
+        if np.isfinite(tempered[1]):  # the target is still reached (else keep the model as it was)
+            schedule = fitted
             thresholds[best], taps[best], accuracy[best] = tempered
     confirm_runs = max(runs, 10000) if confirm_runs is None else int(confirm_runs)
     if confirm_runs > 0 and best is not None:
         # The threshold again at the chosen fixation, on runs that did not choose it (another seed).
-        confirmed = row(classes[best], environment=environment.tempered(factor) if factor != 1.0 else environment,
-                        runs=confirm_runs, seed=_other_seed(seed))
+        chosen = environment.with_tap_tempering(schedule) if schedule else environment
+        confirmed = row(classes[best], environment=chosen, runs=confirm_runs, seed=_other_seed(seed))
         if np.isfinite(confirmed[1]):
             thresholds[best], taps[best], accuracy[best] = confirmed
     return AccuracySweep(model.location_centres[classes], thresholds, taps, accuracy, float(target), float(tolerance),
-                         best, factor)
+                         best, schedule)

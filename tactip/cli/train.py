@@ -22,7 +22,7 @@ The calibrated kinds need at least two taps per class, ideally repeated at the s
 (tactip validate).
 
 --choose-fixation also picks the fixation location, the decision threshold and (calibrated kinds)
-the tempering for 1-5 taps, as the station does on its first run, without looking at the test set:
+the tap tempering g1..g5 for taps 1-5, as the station does on its first run, without looking at the test set:
 the training taps are held out in 4 folds, each scored by a model fitted on the others, and the
 settings are chosen on those out-of-fold scores; fold 0's model is written with them. Then 'tactip validate
 MODEL TEST' gives figures the settings were not chosen on.

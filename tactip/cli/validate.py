@@ -21,8 +21,9 @@ recommended settings (used by the station). --sweep-lateral gives the error when
 lateral placement is within [-SIGMA, SIGMA] mm, relative to the smallest SIGMA (paper 002 Fig. 11).
 With --target-accuracy P, --sweep-fixation instead picks the fixation and threshold whose decisions
 are within --tolerance of the true identity in a fraction P of runs in the fewest mean taps; a
-calibrated model's tempering is then refitted at the best fixation, so that its beliefs after 1 to 5
-taps mean what they say (the taps of one run repeat each other's evidence), and written with them.
+calibrated model then gets a tap tempering g1..g5 fitted at the best fixation (the t-th tap's log
+likelihood times g_t, beyond the 5th times g5), so that its beliefs after each of taps 1 to 5 mean what
+they say (the taps of one run repeat each other's evidence); the factors are printed and written.
 With --scheduler tcp://HOST:PORT a sweep's fixations (or sigmas) run on that Dask cluster, one per
 worker at a time: the same seed gives the same figures as a run here.
 
@@ -327,7 +328,6 @@ def _sweep_fixation(args, model, test, options, tqdm) -> list[dict]:
 
     progress = functools.partial(tqdm, desc="fixations", unit="fixation", disable=args.quiet)
     unit, identity_unit = model.location_unit, model.identity_unit
-    trained = model.tempering if model.temperable else None
     sweep_options = {k: options[k] for k in ("move_threshold", "shift_mode", "map_fn") if k in options}
     if args.target_accuracy is None:
         sweep_options.update(thresholds=options["thresholds"], deadline=options["deadline"])
@@ -347,8 +347,9 @@ def _sweep_fixation(args, model, test, options, tqdm) -> list[dict]:
         return with_label_error(model, [{**row, "fixation": float(f)} for f, r in zip(sweep.fixations, sweep.results)
                                         for row in r.rows()])
     best = sweep.best
-    tempering = "" if trained is None else (f", tempering {trained:.4g} x {sweep.tempering:.3g} for the beliefs "
-                                            f"after 1-5 taps")
+    tempering = "" if not sweep.tap_tempering else (
+        f", tap tempering g1..g{len(sweep.tap_tempering)} " + ", ".join(f"{g:.3g}" for g in sweep.tap_tempering)
+        + " for the beliefs after taps 1, 2, ...")
     print(f"best fixation {fixation:g} {unit} (threshold {threshold:g}: {sweep.accuracy[best]:.3f} within "
           f"{args.tolerance:g} {identity_unit} in {sweep.taps[best]:.1f} taps{tempering}); written to {args.model}")
     if args.plot:
@@ -356,7 +357,7 @@ def _sweep_fixation(args, model, test, options, tqdm) -> list[dict]:
 
         plot_accuracy_sweep(sweep, args.plot, units=unit)
     return [{"fixation": float(f), "threshold": float(t), "mean_taps": float(n), "accuracy_within_tolerance": float(a),
-             "tempering_factor": sweep.tempering if i == sweep.best else 1.0, "tolerance": args.tolerance,
+             "tap_tempering": list(sweep.tap_tempering) if i == sweep.best else [], "tolerance": args.tolerance,
              "target_accuracy": args.target_accuracy}
             for i, (f, t, n, a) in enumerate(zip(sweep.fixations, sweep.thresholds, sweep.taps, sweep.accuracy))]
 
@@ -374,7 +375,9 @@ def _print_sweep(args, model):
         for k, (fixation, threshold, taps, accuracy) in enumerate(zip(sweep.fixations, sweep.thresholds, sweep.taps,
                                                                       sweep.accuracy)):
             shown = "-" if not threshold == threshold else f"{threshold:.4g}"
-            tempered = f"  (tempering x {sweep.tempering:.3g})" if k == sweep.best and sweep.tempering != 1.0 else ""
+            tempered = ""
+            if k == sweep.best and sweep.tap_tempering:
+                tempered = "  (tap tempering " + ", ".join(f"{g:.3g}" for g in sweep.tap_tempering) + ")"
             print(f"{fixation:>10.3f} {shown:>9} {taps:>6.2f} {accuracy:>8.3f}{tempered}")
 
     return report

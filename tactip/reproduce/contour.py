@@ -177,8 +177,8 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
         for tap in range(1, max_taps + 1):
             x, phi, location, angle = truth(p)
             likelihood = table[env.draw(location * n_id + angle, rng)]
-            log_belief = bayes.update(likelihood, log_belief)
-            evidence = bayes.update(likelihood, evidence)
+            log_belief = bayes.tap_update(likelihood, log_belief, tap, model.tap_tempering)  # g_t: none for the
+            evidence = bayes.tap_update(likelihood, evidence, tap, model.tap_tempering)      # papers' histogram
             belief, map_location, map_angle = bayes.decide(log_belief)
             new = ~done & ((belief > threshold) | (tap == max_taps))
             decided[new] = np.stack([map_location, map_angle], axis=1)[new]

@@ -127,7 +127,7 @@ def test_a_missed_target_still_recommends_a_threshold_above_zero_on_calibrated_b
     # The station's first use when no fixation reaches its target: the fall-back sweeps thresholds in
     # (0, 1] only (a station refuses 0) and refits the tempering there, as the target's path does.
     from calibration import choose_fixation
-    from perception import FixationPolicy, VirtualEnvironment, fit_policy_tempering, load_dataset, train_model
+    from perception import FixationPolicy, VirtualEnvironment, fit_tap_tempering, load_dataset, train_model
 
     root, train = files
     model = train_model(train, kind="gaussian", n_locations=6)
@@ -138,6 +138,6 @@ def test_a_missed_target_still_recommends_a_threshold_above_zero_on_calibrated_b
     assert lines and lines[0].startswith("no fixation depth reaches 1")
     assert 0.0 not in sweep.results[0].thresholds and 0.0 < chosen.recommended["decision_threshold"] <= 1.0
     fixation = int(np.argmin(np.abs(model.location_centres - chosen.recommended["fixation_location"])))
-    factor = fit_policy_tempering(VirtualEnvironment(model, test), FixationPolicy(fixation), runs=300, seed=0)
-    assert factor != pytest.approx(1.0, abs=0.01)
-    assert chosen.tempering == pytest.approx(model.tempering * factor) and "tempering" in line
+    schedule = fit_tap_tempering(VirtualEnvironment(model, test), FixationPolicy(fixation), runs=300, seed=0)
+    assert len(schedule) == 5 and schedule[-1] != pytest.approx(1.0, abs=0.01)
+    assert chosen.tap_tempering == schedule and chosen.tempering == model.tempering and "tap tempering" in line

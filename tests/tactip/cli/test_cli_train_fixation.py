@@ -25,6 +25,7 @@ def test_train_chooses_the_fixation_on_its_own_validation_split(tmp_path, capsys
     chosen, _, _ = choose_fixation(fitted, None, environment=environment, target_accuracy=0.9, log=lambda _: None)
     assert model.recommended == chosen.recommended
     assert np.allclose(model.class_means, fitted.class_means) and model.tempering == chosen.tempering
+    assert model.tap_tempering == chosen.tap_tempering and len(model.tap_tempering) == 5
 
 
 def test_fixation_options_need_choose_fixation(tmp_path, capsys):

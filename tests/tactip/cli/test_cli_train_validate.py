@@ -157,14 +157,17 @@ def test_sweep_fixation_for_a_target_accuracy_writes_the_threshold(files, capsys
     model = tmp_path / "g.h5"
     assert main(["train", str(files / "train.h5"), "--out", str(model), "--locations", "6", "--model", "gaussian"]) == 0
     trained = load_model(model).tempering
+    assert load_model(model).tap_tempering == ()
     code = main(["validate", str(model), str(files / "test.h5"), "--sweep-fixation", "--target-accuracy", "0.9",
                  "--tolerance", "1", "--runs", "500", "--quiet"])
     assert code == 0
     out = capsys.readouterr().out
     recommended = load_model(model).recommended
-    # the tempering refitted for the beliefs after 1-5 taps is the one written
-    factor = float(out.split(f"tempering {trained:.4g} x ")[1].split()[0])
-    assert load_model(model).tempering == pytest.approx(trained * factor, rel=1e-2)  # printed to 3 figures
+    # the tap tempering fitted for the beliefs after taps 1-5 is the one written (the one-tap tempering kept)
+    printed = [float(g) for g in out.split("tap tempering g1..g5 ")[1].split(" for the beliefs")[0].split(", ")]
+    written = load_model(model)
+    assert written.tempering == trained and len(written.tap_tempering) == 5
+    assert written.tap_tempering == pytest.approx(printed, rel=1e-2)  # printed to 3 figures
     assert f"best fixation {recommended['fixation_location']:g} mm (threshold {recommended['decision_threshold']:g}" \
         in out
     assert recommended["fixation_location"] > 2.5  # the width is legible deep only (legible_from=0.5)
