@@ -39,41 +39,28 @@ the mass. Limit: a small bright speck detached from a tip but inside its window 
 than that bound (up to 0.5 px in tests where blob detection would have kept them apart); a speck
 touching a tip fools blob detection as much.
 
-Rest. The rest positions are the windows' own fixed points near the given ones (a few passes of
-mean shift), and what still pulls a window at rest is the pin's rest offset, taken off its first
-window later: the rest frame given again places every pin. A step within the search's settling
-bound is camera noise, not velocity. Near its rest position a window at its guess is judged by
-its centroid less that offset. On a pad back at rest (half the pins within 0.1 spacing of rest,
-hardly any between that and the gate but a faint tip's jitter among still neighbours), pins far
-from rest, drifted by more than a few tenths of a px, and missing ones are looked for at their
-rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on their
-neighbours' tips, nor a faint rim tip's window on the veil beside it.
-
 Search. A lost pin (or one whose centroid is implausible) is looked for in a window at its
 predicted position (its rest position moved by the median displacement of its tracked
 neighbours), re-centred once; it is found when that move is at most 0.1 spacings, its tip is like
 at rest, it lies within the gate (below half the spacing) of the prediction and no neighbour sits
 on the same tip (`Refiner._one_pin_per_tip`).
 
-Recovery (`Refiner.recover`, at a rate `PinTracker` bounds). The frame's blobs are detected
-(`pins.detect`): an implausible pin takes the blob it landed on, one blob per pin, inside a gate
-(`match_to_blobs`; no blob: lost), and blobs no pin claimed are assigned to lost pins one-to-one
-(Hungarian method, `scipy.optimize.linear_sum_assignment`) within the same gate around each lost
-pin's predicted position (its rest position moved by the median displacement of its tracked
-neighbours). Gates below half the pin spacing and one-to-one assignments keep identities.
+The follow passes (`pins._follow`), the still pad and rest (`pins._rest`, with the noise estimates of
+`pins._noise`) and recovery from blobs (`pins._recover`) live in their own modules; `Refiner`
+inherits their steps.
 """
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
-from .detect import DetectionParams, _detect
+from .detect import DetectionParams
 from .disc import SensorDisc
+from ._follow import _GUESS_FRACTION, _Following
+from ._recover import _Recovery, match_to_blobs
+from ._rest import _AtRest
 from ._window import WindowCentroids, _squared_norm
-from .errors import ShapeError
 
 __all__ = ["match_to_blobs", "WindowCentroids", "Refiner"]
 
@@ -101,103 +88,14 @@ _WINDOW_REACH = 0.55
 # and two positions nearer than this fraction of the spacing are one tip (tips of neighbours
 # pushed together stay more than half a spacing apart).
 _SEARCH_SETTLED_FRACTION = 0.1
-# The pad is back at rest when this share of the placed pins lie within this fraction of the
-# spacing of their rest positions.
-_STILL_SHARE = 0.5
-_STILL_FRACTION = 0.1
-# ... and at most this share of them lie between that and the gate (a moving pad's field of
-# displacements is continuous: its transition from still to moved pins holds many).
-_BETWEEN_SHARE = 0.02
-# A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
-# this fraction of the spacing (a few tenths of a px: the window was centred on the tip as LK
-# centres it), and it ended within the second fraction of the spacing of its guess (farther, LK
-# with its pyramid decides: the identity limit is LK's).
-_GUESS_FRACTION = 0.03
-_FOLLOW_FRACTION = 0.4
-_FOLLOW_PASSES = 4
 # Passes of mean shift that take the given rest positions to the windows' fixed points.
 _REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
-# Weight of each still step in a window's learnt scatter (`Refiner.observe_still`), and how many
-# times that scatter a still pin's window may lie from where its still neighbours place it.
-_JITTER_RATE = 0.2
-_JITTER_FIRST = 3
-_JITTER_BOUND = 3.0
-# A pin's window at rest is calm within this many times its learnt scatter of where its still
-# neighbours place it (the scatter of its steps misses the constant part: its rest offset's noise).
-_CALM_BOUND = 5.0
-_FLOOR_EVERY = 8
-# Draws of noise that measure each rest window's scatter before any is learnt.
-_NOISE_DRAWS = 4
 
 
-def noise_sigma(image: np.ndarray) -> float:
-    """Standard deviation of a grey image's pixel noise, grey levels (Immerkaer's Laplacian-difference
-    estimator made robust: the median absolute response over 6 sigma, so that edges and tips, a
-    minority of pixels, do not count; saturated or flat regions, which show none, are left out)."""
-    kernel = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
-    response = np.abs(cv2.filter2D(image.astype(np.float32), -1, kernel))
-    # A saturated surround (and its clipped fringe) or a black margin shows no noise, or less.
-    clipped = cv2.dilate(((image <= 2) | (image >= 253)).astype(np.uint8), np.ones((5, 5), np.uint8))
-    response = response[1:-1, 1:-1][clipped[1:-1, 1:-1] == 0]
-    return float(np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
-
-
-def _learn_mean_square(mean_sq: np.ndarray, seen: np.ndarray, index, value: np.ndarray, candidate: np.ndarray) -> None:
-    """Update running mean squares in place: ``mean_sq[index]`` (px^2) with ``value`` where ``candidate``.
-
-    The first `_JITTER_FIRST` values of each entry are averaged; later ones count, with weight
-    `_JITTER_RATE`, only within `_JITTER_BOUND` times the mean so far (a pin that begins to move with a
-    contact is no noise). ``seen[index]`` counts the values learnt; NaN values learn nothing.
-    """
-    so_far, count = mean_sq[index], seen[index]
-    first = count < _JITTER_FIRST
-    learn = candidate & (first | (value <= _JITTER_BOUND ** 2 * so_far))
-    rate = np.where(first, 1.0 / (count + 1.0), _JITTER_RATE)
-    mean_sq[index] = so_far + np.where(learn, rate * (value - so_far), 0.0)
-    seen[index] = count + learn
-
-
-def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
-    """One-to-one nearest blob for each point, within a gate.
-
-    Each point takes its nearest blob if that blob lies within `gate_px`; when several points
-    take the same blob, the nearest point keeps it and the others get none.
-
-    Parameters
-    ----------
-    points : (N, 2) ndarray
-        (x, y) px; NaN rows get no blob.
-    blobs : (M, 2) ndarray
-        Detected blob centres (x, y), px.
-    gate_px : float
-        Largest accepted distance, px.
-
-    Returns
-    -------
-    index : (N,) ndarray of int
-        Index into `blobs` for each point, -1 where it has none.
-    """
-    points = _as_points(points, "points")
-    blobs = _as_points(blobs, "blobs")
-    index = np.full(len(points), -1, dtype=np.intp)
-    live = np.flatnonzero(np.isfinite(points).all(axis=1))
-    if live.size == 0 or len(blobs) == 0:
-        return index
-    distance, nearest = cKDTree(blobs).query(points[live], k=1, distance_upper_bound=gate_px)
-    found = np.isfinite(distance)
-    live, distance, nearest = live[found], distance[found], nearest[found]
-    # Nearest point first, then keep each blob's first claimant.
-    order = np.argsort(distance, kind="stable")
-    _, first = np.unique(nearest[order], return_index=True)
-    winners = order[first]
-    index[live[winners]] = nearest[winners]
-    return index
-
-
-class Refiner:
+class Refiner(_Following, _AtRest, _Recovery):
     """Moves LK estimates onto their tips' windowed centroids; detects blobs only when that fails.
 
     Parameters
@@ -311,21 +209,6 @@ class Refiner:
                                    _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
         self._area_at_most = _AREA_RATIO[1] * area
 
-    def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, positions: np.ndarray) -> np.ndarray:
-        """Each rest window's mean square displacement, px^2 (N,), under `_NOISE_DRAWS` draws of Gaussian
-        noise of the rest crop's own level (`noise_sigma`) added to it: how far one frame's noise
-        moves the window (a faint tip in glare: tenths of a px; a crisp one: hundredths)."""
-        sigma = noise_sigma(rest_crop)
-        if not sigma > 0:
-            return np.zeros(len(positions))
-        points, radius = positions - self.origin, self.window_radius(positions)
-        base = self.windows.measure(rest_crop, points, radius)[0]
-        rng = np.random.default_rng(0)  # a fixed draw: the same rest frame, the same bound
-        total = np.zeros(len(positions))
-        for _ in range(_NOISE_DRAWS):
-            noisy = np.clip(rest_crop + rng.normal(0.0, sigma, rest_crop.shape), 0, 255).astype(np.uint8)
-            total += _squared_norm(self.windows.measure(noisy, points, radius)[0] - base)
-        return np.where(np.isfinite(total), total / _NOISE_DRAWS, 0.0)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
@@ -345,6 +228,7 @@ class Refiner:
         nearest = np.sqrt(np.minimum.reduce(dx, axis=0))
         nearest *= _WINDOW_REACH
         return np.minimum(nearest, self._radius_cap, out=nearest)
+
 
     def __call__(self, grey: np.ndarray, crop: np.ndarray, tracked: np.ndarray,
                  last_seen: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -377,117 +261,6 @@ class Refiner:
             return positions, False
         return self.recover(grey, tracked, positions, last_seen, crop), True
 
-    def follow(self, crop: np.ndarray, guess: np.ndarray, last_seen: np.ndarray,
-               search: np.ndarray | None = None) -> np.ndarray:
-        """Pins followed from their guesses by windowed centroids alone; lost pins searched for.
-
-        Two passes of windows (steps of mean shift), all pins in one array per pass. First pass:
-        a window per pin with a guess (its constant-velocity guess) and per lost pin to search for
-        (at its prediction, `_predict`). Second pass, re-centred on the first centroid, for the
-        pins whose first centroid moved. A pin with a guess is placed when a pass moved its window
-        by at most `_GUESS_FRACTION` of the spacing (a few tenths of a px: the window was centred
-        on the tip as LK would centre it), its tip is like at rest, and it ended within
-        `_FOLLOW_FRACTION` of the spacing of its guess; the others need LK (`refine` then checks
-        them). A lost pin is found as in `refine`'s search: its second window moved by at most
-        `_SEARCH_SETTLED_FRACTION` of the spacing and it lies within `gate_px` of its prediction.
-        No two pins take one tip (`_one_pin_per_tip`).
-
-        Parameters
-        ----------
-        crop : (h, w) ndarray of uint8
-            The frame's crop at `origin`, bright pins.
-        guess : (N, 2) ndarray
-            Guessed positions (x, y), px in the frame; NaN for lost pins.
-        last_seen : (N, 2) ndarray
-            Each pin's last known position, px.
-        search : (N,) ndarray of bool, optional
-            Lost pins to search for (default: all of them).
-
-        Returns
-        -------
-        positions : (N, 2) ndarray of float64
-            Pins placed or found, px; NaN elsewhere (a pin with a guess and NaN here needs LK).
-        filled : (N, 2) ndarray of float64
-            `guess` with lost pins at their predictions, px (for `refine`).
-        """
-        missing = np.isnan(guess[:, 0])
-        lost = missing.nonzero()[0]
-        if lost.size == 0:
-            filled, which, n = guess, self._every, len(guess)
-        else:
-            filled = guess.copy()
-            filled[lost] = self._predict(guess, lost, last_seen)
-            look = lost if search is None else lost[search[lost]]
-            live = (~missing).nonzero()[0]
-            which, n = np.concatenate([live, look]), live.size
-        radius = self.window_radius(filled)[which]
-        start = filled[which]
-        first, measures = self.windows.measure(crop, start - self.origin, radius)
-        first += self.origin
-        # A window at the guess is judged by its centroid less the pin's own offset at rest (the
-        # window's pull by what lies around the tip), so a still tip is placed where it rested.
-        placed_at = first - self._pull(start, which)
-        moved = _squared_norm(placed_at - start)
-        like = self._like_at_rest(measures, which)
-        fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
-        done = (moved <= fine) & like
-        done[n:] = False  # a lost pin's prediction is no guess: two passes
-        positions = np.full(guess.shape, np.nan)
-        positions[which[done]] = placed_at[done]
-        # Second and third passes: pins that moved but not far re-centred on their last centroid;
-        # a pin with a guess that found no tip near it searched for from its prediction from the
-        # pins just placed (its neighbours' guesses held: a lone pin that vanished, or that moved
-        # unlike its guess near a contact); lost pins re-centred on theirs.
-        again = ~done & np.isfinite(first[:, 0])
-        again[:n] &= moved[:n] <= reach
-        far = (~done[:n] & ~again[:n]).nonzero()[0]
-        chain = np.concatenate([again.nonzero()[0], far])
-        points = placed_at[chain]
-        if far.size:
-            start[far] = points[-far.size:] = self._predict(positions, which[far], last_seen)
-            # Their neighbours' guesses were off too: windows bounded by where the pins now are.
-            now = np.where(np.isnan(positions), filled, positions)
-            now[which[far]] = start[far]
-            radius = self.window_radius(now)[which]
-        searched = chain >= n
-        searched[chain.size - far.size:] = True
-        fresh = np.zeros(chain.size, dtype=bool)
-        fresh[chain.size - far.size:] = True
-        placed = [done.nonzero()[0]]
-        for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
-            if chain.size == 0:
-                break
-            pins = which[chain]
-            # Re-centred windows follow their centroids as they are: less the rest offset they would
-            # hold a pin whose tip leaves slowly near its rest position (a still pin drifted onto the
-            # veil is re-measured at rest by `snap_to_rest`).
-            centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
-            centres += self.origin
-            step, offset = centres - points, centres - start[chain]
-            moved = _squared_norm(step)
-            error = _squared_norm(offset)
-            # A search settles within its bound, inside the gate around the prediction; a pin
-            # followed from its guess settles to a few tenths of a px, near its guess.
-            like = self._like_at_rest(measures, pins)
-            settled = moved <= self._settled_px ** 2
-            # In the last pass a pin followed from its guess may settle as loosely as a searched one
-            # (a faint tip's centroid jitters in camera noise by more than a few tenths of a px), but
-            # no farther from its guess than that: a window still drifting is no tip of its own.
-            ok = like & np.where(searched, settled & (error <= self.gate_px ** 2),
-                                 ((moved <= fine) & (error <= reach)) | (last & settled & (error <= self._settled_px ** 2)))
-            positions[pins[ok]] = centres[ok]
-            placed.append(chain[ok])
-            # Go on while the window holds a tip like the pin's (or a search has just started).
-            going = ~ok & np.isfinite(centres[:, 0]) & (searched | (error <= reach)) & (like | fresh)
-            chain, points, searched = chain[going], centres[going], searched[going]
-            fresh = np.zeros(chain.size, dtype=bool)
-        # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
-        # the others can have reached a neighbour's tip.
-        placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]
-        if placed.size:
-            offset = positions[which[placed]] - start[placed]
-            self._one_pin_per_tip(positions, which[placed], _squared_norm(offset))
-        return positions, filled
 
     def refine(self, crop: np.ndarray, tracked: np.ndarray, last_seen: np.ndarray,
                search: np.ndarray | None = None, settled: np.ndarray | None = None, *,
@@ -592,6 +365,7 @@ class Refiner:
         self._one_pin_per_tip(positions, retry, error)
         return positions
 
+
     def _pull(self, points: np.ndarray, which: np.ndarray) -> np.ndarray:
         """What pulls windows at finite `points` (L, 2), px, of pins `which` off their tips: (L, 2), px.
 
@@ -603,113 +377,6 @@ class Refiner:
         weight = np.clip((self.spacing_px - distance) / (self.spacing_px - self.gate_px), 0.0, 1.0)
         return self._rest_offset[which] * np.where(np.isnan(weight), 0.0, weight)[:, None]
 
-    def still(self, steps: np.ndarray) -> np.ndarray:
-        """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
-        return _squared_norm(steps) <= self._settled_px ** 2
-
-    def observe_still(self, steps: np.ndarray) -> np.ndarray:
-        """Learn each window's scatter from one frame's (N, 2) steps, px; returns which steps were still (N,) bool.
-
-        A step within the settling bound (`still`) is the difference of two noisy centroids: half its
-        square updates the pin's running mean square scatter (the mean of its first `_JITTER_FIRST`,
-        then weight `_JITTER_RATE` for steps within `_JITTER_BOUND` times the scatter so far).
-        """
-        half = _squared_norm(steps)
-        still = half <= self._settled_px ** 2  # NaN (lost) compares False
-        half *= 0.5
-        # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
-        _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
-        seen, jitter = self._jitter_seen, self._jitter_sq
-        self._observed += 1
-        if self._observed % _FLOOR_EVERY == 1:
-            learnt = jitter[seen >= _JITTER_FIRST]
-            self._jitter_floor = float(np.median(learnt)) if learnt.size else 0.0
-        return still
-
-    def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
-        """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
-
-        When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing
-        of their rest positions and hardly any (`_BETWEEN_SHARE`) lie between that and `gate_px`
-        (the pad is back at rest: a moving pad's field of displacements is continuous; a pin within
-        twice that fraction whose neighbours are still is a faint tip's jitter), a pin farther than
-        `gate_px` from its rest position (a fast return from a slide carried its stale guess onto a
-        neighbour's tip), drifted by more than a few tenths of a px, or missing is looked for in a
-        window at its rest position (its centroid less the rest offset). A pin far from rest or
-        missing is placed there when the window settles within the search's bound on a tip like its
-        own at rest. A *calm* pin (its still neighbours' median displacement within a few tenths of a
-        px, and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its
-        steps, `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip shown by its contrast. A pin placed
-        near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
-        the check costs a few vector operations per frame.
-
-        Parameters
-        ----------
-        crop : (h, w) ndarray of uint8
-            The frame's crop at `origin`, bright pins.
-        positions : (N, 2) ndarray
-            Positions so far, px; NaN where missing.
-        search : (N,) ndarray of bool
-            Missing pins to look for (retired ones take turns).
-
-        Returns
-        -------
-        positions : (N, 2) ndarray of float64
-            `positions`, or a copy with the pins found at their rest positions, px.
-        """
-        distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
-        far = distance > self.gate_px ** 2
-        # Pins that drifted from rest by more than a window's settling in noise are looked at again.
-        drifted = distance > self._guess_px ** 2
-        if not (drifted.any() or (np.isnan(distance) & search).any()):
-            return positions
-        still = distance <= (_STILL_FRACTION * self.spacing_px) ** 2
-        placed = np.count_nonzero(np.isfinite(distance))
-        # A moving pad's field of displacements is continuous: between its still pins and those
-        # moved farther than the gate lie pins moved by less. Pins put on wrong tips are off by
-        # a whole spacing, with none in between.
-        # A faint tip's window jitters in noise by up to a fifth of the spacing: a pin within that of
-        # rest whose neighbours are still is such jitter, not motion.
-        between = np.flatnonzero(~still & ~far & np.isfinite(distance))
-        if between.size and np.count_nonzero(still) >= _STILL_SHARE * placed:
-            around = _squared_norm(self.neighbour_median(positions - self.rest_positions, between))
-            jitter = (around <= (_STILL_FRACTION * self.spacing_px) ** 2) & (
-                distance[between] <= (2.0 * _STILL_FRACTION * self.spacing_px) ** 2)
-            between = between[~jitter]
-        if np.count_nonzero(still) < _STILL_SHARE * placed or between.size > _BETWEEN_SHARE * placed:
-            return positions  # the pad is not at rest
-        look = np.flatnonzero(drifted | (np.isnan(distance) & search))
-        rest = self.rest_positions[look]
-        centres, measures = self.windows.measure(crop, rest - self.origin, self._rest_radius[look])
-        centres += self.origin - self._rest_offset[look]
-        # Where its neighbours say the pin is: its rest position moved by their median displacement.
-        # When they lie within a few tenths of a px of rest, the membrane there is at rest (it is
-        # continuous: no pin moves by a px alone), and a window that settles within a few times its
-        # own scatter in noise (`observe_still`; up to twice the search's bound) shows the pin there.
-        # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
-        shift = self.neighbour_median(positions - self.rest_positions, look)
-        quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
-        residual = _squared_norm(centres - rest - shift)
-        scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
-                             np.maximum(self._noise_scatter_sq[look], self._jitter_floor))
-        calm = quiet & (residual <= _CALM_BOUND ** 2 * scatter)
-        bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
-        # A calm pin's window need only show a tip (its contrast): its area and compactness near the
-        # rim's veil swing with the noise of its top pixels.
-        like = np.where(calm, measures[1] >= self._at_least[1, look], self._like_at_rest(measures, look))
-        found = (_squared_norm(centres - rest) <= bound ** 2) & like
-        # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
-        found &= calm | ~(distance[look] <= self.gate_px ** 2)
-        # The window's own scatter about where its still neighbours place the pin, learnt from the
-        # windows that showed it here, after the test (a window never widens its own bound): a faint
-        # tip in the veil scatters by tenths of a px, and its steps, taken with its neighbours once
-        # it is placed where they say, do not show that.
-        _learn_mean_square(self._rest_scatter_sq, self._rest_scatter_seen, look, residual, quiet & found)
-        if not found.any():
-            return positions
-        positions = positions.copy()
-        positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
-        return positions
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.
@@ -727,6 +394,7 @@ class Refiner:
             yields = (near & (rank[neighbours] <= error[:, None])).any(axis=1)
             positions[found[yields]] = np.nan
 
+
     def _plausible(self, centres: np.ndarray, estimates: np.ndarray, measures: np.ndarray,
                    which: np.ndarray | slice) -> np.ndarray:
         """Whether windowed centroids of pins `which` are plausible: near their estimates, tips like at rest."""
@@ -734,97 +402,19 @@ class Refiner:
         # NaN compares False: an empty window is not plausible.
         return (_squared_norm(step) <= self._max_shift_px ** 2) & self._like_at_rest(measures, which)
 
+
     def _like_at_rest(self, measures: np.ndarray, which: np.ndarray | slice) -> np.ndarray:
         """Whether tips' (area, contrast, compactness), stacked (3, L), are like those of pins `which` at rest."""
         like = np.logical_and.reduce(measures >= self._at_least[:, which], axis=0)
         like &= measures[0] <= self._area_at_most[which]
         return like
 
-    def recover(self, grey: np.ndarray, tracked: np.ndarray, refined: np.ndarray,
-                last_seen: np.ndarray, crop: np.ndarray | None = None, *,
-                around: np.ndarray | None = None) -> np.ndarray:
-        """Detected blobs for pins without a position; leftover blobs to lost pins (a blob detection).
-
-        Parameters
-        ----------
-        grey : (H, W) ndarray of uint8
-            The frame.
-        tracked : (N, 2) ndarray
-            LK estimates, px; NaN where LK lost the pin.
-        refined : (N, 2) ndarray
-            Positions so far (refined or found), px; NaN where missing.
-        last_seen : (N, 2) ndarray
-            Each pin's last known position, px.
-        crop : (h, w) ndarray of uint8, optional
-            The frame's crop at `origin`, bright pins: when given, a pin keeps its blob only if the
-            blob's window holds a tip like the pin's at rest, and takes its windowed centroid.
-        around : (N,) ndarray of bool, optional
-            Missing pins around which blobs are detected (default: all of them); any missing pin
-            may take a blob detected there.
-
-        Returns
-        -------
-        positions : (N, 2) ndarray of float64
-            `refined` with blobs for missing pins (an LK estimate's own blob, else one assigned
-            one-to-one within the gate around the pin's prediction), px; NaN where still lost.
-        """
-        # Only blobs near the missing pins matter: at their LK estimates or their predictions.
-        missing = np.isnan(refined[:, 0])
-        near = np.flatnonzero(missing if around is None else missing & around)
-        blobs = self._detect_near(grey, np.concatenate([tracked[near], self._predict(refined, near, last_seen)]))
-        gate = self.gate_px
-        # Placed pins claim their blobs too, so that no other pin takes them.
-        claim = match_to_blobs(np.where(np.isfinite(refined), refined, tracked), blobs, gate_px=gate)
-        positions = refined.copy()
-        has_blob = claim >= 0
-        take = has_blob & np.isnan(refined[:, 0])
-        positions[take] = blobs[claim[take]]
-        lost = np.flatnonzero(np.isnan(positions[:, 0]))
-        free = np.ones(len(blobs), dtype=bool)
-        free[claim[has_blob]] = False
-        if lost.size and free.any():
-            predicted = self._predict(positions, lost, last_seen)
-            free_index = np.flatnonzero(free)
-            pins, chosen = _assign(predicted, blobs[free_index], gate)
-            positions[lost[pins]] = blobs[free_index[chosen]]
-        if crop is not None:
-            # A blob is a pin's only when its window holds a tip like the pin's own at rest (not LED
-            # glare or a speck), centred on it: the pin then takes the windowed centroid.
-            new = np.flatnonzero(np.isnan(refined[:, 0]) & np.isfinite(positions[:, 0]))
-            if new.size:
-                radius = self.window_radius(np.where(np.isnan(positions), last_seen, positions))[new]
-                centres, measures = self.windows.measure(crop, positions[new] - self.origin, radius)
-                centres += self.origin
-                step = centres - positions[new]
-                keep = (_squared_norm(step) <= self._settled_px ** 2) & self._like_at_rest(measures, new)
-                positions[new] = np.where(keep[:, None], centres, np.nan)
-        return positions
-
-    def _detect_near(self, grey: np.ndarray, points: np.ndarray) -> np.ndarray:
-        """Blob centres (M, 2), px, detected in the part of the disc around `points` (the missing pins).
-
-        The box around them reaches a spacing and a gate beyond (the blobs of their placed neighbours,
-        which claim theirs) and a threshold block beyond that (the neighbourhood means); the image
-        outside the box counts as outside the disc, as the surround does. The whole disc when the
-        box covers most of it.
-        """
-        disc = self.disc
-        points = points[np.isfinite(points[:, 0])]
-        if len(points) == 0:
-            return np.empty((0, 2))
-        reach = self.spacing_px + self.gate_px + self.detection.block_size_px
-        low = np.maximum(np.floor(points.min(axis=0) - reach).astype(int), 0)
-        high = np.minimum(np.ceil(points.max(axis=0) + reach).astype(int) + 1, grey.shape[::-1])
-        if np.prod(high - low) > 0.5 * np.pi * disc.radius_px ** 2:
-            return _detect(grey, disc, self.detection).centres
-        (x0, y0), (x1, y1) = low, high
-        part = SensorDisc(disc.cx - x0, disc.cy - y0, disc.radius_px)
-        return _detect(grey[y0:y1, x0:x1], part, self.detection).centres + (x0, y0)
 
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
         """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
         shift = self.neighbour_median(positions - self.rest_positions, which)
         return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
+
 
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.
@@ -840,25 +430,3 @@ class Refiner:
         rows = np.arange(len(index))
         return 0.5 * (near[rows, (count - 1) // 2] + near[rows, count // 2])
 
-
-def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
-    """One-to-one assignment of candidates to predictions inside a gate (Hungarian method)."""
-    cost = np.linalg.norm(predicted[:, None, :] - candidates[None, :, :], axis=2)
-    inside = cost <= gate
-    rows = np.flatnonzero(inside.any(axis=1))
-    cols = np.flatnonzero(inside.any(axis=0))
-    if rows.size == 0:
-        return rows, cols
-    sub = np.where(inside[np.ix_(rows, cols)], cost[np.ix_(rows, cols)], 1e6)
-    r, c = linear_sum_assignment(sub)
-    accepted = sub[r, c] <= gate
-    return rows[r[accepted]], cols[c[accepted]]
-
-
-def _as_points(points: np.ndarray, name: str) -> np.ndarray:
-    array = np.asarray(points, dtype=np.float64)
-    if array.size == 0:
-        return array.reshape(0, 2)
-    if array.ndim != 2 or array.shape[1] != 2:
-        raise ShapeError(f"{name} must have shape (N, 2), got {array.shape}")
-    return array

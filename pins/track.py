@@ -53,7 +53,8 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ._refine import Refiner, _as_points, match_to_blobs
+from ._recover import _as_points, match_to_blobs
+from ._refine import Refiner
 from .detect import DetectionParams, _detect
 from .disc import SensorDisc, as_grey, find_sensor_disc
 from .errors import PinsError, ShapeError

@@ -363,7 +363,7 @@ def test_blob_detection_runs_at_most_once_in_detect_every_frames():
 def test_blob_detection_looks_only_around_the_missing_pins_that_are_not_retired(monkeypatch):
     # Retired pins (a rim sector out of view) are searched for in turns; detection, when another
     # pin goes missing, covers the part of the disc around that pin only, not the retired ones too.
-    import pins._refine as refine_module
+    import pins._recover as recover_module
 
     s = sensor(331)
     rest = s.render()
@@ -375,8 +375,8 @@ def test_blob_detection_looks_only_around_the_missing_pins_that_are_not_retired(
     identity = _identity(tracker.start(rest.image), rest.centres)
     to_truth = np.argsort(identity)  # tracked index of each true pin
     sizes = []
-    real_detect = refine_module._detect
-    monkeypatch.setattr(refine_module, "_detect", lambda grey, *a, **k: sizes.append(grey.size) or real_detect(grey, *a, **k))
+    real_detect = recover_module._detect
+    monkeypatch.setattr(recover_module, "_detect", lambda grey, *a, **k: sizes.append(grey.size) or real_detect(grey, *a, **k))
     for _ in range(4):  # the sector's pins lost for longer than retire_after: retired
         tracker.update(s.render(hidden=sector).image)
     assert tracker.retired[to_truth[sector]].all()

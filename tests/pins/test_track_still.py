@@ -98,7 +98,7 @@ def test_a_still_pad_with_shimmer_keeps_its_pins_on_reflections(seed):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_still_pad_hardly_loses_a_faint_rim_pin_from_the_first_frame(seed):
     """Before any window's scatter is learnt, its calm test uses what the rest frame's own noise does
-    to it (`pins._refine.noise_sigma`, windows measured again under such noise): over 10 still frames
+    to it (`pins._noise.noise_sigma`, windows measured again under such noise): over 10 still frames
     at most 3 visible pin-frames are lost (4, 6 and 0 when the bound started at nothing; outcome 1
     asks for none: faint veil tips still fail their window's plausibility now and then)."""
     s, rest, drawn, lost, tracker = _still_run(seed)
@@ -108,7 +108,7 @@ def test_a_still_pad_hardly_loses_a_faint_rim_pin_from_the_first_frame(seed):
 @pytest.mark.parametrize("sigma", [0.0, 2.0, 5.0])
 def test_noise_sigma_is_measured_through_tips_and_a_saturated_surround(sigma):
     """A frame with tips, edges and a saturated surround: the pixel noise within 15 % (0 without noise)."""
-    from pins._refine import noise_sigma
+    from pins._noise import noise_sigma
 
     s = SyntheticTacTip.from_preset("radial-led-120", seed=4, noise_sigma=sigma)
     image = s.render().image

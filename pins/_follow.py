@@ -1,0 +1,139 @@
+"""Pins followed from their constant-velocity guesses by windowed centroids alone, for
+`pins._refine.Refiner` (paper 002, III-A.3).
+
+Following: windows at the constant-velocity guesses, re-centred once; a pin whose window moved by
+at most 0.01 spacings (0.1 px at least) and ended within 0.25 spacings of its guess needs no LK.
+
+`_Following` holds that pass; `pins._refine.Refiner` inherits it and sets the state it reads.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._window import _squared_norm
+
+# A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
+# this fraction of the spacing (a few tenths of a px: the window was centred on the tip as LK
+# centres it), and it ended within the second fraction of the spacing of its guess (farther, LK
+# with its pyramid decides: the identity limit is LK's).
+_GUESS_FRACTION = 0.03
+_FOLLOW_FRACTION = 0.4
+_FOLLOW_PASSES = 4
+
+
+class _Following:
+    """The follow passes of `pins._refine.Refiner` (windows at the guesses, no LK where they settle)."""
+
+    def follow(self, crop: np.ndarray, guess: np.ndarray, last_seen: np.ndarray,
+               search: np.ndarray | None = None) -> np.ndarray:
+        """Pins followed from their guesses by windowed centroids alone; lost pins searched for.
+
+        Two passes of windows (steps of mean shift), all pins in one array per pass. First pass:
+        a window per pin with a guess (its constant-velocity guess) and per lost pin to search for
+        (at its prediction, `_predict`). Second pass, re-centred on the first centroid, for the
+        pins whose first centroid moved. A pin with a guess is placed when a pass moved its window
+        by at most `_GUESS_FRACTION` of the spacing (a few tenths of a px: the window was centred
+        on the tip as LK would centre it), its tip is like at rest, and it ended within
+        `_FOLLOW_FRACTION` of the spacing of its guess; the others need LK (`refine` then checks
+        them). A lost pin is found as in `refine`'s search: its second window moved by at most
+        `_SEARCH_SETTLED_FRACTION` of the spacing and it lies within `gate_px` of its prediction.
+        No two pins take one tip (`_one_pin_per_tip`).
+
+        Parameters
+        ----------
+        crop : (h, w) ndarray of uint8
+            The frame's crop at `origin`, bright pins.
+        guess : (N, 2) ndarray
+            Guessed positions (x, y), px in the frame; NaN for lost pins.
+        last_seen : (N, 2) ndarray
+            Each pin's last known position, px.
+        search : (N,) ndarray of bool, optional
+            Lost pins to search for (default: all of them).
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            Pins placed or found, px; NaN elsewhere (a pin with a guess and NaN here needs LK).
+        filled : (N, 2) ndarray of float64
+            `guess` with lost pins at their predictions, px (for `refine`).
+        """
+        missing = np.isnan(guess[:, 0])
+        lost = missing.nonzero()[0]
+        if lost.size == 0:
+            filled, which, n = guess, self._every, len(guess)
+        else:
+            filled = guess.copy()
+            filled[lost] = self._predict(guess, lost, last_seen)
+            look = lost if search is None else lost[search[lost]]
+            live = (~missing).nonzero()[0]
+            which, n = np.concatenate([live, look]), live.size
+        radius = self.window_radius(filled)[which]
+        start = filled[which]
+        first, measures = self.windows.measure(crop, start - self.origin, radius)
+        first += self.origin
+        # A window at the guess is judged by its centroid less the pin's own offset at rest (the
+        # window's pull by what lies around the tip), so a still tip is placed where it rested.
+        placed_at = first - self._pull(start, which)
+        moved = _squared_norm(placed_at - start)
+        like = self._like_at_rest(measures, which)
+        fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
+        done = (moved <= fine) & like
+        done[n:] = False  # a lost pin's prediction is no guess: two passes
+        positions = np.full(guess.shape, np.nan)
+        positions[which[done]] = placed_at[done]
+        # Second and third passes: pins that moved but not far re-centred on their last centroid;
+        # a pin with a guess that found no tip near it searched for from its prediction from the
+        # pins just placed (its neighbours' guesses held: a lone pin that vanished, or that moved
+        # unlike its guess near a contact); lost pins re-centred on theirs.
+        again = ~done & np.isfinite(first[:, 0])
+        again[:n] &= moved[:n] <= reach
+        far = (~done[:n] & ~again[:n]).nonzero()[0]
+        chain = np.concatenate([again.nonzero()[0], far])
+        points = placed_at[chain]
+        if far.size:
+            start[far] = points[-far.size:] = self._predict(positions, which[far], last_seen)
+            # Their neighbours' guesses were off too: windows bounded by where the pins now are.
+            now = np.where(np.isnan(positions), filled, positions)
+            now[which[far]] = start[far]
+            radius = self.window_radius(now)[which]
+        searched = chain >= n
+        searched[chain.size - far.size:] = True
+        fresh = np.zeros(chain.size, dtype=bool)
+        fresh[chain.size - far.size:] = True
+        placed = [done.nonzero()[0]]
+        for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
+            if chain.size == 0:
+                break
+            pins = which[chain]
+            # Re-centred windows follow their centroids as they are: less the rest offset they would
+            # hold a pin whose tip leaves slowly near its rest position (a still pin drifted onto the
+            # veil is re-measured at rest by `snap_to_rest`).
+            centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
+            centres += self.origin
+            step, offset = centres - points, centres - start[chain]
+            moved = _squared_norm(step)
+            error = _squared_norm(offset)
+            # A search settles within its bound, inside the gate around the prediction; a pin
+            # followed from its guess settles to a few tenths of a px, near its guess.
+            like = self._like_at_rest(measures, pins)
+            settled = moved <= self._settled_px ** 2
+            # In the last pass a pin followed from its guess may settle as loosely as a searched one
+            # (a faint tip's centroid jitters in camera noise by more than a few tenths of a px), but
+            # no farther from its guess than that: a window still drifting is no tip of its own.
+            ok = like & np.where(searched, settled & (error <= self.gate_px ** 2),
+                                 ((moved <= fine) & (error <= reach)) | (last & settled & (error <= self._settled_px ** 2)))
+            positions[pins[ok]] = centres[ok]
+            placed.append(chain[ok])
+            # Go on while the window holds a tip like the pin's (or a search has just started).
+            going = ~ok & np.isfinite(centres[:, 0]) & (searched | (error <= reach)) & (like | fresh)
+            chain, points, searched = chain[going], centres[going], searched[going]
+            fresh = np.zeros(chain.size, dtype=bool)
+        # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
+        # the others can have reached a neighbour's tip.
+        placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]
+        if placed.size:
+            offset = positions[which[placed]] - start[placed]
+            self._one_pin_per_tip(positions, which[placed], _squared_norm(offset))
+        return positions, filled
+

@@ -1,0 +1,48 @@
+"""Noise of the camera and of each window's centroid, for `pins._refine.Refiner` (paper 002, III-A.3).
+
+`noise_sigma` measures a grey image's pixel noise (the rest frame's, whose level then draws the noise
+that bounds each rest window's scatter before any is learnt, `pins._rest`); `_learn_mean_square` is
+the running mean square by which each window learns its scatter frame by frame while its pin is still.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+__all__ = ["noise_sigma"]
+
+# Weight of each still step in a window's learnt scatter (`Refiner.observe_still`), and how many
+# times that scatter a still pin's window may lie from where its still neighbours place it.
+_JITTER_RATE = 0.2
+_JITTER_FIRST = 3
+_JITTER_BOUND = 3.0
+
+
+def noise_sigma(image: np.ndarray) -> float:
+    """Standard deviation of a grey image's pixel noise, grey levels (Immerkaer's Laplacian-difference
+    estimator made robust: the median absolute response over 6 sigma, so that edges and tips, a
+    minority of pixels, do not count; saturated or flat regions, which show none, are left out)."""
+    kernel = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
+    response = np.abs(cv2.filter2D(image.astype(np.float32), -1, kernel))
+    # A saturated surround (and its clipped fringe) or a black margin shows no noise, or less.
+    clipped = cv2.dilate(((image <= 2) | (image >= 253)).astype(np.uint8), np.ones((5, 5), np.uint8))
+    response = response[1:-1, 1:-1][clipped[1:-1, 1:-1] == 0]
+    return float(np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
+
+
+
+def _learn_mean_square(mean_sq: np.ndarray, seen: np.ndarray, index, value: np.ndarray, candidate: np.ndarray) -> None:
+    """Update running mean squares in place: ``mean_sq[index]`` (px^2) with ``value`` where ``candidate``.
+
+    The first `_JITTER_FIRST` values of each entry are averaged; later ones count, with weight
+    `_JITTER_RATE`, only within `_JITTER_BOUND` times the mean so far (a pin that begins to move with a
+    contact is no noise). ``seen[index]`` counts the values learnt; NaN values learn nothing.
+    """
+    so_far, count = mean_sq[index], seen[index]
+    first = count < _JITTER_FIRST
+    learn = candidate & (first | (value <= _JITTER_BOUND ** 2 * so_far))
+    rate = np.where(first, 1.0 / (count + 1.0), _JITTER_RATE)
+    mean_sq[index] = so_far + np.where(learn, rate * (value - so_far), 0.0)
+    seen[index] = count + learn
+

@@ -1,0 +1,174 @@
+"""Pins recovered from detected blobs, for `pins._refine.Refiner` (paper 002, III-A.3).
+
+Recovery (`Refiner.recover`, at a rate `PinTracker` bounds). The frame's blobs are detected
+(`pins.detect`): an implausible pin takes the blob it landed on, one blob per pin, inside a gate
+(`match_to_blobs`; no blob: lost), and blobs no pin claimed are assigned to lost pins one-to-one
+(Hungarian method, `scipy.optimize.linear_sum_assignment`) within the same gate around each lost
+pin's predicted position (its rest position moved by the median displacement of its tracked
+neighbours). Gates below half the pin spacing and one-to-one assignments keep identities.
+
+`match_to_blobs` and the Hungarian assignment are plain functions; `_Recovery` holds the step that
+uses them; `pins._refine.Refiner` inherits it and sets the state it reads.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
+
+from .detect import _detect
+from .disc import SensorDisc
+from ._window import _squared_norm
+from .errors import ShapeError
+
+__all__ = ["match_to_blobs"]
+
+
+def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
+    """One-to-one nearest blob for each point, within a gate.
+
+    Each point takes its nearest blob if that blob lies within `gate_px`; when several points
+    take the same blob, the nearest point keeps it and the others get none.
+
+    Parameters
+    ----------
+    points : (N, 2) ndarray
+        (x, y) px; NaN rows get no blob.
+    blobs : (M, 2) ndarray
+        Detected blob centres (x, y), px.
+    gate_px : float
+        Largest accepted distance, px.
+
+    Returns
+    -------
+    index : (N,) ndarray of int
+        Index into `blobs` for each point, -1 where it has none.
+    """
+    points = _as_points(points, "points")
+    blobs = _as_points(blobs, "blobs")
+    index = np.full(len(points), -1, dtype=np.intp)
+    live = np.flatnonzero(np.isfinite(points).all(axis=1))
+    if live.size == 0 or len(blobs) == 0:
+        return index
+    distance, nearest = cKDTree(blobs).query(points[live], k=1, distance_upper_bound=gate_px)
+    found = np.isfinite(distance)
+    live, distance, nearest = live[found], distance[found], nearest[found]
+    # Nearest point first, then keep each blob's first claimant.
+    order = np.argsort(distance, kind="stable")
+    _, first = np.unique(nearest[order], return_index=True)
+    winners = order[first]
+    index[live[winners]] = nearest[winners]
+    return index
+
+
+
+class _Recovery:
+    """The blob-detection side of `pins._refine.Refiner`: recovery of missing pins from detected blobs."""
+
+    def recover(self, grey: np.ndarray, tracked: np.ndarray, refined: np.ndarray,
+                last_seen: np.ndarray, crop: np.ndarray | None = None, *,
+                around: np.ndarray | None = None) -> np.ndarray:
+        """Detected blobs for pins without a position; leftover blobs to lost pins (a blob detection).
+
+        Parameters
+        ----------
+        grey : (H, W) ndarray of uint8
+            The frame.
+        tracked : (N, 2) ndarray
+            LK estimates, px; NaN where LK lost the pin.
+        refined : (N, 2) ndarray
+            Positions so far (refined or found), px; NaN where missing.
+        last_seen : (N, 2) ndarray
+            Each pin's last known position, px.
+        crop : (h, w) ndarray of uint8, optional
+            The frame's crop at `origin`, bright pins: when given, a pin keeps its blob only if the
+            blob's window holds a tip like the pin's at rest, and takes its windowed centroid.
+        around : (N,) ndarray of bool, optional
+            Missing pins around which blobs are detected (default: all of them); any missing pin
+            may take a blob detected there.
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            `refined` with blobs for missing pins (an LK estimate's own blob, else one assigned
+            one-to-one within the gate around the pin's prediction), px; NaN where still lost.
+        """
+        # Only blobs near the missing pins matter: at their LK estimates or their predictions.
+        missing = np.isnan(refined[:, 0])
+        near = np.flatnonzero(missing if around is None else missing & around)
+        blobs = self._detect_near(grey, np.concatenate([tracked[near], self._predict(refined, near, last_seen)]))
+        gate = self.gate_px
+        # Placed pins claim their blobs too, so that no other pin takes them.
+        claim = match_to_blobs(np.where(np.isfinite(refined), refined, tracked), blobs, gate_px=gate)
+        positions = refined.copy()
+        has_blob = claim >= 0
+        take = has_blob & np.isnan(refined[:, 0])
+        positions[take] = blobs[claim[take]]
+        lost = np.flatnonzero(np.isnan(positions[:, 0]))
+        free = np.ones(len(blobs), dtype=bool)
+        free[claim[has_blob]] = False
+        if lost.size and free.any():
+            predicted = self._predict(positions, lost, last_seen)
+            free_index = np.flatnonzero(free)
+            pins, chosen = _assign(predicted, blobs[free_index], gate)
+            positions[lost[pins]] = blobs[free_index[chosen]]
+        if crop is not None:
+            # A blob is a pin's only when its window holds a tip like the pin's own at rest (not LED
+            # glare or a speck), centred on it: the pin then takes the windowed centroid.
+            new = np.flatnonzero(np.isnan(refined[:, 0]) & np.isfinite(positions[:, 0]))
+            if new.size:
+                radius = self.window_radius(np.where(np.isnan(positions), last_seen, positions))[new]
+                centres, measures = self.windows.measure(crop, positions[new] - self.origin, radius)
+                centres += self.origin
+                step = centres - positions[new]
+                keep = (_squared_norm(step) <= self._settled_px ** 2) & self._like_at_rest(measures, new)
+                positions[new] = np.where(keep[:, None], centres, np.nan)
+        return positions
+
+
+    def _detect_near(self, grey: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Blob centres (M, 2), px, detected in the part of the disc around `points` (the missing pins).
+
+        The box around them reaches a spacing and a gate beyond (the blobs of their placed neighbours,
+        which claim theirs) and a threshold block beyond that (the neighbourhood means); the image
+        outside the box counts as outside the disc, as the surround does. The whole disc when the
+        box covers most of it.
+        """
+        disc = self.disc
+        points = points[np.isfinite(points[:, 0])]
+        if len(points) == 0:
+            return np.empty((0, 2))
+        reach = self.spacing_px + self.gate_px + self.detection.block_size_px
+        low = np.maximum(np.floor(points.min(axis=0) - reach).astype(int), 0)
+        high = np.minimum(np.ceil(points.max(axis=0) + reach).astype(int) + 1, grey.shape[::-1])
+        if np.prod(high - low) > 0.5 * np.pi * disc.radius_px ** 2:
+            return _detect(grey, disc, self.detection).centres
+        (x0, y0), (x1, y1) = low, high
+        part = SensorDisc(disc.cx - x0, disc.cy - y0, disc.radius_px)
+        return _detect(grey[y0:y1, x0:x1], part, self.detection).centres + (x0, y0)
+
+
+
+def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
+    """One-to-one assignment of candidates to predictions inside a gate (Hungarian method)."""
+    cost = np.linalg.norm(predicted[:, None, :] - candidates[None, :, :], axis=2)
+    inside = cost <= gate
+    rows = np.flatnonzero(inside.any(axis=1))
+    cols = np.flatnonzero(inside.any(axis=0))
+    if rows.size == 0:
+        return rows, cols
+    sub = np.where(inside[np.ix_(rows, cols)], cost[np.ix_(rows, cols)], 1e6)
+    r, c = linear_sum_assignment(sub)
+    accepted = sub[r, c] <= gate
+    return rows[r[accepted]], cols[c[accepted]]
+
+
+
+def _as_points(points: np.ndarray, name: str) -> np.ndarray:
+    array = np.asarray(points, dtype=np.float64)
+    if array.size == 0:
+        return array.reshape(0, 2)
+    if array.ndim != 2 or array.shape[1] != 2:
+        raise ShapeError(f"{name} must have shape (N, 2), got {array.shape}")
+    return array

@@ -1,0 +1,169 @@
+"""The still pad: windows' scatter at rest and pins put back at their rest positions, for
+`pins._refine.Refiner` (paper 002, III-A.3).
+
+Rest. The rest positions are the windows' own fixed points near the given ones (a few passes of
+mean shift), and what still pulls a window at rest is the pin's rest offset, taken off its first
+window later: the rest frame given again places every pin. A step within the search's settling
+bound is camera noise, not velocity. Near its rest position a window at its guess is judged by
+its centroid less that offset. On a pad back at rest (half the pins within 0.1 spacing of rest,
+hardly any between that and the gate but a faint tip's jitter among still neighbours), pins far
+from rest, drifted by more than a few tenths of a px, and missing ones are looked for at their
+rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on their
+neighbours' tips, nor a faint rim tip's window on the veil beside it.
+
+`_AtRest` holds these steps; `pins._refine.Refiner` inherits them and sets the state they read
+(`rest_positions`, `_rest_offset`, `_rest_radius`, the learnt scatters, `_settled_px`, `_guess_px`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._noise import _JITTER_FIRST, _learn_mean_square, noise_sigma
+from ._window import _squared_norm
+
+# The pad is back at rest when this share of the placed pins lie within this fraction of the
+# spacing of their rest positions.
+_STILL_SHARE = 0.5
+_STILL_FRACTION = 0.1
+# ... and at most this share of them lie between that and the gate (a moving pad's field of
+# displacements is continuous: its transition from still to moved pins holds many).
+_BETWEEN_SHARE = 0.02
+# A pin's window at rest is calm within this many times its learnt scatter of where its still
+# neighbours place it (the scatter of its steps misses the constant part: its rest offset's noise).
+_CALM_BOUND = 5.0
+_FLOOR_EVERY = 8
+# Draws of noise that measure each rest window's scatter before any is learnt.
+_NOISE_DRAWS = 4
+
+
+class _AtRest:
+    """The rest side of `pins._refine.Refiner`: noise of the rest windows, still steps, snapping to rest."""
+
+    def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """Each rest window's mean square displacement, px^2 (N,), under `_NOISE_DRAWS` draws of Gaussian
+        noise of the rest crop's own level (`noise_sigma`) added to it: how far one frame's noise
+        moves the window (a faint tip in glare: tenths of a px; a crisp one: hundredths)."""
+        sigma = noise_sigma(rest_crop)
+        if not sigma > 0:
+            return np.zeros(len(positions))
+        points, radius = positions - self.origin, self.window_radius(positions)
+        base = self.windows.measure(rest_crop, points, radius)[0]
+        rng = np.random.default_rng(0)  # a fixed draw: the same rest frame, the same bound
+        total = np.zeros(len(positions))
+        for _ in range(_NOISE_DRAWS):
+            noisy = np.clip(rest_crop + rng.normal(0.0, sigma, rest_crop.shape), 0, 255).astype(np.uint8)
+            total += _squared_norm(self.windows.measure(noisy, points, radius)[0] - base)
+        return np.where(np.isfinite(total), total / _NOISE_DRAWS, 0.0)
+
+
+    def still(self, steps: np.ndarray) -> np.ndarray:
+        """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
+        return _squared_norm(steps) <= self._settled_px ** 2
+
+
+    def observe_still(self, steps: np.ndarray) -> np.ndarray:
+        """Learn each window's scatter from one frame's (N, 2) steps, px; returns which steps were still (N,) bool.
+
+        A step within the settling bound (`still`) is the difference of two noisy centroids: half its
+        square updates the pin's running mean square scatter (the mean of its first `_JITTER_FIRST`,
+        then weight `_JITTER_RATE` for steps within `_JITTER_BOUND` times the scatter so far).
+        """
+        half = _squared_norm(steps)
+        still = half <= self._settled_px ** 2  # NaN (lost) compares False
+        half *= 0.5
+        # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
+        _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
+        seen, jitter = self._jitter_seen, self._jitter_sq
+        self._observed += 1
+        if self._observed % _FLOOR_EVERY == 1:
+            learnt = jitter[seen >= _JITTER_FIRST]
+            self._jitter_floor = float(np.median(learnt)) if learnt.size else 0.0
+        return still
+
+
+    def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
+        """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
+
+        When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing
+        of their rest positions and hardly any (`_BETWEEN_SHARE`) lie between that and `gate_px`
+        (the pad is back at rest: a moving pad's field of displacements is continuous; a pin within
+        twice that fraction whose neighbours are still is a faint tip's jitter), a pin farther than
+        `gate_px` from its rest position (a fast return from a slide carried its stale guess onto a
+        neighbour's tip), drifted by more than a few tenths of a px, or missing is looked for in a
+        window at its rest position (its centroid less the rest offset). A pin far from rest or
+        missing is placed there when the window settles within the search's bound on a tip like its
+        own at rest. A *calm* pin (its still neighbours' median displacement within a few tenths of a
+        px, and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its
+        steps, `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip shown by its contrast. A pin placed
+        near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
+        the check costs a few vector operations per frame.
+
+        Parameters
+        ----------
+        crop : (h, w) ndarray of uint8
+            The frame's crop at `origin`, bright pins.
+        positions : (N, 2) ndarray
+            Positions so far, px; NaN where missing.
+        search : (N,) ndarray of bool
+            Missing pins to look for (retired ones take turns).
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            `positions`, or a copy with the pins found at their rest positions, px.
+        """
+        distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
+        far = distance > self.gate_px ** 2
+        # Pins that drifted from rest by more than a window's settling in noise are looked at again.
+        drifted = distance > self._guess_px ** 2
+        if not (drifted.any() or (np.isnan(distance) & search).any()):
+            return positions
+        still = distance <= (_STILL_FRACTION * self.spacing_px) ** 2
+        placed = np.count_nonzero(np.isfinite(distance))
+        # A moving pad's field of displacements is continuous: between its still pins and those
+        # moved farther than the gate lie pins moved by less. Pins put on wrong tips are off by
+        # a whole spacing, with none in between.
+        # A faint tip's window jitters in noise by up to a fifth of the spacing: a pin within that of
+        # rest whose neighbours are still is such jitter, not motion.
+        between = np.flatnonzero(~still & ~far & np.isfinite(distance))
+        if between.size and np.count_nonzero(still) >= _STILL_SHARE * placed:
+            around = _squared_norm(self.neighbour_median(positions - self.rest_positions, between))
+            jitter = (around <= (_STILL_FRACTION * self.spacing_px) ** 2) & (
+                distance[between] <= (2.0 * _STILL_FRACTION * self.spacing_px) ** 2)
+            between = between[~jitter]
+        if np.count_nonzero(still) < _STILL_SHARE * placed or between.size > _BETWEEN_SHARE * placed:
+            return positions  # the pad is not at rest
+        look = np.flatnonzero(drifted | (np.isnan(distance) & search))
+        rest = self.rest_positions[look]
+        centres, measures = self.windows.measure(crop, rest - self.origin, self._rest_radius[look])
+        centres += self.origin - self._rest_offset[look]
+        # Where its neighbours say the pin is: its rest position moved by their median displacement.
+        # When they lie within a few tenths of a px of rest, the membrane there is at rest (it is
+        # continuous: no pin moves by a px alone), and a window that settles within a few times its
+        # own scatter in noise (`observe_still`; up to twice the search's bound) shows the pin there.
+        # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
+        shift = self.neighbour_median(positions - self.rest_positions, look)
+        quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
+        residual = _squared_norm(centres - rest - shift)
+        scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
+                             np.maximum(self._noise_scatter_sq[look], self._jitter_floor))
+        calm = quiet & (residual <= _CALM_BOUND ** 2 * scatter)
+        bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
+        # A calm pin's window need only show a tip (its contrast): its area and compactness near the
+        # rim's veil swing with the noise of its top pixels.
+        like = np.where(calm, measures[1] >= self._at_least[1, look], self._like_at_rest(measures, look))
+        found = (_squared_norm(centres - rest) <= bound ** 2) & like
+        # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
+        found &= calm | ~(distance[look] <= self.gate_px ** 2)
+        # The window's own scatter about where its still neighbours place the pin, learnt from the
+        # windows that showed it here, after the test (a window never widens its own bound): a faint
+        # tip in the veil scatters by tenths of a px, and its steps, taken with its neighbours once
+        # it is placed where they say, do not show that.
+        _learn_mean_square(self._rest_scatter_sq, self._rest_scatter_seen, look, residual, quiet & found)
+        if not found.any():
+            return positions
+        positions = positions.copy()
+        positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
+        return positions
+
