@@ -15,7 +15,8 @@ from .segment import converging_frames, jitter_floor_px, segment_taps, tap_signa
 from .scale import (DEFAULT_PAD_DIAMETER_MM, SENSOR_PRESETS, PadScale, SensorDescription, central_spacing_px,
                     pad_scale, pin_pitch_mm, sensor_preset, sensor_scale)
 from .select import PinSelection, median_spacing_px, select_feature_pins, select_pins
-from .track import LKParams, PinTracker, match_to_blobs, track_pins
+from .lk import LKParams, track_pins
+from .track import PinTracker, match_to_blobs
 from .propagate import match_by_propagation
 
 __all__ = [

@@ -8,7 +8,7 @@ import importlib
 
 import pytest
 
-MODULES = ["pins.detect", "pins.disc", "pins.lattice", "pins.track", "pins.displacement", "pins.select",
+MODULES = ["pins.detect", "pins.disc", "pins.lattice", "pins.track", "pins.lk", "pins.displacement", "pins.select",
            "pins.scale", "pins.features", "pins.segment", "pins.accel_detect", "pins._tipfit", "pins._rescue"]
 
 
