@@ -141,7 +141,7 @@ def test_consensus_agrees_on_pins_half_the_voters_keep_and_never_on_one_sets_own
     not agree with itself (the other wins)."""
     from pins.detect import Blobs
     from pins._judge import _KEPT, _OFF
-    from pins.lattice import _Run, _consensus
+    from pins._candidates import _Run, _consensus
 
     pitch = 10.0
     grid = pitch * np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), axis=-1).reshape(-1, 2)
@@ -166,7 +166,7 @@ def test_consensus_matches_every_centre_with_each_voters_nearest_even_among_crow
     gate, also where a centre has more blobs inside the gate than its k nearest (split blobs)."""
     from pins.detect import Blobs
     from pins._judge import _KEPT
-    from pins.lattice import _MATCH, _VOTER, _Run, _consensus
+    from pins._candidates import _MATCH, _VOTER, _Run, _consensus
 
     rng = np.random.default_rng(3)
     pitch = 10.0

@@ -1,0 +1,150 @@
+"""Candidate detection parameters of the pin-field search, for `pins.lattice.find_pin_field`.
+
+Each candidate parameter set (`_candidates`: blocks and offsets scaled to a pitch) is run once:
+blobs detected (`pins.detect`) and judged against the lattice (`pins._judge`), a `_Run`; the runs
+are run two at a time (`_evaluate_all`), voted on (`_consensus`: the pins at least half of the good
+runs keep, and each run's distance to their consensus), and the winner's parameters are narrowed
+for later frames (`_final_params`). `pins.lattice` says how the search uses them (steps 1-2, 5, 6).
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ._judge import _KEPT, _MIN_PINS, _judge_lattice, _sharpness
+from .detect import Blobs, DetectionParams, _detect
+from .disc import SensorDisc
+
+_FIELD_MARGIN = 0.5
+# Area range of the final parameters around the kept pins' median area.
+_AREA_RANGE = (0.25, 2.5)
+# Candidate sets: a pin matches within this many pitches; 'the same pins' within this fraction.
+_MATCH = 0.3
+_SAME_PINS = 0.005
+_VOTER = 0.97
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One candidate parameter set: its blobs, the lattice verdict on each, and their pitch, px."""
+
+    params: DetectionParams
+    blobs: Blobs
+    reason: np.ndarray
+    pitch: float
+
+    @property
+    def kept(self) -> np.ndarray:
+        return self.reason == _KEPT
+
+    @property
+    def strength(self) -> float:
+        """Summed contrast x area of the kept blobs: the strongest lattice is the pins'."""
+        kept = self.kept
+        return float(np.sum(self.blobs.contrasts[kept] * self.blobs.areas[kept]))
+
+
+# OpenCV and NumPy release the GIL in the detection, so two candidate sets run at once on two cores.
+_WORKERS = 2
+
+
+def _evaluate_all(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: dict) -> list:
+    """`_evaluate` for each candidate parameter set, on `_WORKERS` threads."""
+    with ThreadPoolExecutor(_WORKERS) as pool:
+        return list(pool.map(lambda params: _evaluate(grey, disc, params, cache), candidates))
+
+
+def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict) -> _Run:
+    """Detect with one candidate parameter set and judge the blobs."""
+    blobs = _detect(grey, disc, params, cache)
+    reason, pitch = _judge_lattice(blobs, _sharpness(grey, blobs, params, cache))
+    return _Run(params, blobs, reason, pitch)
+
+
+def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per run: kept pins the voters agree on minus the others; median distance to the consensus, px.
+
+    Runs keeping fewer than `_VOTER` times the most pins kept neither vote nor win (-inf). The
+    voters agree on a pin that at least half of them keep (both, when two vote).
+
+    A kept pin is matched in another run by its nearest kept pin within `_MATCH` pitches; the
+    consensus position of a pin is the mean of its matches.
+    """
+    kept = [run.blobs.centres[run.kept] for run in runs]
+    # Only runs that keep nearly as many pins as the best one vote (on a small pad most candidate
+    # sets lose pins, and pins that only the good ones find must not look like outliers).
+    counts = np.array([len(c) for c in kept])
+    voters = counts >= _VOTER * counts.max()
+    gate = _MATCH * pitch if np.isfinite(pitch) else 1.0
+    membership = np.full(len(runs), -np.inf)
+    deviation = np.full(len(runs), np.inf)
+    voting = [r for r in range(len(runs)) if voters[r] and len(kept[r])]
+    if not voting:
+        return membership, deviation
+    # Every voter's kept centres matched in every voter's at once: the nearest centres of all of
+    # them (one k-d tree), nearest first, so that a voter's first among them is its nearest.
+    bounds = np.cumsum([0] + [len(kept[r]) for r in voting])
+    every = np.concatenate([kept[r] for r in voting])
+    voter_of = np.append(np.repeat(np.arange(len(voting)), np.diff(bounds)), -1)  # -1: no neighbour
+    tree = cKDTree(every)
+    reach = min(len(voting) + 2, len(every))
+    distance, index = tree.query(every, k=reach, distance_upper_bound=gate)
+    distance, index = distance.reshape(len(every), reach), index.reshape(len(every), reach)
+    rows = np.arange(len(every))
+    matched = np.full((len(voting) + 1, len(every)), -1)  # the extra row takes "no neighbour"
+    for column in range(reach - 1, -1, -1):  # nearest last: it stays
+        matched[voter_of[index[:, column]], rows] = index[:, column]
+    crowded = np.flatnonzero(np.isfinite(distance[:, -1]))  # all of them within the gate: maybe more
+    if crowded.size:
+        for s, r in enumerate(voting):  # asked of each voter, as one at a time
+            found, nearest = cKDTree(kept[r]).query(every[crowded], distance_upper_bound=gate)
+            matched[s, crowded] = np.where(np.isfinite(found), bounds[s] + np.minimum(nearest, len(kept[r]) - 1), -1)
+    matched = matched[:-1]
+    support = (matched >= 0).sum(axis=0)
+    # At least half: a strict majority of four voters would let the two least complete veto the
+    # pins only the two most complete find. Two voters must both keep a pin (one run's own blobs
+    # are no agreement).
+    agreed = (2 * support >= voters.sum()) & (support >= min(2, voters.sum()))
+    # The mean of each centre's matches (the row past the end of `every` is zeros: no match).
+    with np.errstate(invalid="ignore"):  # centres no voter matched: averaged, never used
+        consensus = np.append(every, [[0.0, 0.0]], axis=0)[matched].sum(axis=0) / support[:, None]
+    for s, r in enumerate(voting):
+        mine = slice(bounds[s], bounds[s + 1])
+        membership[r] = agreed[mine].sum() - (~agreed[mine]).sum()
+        if agreed[mine].any():
+            offset = kept[r][agreed[mine]] - consensus[mine][agreed[mine]]
+            deviation[r] = float(np.median(np.hypot(*offset.T)))
+    return membership, deviation
+
+
+def _candidates(pitches: np.ndarray, start: DetectionParams, blocks, offsets):
+    """Permissive parameter sets scaled to each pitch (px)."""
+    for pitch in pitches:
+        blur = float(np.clip(0.07 * pitch, 0.6, 2.5))
+        loose = dict(blur_sigma_px=round(blur, 2), min_area_px=2, max_area_px=max(int(1.2 * pitch**2), 8),
+                     min_fill=0.3, max_aspect=4.0, split_radius_px=round(min(0.12 * pitch, 20.0), 2))
+        for block in blocks:
+            size = max(2 * int(round(block * pitch / 2.0)) + 1, 3)
+            for offset in offsets:
+                yield start.replace(block_size_px=size, offset=offset, **loose)
+
+
+def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float, reach_px: float) -> DetectionParams:
+    """Parameters for later frames: `run`'s, with the area range of its kept blobs and a rim margin
+    that leaves out the membrane beyond `centres` (the pins, px) and whatever lies beyond `reach_px`
+    from the disc centre (a rim ring)."""
+    kept = run.kept
+    if kept.sum() < _MIN_PINS or len(centres) < _MIN_PINS or not np.isfinite(pitch):
+        return run.params
+    median_area = float(np.median(run.blobs.areas[kept]))
+    radius = np.sqrt(median_area / np.pi)
+    params = run.params.replace(min_area_px=max(int(_AREA_RANGE[0] * median_area), 1),
+                                max_area_px=max(int(np.ceil(_AREA_RANGE[1] * median_area)), 2),
+                                min_fill=0.4, max_aspect=3.0, split_radius_px=round(float(min(0.4 * radius, 20.0)), 2))
+    reach = float(np.max(np.hypot(centres[:, 0] - disc.cx, centres[:, 1] - disc.cy)))
+    margin = disc.radius_px - min(reach + _FIELD_MARGIN * pitch, reach_px)
+    return params.replace(rim_margin_px=round(float(max(params.rim_margin_px, margin)), 2))
