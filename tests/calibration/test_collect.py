@@ -159,20 +159,20 @@ def test_planned_taps_are_frozen():
 def test_a_crash_while_creating_the_files_does_not_block_the_rerun(tmp_path, monkeypatch):
     # A kill before the first tap used to leave an empty train.h5 that the rerun refused as
     # "not a tactip-dataset/1 file (schema None)".
-    import perception.dataset
+    import perception._dataset_writer as writer_module  # DatasetWriter writes the attributes
 
     plan = collection_plan(GAPS, DEPTHS, seed=1)
-    write_attributes = perception.dataset._write_attributes
+    write_attributes = writer_module._write_attributes
 
     def crash(f, *args):
         write_attributes(f, *args)
         if Path(f.filename).name.startswith((".test.", "test.")):
             raise KeyboardInterrupt                        # train.h5 made, test.h5 half made
 
-    monkeypatch.setattr(perception.dataset, "_write_attributes", crash)
+    monkeypatch.setattr(writer_module, "_write_attributes", crash)
     with pytest.raises(KeyboardInterrupt):
         collect(plan, tmp_path)
-    monkeypatch.setattr(perception.dataset, "_write_attributes", write_attributes)
+    monkeypatch.setattr(writer_module, "_write_attributes", write_attributes)
     paths = collect(plan, tmp_path)
     assert np.array_equal(load_dataset(paths["test"]).taps, np.stack([fake_tap(t) for t in plan["test"]]))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["test.h5", "train.h5"]
