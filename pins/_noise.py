@@ -31,7 +31,6 @@ def noise_sigma(image: np.ndarray) -> float:
     return float(np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
 
 
-
 def _learn_mean_square(mean_sq: np.ndarray, seen: np.ndarray, index, value: np.ndarray, candidate: np.ndarray) -> None:
     """Update running mean squares in place: ``mean_sq[index]`` (px^2) with ``value`` where ``candidate``.
 

@@ -62,7 +62,6 @@ def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> 
     return index
 
 
-
 class _Recovery:
     """The blob-detection side of `pins._refine.Refiner`: recovery of missing pins from detected blobs."""
 
@@ -126,7 +125,6 @@ class _Recovery:
                 positions[new] = np.where(keep[:, None], centres, np.nan)
         return positions
 
-
     def _detect_near(self, grey: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Blob centres (M, 2), px, detected in the part of the disc around `points` (the missing pins).
 
@@ -149,7 +147,6 @@ class _Recovery:
         return _detect(grey[y0:y1, x0:x1], part, self.detection).centres + (x0, y0)
 
 
-
 def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndarray]:
     """One-to-one assignment of candidates to predictions inside a gate (Hungarian method)."""
     cost = np.linalg.norm(predicted[:, None, :] - candidates[None, :, :], axis=2)
@@ -162,7 +159,6 @@ def _assign(predicted: np.ndarray, candidates: np.ndarray, gate: float) -> tuple
     r, c = linear_sum_assignment(sub)
     accepted = sub[r, c] <= gate
     return rows[r[accepted]], cols[c[accepted]]
-
 
 
 def _as_points(points: np.ndarray, name: str) -> np.ndarray:

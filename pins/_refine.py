@@ -21,8 +21,8 @@ one (N, P) uint8 array, O(pins x window):
    so no neighbour's pixels count, even when contact pushes pins together;
 4. the weighted centroid (zeroth, first and second moments, one matrix product) is the centre.
 
-Following: windows at the constant-velocity guesses, re-centred once; a pin whose window moved by
-at most 0.01 spacings (0.1 px at least) and ended within 0.25 spacings of its guess needs no LK.
+Following (`pins._follow`): windows at the constant-velocity guesses, re-centred; a pin whose
+window settles near its guess needs no LK.
 
 A point-symmetric tip whose foot lies inside the mask gives its centre whatever the threshold;
 a tip cut by the mask (near the rim, seen obliquely; pushed against a neighbour) is cut
@@ -209,7 +209,6 @@ class Refiner(_Following, _AtRest, _Recovery):
                                    _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
         self._area_at_most = _AREA_RATIO[1] * area
 
-
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
 
@@ -228,7 +227,6 @@ class Refiner(_Following, _AtRest, _Recovery):
         nearest = np.sqrt(np.minimum.reduce(dx, axis=0))
         nearest *= _WINDOW_REACH
         return np.minimum(nearest, self._radius_cap, out=nearest)
-
 
     def __call__(self, grey: np.ndarray, crop: np.ndarray, tracked: np.ndarray,
                  last_seen: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -260,7 +258,6 @@ class Refiner(_Following, _AtRest, _Recovery):
         if not np.isnan(positions[:, 0]).any():
             return positions, False
         return self.recover(grey, tracked, positions, last_seen, crop), True
-
 
     def refine(self, crop: np.ndarray, tracked: np.ndarray, last_seen: np.ndarray,
                search: np.ndarray | None = None, settled: np.ndarray | None = None, *,
@@ -365,7 +362,6 @@ class Refiner(_Following, _AtRest, _Recovery):
         self._one_pin_per_tip(positions, retry, error)
         return positions
 
-
     def _pull(self, points: np.ndarray, which: np.ndarray) -> np.ndarray:
         """What pulls windows at finite `points` (L, 2), px, of pins `which` off their tips: (L, 2), px.
 
@@ -376,7 +372,6 @@ class Refiner(_Following, _AtRest, _Recovery):
         distance = np.sqrt(_squared_norm(points - self.rest_positions[which]))
         weight = np.clip((self.spacing_px - distance) / (self.spacing_px - self.gate_px), 0.0, 1.0)
         return self._rest_offset[which] * np.where(np.isnan(weight), 0.0, weight)[:, None]
-
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.
@@ -394,7 +389,6 @@ class Refiner(_Following, _AtRest, _Recovery):
             yields = (near & (rank[neighbours] <= error[:, None])).any(axis=1)
             positions[found[yields]] = np.nan
 
-
     def _plausible(self, centres: np.ndarray, estimates: np.ndarray, measures: np.ndarray,
                    which: np.ndarray | slice) -> np.ndarray:
         """Whether windowed centroids of pins `which` are plausible: near their estimates, tips like at rest."""
@@ -402,19 +396,16 @@ class Refiner(_Following, _AtRest, _Recovery):
         # NaN compares False: an empty window is not plausible.
         return (_squared_norm(step) <= self._max_shift_px ** 2) & self._like_at_rest(measures, which)
 
-
     def _like_at_rest(self, measures: np.ndarray, which: np.ndarray | slice) -> np.ndarray:
         """Whether tips' (area, contrast, compactness), stacked (3, L), are like those of pins `which` at rest."""
         like = np.logical_and.reduce(measures >= self._at_least[:, which], axis=0)
         like &= measures[0] <= self._area_at_most[which]
         return like
 
-
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
         """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
         shift = self.neighbour_median(positions - self.rest_positions, which)
         return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
-
 
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.

@@ -56,11 +56,9 @@ class _AtRest:
             total += _squared_norm(self.windows.measure(noisy, points, radius)[0] - base)
         return np.where(np.isfinite(total), total / _NOISE_DRAWS, 0.0)
 
-
     def still(self, steps: np.ndarray) -> np.ndarray:
         """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
         return _squared_norm(steps) <= self._settled_px ** 2
-
 
     def observe_still(self, steps: np.ndarray) -> np.ndarray:
         """Learn each window's scatter from one frame's (N, 2) steps, px; returns which steps were still (N,) bool.
@@ -80,7 +78,6 @@ class _AtRest:
             learnt = jitter[seen >= _JITTER_FIRST]
             self._jitter_floor = float(np.median(learnt)) if learnt.size else 0.0
         return still
-
 
     def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
         """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
