@@ -2,7 +2,8 @@
 `pins._refine.Refiner` (paper 002, III-A.3).
 
 Following: windows at the constant-velocity guesses, re-centred once; a pin whose window moved by
-at most 0.01 spacings (0.1 px at least) and ended within 0.25 spacings of its guess needs no LK.
+at most 0.03 spacings (`_GUESS_FRACTION`; 0.1 px at least) and ended within 0.4 spacings of its guess
+(`_FOLLOW_FRACTION`) needs no LK.
 
 `_Following` holds that pass; `pins._refine.Refiner` inherits it and sets the state it reads.
 """
