@@ -116,8 +116,9 @@ def test_training_uses_every_core_and_gives_the_callers_threads_back(monkeypatch
     torch.set_num_threads(1)
     try:
         fit_torch(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=3, max_epochs=3)
-        # Early stopping with pooled and with own-class deviations, then the final fit.
-        assert seen == [os.cpu_count()] * 3 and torch.get_num_threads() == 1
+        # Early stopping with pooled and with own-class deviations (on every value and, maybe, on the leading
+        # directions), then the final fit.
+        assert len(seen) in (3, 5) and set(seen) == {os.cpu_count()} and torch.get_num_threads() == 1
     finally:
         torch.set_num_threads(before)
 
@@ -154,13 +155,15 @@ def test_training_draws_deviations_only_when_augmenting(monkeypatch):
     monkeypatch.setattr(_ensemble_training, "train_ensemble", spy)
     data = gap_dataset(seed=1, taps_per_class=4, **GRID)
     fit_torch(data, n_locations=3, max_epochs=3, augment=False)
-    assert given == [None, None] and own == [None, None]
+    assert set(map(id, given)) == {id(None)} and set(map(id, own)) == {id(None)} and len(given) in (2, 3)
     given.clear(), own.clear()
     fit_torch(data, n_locations=3, max_epochs=3)
-    # Early stopping twice (pooled deviations, then each tap's own class's) on the deviations of the taps it
-    # trains on (fewer than all); the final fit: every tap's.
-    assert len(given) == 3 and 0 < len(given[0]) == len(given[1]) < len(given[2]) == len(data)
-    assert own[0] is None and len(own[1]) == len(given[1])
+    # Early stopping with pooled deviations and with each tap's own class's (on every value and, maybe, the
+    # leading directions), each on the deviations of the taps it trains on (fewer than all); the final fit: every
+    # tap's.
+    assert len(given) in (3, 5) and all(0 < len(g) < len(given[-1]) == len(data) for g in given[:-1])
+    assert [o is None for o in own[:-1]] == [True, False] * (len(given) // 2)
+    assert all(len(o) == len(g) for o, g in zip(own, given) if o is not None)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
