@@ -208,3 +208,17 @@ def test_the_imputation_rank_follows_the_structure_of_the_taps(seed):
     x[:10, :samples] = np.nan
     guess = structured.conditional_mean(x)[:10, :samples]
     assert np.sqrt(np.mean((guess - shared[:10, :samples]) ** 2)) < 0.3
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_depths_along_one_code_among_many_noisy_values_are_decided(seed):
+    # Six depths whose mean taps lie along one code of 144 values, each with noise of 1: networks on every value
+    # followed the noise (accuracy about 0.5); on the leading directions (the held-out loss chooses) 0.9 or more.
+    from perception.learned import fit_torch
+    from tests.perception.labelled import labelled_taps
+
+    options = dict(label="numeric", classes=6, separation=5.0, noise=1.0, unseen=0.1, structure_seed=seed)
+    model = fit_torch(labelled_taps(seed=seed, per_class=30, **options), n_locations=1, seed=seed)
+    test = labelled_taps(seed=seed + 100, per_class=50, **options)
+    decided = model.log_likelihood_batch(test.taps)[:, 0].argmax(axis=1)
+    assert np.mean(decided == model.identity_class(test.identity)) >= 0.85
