@@ -40,6 +40,15 @@ longer of its class, and the 1-tap error was 0.026 / 0.029 / 0.036 (seeds 0-2) w
 each tap's own class only (`train_ensemble`'s ``residual_class``), and the lower held-out loss (at its
 best temperature) chooses; xor then gives 0.000 on those seeds.
 
+The input is chosen the same way: every value, or the imputation Gaussian's leading directions (its
+rank, chosen as above; the first layer on them is folded back into one on every value, W1 = Q W1', so
+the stored model is the same). On depths whose mean taps lie along one code among 144 noisy values
+(the `bench/bench_baselines.py` numeric case, 180 taps) the networks on every value followed the noise,
+1-tap error 0.55 / 0.53 / 0.50 mm against ridge's 0.10 / 0.18 / 0.13 (seeds 0-2); on the directions
+0.017 / 0.080 / 0.020, like the Gaussian. Where the classes differ in many ways (named shapes) every value
+is kept. The directions tried are fitted on the trained taps only (fitted on the held-out taps too they
+flattered those taps' loss, and named shapes picked them wrongly).
+
 Why these choices (held-out one-tap accuracy, three seeds each): one pooled scale rather than one
 per value, 0.61 against 0.49 on the small simulated station's collection (96 taps, 44 classes; the
 Gaussian: 0.61) and 1.00 against 0.99 on slides replayed from a radial TacTip, where a scale per
