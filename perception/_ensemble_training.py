@@ -82,7 +82,8 @@ def _tempered_losses(torch, scores, truth):
 
 
 def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden: int, weight_decay: float,
-                   seed: int, epochs, held=None, patience: int | None = None, residuals=None):
+                   seed: int, epochs, held=None, patience: int | None = None, residuals=None,
+                   residual_class=None):
     """Train M members together; keep each at its best held-out epoch, or at its own epoch count.
 
     Parameters
@@ -110,6 +111,9 @@ def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden:
         Within-class deviations: each tap of a minibatch is moved by one of them, drawn afresh at every
         step (`perception.learned.within_class_residuals`), so that the members learn the spread of a
         class rather than its few taps.
+    residual_class : (K,) int array, optional
+        The class of each deviation: a tap is then moved by a deviation of its own class only (none when
+        its class has none), rather than by one drawn from every class.
 
     Returns
     -------
@@ -138,13 +142,23 @@ def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden:
     noise = None
     if residuals is not None and len(residuals):
         noise = torch.as_tensor(np.asarray(residuals), dtype=torch.float32)
+        if residual_class is not None:   # deviations sorted by class: class c owns rows first[c]:first[c] + count[c]
+            by_class = np.argsort(residual_class, kind="stable")
+            noise = torch.cat([noise[torch.as_tensor(by_class)], torch.zeros((1, noise.shape[1]))])   # last row: none
+            count = np.bincount(residual_class, minlength=n_classes)
+            first = torch.as_tensor(np.concatenate([[0], np.cumsum(count)[:-1]]))
+            count = torch.as_tensor(count)
     for epoch in range(1, int(stop.max()) + 1):
         order = torch.stack([torch.randperm(len(inputs), generator=generator) for _ in range(members)])
         for batch in order.split(batch_size, dim=1):           # (M, b): a minibatch of its own per member
             optimiser.zero_grad()
             batch_inputs = inputs[batch]
-            if noise is not None:   # each tap moved by a within-class deviation of another
+            if noise is not None and residual_class is None:   # each tap moved by a within-class deviation of another
                 batch_inputs = batch_inputs + noise[torch.randint(len(noise), batch.shape, generator=generator)]
+            elif noise is not None:   # ... of another tap of its own class
+                own = targets[batch]
+                pick = first[own] + (torch.rand(batch.shape, generator=generator) * count[own]).long()
+                batch_inputs = batch_inputs + noise[torch.where(count[own] > 0, pick, len(noise) - 1)]
             logits = _forward(torch, weights, batch_inputs)
             # Sum over members of each member's mean cross-entropy: the members' gradients stay apart.
             loss = torch.nn.functional.cross_entropy(logits.reshape(-1, n_classes), targets[batch].reshape(-1),
