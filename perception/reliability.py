@@ -196,9 +196,16 @@ class BeliefTrace:
     def brier_score(self, taps: int) -> float:
         """Mean (belief in the decided class - 1 if it is right else 0)^2 over the first ``taps`` taps of
         every run: the Brier score of the decision's confidence, what a reliability diagram shows."""
-        t = self._column(taps)
-        right = self.estimate[:, :t + 1] == self.truth[:, :t + 1]
-        return float(((self.belief[:, :t + 1] - right) ** 2).mean())
+        return float(self._squared_errors(slice(0, self._column(taps) + 1)).mean())
+
+    def brier_score_at(self, tap: int) -> float:
+        """The Brier score of the decision's confidence after tap ``tap`` alone (every run's belief then)."""
+        return float(self._squared_errors(self._column(tap)).mean())
+
+    def _squared_errors(self, columns) -> np.ndarray:
+        """(belief in the decided class - 1 if it is right else 0)^2 at the tap ``columns`` index."""
+        right = self.estimate[:, columns] == self.truth[:, columns]
+        return (self.belief[:, columns] - right) ** 2
 
     def decisions(self, threshold: float) -> Decisions:
         """Each run's decision at ``threshold``: the first tap whose belief exceeds it, else the last tap."""
@@ -319,8 +326,7 @@ def fit_tap_tempering(environment: VirtualEnvironment, policy: Policy, *, taps: 
     def brier(log10_factor: float, t: int) -> float:
         trace = trace_beliefs(environment.with_tap_tempering((*schedule, 10.0 ** log10_factor)), policy, runs=runs,
                               max_taps=t, seed=seed, **options)
-        right = trace.estimate[:, -1] == trace.truth[:, -1]
-        return float(((trace.belief[:, -1] - right) ** 2).mean())
+        return trace.brier_score_at(t)
 
     for t in range(1, int(taps) + 1):
         bounds = _LOG10_FIRST_TAP if t == 1 else _LOG10_LATER_TAPS

@@ -60,6 +60,17 @@ def test_trace_decisions_are_the_monte_carlo_decisions(environment, policy):
         assert decisions.forced.mean() == pytest.approx(result.forced[k], abs=1e-12)
 
 
+def test_brier_score_after_one_tap_and_over_the_first_taps(environment):
+    trace = trace_beliefs(environment, FixationPolicy(2), runs=300, seed=3, max_taps=4)
+    right = trace.estimate == trace.truth
+    per_tap = [float(((trace.belief[:, t] - right[:, t]) ** 2).mean()) for t in range(4)]   # a plain loop
+    assert [trace.brier_score_at(t + 1) for t in range(4)] == pytest.approx(per_tap, abs=1e-15)
+    assert trace.brier_score(3) == pytest.approx(np.mean(per_tap[:3]), abs=1e-15)
+    assert len(set(np.round(per_tap, 6))) > 1                        # the taps differ: the tap index matters
+    with pytest.raises(ValueError, match="1..4"):
+        trace.brier_score_at(5)
+
+
 def test_threshold_for_accuracy_reaches_the_target_in_the_fewest_taps(environment):
     trace = trace_beliefs(environment, FixationPolicy(4), runs=1000, seed=2, max_taps=15)
     decisions, best = threshold_for_accuracy(trace, 0.8, tolerance=1.0)
