@@ -14,6 +14,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .detect import Blobs, DetectionParams
+from .disc import SensorDisc
 
 
 #: Why a candidate blob was rejected, in `PinField.rejected_reason`.
@@ -31,6 +32,8 @@ _MIN_CONTRAST = 0.5
 _MIN_SHARPNESS = 0.8
 # Below this tip radius, px, the steepest slope depends on where the pixel grid cuts the tip.
 _SHARP_RADIUS = 2.0
+# The blurred casing edge reaches this many blur sigmas into the disc (the blur's kernel half-width).
+_EDGE_REACH = 2.5
 _TOO_CLOSE = 0.6
 _LINK = 1.3
 # Lattice sites: a mirror image within this fraction of the link length anchors a blob; a blob with
@@ -52,12 +55,15 @@ _HULL_MARGIN = 0.3
 _OUTSIDE_MARGIN = 0.5
 
 
-def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: dict | None = None) -> np.ndarray:
+def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: dict | None = None,
+               disc: SensorDisc | None = None) -> np.ndarray:
     """Steepest grey-level slope near each blob over its contrast, 1/px.
 
     A pin tip is a disc with a sharp edge; glare, light patches of skin and shadows are smooth. On
     tips smaller than `_SHARP_RADIUS` the slope depends on where the pixel grid cuts the tip: all ones.
-    `cache` keeps the slope image per blur between candidate sets.
+    `cache` keeps the slope image per blur between candidate sets. Within `_EDGE_REACH` blur sigmas
+    (plus the Sobel's pixel) of the rim of `disc` the slope is the casing's edge, not the blob's
+    (a soft skin highlight or glare just inside the rim would look as sharp as a pin): it is left out.
     """
     n = len(blobs.centres)
     radius = float(np.sqrt(np.median(blobs.areas) / np.pi)) if n else 0.0
@@ -65,12 +71,17 @@ def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: d
         return np.ones(n)
     sigma = max(params.blur_sigma_px, 0.5)
     cache = {} if cache is None else cache
-    if sigma not in cache:
+    rim = disc is not None and not disc.whole_frame
+    key = ("slope", sigma) + ((round(disc.cx, 3), round(disc.cy, 3), round(disc.radius_px, 3)) if rim else ())
+    if key not in cache:
         smooth = cv2.GaussianBlur(grey, (0, 0), sigma).astype(np.float32)
         gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3, scale=0.125)
         gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3, scale=0.125)
-        cache[sigma] = cv2.magnitude(gx, gy)
-    slope = cache[sigma]
+        slope = cv2.magnitude(gx, gy)
+        if rim:
+            slope[~disc.mask(grey.shape, margin_px=_EDGE_REACH * sigma + 1.5)] = 0.0
+        cache[key] = slope
+    slope = cache[key]
     # The steepest slope within the tip radius (plus a pixel and a half) of each centre.
     reach = int(np.ceil(radius + 1.5))
     dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
