@@ -64,7 +64,9 @@ finds that lattice without being told the pin count:
 The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided the same way
 when it is not given: both are searched (each inside its own sensor disc) and the one whose lattice
 keeps more pins wins (a polarity without a disc of its own, white pins on a dark membrane in a dark
-casing, is searched in the other's disc when that one's lattice is sparse); a frame where neither
+casing, is searched in the other's disc when that one's lattice is small, sparse, or outnumbered at
+its own pitch by one candidate set of the other polarity: under a tap the pressed white pins darken
+and with the gaps between the others make a dark lattice at the pins' pitch); a frame where neither
 keeps `MIN_SENSOR_PINS` shows no sensor (`NoSensorError`, saying why for each). `tactip detect` and `tactip replay` both decide so.
 
 Sensors without a disc (a flat gel such as GelSight's: dark markers on a rectangular grid filling the
