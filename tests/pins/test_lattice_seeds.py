@@ -8,6 +8,12 @@ causes of failures found on other seeds stay fixed:
 - the sharpness of a blob just inside the casing's rim: the bright casing's blurred edge was taken
   for the blob's own edge, so a soft skin highlight at a hidden lattice site looked as sharp as a pin
   and was kept (brown-127 seeds 1-3, 5, 9, 11: one to three false pins).
+
+Still failing beyond seed 2 (bench/bench_detect_seeds.py, seeds 0-11): brown-127 seed 3 tapped keeps one
+soft highlight at a hidden lattice site by the rim (contrast half its neighbours', as sharp for its
+contrast); small-pad-100 tapped, seeds 4, 5, 8, 10, 11: one to three false pins, each added by
+`pins._rescue.probe_lattice_holes` between the foreshortened rim pins, and on seeds 4 and 10 two pins
+pressed 3.6 px together (pitch 5.5 px) found as one blob.
 """
 
 import cv2
