@@ -349,7 +349,7 @@ def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc 
 
 def _other_keeps_more(grey: np.ndarray, field: PinField, start: DetectionParams) -> bool:
     """Whether one candidate set of the other polarity, at `field`'s pitch in its disc, keeps more
-    lattice pins than `field` (one detection, about a tenth of a search).
+    lattice pins than `field` (one detection, a twentieth of a search).
 
     A lattice of one polarity that is really the other's (the gaps between white pins on a dark
     membrane, and the pins a tap darkens) is outnumbered there by the other's pins; a sensor's own
@@ -360,6 +360,9 @@ def _other_keeps_more(grey: np.ndarray, field: PinField, start: DetectionParams)
         return False
     other = start.replace(dark_pins=not field.params.dark_pins)
     probe = next(_candidates(np.array([field.pitch_px]), other, _COARSE_BLOCK, _COARSE_OFFSETS))
+    # Touching blobs are not split: the other polarity's pins stand apart, and splitting the network
+    # of a membrane seen the wrong way round costs more than the rest of the probe.
+    probe = probe.replace(split_radius_px=0.0)
     return int(_evaluate(grey, field.disc, probe, {}).kept.sum()) > field.count
 
 
