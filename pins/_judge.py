@@ -71,30 +71,33 @@ def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: d
         return np.ones(n)
     sigma = max(params.blur_sigma_px, 0.5)
     cache = {} if cache is None else cache
-    rim = disc is not None and not disc.whole_frame
-    key = ("slope", sigma) + ((round(disc.cx, 3), round(disc.cy, 3), round(disc.radius_px, 3)) if rim else ())
-    if key not in cache:
+    if sigma not in cache:
         smooth = cv2.GaussianBlur(grey, (0, 0), sigma).astype(np.float32)
         gx = cv2.Sobel(smooth, cv2.CV_32F, 1, 0, ksize=3, scale=0.125)
         gy = cv2.Sobel(smooth, cv2.CV_32F, 0, 1, ksize=3, scale=0.125)
-        slope = cv2.magnitude(gx, gy)
-        if rim:
-            slope[~disc.mask(grey.shape, margin_px=_EDGE_REACH * sigma + 1.5)] = 0.0
-        cache[key] = slope
-    slope = cache[key]
+        cache[sigma] = cv2.magnitude(gx, gy)
+    slope = cache[sigma]
     # The steepest slope within the tip radius (plus a pixel and a half) of each centre.
     reach = int(np.ceil(radius + 1.5))
     dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
     inside = dx**2 + dy**2 <= (radius + 1.5) ** 2
+    dx, dy = dx[inside], dy[inside]
     x = np.rint(blobs.centres[:, 0]).astype(np.intp)
     y = np.rint(blobs.centres[:, 1]).astype(np.intp)
     height, width = grey.shape
     if n and x.min() >= reach and y.min() >= reach and x.max() < width - reach and y.max() < height - reach:
         # Every disc of pixels inside the image: one flat gather (no clipping).
-        steepest = slope.ravel().take((y * width + x)[:, None] + (dy * width + dx)[inside]).max(axis=1)
+        slopes = slope.ravel().take((y * width + x)[:, None] + (dy * width + dx))
     else:
-        steepest = slope[np.clip(y[:, None] + dy[inside], 0, height - 1),
-                         np.clip(x[:, None] + dx[inside], 0, width - 1)].max(axis=1)
+        slopes = slope[np.clip(y[:, None] + dy, 0, height - 1), np.clip(x[:, None] + dx, 0, width - 1)]
+    if disc is not None and not disc.whole_frame:
+        # Only the blobs within reach of the casing's blurred edge: their pixels there left out.
+        limit = disc.radius_px - _EDGE_REACH * sigma - 1.5
+        rim = np.flatnonzero(np.hypot(x - disc.cx, y - disc.cy) > limit - reach)
+        if rim.size:
+            beyond = np.hypot(x[rim, None] + dx - disc.cx, y[rim, None] + dy - disc.cy) > limit
+            slopes[rim] = np.where(beyond, 0.0, slopes[rim])
+    steepest = slopes.max(axis=1)
     return steepest / np.maximum(blobs.contrasts, 1e-6)
 
 
