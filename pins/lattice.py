@@ -24,7 +24,8 @@ finds that lattice without being told the pin count:
    changes its neighbours' statistics), each blob against the medians of its six nearest
    neighbours: ``size`` when its area is below 0.4 or above 2.2 of theirs (or its box poorly
    filled); ``contrast`` when fainter than half of theirs, or with edges much softer (glare and
-   patches of skin are smooth, pin tips are discs with a sharp edge); ``off lattice`` when within
+   patches of skin are smooth, pin tips are discs with a sharp edge; the casing's blurred edge
+   next to a blob by the rim is not its edge); ``off lattice`` when within
    0.6 local pitches of a stronger blob (a speck, a light patch between pins), or when it sits at no
    lattice site and does not look just like its neighbours. A lattice site is found by mirror
    images: a pin is the mirror of a neighbour through another neighbour (six times for interior
