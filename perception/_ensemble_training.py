@@ -31,8 +31,6 @@ MIN_SHARED_WORK = 2 ** 20
 _BETAS = np.geomspace(0.05, 20.0, 41)
 #: Adam's learning rate.
 LEARNING_RATE = 3e-3
-#: Experiment knob: the optimiser ("adam", "adamw", "sgd") and SGD's learning rate and momentum.
-OPTIMISER = {"name": "adam", "sgd_lr": 0.05, "momentum": 0.9, "nesterov": True}
 
 
 @contextmanager
@@ -129,13 +127,7 @@ def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden:
     generator = torch.Generator().manual_seed(int(seed))
     torch.manual_seed(int(seed))
     weights = _initial_weights(torch, members, x.shape[1], hidden, n_classes, generator)
-    if OPTIMISER["name"] == "sgd":
-        optimiser = torch.optim.SGD(weights, lr=OPTIMISER["sgd_lr"], momentum=OPTIMISER["momentum"],
-                                    nesterov=OPTIMISER["nesterov"], weight_decay=weight_decay)
-    elif OPTIMISER["name"] == "adamw":
-        optimiser = torch.optim.AdamW(weights, lr=LEARNING_RATE, weight_decay=weight_decay)
-    else:
-        optimiser = torch.optim.Adam(weights, lr=LEARNING_RATE, weight_decay=weight_decay)
+    optimiser = torch.optim.Adam(weights, lr=LEARNING_RATE, weight_decay=weight_decay)
     inputs = torch.as_tensor(np.asarray(x), dtype=torch.float32)
     targets = torch.as_tensor(np.asarray(tap_class), dtype=torch.long)
     stop = np.broadcast_to(np.asarray(epochs, dtype=np.int64), (members,)).copy()
