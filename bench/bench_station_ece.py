@@ -16,9 +16,10 @@ sample with replacement). Slow (minutes per seed; the ECE collection about 0.5 s
 workers). Usage: ``python bench/bench_station_ece.py --seeds 0 1 2 --out /tmp/ece --ece-repeats 16``.
 
 Measured 2026-11-28 (models prepared by main 2137c4f, 2 repeats, ``--ece-repeats 16``): ECE after one tap over
-the 768 ECE taps 0.082 / 0.063 / 0.091 for seeds 0 / 1 / 2 (floor 0.024 / 0.025 / 0.022), on the 96 test
-taps 0.086 / 0.100 / 0.103 (floor 0.068 / 0.064 / 0.064); after 3 and 5 taps (validate, 1000 runs, on
-the ECE taps) 0.000 / 0.000, 0.006 / 0.000, 0.000 / 0.000. The models of 4 repeats on the same ECE taps:
+the 768 ECE taps 0.082 / 0.063 / 0.091 / 0.029 / 0.047 for seeds 0-4 (floor 0.024 / 0.025 / 0.022 / 0.022 /
+0.021), on the 96 test taps 0.086 / 0.100 / 0.103 / 0.061 / 0.059 (floor 0.068 / 0.064 / 0.064 / 0.057 /
+0.054); after 3 and 5 taps (validate, 1000 runs, on the ECE taps) 0.000 / 0.000, 0.006 / 0.000 and 0.000 /
+0.000 on the other three. The models of 4 repeats on the same ECE taps:
 0.026 / 0.066 / 0.047 after one tap (floor 0.02), 0.041 / 0.012 / 0.007 after 3, 0.054 / 0.014 / 0.001
 after 5 (2000 runs).
 """
