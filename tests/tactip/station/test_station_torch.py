@@ -5,7 +5,7 @@ with the torch likelihood, as a first `tactip inspect --sim` prepares it: train,
 depth, choose the threshold for 95 % of decisions within the gaps' tolerance (fitting the tap
 tempering g1..g5 for the beliefs after each of taps 1 to 5). Then the expected calibration error of
 the active policy's width belief, as `tactip validate` prints it, after 1, 3 and 5 taps (the issue's
-bar, 0.05: met after 3 and 5 taps over collection seeds 0-2; after one tap it is not met on this
+bar, 0.05: met after 3 and 5 taps over collection seeds 0-4; after one tap it is not met on this
 small station, an expected failure with the figures measured); and `tactip inspect` decides every
 gap with the torch model (judging every gap right is not robust yet either: an expected failure).
 
