@@ -30,8 +30,10 @@ _LAZY = {
     **dict.fromkeys(("Perceiver", "Step"), ".perceiver"),
     **dict.fromkeys(("POLICIES", "FixationPolicy", "Policy", "RandomPolicy", "StationaryPolicy", "make_policy"),
                     ".policies"),
-    **dict.fromkeys(("CALIBRATION_TAPS", "BeliefTrace", "expected_calibration_error", "fit_tap_tempering",
-                     "fixation_for_accuracy", "reliability_bins", "threshold_for_accuracy", "trace_beliefs"),
+    **dict.fromkeys(("reliability_bins", "expected_calibration_error", "calibration_error_floor"),
+                    ".calibration_error"),
+    **dict.fromkeys(("CALIBRATION_TAPS", "BeliefTrace", "fit_tap_tempering",
+                     "fixation_for_accuracy", "threshold_for_accuracy", "trace_beliefs"),
                     ".reliability"),
 }
 
@@ -48,6 +50,7 @@ __all__ = [
     "DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo",
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
     "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
+    "calibration_error_floor",
     "threshold_for_accuracy", "fixation_for_accuracy", "fit_tap_tempering",
     "BaselineResult", "BaselineReport", "compare_baselines", "keep_verdict",
 ]

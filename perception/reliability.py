@@ -33,6 +33,7 @@ import numpy as np
 from _shared.mapping import map_pieces
 
 from . import bayes
+from .calibration_error import expected_calibration_error, reliability_bins
 from .montecarlo import VirtualEnvironment
 from .perceiver import clamp_move
 from .policies import Policy
@@ -49,66 +50,6 @@ CALIBRATION_TAPS = (1, 3, 5)
 #: (a belief of 0.45 in 4.25 mm may be within 0.25 mm 95 % of the time); below 0.3 one tap decides too often.
 DECISION_THRESHOLDS = np.concatenate([np.round(np.arange(0.3, 0.99, 0.005), 3),
                                       [0.99, 0.995, 0.998, 0.999, 0.9995, 0.9999]])
-
-
-def reliability_bins(confidence, correct, *, bins: int = 10):
-    """Equal-width confidence bins: mean confidence, accuracy and count of each.
-
-    Parameters
-    ----------
-    confidence : (N,) array in [0, 1]
-        Belief in the decided class.
-    correct : (N,) bool array
-        Whether the decided class was right.
-    bins : int
-        Number of equal bins over [0, 1].
-
-    Returns
-    -------
-    mean_confidence, accuracy : (bins,) float64 ndarray
-        NaN for empty bins.
-    counts : (bins,) int ndarray
-    """
-    confidence = np.asarray(confidence, dtype=np.float64).ravel()
-    correct = np.asarray(correct, dtype=np.float64).ravel()
-    if confidence.shape != correct.shape:
-        raise ValueError(f"confidence and correct must have the same length, got {confidence.size} and "
-                         f"{correct.size}")
-    if int(bins) != bins or bins < 1:
-        raise ValueError(f"bins must be an integer >= 1, got {bins}")
-    index = np.clip((confidence * bins).astype(np.intp), 0, bins - 1)
-    counts = np.bincount(index, minlength=bins)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_confidence = np.bincount(index, weights=confidence, minlength=bins) / counts
-        accuracy = np.bincount(index, weights=correct, minlength=bins) / counts
-    return mean_confidence, accuracy, counts
-
-
-def expected_calibration_error(confidence, correct, *, bins: int = 10) -> float:
-    """ECE = sum over bins of (share of samples) x |accuracy - mean confidence|.
-
-    Parameters
-    ----------
-    confidence : (N,) array in [0, 1]
-    correct : (N,) bool array
-    bins : int
-
-    Returns
-    -------
-    float in [0, 1]
-
-    Examples
-    --------
-    >>> round(expected_calibration_error([0.9] * 10, [1] * 9 + [0]), 12)    # 90 % sure, 90 % right
-    0.0
-    >>> round(expected_calibration_error([0.95, 0.95], [1, 0]), 3)
-    0.45
-    """
-    mean_confidence, accuracy, counts = reliability_bins(confidence, correct, bins=bins)
-    full = counts > 0
-    if not full.any():
-        raise ValueError("no beliefs to measure")
-    return float((counts[full] * np.abs(accuracy[full] - mean_confidence[full])).sum() / counts.sum())
 
 
 @dataclass(frozen=True)

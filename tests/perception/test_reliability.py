@@ -5,9 +5,11 @@ import doctest
 import numpy as np
 import pytest
 
+import perception.calibration_error
 import perception.reliability
 import perception.tempering
-from perception import (FixationPolicy, RandomPolicy, VirtualEnvironment, expected_calibration_error, fit_model,
+from perception import (FixationPolicy, RandomPolicy, VirtualEnvironment, calibration_error_floor,
+                        expected_calibration_error, fit_model,
                         monte_carlo, reliability_bins, threshold_for_accuracy, trace_beliefs, train_model)
 from perception.reliability import fixation_for_accuracy
 from tests.perception.synthetic import gap_dataset
@@ -21,7 +23,7 @@ def environment():
     return VirtualEnvironment(model, gap_dataset(seed=2, taps_per_class=6, **GRID))
 
 
-@pytest.mark.parametrize("module", [perception.reliability, perception.tempering])
+@pytest.mark.parametrize("module", [perception.calibration_error, perception.tempering])   # reliability: all SKIP
 def test_docstring_examples(module):
     result = doctest.testmod(module)
     assert result.attempted > 0 and result.failed == 0
@@ -46,6 +48,26 @@ def test_a_calibrated_belief_has_a_small_ece():
     confidence = rng.uniform(0.2, 1.0, 50000)
     assert expected_calibration_error(confidence, rng.random(50000) < confidence) < 0.01
     assert expected_calibration_error(confidence, rng.random(50000) < confidence / 2) > 0.25
+
+
+def test_the_ece_floor_is_what_calibrated_beliefs_measure():
+    # Beliefs of 0.5 on N decisions: one bin, and E|right / N - 0.5| of a fair coin, exactly by the binomial sum.
+    from scipy.stats import binom
+
+    for n in (25, 100, 400):
+        k = np.arange(n + 1)
+        exact = float((binom.pmf(k, n, 0.5) * np.abs(k / n - 0.5)).sum())
+        assert calibration_error_floor(np.full(n, 0.5), draws=20000, seed=1).mean() == pytest.approx(exact, rel=0.03)
+    # Spread beliefs: each draw is the ECE of a plain loop over those beliefs with Bernoulli(belief) outcomes,
+    # and the floor falls as 1 / sqrt(N).
+    belief = np.random.default_rng(2).uniform(0.3, 0.9, 96)
+    floor = calibration_error_floor(belief, draws=500, seed=3)
+    right = np.random.default_rng(3).random((500, 96)) < belief
+    assert floor == pytest.approx([expected_calibration_error(belief, r) for r in right], abs=1e-12)
+    large = calibration_error_floor(np.tile(belief, 16), draws=500, seed=3)
+    assert large.mean() == pytest.approx(floor.mean() / 4, rel=0.2)
+    with pytest.raises(ValueError, match="draws"):
+        calibration_error_floor(belief, draws=0)
 
 
 @pytest.mark.parametrize("policy", [FixationPolicy(4), RandomPolicy()])

@@ -5,9 +5,16 @@ with the torch likelihood, as a first `tactip inspect --sim` prepares it: train,
 depth, choose the threshold for 95 % of decisions within the gaps' tolerance (fitting the tap
 tempering g1..g5 for the beliefs after each of taps 1 to 5). Then the expected calibration error of
 the active policy's width belief, as `tactip validate` prints it, after 1, 3 and 5 taps (the issue's
-bar, 0.05: met after 3 and 5 taps over collection seeds 0-2; after one tap it is not met on this
+bar, 0.05: met after 3 and 5 taps over collection seeds 0-4; after one tap it is not met on this
 small station, an expected failure with the figures measured); and `tactip inspect` decides every
 gap with the torch model (judging every gap right is not robust yet either: an expected failure).
+
+The station's 96 test taps cannot resolve a bar of 0.05 after one tap: a perfectly calibrated model
+with the same beliefs measures about 0.07 on them (`perception.calibration_error_floor`). The figures
+in the expected failure's reason are measured on 768 further taps per station instead
+(`bench/bench_station_ece.py --ece-repeats 16`), where that floor is 0.02; collecting them takes
+longer than the whole station here, so the test keeps the 96 taps and the bar's figures live in the
+bench.
 """
 
 import importlib.util
@@ -63,14 +70,17 @@ def test_the_torch_models_beliefs_are_calibrated_after_3_and_5_taps(torch_ece):
     assert max(torch_ece[1:]) <= 0.05, torch_ece
 
 
-@pytest.mark.xfail(strict=False, reason="issue 21 bar not met after one tap on the small station: with the tap "
-                                        "tempering g1..g5 (bench/bench_station_ece.py, 2026-11-28, 1000 runs) ECE "
-                                        "0.073 / 0.123 / 0.080 for collection seeds 0 / 1 / 2 (g1 0.016-0.030 on a "
-                                        "one-tap tempering of 94-305: beliefs 0.62-0.65 at accuracy 0.55-0.61, so "
-                                        "right on average; the bins' spread is what is left). Its 96 test taps bound "
-                                        "what can be measured: a perfectly calibrated model's ECE on them is "
-                                        "0.045-0.055. With 4 repeats per depth instead of 2: 0.044 / 0.067 / 0.043 "
-                                        "after 1 tap, 0.036 / 0.017 / 0.008 after 3, 0.047 / 0.015 / 0.001 after 5")
+@pytest.mark.xfail(strict=False, reason="issue 21 bar not met after one tap on the small station (2 taps per depth "
+                                        "and gap): on 768 further taps per station, where a calibrated model measures "
+                                        "0.02-0.025 (bench/bench_station_ece.py --ece-repeats 16, 2026-11-28), ECE "
+                                        "0.082 / 0.063 / 0.091 / 0.029 / 0.047 after one tap for collection seeds 0-4 "
+                                        "(every tap once; 0.000-0.006 after 3 and 5 taps). Not the measurement: the "
+                                        "beliefs in air (no contact, the gaps alike) are 0.32 at accuracy 0.25 and the "
+                                        "deepest 0.93 at 1.00 (seed 0), a shape no one-tap "
+                                        "factor mends: the best g1 chosen on those very taps gives 0.067 / 0.044 / "
+                                        "0.052, the g1 fitted on held-out training taps being 1.3-2x too large. With 4 "
+                                        "taps per depth 0.026 / 0.066 / 0.047 (floor 0.02). The 96 test taps here "
+                                        "measure a calibrated model at 0.07: this test can pass or fail by chance")
 def test_the_torch_models_beliefs_are_calibrated_after_1_tap(torch_ece):
     assert torch_ece[0] <= 0.05, torch_ece
 
