@@ -37,6 +37,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._judge import _MIRROR, _Neighbourhood, _row_median
+from ._noise import noise_sigma
+from ._tipfit import tip_shapes
+from ._tipprobe import threshold, tip_evidence
 
 # A blob at a hole: its area within this range of the median area of the kept pins round the hole
 # (px added to both, as the judge does), and at least this fraction of their median contrast.
@@ -64,7 +67,9 @@ _CLOSE_PINS = 8
 # above the membrane's quadratic fit, with `_MIN_CONTRAST` of the median contrast of the
 # `_PROBE_NEIGHBOURS` pins round it; the holes no farther than `_PROBE_BEYOND` pitches past the
 # outermost pin (the rim glare lies a pitch past it).
-_SIGNIFICANCE = 5.0
+_FALSE_ALARM = 1e-3
+_PROBE_STEP_PX = 0.5
+_MIN_LEVEL = 0.0
 _PROBE_NEIGHBOURS = 6
 _PROBE_BEYOND = 0.1
 _SATURATED = 254.0
@@ -305,28 +310,62 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     sites, tolerance, through = sites[far], tolerance[far], through[far]
     if not len(sites):
         return none
-    spots = _brightest_spots(image, sites, tolerance, radius_px)
-    # A hole predicted by several links is measured once.
-    spots, first = np.unique(spots, axis=0, return_index=True)
-    through = through[first]
-    contrast, error, position = _core_above_membrane(image, spots, radius_px, pins)
-    # The pins round each hole, measured the same way.
-    _, near = cKDTree(pins).query(spots, min(_PROBE_NEIGHBOURS, len(pins)))
-    used = np.unique(near)
-    reference = np.full(len(pins), np.nan)
-    reference[used] = _core_above_membrane(image, pins[used], radius_px, pins)[0]
+    position, evidence, bar, level, contrast, typical_level, typical_contrast = _measure_holes(
+        grey, image, pins, sites, tolerance, radius_px)
     with np.errstate(invalid="ignore"):
-        typical = np.nanmedian(reference[near], axis=1)
-        good = ((contrast >= _SIGNIFICANCE * error) & (contrast >= _MIN_CONTRAST * typical)
-                & (contrast <= _MAX_CONTRAST * typical)
+        good = ((evidence >= bar) & (np.abs(contrast) <= _MAX_CONTRAST * typical_contrast)
+                & (level >= _MIN_LEVEL * typical_level)
                 & (np.hypot(position[:, 0] - centre[0], position[:, 1] - centre[1]) <= disc_radius_px - radius_px - 1.5)
                 & (cKDTree(pins).query(position)[0] >= _APART * hood.pitch[through]))
-    # One pin per hole (several links predict it): the most significant first.
+    # One pin per hole (several links predict it): the strongest evidence first.
     found: list[int] = []
-    for i in np.flatnonzero(good)[np.argsort(-(contrast / error)[good], kind="stable")]:
+    for i in np.flatnonzero(good)[np.argsort(-evidence[good], kind="stable")]:
         if not found or np.min(np.hypot(*(position[found] - position[i]).T)) >= _APART * hood.pitch[through[i]]:
             found.append(int(i))
     return position[np.sort(found)] if found else none
+
+
+def _measure_holes(grey: np.ndarray, image: np.ndarray, pins: np.ndarray, sites: np.ndarray, tolerance: np.ndarray,
+                   radius_px: float):
+    """The best place for a tip within each site's tolerance and what it shows (`pins._tipprobe`).
+
+    The tip's expected shape at a site is the median ellipse of the `_PROBE_NEIGHBOURS` pins nearest it
+    (`pins._tipfit.tip_shapes`); its place, the point of a `_PROBE_STEP_PX` grid within the tolerance
+    with the most evidence; the bar, the evidence bare membrane reaches with probability
+    `_FALSE_ALARM` over the tip-sized cells of that disc.
+
+    Returns
+    -------
+    position (S, 2) px, evidence (S,), bar (S,), level (S,) and contrast (S,) grey levels, and the
+    median level and absolute contrast (S,) of the pins round each site, measured the same way.
+    """
+    sigma = noise_sigma(grey)
+    shapes = tip_shapes(image, pins, radius_px)
+    _, near = cKDTree(pins).query(sites, min(_PROBE_NEIGHBOURS, len(pins)))
+    near = near.reshape(len(sites), -1)
+    expected = np.median(shapes[near], axis=1)  # (S, 2, 2)
+    steps = np.arange(-np.ceil(tolerance.max() / _PROBE_STEP_PX), np.ceil(tolerance.max() / _PROBE_STEP_PX) + 1)
+    gx, gy = (a.ravel() * _PROBE_STEP_PX for a in np.meshgrid(steps, steps))
+    within = np.hypot(gx, gy)[None] <= tolerance[:, None]  # (S, G)
+    owner, cell = np.nonzero(within)
+    points = sites[owner] + np.column_stack([gx[cell], gy[cell]])
+    found, level, contrast = tip_evidence(image, points, expected[owner], pins, sigma)
+    score = np.full(within.shape, -np.inf)
+    score[owner, cell] = np.nan_to_num(found, nan=-np.inf)
+    best = np.argmax(score, axis=1)
+    pick = np.full(within.shape, -1)
+    pick[owner, cell] = np.arange(len(owner))
+    chosen = pick[np.arange(len(sites)), best]
+    tip_area = np.pi * np.sqrt(np.linalg.det(expected))
+    bar = threshold(_FALSE_ALARM, 1.0 + np.pi * tolerance ** 2 / tip_area)
+    used = np.unique(near)
+    pin_level, pin_contrast = np.full(len(pins), np.nan), np.full(len(pins), np.nan)
+    _, pin_level[used], pin_contrast[used] = tip_evidence(image, pins[used], shapes[used], pins, sigma)
+    with np.errstate(invalid="ignore"):
+        typical_level = np.nanmedian(pin_level[near], axis=1)
+        typical_contrast = np.nanmedian(np.abs(pin_contrast[near]), axis=1)
+    return (points[chosen], score[np.arange(len(sites)), best], bar, level[chosen], contrast[chosen],
+            typical_level, typical_contrast)
 
 
 def _disc_offsets(reach: float) -> tuple[np.ndarray, np.ndarray]:
@@ -343,33 +382,6 @@ def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray
     inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
     values = image[np.clip(y, 0, height - 1).astype(np.intp), np.clip(x, 0, width - 1).astype(np.intp)]
     return values.astype(np.float64), inside
-
-
-def _brightest_spots(image: np.ndarray, sites: np.ndarray, tolerance: np.ndarray, radius_px: float) -> np.ndarray:
-    """Per site, the pixel within its tolerance (px) where a tip-sized disc stands most above the ring
-    round it (a linear slope cancels in the difference), (S, 2) px."""
-    core_x, core_y = _disc_offsets(radius_px)
-    ring_x, ring_y = _disc_offsets(radius_px + 2.0)
-    ring = np.hypot(ring_x, ring_y) > radius_px + 1.0
-    half = int(np.ceil(radius_px + 2.0))
-    kernel = np.zeros((2 * half + 1, 2 * half + 1), np.float32)
-    kernel[(core_y + half).astype(int), (core_x + half).astype(int)] = 1.0 / len(core_x)
-    kernel[(ring_y[ring] + half).astype(int), (ring_x[ring] + half).astype(int)] = -1.0 / ring.sum()
-    # The response over the sites' bounding box only (a few pads' worth of pixels at most).
-    reach = int(np.ceil(tolerance.max())) + half + 1
-    x0, y0 = np.maximum(np.floor(sites.min(axis=0)).astype(int) - reach, 0)
-    x1, y1 = np.ceil(sites.max(axis=0)).astype(int) + reach + 1
-    response = cv2.filter2D(image[y0:y1, x0:x1], cv2.CV_32F, kernel, borderType=cv2.BORDER_REPLICATE)
-    cx, cy = _disc_offsets(float(tolerance.max()))
-    anchor = np.rint(sites)
-    px = anchor[:, 0, None] + cx[None]  # (S, C) candidate pixels
-    py = anchor[:, 1, None] + cy[None]
-    height, width = response.shape
-    values = response[np.clip(py - y0, 0, height - 1).astype(np.intp), np.clip(px - x0, 0, width - 1).astype(np.intp)]
-    values[np.hypot(px - sites[:, 0, None], py - sites[:, 1, None]) > tolerance[:, None]] = -np.inf
-    best = np.argmax(values, axis=1)
-    rows = np.arange(len(sites))
-    return np.column_stack([px[rows, best], py[rows, best]])
 
 
 def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
