@@ -69,9 +69,10 @@ _CLOSE_PINS = 8
 # outermost pin (the rim glare lies a pitch past it).
 _FALSE_ALARM = 1e-3
 _PROBE_STEP_PX = 0.5
-_MIN_LEVEL = 0.0
+_HUB_RING = 5
+_HUB_SPREAD = 0.25
 _PROBE_NEIGHBOURS = 6
-_PROBE_BEYOND = 0.1
+_PROBE_BEYOND = 0.3
 _SATURATED = 254.0
 # A kept pin whose core stands neither this many standard errors above the membrane's fit nor this
 # fraction of its neighbours' contrast is no tip (an LED reflection's flat top): `flat_pins`.
@@ -166,7 +167,7 @@ def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts:
 
 
 def _holes(pins: np.ndarray, hood: _Neighbourhood, centre: tuple[float, float], field_reach: float, beyond: float,
-           fresh: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+           fresh: int | None = None, inward_beyond: float = np.inf) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lattice sites `pins` predict and none occupies (the module docstring).
 
     Parameters
@@ -245,6 +246,10 @@ def _holes(pins: np.ndarray, hood: _Neighbourhood, centre: tuple[float, float], 
     cosine = np.where(within[:, :, None] & within[:, None, :], unit @ unit.transpose(0, 2, 1), 1.0)
     flanked = cosine.min(axis=(1, 2)) < _OPPOSITE
     plausible = opposite | flanked | ((predictions == 1) & outward & lone)
+    # ... or, where its image is looked at (`probe_lattice_holes`), a site predicted towards the
+    # centre from outside, not in the empty zone round a radial layout's centre pin (two pins lost in
+    # a row along a spoke, a gap in the innermost ring).
+    plausible |= ~outward & (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1]) >= inward_beyond)
     return sites[plausible], tolerance[plausible], through[plausible]
 
 
@@ -302,27 +307,77 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     image = grey.astype(np.float32)
     if dark_pins:
         image = 255.0 - image
-    hood = _Neighbourhood(pins)
     field_reach = float(np.max(np.hypot(pins[:, 0] - centre[0], pins[:, 1] - centre[1])))
-    sites, tolerance, through = _holes(pins, hood, centre, field_reach, _PROBE_BEYOND)
-    # A site nearer a pin than a pin's own neighbours are is that pin's (an irregular patch of lattice).
-    far = cKDTree(pins).query(sites)[0] >= _APART * hood.pitch[through]
-    sites, tolerance, through = sites[far], tolerance[far], through[far]
-    if not len(sites):
-        return none
-    position, evidence, bar, level, contrast, typical_level, typical_contrast = _measure_holes(
-        grey, image, pins, sites, tolerance, radius_px)
-    with np.errstate(invalid="ignore"):
-        good = ((evidence >= bar) & (np.abs(contrast) <= _MAX_CONTRAST * typical_contrast)
-                & (level >= _MIN_LEVEL * typical_level)
-                & (np.hypot(position[:, 0] - centre[0], position[:, 1] - centre[1]) <= disc_radius_px - radius_px - 1.5)
-                & (cKDTree(pins).query(position)[0] >= _APART * hood.pitch[through]))
-    # One pin per hole (several links predict it): the strongest evidence first.
-    found: list[int] = []
-    for i in np.flatnonzero(good)[np.argsort(-evidence[good], kind="stable")]:
-        if not found or np.min(np.hypot(*(position[found] - position[i]).T)) >= _APART * hood.pitch[through[i]]:
-            found.append(int(i))
-    return position[np.sort(found)] if found else none
+    inner, hub = _empty_zone(pins, centre)
+    taken: list[np.ndarray] = []
+    fresh = None
+    for round_ in range(_ROUNDS):
+        hood = _Neighbourhood(pins)
+        sites, tolerance, through = _holes(pins, hood, centre, field_reach, _PROBE_BEYOND, fresh=fresh, inward_beyond=inner)
+        if round_ == 0 and hub is not None:
+            sites = np.vstack([sites, hub[:2]])
+            tolerance = np.append(tolerance, hub[2])
+            through = np.append(through, int(cKDTree(pins).query(hub[:2])[1]))
+        # A site nearer a pin than a pin's own neighbours are is that pin's (an irregular patch of lattice).
+        far = cKDTree(pins).query(sites)[0] >= _APART * hood.pitch[through]
+        sites, tolerance, through = sites[far], tolerance[far], through[far]
+        if not len(sites):
+            break
+        position, evidence, bar, level, contrast, typical_level, typical_contrast = _measure_holes(
+            grey, image, pins, sites, tolerance, radius_px)
+        with np.errstate(invalid="ignore"):
+            good = ((evidence >= bar) & (np.abs(contrast) <= _MAX_CONTRAST * typical_contrast)
+                    & (np.hypot(position[:, 0] - centre[0], position[:, 1] - centre[1])
+                       <= disc_radius_px - radius_px - 1.5)
+                    & (cKDTree(pins).query(position)[0] >= _APART * hood.pitch[through]))
+        # One pin per hole (several links predict it): the strongest evidence first.
+        found: list[int] = []
+        for i in np.flatnonzero(good)[np.argsort(-evidence[good], kind="stable")]:
+            if not found or np.min(np.hypot(*(position[found] - position[i]).T)) >= _APART * hood.pitch[through[i]]:
+                found.append(int(i))
+        if not found:
+            break
+        # The pins found predict in the next round (a spoke that lost two pins in a row).
+        fresh = len(pins)
+        taken.append(position[np.sort(found)])
+        pins = np.vstack([pins, taken[-1]])
+    return np.vstack(taken) if taken else none
+
+
+def _empty_zone(pins: np.ndarray, centre: tuple[float, float]) -> tuple[float, np.ndarray | None]:
+    """The empty zone round a radial layout's lone centre pin, and the centre pin's site if it is missing.
+
+    A radial layout's spokes start a ring away from the centre: their inner ends point into an empty
+    zone, where no site lies. Its radius is that of the innermost ring (the pins nearest the disc
+    centre but for the centre pin, within half a pitch of it) less half a pitch. When the pins
+    nearest the centre form a ring round it (at least `_HUB_RING` of them within `_HUB_SPREAD` of
+    one radius, no gap between them wider than a third of the turn) and none sits at their centroid,
+    the centre pin's site is that centroid (its tolerance `_MIRROR` of the ring's radius... at most
+    a pitch's). A hexagonal lattice has pins at every radius: no zone (0) and no such site.
+
+    Returns
+    -------
+    inward_beyond : float
+        Sites predicted towards the centre lie farther from `centre` than this, px.
+    hub : (3,) ndarray or None
+        The missing centre pin's site (x, y) and tolerance, px.
+    """
+    offset = pins - np.asarray(centre, dtype=np.float64)
+    radius = np.hypot(*offset.T)
+    pitch = float(np.median(cKDTree(pins).query(pins, 2)[0][:, 1]))
+    ring = np.sort(radius[radius > 0.5 * pitch])
+    if not len(ring):
+        return 0.0, None
+    inner = float(ring[0])
+    within = (radius > 0.5 * pitch) & (radius <= (1.0 + _HUB_SPREAD) * inner)
+    hub = None
+    if within.sum() >= _HUB_RING and inner > 1.5 * pitch:
+        angles = np.sort(np.arctan2(offset[within, 1], offset[within, 0]))
+        gaps = np.diff(np.append(angles, angles[0] + 2.0 * np.pi))
+        site = pins[within].mean(axis=0)
+        if gaps.max() <= 2.0 * np.pi / 3.0 and cKDTree(pins).query(site)[0] > 0.5 * inner:
+            hub = np.array([site[0], site[1], _MIRROR * min(inner, pitch)])
+    return max(inner - 0.5 * pitch, 0.0), hub
 
 
 def _measure_holes(grey: np.ndarray, image: np.ndarray, pins: np.ndarray, sites: np.ndarray, tolerance: np.ndarray,
