@@ -31,7 +31,11 @@ from scipy.stats import chi2
 __all__ = ["tip_evidence", "threshold"]
 
 _EDGE_PX = 0.55  # soft edge of the coverage (as `pins._tipfit`): erf of the distance inside / this, px
-_SATURATED = 254.0  # pixels this bright show no membrane level (the surround's veil)
+_SATURATED = 254.0
+# H1 has this many parameters more than H0 (the tip's level and dome): the null's degrees of freedom.
+_EXTRA = 2
+# Another pin's tip and foot reach this far beyond the tip's major semi-axis (the soft edge, blur), px.
+_FOOT_PX = 2.0  # pixels this bright show no membrane level (the surround's veil)
 
 
 def threshold(false_alarm: float, cells: np.ndarray | float) -> np.ndarray:
@@ -42,7 +46,7 @@ def threshold(false_alarm: float, cells: np.ndarray | float) -> np.ndarray:
     >>> round(float(threshold(1e-3, 1.0)), 1)
     10.8
     """
-    return chi2.isf(false_alarm / np.maximum(np.asarray(cells, dtype=np.float64), 1.0), 1)
+    return chi2.isf(false_alarm / np.maximum(np.asarray(cells, dtype=np.float64), 1.0), _EXTRA)
 
 
 def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins: np.ndarray,
@@ -59,8 +63,8 @@ def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins
         Each tip's ellipse: it covers ``{e : e^T shapes^-1 e <= 1}``, px^2 (a circle of radius r:
         ``r^2 I``).
     pins : (N, 2) ndarray
-        Pins known round the points, px: pixels within 1.5 tip radii of one (its tip and foot) are no
-        membrane; a pin within half a tip radius of a point is that point's own and is not left out.
+        Pins known round the points, px: pixels near one (its tip and foot) are no
+        membrane (`_FOOT_PX` beyond the major semi-axis); a pin within half a tip radius of a point is that point's own and is not left out.
     noise_sigma : float
         The camera's pixel noise, grey levels: the least variance the test assumes.
 
@@ -95,8 +99,9 @@ def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins
         gap, near = cKDTree(pins).query(points, min(7, len(pins)))
         gap, near = gap.reshape(len(points), -1), near.reshape(len(points), -1)
         others = np.where((gap < 0.5 * major[:, None])[..., None], np.inf, pins[near])
+        foot = (major + _FOOT_PX)[:, None]
         for k in range(others.shape[1]):
-            weight &= np.hypot(x - others[:, k, 0, None], y - others[:, k, 1, None]) > 1.5 * major[:, None]
+            weight &= np.hypot(x - others[:, k, 0, None], y - others[:, k, 1, None]) > foot
     q = (inverse[:, 0, 0, None] * ex * ex + 2.0 * inverse[:, 0, 1, None] * ex * ey
          + inverse[:, 1, 1, None] * ey * ey)
     root = np.sqrt(np.maximum(q, 1e-12))
@@ -106,11 +111,12 @@ def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins
     surface = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (P, 6, K)
     w = weight.astype(np.float64)
     rss0, _ = _fit(surface, values, w)
-    tip = np.concatenate([surface * (1.0 - coverage)[:, None], coverage[:, None]], axis=1)  # (P, 7, K)
+    dome = coverage * np.minimum(q, 1.0)
+    tip = np.concatenate([surface * (1.0 - coverage)[:, None], coverage[:, None], dome[:, None]], axis=1)  # (P, 8, K)
     rss1, beta = _fit(tip, values, w)
     count = w.sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        scatter = np.where(count > 14, rss1 / (count - 7.0), np.nan)
+        scatter = np.where(count > 16, rss1 / (count - 8.0), np.nan)
         variance = np.maximum(scatter, float(noise_sigma) ** 2)
         evidence = (rss0 - rss1) / variance
     return evidence, beta[:, 6], beta[:, 6] - beta[:, 0]
