@@ -22,17 +22,21 @@ pitches, so that no chain reaches the glare on the rim. A gap in a curved row (a
 innermost ring, where a mirror image through a neighbour misses the next site by 0.4 pitch) is a
 hole too when two pins within a pitch flank it on opposite sides.
 
-Some pins make a blob in no candidate set (the outermost ring under the veil, 10-15 grey above noise
-of 5): `probe_lattice_holes` looks at the image itself at the holes left, no farther out than the
-outermost pin plus `_PROBE_BEYOND` pitches, and takes a pin where a tip-sized core stands clearly
-above a quadratic fit of the membrane round it (`_core_above_membrane`). The same measure tells a
-kept blob that is no tip (`flat_pins`): an LED reflection's flat top at a lattice site stands no
-higher than the membrane round it.
+Some pins make a blob in no candidate set (the outermost ring under the veil, -11 to +16 grey from
+the membrane round them, noise sigma 5): `probe_lattice_holes` looks at the image itself at the holes
+left, no farther out than the outermost pin plus `_PROBE_BEYOND` pitches, and takes a pin where a
+matched test of an opaque tip over a quadratic membrane (`pins._tipprobe`) passes a bar set by a
+false-alarm rate per hole. There the lattice prior is used harder than for blobs: a site predicted
+towards the centre (two pins lost in a row along a spoke, a gap in a radial layout's innermost ring)
+is a hole too, unless it lies in the empty zone round a radial layout's centre pin, whose own site is
+probed when the ring round it is whole and it is missing; pins found predict again.
+
+A kept blob that is no tip (an LED reflection's flat top at a lattice site) is told by
+`pins._tipprobe.flat_pins`.
 """
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -63,25 +67,22 @@ _OPPOSITE = -0.5
 _LONE = 1.3
 # At most this many pins lie within `_LONE` link lengths of a site.
 _CLOSE_PINS = 8
-# Probing the image at the holes no blob filled: a pin's core at least this many standard errors
-# above the membrane's quadratic fit, with `_MIN_CONTRAST` of the median contrast of the
-# `_PROBE_NEIGHBOURS` pins round it; the holes no farther than `_PROBE_BEYOND` pitches past the
-# outermost pin (the rim glare lies a pitch past it).
+# Probing the image at the holes no blob filled (`probe_lattice_holes`): bare membrane passes for a tip
+# at a hole with probability `_FALSE_ALARM` (the bar: `pins._tipprobe.threshold`, from the noise, not
+# fitted); the tip's place is searched on a `_PROBE_STEP_PX` grid within the hole's tolerance, its
+# shape taken from the `_PROBE_NEIGHBOURS` pins round it, its contrast at most `_MAX_CONTRAST` times
+# theirs (the bright surround's edge, a glare spot); the holes no farther than `_PROBE_BEYOND`
+# pitches past the outermost pin (as for blobs, `_BEYOND`: the rim glare lies a pitch past it).
 _FALSE_ALARM = 1e-3
 _PROBE_STEP_PX = 0.5
-_HUB_RING = 5
-_HUB_SPREAD = 0.25
 _PROBE_NEIGHBOURS = 6
 _PROBE_BEYOND = 0.3
-_SATURATED = 254.0
-# A kept pin whose core stands neither this many standard errors above the membrane's fit nor this
-# fraction of its neighbours' contrast is no tip (an LED reflection's flat top): `flat_pins`.
-_FLAT_SIGNIFICANCE = 2.5
-_FLAT_CONTRAST = 0.2
+# A radial layout's centre pin is probed when at least this many pins ring it within this fraction
+# of one radius (`_empty_zone`).
+_HUB_RING = 5
+_HUB_SPREAD = 0.25
 # ... and at most this many times their contrast (the bright surround's edge, a glare spot).
 _MAX_CONTRAST = 2.0
-# The pins whose feet are left out of the membrane round a point: its nearest this many (itself included).
-_FOOT_PINS = 7
 
 
 def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts: np.ndarray,
@@ -257,13 +258,15 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
                         disc_radius_px: float = np.inf, dark_pins: bool = False) -> np.ndarray:
     """Pins at lattice holes that no blob filled, found by looking at the image there.
 
-    A faint pin (the outermost ring under the veil and the rim glare, 10-15 grey above noise of 5)
-    makes a blob in no candidate set, or one too small to judge. At each hole of the lattice of
-    `pins` (`_holes`, reaching no farther than the farthest pin plus `_PROBE_BEYOND` pitches) the
-    brightest tip-sized spot within the hole's tolerance is a pin when its core stands at least
-    `_SIGNIFICANCE` standard errors above a quadratic fit of the membrane round it (a reflection's
-    or the veil's flank is curved, not a tip), with at least `_MIN_CONTRAST` of the contrast of the
-    pins round it, measured the same way, and no closer than `_APART` local pitches to a pin.
+    A faint pin (the outermost ring under the veil and the rim glare, -11 to +16 grey from the membrane
+    round it, noise sigma 5) makes a blob in no candidate set, or one too small to judge. At each hole
+    of the lattice of `pins` (`_holes`, reaching no farther than the farthest pin plus `_PROBE_BEYOND`
+    pitches; with the sites predicted towards the centre and the centre pin's, `_empty_zone`) the
+    place within the hole's tolerance with the most evidence for an opaque tip shaped like the pins
+    round it (`pins._tipprobe.tip_evidence`) is a pin when that evidence passes the bar for a
+    false-alarm rate of `_FALSE_ALARM` per hole (set from the noise: `pins._tipprobe.threshold`), its
+    contrast is at most `_MAX_CONTRAST` times theirs, it lies inside the disc and no closer than
+    `_APART` local pitches to a pin. Pins found predict again, for `_ROUNDS` rounds at most.
 
     Parameters
     ----------
@@ -421,112 +424,3 @@ def _measure_holes(grey: np.ndarray, image: np.ndarray, pins: np.ndarray, sites:
         typical_contrast = np.nanmedian(np.abs(pin_contrast[near]), axis=1)
     return (points[chosen], score[np.arange(len(sites)), best], bar, level[chosen], contrast[chosen],
             typical_level, typical_contrast)
-
-
-def _disc_offsets(reach: float) -> tuple[np.ndarray, np.ndarray]:
-    """Integer pixel offsets (dx, dy) within `reach` px of the origin."""
-    half = int(np.ceil(reach))
-    dy, dx = np.mgrid[-half:half + 1, -half:half + 1]
-    inside = np.hypot(dx, dy) <= reach
-    return dx[inside].astype(np.float64), dy[inside].astype(np.float64)
-
-
-def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Grey levels at integer pixel coordinates (any shape, clipped to the image) and whether inside."""
-    height, width = image.shape
-    inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
-    values = image[np.clip(y, 0, height - 1).astype(np.intp), np.clip(x, 0, width - 1).astype(np.intp)]
-    return values.astype(np.float64), inside
-
-
-def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
-                         pins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """How far the core of a tip at each point stands above a quadratic fit of the membrane round it.
-
-    The membrane is the ring 1.5-3.5 px beyond the tip radius (pixels at the foot of another pin of
-    `pins` left out); the core is the disc of the tip radius less half a pixel (at least 1 px).
-
-    Returns
-    -------
-    contrast : (P,) ndarray
-        Mean core grey level minus the fit's mean over the core, grey levels (nan: too little membrane).
-    error : (P,) ndarray
-        Its standard error: the membrane's scatter about the fit (residual standard deviation, grey
-        levels) over the square root of the core's pixel count.
-    position : (P, 2) ndarray
-        Centroid of the core's grey levels above the fit, px (the point where none stands above).
-    """
-    dx, dy = _disc_offsets(radius_px + 3.5)
-    distance = np.hypot(dx, dy)
-    used = (distance <= max(radius_px - 0.5, 1.0)) | (distance >= radius_px + 1.5)  # the tip's edge: neither
-    dx, dy, distance = dx[used], dy[used], distance[used]
-    core, ring = distance < radius_px + 1.5, distance >= radius_px + 1.5
-    anchor = np.rint(points)
-    x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
-    values, inside = _gather(image, x, y)
-    # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
-    gap, near = cKDTree(pins).query(points, min(_FOOT_PINS, len(pins)))
-    others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near]).astype(np.float32)  # (P, F, 2)
-    xs, ys = x[:, ring].astype(np.float32), y[:, ring].astype(np.float32)
-    other = np.sqrt(np.min((xs[:, :, None] - others[:, None, :, 0]) ** 2 + (ys[:, :, None] - others[:, None, :, 1]) ** 2,
-                           axis=2))
-    # Saturated pixels (the surround's veil near the rim) show no membrane level.
-    weight = np.zeros(values.shape)
-    weight[:, ring] = inside[:, ring] & (other > radius_px + 1.5) & (values[:, ring] < _SATURATED)
-    scale = radius_px + 3.5
-    u, v = dx / scale, dy / scale
-    basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
-    # Weighted least squares for every point at once, as two matrix products over the pixels.
-    normal = (weight @ (basis[:, :, None] * basis[:, None, :]).reshape(len(basis), 36)).reshape(-1, 6, 6)
-    beta = np.linalg.solve(normal + 1e-9 * np.eye(6), ((weight * values) @ basis)[..., None])[..., 0]
-    residual = values - beta @ basis.T
-    dof = weight.sum(axis=1) - 6.0
-    with np.errstate(invalid="ignore", divide="ignore"):
-        variance = np.where(dof >= 6.0, np.sum(weight * residual ** 2, axis=1) / dof, np.nan)
-        # The core mean's standard error, its pixels scattering about the fit as the membrane's do.
-        error = np.sqrt(variance / core.sum())
-        contrast = np.where(np.isfinite(variance), residual[:, core].mean(axis=1), np.nan)
-        above = np.clip(residual[:, core], 0.0, None)
-        total = above.sum(axis=1)
-        shift = np.column_stack([above @ dx[core], above @ dy[core]]) / total[:, None]
-    position = anchor + np.where(total[:, None] > 0, shift, 0.0)
-    return contrast, error, position
-
-
-def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
-    """Which pins (N,) bool show no tip: a core that stands neither `_FLAT_SIGNIFICANCE` standard errors
-    above a quadratic fit of the membrane round it nor `_FLAT_CONTRAST` of its neighbours' contrast.
-
-    The flat top of an LED reflection inside the pad, at a lattice site, is a blob as large and as
-    bright above the threshold's neighbourhood mean as a pin, but round it the membrane rises to the
-    same level: above the fit it stands 0.7-1.8 standard errors and 0.03-0.08 of its neighbours'
-    contrast, where the faintest pins under the veil stand 3.3 and 0.14 (radial-led-120, seeds 0-11).
-    A pin whose membrane cannot be fitted (too little of it round the pin) is not judged.
-
-    Parameters
-    ----------
-    grey : (H, W) ndarray of uint8
-        Grey frame.
-    pins : (N, 2) ndarray
-        Pins (x, y), px.
-    radius_px : float
-        Pin tip radius, px.
-    dark_pins : bool
-        Dark markers on a light membrane (the image is inverted).
-
-    Returns
-    -------
-    flat : (N,) ndarray of bool
-        All False for fewer than 7 pins or no radius.
-    """
-    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
-    if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
-        return np.zeros(len(pins), bool)
-    image = grey.astype(np.float32)
-    if dark_pins:
-        image = 255.0 - image
-    contrast, error, _ = _core_above_membrane(image, pins, radius_px, pins)
-    _, near = cKDTree(pins).query(pins, min(_PROBE_NEIGHBOURS + 1, len(pins)))
-    with np.errstate(invalid="ignore"):
-        typical = np.nanmedian(contrast[near[:, 1:]], axis=1)
-        return (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)

@@ -7,18 +7,25 @@ shows is that the membrane's slope stops at the tip's edge. A test of "core brig
 round it" misses such a tip (its core mean is -11 to +7 grey from the membrane, noise sigma 5); the
 model of what the camera sees does not::
 
-    H1:  m(x) = (1 - c(x)) * s(x) + c(x) * L      H0:  m(x) = s(x)
+    H1:  m(x) = (1 - c(x)) * s(x) + c(x) * (L + D * q(x))      H0:  m(x) = s(x)
 
-with ``s`` a quadratic membrane, ``c`` the tip's coverage (an ellipse with a soft edge, the shape of
-the pins round the point: foreshortening makes outer tips ellipses) and ``L`` the tip's level. Both
-are linear given the point, so each is a least-squares fit, all points at once. The evidence is the
-drop in squared residual from H0 to H1 over the noise variance, ``T = (RSS0 - RSS1) / sigma^2``: for
-a pin, about its matched-filter SNR squared (6-9 for the faint outer tips of ``radial-led-120``: T
-36-80); on bare membrane (H1 one parameter more than H0), at most chi-square with one degree of
-freedom at a fixed point, so a threshold for a false-alarm rate follows from the noise alone
-(`threshold`). The variance is the larger of the camera's pixel noise and the window's own residual
-scatter under H1, so a membrane that no quadratic fits (a reflection's edge, the veil) raises the
-bar instead of passing for a tip.
+with ``s`` a quadratic membrane, ``c`` the tip's coverage (an ellipse ``q(x) <= 1`` with a soft edge,
+the shape of the pins round the point: foreshortening makes outer tips ellipses) and ``L + D q`` the
+tip's own level, domed as `pins._tipfit` models it (a hemispherical tip lit from round it is brighter
+at its centre: 25 grey from centre to edge on the faint tips of ``radial-led-120``; without the dome
+their evidence fell to half). Both are linear given the point, so each is a least-squares fit, all
+points at once. The evidence is the drop in squared residual from H0 to H1 over the noise variance,
+``T = (RSS0 - RSS1) / sigma^2``: for a pin, its matched-filter SNR squared (on noise-free renders of
+``radial-led-120`` the faint outer tips give T equal to the ideal SNR^2, 20-80 at sigma 5); on bare
+membrane (H1 has `_EXTRA` parameters more than H0) chi-square with `_EXTRA` degrees of freedom at a
+fixed point, so a threshold for a false-alarm rate follows from the noise alone (`threshold`; on
+4056 points of bare membrane of ``radial-led-120``, seeds 0-11, 0.37 % passed chi-square's 0.45 %
+point and none its 0.055 % point). The variance is the larger of the camera's pixel noise and the
+window's own residual scatter under H1, so a membrane that no quadratic fits (a reflection's edge,
+the veil) raises the bar instead of passing for a tip.
+
+`flat_pins` asks the opposite of kept blobs: an LED reflection's flat top at a lattice site stands no
+higher above a quadratic fit of the membrane round it than the membrane does (`_core_above_membrane`).
 """
 
 from __future__ import annotations
@@ -28,7 +35,7 @@ from scipy.spatial import cKDTree
 from scipy.special import erf
 from scipy.stats import chi2
 
-__all__ = ["tip_evidence", "threshold"]
+__all__ = ["flat_pins", "tip_evidence", "threshold"]
 
 _EDGE_PX = 0.55  # soft edge of the coverage (as `pins._tipfit`): erf of the distance inside / this, px
 _SATURATED = 254.0
@@ -40,11 +47,11 @@ _FOOT_PX = 2.0  # pixels this bright show no membrane level (the surround's veil
 
 def threshold(false_alarm: float, cells: np.ndarray | float) -> np.ndarray:
     """The evidence T above which bare membrane passes for a tip with probability `false_alarm`,
-    searched over `cells` independent tip-sized places (Bonferroni over chi-square, one degree of
-    freedom).
+    searched over `cells` independent tip-sized places (Bonferroni over chi-square with `_EXTRA`
+    degrees of freedom: H1's level and dome).
 
     >>> round(float(threshold(1e-3, 1.0)), 1)
-    10.8
+    13.8
     """
     return chi2.isf(false_alarm / np.maximum(np.asarray(cells, dtype=np.float64), 1.0), _EXTRA)
 
@@ -131,3 +138,112 @@ def _fit(basis: np.ndarray, values: np.ndarray, weight: np.ndarray) -> tuple[np.
     beta = np.linalg.solve(normal + ridge, (weighted @ values[..., None]))[..., 0]
     residual = values - np.einsum("pbk,pb->pk", basis, beta)
     return np.sum(weight * residual ** 2, axis=1), beta
+
+
+def _disc_offsets(reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Integer pixel offsets (dx, dy) within `reach` px of the origin."""
+    half = int(np.ceil(reach))
+    dy, dx = np.mgrid[-half:half + 1, -half:half + 1]
+    inside = np.hypot(dx, dy) <= reach
+    return dx[inside].astype(np.float64), dy[inside].astype(np.float64)
+
+
+def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Grey levels at integer pixel coordinates (any shape, clipped to the image) and whether inside."""
+    height, width = image.shape
+    inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
+    values = image[np.clip(y, 0, height - 1).astype(np.intp), np.clip(x, 0, width - 1).astype(np.intp)]
+    return values.astype(np.float64), inside
+
+
+def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
+                         pins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How far the core of a tip at each point stands above a quadratic fit of the membrane round it.
+
+    The membrane is the ring 1.5-3.5 px beyond the tip radius (pixels at the foot of another pin of
+    `pins` left out); the core is the disc of the tip radius less half a pixel (at least 1 px).
+
+    Returns
+    -------
+    contrast : (P,) ndarray
+        Mean core grey level minus the fit's mean over the core, grey levels (nan: too little membrane).
+    error : (P,) ndarray
+        Its standard error: the membrane's scatter about the fit (residual standard deviation, grey
+        levels) over the square root of the core's pixel count.
+    position : (P, 2) ndarray
+        Centroid of the core's grey levels above the fit, px (the point where none stands above).
+    """
+    dx, dy = _disc_offsets(radius_px + 3.5)
+    distance = np.hypot(dx, dy)
+    used = (distance <= max(radius_px - 0.5, 1.0)) | (distance >= radius_px + 1.5)  # the tip's edge: neither
+    dx, dy, distance = dx[used], dy[used], distance[used]
+    core, ring = distance < radius_px + 1.5, distance >= radius_px + 1.5
+    anchor = np.rint(points)
+    x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
+    values, inside = _gather(image, x, y)
+    # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
+    gap, near = cKDTree(pins).query(points, min(_FOOT_PINS, len(pins)))
+    others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near]).astype(np.float32)  # (P, F, 2)
+    xs, ys = x[:, ring].astype(np.float32), y[:, ring].astype(np.float32)
+    other = np.sqrt(np.min((xs[:, :, None] - others[:, None, :, 0]) ** 2 + (ys[:, :, None] - others[:, None, :, 1]) ** 2,
+                           axis=2))
+    # Saturated pixels (the surround's veil near the rim) show no membrane level.
+    weight = np.zeros(values.shape)
+    weight[:, ring] = inside[:, ring] & (other > radius_px + 1.5) & (values[:, ring] < _SATURATED)
+    scale = radius_px + 3.5
+    u, v = dx / scale, dy / scale
+    basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
+    # Weighted least squares for every point at once, as two matrix products over the pixels.
+    normal = (weight @ (basis[:, :, None] * basis[:, None, :]).reshape(len(basis), 36)).reshape(-1, 6, 6)
+    beta = np.linalg.solve(normal + 1e-9 * np.eye(6), ((weight * values) @ basis)[..., None])[..., 0]
+    residual = values - beta @ basis.T
+    dof = weight.sum(axis=1) - 6.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        variance = np.where(dof >= 6.0, np.sum(weight * residual ** 2, axis=1) / dof, np.nan)
+        # The core mean's standard error, its pixels scattering about the fit as the membrane's do.
+        error = np.sqrt(variance / core.sum())
+        contrast = np.where(np.isfinite(variance), residual[:, core].mean(axis=1), np.nan)
+        above = np.clip(residual[:, core], 0.0, None)
+        total = above.sum(axis=1)
+        shift = np.column_stack([above @ dx[core], above @ dy[core]]) / total[:, None]
+    position = anchor + np.where(total[:, None] > 0, shift, 0.0)
+    return contrast, error, position
+
+
+def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
+    """Which pins (N,) bool show no tip: a core that stands neither `_FLAT_SIGNIFICANCE` standard errors
+    above a quadratic fit of the membrane round it nor `_FLAT_CONTRAST` of its neighbours' contrast.
+
+    The flat top of an LED reflection inside the pad, at a lattice site, is a blob as large and as
+    bright above the threshold's neighbourhood mean as a pin, but round it the membrane rises to the
+    same level: above the fit it stands 0.7-1.8 standard errors and 0.03-0.08 of its neighbours'
+    contrast, where the faintest pins under the veil stand 3.3 and 0.14 (radial-led-120, seeds 0-11).
+    A pin whose membrane cannot be fitted (too little of it round the pin) is not judged.
+
+    Parameters
+    ----------
+    grey : (H, W) ndarray of uint8
+        Grey frame.
+    pins : (N, 2) ndarray
+        Pins (x, y), px.
+    radius_px : float
+        Pin tip radius, px.
+    dark_pins : bool
+        Dark markers on a light membrane (the image is inverted).
+
+    Returns
+    -------
+    flat : (N,) ndarray of bool
+        All False for fewer than 7 pins or no radius.
+    """
+    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
+    if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
+        return np.zeros(len(pins), bool)
+    image = grey.astype(np.float32)
+    if dark_pins:
+        image = 255.0 - image
+    contrast, error, _ = _core_above_membrane(image, pins, radius_px, pins)
+    _, near = cKDTree(pins).query(pins, min(_FLAT_NEIGHBOURS + 1, len(pins)))
+    with np.errstate(invalid="ignore"):
+        typical = np.nanmedian(contrast[near[:, 1:]], axis=1)
+        return (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)
