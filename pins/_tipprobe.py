@@ -38,11 +38,19 @@ from scipy.stats import chi2
 __all__ = ["flat_pins", "tip_evidence", "threshold"]
 
 _EDGE_PX = 0.55  # soft edge of the coverage (as `pins._tipfit`): erf of the distance inside / this, px
-_SATURATED = 254.0
+_SATURATED = 254.0  # pixels this bright show no membrane level (the surround's veil)
 # H1 has this many parameters more than H0 (the tip's level and dome): the null's degrees of freedom.
 _EXTRA = 2
 # Another pin's tip and foot reach this far beyond the tip's major semi-axis (the soft edge, blur), px.
-_FOOT_PX = 2.0  # pixels this bright show no membrane level (the surround's veil)
+_FOOT_PX = 2.0
+# A kept pin whose core stands neither this many standard errors above the membrane's fit nor this
+# fraction of the contrast of its `_FLAT_NEIGHBOURS` nearest pins is no tip (an LED reflection's flat
+# top): `flat_pins`.
+_FLAT_SIGNIFICANCE = 2.5
+_FLAT_CONTRAST = 0.2
+_FLAT_NEIGHBOURS = 6
+# The pins whose feet are left out of the membrane round a point: its nearest this many (itself included).
+_FOOT_PINS = 7
 
 
 def threshold(false_alarm: float, cells: np.ndarray | float) -> np.ndarray:
@@ -71,7 +79,8 @@ def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins
         ``r^2 I``).
     pins : (N, 2) ndarray
         Pins known round the points, px: pixels near one (its tip and foot) are no
-        membrane (`_FOOT_PX` beyond the major semi-axis); a pin within half a tip radius of a point is that point's own and is not left out.
+        membrane (`_FOOT_PX` beyond the major semi-axis); a pin within half a tip radius of a point
+        is that point's own and is not left out.
     noise_sigma : float
         The camera's pixel noise, grey levels: the least variance the test assumes.
 
