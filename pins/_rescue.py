@@ -326,7 +326,7 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
         sites, tolerance, through = sites[far], tolerance[far], through[far]
         if not len(sites):
             break
-        position, evidence, bar, level, contrast, typical_level, typical_contrast = _measure_holes(
+        position, evidence, bar, contrast, typical_contrast = _measure_holes(
             grey, image, pins, sites, tolerance, radius_px)
         with np.errstate(invalid="ignore"):
             good = ((evidence >= bar) & (np.abs(contrast) <= _MAX_CONTRAST * typical_contrast)
@@ -388,39 +388,52 @@ def _measure_holes(grey: np.ndarray, image: np.ndarray, pins: np.ndarray, sites:
     """The best place for a tip within each site's tolerance and what it shows (`pins._tipprobe`).
 
     The tip's expected shape at a site is the median ellipse of the `_PROBE_NEIGHBOURS` pins nearest it
-    (`pins._tipfit.tip_shapes`); its place, the point of a `_PROBE_STEP_PX` grid within the tolerance
-    with the most evidence; the bar, the evidence bare membrane reaches with probability
-    `_FALSE_ALARM` over the tip-sized cells of that disc.
+    (`pins._tipfit.tip_shapes`); its place, the point of a 1 px grid within the tolerance with the
+    most evidence, refined on a `_PROBE_STEP_PX` grid round it; the bar, the evidence bare membrane
+    reaches with probability `_FALSE_ALARM` over the tip-sized cells of that disc.
 
     Returns
     -------
-    position (S, 2) px, evidence (S,), bar (S,), level (S,) and contrast (S,) grey levels, and the
-    median level and absolute contrast (S,) of the pins round each site, measured the same way.
+    position (S, 2) px, evidence (S,), bar (S,), contrast (S,) grey levels, and the median absolute
+    contrast (S,) of the pins round each site, measured the same way.
     """
     sigma = noise_sigma(grey)
-    shapes = tip_shapes(image, pins, radius_px)
     _, near = cKDTree(pins).query(sites, min(_PROBE_NEIGHBOURS, len(pins)))
     near = near.reshape(len(sites), -1)
+    # Only the pins round the sites are fitted (a pad of 532 pins with 5 holes: 30 of them).
+    used = np.unique(near)
+    shapes = np.full((len(pins), 2, 2), np.nan)
+    shapes[used] = tip_shapes(image, pins, radius_px, which=used)
     expected = np.median(shapes[near], axis=1)  # (S, 2, 2)
-    steps = np.arange(-np.ceil(tolerance.max() / _PROBE_STEP_PX), np.ceil(tolerance.max() / _PROBE_STEP_PX) + 1)
-    gx, gy = (a.ravel() * _PROBE_STEP_PX for a in np.meshgrid(steps, steps))
-    within = np.hypot(gx, gy)[None] <= tolerance[:, None]  # (S, G)
+    # The best place on a 1 px grid within the tolerance, then on a `_PROBE_STEP_PX` grid round it.
+    position, evidence, contrast = _best_place(image, sites, sites, tolerance, expected, pins, sigma, 1.0, tolerance)
+    position, evidence, contrast = _best_place(image, sites, position, tolerance, expected, pins, sigma,
+                                               _PROBE_STEP_PX, np.full(len(sites), _PROBE_STEP_PX))
+    tip_area = np.pi * np.sqrt(np.linalg.det(expected))
+    bar = threshold(_FALSE_ALARM, 1.0 + np.pi * tolerance ** 2 / tip_area)
+    pin_contrast = np.full(len(pins), np.nan)
+    pin_contrast[used] = tip_evidence(image, pins[used], shapes[used], pins, sigma)[2]
+    with np.errstate(invalid="ignore"):
+        typical_contrast = np.nanmedian(np.abs(pin_contrast[near]), axis=1)
+    return position, evidence, bar, contrast, typical_contrast
+
+
+def _best_place(image, sites, around, tolerance, expected, pins, sigma, step, reach):
+    """Per site, the point of a `step` px grid within `reach` of `around` and `tolerance` of the site
+    with the most tip evidence: (points (S, 2) px, evidence (S,), contrast (S,) grey levels)."""
+    half = np.ceil(reach.max() / step)
+    steps = np.arange(-half, half + 1) * step
+    gx, gy = (a.ravel() for a in np.meshgrid(steps, steps))
+    candidates = around[:, None, :] + np.stack([gx, gy], axis=1)[None]  # (S, G, 2)
+    within = ((np.hypot(gx, gy)[None] <= reach[:, None] + 1e-9)
+              & (np.hypot(*(candidates - sites[:, None, :]).transpose(2, 0, 1)) <= tolerance[:, None] + 1e-9))
+    within[:, np.argmin(np.hypot(gx, gy))] = True  # `around` itself, always
     owner, cell = np.nonzero(within)
-    points = sites[owner] + np.column_stack([gx[cell], gy[cell]])
-    found, level, contrast = tip_evidence(image, points, expected[owner], pins, sigma)
+    found, _, contrast = tip_evidence(image, candidates[owner, cell], expected[owner], pins, sigma)
     score = np.full(within.shape, -np.inf)
     score[owner, cell] = np.nan_to_num(found, nan=-np.inf)
     best = np.argmax(score, axis=1)
     pick = np.full(within.shape, -1)
     pick[owner, cell] = np.arange(len(owner))
     chosen = pick[np.arange(len(sites)), best]
-    tip_area = np.pi * np.sqrt(np.linalg.det(expected))
-    bar = threshold(_FALSE_ALARM, 1.0 + np.pi * tolerance ** 2 / tip_area)
-    used = np.unique(near)
-    pin_level, pin_contrast = np.full(len(pins), np.nan), np.full(len(pins), np.nan)
-    _, pin_level[used], pin_contrast[used] = tip_evidence(image, pins[used], shapes[used], pins, sigma)
-    with np.errstate(invalid="ignore"):
-        typical_level = np.nanmedian(pin_level[near], axis=1)
-        typical_contrast = np.nanmedian(np.abs(pin_contrast[near]), axis=1)
-    return (points[chosen], score[np.arange(len(sites)), best], bar, level[chosen], contrast[chosen],
-            typical_level, typical_contrast)
+    return candidates[np.arange(len(sites)), best], score[np.arange(len(sites)), best], contrast[chosen]

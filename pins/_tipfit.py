@@ -87,34 +87,40 @@ def fit_tip_centres(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, 
     return fixed[:, :2].copy()
 
 
-def tip_shapes(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
-    """Each tip's ellipse as the first pass of `fit_tip_centres` fits it (the ellipse free): the tip
-    covers ``{e : e^T shape^-1 e <= 1}``, (N, 2, 2) px^2; ``radius_px^2 I`` where a fit fails or for
-    fewer than two pins. Noisy for a faint tip: take a median over neighbours."""
+def tip_shapes(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, dark_pins: bool = False,
+               which: np.ndarray | None = None) -> np.ndarray:
+    """Tips' ellipses as the first pass of `fit_tip_centres` fits them (the ellipse free): a tip covers
+    ``{e : e^T shape^-1 e <= 1}``, (M, 2, 2) px^2, for the pins `which` (indices into `centres`; all
+    when None), their windows clear of every other pin's foot; ``radius_px^2 I`` where a fit fails,
+    for fewer than two pins or no radius. Noisy for a faint tip: take a median over neighbours."""
     start = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
-    circle = np.repeat((radius_px ** 2 * np.eye(2))[None], len(start), axis=0)
-    if len(start) < 2 or not (np.isfinite(radius_px) and radius_px > 0):
+    which = np.arange(len(start)) if which is None else np.asarray(which, dtype=np.intp)
+    circle = np.repeat((radius_px ** 2 * np.eye(2))[None], len(which), axis=0)
+    if len(start) < 2 or not len(which) or not (np.isfinite(radius_px) and radius_px > 0):
         return circle
-    _, theta = _free_fit(grey, start, radius_px, dark_pins)
+    _, theta = _free_fit(grey, start, radius_px, dark_pins, which)
     q = np.stack([theta[:, 2:4], theta[:, 3:5]], axis=1)
     good = np.isfinite(q).all(axis=(1, 2)) & (np.linalg.det(q) > 0)
     circle[good] = np.linalg.inv(q[good])
     return circle
 
 
-def _free_fit(grey: np.ndarray, start: np.ndarray, radius_px: float, dark_pins: bool):
-    """The tips' windows and their fit with the ellipse free: (`_Windows`, theta (N, 5))."""
+def _free_fit(grey: np.ndarray, start: np.ndarray, radius_px: float, dark_pins: bool, which: np.ndarray | None = None):
+    """The windows of the tips `which` (all when None) and their fit with the ellipse free:
+    (`_Windows`, theta (M, 5)); every pin of `start` is a neighbour whose foot is left out."""
     image = grey.astype(np.float64)
     if dark_pins:
         image = 255.0 - image
-    distance, index = cKDTree(start).query(start, min(8, len(start)))
+    which = np.arange(len(start)) if which is None else which
+    distance, index = cKDTree(start).query(start[which], min(8, len(start)))
     nearest = distance[:, 1]
     reach = np.minimum(1.5 * radius_px + 1.0 + _MARGIN_PX, nearest - 0.5 * radius_px)
-    window = _Windows(image, start, reach, start[index[:, 1:]], nearest)
-    theta = np.zeros((len(start), 5))
-    theta[:, :2] = start
+    own = start[which]
+    window = _Windows(image, own, reach, start[index[:, 1:]], nearest)
+    theta = np.zeros((len(own), 5))
+    theta[:, :2] = own
     theta[:, 2] = theta[:, 4] = 1.0 / radius_px ** 2
-    return window, _gauss_newton(window, theta, start, radius_px, free=5, passes=_FULL_PASSES)
+    return window, _gauss_newton(window, theta, own, radius_px, free=5, passes=_FULL_PASSES)
 
 
 class _Windows:
