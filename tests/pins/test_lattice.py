@@ -491,9 +491,11 @@ def test_probing_adds_no_pin_off_the_pad(name):
 
 
 def test_radial_layout_with_led_reflections_count_over_many_seeds():
-    """Issue 20, outcome 7, over seeds 0-11 at rest and under a 5 mm tap: the count within 3 % on every
-    frame, no reflection (nor anything else) kept, 99 % of the pins found; the bar of 1 % is met on most
-    frames (17 of 24 when this was written; the rest miss 2-3 faint outer-ring tips, `NOT_YET_MET`)."""
+    """Issue 20, outcome 7's bar, over seeds 0-11 at rest and under a 5 mm tap: the count within 1 % on every
+    frame, no reflection (nor anything else) kept, at most 2 of the 2880 pins missed (none when this was
+    written). Before the holes were probed with the opaque-tip test (`pins._tipprobe`) 23 were missed and
+    the bar met on 17 of 24 frames. (Seeds 0-11 are those the probe was developed on; on seeds 12-35 the
+    bar was met on 45 of 48 frames, see `NOT_YET_MET`.)"""
     within_bar = missed = drawn = 0
     for seed in range(12):
         for contact in (None, TAP):
@@ -505,4 +507,4 @@ def test_radial_layout_with_led_reflections_count_over_many_seeds():
             within_bar += abs(field.count - visible) <= 0.01 * visible
             missed += round((1.0 - recall) * visible)
             drawn += visible
-    assert missed <= 0.01 * drawn and within_bar >= 12, (missed, within_bar)
+    assert missed <= 2 and within_bar == 24, (missed, within_bar)
