@@ -85,8 +85,6 @@ _LEVEL_RANGE = (0.8, 1.5)
 # of one radius (`_empty_zone`).
 _HUB_RING = 5
 _HUB_SPREAD = 0.25
-# ... and at most this many times their contrast (the bright surround's edge, a glare spot).
-_MAX_CONTRAST = 2.0
 
 
 def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts: np.ndarray,
