@@ -81,6 +81,7 @@ _PROBE_STEP_PX = 0.5
 _PROBE_NEIGHBOURS = 6
 _PROBE_BEYOND = 0.3
 _LEVEL_RANGE = (0.8, 1.5)
+_MOST_FOUND = 0.1
 # A radial layout's centre pin is probed when at least this many pins ring it within this fraction
 # of one radius (`_empty_zone`).
 _HUB_RING = 5
@@ -312,6 +313,7 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     image = grey.astype(np.float32)
     if dark_pins:
         image = 255.0 - image
+    pins0 = pins
     field_reach = float(np.max(np.hypot(pins[:, 0] - centre[0], pins[:, 1] - centre[1])))
     inner, hub = _empty_zone(pins, centre)
     taken: list[np.ndarray] = []
@@ -347,7 +349,10 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
         fresh = len(pins)
         taken.append(position[np.sort(found)])
         pins = np.vstack([pins, taken[-1]])
-    return np.vstack(taken) if taken else none
+    found_all = np.vstack(taken) if taken else none
+    # Holes are the exception in a lattice: a field the probe would grow by more than `_MOST_FOUND` of
+    # its pins is no lattice with holes (the wrong polarity's field of a white-on-dark pad: 24 + 37).
+    return found_all if len(found_all) <= _MOST_FOUND * len(pins0) else none
 
 
 def _empty_zone(pins: np.ndarray, centre: tuple[float, float]) -> tuple[float, np.ndarray | None]:
