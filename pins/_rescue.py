@@ -269,7 +269,8 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     round it (`pins._tipprobe.tip_evidence`) is a pin when that evidence passes the bar for a
     false-alarm rate of `_FALSE_ALARM` per hole (set from the noise: `pins._tipprobe.threshold`), its
     level is within `_LEVEL_RANGE` of theirs, it lies inside the disc and no closer than
-    `_APART` local pitches to a pin. Pins found predict again, for `_ROUNDS` rounds at most.
+    `_APART` local pitches to a pin. Pins found predict again, for `_ROUNDS` rounds at most. A field
+    the probe would grow by more than `_MOST_FOUND` of its pins gets none (it is no lattice with holes).
 
     Parameters
     ----------

@@ -380,8 +380,10 @@ def test_radial_layout_with_led_reflections_keeps_the_pins_on_them(seed):
         recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
         assert precision == 1.0 and recall >= 0.97, (contact, recall, precision, field.summary())
         # Tips fitted as opaque ellipses over the reflections' and the veil's curved flanks: 0.09-0.11 px
-        # (blob centroids leaning up those flanks: 0.12-0.19; the bar of 0.1 is not met everywhere).
-        assert rmse <= 0.12, (contact, rmse)
+        # (blob centroids leaning up those flanks: 0.12-0.19; the bar of 0.1 is not met everywhere). The
+        # faint outer-ring tips the probe finds (SNR 6-9) are placed to 0.37 px RMSE (30 of them, seeds
+        # 0-11): with them 0.09-0.14.
+        assert rmse <= 0.14, (contact, rmse)
         assert abs(field.count - int(f.visible.sum())) <= 0.03 * f.visible.sum()
         truth = f.centres[f.visible]
         reach = np.min(np.hypot(*(truth[:, None] - sensor.reflection_centres[None]).transpose(2, 0, 1))
