@@ -36,6 +36,16 @@ With ``--slides N`` the video is instead issue 20's real-like slide video (bar: 
 pad, a very bright surround, 120 frames/s) sliding 3 pitches in N directions round the compass,
 with 3-frame rests between the slides (`tactip.sim.SyntheticTacTip.slides`).
 
+Figures for ``--slides 8 --codec MJPG`` (795 frames, 120 pins; best of 3 repeats, 3 rounds interleaved
+with the code before this session's changes, on the 2-core VM shared with four other sessions at load
+average 21-26): CPU, ms/frame: decoding 1.20-1.45, replay's main thread 2.07-2.20 (1.50-1.79 x
+decoding), its decode thread 1.55-1.69, the field 0.25, the tracker 1.58-1.80, window measurements
+4.21 per frame; the code before: decoding 1.12-1.48, main thread 1.82-2.31 (1.35-1.77 x), tracker
+1.51-1.75. At that load the clock says nothing (replay / decode per repeat 2.0-10.5 on either side);
+the tracker alone, 10 interleaved rounds of `PinTracker.update` over the decoded frames: 1.44-2.29
+ms/frame against 1.52-2.81 before (median of the paired ratios 0.94). The bar (1.5) is not met.
+`bench_replay_parts.py` splits the main thread by part.
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
 """

@@ -61,7 +61,7 @@ def _evaluate_all(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: d
 def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict) -> _Run:
     """Detect with one candidate parameter set and judge the blobs."""
     blobs = _detect(grey, disc, params, cache)
-    reason, pitch = _judge_lattice(blobs, _sharpness(grey, blobs, params, cache))
+    reason, pitch = _judge_lattice(blobs, _sharpness(grey, blobs, params, cache, disc))
     return _Run(params, blobs, reason, pitch)
 
 

@@ -119,17 +119,20 @@ class _Following:
             # followed from its guess settles to a few tenths of a px, near its guess.
             like = self._like_at_rest(measures, pins)
             settled = moved <= self._settled_px ** 2
-            # In the last pass a pin followed from its guess may settle as loosely as a searched one
-            # (a faint tip's centroid jitters in camera noise by more than a few tenths of a px), but
-            # no farther from its guess than that: a window still drifting is no tip of its own.
-            ok = like & np.where(searched, settled & (error <= self.gate_px ** 2),
-                                 ((moved <= fine) & (error <= reach)) | (last & settled & (error <= self._settled_px ** 2)))
+            followed = (moved <= fine) & (error <= reach)
+            if last:
+                # In the last pass a pin followed from its guess may settle as loosely as a searched one
+                # (a faint tip's centroid jitters in camera noise by more than a few tenths of a px), but
+                # no farther from its guess than that: a window still drifting is no tip of its own.
+                followed |= settled & (error <= self._settled_px ** 2)
+            ok = like & np.where(searched, settled & (error <= self.gate_px ** 2), followed)
             positions[pins[ok]] = centres[ok]
             placed.append(chain[ok])
             # Go on while the window holds a tip like the pin's (or a search has just started).
-            going = ~ok & np.isfinite(centres[:, 0]) & (searched | (error <= reach)) & (like | fresh)
+            going = ~ok & np.isfinite(centres[:, 0]) & (searched | (error <= reach))
+            going &= like if fresh is None else like | fresh
             chain, points, searched = chain[going], centres[going], searched[going]
-            fresh = np.zeros(chain.size, dtype=bool)
+            fresh = None  # (searches start fresh in the first of these passes only)
         # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
         # the others can have reached a neighbour's tip.
         placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]

@@ -14,6 +14,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .detect import Blobs, DetectionParams
+from .disc import SensorDisc
 
 
 #: Why a candidate blob was rejected, in `PinField.rejected_reason`.
@@ -31,6 +32,8 @@ _MIN_CONTRAST = 0.5
 _MIN_SHARPNESS = 0.8
 # Below this tip radius, px, the steepest slope depends on where the pixel grid cuts the tip.
 _SHARP_RADIUS = 2.0
+# The blurred casing edge reaches this many blur sigmas into the disc (the blur's kernel half-width).
+_EDGE_REACH = 2.5
 _TOO_CLOSE = 0.6
 _LINK = 1.3
 # Lattice sites: a mirror image within this fraction of the link length anchors a blob; a blob with
@@ -52,12 +55,15 @@ _HULL_MARGIN = 0.3
 _OUTSIDE_MARGIN = 0.5
 
 
-def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: dict | None = None) -> np.ndarray:
+def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: dict | None = None,
+               disc: SensorDisc | None = None) -> np.ndarray:
     """Steepest grey-level slope near each blob over its contrast, 1/px.
 
     A pin tip is a disc with a sharp edge; glare, light patches of skin and shadows are smooth. On
     tips smaller than `_SHARP_RADIUS` the slope depends on where the pixel grid cuts the tip: all ones.
-    `cache` keeps the slope image per blur between candidate sets.
+    `cache` keeps the slope image per blur between candidate sets. Within `_EDGE_REACH` blur sigmas
+    (plus the Sobel's pixel) of the rim of `disc` the slope is the casing's edge, not the blob's
+    (a soft skin highlight or glare just inside the rim would look as sharp as a pin): it is left out.
     """
     n = len(blobs.centres)
     radius = float(np.sqrt(np.median(blobs.areas) / np.pi)) if n else 0.0
@@ -75,15 +81,23 @@ def _sharpness(grey: np.ndarray, blobs: Blobs, params: DetectionParams, cache: d
     reach = int(np.ceil(radius + 1.5))
     dy, dx = np.mgrid[-reach:reach + 1, -reach:reach + 1]
     inside = dx**2 + dy**2 <= (radius + 1.5) ** 2
+    dx, dy = dx[inside], dy[inside]
     x = np.rint(blobs.centres[:, 0]).astype(np.intp)
     y = np.rint(blobs.centres[:, 1]).astype(np.intp)
     height, width = grey.shape
     if n and x.min() >= reach and y.min() >= reach and x.max() < width - reach and y.max() < height - reach:
         # Every disc of pixels inside the image: one flat gather (no clipping).
-        steepest = slope.ravel().take((y * width + x)[:, None] + (dy * width + dx)[inside]).max(axis=1)
+        slopes = slope.ravel().take((y * width + x)[:, None] + (dy * width + dx))
     else:
-        steepest = slope[np.clip(y[:, None] + dy[inside], 0, height - 1),
-                         np.clip(x[:, None] + dx[inside], 0, width - 1)].max(axis=1)
+        slopes = slope[np.clip(y[:, None] + dy, 0, height - 1), np.clip(x[:, None] + dx, 0, width - 1)]
+    if disc is not None and not disc.whole_frame:
+        # Only the blobs within reach of the casing's blurred edge: their pixels there left out.
+        limit = disc.radius_px - _EDGE_REACH * sigma - 1.5
+        rim = np.flatnonzero(np.hypot(x - disc.cx, y - disc.cy) > limit - reach)
+        if rim.size:
+            beyond = np.hypot(x[rim, None] + dx - disc.cx, y[rim, None] + dy - disc.cy) > limit
+            slopes[rim] = np.where(beyond, 0.0, slopes[rim])
+    steepest = slopes.max(axis=1)
     return steepest / np.maximum(blobs.contrasts, 1e-6)
 
 

@@ -5,7 +5,7 @@ Refinement. Lucas-Kanade errors add up from frame to frame, so each tracked pin 
 the intensity-weighted centroid of its tip in a small window around its estimate (its guess,
 `Refiner.follow`, or its LK estimate, `Refiner.refine`; `WindowCentroids`). All windows are gathered at once from the grey crop (a fancy index into its
 sliding-window view, as `numpy.lib.stride_tricks.sliding_window_view` makes) and processed as
-one (N, P) uint8 array, O(pins x window):
+one (N, P) array (uint8 pixels, float32 weights), O(pins x window):
 
 1. the threshold of each window lies above its local background, a plane through the darkest
    runs of pixels along the window's four sides (`pins._window`; tilted only where it rises by

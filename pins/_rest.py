@@ -118,18 +118,20 @@ class _AtRest:
             return positions
         still = distance <= (_STILL_FRACTION * self.spacing_px) ** 2
         placed = np.count_nonzero(np.isfinite(distance))
+        if np.count_nonzero(still) < _STILL_SHARE * placed:
+            return positions  # the pad is not at rest (most frames of a contact: decided before the rest)
         # A moving pad's field of displacements is continuous: between its still pins and those
         # moved farther than the gate lie pins moved by less. Pins put on wrong tips are off by
         # a whole spacing, with none in between.
         # A faint tip's window jitters in noise by up to a fifth of the spacing: a pin within that of
         # rest whose neighbours are still is such jitter, not motion.
         between = np.flatnonzero(~still & ~far & np.isfinite(distance))
-        if between.size and np.count_nonzero(still) >= _STILL_SHARE * placed:
+        if between.size:
             around = _squared_norm(self.neighbour_median(positions - self.rest_positions, between))
             jitter = (around <= (_STILL_FRACTION * self.spacing_px) ** 2) & (
                 distance[between] <= (2.0 * _STILL_FRACTION * self.spacing_px) ** 2)
             between = between[~jitter]
-        if np.count_nonzero(still) < _STILL_SHARE * placed or between.size > _BETWEEN_SHARE * placed:
+        if between.size > _BETWEEN_SHARE * placed:
             return positions  # the pad is not at rest
         look = np.flatnonzero(drifted | (np.isnan(distance) & search))
         rest = self.rest_positions[look]

@@ -97,6 +97,7 @@ class WindowCentroids:
         self._phase_steps = np.array([1.0, float(self._n_phases)])
         self._mask_base = float((_PHASES // 2) * (self._n_phases + 1) - self._n_phases ** 2)
         self._layouts: dict = {}
+        self._viewed = (None, None, None)  # (image, corner bounds, sliding view): the last image measured
 
     def __repr__(self) -> str:
         return (f"WindowCentroids(half_px={self.half_px}, threshold_fraction={self.threshold_fraction}, "
@@ -174,8 +175,22 @@ class WindowCentroids:
             self._layouts[shape] = layout
         return layout
 
-    def _sums_of(self, patches: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """Of (N, P) uint8 windows: the tip's top (the mean of the five centre pixels, (N,)), the darkest
+    def _view(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The bounds of a window's corner (`_layout`) and the (H - side + 1, W - side + 1, side, side)
+        sliding-window view of a grey `image`; kept for the last image (a frame's windows are measured
+        a few times, on the same crop)."""
+        seen, bounds, view = self._viewed
+        if image is seen:
+            return bounds, view
+        contiguous = np.ascontiguousarray(image)
+        bounds, view_shape = self._layout(contiguous.shape)
+        view = np.ndarray(view_shape, np.uint8, contiguous, 0, contiguous.strides * 2)
+        if contiguous is image:  # (a copy would not show later changes to the image)
+            self._viewed = (image, bounds, view)
+        return bounds, view
+
+    def _sums_of(self, patches: np.ndarray, grey: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """Of (N, P) uint8 windows (`grey`: the same as float32): the tip's top (the mean of the five centre pixels, (N,)), the darkest
         run of `_SIDE_RUN` pixels along each side (left, right, top, bottom; their sums, (N, 4)) and,
         with `above_mean`, the window's mean (N,, else None), float64, grey levels.
 
@@ -185,7 +200,7 @@ class WindowCentroids:
         n, pixels = patches.shape
         if n * pixels <= self._product_pixels:
             # (Few enough multiply-adds for one BLAS thread.)
-            sums = np.dot(patches.astype(np.float32), self._sums).astype(np.float64)
+            sums = np.dot(grey, self._sums).astype(np.float64)
             darkest = np.minimum.reduce(sums[:, 1:-1].reshape(n, -1, 4), axis=1)
             return sums[:, 0] / len(self._top), darkest, sums[:, -1] / pixels if self.above_mean else None
         top = np.add.reduce(patches[:, self._top], axis=1, dtype=np.float64) / len(self._top)
@@ -202,8 +217,7 @@ class WindowCentroids:
             return np.empty((0, 2)), np.empty((3, 0))
         # Called a few times a frame, mostly on a few dozen windows: each NumPy call's own cost
         # counts, so the work is in as few calls as possible (ufuncs and np.dot called directly).
-        image = np.ascontiguousarray(image)
-        bounds, view_shape = self._layout(image.shape)
+        bounds, view = self._view(image)
         anchor = np.rint(points)
         corner = anchor.astype(np.intp)
         corner -= half
@@ -214,9 +228,9 @@ class WindowCentroids:
             fits = inside[:, 0] & inside[:, 1]
             corner *= fits[:, None]  # a window that does not fit: the image's corner's (its centre NaN)
         # All windows at once: a (H - side + 1, W - side + 1, side, side) sliding view, fancy-indexed.
-        view = np.ndarray(view_shape, np.uint8, image, 0, image.strides * 2)
         patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)  # (N, P) copy
-        top, darkest, mean = self._sums_of(patches)
+        weights = patches.astype(np.float32)  # the pixels' grey levels, then (in place) their weights
+        top, darkest, mean = self._sums_of(patches, weights)
         # The local background: a plane through the darkest of the runs of `_SIDE_RUN` pixels along
         # each of the window's sides (left, right, top, bottom), where no neighbour's foot or glare
         # lies, a run averaging the noise down. Judged above that plane, a tip on the slope of an LED
@@ -241,19 +255,19 @@ class WindowCentroids:
             # value): on a textured or shadowed skin the membrane's texture must not count.
             lift = np.minimum(np.maximum(lift, mean - background), positive)
         level = background + lift  # the threshold at the window's centre, <= top
-        # Windows on a slope (few) weigh their pixels above the threshold plane, in whole grey
-        # levels so that weights stay integers; the others above a flat threshold, in uint8.
+        # Each pixel weighs its grey level above the threshold (its positive part), in whole grey levels
+        # so that weights are integers: windows on a slope above the threshold plane, the others above
+        # a flat threshold.
         if sloped.size:
             coefficients = np.empty((sloped.size, 3), np.float32)  # level, slope x, y (grey levels per px)
             coefficients[:, 0] = level[sloped]
             coefficients[:, 1:] = rise[sloped] * ((1.0 - np.maximum(shrink[sloped], 0.0)) / half)[:, None]
             tilted = np.rint(np.dot(coefficients, self._plane))  # (k, P) threshold plane
-            np.subtract(patches[sloped], tilted, out=tilted)
-            np.maximum(tilted, 0.0, out=tilted)
-        # Positive part of (pixel - threshold), in place, without leaving uint8.
-        below = np.rint(level).astype(np.uint8)[:, None]
-        np.maximum(patches, below, out=patches)
-        np.subtract(patches, below, out=patches)
+            np.subtract(weights[sloped], tilted, out=tilted)
+        np.subtract(weights, np.rint(level).astype(np.float32)[:, None], out=weights)
+        if sloped.size:
+            weights[sloped] = tilted
+        np.maximum(weights, 0.0, out=weights)
         # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
         # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x).
         phase = np.rint((points - anchor) * _PHASES)
@@ -262,11 +276,7 @@ class WindowCentroids:
         # Phases run from -_PHASES // 2 and radius indices from 1 (the mask of radius r/4 is row r - 1).
         mask = np.dot(phase, self._phase_steps)
         mask += radius * self._n_phases ** 2 + self._mask_base
-        masks = self._masks[mask.astype(np.intp)]
-        np.multiply(patches, masks, out=patches)
-        weights = patches.astype(np.float32)
-        if sloped.size:
-            weights[sloped] = tilted * masks[sloped]
+        np.multiply(weights, self._masks[mask.astype(np.intp)], out=weights)
         # (N, 4): mass, sum x, sum y, sum r^2.
         moments = _dot(weights, self._moments, self._moment_rows).astype(np.float64)
         mass = moments[:, 0]

@@ -24,7 +24,8 @@ finds that lattice without being told the pin count:
    changes its neighbours' statistics), each blob against the medians of its six nearest
    neighbours: ``size`` when its area is below 0.4 or above 2.2 of theirs (or its box poorly
    filled); ``contrast`` when fainter than half of theirs, or with edges much softer (glare and
-   patches of skin are smooth, pin tips are discs with a sharp edge); ``off lattice`` when within
+   patches of skin are smooth, pin tips are discs with a sharp edge; the casing's blurred edge
+   next to a blob by the rim is not its edge); ``off lattice`` when within
    0.6 local pitches of a stronger blob (a speck, a light patch between pins), or when it sits at no
    lattice site and does not look just like its neighbours. A lattice site is found by mirror
    images: a pin is the mirror of a neighbour through another neighbour (six times for interior
@@ -64,7 +65,9 @@ finds that lattice without being told the pin count:
 The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided the same way
 when it is not given: both are searched (each inside its own sensor disc) and the one whose lattice
 keeps more pins wins (a polarity without a disc of its own, white pins on a dark membrane in a dark
-casing, is searched in the other's disc when that one's lattice is sparse); a frame where neither
+casing, is searched in the other's disc when that one's lattice is small, sparse, or outnumbered at
+its own pitch by one candidate set of the other polarity: under a tap the pressed white pins darken
+and with the gaps between the others make a dark lattice at the pins' pitch); a frame where neither
 keeps `MIN_SENSOR_PINS` shows no sensor (`NoSensorError`, saying why for each). `tactip detect` and `tactip replay` both decide so.
 
 Sensors without a disc (a flat gel such as GelSight's: dark markers on a rectangular grid filling the
@@ -99,7 +102,7 @@ from ._draw import draw_pin_field
 from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._tipprobe import flat_pins
-from ._candidates import _MATCH, _candidates, _consensus, _evaluate_all, _final_params
+from ._candidates import _MATCH, _candidates, _consensus, _evaluate, _evaluate_all, _final_params
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
@@ -306,10 +309,13 @@ def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc 
         field = _search(grey, found, start.replace(dark_pins=dark), False, expected_pins)
         fields.append(field)
         why.append(f"{name}: {field.count} pins form a lattice")
-    if len(fields) == 1 and disc is None and (fields[0].count < MIN_SENSOR_PINS or _sparse(fields[0])):
+    if len(fields) == 1 and disc is None and (fields[0].count < MIN_SENSOR_PINS or _sparse(fields[0])
+                                              or _other_keeps_more(grey, fields[0], start)):
         # No disc of the other polarity (white pins on a dark membrane in a dark casing: no bright
-        # surround frames the pad), and this one's lattice is no sensor's or fills little of its disc
-        # (the dark gaps between white pins): the other polarity is searched in this disc, grown.
+        # surround frames the pad), and this one's lattice is no sensor's, fills little of its disc
+        # (the dark gaps between white pins), or is outnumbered by the other polarity's at its own
+        # pitch (white pins darkened by a tap form a patch of dark lattice among the gaps): the other
+        # polarity is searched in this disc, grown.
         found = fields[0]
         other = not found.params.dark_pins
         grown = SensorDisc(found.disc.cx, found.disc.cy, _BORROW * found.disc.radius_px)
@@ -341,6 +347,25 @@ def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc 
         raise NoSensorError(f"no sensor in the frame: no pin lattice of at least {MIN_SENSOR_PINS} pins ("
                             + "; ".join(why) + ")")
     return best
+
+
+def _other_keeps_more(grey: np.ndarray, field: PinField, start: DetectionParams) -> bool:
+    """Whether one candidate set of the other polarity, at `field`'s pitch in its disc, keeps more
+    lattice pins than `field` (one detection, a twentieth of a search).
+
+    A lattice of one polarity that is really the other's (the gaps between white pins on a dark
+    membrane, and the pins a tap darkens) is outnumbered there by the other's pins; a sensor's own
+    lattice is not (the gaps between its pins and its glare, at its pitch, keep at most about 3/4 as
+    many on every preset, at rest and tapped).
+    """
+    if field.count < 2 or not np.isfinite(field.pitch_px):
+        return False
+    other = start.replace(dark_pins=not field.params.dark_pins)
+    probe = next(_candidates(np.array([field.pitch_px]), other, _COARSE_BLOCK, _COARSE_OFFSETS))
+    # Touching blobs are not split: the other polarity's pins stand apart, and splitting the network
+    # of a membrane seen the wrong way round costs more than the rest of the probe.
+    probe = probe.replace(split_radius_px=0.0)
+    return int(_evaluate(grey, field.disc, probe, {}).kept.sum()) > field.count
 
 
 def _sparse(field: PinField) -> bool:
