@@ -270,9 +270,8 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     false-alarm rate of `_FALSE_ALARM` per hole (set from the noise: `pins._tipprobe.threshold`), its
     level is within `_LEVEL_RANGE` of theirs, it lies inside the disc and no closer than
     `_APART` local pitches to a pin. Pins found predict again, for `_ROUNDS` rounds at most. A field
-    the probe would grow by more than `_MOST_FOUND` of its pins, or with more than twice as many
-    predicted sites, gets none (it is no lattice with holes: the wrong polarity's field of a white-on-
-    dark pad).
+    the probe would grow by more than `_MOST_FOUND` of its pins, or with more predicted sites than
+    pins, gets none (it is no lattice with holes: the wrong polarity's field of a white-on-dark pad).
 
     Parameters
     ----------
@@ -333,8 +332,8 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
         sites, tolerance, through = sites[far], tolerance[far], through[far]
         if not len(sites):
             break
-        if len(sites) > 2.0 * _MOST_FOUND * len(pins0):
-            return none  # holes everywhere (each predicted by a few links): no lattice with holes
+        if len(sites) > len(pins0):
+            return none  # more predicted sites than pins: no lattice with holes
         position, evidence, bar, level, typical_level = _measure_holes(
             grey, image, pins, sites, tolerance, radius_px)
         with np.errstate(invalid="ignore"):
