@@ -22,21 +22,28 @@ pitches, so that no chain reaches the glare on the rim. A gap in a curved row (a
 innermost ring, where a mirror image through a neighbour misses the next site by 0.4 pitch) is a
 hole too when two pins within a pitch flank it on opposite sides.
 
-Some pins make a blob in no candidate set (the outermost ring under the veil, 10-15 grey above noise
-of 5): `probe_lattice_holes` looks at the image itself at the holes left, no farther out than the
-outermost pin plus `_PROBE_BEYOND` pitches, and takes a pin where a tip-sized core stands clearly
-above a quadratic fit of the membrane round it (`_core_above_membrane`). The same measure tells a
-kept blob that is no tip (`flat_pins`): an LED reflection's flat top at a lattice site stands no
-higher than the membrane round it.
+Some pins make a blob in no candidate set (the outermost ring under the veil, -11 to +16 grey from
+the membrane round them, noise sigma 5): `probe_lattice_holes` looks at the image itself at the holes
+left, no farther out than the outermost pin plus `_PROBE_BEYOND` pitches, and takes a pin where a
+matched test of an opaque tip over a quadratic membrane (`pins._tipprobe`) passes a bar set by a
+false-alarm rate per hole. There the lattice prior is used harder than for blobs: a site predicted
+towards the centre (two pins lost in a row along a spoke, a gap in a radial layout's innermost ring)
+is a hole too, unless it lies in the empty zone round a radial layout's centre pin, whose own site is
+probed when the ring round it is whole and it is missing; pins found predict again.
+
+A kept blob that is no tip (an LED reflection's flat top at a lattice site) is told by
+`pins._tipprobe.flat_pins`.
 """
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ._judge import _MIRROR, _Neighbourhood, _row_median
+from ._noise import noise_sigma
+from ._tipfit import tip_shapes
+from ._tipprobe import threshold, tip_evidence
 
 # A blob at a hole: its area within this range of the median area of the kept pins round the hole
 # (px added to both, as the judge does), and at least this fraction of their median contrast.
@@ -60,22 +67,25 @@ _OPPOSITE = -0.5
 _LONE = 1.3
 # At most this many pins lie within `_LONE` link lengths of a site.
 _CLOSE_PINS = 8
-# Probing the image at the holes no blob filled: a pin's core at least this many standard errors
-# above the membrane's quadratic fit, with `_MIN_CONTRAST` of the median contrast of the
-# `_PROBE_NEIGHBOURS` pins round it; the holes no farther than `_PROBE_BEYOND` pitches past the
-# outermost pin (the rim glare lies a pitch past it).
-_SIGNIFICANCE = 5.0
+# Probing the image at the holes no blob filled (`probe_lattice_holes`): bare membrane passes for a tip
+# at a hole with probability `_FALSE_ALARM` (the bar: `pins._tipprobe.threshold`, from the noise, not
+# fitted); the tip's place is searched on a `_PROBE_STEP_PX` grid within the hole's tolerance, its
+# shape taken from the `_PROBE_NEIGHBOURS` pins round it; the holes no farther than `_PROBE_BEYOND`
+# pitches past the outermost pin (as for blobs, `_BEYOND`: the rim glare lies a pitch past it).
+# A tip is painted and lit like the pins round it: its level within `_LEVEL_RANGE` of their median
+# level. Chosen on seeds 0-2 of brown-127 and 0-23 of radial-led-120: skin highlights on brown-127
+# stand at 0.63-0.77 of the pins' level round them (and pass the evidence bar: skin is no quadratic
+# membrane), the pins found on radial-led-120 at 0.76-1.25 (three of 62 below 0.8 are lost).
+_FALSE_ALARM = 1e-3
+_PROBE_STEP_PX = 0.5
 _PROBE_NEIGHBOURS = 6
-_PROBE_BEYOND = 0.1
-_SATURATED = 254.0
-# A kept pin whose core stands neither this many standard errors above the membrane's fit nor this
-# fraction of its neighbours' contrast is no tip (an LED reflection's flat top): `flat_pins`.
-_FLAT_SIGNIFICANCE = 2.5
-_FLAT_CONTRAST = 0.2
-# ... and at most this many times their contrast (the bright surround's edge, a glare spot).
-_MAX_CONTRAST = 2.0
-# The pins whose feet are left out of the membrane round a point: its nearest this many (itself included).
-_FOOT_PINS = 7
+_PROBE_BEYOND = 0.3
+_LEVEL_RANGE = (0.8, 1.5)
+_MOST_FOUND = 0.1
+# A radial layout's centre pin is probed when at least this many pins ring it within this fraction
+# of one radius (`_empty_zone`).
+_HUB_RING = 5
+_HUB_SPREAD = 0.25
 
 
 def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts: np.ndarray,
@@ -161,7 +171,7 @@ def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts:
 
 
 def _holes(pins: np.ndarray, hood: _Neighbourhood, centre: tuple[float, float], field_reach: float, beyond: float,
-           fresh: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+           fresh: int | None = None, inward_beyond: float = np.inf) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lattice sites `pins` predict and none occupies (the module docstring).
 
     Parameters
@@ -240,6 +250,10 @@ def _holes(pins: np.ndarray, hood: _Neighbourhood, centre: tuple[float, float], 
     cosine = np.where(within[:, :, None] & within[:, None, :], unit @ unit.transpose(0, 2, 1), 1.0)
     flanked = cosine.min(axis=(1, 2)) < _OPPOSITE
     plausible = opposite | flanked | ((predictions == 1) & outward & lone)
+    # ... or, where its image is looked at (`probe_lattice_holes`), a site predicted towards the
+    # centre from outside, not in the empty zone round a radial layout's centre pin (two pins lost in
+    # a row along a spoke, a gap in the innermost ring).
+    plausible |= ~outward & (np.hypot(sites[:, 0] - centre[0], sites[:, 1] - centre[1]) >= inward_beyond)
     return sites[plausible], tolerance[plausible], through[plausible]
 
 
@@ -247,13 +261,17 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
                         disc_radius_px: float = np.inf, dark_pins: bool = False) -> np.ndarray:
     """Pins at lattice holes that no blob filled, found by looking at the image there.
 
-    A faint pin (the outermost ring under the veil and the rim glare, 10-15 grey above noise of 5)
-    makes a blob in no candidate set, or one too small to judge. At each hole of the lattice of
-    `pins` (`_holes`, reaching no farther than the farthest pin plus `_PROBE_BEYOND` pitches) the
-    brightest tip-sized spot within the hole's tolerance is a pin when its core stands at least
-    `_SIGNIFICANCE` standard errors above a quadratic fit of the membrane round it (a reflection's
-    or the veil's flank is curved, not a tip), with at least `_MIN_CONTRAST` of the contrast of the
-    pins round it, measured the same way, and no closer than `_APART` local pitches to a pin.
+    A faint pin (the outermost ring under the veil and the rim glare, -11 to +16 grey from the membrane
+    round it, noise sigma 5) makes a blob in no candidate set, or one too small to judge. At each hole
+    of the lattice of `pins` (`_holes`, reaching no farther than the farthest pin plus `_PROBE_BEYOND`
+    pitches; with the sites predicted towards the centre and the centre pin's, `_empty_zone`) the
+    place within the hole's tolerance with the most evidence for an opaque tip shaped like the pins
+    round it (`pins._tipprobe.tip_evidence`) is a pin when that evidence passes the bar for a
+    false-alarm rate of `_FALSE_ALARM` per hole (set from the noise: `pins._tipprobe.threshold`), its
+    level is within `_LEVEL_RANGE` of theirs, it lies inside the disc and no closer than
+    `_APART` local pitches to a pin. Pins found predict again, for `_ROUNDS` rounds at most. A field
+    the probe would grow by more than `_MOST_FOUND` of its pins, or with more predicted sites than
+    pins, gets none (it is no lattice with holes: the wrong polarity's field of a white-on-dark pad).
 
     Parameters
     ----------
@@ -297,169 +315,139 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     image = grey.astype(np.float32)
     if dark_pins:
         image = 255.0 - image
-    hood = _Neighbourhood(pins)
+    pins0 = pins
     field_reach = float(np.max(np.hypot(pins[:, 0] - centre[0], pins[:, 1] - centre[1])))
-    sites, tolerance, through = _holes(pins, hood, centre, field_reach, _PROBE_BEYOND)
-    # A site nearer a pin than a pin's own neighbours are is that pin's (an irregular patch of lattice).
-    far = cKDTree(pins).query(sites)[0] >= _APART * hood.pitch[through]
-    sites, tolerance, through = sites[far], tolerance[far], through[far]
-    if not len(sites):
-        return none
-    spots = _brightest_spots(image, sites, tolerance, radius_px)
-    # A hole predicted by several links is measured once.
-    spots, first = np.unique(spots, axis=0, return_index=True)
-    through = through[first]
-    contrast, error, position = _core_above_membrane(image, spots, radius_px, pins)
-    # The pins round each hole, measured the same way.
-    _, near = cKDTree(pins).query(spots, min(_PROBE_NEIGHBOURS, len(pins)))
+    inner, hub = _empty_zone(pins, centre)
+    taken: list[np.ndarray] = []
+    fresh = None
+    for round_ in range(_ROUNDS):
+        hood = _Neighbourhood(pins)
+        sites, tolerance, through = _holes(pins, hood, centre, field_reach, _PROBE_BEYOND, fresh=fresh, inward_beyond=inner)
+        if round_ == 0 and hub is not None:
+            sites = np.vstack([sites, hub[:2]])
+            tolerance = np.append(tolerance, hub[2])
+            through = np.append(through, int(cKDTree(pins).query(hub[:2])[1]))
+        # A site nearer a pin than a pin's own neighbours are is that pin's (an irregular patch of lattice).
+        far = cKDTree(pins).query(sites)[0] >= _APART * hood.pitch[through]
+        sites, tolerance, through = sites[far], tolerance[far], through[far]
+        if not len(sites):
+            break
+        if len(sites) > len(pins0):
+            return none  # more predicted sites than pins: no lattice with holes
+        position, evidence, bar, level, typical_level = _measure_holes(
+            grey, image, pins, sites, tolerance, radius_px)
+        with np.errstate(invalid="ignore"):
+            good = ((evidence >= bar) & (level >= _LEVEL_RANGE[0] * typical_level)
+                    & (level <= _LEVEL_RANGE[1] * typical_level)
+                    & (np.hypot(position[:, 0] - centre[0], position[:, 1] - centre[1])
+                       <= disc_radius_px - radius_px - 1.5)
+                    & (cKDTree(pins).query(position)[0] >= _APART * hood.pitch[through]))
+        # One pin per hole (several links predict it): the strongest evidence first.
+        found: list[int] = []
+        for i in np.flatnonzero(good)[np.argsort(-evidence[good], kind="stable")]:
+            if not found or np.min(np.hypot(*(position[found] - position[i]).T)) >= _APART * hood.pitch[through[i]]:
+                found.append(int(i))
+        if not found:
+            break
+        # The pins found predict in the next round (a spoke that lost two pins in a row).
+        fresh = len(pins)
+        taken.append(position[np.sort(found)])
+        if sum(map(len, taken)) > _MOST_FOUND * len(pins0):
+            break
+        pins = np.vstack([pins, taken[-1]])
+    found_all = np.vstack(taken) if taken else none
+    # Holes are the exception in a lattice: a field the probe would grow by more than `_MOST_FOUND` of
+    # its pins is no lattice with holes (the wrong polarity's field of a white-on-dark pad: 24 + 37).
+    return found_all if len(found_all) <= _MOST_FOUND * len(pins0) else none
+
+
+def _empty_zone(pins: np.ndarray, centre: tuple[float, float]) -> tuple[float, np.ndarray | None]:
+    """The empty zone round a radial layout's lone centre pin, and the centre pin's site if it is missing.
+
+    A radial layout's spokes start a ring away from the centre: their inner ends point into an empty
+    zone, where no site lies. Its radius is that of the innermost ring (the pins nearest the disc
+    centre but for the centre pin, within half a pitch of it) less half a pitch. When the pins
+    nearest the centre form a ring round it (at least `_HUB_RING` of them within `_HUB_SPREAD` of
+    one radius, no gap between them wider than a third of the turn) and none sits at their centroid,
+    the centre pin's site is that centroid (its tolerance `_MIRROR` of the ring's radius... at most
+    a pitch's). A hexagonal lattice has pins at every radius: no zone (0) and no such site.
+
+    Returns
+    -------
+    inward_beyond : float
+        Sites predicted towards the centre lie farther from `centre` than this, px.
+    hub : (3,) ndarray or None
+        The missing centre pin's site (x, y) and tolerance, px.
+    """
+    offset = pins - np.asarray(centre, dtype=np.float64)
+    radius = np.hypot(*offset.T)
+    pitch = float(np.median(cKDTree(pins).query(pins, 2)[0][:, 1]))
+    ring = np.sort(radius[radius > 0.5 * pitch])
+    if not len(ring):
+        return 0.0, None
+    inner = float(ring[0])
+    within = (radius > 0.5 * pitch) & (radius <= (1.0 + _HUB_SPREAD) * inner)
+    hub = None
+    if within.sum() >= _HUB_RING and inner > 1.5 * pitch:
+        angles = np.sort(np.arctan2(offset[within, 1], offset[within, 0]))
+        gaps = np.diff(np.append(angles, angles[0] + 2.0 * np.pi))
+        site = pins[within].mean(axis=0)
+        if gaps.max() <= 2.0 * np.pi / 3.0 and cKDTree(pins).query(site)[0] > 0.5 * inner:
+            hub = np.array([site[0], site[1], _MIRROR * min(inner, pitch)])
+    return max(inner - 0.5 * pitch, 0.0), hub
+
+
+def _measure_holes(grey: np.ndarray, image: np.ndarray, pins: np.ndarray, sites: np.ndarray, tolerance: np.ndarray,
+                   radius_px: float):
+    """The best place for a tip within each site's tolerance and what it shows (`pins._tipprobe`).
+
+    The tip's expected shape at a site is the median ellipse of the `_PROBE_NEIGHBOURS` pins nearest it
+    (`pins._tipfit.tip_shapes`); its place, the point of a 1 px grid within the tolerance with the
+    most evidence, refined on a `_PROBE_STEP_PX` grid round it; the bar, the evidence bare membrane
+    reaches with probability `_FALSE_ALARM` over the tip-sized cells of that disc.
+
+    Returns
+    -------
+    position (S, 2) px, evidence (S,), bar (S,), the tip's level (S,) grey levels, and the median
+    level (S,) of the pins round each site, measured the same way.
+    """
+    sigma = noise_sigma(grey)
+    _, near = cKDTree(pins).query(sites, min(_PROBE_NEIGHBOURS, len(pins)))
+    near = near.reshape(len(sites), -1)
+    # Only the pins round the sites are fitted (a pad of 532 pins with 5 holes: 30 of them).
     used = np.unique(near)
-    reference = np.full(len(pins), np.nan)
-    reference[used] = _core_above_membrane(image, pins[used], radius_px, pins)[0]
+    shapes = np.full((len(pins), 2, 2), np.nan)
+    shapes[used] = tip_shapes(image, pins, radius_px, which=used)
+    expected = np.median(shapes[near], axis=1)  # (S, 2, 2)
+    # The best place on a 1 px grid within the tolerance, then on a `_PROBE_STEP_PX` grid round it.
+    position, evidence, level = _best_place(image, sites, sites, tolerance, expected, pins, sigma, 1.0, tolerance)
+    position, evidence, level = _best_place(image, sites, position, tolerance, expected, pins, sigma,
+                                            _PROBE_STEP_PX, np.full(len(sites), _PROBE_STEP_PX))
+    tip_area = np.pi * np.sqrt(np.linalg.det(expected))
+    bar = threshold(_FALSE_ALARM, 1.0 + np.pi * tolerance ** 2 / tip_area)
+    pin_level = np.full(len(pins), np.nan)
+    pin_level[used] = tip_evidence(image, pins[used], shapes[used], pins, sigma)[1]
     with np.errstate(invalid="ignore"):
-        typical = np.nanmedian(reference[near], axis=1)
-        good = ((contrast >= _SIGNIFICANCE * error) & (contrast >= _MIN_CONTRAST * typical)
-                & (contrast <= _MAX_CONTRAST * typical)
-                & (np.hypot(position[:, 0] - centre[0], position[:, 1] - centre[1]) <= disc_radius_px - radius_px - 1.5)
-                & (cKDTree(pins).query(position)[0] >= _APART * hood.pitch[through]))
-    # One pin per hole (several links predict it): the most significant first.
-    found: list[int] = []
-    for i in np.flatnonzero(good)[np.argsort(-(contrast / error)[good], kind="stable")]:
-        if not found or np.min(np.hypot(*(position[found] - position[i]).T)) >= _APART * hood.pitch[through[i]]:
-            found.append(int(i))
-    return position[np.sort(found)] if found else none
+        typical_level = np.nanmedian(pin_level[near], axis=1)
+    return position, evidence, bar, level, typical_level
 
 
-def _disc_offsets(reach: float) -> tuple[np.ndarray, np.ndarray]:
-    """Integer pixel offsets (dx, dy) within `reach` px of the origin."""
-    half = int(np.ceil(reach))
-    dy, dx = np.mgrid[-half:half + 1, -half:half + 1]
-    inside = np.hypot(dx, dy) <= reach
-    return dx[inside].astype(np.float64), dy[inside].astype(np.float64)
-
-
-def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Grey levels at integer pixel coordinates (any shape, clipped to the image) and whether inside."""
-    height, width = image.shape
-    inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
-    values = image[np.clip(y, 0, height - 1).astype(np.intp), np.clip(x, 0, width - 1).astype(np.intp)]
-    return values.astype(np.float64), inside
-
-
-def _brightest_spots(image: np.ndarray, sites: np.ndarray, tolerance: np.ndarray, radius_px: float) -> np.ndarray:
-    """Per site, the pixel within its tolerance (px) where a tip-sized disc stands most above the ring
-    round it (a linear slope cancels in the difference), (S, 2) px."""
-    core_x, core_y = _disc_offsets(radius_px)
-    ring_x, ring_y = _disc_offsets(radius_px + 2.0)
-    ring = np.hypot(ring_x, ring_y) > radius_px + 1.0
-    half = int(np.ceil(radius_px + 2.0))
-    kernel = np.zeros((2 * half + 1, 2 * half + 1), np.float32)
-    kernel[(core_y + half).astype(int), (core_x + half).astype(int)] = 1.0 / len(core_x)
-    kernel[(ring_y[ring] + half).astype(int), (ring_x[ring] + half).astype(int)] = -1.0 / ring.sum()
-    # The response over the sites' bounding box only (a few pads' worth of pixels at most).
-    reach = int(np.ceil(tolerance.max())) + half + 1
-    x0, y0 = np.maximum(np.floor(sites.min(axis=0)).astype(int) - reach, 0)
-    x1, y1 = np.ceil(sites.max(axis=0)).astype(int) + reach + 1
-    response = cv2.filter2D(image[y0:y1, x0:x1], cv2.CV_32F, kernel, borderType=cv2.BORDER_REPLICATE)
-    cx, cy = _disc_offsets(float(tolerance.max()))
-    anchor = np.rint(sites)
-    px = anchor[:, 0, None] + cx[None]  # (S, C) candidate pixels
-    py = anchor[:, 1, None] + cy[None]
-    height, width = response.shape
-    values = response[np.clip(py - y0, 0, height - 1).astype(np.intp), np.clip(px - x0, 0, width - 1).astype(np.intp)]
-    values[np.hypot(px - sites[:, 0, None], py - sites[:, 1, None]) > tolerance[:, None]] = -np.inf
-    best = np.argmax(values, axis=1)
-    rows = np.arange(len(sites))
-    return np.column_stack([px[rows, best], py[rows, best]])
-
-
-def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
-                         pins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """How far the core of a tip at each point stands above a quadratic fit of the membrane round it.
-
-    The membrane is the ring 1.5-3.5 px beyond the tip radius (pixels at the foot of another pin of
-    `pins` left out); the core is the disc of the tip radius less half a pixel (at least 1 px).
-
-    Returns
-    -------
-    contrast : (P,) ndarray
-        Mean core grey level minus the fit's mean over the core, grey levels (nan: too little membrane).
-    error : (P,) ndarray
-        Its standard error: the membrane's scatter about the fit (residual standard deviation, grey
-        levels) over the square root of the core's pixel count.
-    position : (P, 2) ndarray
-        Centroid of the core's grey levels above the fit, px (the point where none stands above).
-    """
-    dx, dy = _disc_offsets(radius_px + 3.5)
-    distance = np.hypot(dx, dy)
-    used = (distance <= max(radius_px - 0.5, 1.0)) | (distance >= radius_px + 1.5)  # the tip's edge: neither
-    dx, dy, distance = dx[used], dy[used], distance[used]
-    core, ring = distance < radius_px + 1.5, distance >= radius_px + 1.5
-    anchor = np.rint(points)
-    x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
-    values, inside = _gather(image, x, y)
-    # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
-    gap, near = cKDTree(pins).query(points, min(_FOOT_PINS, len(pins)))
-    others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near]).astype(np.float32)  # (P, F, 2)
-    xs, ys = x[:, ring].astype(np.float32), y[:, ring].astype(np.float32)
-    other = np.sqrt(np.min((xs[:, :, None] - others[:, None, :, 0]) ** 2 + (ys[:, :, None] - others[:, None, :, 1]) ** 2,
-                           axis=2))
-    # Saturated pixels (the surround's veil near the rim) show no membrane level.
-    weight = np.zeros(values.shape)
-    weight[:, ring] = inside[:, ring] & (other > radius_px + 1.5) & (values[:, ring] < _SATURATED)
-    scale = radius_px + 3.5
-    u, v = dx / scale, dy / scale
-    basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
-    # Weighted least squares for every point at once, as two matrix products over the pixels.
-    normal = (weight @ (basis[:, :, None] * basis[:, None, :]).reshape(len(basis), 36)).reshape(-1, 6, 6)
-    beta = np.linalg.solve(normal + 1e-9 * np.eye(6), ((weight * values) @ basis)[..., None])[..., 0]
-    residual = values - beta @ basis.T
-    dof = weight.sum(axis=1) - 6.0
-    with np.errstate(invalid="ignore", divide="ignore"):
-        variance = np.where(dof >= 6.0, np.sum(weight * residual ** 2, axis=1) / dof, np.nan)
-        # The core mean's standard error, its pixels scattering about the fit as the membrane's do.
-        error = np.sqrt(variance / core.sum())
-        contrast = np.where(np.isfinite(variance), residual[:, core].mean(axis=1), np.nan)
-        above = np.clip(residual[:, core], 0.0, None)
-        total = above.sum(axis=1)
-        shift = np.column_stack([above @ dx[core], above @ dy[core]]) / total[:, None]
-    position = anchor + np.where(total[:, None] > 0, shift, 0.0)
-    return contrast, error, position
-
-
-def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
-    """Which pins (N,) bool show no tip: a core that stands neither `_FLAT_SIGNIFICANCE` standard errors
-    above a quadratic fit of the membrane round it nor `_FLAT_CONTRAST` of its neighbours' contrast.
-
-    The flat top of an LED reflection inside the pad, at a lattice site, is a blob as large and as
-    bright above the threshold's neighbourhood mean as a pin, but round it the membrane rises to the
-    same level: above the fit it stands 0.7-1.8 standard errors and 0.03-0.08 of its neighbours'
-    contrast, where the faintest pins under the veil stand 3.3 and 0.14 (radial-led-120, seeds 0-11).
-    A pin whose membrane cannot be fitted (too little of it round the pin) is not judged.
-
-    Parameters
-    ----------
-    grey : (H, W) ndarray of uint8
-        Grey frame.
-    pins : (N, 2) ndarray
-        Pins (x, y), px.
-    radius_px : float
-        Pin tip radius, px.
-    dark_pins : bool
-        Dark markers on a light membrane (the image is inverted).
-
-    Returns
-    -------
-    flat : (N,) ndarray of bool
-        All False for fewer than 7 pins or no radius.
-    """
-    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
-    if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
-        return np.zeros(len(pins), bool)
-    image = grey.astype(np.float32)
-    if dark_pins:
-        image = 255.0 - image
-    contrast, error, _ = _core_above_membrane(image, pins, radius_px, pins)
-    _, near = cKDTree(pins).query(pins, min(_PROBE_NEIGHBOURS + 1, len(pins)))
-    with np.errstate(invalid="ignore"):
-        typical = np.nanmedian(contrast[near[:, 1:]], axis=1)
-        return (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)
+def _best_place(image, sites, around, tolerance, expected, pins, sigma, step, reach):
+    """Per site, the point of a `step` px grid within `reach` of `around` and `tolerance` of the site
+    with the most tip evidence: (points (S, 2) px, evidence (S,), the tip's level (S,) grey levels)."""
+    half = np.ceil(reach.max() / step)
+    steps = np.arange(-half, half + 1) * step
+    gx, gy = (a.ravel() for a in np.meshgrid(steps, steps))
+    candidates = around[:, None, :] + np.stack([gx, gy], axis=1)[None]  # (S, G, 2)
+    within = ((np.hypot(gx, gy)[None] <= reach[:, None] + 1e-9)
+              & (np.hypot(*(candidates - sites[:, None, :]).transpose(2, 0, 1)) <= tolerance[:, None] + 1e-9))
+    within[:, np.argmin(np.hypot(gx, gy))] = True  # `around` itself, always
+    owner, cell = np.nonzero(within)
+    found, level, _ = tip_evidence(image, candidates[owner, cell], expected[owner], pins, sigma)
+    score = np.full(within.shape, -np.inf)
+    score[owner, cell] = np.nan_to_num(found, nan=-np.inf)
+    best = np.argmax(score, axis=1)
+    pick = np.full(within.shape, -1)
+    pick[owner, cell] = np.arange(len(owner))
+    chosen = pick[np.arange(len(sites)), best]
+    return candidates[np.arange(len(sites)), best], score[np.arange(len(sites)), best], level[chosen]

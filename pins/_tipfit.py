@@ -31,7 +31,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
-__all__ = ["fit_tip_centres"]
+__all__ = ["fit_tip_centres", "tip_shapes"]
 
 _EDGE_PX = 0.55  # soft edge of the coverage: erf of (distance beyond the boundary) / this, px
 _REACH_PX = 0.8  # a fitted centre farther than this from its start is not trusted, px
@@ -77,24 +77,50 @@ def fit_tip_centres(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, 
     start = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
     if len(start) < 2 or not (np.isfinite(radius_px) and radius_px > 0):
         return start.copy()
-    image = grey.astype(np.float64)
-    if dark_pins:
-        image = 255.0 - image
+    window, theta = _free_fit(grey, start, radius_px, dark_pins)
     tree = cKDTree(start)
-    distance, index = tree.query(start, min(8, len(start)))
-    nearest = distance[:, 1]
-    reach = np.minimum(1.5 * radius_px + 1.0 + _MARGIN_PX, nearest - 0.5 * radius_px)
-    window = _Windows(image, start, reach, start[index[:, 1:]], nearest)
-    theta = np.zeros((len(start), 5))
-    theta[:, :2] = start
-    theta[:, 2] = theta[:, 4] = 1.0 / radius_px ** 2
-    theta = _gauss_newton(window, theta, start, radius_px, free=5, passes=_FULL_PASSES)
     _, near = tree.query(theta[:, :2], min(_SHAPE_NEIGHBOURS, len(start)))
     fixed = theta.copy()
     fixed[:, :2] = start
     fixed[:, 2:] = np.median(theta[near, 2:], axis=1)
     fixed = _gauss_newton(window, fixed, start, radius_px, free=2, passes=_CENTRE_PASSES)
     return fixed[:, :2].copy()
+
+
+def tip_shapes(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, dark_pins: bool = False,
+               which: np.ndarray | None = None) -> np.ndarray:
+    """Tips' ellipses as the first pass of `fit_tip_centres` fits them (the ellipse free): a tip covers
+    ``{e : e^T shape^-1 e <= 1}``, (M, 2, 2) px^2, for the pins `which` (indices into `centres`; all
+    when None), their windows clear of every other pin's foot; ``radius_px^2 I`` where a fit fails,
+    for fewer than two pins or no radius. Noisy for a faint tip: take a median over neighbours."""
+    start = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
+    which = np.arange(len(start)) if which is None else np.asarray(which, dtype=np.intp)
+    circle = np.repeat((radius_px ** 2 * np.eye(2))[None], len(which), axis=0)
+    if len(start) < 2 or not len(which) or not (np.isfinite(radius_px) and radius_px > 0):
+        return circle
+    _, theta = _free_fit(grey, start, radius_px, dark_pins, which)
+    q = np.stack([theta[:, 2:4], theta[:, 3:5]], axis=1)
+    good = np.isfinite(q).all(axis=(1, 2)) & (np.linalg.det(q) > 0)
+    circle[good] = np.linalg.inv(q[good])
+    return circle
+
+
+def _free_fit(grey: np.ndarray, start: np.ndarray, radius_px: float, dark_pins: bool, which: np.ndarray | None = None):
+    """The windows of the tips `which` (all when None) and their fit with the ellipse free:
+    (`_Windows`, theta (M, 5)); every pin of `start` is a neighbour whose foot is left out."""
+    image = grey.astype(np.float64)
+    if dark_pins:
+        image = 255.0 - image
+    which = np.arange(len(start)) if which is None else which
+    distance, index = cKDTree(start).query(start[which], min(8, len(start)))
+    nearest = distance[:, 1]
+    reach = np.minimum(1.5 * radius_px + 1.0 + _MARGIN_PX, nearest - 0.5 * radius_px)
+    own = start[which]
+    window = _Windows(image, own, reach, start[index[:, 1:]], nearest)
+    theta = np.zeros((len(own), 5))
+    theta[:, :2] = own
+    theta[:, 2] = theta[:, 4] = 1.0 / radius_px ** 2
+    return window, _gauss_newton(window, theta, own, radius_px, free=5, passes=_FULL_PASSES)
 
 
 class _Windows:

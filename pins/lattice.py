@@ -99,8 +99,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
-from ._rescue import fill_lattice_holes, flat_pins, probe_lattice_holes
+from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
+from ._tipprobe import flat_pins
 from ._candidates import _MATCH, _candidates, _consensus, _evaluate, _evaluate_all, _final_params
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams

@@ -380,8 +380,10 @@ def test_radial_layout_with_led_reflections_keeps_the_pins_on_them(seed):
         recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
         assert precision == 1.0 and recall >= 0.97, (contact, recall, precision, field.summary())
         # Tips fitted as opaque ellipses over the reflections' and the veil's curved flanks: 0.09-0.11 px
-        # (blob centroids leaning up those flanks: 0.12-0.19; the bar of 0.1 is not met everywhere).
-        assert rmse <= 0.12, (contact, rmse)
+        # (blob centroids leaning up those flanks: 0.12-0.19; the bar of 0.1 is not met everywhere). The
+        # faint outer-ring tips the probe finds (SNR 6-9) are placed to 0.37 px RMSE (30 of them, seeds
+        # 0-11): with them 0.09-0.14.
+        assert rmse <= 0.14, (contact, rmse)
         assert abs(field.count - int(f.visible.sum())) <= 0.03 * f.visible.sum()
         truth = f.centres[f.visible]
         reach = np.min(np.hypot(*(truth[:, None] - sensor.reflection_centres[None]).transpose(2, 0, 1))
@@ -491,9 +493,12 @@ def test_probing_adds_no_pin_off_the_pad(name):
 
 
 def test_radial_layout_with_led_reflections_count_over_many_seeds():
-    """Issue 20, outcome 7, over seeds 0-11 at rest and under a 5 mm tap: the count within 3 % on every
-    frame, no reflection (nor anything else) kept, 99 % of the pins found; the bar of 1 % is met on most
-    frames (17 of 24 when this was written; the rest miss 2-3 faint outer-ring tips, `NOT_YET_MET`)."""
+    """Issue 20, outcome 7's bar, over seeds 0-11 at rest and under a 5 mm tap: the count within 1 % on every
+    frame, no reflection (nor anything else) kept, at most 2 of the 2880 pins missed (none when this was
+    written). Before the holes were probed with the opaque-tip test (`pins._tipprobe`) 23 were missed and
+    the bar met on 17 of 24 frames. (Seeds 0-11 are those the probe was developed on; on seeds 24-35, never
+    looked at while developing, the bar was met on 24 of 24 frames, 1 pin missed and 1 false; on 12-23, on 21:
+    see `NOT_YET_MET`.)"""
     within_bar = missed = drawn = 0
     for seed in range(12):
         for contact in (None, TAP):
@@ -505,4 +510,4 @@ def test_radial_layout_with_led_reflections_count_over_many_seeds():
             within_bar += abs(field.count - visible) <= 0.01 * visible
             missed += round((1.0 - recall) * visible)
             drawn += visible
-    assert missed <= 0.01 * drawn and within_bar >= 12, (missed, within_bar)
+    assert missed <= 2 and within_bar == 24, (missed, within_bar)

@@ -1,0 +1,258 @@
+"""Is there a pin tip at a point? A matched test of an opaque tip against a curved membrane.
+
+A pin tip is paint: it hides the membrane behind it. Where the light on the membrane is about the
+tip's own level (the outermost ring of ``radial-led-120`` under the veil, which lights the membrane
+fully and the tips only in part) a tip barely stands above or below its surround on average; what
+shows is that the membrane's slope stops at the tip's edge. A test of "core brighter than the ring
+round it" misses such a tip (its core mean is -11 to +7 grey from the membrane, noise sigma 5); the
+model of what the camera sees does not::
+
+    H1:  m(x) = (1 - c(x)) * s(x) + c(x) * (L + D * q(x))      H0:  m(x) = s(x)
+
+with ``s`` a quadratic membrane, ``c`` the tip's coverage (an ellipse ``q(x) <= 1`` with a soft edge,
+the shape of the pins round the point: foreshortening makes outer tips ellipses) and ``L + D q`` the
+tip's own level, domed as `pins._tipfit` models it (a hemispherical tip lit from round it is brighter
+at its centre: 25 grey from centre to edge on the faint tips of ``radial-led-120``; without the dome
+their evidence fell to half). Both are linear given the point, so each is a least-squares fit, all
+points at once. The evidence is the drop in squared residual from H0 to H1 over the noise variance,
+``T = (RSS0 - RSS1) / sigma^2``: for a pin, its matched-filter SNR squared (on noise-free renders of
+``radial-led-120`` the faint outer tips give T equal to the ideal SNR^2, 20-80 at sigma 5); on bare
+membrane (H1 has `_EXTRA` parameters more than H0) chi-square with `_EXTRA` degrees of freedom at a
+fixed point, so a threshold for a false-alarm rate follows from the noise alone (`threshold`; on
+4056 points of bare membrane of ``radial-led-120``, seeds 0-11, 0.37 % passed chi-square's 0.45 %
+point and none its 0.055 % point). The variance is the larger of the camera's pixel noise and the
+window's own residual scatter under H1, so a membrane that no quadratic fits (a reflection's edge,
+the veil) raises the bar instead of passing for a tip.
+
+`flat_pins` asks the opposite of kept blobs: an LED reflection's flat top at a lattice site stands no
+higher above a quadratic fit of the membrane round it than the membrane does (`_core_above_membrane`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+from scipy.special import erf
+from scipy.stats import chi2
+
+__all__ = ["flat_pins", "tip_evidence", "threshold"]
+
+_EDGE_PX = 0.55  # soft edge of the coverage (as `pins._tipfit`): erf of the distance inside / this, px
+_SATURATED = 254.0  # pixels this bright show no membrane level (the surround's veil)
+# H1 has this many parameters more than H0 (the tip's level and dome): the null's degrees of freedom.
+_EXTRA = 2
+# Another pin's tip and foot reach this far beyond the tip's major semi-axis (the soft edge, blur), px.
+_FOOT_PX = 2.0
+# A kept pin whose core stands neither this many standard errors above the membrane's fit nor this
+# fraction of the contrast of its `_FLAT_NEIGHBOURS` nearest pins is no tip (an LED reflection's flat
+# top): `flat_pins`.
+_FLAT_SIGNIFICANCE = 2.5
+_FLAT_CONTRAST = 0.2
+_FLAT_NEIGHBOURS = 6
+# The pins whose feet are left out of the membrane round a point: its nearest this many (itself included).
+_FOOT_PINS = 7
+
+
+def threshold(false_alarm: float, cells: np.ndarray | float) -> np.ndarray:
+    """The evidence T above which bare membrane passes for a tip with probability `false_alarm`,
+    searched over `cells` independent tip-sized places (Bonferroni over chi-square with `_EXTRA`
+    degrees of freedom: H1's level and dome).
+
+    >>> round(float(threshold(1e-3, 1.0)), 1)
+    13.8
+    """
+    return chi2.isf(false_alarm / np.maximum(np.asarray(cells, dtype=np.float64), 1.0), _EXTRA)
+
+
+def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins: np.ndarray,
+                 noise_sigma: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The evidence for an opaque tip at each point (the module docstring), its level and contrast.
+
+    Parameters
+    ----------
+    image : (H, W) ndarray of float32
+        Grey frame (bright tips: invert dark markers first).
+    points : (P, 2) ndarray
+        Tip centres to test (x, y), px (sub-pixel).
+    shapes : (P, 2, 2) ndarray
+        Each tip's ellipse: it covers ``{e : e^T shapes^-1 e <= 1}``, px^2 (a circle of radius r:
+        ``r^2 I``).
+    pins : (N, 2) ndarray
+        Pins known round the points, px: pixels near one (its tip and foot) are no
+        membrane (`_FOOT_PX` beyond the major semi-axis); a pin within half a tip radius of a point
+        is that point's own and is not left out.
+    noise_sigma : float
+        The camera's pixel noise, grey levels: the least variance the test assumes.
+
+    Returns
+    -------
+    evidence : (P,) ndarray
+        T = (RSS0 - RSS1) / sigma^2 (nan: too few membrane pixels to fit).
+    level : (P,) ndarray
+        The tip's fitted level L, grey levels.
+    contrast : (P,) ndarray
+        L minus the membrane's fitted level at the point, grey levels (negative: a tip darker than the
+        membrane lit round it).
+    """
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    shapes = np.asarray(shapes, dtype=np.float64).reshape(-1, 2, 2)
+    inverse = np.linalg.inv(shapes)
+    major = np.sqrt(np.linalg.eigvalsh(shapes)[:, 1])
+    reach = 1.5 * float(major.max()) + 2.0
+    half = int(np.ceil(reach)) + 1
+    dy, dx = np.mgrid[-half:half + 1, -half:half + 1]
+    dx, dy = dx.ravel().astype(np.float64), dy.ravel().astype(np.float64)
+    anchor = np.rint(points)
+    x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
+    height, width = image.shape
+    inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
+    values = image[np.clip(y, 0, height - 1).astype(np.intp), np.clip(x, 0, width - 1).astype(np.intp)].astype(np.float64)
+    ex, ey = x - points[:, 0, None], y - points[:, 1, None]
+    length = np.hypot(ex, ey)
+    weight = inside & (length <= (1.5 * major + 2.0)[:, None]) & (values < _SATURATED)
+    # Other pins' tips and feet are no membrane.
+    if len(pins):
+        gap, near = cKDTree(pins).query(points, min(7, len(pins)))
+        gap, near = gap.reshape(len(points), -1), near.reshape(len(points), -1)
+        others = np.where((gap < 0.5 * major[:, None])[..., None], np.inf, pins[near])
+        foot = (major + _FOOT_PX)[:, None]
+        for k in range(others.shape[1]):
+            weight &= np.hypot(x - others[:, k, 0, None], y - others[:, k, 1, None]) > foot
+    q = (inverse[:, 0, 0, None] * ex * ex + 2.0 * inverse[:, 0, 1, None] * ex * ey
+         + inverse[:, 1, 1, None] * ey * ey)
+    root = np.sqrt(np.maximum(q, 1e-12))
+    coverage = 0.5 + 0.5 * erf(length * (1.0 - root) / root / _EDGE_PX)
+    scale = reach
+    u, v = ex / scale, ey / scale
+    surface = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (P, 6, K)
+    w = weight.astype(np.float64)
+    rss0, _ = _fit(surface, values, w)
+    dome = coverage * np.minimum(q, 1.0)
+    tip = np.concatenate([surface * (1.0 - coverage)[:, None], coverage[:, None], dome[:, None]], axis=1)  # (P, 8, K)
+    rss1, beta = _fit(tip, values, w)
+    count = w.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scatter = np.where(count > 16, rss1 / (count - 8.0), np.nan)
+        variance = np.maximum(scatter, float(noise_sigma) ** 2)
+        evidence = (rss0 - rss1) / variance
+    return evidence, beta[:, 6], beta[:, 6] - beta[:, 0]
+
+
+def _fit(basis: np.ndarray, values: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted least squares of `values` (P, K) on `basis` (P, B, K), every point at once: the residual
+    sum of squares (P,) and the coefficients (P, B)."""
+    weighted = basis * weight[:, None, :]
+    normal = weighted @ basis.transpose(0, 2, 1)
+    ridge = 1e-9 * np.eye(basis.shape[1])
+    beta = np.linalg.solve(normal + ridge, (weighted @ values[..., None]))[..., 0]
+    residual = values - np.einsum("pbk,pb->pk", basis, beta)
+    return np.sum(weight * residual ** 2, axis=1), beta
+
+
+def _disc_offsets(reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Integer pixel offsets (dx, dy) within `reach` px of the origin."""
+    half = int(np.ceil(reach))
+    dy, dx = np.mgrid[-half:half + 1, -half:half + 1]
+    inside = np.hypot(dx, dy) <= reach
+    return dx[inside].astype(np.float64), dy[inside].astype(np.float64)
+
+
+def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Grey levels at integer pixel coordinates (any shape, clipped to the image) and whether inside."""
+    height, width = image.shape
+    inside = (x >= 0) & (x <= width - 1) & (y >= 0) & (y <= height - 1)
+    values = image[np.clip(y, 0, height - 1).astype(np.intp), np.clip(x, 0, width - 1).astype(np.intp)]
+    return values.astype(np.float64), inside
+
+
+def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
+                         pins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """How far the core of a tip at each point stands above a quadratic fit of the membrane round it.
+
+    The membrane is the ring 1.5-3.5 px beyond the tip radius (pixels at the foot of another pin of
+    `pins` left out); the core is the disc of the tip radius less half a pixel (at least 1 px).
+
+    Returns
+    -------
+    contrast : (P,) ndarray
+        Mean core grey level minus the fit's mean over the core, grey levels (nan: too little membrane).
+    error : (P,) ndarray
+        Its standard error: the membrane's scatter about the fit (residual standard deviation, grey
+        levels) over the square root of the core's pixel count.
+    position : (P, 2) ndarray
+        Centroid of the core's grey levels above the fit, px (the point where none stands above).
+    """
+    dx, dy = _disc_offsets(radius_px + 3.5)
+    distance = np.hypot(dx, dy)
+    used = (distance <= max(radius_px - 0.5, 1.0)) | (distance >= radius_px + 1.5)  # the tip's edge: neither
+    dx, dy, distance = dx[used], dy[used], distance[used]
+    core, ring = distance < radius_px + 1.5, distance >= radius_px + 1.5
+    anchor = np.rint(points)
+    x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
+    values, inside = _gather(image, x, y)
+    # Pixels at another pin's foot (not the pin measured, which sits at its own point) are no membrane.
+    gap, near = cKDTree(pins).query(points, min(_FOOT_PINS, len(pins)))
+    others = np.where((gap < 0.5 * radius_px)[..., None], np.inf, pins[near]).astype(np.float32)  # (P, F, 2)
+    xs, ys = x[:, ring].astype(np.float32), y[:, ring].astype(np.float32)
+    other = np.sqrt(np.min((xs[:, :, None] - others[:, None, :, 0]) ** 2 + (ys[:, :, None] - others[:, None, :, 1]) ** 2,
+                           axis=2))
+    # Saturated pixels (the surround's veil near the rim) show no membrane level.
+    weight = np.zeros(values.shape)
+    weight[:, ring] = inside[:, ring] & (other > radius_px + 1.5) & (values[:, ring] < _SATURATED)
+    scale = radius_px + 3.5
+    u, v = dx / scale, dy / scale
+    basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
+    # Weighted least squares for every point at once, as two matrix products over the pixels.
+    normal = (weight @ (basis[:, :, None] * basis[:, None, :]).reshape(len(basis), 36)).reshape(-1, 6, 6)
+    beta = np.linalg.solve(normal + 1e-9 * np.eye(6), ((weight * values) @ basis)[..., None])[..., 0]
+    residual = values - beta @ basis.T
+    dof = weight.sum(axis=1) - 6.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        variance = np.where(dof >= 6.0, np.sum(weight * residual ** 2, axis=1) / dof, np.nan)
+        # The core mean's standard error, its pixels scattering about the fit as the membrane's do.
+        error = np.sqrt(variance / core.sum())
+        contrast = np.where(np.isfinite(variance), residual[:, core].mean(axis=1), np.nan)
+        above = np.clip(residual[:, core], 0.0, None)
+        total = above.sum(axis=1)
+        shift = np.column_stack([above @ dx[core], above @ dy[core]]) / total[:, None]
+    position = anchor + np.where(total[:, None] > 0, shift, 0.0)
+    return contrast, error, position
+
+
+def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
+    """Which pins (N,) bool show no tip: a core that stands neither `_FLAT_SIGNIFICANCE` standard errors
+    above a quadratic fit of the membrane round it nor `_FLAT_CONTRAST` of its neighbours' contrast.
+
+    The flat top of an LED reflection inside the pad, at a lattice site, is a blob as large and as
+    bright above the threshold's neighbourhood mean as a pin, but round it the membrane rises to the
+    same level: above the fit it stands 0.7-1.8 standard errors and 0.03-0.08 of its neighbours'
+    contrast, where the faintest pins under the veil stand 3.3 and 0.14 (radial-led-120, seeds 0-11).
+    A pin whose membrane cannot be fitted (too little of it round the pin) is not judged.
+
+    Parameters
+    ----------
+    grey : (H, W) ndarray of uint8
+        Grey frame.
+    pins : (N, 2) ndarray
+        Pins (x, y), px.
+    radius_px : float
+        Pin tip radius, px.
+    dark_pins : bool
+        Dark markers on a light membrane (the image is inverted).
+
+    Returns
+    -------
+    flat : (N,) ndarray of bool
+        All False for fewer than 7 pins or no radius.
+    """
+    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
+    if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
+        return np.zeros(len(pins), bool)
+    image = grey.astype(np.float32)
+    if dark_pins:
+        image = 255.0 - image
+    contrast, error, _ = _core_above_membrane(image, pins, radius_px, pins)
+    _, near = cKDTree(pins).query(pins, min(_FLAT_NEIGHBOURS + 1, len(pins)))
+    with np.errstate(invalid="ignore"):
+        typical = np.nanmedian(contrast[near[:, 1:]], axis=1)
+        return (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)
