@@ -54,6 +54,9 @@ SKIPPED = {
     "gel_frame.png": _GEL, "gel_video.avi": _GEL, "gel/labels.csv": _GEL, "data/gel/": _GEL,
     "tactip reproduce 00": "tests/tactip/reproduce/test_reproduce.py runs 'tactip reproduce PAPER' for every paper "
                            "with --quick and checks its figures (full sizes: bench/bench_reproduce.py)",
+    "tactip collect --config station.toml --out data/line3/datasets": "the session's small station is collected by "
+        "this very command on this station (tests/tactip/conftest.py, sim_station; tests/tactip/cli/test_cli_station.py "
+        "checks what it wrote): run once, not twice",
     "--scheduler tcp://HEAD": "needs a Dask cluster on other machines (tests/tactip/replay/test_batch.py starts a "
                               "dask scheduler and a dask worker of its own)",
 }

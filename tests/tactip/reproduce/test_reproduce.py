@@ -1,8 +1,7 @@
-"""`tactip reproduce PAPER --quick` end to end: JSON rows and the bars of issue 10."""
+"""`tactip reproduce PAPER --quick` end to end: JSON rows and the bars of issue 10.
 
-import contextlib
-import io
-import json
+The quick runs are the session's (`quick_reproduction`, tests/tactip/conftest.py): the CLI run once per paper.
+"""
 
 import numpy as np
 import pytest
@@ -10,21 +9,10 @@ import pytest
 from tactip.cli import main
 
 
-def _rows(tmp_path, paper, capsys):
-    out = tmp_path / f"{paper}.json"
-    assert main(["reproduce", paper, "--quick", "--quiet", "--json", str(out)]) == 0
-    text = capsys.readouterr().out
-    assert f"paper {paper}:" in text and "paper " in text.splitlines()[1]
-    return json.loads(out.read_text()), text
-
-
 @pytest.fixture(scope="module")
-def run_001(tmp_path_factory):
-    out = tmp_path_factory.mktemp("001") / "001.json"
-    text = io.StringIO()
-    with contextlib.redirect_stdout(text):
-        assert main(["reproduce", "001", "--quick", "--quiet", "--json", str(out)]) == 0
-    return json.loads(out.read_text()), text.getvalue()
+def run_001(quick_reproduction):
+    rows, text, _ = quick_reproduction("001")       # the session's run, which test_cluster.py compares with Dask's
+    return rows, text
 
 
 def test_001_deadline_and_relocation(run_001):
@@ -67,13 +55,10 @@ def test_001_deadline_5_lowers_the_position_error_at_the_paper_thresholds(run_00
 
 
 @pytest.fixture(scope="module")
-def rows_000(tmp_path_factory):
-    out = tmp_path_factory.mktemp("000") / "000.json"
-    text = io.StringIO()
-    with contextlib.redirect_stdout(text):
-        assert main(["reproduce", "000", "--quick", "--quiet", "--json", str(out)]) == 0
-    assert "Table III" in text.getvalue()
-    return json.loads(out.read_text())
+def rows_000(quick_reproduction):
+    rows, text, _ = quick_reproduction("000")
+    assert "Table III" in text
+    return rows
 
 
 def test_000_tables_ii_and_iii_rows(rows_000):
@@ -112,8 +97,9 @@ def test_000_skin_active_no_worse_than_passive_at_every_class_count(rows_000):
     assert claim_margin("000", rows_000) >= 0
 
 
-def test_003_active_touch_beats_passive(tmp_path, capsys):
-    rows, text = _rows(tmp_path, "003", capsys)
+def test_003_active_touch_beats_passive(quick_reproduction):
+    rows, text, _ = quick_reproduction("003")
+    assert "paper 003:" in text and "paper " in text.splitlines()[1]
     error = {r["move_threshold"]: r["texture_error_classes"] for r in rows}
     assert set(error) == {1.5, 0.999, 0.05} and all("mean_taps" in r for r in rows)
     assert error[0.05] <= 0.5 * error[1.5]                                     # paper: 0.4 against 1.4

@@ -1,9 +1,19 @@
 """`tactip reproduce 002 --quick` end to end: the bar of issue 10 (paper 002 Fig. 9), a file of its own so
 that pytest-xdist runs it beside the other papers' reproductions (it prepares a simulated station)."""
 
+import json
+
 import numpy as np
 
-from tests.tactip.reproduce.test_reproduce import _rows
+from tactip.cli import main
+
+
+def _rows(tmp_path, paper, capsys):
+    out = tmp_path / f"{paper}.json"
+    assert main(["reproduce", paper, "--quick", "--quiet", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"paper {paper}:" in text and "paper " in text.splitlines()[1]
+    return json.loads(out.read_text()), text
 
 
 def test_002_active_beats_random_beats_stationary_at_equal_taps(tmp_path, capsys):
