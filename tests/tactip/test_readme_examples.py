@@ -13,7 +13,8 @@ are not created: the commands create them. ``--sim`` runs on a shared simulated 
 the first run does not train the packaged station for minutes.
 
 An example passes when it exits 0 (3 where it asks ``--fail-on``: a gap failed, as it may) with no
-traceback. `SKIPPED` lists the examples that cannot run here, each with the reason.
+traceback. `SKIPPED` lists the examples that cannot run here or that another test runs as written, each with the
+reason.
 """
 
 from __future__ import annotations
