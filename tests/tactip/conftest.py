@@ -231,7 +231,8 @@ def _build_sim_station(root: Path) -> SimpleNamespace:
     thresholds = [str(t) for t in THRESHOLDS]
     runs = {
         "calibrate": run_cli(["calibrate", "--config", toml]),
-        "collect": run_cli(["collect", "--config", toml, "--out", datasets, "--workers", "2", "--quiet"]),
+        # the README's example as written (test_readme_examples.py leaves it to this run)
+        "collect": run_cli(["collect", "--config", toml, "--out", datasets]),
         "train": run_cli(["train", datasets / "train.h5", "--out", model, "--locations", LOCATIONS]),
         "sweep": run_cli(["validate", model, datasets / "test.h5", "--sweep-fixation", "--runs", "300",
                           "--thresholds", *thresholds, "--quiet"]),
@@ -242,6 +243,46 @@ def _build_sim_station(root: Path) -> SimpleNamespace:
     assert not failed, f"the station pipeline failed: {failed}"
     assert Path(toml) == root / "station.toml"
     return _sim_station_files(root, runs)
+
+
+# -- quick reproductions, run once per session --------------------------------------------------------
+
+@pytest.fixture(scope="session")
+def quick_reproduction(tmp_path_factory):
+    """``tactip reproduce PAPER --quick --quiet --json FILE`` (seed 0), run once per session and paper.
+
+    A function of the paper giving ``(rows, text, comparisons)``: the JSON file's rows, what the command
+    printed, and ``[figure, measured]`` of each comparison of the report it printed (NaN where nothing was
+    measured). test_reproduce.py checks the rows and the text; test_cluster.py checks that a run on Dask
+    gives the same rows and comparisons, so neither runs the same quick reproduction a second time.
+    Shared by the pytest-xdist workers (`built_once`).
+    """
+    def reproduction(paper: str):
+        with built_once(tmp_path_factory, f"reproduce-{paper}") as (root, build):
+            if build:
+                _reproduce_quick(paper, root)
+        return (json.loads((root / f"{paper}.json").read_text()), (root / "printed.txt").read_text(),
+                json.loads((root / "comparisons.json").read_text()))
+
+    return reproduction
+
+
+def _reproduce_quick(paper: str, root: Path) -> None:
+    """Run the CLI's quick reproduction of ``paper`` into ``root``, keeping the comparisons of its report."""
+    import tactip.reproduce
+
+    real, reports = tactip.reproduce.reproduce, []
+
+    def keeping_the_report(*args, **kwargs):
+        reports.append(real(*args, **kwargs))
+        return reports[-1]
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(tactip.reproduce, "reproduce", keeping_the_report)   # the CLI calls it, as it is
+        code, out, err = run_cli(["reproduce", paper, "--quick", "--quiet", "--json", root / f"{paper}.json"])
+    assert code == 0 and len(reports) == 1, err
+    (root / "printed.txt").write_text(out)
+    (root / "comparisons.json").write_text(json.dumps([[c.figure, float(c.measured)] for c in reports[0].comparisons]))
 
 
 # -- real services (issue 12): a throwaway PostgreSQL server -------------------------------------------

@@ -112,16 +112,16 @@ def test_fixation_sweep_on_the_cluster_equals_a_run_here(client):
 
 
 @pytest.mark.parametrize("paper", ["000", "001", "003"])
-def test_reproduce_on_the_cluster_equals_a_run_here(client, paper):
-    here = reproduce(paper, quick=True, seed=3)
-    there = reproduce(paper, quick=True, seed=3, map_fn=cluster_map(client))
-    assert there.json_rows() == here.json_rows() and len(here.rows) >= 2
+def test_reproduce_on_the_cluster_equals_a_run_here(client, paper, quick_reproduction):
+    # here: the session's `tactip reproduce PAPER --quick` (seed 0), whose rows test_reproduce.py checks
+    here_rows, _, here_comparisons = quick_reproduction(paper)
+    there = reproduce(paper, quick=True, seed=0, map_fn=cluster_map(client))
+    assert json.loads(json.dumps(there.json_rows())) == here_rows and len(here_rows) >= 2   # as the CLI writes them
     # measured is NaN where no run decides (001's deadline at 0.99): equal as NaN
-    np.testing.assert_equal([(c.figure, c.measured) for c in there.comparisons],
-                            [(c.figure, c.measured) for c in here.comparisons])
+    np.testing.assert_equal([[c.figure, float(c.measured)] for c in there.comparisons], here_comparisons)
 
 
-def test_cli_sweep_fixation_and_reproduce_with_scheduler(address, tmp_path, capsys):
+def test_cli_sweep_fixation_and_reproduce_with_scheduler(address, tmp_path, capsys, quick_reproduction):
     save_dataset(tmp_path / "train.h5", gap_dataset(seed=1, taps_per_class=4, **GRID))
     save_dataset(tmp_path / "test.h5", gap_dataset(seed=2, taps_per_class=10, **GRID))
     assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "here.h5"), "--locations", "6"]) == 0
@@ -133,9 +133,9 @@ def test_cli_sweep_fixation_and_reproduce_with_scheduler(address, tmp_path, caps
     capsys.readouterr()
     assert json.loads((tmp_path / "there.json").read_text()) == json.loads((tmp_path / "here.json").read_text())
     assert load_model(tmp_path / "there.h5").recommended == load_model(tmp_path / "here.h5").recommended
-    for name, extra in (("here", []), ("there", ["--scheduler", address])):
-        assert main(["reproduce", "003", "--quick", "--quiet", "--json", str(tmp_path / f"p003-{name}.json"),
-                     *extra]) == 0
-    assert (tmp_path / "p003-there.json").read_text() == (tmp_path / "p003-here.json").read_text()
+    assert main(["reproduce", "003", "--quick", "--quiet", "--json", str(tmp_path / "p003-there.json"), "--scheduler",
+                 address]) == 0
+    here_rows, _, _ = quick_reproduction("003")      # the same command without --scheduler, run once per session
+    assert json.loads((tmp_path / "p003-there.json").read_text()) == here_rows
     assert main(["validate", str(tmp_path / "here.h5"), str(tmp_path / "test.h5"), "--scheduler", address]) == 1
     assert "--scheduler runs a sweep" in capsys.readouterr().err

@@ -13,7 +13,8 @@ are not created: the commands create them. ``--sim`` runs on a shared simulated 
 the first run does not train the packaged station for minutes.
 
 An example passes when it exits 0 (3 where it asks ``--fail-on``: a gap failed, as it may) with no
-traceback. `SKIPPED` lists the examples that cannot run here, each with the reason.
+traceback. `SKIPPED` lists the examples that cannot run here or that another test runs as written, each with the
+reason.
 """
 
 from __future__ import annotations
@@ -54,6 +55,9 @@ SKIPPED = {
     "gel_frame.png": _GEL, "gel_video.avi": _GEL, "gel/labels.csv": _GEL, "data/gel/": _GEL,
     "tactip reproduce 00": "tests/tactip/reproduce/test_reproduce.py runs 'tactip reproduce PAPER' for every paper "
                            "with --quick and checks its figures (full sizes: bench/bench_reproduce.py)",
+    "tactip collect --config station.toml --out data/line3/datasets": "the session's small station is collected by "
+        "this very command on this station (tests/tactip/conftest.py, sim_station; tests/tactip/cli/test_cli_station.py "
+        "checks what it wrote): run once, not twice",
     "--scheduler tcp://HEAD": "needs a Dask cluster on other machines (tests/tactip/replay/test_batch.py starts a "
                               "dask scheduler and a dask worker of its own)",
 }

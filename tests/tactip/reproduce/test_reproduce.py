@@ -1,8 +1,7 @@
-"""`tactip reproduce PAPER --quick` end to end: JSON rows and the bars of issue 10."""
+"""`tactip reproduce PAPER --quick` end to end: JSON rows and the bars of issue 10.
 
-import contextlib
-import io
-import json
+The quick runs are the session's (`quick_reproduction`, tests/tactip/conftest.py): the CLI run once per paper.
+"""
 
 import numpy as np
 import pytest
@@ -10,21 +9,10 @@ import pytest
 from tactip.cli import main
 
 
-def _rows(tmp_path, paper, capsys):
-    out = tmp_path / f"{paper}.json"
-    assert main(["reproduce", paper, "--quick", "--quiet", "--json", str(out)]) == 0
-    text = capsys.readouterr().out
-    assert f"paper {paper}:" in text and "paper " in text.splitlines()[1]
-    return json.loads(out.read_text()), text
-
-
 @pytest.fixture(scope="module")
-def run_001(tmp_path_factory):
-    out = tmp_path_factory.mktemp("001") / "001.json"
-    text = io.StringIO()
-    with contextlib.redirect_stdout(text):
-        assert main(["reproduce", "001", "--quick", "--quiet", "--json", str(out)]) == 0
-    return json.loads(out.read_text()), text.getvalue()
+def run_001(quick_reproduction):
+    rows, text, _ = quick_reproduction("001")       # the session's run, which test_cluster.py compares with Dask's
+    return rows, text
 
 
 def test_001_deadline_and_relocation(run_001):
@@ -67,13 +55,10 @@ def test_001_deadline_5_lowers_the_position_error_at_the_paper_thresholds(run_00
 
 
 @pytest.fixture(scope="module")
-def rows_000(tmp_path_factory):
-    out = tmp_path_factory.mktemp("000") / "000.json"
-    text = io.StringIO()
-    with contextlib.redirect_stdout(text):
-        assert main(["reproduce", "000", "--quick", "--quiet", "--json", str(out)]) == 0
-    assert "Table III" in text.getvalue()
-    return json.loads(out.read_text())
+def rows_000(quick_reproduction):
+    rows, text, _ = quick_reproduction("000")
+    assert "Table III" in text
+    return rows
 
 
 def test_000_tables_ii_and_iii_rows(rows_000):
@@ -112,8 +97,9 @@ def test_000_skin_active_no_worse_than_passive_at_every_class_count(rows_000):
     assert claim_margin("000", rows_000) >= 0
 
 
-def test_003_active_touch_beats_passive(tmp_path, capsys):
-    rows, text = _rows(tmp_path, "003", capsys)
+def test_003_active_touch_beats_passive(quick_reproduction):
+    rows, text, _ = quick_reproduction("003")
+    assert "paper 003:" in text and "paper " in text.splitlines()[1]
     error = {r["move_threshold"]: r["texture_error_classes"] for r in rows}
     assert set(error) == {1.5, 0.999, 0.05} and all("mean_taps" in r for r in rows)
     assert error[0.05] <= 0.5 * error[1.5]                                     # paper: 0.4 against 1.4
@@ -124,69 +110,3 @@ def test_003_active_touch_beats_passive(tmp_path, capsys):
 def test_unknown_papers(capsys):
     with pytest.raises(SystemExit):
         main(["reproduce", "005"])
-
-
-def test_002_active_beats_random_beats_stationary_at_equal_taps(tmp_path, capsys):
-    # Paper 002 Fig. 9 on the simulated station (10 gaps, one tap per depth): width error after 10 mean taps,
-    # active (fixation) < random < stationary (paper: 0.35 < 0.6 < 0.8 mm). The station is prepared on the
-    # training collection only; the Monte Carlo draws from the test collection.
-    rows, text = _rows(tmp_path, "002", capsys)
-    assert {r["policy"] for r in rows} == {"active", "random", "stationary"}
-    assert all(set(r) == {"seed", "policy", "threshold", "width_error_mm", "mean_taps", "accuracy"} for r in rows)
-    at_10 = {}
-    for policy in ("active", "random", "stationary"):
-        mine = sorted((r for r in rows if r["policy"] == policy), key=lambda r: r["mean_taps"])
-        taps = [r["mean_taps"] for r in mine]
-        assert taps[0] <= 10 <= taps[-1], (policy, taps[0], taps[-1])       # 10 taps inside each policy's range
-        at_10[policy] = np.interp(10, taps, [r["width_error_mm"] for r in mine])
-    assert at_10["active"] < at_10["random"] < at_10["stationary"], at_10
-    assert "fit, not a prediction" in text and "MEMBRANE_RHO_MM" in text
-
-
-@pytest.fixture(scope="module")
-def rows_004(tmp_path_factory):
-    out = tmp_path_factory.mktemp("004") / "004.json"
-    assert main(["reproduce", "004", "--quick", "--quiet", "--json", str(out)]) == 0
-    return json.loads(out.read_text())
-
-
-def test_004_contour_following_and_the_adaptive_prior(rows_004):
-    rows = rows_004
-    keys = {"method", "threshold", "angle_error_deg", "position_error_mm", "taps_per_decision", "closed_contour",
-            "delta_error_classes"}
-    assert all(set(r) == keys for r in rows)
-    assert {r["method"] for r in rows} == {"passive", "active", "adaptive", "adaptive_angle_only", "adaptive_shift0"}
-    r = {(row["method"], row["threshold"]): row for row in rows}
-    low, high = sorted({row["threshold"] for row in rows})
-    # Fig. 6: only active perception at a high threshold traces the circle
-    assert r["active", high]["closed_contour"] >= 0.9
-    assert all(r[m, t]["closed_contour"] <= 0.1 for m, t in (("passive", low), ("passive", high), ("active", low)))
-    # Fig. 7C: the adaptive prior decides in fewer taps, eq. 7 as printed and the angle-only variant alike
-    for method in ("adaptive", "adaptive_angle_only"):
-        assert r[method, high]["taps_per_decision"] < r["active", high]["taps_per_decision"]
-    # Eq. 7 as printed carries the last decision's position belief into the next, stale after the straight step
-    # along the tangent (0.45 mm further out per decision on the 30 mm circle): the traced points leave the 2 mm
-    # band, though the pad never loses the edge (bench/bench_004_mechanism.py; seeds 0-2: 17-21 % of runs close
-    # the contour, against 67-96 % with the angle-only prediction)
-    assert r["adaptive", high]["closed_contour"] < r["adaptive_angle_only", high]["closed_contour"]
-    # Fig. 8: the learned shift converges on the true turn (2 classes per decision)
-    assert r["adaptive_angle_only", high]["delta_error_classes"] < 0.5
-    # without the shift the prior is a handicap, not a gain
-    assert r["adaptive_shift0", high]["angle_error_deg"] > r["active", high]["angle_error_deg"]
-    assert r["active", high]["delta_error_classes"] is None
-
-
-@pytest.mark.xfail(strict=False, reason="issue 25, the paper's claim fails in this world with eq. 7 as printed: at "
-                                        "threshold 0.5 the adaptive angle error is 5.0-5.4 deg against active's "
-                                        "3.0-3.6 (quick, seeds 0-2) and the contour closes in 17-21 % of runs; the "
-                                        "angle-only variant is within -7..+10 % of active, not 0.9x. Causes "
-                                        "(bench/bench_004_mechanism.py): the straight tangent step drifts 0.45 mm "
-                                        "outward per decision, which the joint prior cannot predict, so traced "
-                                        "points leave the 2 mm band (the edge is never lost); the learned Delta, "
-                                        "fed ~5 taps per decision, is right in about half the decisions. Without "
-                                        "the drift and with Delta = 2 the claim holds (seeds 0-2: 1.75-1.91 against "
-                                        "2.93-3.36 deg; seeds 0-9: margin +1.09 deg [0.91, 1.27], 10 of 10)")
-def test_004_the_adaptive_prior_lowers_the_angle_error_by_a_tenth_with_the_contour_closed(rows_004):
-    from tactip.reproduce.seeds import claim_margin
-
-    assert claim_margin("004", rows_004) > 0

@@ -1,0 +1,33 @@
+"""`tactip reproduce 002 --quick` end to end: the bar of issue 10 (paper 002 Fig. 9), a file of its own so
+that pytest-xdist runs it beside the other papers' reproductions (it prepares a simulated station)."""
+
+import json
+
+import numpy as np
+
+from tactip.cli import main
+
+
+def _rows(tmp_path, paper, capsys):
+    out = tmp_path / f"{paper}.json"
+    assert main(["reproduce", paper, "--quick", "--quiet", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"paper {paper}:" in text and "paper " in text.splitlines()[1]
+    return json.loads(out.read_text()), text
+
+
+def test_002_active_beats_random_beats_stationary_at_equal_taps(tmp_path, capsys):
+    # Paper 002 Fig. 9 on the simulated station (10 gaps, one tap per depth): width error after 10 mean taps,
+    # active (fixation) < random < stationary (paper: 0.35 < 0.6 < 0.8 mm). The station is prepared on the
+    # training collection only; the Monte Carlo draws from the test collection.
+    rows, text = _rows(tmp_path, "002", capsys)
+    assert {r["policy"] for r in rows} == {"active", "random", "stationary"}
+    assert all(set(r) == {"seed", "policy", "threshold", "width_error_mm", "mean_taps", "accuracy"} for r in rows)
+    at_10 = {}
+    for policy in ("active", "random", "stationary"):
+        mine = sorted((r for r in rows if r["policy"] == policy), key=lambda r: r["mean_taps"])
+        taps = [r["mean_taps"] for r in mine]
+        assert taps[0] <= 10 <= taps[-1], (policy, taps[0], taps[-1])       # 10 taps inside each policy's range
+        at_10[policy] = np.interp(10, taps, [r["width_error_mm"] for r in mine])
+    assert at_10["active"] < at_10["random"] < at_10["stationary"], at_10
+    assert "fit, not a prediction" in text and "MEMBRANE_RHO_MM" in text
