@@ -593,10 +593,20 @@ def test_a_read_only_data_folder_is_reported_as_permission_denied(sim_station, i
                     path.chmod(0o755 if path.is_dir() else 0o644)
 
 
+def _sighup_as_a_terminal_leaves_it() -> None:
+    """In the child: SIGHUP at its default action, whatever pytest inherited (``nohup make test`` ignores it).
+
+    tactip keeps a SIGHUP that its parent ignored ignored (as ``nohup tactip ...`` asks), so without this
+    the hang-up test would only hold when the suite itself was started from a terminal.
+    """
+    if hasattr(signal, "SIGHUP"):
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
 def _start_inspect(toml: Path, cwd: Path) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "tactip.cli", "inspect", "--config", str(toml), "--seed", "1",
                              "--quiet"], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            stdin=subprocess.DEVNULL)
+                            stdin=subprocess.DEVNULL, preexec_fn=_sighup_as_a_terminal_leaves_it)
 
 
 def _wait_for_a_tap(db: Path, process: subprocess.Popen, timeout_s: float = 60) -> None:
