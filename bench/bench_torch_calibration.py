@@ -40,15 +40,12 @@ def one_tap_floor(model, environment, *, draws: int = 500, seed: int = 0) -> flo
     """Mean ECE of a perfectly calibrated model with these 1-tap beliefs over the distinct test taps."""
     from scipy.special import logsumexp
 
-    from perception import expected_calibration_error
+    from perception import calibration_error_floor
 
     ll = environment.log_likelihood.reshape(-1, model.n_locations, model.n_identities)
     decision = np.exp(logsumexp(ll - logsumexp(ll, axis=(1, 2), keepdims=True), axis=1 if model.n_identities > 1
                                 else 2))
-    confidence = decision.max(axis=1)
-    rng = np.random.default_rng(seed)
-    return float(np.mean([expected_calibration_error(confidence, rng.random(confidence.size) < confidence)
-                          for _ in range(draws)]))
+    return float(calibration_error_floor(decision.max(axis=1), draws=draws, seed=seed).mean())
 
 
 def measure(seed: int, repeats: int, kind: str, runs: int, root: Path, *, packaged: bool = False) -> str:

@@ -21,6 +21,11 @@ import numpy as np
 __all__ = ["reliability_bins", "expected_calibration_error", "calibration_error_floor"]
 
 
+def _bin_index(confidence: np.ndarray, bins: int) -> np.ndarray:
+    """Each belief's equal-width bin over [0, 1] (a belief of exactly 1 in the last)."""
+    return np.clip((confidence * bins).astype(np.intp), 0, bins - 1)
+
+
 def reliability_bins(confidence, correct, *, bins: int = 10):
     """Equal-width confidence bins: mean confidence, accuracy and count of each.
 
@@ -46,7 +51,7 @@ def reliability_bins(confidence, correct, *, bins: int = 10):
                          f"{correct.size}")
     if int(bins) != bins or bins < 1:
         raise ValueError(f"bins must be an integer >= 1, got {bins}")
-    index = np.clip((confidence * bins).astype(np.intp), 0, bins - 1)
+    index = _bin_index(confidence, bins)
     counts = np.bincount(index, minlength=bins)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean_confidence = np.bincount(index, weights=confidence, minlength=bins) / counts
@@ -110,10 +115,10 @@ def calibration_error_floor(confidence, *, bins: int = 10, draws: int = 1000, se
     confidence = np.asarray(confidence, dtype=np.float64).ravel()
     if int(draws) != draws or draws < 1:
         raise ValueError(f"draws must be an integer >= 1, got {draws}")
-    mean_confidence, _, counts = reliability_bins(confidence, np.zeros(confidence.shape, bool), bins=bins)
     if confidence.size == 0:
         raise ValueError("no beliefs to measure")
-    index = np.clip((confidence * bins).astype(np.intp), 0, bins - 1)
+    mean_confidence, _, counts = reliability_bins(confidence, np.zeros(confidence.shape, bool), bins=bins)
+    index = _bin_index(confidence, bins)
     correct = np.random.default_rng(seed).random((int(draws), confidence.size)) < confidence   # (draws, N)
     right = np.zeros((int(draws), bins))
     np.add.at(right.T, index, correct.T)   # right answers per bin and draw
