@@ -19,6 +19,7 @@ from scipy.spatial import cKDTree
 
 from .detect import _detect
 from .disc import SensorDisc
+from ._tipfit import fit_tip_centres
 from ._window import _squared_norm
 from .errors import ShapeError
 
@@ -123,6 +124,51 @@ class _Recovery:
                 step = centres - positions[new]
                 keep = (_squared_norm(step) <= self._settled_px ** 2) & self._like_at_rest(measures, new)
                 positions[new] = np.where(keep[:, None], centres, np.nan)
+        return positions
+
+    def fit_veiled(self, crop: np.ndarray, positions: np.ndarray, last_seen: np.ndarray,
+                   which: np.ndarray) -> np.ndarray:
+        """Missing veiled pins `which` (indices) placed by fitting their tips as opaque ellipses.
+
+        A pin is veiled when its windowed centroid at rest lies off its tip by more than the
+        plausibility bound (`Refiner.veiled`: a faint tip on the flank of a reflection or of the
+        bright surround's veil, where the window counts the bright side as tip): its window cannot
+        show it, the fit of `pins._tipfit` can. Each is fitted from its prediction (its rest position
+        moved by the median displacement of its placed neighbours), its nearest neighbours fitted
+        with it (their feet are left out of its window, their ellipses shape its own), and placed
+        where the fit ends when that lies within the gate of the prediction, a window there shows
+        a tip of the pin's contrast at rest, and no neighbour sits on the same tip.
+
+        Parameters
+        ----------
+        crop : (h, w) ndarray of uint8
+            The frame's crop at `origin`, bright pins.
+        positions : (N, 2) ndarray
+            Positions so far, px; NaN where missing.
+        last_seen : (N, 2) ndarray
+            Each pin's last known position, px.
+        which : (L,) ndarray of int
+            Missing veiled pins to fit.
+
+        Returns
+        -------
+        positions : (N, 2) ndarray of float64
+            A copy of `positions` with the pins found, px.
+        """
+        predicted = self._predict(positions, which, last_seen)
+        neighbours = self._window_neighbours[:, which].ravel()
+        neighbours = np.setdiff1d(neighbours[np.isfinite(positions[neighbours, 0])], which)
+        starts = np.concatenate([predicted, positions[neighbours]])
+        fitted = fit_tip_centres(crop, starts - self.origin, self.tip_fit_radius_px)[:len(which)] + self.origin
+        measures = self.windows.measure(crop, fitted - self.origin, self.window_radius(
+            np.where(np.isnan(positions), last_seen, positions))[which])[1]
+        found = ((_squared_norm(fitted - predicted) <= self.gate_px ** 2)
+                 & (measures[1] >= self._at_least[1, which]))
+        positions = positions.copy()
+        if found.any():
+            which, fitted = which[found], fitted[found]
+            positions[which] = fitted
+            self._one_pin_per_tip(positions, which, _squared_norm(fitted - predicted[found]))
         return positions
 
     def _detect_near(self, grey: np.ndarray, points: np.ndarray) -> np.ndarray:

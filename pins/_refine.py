@@ -57,7 +57,9 @@ from scipy.spatial import cKDTree
 
 from .detect import DetectionParams
 from .disc import SensorDisc
+from ._flat import _pin_radius_px
 from ._follow import _GUESS_FRACTION, _Following
+from ._tipfit import fit_tip_centres
 from ._recover import _Recovery, match_to_blobs
 from ._rest import _AtRest
 from ._window import WindowCentroids, _squared_norm
@@ -208,6 +210,15 @@ class Refiner(_Following, _AtRest, _Recovery):
         self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
                                    _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
         self._area_at_most = _AREA_RATIO[1] * area
+        # Pins whose window at rest settles off their tip (fitted as an opaque ellipse over a curved
+        # background, `pins._tipfit`) by more than the plausibility bound: faint tips on a veil's or a
+        # reflection's flank, which the window weighs with the bright side. When their windows lose
+        # them, the fit looks for them (`fit_veiled`).
+        #: Tip radius the fits take, px (where the tips' mean profile crosses half-way to the membrane).
+        self.tip_fit_radius_px = _pin_radius_px(rest_crop, positions - origin, spacing_px, False)
+        tips = fit_tip_centres(rest_crop, positions - origin, self.tip_fit_radius_px) + origin
+        #: (N,) bool: pins whose windowed centroid at rest lies off their fitted tip.
+        self.veiled = ~(_squared_norm(positions + self._rest_offset - tips) <= self._max_shift_px ** 2)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).

@@ -426,6 +426,11 @@ class PinTracker:
         # missing ones are looked for at their rest positions.
         positions = refiner.snap_to_rest(crop, positions, search)
         missing = np.isnan(positions[:, 0])
+        veiled = (missing & search & refiner.veiled).nonzero()[0]
+        if veiled.size:
+            # Faint tips on a veil's flank, which their windows lose: fitted as opaque ellipses.
+            positions = refiner.fit_veiled(crop, positions, self._last_seen, veiled)
+            missing = np.isnan(positions[:, 0])
         if not missing.any():
             return positions, False, False
         if self._too_few(positions):
