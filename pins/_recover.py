@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 
 from .detect import _detect
 from .disc import SensorDisc
-from ._tipfit import fit_tip_centres
+from ._tipfit import _CENTRE_PASSES, _MARGIN_PX, _Windows, _gauss_newton
 from ._window import _squared_norm
 from .errors import ShapeError
 
@@ -126,18 +126,18 @@ class _Recovery:
                 positions[new] = np.where(keep[:, None], centres, np.nan)
         return positions
 
-    def fit_veiled(self, crop: np.ndarray, positions: np.ndarray, last_seen: np.ndarray,
-                   which: np.ndarray) -> np.ndarray:
-        """Missing veiled pins `which` (indices) placed by fitting their tips as opaque ellipses.
+    def fit_tips(self, crop: np.ndarray, positions: np.ndarray, last_seen: np.ndarray,
+                 which: np.ndarray) -> np.ndarray:
+        """Missing pins `which` (indices) whose tips show at their predictions, placed by fitting the tips.
 
-        A pin is veiled when its windowed centroid at rest lies off its tip by more than the
-        plausibility bound (`Refiner.veiled`: a faint tip on the flank of a reflection or of the
-        bright surround's veil, where the window counts the bright side as tip): its window cannot
-        show it, the fit of `pins._tipfit` can. Each is fitted from its prediction (its rest position
-        moved by the median displacement of its placed neighbours), its nearest neighbours fitted
-        with it (their feet are left out of its window, their ellipses shape its own), and placed
-        where the fit ends when that lies within the gate of the prediction, a window there shows
-        a tip of the pin's contrast at rest, and no neighbour sits on the same tip.
+        A faint tip on a slope (the flank of a reflection or of a bright surround's veil) may be
+        lost by its window, which weighs the bright side as tip (too much area, a centroid pulled
+        off the tip), and by blob detection. A pin whose window at its prediction (its rest position
+        moved by the median displacement of its placed neighbours) shows a tip of at least its
+        least contrast (`_like_at_rest`'s) is fitted there as `pins._tipfit` fits tips: an opaque
+        ellipse (the pin's own at rest, `tip_shapes`) over a quadratic membrane, its centre alone
+        free, its placed neighbours' feet left out. It is placed where the fit ends, unless no step
+        of the fit was taken (the fit failed: it keeps its start).
 
         Parameters
         ----------
@@ -148,27 +148,34 @@ class _Recovery:
         last_seen : (N, 2) ndarray
             Each pin's last known position, px.
         which : (L,) ndarray of int
-            Missing veiled pins to fit.
+            Missing pins to look for.
 
         Returns
         -------
         positions : (N, 2) ndarray of float64
-            A copy of `positions` with the pins found, px.
+            `positions`, or a copy with the pins found, px.
         """
         predicted = self._predict(positions, which, last_seen)
-        neighbours = self._window_neighbours[:, which].ravel()
-        neighbours = np.setdiff1d(neighbours[np.isfinite(positions[neighbours, 0])], which)
-        starts = np.concatenate([predicted, positions[neighbours]])
-        fitted = fit_tip_centres(crop, starts - self.origin, self.tip_fit_radius_px)[:len(which)] + self.origin
-        measures = self.windows.measure(crop, fitted - self.origin, self.window_radius(
-            np.where(np.isnan(positions), last_seen, positions))[which])[1]
-        found = ((_squared_norm(fitted - predicted) <= self.gate_px ** 2)
-                 & (measures[1] >= self._at_least[1, which]))
+        known = np.where(np.isnan(positions), last_seen, positions)
+        contrast = self.windows.measure(crop, predicted - self.origin, self.window_radius(known)[which])[1][1]
+        shows = contrast >= self._at_least[1, which]  # NaN (no window) compares False
+        if not shows.any():
+            return positions
+        which, start = which[shows], predicted[shows] - self.origin
+        radius = self.tip_fit_radius_px
+        neighbours = known[self._window_neighbours[:, which].T] - self.origin  # (L, k, 2)
+        nearest = np.sqrt(_squared_norm(neighbours - start[:, None, :]).min(axis=1))
+        reach = np.minimum(1.5 * radius + 1.0 + _MARGIN_PX, nearest - 0.5 * radius)
+        theta = np.concatenate([start, self._tip_ellipses[which]], axis=1)  # (L, 5): centre, Q_xx, Q_xy, Q_yy
+        window = _Windows(crop, start, reach, neighbours, nearest)
+        fitted = _gauss_newton(window, theta, start, radius, free=2, passes=_CENTRE_PASSES)[:, :2]
+        moved = (fitted != start).any(axis=1)
+        if not moved.any():
+            return positions
         positions = positions.copy()
-        if found.any():
-            which, fitted = which[found], fitted[found]
-            positions[which] = fitted
-            self._one_pin_per_tip(positions, which, _squared_norm(fitted - predicted[found]))
+        which, fitted = which[moved], fitted[moved] + self.origin
+        positions[which] = fitted
+        self._one_pin_per_tip(positions, which, _squared_norm(fitted - predicted[shows][moved]))
         return positions
 
     def _detect_near(self, grey: np.ndarray, points: np.ndarray) -> np.ndarray:

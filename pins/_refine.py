@@ -59,7 +59,7 @@ from .detect import DetectionParams
 from .disc import SensorDisc
 from ._flat import _pin_radius_px
 from ._follow import _GUESS_FRACTION, _Following
-from ._tipfit import fit_tip_centres
+from ._tipfit import _SHAPE_NEIGHBOURS, tip_shapes
 from ._recover import _Recovery, match_to_blobs
 from ._rest import _AtRest
 from ._window import WindowCentroids, _squared_norm
@@ -210,15 +210,15 @@ class Refiner(_Following, _AtRest, _Recovery):
         self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
                                    _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
         self._area_at_most = _AREA_RATIO[1] * area
-        # Pins whose window at rest settles off their tip (fitted as an opaque ellipse over a curved
-        # background, `pins._tipfit`) by more than the plausibility bound: faint tips on a veil's or a
-        # reflection's flank, which the window weighs with the bright side. When their windows lose
-        # them, the fit looks for them (`fit_veiled`).
-        #: Tip radius the fits take, px (where the tips' mean profile crosses half-way to the membrane).
+        # For tips the windows lose (`fit_tips`): the tips' radius, px (where their mean profile crosses
+        # half-way to the membrane), and each tip's ellipse at rest (Q_xx, Q_xy, Q_yy: the tip covers
+        # e^T Q e <= 1), px^-2, the median of its own and its nearest neighbours' (one tip's is noisy).
+        #: Radius of the tips for their fits, px.
         self.tip_fit_radius_px = _pin_radius_px(rest_crop, positions - origin, spacing_px, False)
-        tips = fit_tip_centres(rest_crop, positions - origin, self.tip_fit_radius_px) + origin
-        #: (N,) bool: pins whose windowed centroid at rest lies off their fitted tip.
-        self.veiled = ~(_squared_norm(positions + self._rest_offset - tips) <= self._max_shift_px ** 2)
+        shapes = np.linalg.inv(tip_shapes(rest_crop, positions - origin, self.tip_fit_radius_px))
+        shapes = np.stack([shapes[:, 0, 0], shapes[:, 0, 1], shapes[:, 1, 1]], axis=1)
+        near = index[:, :_SHAPE_NEIGHBOURS - 1] if index.shape[1] >= _SHAPE_NEIGHBOURS - 1 else index
+        self._tip_ellipses = np.median(np.concatenate([shapes[:, None], shapes[near]], axis=1), axis=1)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).

@@ -59,6 +59,7 @@ from .lk import _RETRY_FRACTION, LKParams, _track, track_pins
 __all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
 
 # A frame in which fewer than this fraction of the expected (not retired) pins are found is blank.
+FIT_ON = True
 _BLANK_FRACTION = 0.1
 # The sensor disc's rim is blurred over this many px inside its fitted radius: the surround's light
 # reaches that far (the crop's surround is replaced up to here, where pins' windows reach it).
@@ -426,21 +427,22 @@ class PinTracker:
         # missing ones are looked for at their rest positions.
         positions = refiner.snap_to_rest(crop, positions, search)
         missing = np.isnan(positions[:, 0])
-        veiled = (missing & search & refiner.veiled).nonzero()[0]
-        if veiled.size:
-            # Faint tips on a veil's flank, which their windows lose: fitted as opaque ellipses.
-            positions = refiner.fit_veiled(crop, positions, self._last_seen, veiled)
-            missing = np.isnan(positions[:, 0])
         if not missing.any():
             return positions, False, False
         if self._too_few(positions):
             return positions, True, False
         wanted = missing & ~self.retired
-        if wanted.any() and self._since_detection + 1 >= self.detect_every:
+        detected = bool(wanted.any() and self._since_detection + 1 >= self.detect_every)
+        if detected:
             # Blobs only around the pins that asked for them: retired pins, spread along the rim,
             # would widen the detection to most of the disc; they come back by their own search.
-            return refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted), False, True
-        return positions, False, False
+            positions = refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted)
+        # Pins still missing whose tips show at their predictions (faint on a slope, which their windows
+        # weigh as tip: a veil's or a reflection's flank) are fitted as opaque ellipses.
+        fit = (np.isnan(positions[:, 0]) & wanted).nonzero()[0]
+        if fit.size and FIT_ON:
+            positions = refiner.fit_tips(crop, positions, self._last_seen, fit)
+        return positions, False, detected
 
     def _too_few(self, positions: np.ndarray) -> bool:
         """Whether fewer than a tenth of the pins expected (not retired) were found: a blank frame."""
