@@ -62,7 +62,7 @@ from ._follow import _GUESS_FRACTION, _Following
 from ._tipfit import _SHAPE_NEIGHBOURS, tip_shapes
 from ._recover import _Recovery, match_to_blobs
 from ._rest import _AtRest
-from ._window import WindowCentroids, _squared_norm
+from ._window import _FLAT_RISE, WindowCentroids, _squared_norm
 
 __all__ = ["match_to_blobs", "WindowCentroids", "Refiner"]
 
@@ -219,6 +219,10 @@ class Refiner(_Following, _AtRest, _Recovery):
         shapes = np.stack([shapes[:, 0, 0], shapes[:, 0, 1], shapes[:, 1, 1]], axis=1)
         near = index[:, :_SHAPE_NEIGHBOURS - 1] if index.shape[1] >= _SHAPE_NEIGHBOURS - 1 else index
         self._tip_ellipses = np.median(np.concatenate([shapes[:, None], shapes[near]], axis=1), axis=1)
+        # Only tips on a slope (their windows tilt their thresholds there) are fitted: on a flat membrane
+        # a window that loses its tip has lost it to contact, to the rim or to a neighbour.
+        #: (N,) bool: pins whose windows at rest lie on a sloped background (a reflection, a veil).
+        self.sloped = self.windows.slopes(rest_crop, positions - origin) > _FLAT_RISE
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).

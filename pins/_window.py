@@ -121,6 +121,27 @@ class WindowCentroids:
             out[:, fits] = (patches.min(axis=1), np.median(patches, axis=1), patches[:, self._top].mean(axis=1))
         return out[0], out[1], out[2]
 
+    def slopes(self, image: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """How steep each window's background is: the rise of its plane (through the darkest runs of its
+        sides, as `measure` fits it) across half the window over the tip's contrast above it, (N,).
+
+        Windows at the finite `points` (N, 2), px, that fit in `image`; NaN elsewhere (and inf where
+        no tip rises). Beyond `_FLAT_RISE` the window tilts its threshold: the tip lies on a slope.
+        """
+        n = len(points)
+        out = np.full(n, np.nan)
+        if n == 0:
+            return out
+        bounds, view = self._view(image)
+        corner = np.rint(points).astype(np.intp) - self.half_px
+        fits = (corner.view(np.uintp) <= bounds).all(axis=1)
+        patches = view[corner[fits, 1], corner[fits, 0]].reshape(int(fits.sum()), -1)
+        top, darkest, _ = self._sums_of(patches, patches.astype(np.float32))
+        plane = np.dot(darkest, self._side_plane)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out[fits] = np.sqrt(_squared_norm(plane[:, 1:])) / np.maximum(top - plane[:, 0], 0.0)
+        return out
+
     def __call__(self, image: np.ndarray, points: np.ndarray,
                  radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Centroids of the bright tips around `points`.

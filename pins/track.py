@@ -59,7 +59,6 @@ from .lk import _RETRY_FRACTION, LKParams, _track, track_pins
 __all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
 
 # A frame in which fewer than this fraction of the expected (not retired) pins are found is blank.
-FIT_ON = True
 _BLANK_FRACTION = 0.1
 # The sensor disc's rim is blurred over this many px inside its fitted radius: the surround's light
 # reaches that far (the crop's surround is replaced up to here, where pins' windows reach it).
@@ -437,10 +436,11 @@ class PinTracker:
             # Blobs only around the pins that asked for them: retired pins, spread along the rim,
             # would widen the detection to most of the disc; they come back by their own search.
             positions = refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted)
-        # Pins still missing whose tips show at their predictions (faint on a slope, which their windows
-        # weigh as tip: a veil's or a reflection's flank) are fitted as opaque ellipses.
-        fit = (np.isnan(positions[:, 0]) & wanted).nonzero()[0]
-        if fit.size and FIT_ON:
+        # Pins just seen, on a sloped background at rest (a veil's or a reflection's flank, which their
+        # windows weigh as tip), and missing now: fitted as opaque ellipses where their tips show.
+        # (Those lost for longer come back by their windows' search, snapping to rest and blobs.)
+        fit = (np.isnan(positions[:, 0]) & (self._lost_run == 0) & refiner.sloped).nonzero()[0]
+        if fit.size:
             positions = refiner.fit_tips(crop, positions, self._last_seen, fit)
         return positions, False, detected
 
