@@ -7,8 +7,11 @@ Recovery (`Refiner.recover`, at a rate `PinTracker` bounds). The frame's blobs a
 pin's predicted position (its rest position moved by the median displacement of its tracked
 neighbours). Gates below half the pin spacing and one-to-one assignments keep identities.
 
-`match_to_blobs` and the Hungarian assignment are plain functions; `_Recovery` holds the step that
-uses them; `pins._refine.Refiner` inherits it and sets the state it reads.
+Fitting (`Refiner.fit_tips`, every frame, for the few pins just lost on a sloped background): tips
+that their windows lose are fitted as opaque ellipses where their windows show a tip.
+
+`match_to_blobs` and the Hungarian assignment are plain functions; `_Recovery` holds the steps that
+use them; `pins._refine.Refiner` inherits it and sets the state it reads.
 """
 
 from __future__ import annotations

@@ -45,6 +45,15 @@ neighbours), re-centred once; it is found when that move is at most 0.1 spacings
 at rest, it lies within the gate (below half the spacing) of the prediction and no neighbour sits
 on the same tip (`Refiner._one_pin_per_tip`).
 
+Fitting. A faint tip on a slope (a reflection's flank, the veil of a bright surround over the outer
+ring) is paint: it hides the light behind it, which no background subtracted before a centroid
+models, so its window may count the bright side as tip (twice its area at rest) and lose it, and
+blob detection may too. A pin whose window at rest lies on such a slope (`sloped`: the window
+tilts its threshold there), placed in the last frame and missing now, is fitted as an opaque
+ellipse over a quadratic membrane where its window shows a tip (`pins._recover`, `fit_tips`; the
+model of `pins._tipfit`, its ellipse its own at rest). On radial-led-120's 4 mm tap through mp4v,
+seeds 0-11, this keeps 98.9-100 % of the visible pin-frames (windows alone: 95.5-98.5 %).
+
 The follow passes (`pins._follow`), the still pad and rest (`pins._rest`, with the noise estimates of
 `pins._noise`) and recovery from blobs (`pins._recover`) live in their own modules; `Refiner`
 inherits their steps.
@@ -215,8 +224,11 @@ class Refiner(_Following, _AtRest, _Recovery):
         # e^T Q e <= 1), px^-2, the median of its own and its nearest neighbours' (one tip's is noisy).
         #: Radius of the tips for their fits, px.
         self.tip_fit_radius_px = _pin_radius_px(rest_crop, positions - origin, spacing_px, False)
-        shapes = np.linalg.inv(tip_shapes(rest_crop, positions - origin, self.tip_fit_radius_px))
-        shapes = np.stack([shapes[:, 0, 0], shapes[:, 0, 1], shapes[:, 1, 1]], axis=1)
+        # (Q = shape^-1 in closed form; a blank frame's degenerate shapes give NaN, and NaN fits fail.)
+        shapes = tip_shapes(rest_crop, positions - origin, self.tip_fit_radius_px)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            shapes = np.stack([shapes[:, 1, 1], -shapes[:, 0, 1], shapes[:, 0, 0]], axis=1) / np.linalg.det(shapes)[:, None]
+        shapes[~np.isfinite(shapes).all(axis=1)] = np.nan
         near = index[:, :_SHAPE_NEIGHBOURS - 1] if index.shape[1] >= _SHAPE_NEIGHBOURS - 1 else index
         self._tip_ellipses = np.median(np.concatenate([shapes[:, None], shapes[near]], axis=1), axis=1)
         # Only tips on a slope (their windows tilt their thresholds there) are fitted: on a flat membrane
