@@ -459,7 +459,8 @@ def _membrane_evidence(grey: np.ndarray, image: np.ndarray, pins: np.ndarray, po
     _, near = cKDTree(centroids).query(points, _NULL_SITES)
     used, back = np.unique(near, return_inverse=True)
     tolerance = _MIRROR * nearest[cKDTree(pins).query(centroids[used])[1]]
-    evidence = np.nan_to_num(_measure_holes(grey, image, pins, centroids[used], tolerance, radius_px)[1], nan=0.0)
+    evidence = _measure_holes(grey, image, pins, centroids[used], tolerance, radius_px)[1]
+    evidence = np.where(np.isfinite(evidence), evidence, 0.0)  # no membrane to fit: no evidence
     return np.median(evidence[back.reshape(near.shape)], axis=1)
 
 
