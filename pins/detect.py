@@ -33,6 +33,9 @@ __all__ = ["DetectionParams", "detect_pins", "detect_blobs", "Blobs"]
 
 # Smallest eroded core that counts as a pin when splitting touching pins, px.
 _MIN_CORE_PX = 4
+# ... when the pins are too small to erode (a split radius below 1 px): the core of a tip of about a
+# pixel's radius at half height has 2-4 pixels (small-pad-100, two tips pressed 3.6 px together).
+_MIN_CORE_UNERODED_PX = 2
 _GROW = np.ones((3, 3), np.uint8)
 
 @dataclass(frozen=True)
@@ -360,7 +363,9 @@ def _split_touching(smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, co
     mx, my = px + origin_x[component], py + origin_y[component]
     mask = np.zeros((int(box_h[tiles].max()) + 2 + 2 * pad, int(tile_w.sum())), np.uint8)
     mask[my[core], mx[core]] = 255
-    size = 2 * int(np.ceil(radius_px)) + 1
+    # A disc of `radius_px` below 1 px holds the centre pixel alone: no erosion (the half-height cut
+    # parts the cores of tips of about a pixel's radius, which a 3 px cross would erase).
+    size = 2 * int(np.ceil(radius_px)) + 1 if radius_px >= 1.0 else 1
     eroded = cv2.erode(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (size, size)))
     # 4-connected cores: a diagonal one-pixel bridge left by the erosion does not join two pins.
     cores, core_labels = cv2.connectedComponents(eroded, connectivity=4, ltype=cv2.CV_32S)
@@ -373,7 +378,7 @@ def _split_touching(smooth: np.ndarray, mean: np.ndarray, labels: np.ndarray, co
     component_of_core = np.zeros(cores, dtype=np.int64)
     component_of_core[core_of_pixel] = component[core_pixels]
     # Crumbs of a bridge are not pins: cores need a few pixels to count.
-    component_of_core[core_size < _MIN_CORE_PX] = 0
+    component_of_core[core_size < (_MIN_CORE_PX if size > 1 else _MIN_CORE_UNERODED_PX)] = 0
     multi = np.bincount(component_of_core[1:], minlength=count) >= 2
     multi[0] = False
     if not multi.any():

@@ -98,3 +98,18 @@ def test_camera_noise_filling_the_frame_is_no_sensor(seed=0):
         find_pin_field(noise)
     with pytest.raises(NoSensorError, match="not on a regular lattice"):
         find_pin_field(noise, dark_pins=True)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_markers_going_on_beyond_a_false_disc_spill_over_it(seed):
+    """A disc laid on a flat gel (as a gradient might make one): its markers go on beyond it in rows at
+    the pitch, so the field spills over (`pins._flat._spills_over`) and the whole frame is searched."""
+    from pins._flat import _spills_over
+    from pins.disc import SensorDisc
+
+    f = _frame(seed, "rest")
+    grey = f.image if f.image.ndim == 2 else f.image.mean(axis=2).astype(np.uint8)
+    height, width = grey.shape
+    field = find_pin_field(f.image, disc=SensorDisc(width / 2, height / 2, 0.3 * height), dark_pins=True)
+    assert field.count >= 7 and not field.disc.whole_frame
+    assert _spills_over(grey, field)

@@ -9,11 +9,12 @@ causes of failures found on other seeds stay fixed:
   for the blob's own edge, so a soft skin highlight at a hidden lattice site looked as sharp as a pin
   and was kept (brown-127 seeds 1-3, 5, 9, 11: one to three false pins).
 
-Still failing beyond seed 2 (bench/bench_detect_seeds.py, seeds 0-11): brown-127 seed 3 tapped keeps one
-soft highlight at a hidden lattice site by the rim (contrast half its neighbours', as sharp for its
-contrast); small-pad-100 tapped, seeds 4, 5, 8, 10, 11: one to three false pins, each added by
-`pins._rescue.probe_lattice_holes` between the foreshortened rim pins, and on seeds 4 and 10 two pins
-pressed 3.6 px together (pitch 5.5 px) found as one blob.
+Still failing beyond seed 2 (bench/bench_detect_seeds.py, seeds 0-11): brown-127 seed 3 tapped keeps two
+soft highlights at hidden lattice sites by the rim (the blob stage); radial-led-120 places its pins to
+0.10-0.15 px RMSE on 16 of 24 frames (the bench's bar is 0.1 px; its own test allows 0.14: the faint
+outer-ring tips the lattice probe finds). Fixed here: brown-127 seed 5 (a rim highlight the lattice
+probe took), small-pad-100 tapped seeds 4 and 10 (two tips pressed together read as one) and
+radial-led-120 seed 14 at rest (noise in the surround taken for a flat gel's markers beyond the disc).
 """
 
 import cv2
@@ -102,3 +103,41 @@ def test_the_casings_edge_does_not_sharpen_a_soft_highlight_by_the_rim():
     # Without the disc the bright casing's blurred edge, within reach of the highlight, is taken for its own.
     inside_blind, by_the_rim_blind = _sharpness(image, blobs, params)
     assert inside_blind == pytest.approx(inside) and by_the_rim_blind > 2 * inside_blind
+
+
+@pytest.mark.parametrize("contact", list(CONTACTS))
+def test_a_skin_highlight_at_a_hidden_rim_site_is_not_probed_for_a_pin(contact):
+    """brown-127 seed 5: by the rim, where the lattice predicts sites whose pins are hidden, textured skin
+    passes the lattice probe's false-alarm bar (evidence 58-79 against 15) with a tip level 0.84-0.94 of
+    its neighbours'; the probe took it for a pin, at rest and tapped (two false pins with the blob
+    stage's one: precision 0.984). Bare skin at the interstices round it reaches a median evidence of
+    38-54, and the probe now asks twice that (`pins._rescue._NULL_FACTOR`)."""
+    f = preset_frame("brown-127", CONTACTS[contact], 5)
+    field = find_pin_field(f.image)
+    recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
+    assert recall >= 0.99 and precision >= 0.99 and rmse <= 0.1, (recall, precision, rmse)
+    false = cKDTree(f.centres[f.visible | f.partial]).query(field.centres)[0] > _gate_px(f)
+    assert false.sum() <= 1, field.centres[false]
+
+
+def test_noise_blobs_in_a_bright_surround_do_not_make_the_disc_a_flat_gels():
+    """radial-led-120 seed 14 at rest: in the near-saturated surround (245, noise 5) the field's parameters
+    make 38 blobs of noise beyond the disc, which passed for a flat gel's markers going on past a false
+    disc: the whole frame was searched and 216 pins found (102 false). Scattered, a median 3.5 pitches
+    apart and not in rows, they no longer count (`pins._flat._SPILL_LINK`): the disc holds, 120 of 120."""
+    f = preset_frame("radial-led-120", None, 14)
+    field = find_pin_field(f.image)
+    recall, precision, _ = score(field.centres, f, gate_px=_gate_px(f))
+    assert not field.disc.whole_frame and recall >= 0.99 and precision >= 0.99, field.summary()
+
+
+@pytest.mark.parametrize("seed", [4, 10])
+def test_tips_of_a_pixel_pressed_together_are_split(seed):
+    """small-pad-100 tapped (tips about 1 px in radius, pitch 5.4 px): two tips pressed 3.6 px apart join
+    into one blob through a bridge of a pixel or two. Splitting eroded the half-height cores by a 3 px
+    cross, which left nothing of a 3-pixel core, so the pair was one pin (recall 0.98, one false): a
+    split radius below 1 px now erodes nothing (`pins.detect._split_touching`), and both are found."""
+    f = preset_frame("small-pad-100", TAP, seed)
+    field = find_pin_field(f.image)
+    recall, precision, rmse = score(field.centres, f, gate_px=_gate_px(f))
+    assert recall == 1.0 and precision == 1.0 and rmse <= 0.1, (recall, precision, rmse)
