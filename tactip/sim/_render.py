@@ -269,6 +269,25 @@ def tint_table(skin_level: float, pin_level: float) -> np.ndarray:
     return ((1 - t) * skin + t * pin).astype(np.float32)
 
 
+def expose(scene, *, rng: np.random.Generator, noise_sigma: float, jpeg_quality: int | None) -> np.ndarray:
+    """The camera's frame of a float32 scene (grey levels): sensor noise, rounding to uint8, JPEG.
+
+    ``scene`` ((H, W) or (H, W, 3) float32) is overwritten; the noise is `byte_noise` of ``noise_sigma``
+    drawn from ``rng`` (none at 0), and ``jpeg_quality`` (1-100 or None) compresses the frame like an
+    MJPG webcam. Returns the uint8 frame, the shape of ``scene``.
+    """
+    if noise_sigma > 0:
+        scene += byte_noise(rng, scene.shape, noise_sigma)
+    scene += np.float32(0.5)  # round to nearest on conversion
+    image = np.clip(scene, 0, 255, out=scene).astype(np.uint8)
+    if jpeg_quality is not None:
+        import cv2
+
+        _, buffer = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)])
+        image = cv2.imdecode(buffer, cv2.IMREAD_UNCHANGED)
+    return image
+
+
 def byte_noise(rng: np.random.Generator, shape, sigma: float) -> np.ndarray:
     """Zero-mean near-Gaussian noise of standard deviation ``sigma``, float32.
 
