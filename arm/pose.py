@@ -16,7 +16,9 @@ Example
 
 from __future__ import annotations
 
+import functools
 import math
+import struct
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,7 +93,9 @@ class Pose:
         """Compose: ``self @ other`` maps other's frame through self (``T_self · T_other``)."""
         if not isinstance(other, Pose):
             return NotImplemented
-        return Pose.from_matrix(self.as_matrix() @ other.as_matrix())
+        key = struct.pack("12d", self.x, self.y, self.z, self.roll, self.pitch, self.yaw,
+                          other.x, other.y, other.z, other.roll, other.pitch, other.yaw)
+        return _compose(key, self, other)
 
     def inverse(self) -> Pose:
         """The inverse transform."""
@@ -115,6 +119,13 @@ class Pose:
         """Whether two poses agree within a position (mm) and an orientation (deg) tolerance."""
         angle = np.degrees((self.rotation.inv() * other.rotation).magnitude())
         return self.distance_to(other) <= position_mm and angle <= angle_deg
+
+
+@functools.lru_cache(maxsize=512)
+def _compose(key: bytes, first: Pose, second: Pose) -> Pose:
+    """``first @ second`` (poses are immutable: a station's moves compose the same few poses again and
+    again, so the products are kept, keyed on their twelve numbers' bytes: -0.0 is not 0.0)."""
+    return Pose.from_matrix(first.as_matrix() @ second.as_matrix())
 
 
 def pose_to_ur(pose: Pose) -> list[float]:

@@ -4,6 +4,8 @@ Prints the median over repeated renders of an indented contact over a gap, with 
 appearance (noise, glare, gradient), and the cost of the ground truth alone (``pin_centres``); then
 the same for every preset of `tactip.sim.synthetic.PRESETS` (image size, pins; target < 40 ms for
 ``dense-1000``, 1000 pins at 1280x720), with the default 331-pin render beside it as the yardstick.
+Last, CPU ms per frame of the simulated station's taps (`SimulatedCamera`, 331 pins, depths 0-5.5 mm):
+a tap films the same contact through its rests and plateau, which the renderer draws once.
 Run: ``.venv/bin/python bench/bench_render.py``
 """
 
@@ -12,6 +14,7 @@ import time
 import numpy as np
 
 from tactip.sim import PRESETS, Contact, SyntheticTacTip
+from tactip.sim.camera import SimulatedCamera
 
 REPEATS = 60
 
@@ -46,6 +49,20 @@ def main():
         render = per_call_ms(lambda: sensor.render(contact), repeats=20)
         size = "x".join(map(str, sensor.image_size))
         print(f"{name:14s}  {size:9s}  {sensor.n_pins:4d}  {render:15.2f}  {render / yardstick:13.2f}")
+    print(f"\nstation taps: {station_tap_ms():.2f} CPU ms/frame (SimulatedCamera, 331 pins, 23 depths x 2 gaps)")
+
+
+def station_tap_ms():
+    """CPU ms per frame of the simulated station's taps: 23 depths (0-5.5 mm, 1.5 mm of air) x 2 gaps."""
+    from types import SimpleNamespace
+
+    camera = SimulatedCamera(pins=331, approach_height_mm=2.5, seed=0)
+    frames, start = 0, time.process_time()
+    for seed, (depth, width) in enumerate((d, w) for d in np.arange(0.0, 5.51, 0.25) for w in (1.0, 3.0)):
+        event = SimpleNamespace(contact=Contact(indentation_mm=max(depth - 1.5, 0.0), gap_width_mm=width))
+        camera.begin_tap(event, seed=seed)
+        frames += len(camera.end_tap(event)[0])
+    return 1e3 * (time.process_time() - start) / frames
 
 
 if __name__ == "__main__":

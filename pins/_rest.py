@@ -52,7 +52,9 @@ class _AtRest:
         rng = np.random.default_rng(0)  # a fixed draw: the same rest frame, the same bound
         total = np.zeros(len(positions))
         for _ in range(_NOISE_DRAWS):
-            noisy = np.clip(rest_crop + rng.normal(0.0, sigma, rest_crop.shape), 0, 255).astype(np.uint8)
+            noisy = rng.normal(0.0, sigma, rest_crop.shape)
+            noisy += rest_crop  # in place: the crop plus the draw, clipped and truncated to uint8
+            noisy = np.clip(noisy, 0, 255, out=noisy).astype(np.uint8)
             total += _squared_norm(self.windows.measure(noisy, points, radius)[0] - base)
         return np.where(np.isfinite(total), total / _NOISE_DRAWS, 0.0)
 

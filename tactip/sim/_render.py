@@ -6,6 +6,7 @@ All images here are float32 grey levels (0-255 scale); `tactip.sim.synthetic` co
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
@@ -269,6 +270,39 @@ def tint_table(skin_level: float, pin_level: float) -> np.ndarray:
     return ((1 - t) * skin + t * pin).astype(np.float32)
 
 
+def expose(scene, *, rng: np.random.Generator, noise_sigma: float, jpeg_quality: int | None) -> np.ndarray:
+    """The camera's frame of a float32 scene (grey levels): sensor noise, rounding to uint8, JPEG.
+
+    ``scene`` ((H, W) or (H, W, 3) float32) is overwritten; the noise is `byte_noise` of ``noise_sigma``
+    drawn from ``rng`` (none at 0), and ``jpeg_quality`` (1-100 or None) compresses the frame like an
+    MJPG webcam. Returns the uint8 frame, the shape of ``scene``.
+    """
+    if noise_sigma > 0:
+        scene += byte_noise(rng, scene.shape, noise_sigma)
+    scene += np.float32(0.5)  # round to nearest on conversion
+    image = np.clip(scene, 0, 255, out=scene).astype(np.uint8)
+    if jpeg_quality is not None:
+        import cv2
+
+        _, buffer = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)])
+        image = cv2.imdecode(buffer, cv2.IMREAD_UNCHANGED)
+    return image
+
+
+def _random_bytes(rng: np.random.Generator, count: int) -> np.ndarray:
+    """``rng.bytes(count)`` as a (count,) uint8 array, and ``rng`` left in the same state.
+
+    ``Generator.bytes`` draws 32-bit words, two from each 64-bit output of the bit generator, low half
+    first, so on a little-endian machine a PCG64 with no half word buffered gives the same bytes as
+    its raw outputs (the same stream after), which it returns several times faster.
+    """
+    bits = rng.bit_generator
+    if (type(bits) is np.random.PCG64 and count % 8 == 0 and sys.byteorder == "little"
+            and not bits.state["has_uint32"]):
+        return bits.random_raw(count // 8).view(np.uint8)
+    return np.frombuffer(rng.bytes(count), dtype=np.uint8)
+
+
 def byte_noise(rng: np.random.Generator, shape, sigma: float) -> np.ndarray:
     """Zero-mean near-Gaussian noise of standard deviation ``sigma``, float32.
 
@@ -276,7 +310,7 @@ def byte_noise(rng: np.random.Generator, shape, sigma: float) -> np.ndarray:
     bounded at 3.5 sigma), about twice as fast as ``rng.standard_normal`` for a whole frame.
     """
     n = int(np.prod(shape))
-    octets = np.frombuffer(rng.bytes(4 * n), dtype=np.uint8).reshape(4, n)
+    octets = _random_bytes(rng, 4 * n).reshape(4, n)
     total = octets[0].astype(np.int16)
     total += octets[1]
     total += octets[2]

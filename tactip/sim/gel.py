@@ -133,6 +133,7 @@ class SyntheticGel(ContactSequences):
         self.colour, self.frame_rate, self.seed = bool(colour), float(frame_rate), seed
         self.preset = None
         layout_rng, self._noise_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
+        self._scenes = {}  # the last frames before noise at rest and pressed (see `render`)
 
         self.pitch_px = float(min(width / cols, height / rows))
         self.mm_per_px = self.pin_spacing_mm / self.pitch_px
@@ -223,21 +224,32 @@ class SyntheticGel(ContactSequences):
             ``visible``: markers wholly in the frame; ``partial``: cut by the frame's edge.
         """
         contact = contact or Contact()
-        centres = self._project(contact)
-        visible, partial = self._visibility(centres)
         if hidden is not None:
             hidden = np.asarray(hidden, dtype=bool)
             if hidden.shape != (self._n,):
                 raise ValueError(f"hidden must have shape ({self._n},), got {hidden.shape}")
-            visible &= ~hidden
-            partial &= ~hidden
-        drawn = visible | partial
-        image = self._draw(centres[drawn], contact)
-        return SyntheticFrame(image=image, centres=centres, visible=visible, timestamp_s=float(timestamp_s),
-                              contact=contact, partial=partial)
+        # As SyntheticTacTip's: the last frames before noise at rest and pressed are drawn once.
+        key = (repr(contact), None if hidden is None else hidden.tobytes())  # repr: -0.0 is not 0.0
+        slot = "rest" if contact.indentation_mm <= 0 else "pressed"
+        cached = self._scenes.get(slot)
+        if cached is not None and cached[0] == key:
+            centres, visible, partial, scene = cached[1]
+        else:
+            centres = self._project(contact)
+            visible, partial = self._visibility(centres)
+            if hidden is not None:
+                visible &= ~hidden
+                partial &= ~hidden
+            drawn = visible | partial
+            scene = self._draw(centres[drawn], contact)
+            self._scenes[slot] = (key, (centres, visible, partial, scene))
+        image = _render.expose(scene.copy(), rng=self._noise_rng, noise_sigma=self.noise_sigma,
+                               jpeg_quality=self.jpeg_quality)
+        return SyntheticFrame(image=image, centres=centres.copy(), visible=visible.copy(),
+                              timestamp_s=float(timestamp_s), contact=contact, partial=partial.copy())
 
     def _draw(self, centres: np.ndarray, contact: Contact) -> np.ndarray:
-        """The lit gel, its shading under contact, the markers, blur, noise and compression; uint8."""
+        """The lit gel, its shading under contact, the markers and blur: the frame before noise, float32."""
         width, height = self.image_size
         light = self._light + _gel.shading(self.image_size, self.mm_per_px, contact, gain=self.shading)
         shape = np.broadcast_to(self.pin_radius_px ** 2 * np.eye(2), (len(centres), 2, 2))
@@ -256,15 +268,6 @@ class SyntheticGel(ContactSequences):
             import cv2
 
             scene = cv2.GaussianBlur(scene, (0, 0), self.blur_sigma)
-        if self.noise_sigma > 0:
-            scene += _render.byte_noise(self._noise_rng, scene.shape, self.noise_sigma)
-        scene += np.float32(0.5)
-        image = np.clip(scene, 0, 255, out=scene).astype(np.uint8)
-        if self.jpeg_quality is not None:
-            import cv2
-
-            _, buffer = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, int(self.jpeg_quality)])
-            image = cv2.imdecode(buffer, cv2.IMREAD_UNCHANGED)
-        return image
+        return scene
 
     tap = SyntheticTacTip.tap

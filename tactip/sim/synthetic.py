@@ -232,6 +232,9 @@ class SyntheticTacTip(ContactSequences):
         self.reflection_centres = np.zeros((0, 2)) if self._light is None else self._light.centres
         self.reflection_radii_px = np.zeros(0) if self._light is None else self._light.radii_px
         self._shimmer_rng = None
+        # the last frames before noise at rest and pressed, (key, (centres, visible, partial, scene)): a tap
+        # films the same contact in its rests and plateau, and only the camera noise differs between them
+        self._scenes = {}
         self.reseed_noise(None)
         self._tint = (_render.tint_table(self.membrane_level or _render.MEMBRANE_LEVEL, 0.85 * self._pin_level)
                       if self.skin_tint == "brown" else None)
@@ -396,21 +399,32 @@ class SyntheticTacTip(ContactSequences):
         SyntheticFrame
         """
         contact = contact or Contact()
-        centres, shape, facing = self._project(contact)
-        visible, partial = self._visibility(centres, shape, facing)
         if hidden is not None:
             hidden = np.asarray(hidden, dtype=bool)
             if hidden.shape != (self._n,):
                 raise ValueError(f"hidden must have shape ({self._n},), got {hidden.shape}")
-            visible &= ~hidden
-            partial &= ~hidden
-        drawn = visible | partial
-        image = self._draw(centres[drawn], shape[drawn], self._brightness[drawn], contact)
-        return SyntheticFrame(image=image, centres=centres, visible=visible, timestamp_s=float(timestamp_s),
-                              contact=contact, partial=partial)
+        key = (repr(contact), None if hidden is None else hidden.tobytes())  # repr: -0.0 is not 0.0
+        slot = "rest" if contact.indentation_mm <= 0 else "pressed"
+        cached = self._scenes.get(slot)
+        if cached is not None and cached[0] == key:
+            centres, visible, partial, scene = cached[1]
+        else:
+            centres, shape, facing = self._project(contact)
+            visible, partial = self._visibility(centres, shape, facing)
+            if hidden is not None:
+                visible &= ~hidden
+                partial &= ~hidden
+            drawn = visible | partial
+            scene = self._draw(centres[drawn], shape[drawn], self._brightness[drawn], contact)
+            if self._shimmer_rng is None:  # a shimmering pad's light differs in every frame
+                self._scenes[slot] = (key, (centres, visible, partial, scene))
+        image = _render.expose(scene.copy(), rng=self._noise_rng, noise_sigma=self.noise_sigma,
+                               jpeg_quality=self.jpeg_quality)
+        return SyntheticFrame(image=image, centres=centres.copy(), visible=visible.copy(),
+                              timestamp_s=float(timestamp_s), contact=contact, partial=partial.copy())
 
     def _draw(self, centres, shape, brightness, contact):
-        """Composite pins over the static scene, add blur, noise and compression; returns uint8."""
+        """Composite pins over the static scene and blur: the frame before noise, (H, W[, 3]) float32."""
         scene = self._static.copy()
         flat = scene.reshape(-1)
         width, height = self.image_size
@@ -446,16 +460,7 @@ class SyntheticTacTip(ContactSequences):
             scene = scene[:, :, None] * np.take(self._tint, np.clip(scene, 0, 255).astype(np.uint8), axis=0)
         elif self.colour:
             scene = scene[:, :, None] * np.array([1.0, 0.97, 0.93], dtype=np.float32)
-        if self.noise_sigma > 0:
-            scene += _render.byte_noise(self._noise_rng, scene.shape, self.noise_sigma)
-        scene += np.float32(0.5)  # round to nearest on conversion
-        image = np.clip(scene, 0, 255, out=scene).astype(np.uint8)
-        if self.jpeg_quality is not None:
-            import cv2
-
-            _, buffer = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, int(self.jpeg_quality)])
-            image = cv2.imdecode(buffer, cv2.IMREAD_UNCHANGED)
-        return image
+        return scene
 
     def tap(self, contact: Contact, *, frame_rate: float | None = None, rise_s: float = 0.25, plateau_s: float = 0.25,
             release_s: float = 0.25, rest_before_s: float = 0.1,
