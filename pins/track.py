@@ -472,12 +472,16 @@ class PinTracker:
         if np.hypot(*(pins - (disc.cx, disc.cy)).T).max() + reach <= disc.radius_px - _DISC_EDGE_PX:
             return None  # no pin reaches the rim (most pads): no need to look at every pixel
         yy, xx = np.mgrid[0:rest_crop.shape[0], 0:rest_crop.shape[1]]
-        beyond = np.hypot(xx + x0 - disc.cx, yy + y0 - disc.cy) > disc.radius_px - _DISC_EDGE_PX
+        from_centre = np.hypot(xx + x0 - disc.cx, yy + y0 - disc.cy)
+        beyond = from_centre > disc.radius_px - _DISC_EDGE_PX
         if not beyond.any() or beyond.all():
             return None
-        near = cKDTree(pins - self._origin).query(np.column_stack([xx[beyond], yy[beyond]]),
+        # Only pixels no farther from the centre than the outermost pin's reach can be within a pin's
+        # reach (triangle inequality): the nearest-pin query skips the crop's corners.
+        candidates = np.flatnonzero(beyond & (from_centre <= np.hypot(*(pins - (disc.cx, disc.cy)).T).max() + reach + 1.0))
+        near = cKDTree(pins - self._origin).query(np.column_stack([xx.ravel()[candidates], yy.ravel()[candidates]]),
                                                    distance_upper_bound=reach)[0] <= reach
         if not near.any():
             return None
         bright = cv2.bitwise_not(rest_crop) if self.detection.dark_pins else rest_crop
-        return np.flatnonzero(beyond)[near], np.uint8(np.median(bright[~beyond]))
+        return candidates[near], np.uint8(np.median(bright[~beyond]))
