@@ -166,14 +166,13 @@ class _Recovery:
             `positions`, or a copy with the pins found, px.
         """
         predicted = self._predict(positions, which, last_seen)
-        known = np.where(np.isnan(positions), last_seen, positions)
-        radius = self.window_radius(known)[which]
-        contrast = self.windows.measure(crop, predicted - self.origin, radius)[1][1]
-        shows = contrast >= self._at_least[1, which]  # NaN (no window) compares False
+        # (Only the windows' contrast is asked for, before and after the fit: `WindowCentroids.contrast`.)
+        shows = self.windows.contrast(crop, predicted - self.origin) >= self._at_least[1, which]
         if not shows.any():
             return positions
         which, start = which[shows], predicted[shows] - self.origin
-        neighbours = known[self._window_neighbours[:, which].T] - self.origin  # (L, k, 2)
+        around = self._window_neighbours[:, which].T  # (L, k)
+        neighbours = np.where(np.isnan(positions[around]), last_seen[around], positions[around]) - self.origin
         nearest = np.sqrt(_squared_norm(neighbours - start[:, None, :]).min(axis=1))
         tip = self.tip_fit_radius_px
         reach = np.minimum(1.5 * tip + 1.0 + _MARGIN_PX, nearest - 0.5 * tip)
@@ -182,7 +181,7 @@ class _Recovery:
         fitted = _gauss_newton(window, theta, start, tip, free=2, passes=_FIT_PASSES)[:, :2]
         # A fit that took a step and ended on a tip of the pin's least contrast places it.
         moved = (fitted != start).any(axis=1)
-        moved[moved] = self.windows.measure(crop, fitted[moved], radius[shows][moved])[1][1] >= self._at_least[1, which[moved]]
+        moved[moved] = self.windows.contrast(crop, fitted[moved]) >= self._at_least[1, which[moved]]
         if not moved.any():
             return positions
         positions = positions.copy()

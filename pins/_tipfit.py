@@ -27,6 +27,8 @@ radius, not finite) keeps the starting centre.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.spatial import cKDTree
 from scipy.special import erf
@@ -39,6 +41,8 @@ _AXIS_RANGE = (0.5, 2.0)  # fitted semi-axes within these factors of the pin rad
 _FULL_PASSES = 3  # damped Gauss-Newton passes with the ellipse free ...
 _CENTRE_PASSES = 3  # ... then with each ellipse fixed to its neighbours' median
 _SHAPE_NEIGHBOURS = 7  # tips (with itself) whose median ellipse a tip takes
+_EYE = {2: np.eye(2), 5: np.eye(5)}  # the free parameters' identities, by their number
+_RIDGE = 1e-6 * np.eye(8)  # keeps the linear parameters' normal equations regular
 _MARGIN_PX = 1.0  # the window reaches this far beyond 1.5 pin radii (the tip's foot and a ring of membrane)
 
 
@@ -128,23 +132,33 @@ class _Windows:
 
     def __init__(self, image, start, reach, neighbours, nearest):
         height, width = image.shape
-        half = int(np.ceil(reach.max())) + 1
-        offsets = np.arange(-half, half + 1)
-        gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
-        disc = np.hypot(gx, gy) <= half  # no pixel beyond the reach counts: the square's corners are left out
-        gx, gy = gx[disc], gy[disc]
+        gx, gy = _disc_offsets(int(np.ceil(reach.max())) + 1)
         anchor = np.rint(start).astype(np.intp)
-        self.x = (anchor[:, 0, None] + gx[None]).astype(np.float64)
-        self.y = (anchor[:, 1, None] + gy[None]).astype(np.float64)
-        inside = (self.x >= 0) & (self.x <= width - 1) & (self.y >= 0) & (self.y <= height - 1)
-        self.values = image[np.clip(self.y, 0, height - 1).astype(np.intp), np.clip(self.x, 0, width - 1).astype(np.intp)]
+        ix, iy = anchor[:, 0, None] + gx, anchor[:, 1, None] + gy  # (N, P) int
+        self.x, self.y = ix.astype(np.float64), iy.astype(np.float64)
+        # (A negative index, read as unsigned, lies beyond the bound: one comparison a side.)
+        inside = (ix.view(np.uintp) <= width - 1) & (iy.view(np.uintp) <= height - 1)
+        if inside.all():
+            self.values = image[iy, ix]
+        else:
+            self.values = image[np.clip(iy, 0, height - 1), np.clip(ix, 0, width - 1)]
         # A pixel counts when it lies in the image and nearer to its own tip than half the distance
         # to the nearest neighbour from every neighbour (no neighbour's foot), within the reach.
-        own = np.full(self.x.shape, np.inf)
-        for k in range(neighbours.shape[1]):
-            np.minimum(own, np.hypot(self.x - neighbours[:, k, 0, None], self.y - neighbours[:, k, 1, None]), out=own)
-        self.usable = inside & (own > 0.5 * nearest[:, None])
+        own = np.hypot(self.x[:, None, :] - neighbours[:, :, 0, None], self.y[:, None, :] - neighbours[:, :, 1, None])
+        self.usable = inside & (np.minimum.reduce(own, axis=1) > 0.5 * nearest[:, None])
         self.reach = reach
+
+
+@functools.lru_cache(maxsize=8)
+def _disc_offsets(half: int) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (x, y), px, of the pixels of a square of half side `half` px no farther than `half` from its
+    centre (no pixel beyond the reach counts: the square's corners are left out), row by row: (P,) int each."""
+    offsets = np.arange(-half, half + 1)
+    gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
+    disc = np.hypot(gx, gy) <= half
+    gx, gy = gx[disc], gy[disc]
+    gx.flags.writeable = gy.flags.writeable = False
+    return gx, gy
 
 
 def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius_px: float, *, free: int,
@@ -152,10 +166,14 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
     """Refine the first `free` of (mu_x, mu_y, Q_xx, Q_xy, Q_yy) by damped Gauss-Newton (N, 5)."""
     damping = np.full(len(theta), 1e-3)
     lowest, highest = (1.0 / (_AXIS_RANGE[1] * radius_px) ** 2, 1.0 / (_AXIS_RANGE[0] * radius_px) ** 2)
-    eye = np.eye(free)
-    basis = np.empty((len(theta), 8, window.x.shape[1]))
-    weighted, surface_rows = np.empty_like(basis), np.empty((len(theta), 6, window.x.shape[1]))
-    ridge = 1e-6 * np.eye(8)
+    eye = _EYE[free]
+    n, pixels = window.x.shape
+    basis = np.empty((n, 8, pixels))
+    weighted, surface_rows = np.empty_like(basis), np.empty((n, 6, pixels))
+    jacobian = np.empty((n, free, pixels))
+    if free == 2:
+        # The ellipses stay as they are: whether each is acceptable is known before the passes.
+        ellipse_bad = ~_ellipse_ok(theta, lowest, highest)
     for _ in range(passes):
         ex, ey = window.x - theta[:, 0, None], window.y - theta[:, 1, None]
         length = np.hypot(ex, ey)
@@ -180,7 +198,7 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
         basis[:, 6] = coverage
         np.multiply(coverage, dome, out=basis[:, 7])
         np.multiply(basis, weight[:, None, :], out=weighted)
-        normal = weighted @ basis.transpose(0, 2, 1) + ridge
+        normal = weighted @ basis.transpose(0, 2, 1) + _RIDGE
         beta = np.linalg.solve(normal, weighted @ window.values[..., None])[..., 0]
         model = np.einsum("nkp,nk->np", basis, beta)
         residual = window.values - model
@@ -192,12 +210,12 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
         safe = np.maximum(length, 1e-9)
         factor = 1.0 / root - 1.0
         under = beta[:, 7, None] * coverage * (q < 1.0)  # the dome's own change
-        grads = [slope * (-ex / safe * factor) - 2.0 * qx * (slope * per_q + under),
-                 slope * (-ey / safe * factor) - 2.0 * qy * (slope * per_q + under)]
+        by_q = slope * per_q + under  # d m / d q
+        np.subtract(slope * (-ex / safe * factor), 2.0 * qx * by_q, out=jacobian[:, 0])
+        np.subtract(slope * (-ey / safe * factor), 2.0 * qy * by_q, out=jacobian[:, 1])
         if free == 5:
-            for dq in (ex * ex, 2.0 * ex * ey, ey * ey):
-                grads.append((slope * per_q + under) * dq)
-        jacobian = np.stack(grads, axis=1)  # (N, free, P)
+            for row, dq in enumerate((ex * ex, 2.0 * ex * ey, ey * ey), start=2):
+                np.multiply(by_q, dq, out=jacobian[:, row])
         jw = jacobian * weight[:, None, :]
         hessian = jw @ jacobian.transpose(0, 2, 1)
         hessian = hessian + damping[:, None, None] * np.diagonal(hessian, axis1=1, axis2=2)[:, :, None] * eye
@@ -206,11 +224,21 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
         step[:, :2] = np.clip(step[:, :2], -0.5, 0.5)
         new = theta.copy()
         new[:, :free] += step
-        trace = new[:, 2] + new[:, 4]
-        det = new[:, 2] * new[:, 4] - new[:, 3] ** 2
-        spread = np.sqrt(np.maximum(trace * trace / 4.0 - det, 0.0))
-        bad = (~np.isfinite(new).all(axis=1) | (det <= 0) | (trace / 2.0 - spread < lowest)
-               | (trace / 2.0 + spread > highest) | (np.hypot(*(new[:, :2] - start).T) > _REACH_PX))
+        if free == 2:
+            bad = ellipse_bad | ~np.isfinite(new[:, :2]).all(axis=1)
+        else:
+            bad = ~_ellipse_ok(new, lowest, highest)
+        bad |= np.hypot(*(new[:, :2] - start).T) > _REACH_PX
         theta[~bad] = new[~bad]
         damping = np.where(bad, damping * 10.0, damping / 3.0)
     return theta
+
+
+def _ellipse_ok(theta: np.ndarray, lowest: float, highest: float) -> np.ndarray:
+    """Whether each row of (mu_x, mu_y, Q_xx, Q_xy, Q_yy) (N, 5) is finite with Q's eigenvalues in
+    [lowest, highest], px^-2 (semi-axes within `_AXIS_RANGE` of the pin radius): (N,) bool."""
+    trace = theta[:, 2] + theta[:, 4]
+    det = theta[:, 2] * theta[:, 4] - theta[:, 3] ** 2
+    spread = np.sqrt(np.maximum(trace * trace / 4.0 - det, 0.0))
+    return (np.isfinite(theta).all(axis=1) & (det > 0) & (trace / 2.0 - spread >= lowest)
+            & (trace / 2.0 + spread <= highest))
