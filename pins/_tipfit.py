@@ -33,6 +33,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
+from ._window import _squared_norm
+
 __all__ = ["fit_tip_centres", "tip_shapes"]
 
 _EDGE_PX = 0.55  # soft edge of the coverage: erf of (distance beyond the boundary) / this, px
@@ -43,6 +45,7 @@ _CENTRE_PASSES = 3  # ... then with each ellipse fixed to its neighbours' median
 _SHAPE_NEIGHBOURS = 7  # tips (with itself) whose median ellipse a tip takes
 _EYE = {2: np.eye(2), 5: np.eye(5)}  # the free parameters' identities, by their number
 _RIDGE = 1e-6 * np.eye(8)  # keeps the linear parameters' normal equations regular
+_ERF_SLOPE = 1.0 / (np.sqrt(np.pi) * _EDGE_PX)  # d coverage / d beyond at the boundary, px^-1 (times the Gaussian)
 _MARGIN_PX = 1.0  # the window reaches this far beyond 1.5 pin radii (the tip's foot and a ring of membrane)
 
 
@@ -135,7 +138,8 @@ class _Windows:
         gx, gy = _disc_offsets(int(np.ceil(reach.max())) + 1)
         anchor = np.rint(start).astype(np.intp)
         ix, iy = anchor[:, 0, None] + gx, anchor[:, 1, None] + gy  # (N, P) int
-        self.x, self.y = ix.astype(np.float64), iy.astype(np.float64)
+        self.xy = np.stack([ix, iy], axis=1).astype(np.float64)  # (N, 2, P)
+        self.x, self.y = self.xy[:, 0], self.xy[:, 1]
         # (A negative index, read as unsigned, lies beyond the bound: one comparison a side.)
         inside = (ix.view(np.uintp) <= width - 1) & (iy.view(np.uintp) <= height - 1)
         if inside.all():
@@ -144,8 +148,8 @@ class _Windows:
             self.values = image[np.clip(iy, 0, height - 1), np.clip(ix, 0, width - 1)]
         # A pixel counts when it lies in the image and nearer to its own tip than half the distance
         # to the nearest neighbour from every neighbour (no neighbour's foot), within the reach.
-        own = np.hypot(self.x[:, None, :] - neighbours[:, :, 0, None], self.y[:, None, :] - neighbours[:, :, 1, None])
-        self.usable = inside & (np.minimum.reduce(own, axis=1) > 0.5 * nearest[:, None])
+        own = _squared_norm(self.xy.transpose(0, 2, 1)[:, None] - neighbours[:, :, None, :])  # (N, k, P), px^2
+        self.usable = inside & (np.minimum.reduce(own, axis=1) > np.square(0.5 * nearest)[:, None])
         self.reach = reach
 
 
@@ -232,6 +236,66 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
         theta[~bad] = new[~bad]
         damping = np.where(bad, damping * 10.0, damping / 3.0)
     return theta
+
+
+def _centre_step(window: _Windows, theta: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """One damped Gauss-Newton step of the tips' centres alone, their ellipses fixed: the first pass of
+    `_gauss_newton(..., free=2)`, the same model and step in about half its NumPy calls (the (x, y)
+    rows as one array, the 2 x 2 step in closed form), for `pins._recover`'s fits every frame.
+
+    `theta` (N, 5) as there, its ellipses acceptable (`_ellipse_ok`; the caller checks them once);
+    returns the centres (N, 2), px: each moved by its step where that stays finite and within
+    `_REACH_PX` of `start`, else as in `theta`.
+    """
+    n, pixels = window.x.shape
+    e = window.xy - theta[:, :2, None]  # (N, 2, P): each pixel from the centre, px
+    ex, ey = e[:, 0], e[:, 1]
+    length = np.hypot(ex, ey)
+    weight = (window.usable & (length <= window.reach[:, None])).astype(np.float64)
+    qe = theta[:, (2, 3, 3, 4)].reshape(n, 2, 2) @ e  # Q e
+    q = np.maximum(np.einsum("nkp,nkp->np", e, qe), 1e-12)
+    root = np.sqrt(q)
+    beyond = length * (1.0 - root) / root  # distance inside the boundary along the ray, px
+    coverage = 0.5 + 0.5 * erf(beyond / _EDGE_PX)
+    dome = np.minimum(q, 1.0)
+    # The linear parameters (quadratic background behind the tip, the tip's level and dome) in closed form.
+    surface_rows = np.empty((n, 6, pixels))
+    surface_rows[:, 0] = 1.0
+    surface_rows[:, 1:3] = e
+    np.multiply(ex, ex, out=surface_rows[:, 3])
+    np.multiply(ex, ey, out=surface_rows[:, 4])
+    np.multiply(ey, ey, out=surface_rows[:, 5])
+    basis = np.empty((n, 8, pixels))
+    np.multiply(surface_rows, (1.0 - coverage)[:, None, :], out=basis[:, :6])
+    basis[:, 6] = coverage
+    np.multiply(coverage, dome, out=basis[:, 7])
+    weighted = basis * weight[:, None, :]
+    beta = np.linalg.solve(weighted @ basis.transpose(0, 2, 1) + _RIDGE, weighted @ window.values[..., None])
+    surface = (beta[:, None, :6, 0] @ surface_rows)[:, 0]
+    rise = beta[:, 6] + beta[:, 7] * dome - surface  # the tip above the membrane behind it
+    residual = window.values - (surface + coverage * rise)
+    # d m / d beyond, and d beyond / d mu (dq/dmu = -2 Q e); the dome's own change.
+    slope = rise * np.exp(np.square(beyond / _EDGE_PX) * -1.0) * _ERF_SLOPE
+    by_q = slope * (length / (-2.0 * q * root)) + beta[:, 7] * coverage * (q < 1.0)
+    radial = slope * (1.0 / root - 1.0) / np.maximum(length, 1e-9)
+    jacobian = -(e * radial[:, None, :]) - 2.0 * qe * by_q[:, None, :]  # (N, 2, P)
+    jw = jacobian * weight[:, None, :]
+    (a, b), (c, d) = (jw @ jacobian.transpose(0, 2, 1)).transpose(1, 2, 0)
+    g0, g1 = (jw @ residual[..., None])[..., 0].T
+    # Damped as `_gauss_newton`'s first pass; the determinant is positive (a Gram matrix, damped).
+    a, d = a * (1.0 + 1e-3) + 1e-9, d * (1.0 + 1e-3) + 1e-9
+    det = a * d - b * c
+    step = np.stack([(d * g0 - b * g1) / det, (a * g1 - c * g0) / det], axis=1)
+    new = theta[:, :2] + np.minimum(np.maximum(step, -0.5), 0.5)
+    good = np.isfinite(new).all(axis=1) & (_squared_norm(new - start) <= _REACH_PX ** 2)
+    return np.where(good[:, None], new, theta[:, :2])
+
+
+def _fittable(ellipses: np.ndarray, radius_px: float) -> np.ndarray:
+    """Whether tips of ellipses (Q_xx, Q_xy, Q_yy) (N, 3), px^-2, can be fitted with their ellipses fixed
+    (`_centre_step`): finite, with semi-axes within `_AXIS_RANGE` of `radius_px` (no fit of another moves). (N,) bool."""
+    lowest, highest = (1.0 / (_AXIS_RANGE[1] * radius_px) ** 2, 1.0 / (_AXIS_RANGE[0] * radius_px) ** 2)
+    return _ellipse_ok(np.concatenate([np.zeros((len(ellipses), 2)), ellipses], axis=1), lowest, highest)
 
 
 def _ellipse_ok(theta: np.ndarray, lowest: float, highest: float) -> np.ndarray:
