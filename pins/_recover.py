@@ -181,7 +181,9 @@ class _Recovery:
         fitted = _centre_step(window, theta, start)
         # A fit that took a step and ended on a tip of the pin's least contrast places it.
         moved = (fitted != start).any(axis=1)
-        moved[moved] = self.windows.contrast(crop, fitted[moved]) >= self._at_least[1, which[moved]]
+        # (The contrast depends on the window's pixel alone: a fit that stayed on it keeps its contrast.)
+        again = moved & (np.rint(fitted) != np.rint(start)).any(axis=1)
+        moved[again] = self.windows.contrast(crop, fitted[again]) >= self._at_least[1, which[again]]
         if not moved.any():
             return positions
         positions = positions.copy()

@@ -143,9 +143,10 @@ class _Windows:
         # (A negative index, read as unsigned, lies beyond the bound: one comparison a side.)
         inside = (ix.view(np.uintp) <= width - 1) & (iy.view(np.uintp) <= height - 1)
         if inside.all():
-            self.values = image[iy, ix]
+            values = image[iy, ix]
         else:
-            self.values = image[np.clip(iy, 0, height - 1), np.clip(ix, 0, width - 1)]
+            values = image[np.clip(iy, 0, height - 1), np.clip(ix, 0, width - 1)]
+        self.values = values.astype(np.float64)
         # A pixel counts when it lies in the image and nearer to its own tip than half the distance
         # to the nearest neighbour from every neighbour (no neighbour's foot), within the reach.
         own = _squared_norm(self.xy.transpose(0, 2, 1)[:, None] - neighbours[:, :, None, :])  # (N, k, P), px^2
@@ -250,44 +251,54 @@ def _centre_step(window: _Windows, theta: np.ndarray, start: np.ndarray) -> np.n
     n, pixels = window.x.shape
     e = window.xy - theta[:, :2, None]  # (N, 2, P): each pixel from the centre, px
     ex, ey = e[:, 0], e[:, 1]
-    length = np.hypot(ex, ey)
+    length = np.sqrt(ex * ex + ey * ey)
     weight = (window.usable & (length <= window.reach[:, None])).astype(np.float64)
-    qe = theta[:, (2, 3, 3, 4)].reshape(n, 2, 2) @ e  # Q e
-    q = np.maximum(np.einsum("nkp,nkp->np", e, qe), 1e-12)
+    qxx, qxy, qyy = theta[:, 2, None], theta[:, 3, None], theta[:, 4, None]
+    qe = np.empty_like(e)  # Q e
+    qx, qy = qe[:, 0], qe[:, 1]
+    np.add(qxx * ex, qxy * ey, out=qx)
+    np.add(qxy * ex, qyy * ey, out=qy)
+    q = np.maximum(ex * qx + ey * qy, 1e-12)
     root = np.sqrt(q)
     beyond = length * (1.0 - root) / root  # distance inside the boundary along the ray, px
-    coverage = 0.5 + 0.5 * erf(beyond / _EDGE_PX)
+    edge = beyond / _EDGE_PX
+    coverage = 0.5 + 0.5 * erf(edge)
     dome = np.minimum(q, 1.0)
-    # The linear parameters (quadratic background behind the tip, the tip's level and dome) in closed form.
+    # The linear parameters (quadratic background behind the tip, the tip's level and dome) in closed
+    # form; the grey levels ride along as a ninth row, so one product gives the normal equations.
     surface_rows = np.empty((n, 6, pixels))
     surface_rows[:, 0] = 1.0
     surface_rows[:, 1:3] = e
     np.multiply(ex, ex, out=surface_rows[:, 3])
     np.multiply(ex, ey, out=surface_rows[:, 4])
     np.multiply(ey, ey, out=surface_rows[:, 5])
-    basis = np.empty((n, 8, pixels))
+    basis = np.empty((n, 9, pixels))
     np.multiply(surface_rows, (1.0 - coverage)[:, None, :], out=basis[:, :6])
     basis[:, 6] = coverage
     np.multiply(coverage, dome, out=basis[:, 7])
-    weighted = basis * weight[:, None, :]
-    beta = np.linalg.solve(weighted @ basis.transpose(0, 2, 1) + _RIDGE, weighted @ window.values[..., None])
+    basis[:, 8] = window.values
+    weighted = basis[:, :8] * weight[:, None, :]
+    products = weighted @ basis.transpose(0, 2, 1)  # (N, 8, 9)
+    beta = np.linalg.solve(products[:, :, :8] + _RIDGE, products[:, :, 8:])
     surface = (beta[:, None, :6, 0] @ surface_rows)[:, 0]
     rise = beta[:, 6] + beta[:, 7] * dome - surface  # the tip above the membrane behind it
     residual = window.values - (surface + coverage * rise)
     # d m / d beyond, and d beyond / d mu (dq/dmu = -2 Q e); the dome's own change.
-    slope = rise * np.exp(np.square(beyond / _EDGE_PX) * -1.0) * _ERF_SLOPE
+    slope = rise * np.exp(-(edge * edge)) * _ERF_SLOPE
     by_q = slope * (length / (-2.0 * q * root)) + beta[:, 7] * coverage * (q < 1.0)
     radial = slope * (1.0 / root - 1.0) / np.maximum(length, 1e-9)
     jacobian = -(e * radial[:, None, :]) - 2.0 * qe * by_q[:, None, :]  # (N, 2, P)
     jw = jacobian * weight[:, None, :]
-    (a, b), (c, d) = (jw @ jacobian.transpose(0, 2, 1)).transpose(1, 2, 0)
-    g0, g1 = (jw @ residual[..., None])[..., 0].T
+    jacobian = np.concatenate([jacobian, residual[:, None]], axis=1)
+    (a, b, g0), (c, d, g1) = (jw @ jacobian.transpose(0, 2, 1)).transpose(1, 2, 0)  # J^T J and J^T r
     # Damped as `_gauss_newton`'s first pass; the determinant is positive (a Gram matrix, damped).
     a, d = a * (1.0 + 1e-3) + 1e-9, d * (1.0 + 1e-3) + 1e-9
     det = a * d - b * c
-    step = np.stack([(d * g0 - b * g1) / det, (a * g1 - c * g0) / det], axis=1)
+    step = np.empty((n, 2))
+    np.divide(d * g0 - b * g1, det, out=step[:, 0])
+    np.divide(a * g1 - c * g0, det, out=step[:, 1])
     new = theta[:, :2] + np.minimum(np.maximum(step, -0.5), 0.5)
-    good = np.isfinite(new).all(axis=1) & (_squared_norm(new - start) <= _REACH_PX ** 2)
+    good = _squared_norm(new - start) <= _REACH_PX ** 2  # (NaN compares False)
     return np.where(good[:, None], new, theta[:, :2])
 
 
