@@ -23,6 +23,10 @@ smoothly over the pad, and under a contact) and fits the centre alone.
 
 A fit that fails (moves beyond `_REACH_PX` of its start, an ellipse outside [0.5, 2] times the pin
 radius, not finite) keeps the starting centre.
+
+The tracker fits a few lost tips every frame (`pins._recover`'s `fit_tips`): one centre-only step,
+`_centre_step`, the first pass of `_gauss_newton` in about half its NumPy calls (on a few windows
+each call's fixed cost, not the pixels, sets the time).
 """
 
 from __future__ import annotations
