@@ -308,7 +308,10 @@ def _centre_step(window: _Windows, theta: np.ndarray, start: np.ndarray) -> np.n
 
 def _fittable(ellipses: np.ndarray, radius_px: float) -> np.ndarray:
     """Whether tips of ellipses (Q_xx, Q_xy, Q_yy) (N, 3), px^-2, can be fitted with their ellipses fixed
-    (`_centre_step`): finite, with semi-axes within `_AXIS_RANGE` of `radius_px` (no fit of another moves). (N,) bool."""
+    (`_centre_step`): finite, with semi-axes within `_AXIS_RANGE` of `radius_px` (no fit of another moves);
+    none without a radius (a blank frame's). (N,) bool."""
+    if not (np.isfinite(radius_px) and radius_px > 0):
+        return np.zeros(len(ellipses), dtype=bool)
     lowest, highest = (1.0 / (_AXIS_RANGE[1] * radius_px) ** 2, 1.0 / (_AXIS_RANGE[0] * radius_px) ** 2)
     return _ellipse_ok(np.concatenate([np.zeros((len(ellipses), 2)), ellipses], axis=1), lowest, highest)
 

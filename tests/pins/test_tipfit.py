@@ -126,3 +126,4 @@ def test_the_trackers_centre_step_is_the_first_centre_only_pass():
     assert np.hypot(*(got[1:] - truth[1:]).T).mean() < 0.6 * np.hypot(*(start[1:] - truth[1:]).T).mean()
     assert _fittable(ellipses[:2], 2.0).all()
     assert not _fittable(np.array([[4.0, 0.0, 4.0], [np.nan, 0.0, 0.25], [0.25, 0.3, 0.25]]), 2.0).any()
+    assert not _fittable(ellipses[:2], 0.0).any() and not _fittable(ellipses[:2], np.nan).any()  # no tips
