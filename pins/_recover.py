@@ -139,10 +139,9 @@ class _Recovery:
         moved by the median displacement of its placed neighbours) shows a tip of at least its
         least contrast (`_like_at_rest`'s) is fitted there as `pins._tipfit` fits tips: an opaque
         ellipse (its own at rest, the median of its neighbours', `tip_shapes`) over a quadratic
-        membrane, its centre alone free, one damped Gauss-Newton step (`pins._tipfit._centre_step`; on
-        radial-led-120's tap, seeds 0-11, three steps tracked as many pins with an RMSE max of 0.26 px
-        against 0.23 with one), its
-        neighbours' feet left out. It is placed where the fit ends when the fit took its step (a
+        membrane, its centre alone free, its neighbours' feet left out, one damped Gauss-Newton step
+        (`pins._tipfit._centre_step`; on radial-led-120's tap, seeds 0-11, three steps tracked as many
+        pins with an RMSE max of 0.26 px against 0.23 with one). It is placed where the fit ends when the fit took its step (a
         failed fit keeps its start) and the window there shows its least contrast too, unless a
         neighbour sits on the same tip (`_one_pin_per_tip`).
 
@@ -181,7 +180,7 @@ class _Recovery:
         fitted = _centre_step(window, theta, start)
         # A fit that took a step and ended on a tip of the pin's least contrast places it.
         moved = (fitted != start).any(axis=1)
-        # (The contrast depends on the window's pixel alone: a fit that stayed on it keeps its contrast.)
+        # (The contrast depends on the window's centre pixel alone: a fit that stayed on it keeps its contrast.)
         again = moved & (np.rint(fitted) != np.rint(start)).any(axis=1)
         moved[again] = self.windows.contrast(crop, fitted[again]) >= self._at_least[1, which[again]]
         if not moved.any():
