@@ -22,16 +22,11 @@ from scipy.spatial import cKDTree
 
 from .detect import _detect
 from .disc import SensorDisc
-from ._tipfit import _CENTRE_PASSES, _MARGIN_PX, _Windows, _gauss_newton
+from ._tipfit import _MARGIN_PX, _Windows, _centre_step
 from ._window import _squared_norm
 from .errors import ShapeError
 
 __all__ = ["match_to_blobs"]
-
-# Gauss-Newton passes of a lost tip's fit from its prediction: one (each costs about four window
-# measurements; on radial-led-120's tap, seeds 0-11, three passes track as many pins, RMSE max
-# 0.26 px against 0.23 with one).
-_FIT_PASSES = 1
 
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
@@ -144,8 +139,9 @@ class _Recovery:
         moved by the median displacement of its placed neighbours) shows a tip of at least its
         least contrast (`_like_at_rest`'s) is fitted there as `pins._tipfit` fits tips: an opaque
         ellipse (its own at rest, the median of its neighbours', `tip_shapes`) over a quadratic
-        membrane, its centre alone free, one damped Gauss-Newton step (`_FIT_PASSES`), its
-        neighbours' feet left out. It is placed where the fit ends when the fit took its step (a
+        membrane, its centre alone free, its neighbours' feet left out, one damped Gauss-Newton step
+        (`pins._tipfit._centre_step`; on radial-led-120's tap, seeds 0-11, three steps tracked as many
+        pins with an RMSE max of 0.26 px against 0.23 with one). It is placed where the fit ends when the fit took its step (a
         failed fit keeps its start) and the window there shows its least contrast too, unless a
         neighbour sits on the same tip (`_one_pin_per_tip`).
 
@@ -165,24 +161,28 @@ class _Recovery:
         positions : (N, 2) ndarray of float64
             `positions`, or a copy with the pins found, px.
         """
+        which = which[self._fittable[which]]  # (the others' fits never move them)
+        if not which.size:
+            return positions
         predicted = self._predict(positions, which, last_seen)
-        known = np.where(np.isnan(positions), last_seen, positions)
-        radius = self.window_radius(known)[which]
-        contrast = self.windows.measure(crop, predicted - self.origin, radius)[1][1]
-        shows = contrast >= self._at_least[1, which]  # NaN (no window) compares False
+        # (Only the windows' contrast is asked for, before and after the fit: `WindowCentroids.contrast`.)
+        shows = self.windows.contrast(crop, predicted - self.origin) >= self._at_least[1, which]
         if not shows.any():
             return positions
         which, start = which[shows], predicted[shows] - self.origin
-        neighbours = known[self._window_neighbours[:, which].T] - self.origin  # (L, k, 2)
+        around = self._window_neighbours[:, which].T  # (L, k)
+        neighbours = np.where(np.isnan(positions[around]), last_seen[around], positions[around]) - self.origin
         nearest = np.sqrt(_squared_norm(neighbours - start[:, None, :]).min(axis=1))
         tip = self.tip_fit_radius_px
         reach = np.minimum(1.5 * tip + 1.0 + _MARGIN_PX, nearest - 0.5 * tip)
         theta = np.concatenate([start, self._tip_ellipses[which]], axis=1)  # (L, 5): centre, Q_xx, Q_xy, Q_yy
         window = _Windows(crop, start, reach, neighbours, nearest)
-        fitted = _gauss_newton(window, theta, start, tip, free=2, passes=_FIT_PASSES)[:, :2]
+        fitted = _centre_step(window, theta, start)
         # A fit that took a step and ended on a tip of the pin's least contrast places it.
         moved = (fitted != start).any(axis=1)
-        moved[moved] = self.windows.measure(crop, fitted[moved], radius[shows][moved])[1][1] >= self._at_least[1, which[moved]]
+        # (The contrast depends on the window's centre pixel alone: a fit that stayed on it keeps its contrast.)
+        again = moved & (np.rint(fitted) != np.rint(start)).any(axis=1)
+        moved[again] = self.windows.contrast(crop, fitted[again]) >= self._at_least[1, which[again]]
         if not moved.any():
             return positions
         positions = positions.copy()

@@ -70,7 +70,7 @@ from .detect import DetectionParams
 from .disc import SensorDisc
 from ._flat import _pin_radius_px
 from ._follow import _GUESS_FRACTION, _Following
-from ._tipfit import _SHAPE_NEIGHBOURS, tip_shapes
+from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
 from ._recover import _Recovery, match_to_blobs
 from ._rest import _AtRest
 from ._window import _FLAT_RISE, WindowCentroids, _squared_norm
@@ -247,6 +247,8 @@ class Refiner(_Following, _AtRest, _Recovery):
                 warnings.simplefilter("ignore", RuntimeWarning)  # (all NaN: a NaN ellipse, whose fit fails)
                 self._tip_ellipses[sloped] = np.nanmedian(
                     np.concatenate([every[sloped, None], every[near[sloped]]], axis=1), axis=1)
+        # Pins whose ellipses a fit can keep (`pins._tipfit._fittable`): the others' fits never move them.
+        self._fittable = _fittable(self._tip_ellipses, self.tip_fit_radius_px)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).

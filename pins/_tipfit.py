@@ -23,13 +23,21 @@ smoothly over the pad, and under a contact) and fits the centre alone.
 
 A fit that fails (moves beyond `_REACH_PX` of its start, an ellipse outside [0.5, 2] times the pin
 radius, not finite) keeps the starting centre.
+
+The tracker fits a few lost tips every frame (`pins._recover`'s `fit_tips`): one centre-only step,
+`_centre_step`, the first pass of `_gauss_newton` in about half its NumPy calls (on a few windows
+each call's fixed cost, not the pixels, sets the time).
 """
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.spatial import cKDTree
 from scipy.special import erf
+
+from ._window import _squared_norm
 
 __all__ = ["fit_tip_centres", "tip_shapes"]
 
@@ -39,6 +47,9 @@ _AXIS_RANGE = (0.5, 2.0)  # fitted semi-axes within these factors of the pin rad
 _FULL_PASSES = 3  # damped Gauss-Newton passes with the ellipse free ...
 _CENTRE_PASSES = 3  # ... then with each ellipse fixed to its neighbours' median
 _SHAPE_NEIGHBOURS = 7  # tips (with itself) whose median ellipse a tip takes
+_EYE = {2: np.eye(2), 5: np.eye(5)}  # the free parameters' identities, by their number
+_RIDGE = 1e-6 * np.eye(8)  # keeps the linear parameters' normal equations regular
+_ERF_SLOPE = 1.0 / (np.sqrt(np.pi) * _EDGE_PX)  # d coverage / d beyond at the boundary, px^-1 (times the Gaussian)
 _MARGIN_PX = 1.0  # the window reaches this far beyond 1.5 pin radii (the tip's foot and a ring of membrane)
 
 
@@ -128,23 +139,35 @@ class _Windows:
 
     def __init__(self, image, start, reach, neighbours, nearest):
         height, width = image.shape
-        half = int(np.ceil(reach.max())) + 1
-        offsets = np.arange(-half, half + 1)
-        gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
-        disc = np.hypot(gx, gy) <= half  # no pixel beyond the reach counts: the square's corners are left out
-        gx, gy = gx[disc], gy[disc]
+        gx, gy = _disc_offsets(int(np.ceil(reach.max())) + 1)
         anchor = np.rint(start).astype(np.intp)
-        self.x = (anchor[:, 0, None] + gx[None]).astype(np.float64)
-        self.y = (anchor[:, 1, None] + gy[None]).astype(np.float64)
-        inside = (self.x >= 0) & (self.x <= width - 1) & (self.y >= 0) & (self.y <= height - 1)
-        self.values = image[np.clip(self.y, 0, height - 1).astype(np.intp), np.clip(self.x, 0, width - 1).astype(np.intp)]
+        ix, iy = anchor[:, 0, None] + gx, anchor[:, 1, None] + gy  # (N, P) int
+        self.xy = np.stack([ix, iy], axis=1).astype(np.float64)  # (N, 2, P)
+        self.x, self.y = self.xy[:, 0], self.xy[:, 1]
+        # (A negative index, read as unsigned, lies beyond the bound: one comparison a side.)
+        inside = (ix.view(np.uintp) <= width - 1) & (iy.view(np.uintp) <= height - 1)
+        if inside.all():
+            values = image[iy, ix]
+        else:
+            values = image[np.clip(iy, 0, height - 1), np.clip(ix, 0, width - 1)]
+        self.values = values.astype(np.float64)
         # A pixel counts when it lies in the image and nearer to its own tip than half the distance
         # to the nearest neighbour from every neighbour (no neighbour's foot), within the reach.
-        own = np.full(self.x.shape, np.inf)
-        for k in range(neighbours.shape[1]):
-            np.minimum(own, np.hypot(self.x - neighbours[:, k, 0, None], self.y - neighbours[:, k, 1, None]), out=own)
-        self.usable = inside & (own > 0.5 * nearest[:, None])
+        own = _squared_norm(self.xy.transpose(0, 2, 1)[:, None] - neighbours[:, :, None, :])  # (N, k, P), px^2
+        self.usable = inside & (np.minimum.reduce(own, axis=1) > np.square(0.5 * nearest)[:, None])
         self.reach = reach
+
+
+@functools.lru_cache(maxsize=8)
+def _disc_offsets(half: int) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (x, y), px, of the pixels of a square of half side `half` px no farther than `half` from its
+    centre (no pixel beyond the reach counts: the square's corners are left out), row by row: (P,) int each."""
+    offsets = np.arange(-half, half + 1)
+    gy, gx = (a.ravel() for a in np.meshgrid(offsets, offsets, indexing="ij"))
+    disc = np.hypot(gx, gy) <= half
+    gx, gy = gx[disc], gy[disc]
+    gx.flags.writeable = gy.flags.writeable = False
+    return gx, gy
 
 
 def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius_px: float, *, free: int,
@@ -152,10 +175,14 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
     """Refine the first `free` of (mu_x, mu_y, Q_xx, Q_xy, Q_yy) by damped Gauss-Newton (N, 5)."""
     damping = np.full(len(theta), 1e-3)
     lowest, highest = (1.0 / (_AXIS_RANGE[1] * radius_px) ** 2, 1.0 / (_AXIS_RANGE[0] * radius_px) ** 2)
-    eye = np.eye(free)
-    basis = np.empty((len(theta), 8, window.x.shape[1]))
-    weighted, surface_rows = np.empty_like(basis), np.empty((len(theta), 6, window.x.shape[1]))
-    ridge = 1e-6 * np.eye(8)
+    eye = _EYE[free]
+    n, pixels = window.x.shape
+    basis = np.empty((n, 8, pixels))
+    weighted, surface_rows = np.empty_like(basis), np.empty((n, 6, pixels))
+    jacobian = np.empty((n, free, pixels))
+    if free == 2:
+        # The ellipses stay as they are: whether each is acceptable is known before the passes.
+        ellipse_bad = ~_ellipse_ok(theta, lowest, highest)
     for _ in range(passes):
         ex, ey = window.x - theta[:, 0, None], window.y - theta[:, 1, None]
         length = np.hypot(ex, ey)
@@ -180,7 +207,7 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
         basis[:, 6] = coverage
         np.multiply(coverage, dome, out=basis[:, 7])
         np.multiply(basis, weight[:, None, :], out=weighted)
-        normal = weighted @ basis.transpose(0, 2, 1) + ridge
+        normal = weighted @ basis.transpose(0, 2, 1) + _RIDGE
         beta = np.linalg.solve(normal, weighted @ window.values[..., None])[..., 0]
         model = np.einsum("nkp,nk->np", basis, beta)
         residual = window.values - model
@@ -192,12 +219,12 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
         safe = np.maximum(length, 1e-9)
         factor = 1.0 / root - 1.0
         under = beta[:, 7, None] * coverage * (q < 1.0)  # the dome's own change
-        grads = [slope * (-ex / safe * factor) - 2.0 * qx * (slope * per_q + under),
-                 slope * (-ey / safe * factor) - 2.0 * qy * (slope * per_q + under)]
+        by_q = slope * per_q + under  # d m / d q
+        np.subtract(slope * (-ex / safe * factor), 2.0 * qx * by_q, out=jacobian[:, 0])
+        np.subtract(slope * (-ey / safe * factor), 2.0 * qy * by_q, out=jacobian[:, 1])
         if free == 5:
-            for dq in (ex * ex, 2.0 * ex * ey, ey * ey):
-                grads.append((slope * per_q + under) * dq)
-        jacobian = np.stack(grads, axis=1)  # (N, free, P)
+            for row, dq in enumerate((ex * ex, 2.0 * ex * ey, ey * ey), start=2):
+                np.multiply(by_q, dq, out=jacobian[:, row])
         jw = jacobian * weight[:, None, :]
         hessian = jw @ jacobian.transpose(0, 2, 1)
         hessian = hessian + damping[:, None, None] * np.diagonal(hessian, axis1=1, axis2=2)[:, :, None] * eye
@@ -206,11 +233,94 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
         step[:, :2] = np.clip(step[:, :2], -0.5, 0.5)
         new = theta.copy()
         new[:, :free] += step
-        trace = new[:, 2] + new[:, 4]
-        det = new[:, 2] * new[:, 4] - new[:, 3] ** 2
-        spread = np.sqrt(np.maximum(trace * trace / 4.0 - det, 0.0))
-        bad = (~np.isfinite(new).all(axis=1) | (det <= 0) | (trace / 2.0 - spread < lowest)
-               | (trace / 2.0 + spread > highest) | (np.hypot(*(new[:, :2] - start).T) > _REACH_PX))
+        if free == 2:
+            bad = ellipse_bad | ~np.isfinite(new[:, :2]).all(axis=1)
+        else:
+            bad = ~_ellipse_ok(new, lowest, highest)
+        bad |= np.hypot(*(new[:, :2] - start).T) > _REACH_PX
         theta[~bad] = new[~bad]
         damping = np.where(bad, damping * 10.0, damping / 3.0)
     return theta
+
+
+def _centre_step(window: _Windows, theta: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """One damped Gauss-Newton step of the tips' centres alone, their ellipses fixed: the first pass of
+    `_gauss_newton(..., free=2)`, the same model and step in about half its NumPy calls (the (x, y)
+    rows as one array, the 2 x 2 step in closed form), for `pins._recover`'s fits every frame.
+
+    `theta` (N, 5) as there, its ellipses acceptable (`_ellipse_ok`; the caller checks them once);
+    returns the centres (N, 2), px: each moved by its step where that stays finite and within
+    `_REACH_PX` of `start`, else as in `theta`.
+    """
+    n, pixels = window.x.shape
+    e = window.xy - theta[:, :2, None]  # (N, 2, P): each pixel from the centre, px
+    ex, ey = e[:, 0], e[:, 1]
+    length = np.sqrt(ex * ex + ey * ey)
+    weight = (window.usable & (length <= window.reach[:, None])).astype(np.float64)
+    qxx, qxy, qyy = theta[:, 2, None], theta[:, 3, None], theta[:, 4, None]
+    qe = np.empty_like(e)  # Q e
+    qx, qy = qe[:, 0], qe[:, 1]
+    np.add(qxx * ex, qxy * ey, out=qx)
+    np.add(qxy * ex, qyy * ey, out=qy)
+    q = np.maximum(ex * qx + ey * qy, 1e-12)
+    root = np.sqrt(q)
+    beyond = length * (1.0 - root) / root  # distance inside the boundary along the ray, px
+    edge = beyond / _EDGE_PX
+    coverage = 0.5 + 0.5 * erf(edge)
+    dome = np.minimum(q, 1.0)
+    # The linear parameters (quadratic background behind the tip, the tip's level and dome) in closed
+    # form; the grey levels ride along as a ninth row, so one product gives the normal equations.
+    surface_rows = np.empty((n, 6, pixels))
+    surface_rows[:, 0] = 1.0
+    surface_rows[:, 1:3] = e
+    np.multiply(ex, ex, out=surface_rows[:, 3])
+    np.multiply(ex, ey, out=surface_rows[:, 4])
+    np.multiply(ey, ey, out=surface_rows[:, 5])
+    basis = np.empty((n, 9, pixels))
+    np.multiply(surface_rows, (1.0 - coverage)[:, None, :], out=basis[:, :6])
+    basis[:, 6] = coverage
+    np.multiply(coverage, dome, out=basis[:, 7])
+    basis[:, 8] = window.values
+    weighted = basis[:, :8] * weight[:, None, :]
+    products = weighted @ basis.transpose(0, 2, 1)  # (N, 8, 9)
+    beta = np.linalg.solve(products[:, :, :8] + _RIDGE, products[:, :, 8:])
+    surface = (beta[:, None, :6, 0] @ surface_rows)[:, 0]
+    rise = beta[:, 6] + beta[:, 7] * dome - surface  # the tip above the membrane behind it
+    residual = window.values - (surface + coverage * rise)
+    # d m / d beyond, and d beyond / d mu (dq/dmu = -2 Q e); the dome's own change.
+    slope = rise * np.exp(-(edge * edge)) * _ERF_SLOPE
+    by_q = slope * (length / (-2.0 * q * root)) + beta[:, 7] * coverage * (q < 1.0)
+    radial = slope * (1.0 / root - 1.0) / np.maximum(length, 1e-9)
+    jacobian = -(e * radial[:, None, :]) - 2.0 * qe * by_q[:, None, :]  # (N, 2, P)
+    jw = jacobian * weight[:, None, :]
+    jacobian = np.concatenate([jacobian, residual[:, None]], axis=1)
+    (a, b, g0), (c, d, g1) = (jw @ jacobian.transpose(0, 2, 1)).transpose(1, 2, 0)  # J^T J and J^T r
+    # Damped as `_gauss_newton`'s first pass; the determinant is positive (a Gram matrix, damped).
+    a, d = a * (1.0 + 1e-3) + 1e-9, d * (1.0 + 1e-3) + 1e-9
+    det = a * d - b * c
+    step = np.empty((n, 2))
+    np.divide(d * g0 - b * g1, det, out=step[:, 0])
+    np.divide(a * g1 - c * g0, det, out=step[:, 1])
+    new = theta[:, :2] + np.minimum(np.maximum(step, -0.5), 0.5)
+    good = _squared_norm(new - start) <= _REACH_PX ** 2  # (NaN compares False)
+    return np.where(good[:, None], new, theta[:, :2])
+
+
+def _fittable(ellipses: np.ndarray, radius_px: float) -> np.ndarray:
+    """Whether tips of ellipses (Q_xx, Q_xy, Q_yy) (N, 3), px^-2, can be fitted with their ellipses fixed
+    (`_centre_step`): finite, with semi-axes within `_AXIS_RANGE` of `radius_px` (no fit of another moves);
+    none without a radius (a blank frame's). (N,) bool."""
+    if not (np.isfinite(radius_px) and radius_px > 0):
+        return np.zeros(len(ellipses), dtype=bool)
+    lowest, highest = (1.0 / (_AXIS_RANGE[1] * radius_px) ** 2, 1.0 / (_AXIS_RANGE[0] * radius_px) ** 2)
+    return _ellipse_ok(np.concatenate([np.zeros((len(ellipses), 2)), ellipses], axis=1), lowest, highest)
+
+
+def _ellipse_ok(theta: np.ndarray, lowest: float, highest: float) -> np.ndarray:
+    """Whether each row of (mu_x, mu_y, Q_xx, Q_xy, Q_yy) (N, 5) is finite with Q's eigenvalues in
+    [lowest, highest], px^-2 (semi-axes within `_AXIS_RANGE` of the pin radius): (N,) bool."""
+    trace = theta[:, 2] + theta[:, 4]
+    det = theta[:, 2] * theta[:, 4] - theta[:, 3] ** 2
+    spread = np.sqrt(np.maximum(trace * trace / 4.0 - det, 0.0))
+    return (np.isfinite(theta).all(axis=1) & (det > 0) & (trace / 2.0 - spread >= lowest)
+            & (trace / 2.0 + spread <= highest))

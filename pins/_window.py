@@ -142,6 +142,28 @@ class WindowCentroids:
             out[fits] = np.sqrt(_squared_norm(plane[:, 1:])) / np.maximum(top - plane[:, 0], 0.0)
         return out
 
+    def contrast(self, image: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """The tips' contrast alone, grey levels (N,): `measure`'s (its second row), at a fraction of its cost.
+
+        The top (the mean of the five centre pixels) above the plane through the darkest runs of the
+        sides, at the window's centre, of the windows at the finite `points` (N, 2), px; a window that
+        does not fit in `image` is measured at the image's corner, as `measure` measures it. No mask
+        and no weights: the contrast depends on neither (`Refiner.fit_tips` asks for it before and
+        after each fit).
+        """
+        n = len(points)
+        if n == 0:
+            return np.empty(0)
+        bounds, view = self._view(image)
+        corner = np.rint(points).astype(np.intp)
+        corner -= self.half_px
+        inside = corner.view(np.uintp) <= bounds
+        if not inside.all():
+            corner *= (inside[:, 0] & inside[:, 1])[:, None]
+        patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)
+        top, darkest, _ = self._sums_of(patches, patches.astype(np.float32))
+        return top - np.dot(darkest, self._side_plane[:, 0])
+
     def __call__(self, image: np.ndarray, points: np.ndarray,
                  radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Centroids of the bright tips around `points`.

@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
-from pins._tipfit import fit_tip_centres
+from scipy.spatial import cKDTree
+
+from pins._tipfit import _Windows, _centre_step, _fittable, _gauss_newton, fit_tip_centres
 from tactip.sim import _render
 
 
@@ -99,3 +101,29 @@ def test_a_fit_that_fails_keeps_its_start_and_too_few_pins_are_returned_as_given
     np.testing.assert_array_equal(fit_tip_centres(image, start[:1], 2.0), start[:1])
     assert fit_tip_centres(image, np.empty((0, 2)), 2.0).shape == (0, 2)
     np.testing.assert_array_equal(fit_tip_centres(image, start, 0.0), start)
+
+
+def test_the_trackers_centre_step_is_the_first_centre_only_pass():
+    """`_centre_step` (the tracker's fits, every frame) takes the step `_gauss_newton(free=2, passes=1)` takes,
+    from starts up to 0.8 px off on noisy tips under reflections, and from between two tips (no step); a tip
+    ellipse out of range (semi-axes of 0.5 px for a 2 px tip, NaN, not positive definite) is not `_fittable`."""
+    rng = np.random.default_rng(5)
+    truth = _grid(rng)
+    shape = np.broadcast_to(np.diag([2.1 ** 2, 1.8 ** 2]), (len(truth), 2, 2)).copy()
+    image = _scene(truth, shape, glare=70.0, noise=4.0)
+    start = truth + rng.uniform(-0.8, 0.8, truth.shape)
+    start[0] = truth[0] + [6.0, 0.0]  # between two tips
+    distance, index = cKDTree(truth).query(start, 7)
+    nearest = distance[:, 1]
+    reach = np.minimum(1.5 * 2.0 + 2.0, nearest - 1.0)
+    window = _Windows(image, start, reach, truth[index[:, 1:]], nearest)
+    ellipses = np.tile([1 / 2.1 ** 2, 0.0, 1 / 1.8 ** 2], (len(truth), 1))
+    theta = np.concatenate([start, ellipses], axis=1)
+    want = _gauss_newton(window, theta.copy(), start, 2.0, free=2, passes=1)[:, :2]
+    got = _centre_step(window, theta, start)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
+    assert (got[1:] != start[1:]).any(axis=1).mean() > 0.9  # most took their step, nearer the truth
+    assert np.hypot(*(got[1:] - truth[1:]).T).mean() < 0.6 * np.hypot(*(start[1:] - truth[1:]).T).mean()
+    assert _fittable(ellipses[:2], 2.0).all()
+    assert not _fittable(np.array([[4.0, 0.0, 4.0], [np.nan, 0.0, 0.25], [0.25, 0.3, 0.25]]), 2.0).any()
+    assert not _fittable(ellipses[:2], 0.0).any() and not _fittable(ellipses[:2], np.nan).any()  # no tips

@@ -154,6 +154,7 @@ def test_windows_equal_the_reference_bit_for_bit(name, above_mean, seed):
             got, want = windows.measure(image, points, radius), reference.measure(image, points, radius)
             np.testing.assert_array_equal(got[0], want[0])
             np.testing.assert_array_equal(got[1], want[1])
+            np.testing.assert_array_equal(windows.contrast(image, points), got[1][1])  # the contrast alone
             assert np.isfinite(got[0]).sum() > len(rest.centres) // 2  # most windows hold a tip
             # A few windows at a time (most of the tracker's calls; their sums are taken another way).
             for part in np.array_split(np.arange(len(points)), len(points) // 7):
@@ -161,6 +162,7 @@ def test_windows_equal_the_reference_bit_for_bit(name, above_mean, seed):
                 want = reference.measure(image, points[part], radius[part])
                 np.testing.assert_array_equal(few[0], want[0])
                 np.testing.assert_array_equal(few[1], want[1])
+                np.testing.assert_array_equal(windows.contrast(image, points[part]), few[1][1])
 
 
 @pytest.mark.parametrize("name, seed", [("radial-led-120", 0), ("radial-led-120", 3), ("tactip-331", 1)])
