@@ -24,7 +24,6 @@ import time
 
 import numpy as np
 
-import pins._refine
 from pins import PinTracker, find_pin_field
 from bench_replay import decode, write_slides
 

@@ -20,7 +20,6 @@ from scipy.spatial import cKDTree
 
 from tactip.replay.video import replay_video
 from tactip.sim import Contact, SyntheticTacTip, preset_names
-from tests.pins.conftest import preset_params
 
 TAP = Contact(indentation_mm=4.0, gap_width_mm=2.0)
 
@@ -44,7 +43,9 @@ def _video(name: str, folder: str):
     return path, sensor, np.array(centres), np.array(depth), np.array(whole)
 
 
-@pytest.mark.parametrize("name", preset_params(preset_names()))
+# Every preset, radial-led-120 included: its replay bar is met since the veil fits (issue 20; its entry in
+# tests.pins.conftest.NOT_YET_MET is for detection's field RMSE).
+@pytest.mark.parametrize("name", preset_names())
 def test_replay_succeeds_on_every_preset(tmp_path, name):
     path, sensor, truth, depth, whole = _video(name, str(tmp_path))
     out = tmp_path / "r.h5"
