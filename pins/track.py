@@ -469,7 +469,8 @@ class PinTracker:
         """
         disc, (x0, y0) = self.disc, self._origin
         reach = 1.5 * self.spacing_px + 2.0
-        if np.hypot(*(pins - (disc.cx, disc.cy)).T).max() + reach <= disc.radius_px - _DISC_EDGE_PX:
+        outermost = np.hypot(*(pins - (disc.cx, disc.cy)).T).max() + reach   # px from the centre
+        if outermost <= disc.radius_px - _DISC_EDGE_PX:
             return None  # no pin reaches the rim (most pads): no need to look at every pixel
         yy, xx = np.mgrid[0:rest_crop.shape[0], 0:rest_crop.shape[1]]
         from_centre = np.hypot(xx + x0 - disc.cx, yy + y0 - disc.cy)
@@ -478,7 +479,7 @@ class PinTracker:
             return None
         # Only pixels no farther from the centre than the outermost pin's reach can be within a pin's
         # reach (triangle inequality): the nearest-pin query skips the crop's corners.
-        candidates = np.flatnonzero(beyond & (from_centre <= np.hypot(*(pins - (disc.cx, disc.cy)).T).max() + reach + 1.0))
+        candidates = np.flatnonzero(beyond & (from_centre <= outermost + 1.0))
         near = cKDTree(pins - self._origin).query(np.column_stack([xx.ravel()[candidates], yy.ravel()[candidates]]),
                                                    distance_upper_bound=reach)[0] <= reach
         if not near.any():

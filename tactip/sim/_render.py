@@ -270,6 +270,17 @@ def tint_table(skin_level: float, pin_level: float) -> np.ndarray:
     return ((1 - t) * skin + t * pin).astype(np.float32)
 
 
+def scene_slot(contact, hidden: np.ndarray | None) -> tuple[str, tuple]:
+    """Where a sensor keeps its last frame before noise for ``contact``, and the key it is kept under.
+
+    Two slots, ``"rest"`` and ``"pressed"``: a tap films the same contact through its rests and its
+    plateau, so those frames differ only in camera noise (`expose`). The key is the contact's repr
+    (so -0.0 is not 0.0) and the hidden pins' bytes.
+    """
+    slot = "rest" if contact.indentation_mm <= 0 else "pressed"
+    return slot, (repr(contact), None if hidden is None else hidden.tobytes())
+
+
 def expose(scene, *, rng: np.random.Generator, noise_sigma: float, jpeg_quality: int | None) -> np.ndarray:
     """The camera's frame of a float32 scene (grey levels): sensor noise, rounding to uint8, JPEG.
 

@@ -229,8 +229,7 @@ class SyntheticGel(ContactSequences):
             if hidden.shape != (self._n,):
                 raise ValueError(f"hidden must have shape ({self._n},), got {hidden.shape}")
         # As SyntheticTacTip's: the last frames before noise at rest and pressed are drawn once.
-        key = (repr(contact), None if hidden is None else hidden.tobytes())  # repr: -0.0 is not 0.0
-        slot = "rest" if contact.indentation_mm <= 0 else "pressed"
+        slot, key = _render.scene_slot(contact, hidden)
         cached = self._scenes.get(slot)
         if cached is not None and cached[0] == key:
             centres, visible, partial, scene = cached[1]

@@ -403,8 +403,7 @@ class SyntheticTacTip(ContactSequences):
             hidden = np.asarray(hidden, dtype=bool)
             if hidden.shape != (self._n,):
                 raise ValueError(f"hidden must have shape ({self._n},), got {hidden.shape}")
-        key = (repr(contact), None if hidden is None else hidden.tobytes())  # repr: -0.0 is not 0.0
-        slot = "rest" if contact.indentation_mm <= 0 else "pressed"
+        slot, key = _render.scene_slot(contact, hidden)
         cached = self._scenes.get(slot)
         if cached is not None and cached[0] == key:
             centres, visible, partial, scene = cached[1]
