@@ -1,0 +1,100 @@
+"""Identities through slides (issue 20, outcome 2): pin-frames off the truth, identity swaps, lost pins,
+and the return to rest, per preset and seed.
+
+The video: `SyntheticTacTip.slides` of the preset, slides of 3 pitches round the compass (``--slides``
+directions, 0, 45, 90, ... degrees) with 3-frame rests, 120 frames/s (the issue's real recordings),
+raw renders (no codec). The tracker starts from the drawn pins' true rest centres (visible or cut by
+the rim), as from a calibration, and `PinTracker.update` runs over every other frame. Printed per video:
+
+- lost:    visible pins reported lost per frame (mean over frames);
+- >1, >3:  tracked visible pin-frames more than 1 px / 3 px from their own true centre;
+- swaps:   tracked pin-frames whose nearest true centre (of the drawn pins) is another pin's;
+- rest>1:  in the rest frames between and after the slides (the pad at rest), tracked visible
+           pin-frames more than 1 px from their own rest centre;
+- end>1:   in the last frame (the pad back at rest), visible pins more than 1 px from their rest
+           centre, lost ones counted too (the bar: 0);
+- ms/frame: CPU time of the updates (``time.thread_time``).
+
+Run: .venv/bin/python bench/bench_slides.py [--presets radial-led-120 tactip-331 small-pad-100]
+     [--seeds 0 1 2 3 4 5] [--slides 8] [--pitches 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from pins import DetectionParams, PinTracker, SensorDisc
+from tactip.sim import SyntheticTacTip
+
+
+def slide_video(preset: str, seed: int, slides: int, pitches: float, *, frame_rate: float = 120.0,
+                lift_s: float = 0.2):
+    """The preset's slide video (a `ContactSequence`) and its sensor: slides of `pitches` pin spacings round the compass."""
+    sensor = SyntheticTacTip.from_preset(preset, seed=seed)
+    run = sensor.slides(np.arange(slides) * 360.0 / slides, distance_mm=pitches * sensor.pin_spacing_mm,
+                        rest_s=3.0 / frame_rate, lift_s=lift_s, frame_rate=frame_rate)
+    return sensor, run
+
+
+def measure(preset: str, seed: int, slides: int, pitches: float, *, lift_s: float = 0.2) -> dict:
+    """Track the slide video of `preset` (seed) and count its errors against the renderer's truth."""
+    sensor, run = slide_video(preset, seed, slides, pitches, lift_s=lift_s)
+    resting = ~run.in_contact()
+    frames = iter(run)
+    rest = next(frames)
+    drawn = np.flatnonzero(rest.visible | rest.partial)
+    truth_rest = rest.centres[drawn]
+    tracker = PinTracker(detection=DetectionParams(dark_pins=sensor.dark_pins), disc=SensorDisc(*sensor.disc))
+    tracker.start(rest.image, pins=truth_rest)
+    counts = dict(frames=0, visible=0, lost=0, off1=0, off3=0, swaps=0, rest1=0, cpu=0.0)
+    for k, f in enumerate(frames, start=1):
+        start = time.thread_time()
+        positions = tracker.update(f.image)
+        counts["cpu"] += time.thread_time() - start
+        truth = f.centres[drawn]
+        visible = f.visible[drawn]
+        found = np.isfinite(positions[:, 0])
+        counts["frames"] += 1
+        counts["visible"] += int(visible.sum())
+        counts["lost"] += int((visible & ~found).sum())
+        seen = visible & found
+        error = np.linalg.norm(positions[seen] - truth[seen], axis=1)
+        counts["off1"] += int((error > 1.0).sum())
+        counts["off3"] += int((error > 3.0).sum())
+        shown = f.visible[drawn] | f.partial[drawn]
+        placed = np.flatnonzero(found)
+        nearest = np.flatnonzero(shown)[cKDTree(truth[shown]).query(positions[placed])[1]]
+        counts["swaps"] += int((nearest != placed).sum())
+        if resting[k]:
+            counts["rest1"] += int((np.linalg.norm(positions[seen] - truth_rest[seen], axis=1) > 1.0).sum())
+    off = np.linalg.norm(positions - truth_rest, axis=1)
+    counts["end1"] = int((visible & ~(off <= 1.0)).sum())
+    counts["end_visible"] = int(visible.sum())
+    return counts
+
+
+def main() -> None:
+    """Measure every preset and seed asked for and print one line each."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--presets", nargs="+", default=["radial-led-120", "tactip-331", "small-pad-100"])
+    parser.add_argument("--seeds", nargs="+", type=int, default=list(range(6)))
+    parser.add_argument("--slides", type=int, default=8)
+    parser.add_argument("--pitches", type=float, default=3.0)
+    parser.add_argument("--lift-s", type=float, default=0.2)
+    args = parser.parse_args()
+    print(f"{args.slides} slides of {args.pitches} pitches, 3-frame rests, 120 frames/s, lift {args.lift_s} s, raw renders")
+    print(f"{'preset':16s} seed frames  lost/f    >1px  >3px swaps rest>1 end>1/visible  ms/frame")
+    for preset in args.presets:
+        for seed in args.seeds:
+            c = measure(preset, seed, args.slides, args.pitches, lift_s=args.lift_s)
+            print(f"{preset:16s} {seed:4d} {c['frames']:6d} {c['lost'] / c['frames']:7.2f} {c['off1']:7d} {c['off3']:5d} "
+                  f"{c['swaps']:5d} {c['rest1']:6d} {c['end1']:5d}/{c['end_visible']:<7d} "
+                  f"{c['cpu'] / c['frames'] * 1e3:8.3f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
