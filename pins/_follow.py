@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._identity import keep_own_tips
 from ._window import _squared_norm
 
 # A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
@@ -39,7 +40,9 @@ class _Following:
         `_FOLLOW_FRACTION` of the spacing of its guess; the others need LK (`refine` then checks
         them). A lost pin is found as in `refine`'s search: its second window moved by at most
         `_SEARCH_SETTLED_FRACTION` of the spacing and it lies within `gate_px` of its prediction.
-        No two pins take one tip (`_one_pin_per_tip`).
+        No two pins take one tip (`_one_pin_per_tip`), and a pin placed away from its guess keeps its
+        tip only when no other pin is expected nearer to it (`pins._identity.keep_own_tips`). Lost pins,
+        and pins whose guesses found no tip, are searched for only where `_trusted`.
 
         Parameters
         ----------
@@ -67,6 +70,7 @@ class _Following:
             filled = guess.copy()
             filled[lost] = self._predict(guess, lost, last_seen)
             look = lost if search is None else lost[search[lost]]
+            look = look[self._trusted(guess, look, last_seen)]
             live = (~missing).nonzero()[0]
             which, n = np.concatenate([live, look]), live.size
         radius = self.window_radius(filled)[which]
@@ -90,6 +94,8 @@ class _Following:
         again = ~done & np.isfinite(first[:, 0])
         again[:n] &= moved[:n] <= reach
         far = (~done[:n] & ~again[:n]).nonzero()[0]
+        if far.size:
+            far = far[self._trusted(positions, which[far], last_seen)]
         chain = np.concatenate([again.nonzero()[0], far])
         points = placed_at[chain]
         if far.size:
@@ -139,5 +145,6 @@ class _Following:
         if placed.size:
             offset = positions[which[placed]] - start[placed]
             self._one_pin_per_tip(positions, which[placed], _squared_norm(offset))
+            keep_own_tips(positions, which[placed], start[placed], filled)
         return positions, filled
 

@@ -28,6 +28,9 @@ from .errors import ShapeError
 
 __all__ = ["match_to_blobs"]
 
+# At most this many rounds of assigning free blobs to lost pins (each round's pins help predict the next's).
+_ROUNDS = 8
+
 
 def match_to_blobs(points: np.ndarray, blobs: np.ndarray, *, gate_px: float) -> np.ndarray:
     """One-to-one nearest blob for each point, within a gate.
@@ -108,14 +111,22 @@ class _Recovery:
         has_blob = claim >= 0
         take = has_blob & np.isnan(refined[:, 0])
         positions[take] = blobs[claim[take]]
-        lost = np.flatnonzero(np.isnan(positions[:, 0]))
         free = np.ones(len(blobs), dtype=bool)
         free[claim[has_blob]] = False
-        if lost.size and free.any():
+        # In rounds: pins whose neighbours are placed first (`_trusted`), then those whose neighbours
+        # the round before placed.
+        for _ in range(_ROUNDS):
+            lost = np.flatnonzero(np.isnan(positions[:, 0]))
+            lost = lost[self._trusted(positions, lost, last_seen)]
+            if not (lost.size and free.any()):
+                break
             predicted = self._predict(positions, lost, last_seen)
             free_index = np.flatnonzero(free)
             pins, chosen = _assign(predicted, blobs[free_index], gate)
+            if not pins.size:
+                break
             positions[lost[pins]] = blobs[free_index[chosen]]
+            free[free_index[chosen]] = False
         if crop is not None:
             # A blob is a pin's only when its window holds a tip like the pin's own at rest (not LED
             # glare or a speck), centred on it: the pin then takes the windowed centroid.

@@ -43,7 +43,8 @@ Search. A lost pin (or one whose centroid is implausible) is looked for in a win
 predicted position (its rest position moved by the median displacement of its tracked
 neighbours), re-centred once; it is found when that move is at most 0.1 spacings, its tip is like
 at rest, it lies within the gate (below half the spacing) of the prediction and no neighbour sits
-on the same tip (`Refiner._one_pin_per_tip`).
+on the same tip (`Refiner._one_pin_per_tip`), nor any pin expected nearer to it (`pins._identity`).
+Only pins whose predictions can be trusted are searched for (`Refiner._trusted`).
 
 Fitting. A faint tip on a slope (a reflection's flank, the veil of a bright surround over the outer
 ring) is paint: it hides the light behind it, which no background subtracted before a centroid
@@ -69,6 +70,7 @@ from scipy.spatial import cKDTree
 from .detect import DetectionParams
 from .disc import SensorDisc
 from ._flat import _pin_radius_px
+from ._identity import keep_own_tips
 from ._follow import _GUESS_FRACTION, _Following
 from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
 from ._recover import _Recovery, match_to_blobs
@@ -106,6 +108,8 @@ _REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
+# A lost pin is searched for at its prediction only when this share of its neighbours is placed.
+_TRUSTED_SHARE = 2 / 3
 
 
 class Refiner(_Following, _AtRest, _Recovery):
@@ -249,6 +253,8 @@ class Refiner(_Following, _AtRest, _Recovery):
                     np.concatenate([every[sloped, None], every[near[sloped]]], axis=1), axis=1)
         # Pins whose ellipses a fit can keep (`pins._tipfit._fittable`): the others' fits never move them.
         self._fittable = _fittable(self._tip_ellipses, self.tip_fit_radius_px)
+        #: (N,) bool: pins that did not move in the last frame (`pins.track.PinTracker` sets it).
+        self.still = np.ones(len(positions), dtype=bool)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
@@ -364,6 +370,7 @@ class Refiner(_Following, _AtRest, _Recovery):
             live = ~missing if settled is None else ~missing & ~settled
             live = np.flatnonzero(live)
             look = lost if search is None else lost[search[lost]]
+            look = look[self._trusted(tracked, look, last_seen)]
             which = np.concatenate([live, look])
             centres, measures = self.windows.measure(crop, filled[which] - self.origin, radius[which])
             centres += self.origin
@@ -378,9 +385,10 @@ class Refiner(_Following, _AtRest, _Recovery):
             implausible = live[~plausible]
             first, predicted = centres[n:], filled[look]
         retry = look
+        implausible = implausible[self._trusted(positions, implausible, last_seen)]
         if implausible.size:
             # A tracked pin whose centroid is implausible (LK between two tips, or on a vanished
-            # one) is searched for from its prediction too.
+            # one) is searched for from its prediction too (where its neighbours are placed).
             guess = self._predict(positions, implausible, last_seen)
             again = self.windows(crop, guess - self.origin, radius[implausible])[0] + self.origin
             retry = np.concatenate([look, implausible])
@@ -401,6 +409,7 @@ class Refiner(_Following, _AtRest, _Recovery):
         retry, second, error = retry[found], second[found], error[found]
         positions[retry] = second
         self._one_pin_per_tip(positions, retry, error)
+        keep_own_tips(positions, retry, predicted[found], tracked if filled is None else filled)
         return positions
 
     def _pull(self, points: np.ndarray, which: np.ndarray) -> np.ndarray:
@@ -447,6 +456,27 @@ class Refiner(_Following, _AtRest, _Recovery):
         """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
         shift = self.neighbour_median(positions - self.rest_positions, which)
         return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
+
+    def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
+        """Whether pins `which` may be searched for at their predictions (`_predict`): (L,) bool.
+
+        Where most of a pin's neighbours are placed (`_TRUSTED_SHARE` of them), its prediction
+        interpolates their displacements. Where fewer are (at least two), only when they did not move
+        in the last frame (`still`) and the prediction lies within the gate of where the pin was last
+        seen: nothing moved there since (a whole rim ring coming back under a held press). From a
+        few on one side of the squeezed skin ahead of a slide (its displacement changes by most of a
+        spacing per spacing there) a prediction lies a spacing off, on another pin's tip (issue 20:
+        tactip-331 slides, 2 or 3 of 6 neighbours placed, predictions 10-25 px off at a 17.7 px spacing).
+        """
+        index = self._neighbour_index[which]
+        placed = np.isfinite(positions[index, 0])
+        count = np.count_nonzero(placed, axis=1)
+        trusted = count >= _TRUSTED_SHARE * index.shape[1]
+        few = np.flatnonzero(~trusted & (count >= 2) & ~(placed & ~self.still[index]).any(axis=1))
+        if few.size:
+            moved = _squared_norm(self._predict(positions, which[few], last_seen) - last_seen[which[few]])
+            trusted[few] = moved <= self.gate_px ** 2
+        return trusted
 
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.

@@ -19,7 +19,10 @@ at an old place.
 - search: a lost pin is looked for in a window around its prediction (its rest position moved
   by the median displacement of its tracked neighbours), re-centred once, and taken when it
   settles on a tip like the pin's own at rest, inside a gate below half the pin spacing, with no
-  other pin on that tip: identities are kept without blob detection;
+  other pin on that tip: identities are kept without blob detection. Only pins whose predictions
+  can be trusted are searched for (most neighbours placed, or a few that are still: `Refiner._trusted`),
+  and a pin found keeps its tip only when no other pin is expected nearer to it (`pins._identity`):
+  through slides that squeeze the skin ahead of them, a pin is rather lost than on another's tip;
 - retirement: a pin lost for more than `retire_after` frames (a rim pin leaving view) is retired:
   searched for only once in `check_every` frames, in turns, until it comes back with its identity;
 - recovery at a bounded rate: when a pin that is not retired is still missing, the frame's blobs
@@ -49,6 +52,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ._identity import kept_on_own_tips
 from ._recover import _as_points, match_to_blobs
 from ._refine import Refiner
 from .detect import DetectionParams, _detect
@@ -390,6 +394,8 @@ class PinTracker:
         # jitters by a few tenths of a px in noise; extrapolated, the jitter would walk the guesses
         # off a still pad); the windows re-centre on slow motion anyway.
         if self.refine:
+            # (Still for `Refiner._trusted`: moved by no more than a window settles on its guess.)
+            self._refiner.still = np.einsum("ij,ij->i", velocity, velocity) <= self._refiner._guess_px ** 2
             velocity[self._refiner.observe_still(velocity)] = 0.0
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
@@ -424,7 +430,9 @@ class PinTracker:
                                        filled=np.where(need[:, None], tracked, filled))
         # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
         # missing ones are looked for at their rest positions.
-        positions = refiner.snap_to_rest(crop, positions, search)
+        # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
+        positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, search),
+                                     refiner.rest_positions, guess)
         missing = np.isnan(positions[:, 0])
         if not missing.any():
             return positions, False, False
@@ -435,7 +443,9 @@ class PinTracker:
         if detected:
             # Blobs only around the pins that asked for them: retired pins, spread along the rim,
             # would widen the detection to most of the disc; they come back by their own search.
+            before = positions
             positions = refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted)
+            positions = kept_on_own_tips(before, positions, np.where(np.isfinite(tracked), tracked, filled), guess)
         # Pins just seen, on a sloped background at rest (a veil's or a reflection's flank, which their
         # windows weigh as tip), and missing now: fitted as opaque ellipses where their tips show.
         # (Those lost for longer come back by their windows' search, snapping to rest and blobs.)

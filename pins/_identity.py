@@ -1,0 +1,68 @@
+"""One pin per tip, whatever the pins' neighbours at rest: identities through slides (issue 20).
+
+A slide squeezes the skin ahead of it: pins lost there (their tips merged) are searched for from
+predictions that may lie a spacing off, and a window searching there may settle on another pin's tip,
+not only a neighbour's at rest. A pin found (searched for, or followed away from its guess) keeps its
+tip only when, of every pin's expected position (a placed pin's place, another found pin's start, a
+missing pin's guess or prediction), its own start is the nearest to it: the tip lies in the pin's own
+cell of the Voronoi diagram of where the pins are expected. That cell shrinks with the squeezed skin
+around it, so the test gates by the local pitch, with no gate to tune.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+
+def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, expected: np.ndarray) -> None:
+    """Unplace (NaN, in place) found pins whose tips lie nearer another pin's expected position than their own start.
+
+    Parameters
+    ----------
+    positions : (N, 2) ndarray
+        Positions so far, px; NaN where missing. Changed in place.
+    found : (F,) ndarray of int
+        Pins just found (searched for, or followed away from their guesses).
+    start : (F, 2) ndarray
+        Where each of them was expected (its guess or prediction), px.
+    expected : (N, 2) ndarray
+        Where every pin is expected, px (NaN: nowhere), for the pins without a position.
+
+    Examples
+    --------
+    >>> positions = np.array([[0.0, 0.0], [10.0, 0.0], [np.nan, np.nan]])
+    >>> expected = np.array([[0.0, 0.0], [10.0, 0.0], [20.0, 0.0]])
+    >>> keep_own_tips(positions, np.array([1]), np.array([[4.0, 0.0]]), expected)  # its start nearest: kept
+    >>> positions[1]
+    array([10.,  0.])
+    >>> positions[1] = [19.0, 0.0]   # the tip where pin 2 is expected: not pin 1's
+    >>> keep_own_tips(positions, np.array([1]), np.array([[12.0, 0.0]]), expected)
+    >>> positions[1]
+    array([nan, nan])
+    """
+    placed = np.isfinite(positions[found, 0])
+    found, start = found[placed], start[placed]
+    if found.size == 0:
+        return
+    others = np.where(np.isfinite(positions), positions, expected)
+    others[found] = start
+    live = np.flatnonzero(np.isfinite(others[:, 0]))
+    nearest = live[cKDTree(others[live]).query(positions[found])[1]]
+    positions[found[nearest != found]] = np.nan
+
+
+
+def kept_on_own_tips(before: np.ndarray, after: np.ndarray, start: np.ndarray, guess: np.ndarray) -> np.ndarray:
+    """A step's positions `after` (N, 2), px, with the pins it moved or placed kept only on their own tips.
+
+    `keep_own_tips` for the pins whose positions differ from `before` (N, 2), px: each expected at its
+    `start` (N, 2), px; the others where `before` places them, else at their `guess` (N, 2), px.
+    `after` is changed in place (a step returns `before` itself when it changed nothing).
+    """
+    if after is before:
+        return after
+    changed = np.flatnonzero(np.isfinite(after[:, 0]) & ~(after == before).all(axis=1))
+    if changed.size:
+        keep_own_tips(after, changed, start[changed], np.where(np.isfinite(before), before, guess))
+    return after

@@ -1,0 +1,80 @@
+"""pins.track keeps identities through slides (issue 20, outcome 2): slides of 3 pitches at 120 frames/s
+with 3-frame rests; no pin takes another pin's tip, and after the return every visible pin is within
+1 px of its rest position. Ground truth from the synthetic TacTip."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from pins import DetectionParams, PinTracker, SensorDisc
+from pins._identity import keep_own_tips
+from tests.pins.conftest import preset_sensor
+
+
+def _swaps(positions, truth, shown, spacing_px):
+    """Pins placed nearer another drawn pin's true centre than their own, that centre at least half
+    a rest spacing from their own (tips squeezed together by a slide merge: nothing tells them apart)."""
+    placed = np.flatnonzero(np.isfinite(positions[:, 0]))
+    nearest = np.flatnonzero(shown)[cKDTree(truth[shown]).query(positions[placed])[1]]
+    other = nearest != placed
+    gap = np.linalg.norm(truth[placed[other]] - truth[nearest[other]], axis=1)
+    return placed[other][gap >= 0.5 * spacing_px]
+
+
+def _track_slides(name, seed):
+    """Two slides of 3 pitches (0 and 180 degrees) from the drawn pins' true rest centres: swapped
+    pin-frames, and the last (rest) frame's positions and truth."""
+    s = preset_sensor(name, seed)
+    s.reseed_noise(seed)
+    run = s.slides([0.0, 180.0], distance_mm=3.0 * s.pin_spacing_mm, rest_s=3 / 120, frame_rate=120.0)
+    frames = iter(run)
+    rest = next(frames)
+    drawn = np.flatnonzero(rest.visible | rest.partial)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
+    tracker.start(rest.image, pins=rest.centres[drawn])
+    swapped, moved = 0, 0.0
+    for f in frames:
+        positions = tracker.update(f.image)
+        truth = f.centres[drawn]
+        swapped += _swaps(positions, truth, f.visible[drawn] | f.partial[drawn], tracker.spacing_px).size
+        moved = max(moved, np.max(np.linalg.norm(truth - rest.centres[drawn], axis=1)[f.visible[drawn]]))
+    assert moved > 2.5 * tracker.spacing_px  # the slides moved pins by about 3 pitches
+    return swapped, positions, rest.centres[drawn], f.visible[drawn]
+
+
+@pytest.mark.parametrize("name", ["radial-led-120", "small-pad-100"])
+def test_slides_keep_identities_and_every_pin_returns_to_rest(name):
+    swapped = 0
+    for seed in (0, 1):
+        count, positions, rest, visible = _track_slides(name, seed)
+        swapped += count
+        # Back at rest every visible pin is found, within 1 px of its rest position.
+        assert (np.linalg.norm(positions - rest, axis=1)[visible] <= 1.0).all()
+    # Pin-frames on another pin's tip, seeds 0-1: 124 (radial-led-120) and 526 (small-pad-100) before
+    # `pins._identity` and the trusted searches; 14 and 21 after.
+    assert swapped <= 40
+
+
+@pytest.mark.xfail(reason="issue 20's bar, not yet met: radial-led-120 seeds 0-3 still put 2-29 pin-frames "
+                          "on other pins' tips (pins lost in the squeezed skin ahead of a slide, found "
+                          "from predictions a spacing off)", strict=False)
+def test_slides_swap_no_identity():
+    assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (2, 3))
+
+
+def test_a_found_pin_keeps_only_a_tip_in_its_own_cell():
+    # Pins 0-2 placed in a row 10 px apart, pin 3 expected at (30, 0) and missing.
+    positions = np.array([[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [np.nan, np.nan]])
+    expected = np.array([[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [30.0, 0.0]])
+    # Pin 1 found at 11 px, expected at 9: its own cell; pin 2 found on pin 3's expected tip: not its own.
+    positions[1], positions[2] = [11.0, 0.0], [29.0, 0.0]
+    keep_own_tips(positions, np.array([1, 2]), np.array([[9.0, 0.0], [21.0, 0.0]]), expected)
+    assert np.allclose(positions[1], [11.0, 0.0]) and np.isnan(positions[2]).all()
+    # Two found pins on one tip: the one expected nearer to it (pin 1, 3 px against 5) keeps it.
+    positions = np.array([[5.0, 0.0], [5.0, 0.0]])
+    keep_own_tips(positions, np.array([0, 1]), np.array([[0.0, 0.0], [8.0, 0.0]]), np.full((2, 2), np.nan))
+    assert np.isnan(positions[0]).all() and np.allclose(positions[1], [5.0, 0.0])
+    # Nothing found: nothing changes.
+    before = positions.copy()
+    keep_own_tips(positions, np.array([], dtype=int), np.empty((0, 2)), np.full((2, 2), np.nan))
+    assert np.array_equal(positions, before, equal_nan=True)
