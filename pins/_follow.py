@@ -145,6 +145,6 @@ class _Following:
         if placed.size:
             offset = positions[which[placed]] - start[placed]
             self._one_pin_per_tip(positions, which[placed], _squared_norm(offset))
-            keep_own_tips(positions, which[placed], start[placed], filled)
+            keep_own_tips(positions, which[placed], start[placed], filled, self._identity_index)
         return positions, filled
 

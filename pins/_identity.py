@@ -12,10 +12,17 @@ around it, so the test gates by the local pitch, with no gate to tune.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
+
+from ._window import _squared_norm
+
+# Pins whose tips a found pin may have taken: its nearest this many at rest (three rings of a hexagonal
+# lattice: the skin squeezed ahead of a slide brings the outer rings near; on tactip-331 slides two
+# rings let 12 % more pin-frames onto other pins' tips than all pins do, three as few).
+IDENTITY_NEIGHBOURS = 36
 
 
-def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, expected: np.ndarray) -> None:
+def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, expected: np.ndarray,
+                  near: np.ndarray) -> None:
     """Unplace (NaN, in place) found pins whose tips lie nearer another pin's expected position than their own start.
 
     Parameters
@@ -28,16 +35,20 @@ def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, e
         Where each of them was expected (its guess or prediction), px.
     expected : (N, 2) ndarray
         Where every pin is expected, px (NaN: nowhere), for the pins without a position.
+    near : (N, m) ndarray of int
+        Each pin's nearest pins at rest (three rings of them: `IDENTITY_NEIGHBOURS`), the only ones
+        whose tips a pin found within its gate can reach.
 
     Examples
     --------
     >>> positions = np.array([[0.0, 0.0], [10.0, 0.0], [np.nan, np.nan]])
     >>> expected = np.array([[0.0, 0.0], [10.0, 0.0], [20.0, 0.0]])
-    >>> keep_own_tips(positions, np.array([1]), np.array([[4.0, 0.0]]), expected)  # its start nearest: kept
+    >>> near = np.array([[1, 2], [0, 2], [1, 0]])
+    >>> keep_own_tips(positions, np.array([1]), np.array([[4.0, 0.0]]), expected, near)  # its start nearest: kept
     >>> positions[1]
     array([10.,  0.])
     >>> positions[1] = [19.0, 0.0]   # the tip where pin 2 is expected: not pin 1's
-    >>> keep_own_tips(positions, np.array([1]), np.array([[12.0, 0.0]]), expected)
+    >>> keep_own_tips(positions, np.array([1]), np.array([[12.0, 0.0]]), expected, near)
     >>> positions[1]
     array([nan, nan])
     """
@@ -45,24 +56,27 @@ def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, e
     found, start = found[placed], start[placed]
     if found.size == 0:
         return
-    others = np.where(np.isfinite(positions), positions, expected)
-    others[found] = start
-    live = np.flatnonzero(np.isfinite(others[:, 0]))
-    nearest = live[cKDTree(others[live]).query(positions[found])[1]]
-    positions[found[nearest != found]] = np.nan
+    at = np.where(np.isfinite(positions), positions, expected)
+    at[found] = start
+    tips = positions[found]
+    own = _squared_norm(tips - start)
+    # (NaN, a pin expected nowhere, compares False.)
+    others = _squared_norm(at[near[found]] - tips[:, None, :])  # (F, m)
+    positions[found[(others < own[:, None]).any(axis=1)]] = np.nan
 
 
-
-def kept_on_own_tips(before: np.ndarray, after: np.ndarray, start: np.ndarray, guess: np.ndarray) -> np.ndarray:
+def kept_on_own_tips(before: np.ndarray, after: np.ndarray, start: np.ndarray, guess: np.ndarray,
+                     near: np.ndarray) -> np.ndarray:
     """A step's positions `after` (N, 2), px, with the pins it moved or placed kept only on their own tips.
 
     `keep_own_tips` for the pins whose positions differ from `before` (N, 2), px: each expected at its
-    `start` (N, 2), px; the others where `before` places them, else at their `guess` (N, 2), px.
+    `start` (N, 2), px; the others where `before` places them, else at their `guess` (N, 2), px;
+    `near` as in `keep_own_tips`.
     `after` is changed in place (a step returns `before` itself when it changed nothing).
     """
     if after is before:
         return after
     changed = np.flatnonzero(np.isfinite(after[:, 0]) & ~(after == before).all(axis=1))
     if changed.size:
-        keep_own_tips(after, changed, start[changed], np.where(np.isfinite(before), before, guess))
+        keep_own_tips(after, changed, start[changed], np.where(np.isfinite(before), before, guess), near)
     return after

@@ -70,7 +70,7 @@ from scipy.spatial import cKDTree
 from .detect import DetectionParams
 from .disc import SensorDisc
 from ._flat import _pin_radius_px
-from ._identity import keep_own_tips
+from ._identity import IDENTITY_NEIGHBOURS, keep_own_tips
 from ._follow import _GUESS_FRACTION, _Following
 from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
 from ._recover import _Recovery, match_to_blobs
@@ -153,8 +153,9 @@ class Refiner(_Following, _AtRest, _Recovery):
         self.spacing_px = spacing_px
         self.detection = detection
         self.disc = disc
-        k = min(max(neighbours, _WINDOW_NEIGHBOURS), len(rest_positions) - 1)
+        k = min(max(neighbours, _WINDOW_NEIGHBOURS, IDENTITY_NEIGHBOURS), len(rest_positions) - 1)
         index = cKDTree(rest_positions).query(rest_positions, k=k + 1)[1][:, 1:]
+        self._identity_index = index[:, :IDENTITY_NEIGHBOURS]  # (for `keep_own_tips`)
         self._neighbour_index = index[:, :neighbours]
         self._every = np.arange(len(rest_positions))
         self._window_neighbours = np.ascontiguousarray(index[:, :_WINDOW_NEIGHBOURS].T)  # (k, N)
@@ -409,7 +410,8 @@ class Refiner(_Following, _AtRest, _Recovery):
         retry, second, error = retry[found], second[found], error[found]
         positions[retry] = second
         self._one_pin_per_tip(positions, retry, error)
-        keep_own_tips(positions, retry, predicted[found], tracked if filled is None else filled)
+        keep_own_tips(positions, retry, predicted[found], tracked if filled is None else filled,
+                      self._identity_index)
         return positions
 
     def _pull(self, points: np.ndarray, which: np.ndarray) -> np.ndarray:

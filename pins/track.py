@@ -432,7 +432,7 @@ class PinTracker:
         # missing ones are looked for at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
         positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, search),
-                                     refiner.rest_positions, guess)
+                                     refiner.rest_positions, guess, refiner._identity_index)
         missing = np.isnan(positions[:, 0])
         if not missing.any():
             return positions, False, False
@@ -445,7 +445,8 @@ class PinTracker:
             # would widen the detection to most of the disc; they come back by their own search.
             before = positions
             positions = refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted)
-            positions = kept_on_own_tips(before, positions, np.where(np.isfinite(tracked), tracked, filled), guess)
+            positions = kept_on_own_tips(before, positions, np.where(np.isfinite(tracked), tracked, filled), guess,
+                                         refiner._identity_index)
         # Pins just seen, on a sloped background at rest (a veil's or a reflection's flank, which their
         # windows weigh as tip), and missing now: fitted as opaque ellipses where their tips show.
         # (Those lost for longer come back by their windows' search, snapping to rest and blobs.)

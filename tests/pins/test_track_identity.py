@@ -68,13 +68,15 @@ def test_a_found_pin_keeps_only_a_tip_in_its_own_cell():
     expected = np.array([[0.0, 0.0], [10.0, 0.0], [20.0, 0.0], [30.0, 0.0]])
     # Pin 1 found at 11 px, expected at 9: its own cell; pin 2 found on pin 3's expected tip: not its own.
     positions[1], positions[2] = [11.0, 0.0], [29.0, 0.0]
-    keep_own_tips(positions, np.array([1, 2]), np.array([[9.0, 0.0], [21.0, 0.0]]), expected)
+    near = np.array([[j for j in range(4) if j != i] for i in range(4)])  # every other pin
+    keep_own_tips(positions, np.array([1, 2]), np.array([[9.0, 0.0], [21.0, 0.0]]), expected, near)
     assert np.allclose(positions[1], [11.0, 0.0]) and np.isnan(positions[2]).all()
     # Two found pins on one tip: the one expected nearer to it (pin 1, 3 px against 5) keeps it.
     positions = np.array([[5.0, 0.0], [5.0, 0.0]])
-    keep_own_tips(positions, np.array([0, 1]), np.array([[0.0, 0.0], [8.0, 0.0]]), np.full((2, 2), np.nan))
+    keep_own_tips(positions, np.array([0, 1]), np.array([[0.0, 0.0], [8.0, 0.0]]), np.full((2, 2), np.nan),
+                  np.array([[1], [0]]))
     assert np.isnan(positions[0]).all() and np.allclose(positions[1], [5.0, 0.0])
     # Nothing found: nothing changes.
     before = positions.copy()
-    keep_own_tips(positions, np.array([], dtype=int), np.empty((0, 2)), np.full((2, 2), np.nan))
+    keep_own_tips(positions, np.array([], dtype=int), np.empty((0, 2)), np.full((2, 2), np.nan), np.array([[1], [0]]))
     assert np.array_equal(positions, before, equal_nan=True)
