@@ -18,6 +18,14 @@ the rim), as from a calibration, and `PinTracker.update` runs over every other f
            centre, lost ones counted too (the bar: 0);
 - ms/frame: CPU time of the updates (``time.thread_time``).
 
+Figures (8 slides, seeds 0-5, 2-core VM at load ~16; old = main bd3cf8a, new = pins._identity and
+trusted searches): pin-frames on another pin's tip ("apart") radial-led-120 173-279 -> 16-147,
+small-pad-100 696-801 -> 61-131; >3 px radial-led-120 229-372 -> 32-211, small-pad-100 532-657 ->
+19-57, tactip-331 7869-8120 -> 3547-3775; lost visible pins per frame 2.8-4.4 -> 4.0-5.4, 4.1-4.4 ->
+6.4-6.9, 5.0-5.3 -> 14.0-14.6; the last frame: 0 visible pins > 1 px from rest, old and new, every
+video. Two slides (0 and 180 degrees), seeds 0-3, apart: radial-led-120 54-80 -> 2-29, small-pad-100
+226-343 -> 7-23 (`tests/pins/test_track_identity.py`).
+
 Run: .venv/bin/python bench/bench_slides.py [--presets radial-led-120 tactip-331 small-pad-100]
      [--seeds 0 1 2 3 4 5] [--slides 8] [--pitches 3]
 """
