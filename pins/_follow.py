@@ -70,7 +70,7 @@ class _Following:
             filled = guess.copy()
             filled[lost] = self._predict(guess, lost, last_seen)
             look = lost if search is None else lost[search[lost]]
-            look = look[self._trusted(guess, look, last_seen)]
+            look = look[self._trusted(guess, look, last_seen, filled[look])]
             live = (~missing).nonzero()[0]
             which, n = np.concatenate([live, look]), live.size
         radius = self.window_radius(filled)[which]

@@ -371,7 +371,7 @@ class Refiner(_Following, _AtRest, _Recovery):
             live = ~missing if settled is None else ~missing & ~settled
             live = np.flatnonzero(live)
             look = lost if search is None else lost[search[lost]]
-            look = look[self._trusted(tracked, look, last_seen)]
+            look = look[self._trusted(tracked, look, last_seen, filled[look])]
             which = np.concatenate([live, look])
             centres, measures = self.windows.measure(crop, filled[which] - self.origin, radius[which])
             centres += self.origin
@@ -459,7 +459,8 @@ class Refiner(_Following, _AtRest, _Recovery):
         shift = self.neighbour_median(positions - self.rest_positions, which)
         return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
 
-    def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
+    def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
+                 predicted: np.ndarray | None = None) -> np.ndarray:
         """Whether pins `which` may be searched for at their predictions (`_predict`): (L,) bool.
 
         Where most of a pin's neighbours are placed (`_TRUSTED_SHARE` of them), its prediction
@@ -469,6 +470,7 @@ class Refiner(_Following, _AtRest, _Recovery):
         few on one side of the squeezed skin ahead of a slide (its displacement changes by most of a
         spacing per spacing there) a prediction lies a spacing off, on another pin's tip (issue 20:
         tactip-331 slides, 2 or 3 of 6 neighbours placed, predictions 10-25 px off at a 17.7 px spacing).
+        `predicted` (L, 2), px: the pins' predictions from `positions`, when known.
         """
         index = self._neighbour_index[which]
         placed = np.isfinite(positions[index, 0])
@@ -476,7 +478,8 @@ class Refiner(_Following, _AtRest, _Recovery):
         trusted = count >= _TRUSTED_SHARE * index.shape[1]
         few = np.flatnonzero(~trusted & (count >= 2) & ~(placed & ~self.still[index]).any(axis=1))
         if few.size:
-            moved = _squared_norm(self._predict(positions, which[few], last_seen) - last_seen[which[few]])
+            guess = self._predict(positions, which[few], last_seen) if predicted is None else predicted[few]
+            moved = _squared_norm(guess - last_seen[which[few]])
             trusted[few] = moved <= self.gate_px ** 2
         return trusted
 
