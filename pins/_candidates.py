@@ -52,8 +52,27 @@ class _Run:
 _WORKERS = 2
 
 
-def _evaluate_all(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: dict) -> list:
-    """`_evaluate` for each candidate parameter set, on `_WORKERS` threads."""
+class _SharedCache(dict):
+    """The filtered images of one grey image and disc shared by the candidate sets of a search (the
+    `cache` of `pins.detect._detect` and `pins._judge._sharpness`), safe to share between threads.
+
+    Each entry is a pure function of the image, the disc and its key (blur, polarity, block), computed
+    whole before it is stored; a dict's lookups and stores are atomic under the GIL, and every array
+    is made read-only as it is stored, so no thread sees one half written or changed after. Two
+    threads that miss the same key both compute it, to the same bits (the second store is a no-op).
+    """
+
+    def __setitem__(self, key, value):
+        for array in value if isinstance(value, tuple) else (value,):
+            if isinstance(array, np.ndarray):
+                array.setflags(write=False)
+        super().__setitem__(key, value)
+
+
+def _evaluate_all(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: _SharedCache) -> list:
+    """`_evaluate` for each candidate parameter set, on `_WORKERS` threads sharing `cache`."""
+    if not isinstance(cache, _SharedCache):
+        raise TypeError("the candidate sets' threads share their filtered images only in a _SharedCache")
     with ThreadPoolExecutor(_WORKERS) as pool:
         return list(pool.map(lambda params: _evaluate(grey, disc, params, cache), candidates))
 

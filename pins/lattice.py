@@ -102,7 +102,7 @@ from ._draw import draw_pin_field
 from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._tipprobe import flat_pins
-from ._candidates import _MATCH, _candidates, _consensus, _evaluate, _evaluate_all, _final_params
+from ._candidates import _MATCH, _SharedCache, _candidates, _consensus, _evaluate, _evaluate_all, _final_params
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
@@ -390,7 +390,7 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
     # The rim margin is measured from the sensor disc's rim (the ring's inner edge is sharp: the
     # pins next to it are whole).
     start = start.replace(rim_margin_px=max(start.rim_margin_px - (disc.radius_px - search.radius_px), 0.0))
-    cache: dict = {}
+    cache = _SharedCache()
     # Coarse: one permissive candidate set per possible pitch; the strongest lattice gives the pitch.
     coarse = _evaluate_all(grey, search, list(_candidates(pitches, start, _COARSE_BLOCK, _COARSE_OFFSETS)), cache)
     first = max(coarse, key=lambda run: run.strength)

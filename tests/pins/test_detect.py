@@ -132,3 +132,32 @@ def test_weighted_sums_by_row_runs_equal_sums_by_pixel(rng):
     expected = [np.bincount(lab, weights=weight * f, minlength=count) for f in (1.0, xs, ys)]
     for got, want in zip(_weighted_sums(index, lab, weight, width, count), expected):
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-9)
+
+
+def test_detection_does_not_depend_on_what_was_detected_before():
+    """The disc's mask and neighbourhood coverage are cached per disc (rounded to 1e-3 px) and frame
+    size: a detection gives the same blobs with the caches cold and after detections of other frames,
+    discs and blocks filled them, including a disc 0.4e-3 px away (the same key)."""
+    from pins.detect import _inverse_coverage_cached, _roi_cached
+
+    f = frame(331)
+    disc = SensorDisc(319.6, 239.4, 206.3)
+    near = SensorDisc(319.6 + 4e-4, 239.4 - 4e-4, 206.3 + 4e-4)
+    params = DetectionParams(block_size_px=21)
+
+    def blobs(d):
+        found = detect_blobs(f.image, disc=d, params=params)
+        return np.concatenate([found.centres.ravel(), found.areas, found.contrasts])
+
+    _roi_cached.cache_clear()
+    _inverse_coverage_cached.cache_clear()
+    cold, cold_near = blobs(disc), blobs(near)
+    _roi_cached.cache_clear()
+    _inverse_coverage_cached.cache_clear()
+    cold_near_first = blobs(near)
+    for other in (frame(127).image, frame(532, TAP).image, f.image[:400, :600]):
+        for d in (SensorDisc(300.0, 230.0, 180.0), disc, near):
+            for block in (15, 21, 41):
+                detect_blobs(other, disc=d, params=params.replace(block_size_px=block))
+    assert np.array_equal(blobs(disc), cold) and np.array_equal(blobs(near), cold_near)
+    assert np.array_equal(cold_near_first, cold_near)
