@@ -322,9 +322,10 @@ def _reference_spacing_px(rest: np.ndarray) -> float:
     """`median_spacing_px` of (N, 2) float64 reference pins, px, kept for the last pins given (1 ms a tap)."""
     global _spacing_of
     key = rest.tobytes()
-    if _spacing_of[0] != key:
-        _spacing_of = (key, float(median_spacing_px(rest)))
-    return _spacing_of[1]
+    kept = _spacing_of  # one read: stations tapping in threads may replace it meanwhile
+    if kept[0] != key:
+        kept = _spacing_of = (key, float(median_spacing_px(rest)))
+    return kept[1]
 
 
 def check_model_fits(model, calibration: SensorCalibration, *, samples: int, source: str = "the model",
