@@ -309,9 +309,23 @@ def place_reference_pins(calibration: SensorCalibration, image: np.ndarray) -> n
     """
     rest = np.array(calibration.reference_pins, dtype=np.float64)
     blobs = detect_pins(image, params=calibration.detection, disc=calibration.disc)
-    index = match_to_blobs(rest, blobs, gate_px=0.4 * median_spacing_px(rest))
+    index = match_to_blobs(rest, blobs, gate_px=0.4 * _reference_spacing_px(rest))
     rest[index >= 0] = blobs[index[index >= 0]]
     return rest
+
+
+# The last reference pins' median spacing: a station places the same pins on every tap's rest frame.
+_spacing_of: tuple[bytes, float] = (b"", float("nan"))
+
+
+def _reference_spacing_px(rest: np.ndarray) -> float:
+    """`median_spacing_px` of (N, 2) float64 reference pins, px, kept for the last pins given (1 ms a tap)."""
+    global _spacing_of
+    key = rest.tobytes()
+    kept = _spacing_of  # one read: stations tapping in threads may replace it meanwhile
+    if kept[0] != key:
+        kept = _spacing_of = (key, float(median_spacing_px(rest)))
+    return kept[1]
 
 
 def check_model_fits(model, calibration: SensorCalibration, *, samples: int, source: str = "the model",

@@ -17,6 +17,8 @@ neighbours' tips, nor a faint rim tip's window on the veil beside it.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from ._noise import _JITTER_FIRST, _learn_mean_square, noise_sigma
@@ -37,6 +39,21 @@ _FLOOR_EVERY = 8
 _NOISE_DRAWS = 4
 
 
+@lru_cache(maxsize=1)
+def _standard_draws(shape: tuple[int, int]) -> tuple[np.ndarray, ...]:
+    """`_NOISE_DRAWS` fields of standard normal noise of ``shape`` from the fixed seed 0, read-only; cached
+    per crop shape (a station's taps share one): 12 ms of a tap's start on a 468 x 468 px crop.
+
+    ``rng.normal(0.0, sigma, shape)`` is ``0.0 + sigma * z`` of the same stream's standard normal draws
+    ``z`` (numpy's ``random_normal``), so these times ``sigma`` are its draws bit for bit.
+    """
+    rng = np.random.default_rng(0)  # a fixed draw: the same rest frame, the same bound
+    draws = tuple(rng.standard_normal(shape) for _ in range(_NOISE_DRAWS))
+    for draw in draws:
+        draw.flags.writeable = False
+    return draws
+
+
 class _AtRest:
     """The rest side of `pins._refine.Refiner`: noise of the rest windows, still steps, snapping to rest."""
 
@@ -49,10 +66,9 @@ class _AtRest:
             return np.zeros(len(positions))
         points, radius = positions - self.origin, self.window_radius(positions)
         base = self.windows.measure(rest_crop, points, radius)[0]
-        rng = np.random.default_rng(0)  # a fixed draw: the same rest frame, the same bound
         total = np.zeros(len(positions))
-        for _ in range(_NOISE_DRAWS):
-            noisy = rng.normal(0.0, sigma, rest_crop.shape)
+        for draw in _standard_draws(rest_crop.shape):
+            noisy = np.multiply(draw, sigma)  # `rng.normal(0.0, sigma, shape)` of seed 0, bit for bit
             noisy += rest_crop  # in place: the crop plus the draw, clipped and truncated to uint8
             noisy = np.clip(noisy, 0, 255, out=noisy).astype(np.uint8)
             total += _squared_norm(self.windows.measure(noisy, points, radius)[0] - base)
