@@ -33,7 +33,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 from scipy.special import erf
-from scipy.stats import chi2
 
 __all__ = ["flat_pins", "tip_evidence", "threshold"]
 
@@ -61,6 +60,8 @@ def threshold(false_alarm: float, cells: np.ndarray | float) -> np.ndarray:
     >>> round(float(threshold(1e-3, 1.0)), 1)
     13.8
     """
+    from scipy.stats import chi2  # here, not at import: scipy.stats is 0.2-0.8 s of every process's `import pins`
+
     return chi2.isf(false_alarm / np.maximum(np.asarray(cells, dtype=np.float64), 1.0), _EXTRA)
 
 
