@@ -23,6 +23,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Sequence
 
@@ -87,6 +88,12 @@ class SensorCalibration:
     sensor: dict = field(default_factory=dict)
     scale: dict = field(default_factory=dict)
     separation_mm: float = float("nan")
+
+    @cached_property
+    def reference_spacing_px(self) -> float:
+        """Median nearest-neighbour spacing of the reference pins, px: computed once per calibration (a
+        station places the same pins on every tap's rest frame)."""
+        return float(median_spacing_px(np.asarray(self.reference_pins, dtype=np.float64)))
 
     @property
     def n_selected(self) -> int:
@@ -309,23 +316,9 @@ def place_reference_pins(calibration: SensorCalibration, image: np.ndarray) -> n
     """
     rest = np.array(calibration.reference_pins, dtype=np.float64)
     blobs = detect_pins(image, params=calibration.detection, disc=calibration.disc)
-    index = match_to_blobs(rest, blobs, gate_px=0.4 * _reference_spacing_px(rest))
+    index = match_to_blobs(rest, blobs, gate_px=0.4 * calibration.reference_spacing_px)
     rest[index >= 0] = blobs[index[index >= 0]]
     return rest
-
-
-# The last reference pins' median spacing: a station places the same pins on every tap's rest frame.
-_spacing_of: tuple[bytes, float] = (b"", float("nan"))
-
-
-def _reference_spacing_px(rest: np.ndarray) -> float:
-    """`median_spacing_px` of (N, 2) float64 reference pins, px, kept for the last pins given (1 ms a tap)."""
-    global _spacing_of
-    key = rest.tobytes()
-    kept = _spacing_of  # one read: stations tapping in threads may replace it meanwhile
-    if kept[0] != key:
-        kept = _spacing_of = (key, float(median_spacing_px(rest)))
-    return kept[1]
 
 
 def check_model_fits(model, calibration: SensorCalibration, *, samples: int, source: str = "the model",
