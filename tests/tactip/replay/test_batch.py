@@ -89,6 +89,14 @@ def _h5_differences(a: bytes, b: bytes, limit: int = 8) -> list[str]:
     return found[:limit]
 
 
+def _same_as_singles(folder, expected) -> None:
+    """Every ``*.h5`` in ``folder`` holds what its single replay holds (by contents, see `_h5_differences`)."""
+    written = {p.name: p.read_bytes() for p in folder.glob("*.h5")}
+    assert set(written) == set(expected)
+    differing = {name: _h5_differences(written[name], expected[name]) for name in expected}
+    assert not any(differing.values()), differing
+
+
 def _mtimes(out):
     return {p.name: p.stat().st_mtime_ns for p in out.glob("*.h5")}
 
@@ -99,11 +107,8 @@ def test_batch_writes_single_replays_names_the_corrupt_file_and_resumes(archive,
     videos = expand_videos([folder])
     assert [v.name for v in videos] == ["bad.mp4"] + [f"tap{k}.mp4" for k in range(COUNT)]
     first = replay_batch(videos, out, client=client)
-    # Every good video's output is byte for byte its single replay; the corrupt one is named, nothing of it written.
-    written = {p.name: p.read_bytes() for p in out.glob("*.h5")}
-    assert set(written) == set(expected)
-    differing = {name: _h5_differences(written[name], expected[name]) for name in expected}
-    assert not any(differing.values()), differing
+    # Every good video's output holds what its single replay holds; the corrupt one is named, nothing of it written.
+    _same_as_singles(out, expected)
     assert [(r["video"], r["status"]) for r in first.failed] == [(str(folder / "bad.mp4"), "failed")]
     assert "not a video" in first.failed[0]["error"]
     assert not list(out.glob(".*part*"))
@@ -118,7 +123,7 @@ def test_batch_writes_single_replays_names_the_corrupt_file_and_resumes(archive,
     assert _mtimes(out) == before
     assert all(r["frames"] == 20 and r["taps"] == 1 for r in second.rows[1:])
     assert "8 skipped" in second.text() and "1 failed" in second.text()
-    # --overwrite replays them again, to the same bytes.
+    # --overwrite replays them again, to the same contents.
     third = replay_batch(videos[1:3], out, client=client, overwrite=True)
     assert [r["status"] for r in third.rows] == ["written", "written"] and not third.failed
     assert not _h5_differences((out / "tap0.h5").read_bytes(), expected["tap0.h5"])
@@ -242,7 +247,7 @@ def test_cli_batch_on_a_dask_scheduler_and_worker(archive, scheduler, tmp_path, 
     assert main(["replay", str(folder), "--out-dir", str(out), "--scheduler", scheduler, "--quiet"]) == 1
     error = capsys.readouterr().err
     assert f"failed: {folder / 'bad.mp4'}: " in error and "1 of 9 videos failed" in error
-    assert {p.name: p.read_bytes() for p in out.glob("*.h5")} == expected
+    _same_as_singles(out, expected)
     rows = json.loads((out / "summary.json").read_text())["rows"]
     assert sorted(r["status"] for r in rows) == ["failed"] + ["written"] * COUNT
     # Resumed on the cluster: only the corrupt file is tried again.
@@ -252,12 +257,12 @@ def test_cli_batch_on_a_dask_scheduler_and_worker(archive, scheduler, tmp_path, 
 
 
 def test_videos_tracked_together_on_torch_write_the_same_files(archive, client, tmp_path):
-    """The batched torch path (CPU torch here): several videos a task, windows measured together, same bytes."""
+    """The batched torch path (CPU torch here): several videos a task, windows measured together, the same files (by contents)."""
     pytest.importorskip("torch")
     folder, expected = archive
     videos = expand_videos([folder])
     result = replay_batch(videos, tmp_path, client=client, device="torch-cpu", together=3)
-    assert {p.name: p.read_bytes() for p in tmp_path.glob("*.h5")} == expected
+    _same_as_singles(tmp_path, expected)
     assert [r["status"] for r in result.rows] == ["failed"] + ["written"] * COUNT
     assert "not a video" in result.rows[0]["error"]
     with pytest.raises(ValueError, match="unknown device"):
