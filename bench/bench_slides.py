@@ -109,9 +109,13 @@ def main() -> None:
                         help="share of each slide the skin keeps when the plate lifts, creeping back (0: none)")
     parser.add_argument("--creep-s", type=float, default=0.1, help="time constant of that creep, s")
     parser.add_argument("--final-rest-s", type=float, default=None, help="the last rest, s (default: 3 frames)")
+    parser.add_argument("--min-area", type=float, default=None,
+                        help="least share of its area the skin ahead of a slide is squeezed to (default: the model's)")
     args = parser.parse_args()
     skin = {} if args.residual == 0 else dict(residual=args.residual, creep_s=args.creep_s,
                                               final_rest_s=args.final_rest_s)
+    if args.min_area is not None:
+        skin["min_area"] = args.min_area
     print(f"{args.slides} slides of {args.pitches} pitches, 3-frame rests, 120 frames/s, lift {args.lift_s} s, "
           f"raw renders, {skin or 'no residual shear'}")
     print(f"{'preset':16s} seed frames  lost/f    >1px  >3px swaps apart rest>1 end>1 end>10/visible creep_px  ms/frame")

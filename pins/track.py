@@ -428,6 +428,8 @@ class PinTracker:
             tracked = np.where(need[:, None], moved + origin, positions)
             positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
                                        filled=np.where(need[:, None], tracked, filled))
+        # Lost pins next to ones just found, from predictions that now interpolate them (`pins._predict`).
+        positions = refiner.search_in_rounds(crop, positions, self._last_seen, search)
         # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
         # missing ones are looked for at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)

@@ -15,6 +15,12 @@ Residual shear (opt-in, ``Contact.shear_x_mm``, ``shear_y_mm``): a real elastome
 at once when the plate lifts; what a slide leaves in the skin creeps back to rest over tens of frames
 (paper 000 waits 1 s between contacts "to ensure transients decayed"). It is laid out as a slide is,
 from the apex when nothing touches, and adds to the plate's drag under contact.
+
+Stiffer skin (opt-in, ``Contact.slide_decay_mm``): by default the skin ahead of a slide may be squeezed
+to ``1 - pi / 4`` (21 %) of its area along the slide, or to `MIN_JACOBIAN` where the base cuts the
+fall-off short: neighbouring tips then merge. A skin of 1-2 mm of elastomer over gel wrinkles long
+before a surface strain of -80 %; a fixed fall-off per stroke (`decay_for_area_mm`, the schedule's
+``min_area``) keeps the squeeze to a given share of the area.
 """
 
 from __future__ import annotations
@@ -26,10 +32,22 @@ DECAY_PER_SLIDE = 2.0  # the fall-off is at least this x the slide: the map's Ja
 MIN_JACOBIAN = 0.05  # a slide may compress the skin round the patch to this share of its area, no further
 
 
-def _decay_mm(indentation_mm: float, slide_mm: float, radius_mm: float) -> float:
-    """Fall-off length of the slide outside the patch, mm: it ends at the latest at the clamped base."""
+def _decay_mm(indentation_mm: float, slide_mm: float, radius_mm: float, given_mm: float = 0.0) -> float:
+    """Fall-off length of the slide outside the patch, mm (`given_mm` when > 0, ``Contact.slide_decay_mm``):
+    it ends at the latest at the clamped base."""
     room = np.pi * radius_mm / 2 - np.sqrt(radius_mm * indentation_mm)
-    return min(max(SLIDE_DECAY_MM, DECAY_PER_SLIDE * slide_mm), room)
+    return min(given_mm if given_mm > 0 else max(SLIDE_DECAY_MM, DECAY_PER_SLIDE * slide_mm), room)
+
+
+def decay_for_area_mm(slide_mm: float, min_area: float) -> float:
+    """The fall-off, mm, that keeps a slide of `slide_mm` from squeezing the skin below `min_area` of its area.
+
+    The map's Jacobian is at least ``1 - pi S / (2 L)`` (a pad's base may cut ``L`` shorter).
+
+    >>> round(decay_for_area_mm(9.0, 0.5), 2)
+    14.14
+    """
+    return max(SLIDE_DECAY_MM, np.pi * slide_mm / (2.0 * (1.0 - min_area)))
 
 
 def max_slide_mm(indentation_mm: float, radius_mm: float) -> float:
@@ -83,7 +101,7 @@ def slide_fraction(arc_mm, contact, radius_mm: float):
     if slide > max_slide_mm(d, radius_mm) + 1e-9:
         raise ValueError(f"slide_x_mm, slide_y_mm: a slide of {slide:.3g} mm folds the skin of a {2 * radius_mm:g} mm "
                          f"pad at {d:g} mm indentation; at most {max_slide_mm(d, radius_mm):.3g} mm")
-    decay = _decay_mm(d, slide, radius_mm)
+    decay = _decay_mm(d, slide, radius_mm, contact.slide_decay_mm)
     t = np.clip((np.asarray(arc_mm) - patch) / decay, 0.0, 1.0)
     return 0.5 * (1.0 + np.cos(np.pi * t))
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tactip.sim import _slide
 from tactip.sim.contact import Contact, SyntheticFrame
 
 __all__ = ["ContactEvent", "ContactSequence", "ContactSequences", "Stroke"]
@@ -127,7 +128,7 @@ def _frames(duration_s: float, frame_rate: float, name: str, minimum: int) -> in
 
 def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, press_s: float, hold_s: float,
              slide_s: float, lift_s: float, gap_angle_deg: float = 0.0, residual: float = 0.0,
-             creep_s: float = 0.1, final_rest_s: float | None = None):
+             creep_s: float = 0.1, final_rest_s: float | None = None, min_area: float | None = None):
     """The contact state of every frame of a sequence, and its events.
 
     Each phase lasts a whole number of frames (at least one; ``rest_s`` and ``hold_s`` may round to
@@ -139,6 +140,8 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
     releases the drag only down to that share of it, and the skin's shear then creeps back to rest
     exponentially with time constant ``creep_s`` s, through the rests and the strokes after (their
     drags add to what is left of it): a real elastomer relaxes over tens of frames, not at once.
+    ``min_area`` in (0, 1) (opt-in; None as before) squeezes the skin ahead of a slide to no less than
+    that share of its area (where the pad's base leaves room: `tactip.sim._slide.decay_for_area_mm`).
     """
     if not (math.isfinite(frame_rate) and frame_rate > 0):
         raise ValueError(f"frame_rate must be > 0, got {frame_rate!r}")
@@ -149,6 +152,8 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
         raise ValueError(f"residual must be in [0, 1), got {residual!r}")
     if not (math.isfinite(creep_s) and creep_s > 0):
         raise ValueError(f"creep_s must be > 0, got {creep_s!r}")
+    if min_area is not None and not (math.isfinite(min_area) and 0.0 < min_area < 1.0):
+        raise ValueError(f"min_area must be None or in (0, 1), got {min_area!r}")
     n_final = n_rest if final_rest_s is None else _frames(final_rest_s, frame_rate, "final_rest_s", 1)
     rest = Contact()
     contacts, events = [rest] * n_rest, []
@@ -165,9 +170,10 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
         up = 0.5 * (1 + np.cos(np.pi * np.arange(1, n_lift + 1) / (n_lift + 1)))  # (1, 0): still touching
         depth = np.concatenate([down, middle, up])
         dragged = np.concatenate([np.zeros(n_press), along, residual + (1.0 - residual) * up])
+        decay = 0.0 if min_area is None else _slide.decay_for_area_mm(stroke.distance_mm, min_area)
         for fraction, share in zip(depth, dragged):
             contacts.append(Contact(stroke.indentation_mm * float(fraction), stroke.gap_width_mm, 0.0, gap_angle_deg,
-                                    sx * float(share), sy * float(share)))
+                                    sx * float(share), sy * float(share), slide_decay_mm=decay))
         stop = len(contacts)
         sliding = stroke.kind == "slide"
         events.append(ContactEvent(stroke.kind, start, stop, start / frame_rate, stop / frame_rate,
@@ -190,7 +196,7 @@ def _creep(contacts, events, strokes, residual: float, decay: float) -> list:
             left[event.stop_frame:] += (residual * stroke.distance_mm * np.array([math.cos(angle), math.sin(angle)])
                                         * decay ** frames[:, None])
     return [Contact(c.indentation_mm, c.gap_width_mm, c.gap_offset_mm, c.gap_angle_deg, c.slide_x_mm, c.slide_y_mm,
-                    float(dx), float(dy)) if dx or dy else c
+                    float(dx), float(dy), c.slide_decay_mm) if dx or dy else c
             for c, (dx, dy) in zip(contacts, left)]
 
 
@@ -200,7 +206,7 @@ class ContactSequences:
     def sequence(self, strokes: Sequence[Stroke], *, rest_s: float = 0.25, press_s: float = 0.2,
                  hold_s: float = 0.1, slide_s: float = 0.4, lift_s: float = 0.2,
                  frame_rate: float | None = None, residual: float = 0.0, creep_s: float = 0.1,
-                 final_rest_s: float | None = None) -> ContactSequence:
+                 final_rest_s: float | None = None, min_area: float | None = None) -> ContactSequence:
         """Frames of presses and slides separated by rests, with the contacts' ground truth.
 
         Parameters
@@ -219,6 +225,9 @@ class ContactSequences:
             Opt-in viscoelastic skin (`schedule`): the share of each slide's drag left when the plate
             lifts (0: none, the default), its creep back to rest's time constant, s, and the last
             rest's length, s (None: ``rest_s``).
+        min_area : float or None
+            Opt-in stiffer skin (`schedule`): the least share of its area the skin ahead of a slide
+            is squeezed to (None: the default model, down to 21 %).
 
         Returns
         -------
@@ -236,7 +245,7 @@ class ContactSequences:
         frame_rate = self.frame_rate if frame_rate is None else frame_rate
         contacts, events = schedule(list(strokes), frame_rate=frame_rate, rest_s=rest_s, press_s=press_s,
                                     hold_s=hold_s, slide_s=slide_s, lift_s=lift_s, residual=residual,
-                                    creep_s=creep_s, final_rest_s=final_rest_s)
+                                    creep_s=creep_s, final_rest_s=final_rest_s, min_area=min_area)
         return ContactSequence(self, contacts, events, frame_rate)
 
     def slides(self, directions_deg, *, distance_mm: float = 3.0, indentation_mm: float = 2.0,
@@ -253,7 +262,7 @@ class ContactSequences:
             Depth of each press, mm.
         **timing
             ``rest_s``, ``press_s``, ``slide_s``, ``lift_s``, ``frame_rate`` and the opt-in residual
-            shear (``residual``, ``creep_s``, ``final_rest_s``) as in `sequence`.
+            shear (``residual``, ``creep_s``, ``final_rest_s``) and stiffer skin (``min_area``) as in `sequence`.
 
         Returns
         -------
