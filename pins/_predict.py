@@ -18,6 +18,18 @@ from ._window import _squared_norm
 
 # A lost pin is searched for at its prediction only when this share of its neighbours is placed.
 _TRUSTED_SHARE = 2 / 3
+CARRY = False
+GROWTH_FROM, GROWTH_AT_MOST = 0.1, 3.0
+
+
+def _median(values: np.ndarray) -> np.ndarray:
+    """Median over axis 1 of (L, k, 2) `values` of the finite rows (NaN sort last): (L, 2), NaN where none; sorts in place."""
+    count = np.add.reduce(np.isfinite(values[..., 0]), axis=1)
+    values.sort(axis=1)
+    rows = np.arange(len(values))
+    return 0.5 * (values[rows, (count - 1) // 2] + values[rows, count // 2])
+
+
 # Rounds of `_Prediction.search_in_rounds` per frame (a cluster lost ahead of a slide is a few rings deep).
 SEARCH_ROUNDS = 4
 
@@ -26,10 +38,36 @@ class _Prediction:
     """The prediction side of `pins._refine.Refiner` (reads `rest_positions`, `_neighbour_index`,
     `gate_px`, `still`; `search_in_rounds` calls `refine`)."""
 
+    def remember(self, positions: np.ndarray, found: np.ndarray) -> None:
+        """Keep, for the (N,) bool `found` pins of final (N, 2) `positions`, px, their neighbours' displacements now."""
+        which = np.flatnonzero(found)
+        if which.size:
+            self._then[which] = (positions - self.rest_positions)[self._neighbour_index[which]]
+
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
         """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
+        if CARRY:
+            return self._carried(positions, which, last_seen)
         shift = self.neighbour_median(positions - self.rest_positions, which)
         return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
+
+    def _carried(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
+        """Lost pins `which` where last seen, carried along by the same neighbours since (px, (L, 2))."""
+        rest = self.rest_positions[which]
+        now = (positions - self.rest_positions)[self._neighbour_index[which]]  # (L, k, 2), a copy
+        then = self._then[which]
+        both = np.isfinite(now[..., 0]) & np.isfinite(then[..., 0])
+        shift = _median(now.copy())  # any placed neighbours
+        now[~both] = np.nan
+        then = np.where(both[..., None], then, np.nan)
+        median_now, median_then = _median(now), _median(then)
+        offset = last_seen[which] - rest - median_then
+        size = _squared_norm(median_then)
+        growth = np.einsum("ij,ij->i", median_now, median_then) / np.where(size > 0, size, 1.0)
+        growth = np.where(size >= (GROWTH_FROM * self.spacing_px) ** 2, np.clip(growth, 0.0, GROWTH_AT_MOST), 1.0)
+        carried = median_now + growth[:, None] * offset
+        shift = np.where(np.isfinite(carried), carried, shift)
+        return np.where(np.isnan(shift), last_seen[which], rest + shift)
 
     def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
                  predicted: np.ndarray | None = None) -> np.ndarray:

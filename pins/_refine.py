@@ -255,6 +255,7 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         self._fittable = _fittable(self._tip_ellipses, self.tip_fit_radius_px)
         #: (N,) bool: pins that did not move in the last frame (`pins.track.PinTracker` sets it).
         self.still = np.ones(len(positions), dtype=bool)
+        self._then = np.zeros((len(positions), self._neighbour_index.shape[1], 2))
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).

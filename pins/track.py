@@ -408,6 +408,8 @@ class PinTracker:
         self._lost_run = np.where(found, 0, self._lost_run + 1)
         self.retired = self._lost_run > self.retire_after
         np.copyto(self._last_seen, positions, where=found[:, None])
+        if self.refine:  # (where lost pins' neighbours were: `pins._predict`)
+            self._refiner.remember(positions, found)
         return positions.copy()
 
     def _refine(self, grey: np.ndarray, current: np.ndarray, guess: np.ndarray) -> tuple[np.ndarray, bool, bool]:
