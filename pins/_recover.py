@@ -117,10 +117,13 @@ class _Recovery:
         # the round before placed.
         for _ in range(_ROUNDS):
             lost = np.flatnonzero(np.isnan(positions[:, 0]))
-            lost = lost[self._trusted(positions, lost, last_seen)]
             if not (lost.size and free.any()):
                 break
-            predicted = self._predict(positions, lost, last_seen)
+            predicted = self._predict(positions, lost, last_seen)  # once: `_trusted` reads it too
+            trusted = self._trusted(positions, lost, last_seen, predicted)
+            lost, predicted = lost[trusted], predicted[trusted]
+            if not lost.size:
+                break
             free_index = np.flatnonzero(free)
             pins, chosen = _assign(predicted, blobs[free_index], gate)
             if not pins.size:

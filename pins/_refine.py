@@ -255,7 +255,7 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         self._fittable = _fittable(self._tip_ellipses, self.tip_fit_radius_px)
         #: (N,) bool: pins that did not move in the last frame (`pins.track.PinTracker` sets it).
         self.still = np.ones(len(positions), dtype=bool)
-        self._then = np.zeros((len(positions), self._neighbour_index.shape[1], 2))
+        self._then = np.zeros((len(positions), self._neighbour_index.shape[1], 2))  # (`pins._predict.remember`)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
@@ -386,11 +386,13 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
             implausible = live[~plausible]
             first, predicted = centres[n:], filled[look]
         retry = look
-        implausible = implausible[self._trusted(positions, implausible, last_seen)]
         if implausible.size:
             # A tracked pin whose centroid is implausible (LK between two tips, or on a vanished
             # one) is searched for from its prediction too (where its neighbours are placed).
             guess = self._predict(positions, implausible, last_seen)
+            trusted = self._trusted(positions, implausible, last_seen, guess)
+            implausible, guess = implausible[trusted], guess[trusted]
+        if implausible.size:
             again = self.windows(crop, guess - self.origin, radius[implausible])[0] + self.origin
             retry = np.concatenate([look, implausible])
             first, predicted = np.concatenate([first, again]), np.concatenate([predicted, guess])

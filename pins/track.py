@@ -397,6 +397,7 @@ class PinTracker:
             # (Still for `Refiner._trusted`: moved by no more than a window settles on its guess.)
             self._refiner.still = np.einsum("ij,ij->i", velocity, velocity) <= self._refiner._guess_px ** 2
             velocity[self._refiner.observe_still(velocity)] = 0.0
+            self._refiner.remember(positions)  # (where lost pins' neighbours were: `pins._predict`)
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
@@ -408,8 +409,6 @@ class PinTracker:
         self._lost_run = np.where(found, 0, self._lost_run + 1)
         self.retired = self._lost_run > self.retire_after
         np.copyto(self._last_seen, positions, where=found[:, None])
-        if self.refine:  # (where lost pins' neighbours were: `pins._predict`)
-            self._refiner.remember(positions, found)
         return positions.copy()
 
     def _refine(self, grey: np.ndarray, current: np.ndarray, guess: np.ndarray) -> tuple[np.ndarray, bool, bool]:
@@ -430,8 +429,6 @@ class PinTracker:
             tracked = np.where(need[:, None], moved + origin, positions)
             positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
                                        filled=np.where(need[:, None], tracked, filled))
-        # Lost pins next to ones just found, from predictions that now interpolate them (`pins._predict`).
-        positions = refiner.search_in_rounds(crop, positions, self._last_seen, search)
         # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
         # missing ones are looked for at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
