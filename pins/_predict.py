@@ -72,6 +72,14 @@ class _Prediction:
         fallback = np.where(np.isnan(either), last_seen[which], rest + either)
         return np.where(np.isfinite(carried), carried, fallback)
 
+    def _predict_from_neighbours(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
+        """Pins `which` at their rest positions moved by the median displacement of their placed neighbours, px (L, 2).
+
+        (`last_seen` where none is placed.)
+        """
+        shift = self.neighbour_median(positions - self.rest_positions, which)
+        return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
+
     def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
                  predicted: np.ndarray | None = None) -> np.ndarray:
         """Whether pins `which` may be searched for at their predictions (`_predict`): (L,) bool.

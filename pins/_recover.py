@@ -178,7 +178,8 @@ class _Recovery:
         which = which[self._fittable[which]]  # (the others' fits never move them)
         if not which.size:
             return positions
-        predicted = self._predict(positions, which, last_seen)
+        # Just lost: where its neighbours are now (a fit needs the tip's place in the gradient of a press).
+        predicted = self._predict_from_neighbours(positions, which, last_seen)
         # (Only the windows' contrast is asked for, before and after the fit: `WindowCentroids.contrast`.)
         shows = self.windows.contrast(crop, predicted - self.origin) >= self._at_least[1, which]
         if not shows.any():
