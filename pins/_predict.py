@@ -12,8 +12,13 @@ was last seen, is carried along. Without such neighbours, the median displacemen
 moves its rest position; without any, it is where it was last seen.
 
 Measured on `bench/bench_slides.py` (8 slides of 3 pitches, seeds 0-5), against the median of the
-neighbours now: pin-frames on another pin's tip tactip-331 11272 -> 7535, radial-led-120 548 -> 370,
-small-pad-100 604 -> 755; lost visible pins per frame 14.3 -> 15.1, 4.7 -> 4.3, 6.6 -> 5.3 (means).
+neighbours now: pin-frames on another pin's tip radial-led-120 548 -> 214, small-pad-100 604 -> 436,
+tactip-331 11272 -> 7535; lost visible pins per frame (mean) 4.68 -> 4.46, 6.60 -> 5.82, 14.3 -> 15.1.
+On a stiffer skin (``min_area=0.5``, seeds 0-2): 310 -> 78, 145 -> 81, 187 -> 196; lost 4.1 -> 3.0,
+6.0 -> 4.9, 2.9 -> 2.1. Fits of tips just lost (`pins._recover`'s `fit_tips`) start where the
+neighbours are now (`_predict_from_neighbours`): a tip on a press's veil lies where the press's
+gradient puts it, not where its offset from its neighbours a frame ago does (carried, radial-led-120's
+20 frames/s tap put 22 pin-frames > 1 px off against 4, seed 0).
 
 A prediction is searched at only where it can be trusted (`_trusted`).
 """
