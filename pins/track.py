@@ -430,9 +430,9 @@ class PinTracker:
             positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
                                        filled=np.where(need[:, None], tracked, filled))
         # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
-        # missing ones are looked for at their rest positions.
+        # missing ones, retired too (a slide's return: 3-9 left lost 3 frames after it), at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
-        positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, search),
+        positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, np.ones_like(search)),
                                      refiner.rest_positions, guess, refiner._identity_index)
         missing = np.isnan(positions[:, 0])
         if not missing.any():

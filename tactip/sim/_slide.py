@@ -45,7 +45,7 @@ def decay_for_area_mm(slide_mm: float, min_area: float) -> float:
     The map's Jacobian is at least ``1 - pi S / (2 L)`` (a pad's base may cut ``L`` shorter).
 
     >>> round(decay_for_area_mm(9.0, 0.5), 2)
-    14.14
+    28.27
     """
     return max(SLIDE_DECAY_MM, np.pi * slide_mm / (2.0 * (1.0 - min_area)))
 
