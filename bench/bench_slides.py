@@ -32,7 +32,10 @@ from their neighbours' motion since they were last seen, `pins._predict`), seeds
 radial-led-120 16/82/71/147/138/94 -> 54/50/18/38/16/38 (548 -> 214), small-pad-100
 76/107/103/61/126/131 -> 75/68/97/62/63/71 (604 -> 436), tactip-331 1641-1973 -> 1140-1336 (11272 ->
 7535); >3 px 771 -> 360, 260 -> 125, 22166 -> 16360; lost per frame (mean) 4.68 -> 4.46, 6.60 -> 5.82,
-14.32 -> 15.13; end>1 0 everywhere, old and new.
+14.32 -> 15.13; end>1 0 everywhere, old and new. Then every missing pin looked for at rest on a pad back
+at rest (not retired ones in turns), seeds 0-1: lost per frame radial-led-120 4.85/3.96 -> 4.56/3.72,
+small-pad-100 5.76/6.07 -> 5.31/5.44, tactip-331 14.97/15.09 -> 13.50/13.47 (old 5.37/4.40, 6.66/6.54,
+13.97/14.52); apart 54/50, 72/63, 1268/1336.
 
 The skin options (opt-in renders, `SyntheticTacTip.sequence`):
 
