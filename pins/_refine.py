@@ -40,8 +40,8 @@ than that bound (up to 0.5 px in tests where blob detection would have kept them
 touching a tip fools blob detection as much.
 
 Search. A lost pin (or one whose centroid is implausible) is looked for in a window at its
-predicted position (its rest position moved by the median displacement of its tracked
-neighbours), re-centred once; it is found when that move is at most 0.1 spacings, its tip is like
+predicted position (where it was last seen, moved as its neighbours moved since: `pins._predict`),
+re-centred once; it is found when that move is at most 0.1 spacings, its tip is like
 at rest, it lies within the gate (below half the spacing) of the prediction and no neighbour sits
 on the same tip (`Refiner._one_pin_per_tip`), nor any pin expected nearer to it (`pins._identity`).
 Only pins whose predictions can be trusted are searched for (`Refiner._trusted`).
