@@ -11,7 +11,7 @@ changes nothing but when it runs.
 Under pytest-xdist the simulated station's collections tap in the worker's own process when the
 workers already use every core (``TACTIP_SIM_WORKERS``, `_free_cpus_per_worker`): a pool of spawned
 processes per collection would only import the package again (~2 s of CPU each) and compete with the
-other workers. test_procedures.py still collects with a pool, and checks it gives the same taps.
+other workers. test_cli_station.py still collects with a pool, and checks it stores the same taps.
 """
 
 import os

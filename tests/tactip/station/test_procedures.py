@@ -57,20 +57,6 @@ def test_collecting_needs_a_calibration(tmp_path):
     assert not (tmp_path / "datasets").exists()
 
 
-def test_a_collection_on_a_process_pool_stores_the_taps_of_one_taken_here(sim_station, tmp_path):
-    """The simulated station's pool (``workers=2``, spawned processes) and this process tap alike."""
-    table = small_station_table(tmp_path, gaps=("g02", "g10"), depth_step=1.1, repeats=1,
-                                sensor={"calibration": str(sim_station.root / "calibration.h5")})
-    config = parse_station_config(table, base_dir=tmp_path)
-    pooled = collect_station(config, tmp_path / "pooled", workers=2, progress=False, log=lambda _: None)
-    here = collect_station(config, tmp_path / "here", workers=1, progress=False, log=lambda _: None)
-    for name in ("train", "test"):
-        a, b = load_dataset(pooled[name]), load_dataset(here[name])
-        assert len(a.taps) == 2 * 6
-        assert np.array_equal(a.taps, b.taps) and np.array_equal(a.location, b.location)
-        assert np.array_equal(a.identity, b.identity)
-
-
 @pytest.mark.parametrize("value, workers", [(None, None), ("", None), ("1", 1), (" 3 ", 3)])
 def test_the_default_worker_count_is_the_cpus_or_the_environments(monkeypatch, value, workers):
     monkeypatch.delenv("TACTIP_SIM_WORKERS", raising=False)
