@@ -54,6 +54,20 @@ def _median_response_uint8(image: np.ndarray, clipped: np.ndarray) -> np.float32
     return (lower + upper) / np.float32(2.0)
 
 
+def median_uint8(values: np.ndarray) -> float:
+    """``np.median`` of uint8 `values` (any shape), bit for bit, from their histogram (no sort); NaN when empty.
+
+    >>> median_uint8(np.array([3, 1, 200, 4], np.uint8)), median_uint8(np.array([7], np.uint8))
+    (3.5, 7.0)
+    """
+    counts = np.cumsum(np.bincount(values.ravel(), minlength=256))
+    n = int(counts[-1])
+    if n == 0:
+        return float("nan")
+    upper = float(np.searchsorted(counts, n // 2 + 1))   # the value at sorted index n // 2
+    return upper if n % 2 else 0.5 * (float(np.searchsorted(counts, n // 2)) + upper)
+
+
 def _learn_mean_square(mean_sq: np.ndarray, seen: np.ndarray, index, value: np.ndarray, candidate: np.ndarray) -> None:
     """Update running mean squares in place: ``mean_sq[index]`` (px^2) with ``value`` where ``candidate``.
 
