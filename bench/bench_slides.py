@@ -35,7 +35,11 @@ radial-led-120 16/82/71/147/138/94 -> 54/50/18/38/16/38 (548 -> 214), small-pad-
 14.32 -> 15.13; end>1 0 everywhere, old and new. Then every missing pin looked for at rest on a pad back
 at rest (not retired ones in turns), seeds 0-1: lost per frame radial-led-120 4.85/3.96 -> 4.56/3.72,
 small-pad-100 5.76/6.07 -> 5.31/5.44, tactip-331 14.97/15.09 -> 13.50/13.47 (old 5.37/4.40, 6.66/6.54,
-13.97/14.52); apart 54/50, 72/63, 1268/1336.
+13.97/14.52); apart 54/50, 72/63, 1268/1336. Seeds 2-5 on the final code, quiet machine (load < 1), old
+(b757c50) -> new: apart radial-led-120 71/147/138/94 -> 18/38/16/38, small-pad-100 103/61/126/131 ->
+99/61/66/70, tactip-331 1973/1906/1937/1641 -> 1299/1268/1270/1135; lost per frame 4.01-5.40 ->
+3.72-4.48, 6.36-6.85 -> 5.05-5.41, 14.11-14.60 -> 13.16-13.76; ms/frame alike (3.55-3.91 -> 3.56-4.29,
+3.03-3.54 -> 2.82-3.18, 2.03-2.60 -> 1.97-2.62); pin-frames > 1 px on small-pad-100 368-432 -> 354-484.
 
 The skin options (opt-in renders, `SyntheticTacTip.sequence`):
 
