@@ -43,15 +43,8 @@ def _median_response_uint8(image: np.ndarray, clipped: np.ndarray) -> np.float32
     histogram of the integer responses (4 x cheaper on a 640 x 480 px frame than sorting them)."""
     response = np.abs(cv2.filter2D(image, cv2.CV_16S, _LAPLACE_DIFFERENCE)[1:-1, 1:-1])   # exact integers
     response[clipped != 0] = _MAX_RESPONSE + 1   # counted in a bin past the largest, then dropped
-    counts = np.cumsum(np.bincount(response.ravel(), minlength=_MAX_RESPONSE + 2)[:_MAX_RESPONSE + 1])
-    n = int(counts[-1])
-    if n == 0:
-        return np.float32(0.0)
-    upper = np.float32(np.searchsorted(counts, n // 2 + 1))   # the value at sorted index n // 2
-    if n % 2:
-        return upper
-    lower = np.float32(np.searchsorted(counts, n // 2))   # ... and at n // 2 - 1: their mean, as np.median
-    return (lower + upper) / np.float32(2.0)
+    n, lower, upper = _middle_values(np.bincount(response.ravel(), minlength=_MAX_RESPONSE + 2)[:_MAX_RESPONSE + 1])
+    return (np.float32(lower) + np.float32(upper)) / np.float32(2.0) if n else np.float32(0.0)
 
 
 def median_uint8(values: np.ndarray) -> float:
@@ -60,12 +53,18 @@ def median_uint8(values: np.ndarray) -> float:
     >>> median_uint8(np.array([3, 1, 200, 4], np.uint8)), median_uint8(np.array([7], np.uint8))
     (3.5, 7.0)
     """
-    counts = np.cumsum(np.bincount(values.ravel(), minlength=256))
+    n, lower, upper = _middle_values(np.bincount(values.ravel(), minlength=256))
+    return 0.5 * (lower + upper) if n else float("nan")
+
+
+def _middle_values(histogram: np.ndarray) -> tuple[int, int, int]:
+    """(n, the values at sorted indices (n - 1) // 2 and n // 2) of n >= 0 integers given by their
+    `histogram` (counts of 0, 1, 2, ...): a median is their mean (equal when n is odd; zeros when n = 0)."""
+    counts = np.cumsum(histogram)
     n = int(counts[-1])
     if n == 0:
-        return float("nan")
-    upper = float(np.searchsorted(counts, n // 2 + 1))   # the value at sorted index n // 2
-    return upper if n % 2 else 0.5 * (float(np.searchsorted(counts, n // 2)) + upper)
+        return 0, 0, 0
+    return n, int(np.searchsorted(counts, (n - 1) // 2 + 1)), int(np.searchsorted(counts, n // 2 + 1))
 
 
 def _learn_mean_square(mean_sq: np.ndarray, seen: np.ndarray, index, value: np.ndarray, candidate: np.ndarray) -> None:

@@ -86,7 +86,7 @@ class _Prediction:
         return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
 
     def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
-                 predicted: np.ndarray | None = None) -> np.ndarray:
+                 predicted: np.ndarray) -> np.ndarray:
         """Whether pins `which` may be searched for at their predictions (`_predict`): (L,) bool.
 
         Where most of a pin's neighbours are placed (`_TRUSTED_SHARE` of them), its prediction
@@ -96,7 +96,7 @@ class _Prediction:
         few on one side of the squeezed skin ahead of a slide (its displacement changes by most of a
         spacing per spacing there) a prediction lies a spacing off, on another pin's tip (issue 20:
         tactip-331 slides, 2 or 3 of 6 neighbours placed, predictions 10-25 px off at a 17.7 px spacing).
-        `predicted` (L, 2), px: the pins' predictions from `positions`, when known.
+        `predicted` (L, 2), px: the pins' predictions from `positions` (`_predict`; every caller has them).
         """
         index = self._neighbour_index[which]
         placed = np.isfinite(positions[index, 0])
@@ -104,8 +104,7 @@ class _Prediction:
         trusted = count >= _TRUSTED_SHARE * index.shape[1]
         few = np.flatnonzero(~trusted & (count >= 2) & ~(placed & ~self.still[index]).any(axis=1))
         if few.size:
-            guess = self._predict(positions, which[few], last_seen) if predicted is None else predicted[few]
-            moved = _squared_norm(guess - last_seen[which[few]])
+            moved = _squared_norm(predicted[few] - last_seen[which[few]])
             trusted[few] = moved <= self.gate_px ** 2
         return trusted
 
