@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -195,8 +195,7 @@ def _creep(contacts, events, strokes, residual: float, decay: float) -> list:
             frames = np.arange(1, len(contacts) - event.stop_frame + 1)
             left[event.stop_frame:] += (residual * stroke.distance_mm * np.array([math.cos(angle), math.sin(angle)])
                                         * decay ** frames[:, None])
-    return [Contact(c.indentation_mm, c.gap_width_mm, c.gap_offset_mm, c.gap_angle_deg, c.slide_x_mm, c.slide_y_mm,
-                    float(dx), float(dy), c.slide_decay_mm) if dx or dy else c
+    return [replace(c, shear_x_mm=float(dx), shear_y_mm=float(dy)) if dx or dy else c
             for c, (dx, dy) in zip(contacts, left)]
 
 
