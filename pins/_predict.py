@@ -108,6 +108,25 @@ class _Prediction:
             trusted[few] = moved <= self.gate_px ** 2
         return trusted
 
+    def carried_velocity(self, velocity: np.ndarray, still: np.ndarray) -> np.ndarray:
+        """Each pin's step to carry into the next frame's guess, px (N, 2), from its last step `velocity` (N, 2), px.
+
+        A step within the settling bound (`still`, (N,) bool) is no motion of the pin's own (a faint
+        tip's jitter): zero, unless its neighbours moved (the median of their steps beyond that bound),
+        then theirs. A window that lags its tip in the skin squeezed ahead of a slide, where tips almost
+        touch, sits between its tip and the neighbour's and steps by a few tenths of a px while its
+        neighbours step by px (issue 20: tactip-331, ``min_area=0.5``, pins 6 px behind their tips after
+        5 frames of such steps): from the neighbours' step its window starts on its own tip again.
+        """
+        which = np.flatnonzero(still)
+        if which.size == velocity.shape[0] - np.count_nonzero(np.isnan(velocity[:, 0])):
+            velocity[which] = 0.0  # (every placed pin still: a still pad, nothing to carry)
+            return velocity
+        around = self.neighbour_median(velocity, which)
+        moving = _squared_norm(around) > self._settled_px ** 2  # (NaN compares False)
+        velocity[which] = np.where(moving[:, None], around, 0.0)
+        return velocity
+
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.
 

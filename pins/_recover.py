@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 
 from .detect import _detect
 from .disc import SensorDisc
+from ._identity import keep_own_tips
 from ._tipfit import _MARGIN_PX, _Windows, _centre_step
 from ._window import _squared_norm
 from .errors import ShapeError
@@ -203,7 +204,14 @@ class _Recovery:
         positions = positions.copy()
         which, fitted = which[moved], fitted[moved] + self.origin
         positions[which] = fitted
-        self._one_pin_per_tip(positions, which, _squared_norm(fitted - predicted[shows][moved]))
+        start = predicted[shows][moved]
+        self._one_pin_per_tip(positions, which, _squared_norm(fitted - start))
+        # ... nor any pin expected nearer to it (`pins._identity`; a missing pin where its neighbours put it):
+        # a faint tip fitted on a slide's squeezed skin may be its lost neighbour's (issue 20).
+        missing = np.flatnonzero(np.isnan(positions[:, 0]))
+        expected = positions.copy()
+        expected[missing] = self._predict_from_neighbours(positions, missing, last_seen)
+        keep_own_tips(positions, which, start, expected, self._identity_index)
         return positions
 
     def _detect_near(self, grey: np.ndarray, points: np.ndarray) -> np.ndarray:

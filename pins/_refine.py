@@ -434,7 +434,7 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         distance `error`, px^2) yields; a pin placed otherwise (not in `found`) never yields to a
         found one; ties: both yield.
         """
-        neighbours = self._window_neighbours[:, found].T  # (F, k)
+        neighbours = self._identity_index[found]  # (F, m)
         gap = positions[neighbours] - positions[found][:, None, :]
         near = _squared_norm(gap) < (_SAME_TIP_FRACTION * self.spacing_px) ** 2
         if near.any():

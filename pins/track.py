@@ -396,7 +396,7 @@ class PinTracker:
         if self.refine:
             # (Still for `Refiner._trusted`: moved by no more than a window settles on its guess.)
             self._refiner.still = np.einsum("ij,ij->i", velocity, velocity) <= self._refiner._guess_px ** 2
-            velocity[self._refiner.observe_still(velocity)] = 0.0
+            velocity = self._refiner.carried_velocity(velocity, self._refiner.observe_still(velocity))
             self._refiner.remember(positions)  # (where lost pins' neighbours were: `pins._predict`)
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
