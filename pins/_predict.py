@@ -118,13 +118,17 @@ class _Prediction:
         neighbours step by px (issue 20: tactip-331, ``min_area=0.5``, pins 6 px behind their tips after
         5 frames of such steps): from the neighbours' step its window starts on its own tip again.
         """
+        moved = ~still & np.isfinite(velocity[:, 0])
+        if not moved.any():
+            velocity[still] = 0.0
+            return velocity  # (a still pad: nothing to carry)
+        # Only still pins with a neighbour that moved (a gather of bools: the medians are the cost).
         which = np.flatnonzero(still)
-        if which.size == velocity.shape[0] - np.count_nonzero(np.isnan(velocity[:, 0])):
-            velocity[which] = 0.0  # (every placed pin still: a still pad, nothing to carry)
-            return velocity
-        around = self.neighbour_median(velocity, which)
+        which = which[moved[self._neighbour_index[which]].any(axis=1)]
+        around = self.neighbour_median(velocity, which)  # (of the steps as they are: still ones too)
+        velocity[still] = 0.0
         moving = _squared_norm(around) > self._settled_px ** 2  # (NaN compares False)
-        velocity[which] = np.where(moving[:, None], around, 0.0)
+        velocity[which[moving]] = around[moving]
         return velocity
 
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:

@@ -430,9 +430,10 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.
 
-        Two pins on one tip are neighbours at rest: the one farther from its prediction (squared
-        distance `error`, px^2) yields; a pin placed otherwise (not in `found`) never yields to a
-        found one; ties: both yield.
+        Two pins on one tip are among each other's nearest `IDENTITY_NEIGHBOURS` at rest (not only the
+        6 nearest: on radial layouts a followed pin slid onto the tip of a pin a ring away, 1.5 px from
+        it, issue 20): the one farther from its prediction (squared distance `error`, px^2) yields; a pin
+        placed otherwise (not in `found`) never yields to a found one; ties: both yield.
         """
         neighbours = self._identity_index[found]  # (F, m)
         gap = positions[neighbours] - positions[found][:, None, :]
