@@ -54,6 +54,17 @@ The skin options (opt-in renders, `SyntheticTacTip.sequence`):
   49/33/63 -> 28/12/41, tactip-331 72/70/45 -> 53/44/99; lost per frame 4.5/4.1/3.6 -> 3.3/3.1/2.5,
   6.1/5.9/6.2 -> 4.7/5.0/5.0, 3.1/2.8/2.9 -> 2.0/2.3/2.1.
 
+Session of issue 20's "slides3" (2-core VM at load ~15-20; old = main e3e7b89, new = a still pin among
+moving neighbours carries their step into its guess, `Refiner.carried_velocity`; one pin per tip over
+the 36 identity neighbours; fitted tips kept only where no pin is expected nearer), seeds 0-5, apart:
+model skin radial-led-120 54/50/18/38/16/38 -> 18/44/20/33/39/22 (214 -> 176), small-pad-100
+72/63/99/61/66/70 -> 57/32/110/46/65/87 (431 -> 397), tactip-331 1135-1336 -> 1127-1294 (7576 -> 7140);
+lost per frame 4.18 -> 4.10, 5.30 -> 5.37, 13.51 -> 13.56. Realistic skin (``--min-area 0.5``):
+radial-led-120 61/12/5/10/5/18 -> 18/10/2/15/2/28 (111 -> 75), small-pad-100 28/12/41/43/20/5 ->
+51/29/32/31/29/4 (149 -> 176: worse), tactip-331 53/44/99/47/61/28 -> 9/28/101/16/26/5 (332 -> 185);
+lost per frame 3.06 -> 3.05, 4.75 -> 4.77, 2.04 -> 1.73; small-pad-100 pin-frames > 1 px 2511 -> 2446
+(model), 926 -> 939 (realistic).
+
 Run: .venv/bin/python bench/bench_slides.py [--presets radial-led-120 tactip-331 small-pad-100]
      [--seeds 0 1 2 3 4 5] [--slides 8] [--pitches 3] [--residual R --creep-s S --final-rest-s S]
      [--min-area model 0.5]  (one report per skin: the model's squeeze and a realistic one, both by default)

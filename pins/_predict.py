@@ -21,6 +21,10 @@ gradient puts it, not where its offset from its neighbours a frame ago does (car
 20 frames/s tap put 22 pin-frames > 1 px off against 4, seed 0).
 
 A prediction is searched at only where it can be trusted (`_trusted`).
+
+Followed pins' guesses: a step within the settling bound is a still pin's jitter, not carried, unless
+its neighbours moved (`carried_velocity`): in the skin squeezed ahead of a slide a window sitting
+between two touching tips steps by a few tenths of a px while its tip moves by px.
 """
 
 from __future__ import annotations
