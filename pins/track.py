@@ -28,7 +28,7 @@ A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; n
   are detected (`pins.detect`, a few ms), at most once in `detect_every` frames: implausible pins
   take the blob they landed on, and free blobs are assigned to lost pins one-to-one (Hungarian
   method) within the gate around their predictions;
-- the surround: pixels of the crop beyond the sensor disc (less its blurred rim, `_DISC_EDGE_PX`)
+- the surround: pixels of the crop beyond the sensor disc (less its blurred rim; `pins._surround`)
   that a pin's window can reach take the membrane's grey level, so a bright surround next to the
   pins at the rim of a small pad neither pulls their centroids nor makes them look unlike at rest;
 - blank frames: a frame where fewer than a tenth of the expected pins are found (LEDs off, a
@@ -52,21 +52,19 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._identity import kept_on_own_tips
-from ._noise import median_uint8
 from ._recover import _as_points, match_to_blobs
 from ._refine import Refiner
+from ._surround import surround_pixels
 from .detect import DetectionParams, _detect
 from .disc import SensorDisc, as_grey, find_sensor_disc
 from .errors import PinsError, ShapeError
+from .lattice import find_pin_field
 from .lk import _RETRY_FRACTION, LKParams, _track, track_pins
 
 __all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
 
 # A frame in which fewer than this fraction of the expected (not retired) pins are found is blank.
 _BLANK_FRACTION = 0.1
-# The sensor disc's rim is blurred over this many px inside its fitted radius: the surround's light
-# reaches that far (the crop's surround is replaced up to here, where pins' windows reach it).
-_DISC_EDGE_PX = 2.0
 
 
 class PinTracker:
@@ -105,6 +103,10 @@ class PinTracker:
         `start`) and one pyramid level.
     detection : DetectionParams, optional
         Blob detection used for recovery (and for the pins at start when `start` is not given them).
+        When not given and `start` is not given the pins, the pins, their polarity (bright pins or
+        dark markers), the detection parameters and the disc are found in the rest frame by
+        `pins.find_pin_field`, as `tactip detect` and `tactip replay` do; when `start` is given the
+        pins, the defaults (`DetectionParams()`, bright pins).
     refine : bool
         Move tracked pins onto their tips' windowed centroids and search for and recover lost pins
         (default). Without it the tracker is plain LK with checks, equal to `track_pins` (but for
@@ -166,6 +168,7 @@ class PinTracker:
                 raise ValueError(f"{name} must be a positive integer, got {value}")
         self.lk = lk
         self._auto_lk = lk is None
+        self._auto_detection = detection is None
         self.detection = detection or DetectionParams()
         self.refine = bool(refine)
         self.gate_fraction = float(gate_fraction)
@@ -235,7 +238,8 @@ class PinTracker:
         frame : (H, W) or (H, W, 3) ndarray of uint8
             The first (rest) frame.
         pins : (N, 2) ndarray, optional
-            Pin positions in `frame`, px; detected in `frame` when not given.
+            Pin positions in `frame`, px; detected in `frame` when not given (with `detection`, or
+            by `pins.find_pin_field` when the tracker was made without it).
 
         Returns
         -------
@@ -248,12 +252,16 @@ class PinTracker:
         Raises
         ------
         NoSensorError
-            The frame shows no sensor disc (when the disc is needed and not given).
+            The frame shows no sensor disc (when the disc is needed and not given), or, searched by
+            `pins.find_pin_field`, no pin lattice of a sensor.
         PinsError
             Fewer than two pins to track, or (with refinement) a blank rest frame: fewer than a tenth
             of the pins show a tip where they are given.
         """
         grey = as_grey(frame)
+        if pins is None and self._auto_detection:
+            field = find_pin_field(grey, disc=self.disc)     # polarity, parameters and disc from the frame
+            self.detection, self.disc, pins = field.params, field.disc, field.centres
         if self.disc is None and (self.refine or pins is None):
             self.disc = find_sensor_disc(grey, dark_pins=self.detection.dark_pins)
         if pins is None:
@@ -269,7 +277,8 @@ class PinTracker:
         self._previous = self._cropped(grey)
         self._surround = None
         if self.refine and self.disc is not None:
-            self._surround = self._surround_pixels(self._previous, pins)
+            self._surround = surround_pixels(self._previous, pins, self.disc, self._origin, self.spacing_px,
+                                             self.detection.dark_pins)
         if self.refine:
             refiner = Refiner(self._bright(self._previous), pins, self._origin,
                               spacing_px=self.spacing_px, gate_px=self.gate_px, neighbours=self.neighbours,
@@ -471,30 +480,3 @@ class PinTracker:
         if self._surround is not None:
             bright.put(*self._surround)
         return bright
-
-    def _surround_pixels(self, rest_crop: np.ndarray, pins: np.ndarray):
-        """(flat indices, grey level): the rest crop's pixels beyond the disc (less its rim) within a pin's reach.
-
-        A pin's reach: a window (half the spacing) plus a spacing of motion. The level is the
-        median inside the disc (the membrane's, bright-pin polarity). None when no pin reaches
-        beyond the disc.
-        """
-        disc, (x0, y0) = self.disc, self._origin
-        reach = 1.5 * self.spacing_px + 2.0
-        outermost = np.hypot(*(pins - (disc.cx, disc.cy)).T).max() + reach   # px from the centre
-        if outermost <= disc.radius_px - _DISC_EDGE_PX:
-            return None  # no pin reaches the rim (most pads): no need to look at every pixel
-        height, width = rest_crop.shape[:2]  # distances: a row against a column, broadcast (no pixel grids)
-        from_centre = np.hypot(np.arange(width) + x0 - disc.cx, (np.arange(height) + y0 - disc.cy)[:, None])
-        beyond = from_centre > disc.radius_px - _DISC_EDGE_PX
-        if not beyond.any() or beyond.all():
-            return None
-        # Only pixels no farther out than the outermost pin's reach can be in reach (triangle inequality).
-        candidates = np.flatnonzero(beyond & (from_centre <= outermost + 1.0))
-        rows, columns = np.divmod(candidates, width)
-        near = cKDTree(pins - self._origin).query(np.column_stack([columns, rows]),
-                                                   distance_upper_bound=reach)[0] <= reach
-        if not near.any():
-            return None
-        bright = cv2.bitwise_not(rest_crop) if self.detection.dark_pins else rest_crop
-        return candidates[near], np.uint8(median_uint8(bright[~beyond]))

@@ -387,3 +387,22 @@ def test_blob_detection_looks_only_around_the_missing_pins_that_are_not_retired(
     assert tracker.lost[to_truth[inner]].all() and not tracker.retired[to_truth[inner]].any()
     disc_area = np.pi * s.disc[2] ** 2
     assert len(sizes) == 1 and sizes[0] < 0.25 * disc_area  # around the inner pin alone
+
+
+@pytest.mark.parametrize("name", ["small-pad-100", "dark-331", "white-dark-331", "tactip-331"])
+def test_a_tracker_made_without_parameters_finds_its_pins_and_polarity_in_the_rest_frame(name):
+    """``PinTracker().start(rest)``: the pins, polarity and disc come from the rest frame as replay finds
+    them (the default detection alone found 3 of small-pad-100's pins and no disc on dark-331 or
+    white-dark-331), and the tap is tracked on them."""
+    s, frames = _preset_tap(name)
+    tracker = PinTracker()
+    start = tracker.start(frames[0].image)
+    truth = frames[0].centres[frames[0].visible]
+    distance, identity = cKDTree(truth).query(start)
+    assert len(start) == len(truth) and distance.max() < 0.5 and len(set(identity)) == len(truth)
+    assert tracker.detection.dark_pins == s.dark_pins
+    for f in frames[1:]:
+        positions = tracker.update(f.image)
+        found = np.isfinite(positions[:, 0]) & f.visible[frames[0].visible][identity]
+        assert np.count_nonzero(found) >= 0.95 * np.count_nonzero(f.visible)
+        assert np.abs(positions[found] - f.centres[frames[0].visible][identity][found]).max() < 1.0
