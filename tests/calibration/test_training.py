@@ -74,6 +74,28 @@ def test_the_holdout_folds_leave_every_class_in_every_fold(files):
     assert np.array_equal(fold, holdout_folds(train, n_locations=3, folds=4))                # deterministic
 
 
+@pytest.mark.parametrize("taps_per_class", [2, 3, 4, 5])
+@pytest.mark.parametrize("n_locations", [3, 6])
+def test_every_holdout_fold_holds_out_as_many_taps_whatever_the_repeats(taps_per_class, n_locations):
+    # With two taps of a class, one is held out; dealt afresh in each class, every such tap fell in fold 0
+    # (44 of the small station's 48). One deal over every class spreads them over the folds.
+    train = gap_dataset(seed=3, taps_per_class=taps_per_class, **GRID)
+    fold = holdout_folds(train, n_locations=n_locations, folds=4)
+    sizes = np.bincount(fold[fold >= 0], minlength=4)
+    assert len(sizes) == 4 and sizes.max() - sizes.min() <= 1, sizes
+    model_class = fit_model(train, n_locations=n_locations, bins=20).tap_class(train)
+    for c in np.unique(model_class):
+        inside = model_class == c
+        off_extremes = inside & (train.location > 0) & (train.location < 5)
+        if off_extremes.any():                              # extremes stay in where the class has other taps
+            assert (fold[inside & ~off_extremes] == -1).all()
+        for k in range(4):
+            assert (inside & (fold != k)).any()             # one tap of every class stays in every fold's fit
+        held = fold[inside & (fold >= 0)]
+        assert len(held) >= 1 and len(np.unique(held)) == min(len(held), 4)   # a class's taps in different folds
+    assert np.array_equal(fold, holdout_folds(train, n_locations=n_locations, folds=4))   # deterministic
+
+
 def test_the_out_of_fold_likelihoods_come_from_models_that_never_saw_the_tap(files):
     from perception import train_model
 
