@@ -402,9 +402,9 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     beta 11, 21, 709, 70), so the g1 fitted on their pooled rows fits none of them exactly. Against
     main before the folds were balanced (fold 0 held out 44 of 48 taps, so g1 was in effect fitted
     on the kept model's own taps) the Gaussian's one-tap ECE was 0.032 / 0.061 / 0.021 / 0.043 /
-    0.035, the torch's 0.082 / 0.063 / 0.091 / 0.029: worse on average (torch 0.066 -> 0.096 mean). Fitting g1 on the kept model's own
-    fold instead (12 taps) did not help (Gaussian 0.084 / 0.084 / 0.081 / 0.070 / 0.076 with fold 0
-    kept; per-fold Brier-best g1 0.01-0.29 on one seed); nor did one tempering fitted on every
+    0.035 (mean 0.038 against 0.048 now), the torch's 0.082 / 0.063 / 0.091 / 0.029 (mean 0.066
+    against 0.096 now, seeds 0-3): worse on average. Fitting g1 on the kept model's own fold instead
+    (12 taps) did not help (Gaussian 0.084 / 0.084 / 0.081 / 0.070 / 0.076 with fold 0 kept; per-fold Brier-best g1 0.01-0.29 on one seed); nor did one tempering fitted on every
     fold's untempered scores (the Gaussian's untempered scale changes from fit to fit too: 0.150 on
     seed 0, refit).
 
@@ -436,7 +436,8 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
                                                   progress=progress, **fit_options)
     fold = holdout_folds(train, n_locations, folds)
     sizes = np.bincount(fold[fold >= 0], minlength=folds)
-    log(f"{len(environment.test)} of the {len(train)} training taps held out ({'/'.join(map(str, sizes))} in the folds)")
+    log(f"{len(environment.test)} of the {len(train)} training taps held out "
+        f"({'/'.join(map(str, sizes))} in the folds)")
     chosen, _, line = choose_fixation(model, None, environment=environment, target_accuracy=target_accuracy,
                                       tolerance=tolerance, max_taps=max_taps, runs=runs, seed=seed, log=log,
                                       fall_back=fall_back, progress=progress)
