@@ -405,8 +405,8 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     0.035 (mean 0.038 against 0.048 now), the torch's 0.082 / 0.063 / 0.091 / 0.029 (mean 0.066
     against 0.096 now, seeds 0-3): worse on average. Fitting g1 on the kept model's own fold instead
     (12 taps) did not help (Gaussian 0.084 / 0.084 / 0.081 / 0.070 / 0.076 with fold 0 kept; per-fold
-    Brier-best g1 0.01-0.29 on one seed); nor did one tempering fitted on every fold's untempered scores (the Gaussian's untempered scale changes from fit to fit too: 0.150 on
-    seed 0, refit).
+    Brier-best g1 0.01-0.29 on one seed); nor did one tempering fitted on every fold's untempered
+    scores (the Gaussian's untempered scale changes from fit to fit too: 0.150 on seed 0, refit).
 
     Parameters
     ----------
