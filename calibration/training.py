@@ -204,15 +204,19 @@ def holdout_folds(dataset, n_locations: int = 11, folds: int = HOLDOUT_FOLDS) ->
     """The fold each training tap is held out in, for choosing settings on taps a model was not fitted on.
 
     The classes are the model's (`perception.likelihood.fit_class_grid`: ``n_locations`` equal location
-    classes x the identities). A tap at the collection's shallowest or deepest location is never held
-    out (-1), so that every fold's model has the very classes of the whole set; and one tap of each
-    class always stays in. The other taps (the held-out candidates, in class, location then collection
-    order) are dealt to folds 0, 1, ..., ``folds`` - 1 in turn, one deal running on from class to class:
-    so every fold holds out the same number of taps to within one, whatever the taps per class, and a
-    class's candidates go to different folds (when it has no more than ``folds``). (Dealt afresh within
-    each class, a class of two taps, which holds out one, would always hold it out in fold 0: with two
-    repeats 44 of the small station's 48 held-out taps fell in fold 0.) Deterministic, so a rerun
-    chooses the same settings.
+    classes x the identities). A tap at the collection's shallowest or deepest location stays in (-1)
+    whenever its class has other taps, so that every fold's model spans the same locations and has the
+    very classes of the whole set; a class made only of such taps (all at one extreme: the shallowest
+    class of a station whose depths fall one per class) holds out one of them, since every class needs
+    held-out taps to run in, and keeps the others. One tap of each class always stays in. The other taps
+    (the held-out candidates, by identity, location class, location then collection order) are dealt to
+    folds 0, 1, ..., ``folds`` - 1 in turn, one deal running on from class to class: so every fold holds
+    out the same number of taps to within one, whatever the taps per class, and a class's candidates go
+    to different folds (when it has no more than ``folds``). (Dealt afresh within each class, a class of
+    two taps, which holds out one, would always hold it out in fold 0: with two repeats 44 of the small
+    station's 48 held-out taps fell in fold 0. Dealt location-major, with as many identities as folds,
+    fold k held out identity k's taps alone, so each fold's model missed the repeats of one identity and
+    was judged on that identity only.) Deterministic, so a rerun chooses the same settings.
 
     Parameters
     ----------
@@ -237,13 +241,15 @@ def holdout_folds(dataset, n_locations: int = 11, folds: int = HOLDOUT_FOLDS) ->
     grid = fit_class_grid(dataset, n_locations=n_locations)
     tap_class = grid.tap_class(dataset)
     extreme = (dataset.location == dataset.location.min()) | (dataset.location == dataset.location.max())
-    order = np.lexsort((np.arange(len(dataset)), dataset.location, extreme, tap_class))   # by class; extremes last
-    cls = tap_class[order]
+    # Dealt identity-major (every location class of one identity, then the next): each fold gets every identity.
+    deal_class = (tap_class % grid.n_identities) * grid.n_locations + tap_class // grid.n_identities
+    order = np.lexsort((np.arange(len(dataset)), dataset.location, extreme, deal_class))   # by class; extremes last
+    cls = deal_class[order]
     starts = np.flatnonzero(np.r_[True, cls[1:] != cls[:-1]])
     counts = np.diff(np.r_[starts, len(order)])
     if (counts < 2).any():
         c = int(cls[starts[np.argmax(counts < 2)]])
-        l, i = divmod(c, grid.n_identities)
+        i, l = divmod(c, grid.n_locations)
         raise CalibrationError(f"the class at location {grid.location_centres[l]:g} {dataset.location_unit}, "
                                f"identity {grid.identities[i]:g} {dataset.identity_unit} has a single training tap: "
                                f"nothing to hold out for choosing the fixation and threshold (collect repeats, or "

@@ -96,6 +96,34 @@ def test_every_holdout_fold_holds_out_as_many_taps_whatever_the_repeats(taps_per
     assert np.array_equal(fold, holdout_folds(train, n_locations=n_locations, folds=4))   # deterministic
 
 
+@pytest.mark.parametrize("widths", [2, 4, 8])
+def test_every_holdout_fold_holds_out_taps_of_every_identity(widths):
+    # Two repeats at 12 depths in 11 location classes (the small station's shape). Dealt location-major, class
+    # (l, i) held out its repeat in fold (l * widths + i) % 4: with 4 widths fold k held out width k alone, so
+    # each fold's model missed one width's repeats and was judged on that width only.
+    train = gap_dataset(seed=3, taps_per_class=2, depths=12, widths=widths, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=11, folds=4)
+    for k in range(4):
+        held = train.identity[fold == k]
+        assert set(held) == set(train.identity), (k, sorted(set(held)))
+        counts = np.unique(held, return_counts=True)[1]
+        assert counts.max() - counts.min() <= 1, counts                 # and as many taps of each, to within one
+
+
+def test_a_class_of_extreme_taps_only_holds_out_one_and_keeps_the_rest():
+    # 12 depths in 11 classes: the shallowest class holds depth 0 mm alone (3 taps per width), the deepest 10 and
+    # 11 mm. Every class needs held-out taps, so the shallowest holds out one and keeps two in every fold's fit;
+    # the deepest class holds out every 10 mm tap and keeps every 11 mm tap in.
+    train = gap_dataset(seed=3, taps_per_class=3, depths=12, widths=3, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=11, folds=4)
+    for width in (1.0, 2.0, 3.0):
+        shallow = (train.location == 0) & (train.identity == width)
+        assert (fold[shallow] >= 0).sum() == 1
+        assert min((shallow & (fold != k)).sum() for k in range(4)) == 2
+        assert (fold[(train.location == 11) & (train.identity == width)] == -1).all()
+        assert (fold[(train.location == 10) & (train.identity == width)] >= 0).all()
+
+
 def test_the_out_of_fold_likelihoods_come_from_models_that_never_saw_the_tap(files):
     from perception import train_model
 
