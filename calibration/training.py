@@ -209,14 +209,17 @@ def holdout_folds(dataset, n_locations: int = 11, folds: int = HOLDOUT_FOLDS) ->
     very classes of the whole set; a class made only of such taps (all at one extreme: the shallowest
     class of a station whose depths fall one per class) holds out one of them, since every class needs
     held-out taps to run in, and keeps the others. One tap of each class always stays in. The other taps
-    (the held-out candidates, by identity, location class, location then collection order) are dealt to
-    folds 0, 1, ..., ``folds`` - 1 in turn, one deal running on from class to class: so every fold holds
-    out the same number of taps to within one, whatever the taps per class, and a class's candidates go
-    to different folds (when it has no more than ``folds``). (Dealt afresh within each class, a class of
+    (the held-out candidates, by identity, location class counted cyclically from the identity's index,
+    location then collection order) are dealt to folds 0, 1, ..., ``folds`` - 1 in turn, one deal
+    running on from class to class: so every fold holds out the same number of taps to within one,
+    whatever the taps per class, and a class's candidates go to different folds (when it has no more
+    than ``folds``). (Dealt afresh within each class, a class of
     two taps, which holds out one, would always hold it out in fold 0: with two repeats 44 of the small
     station's 48 held-out taps fell in fold 0. Dealt location-major, with as many identities as folds,
     fold k held out identity k's taps alone, so each fold's model missed the repeats of one identity and
-    was judged on that identity only.) Deterministic, so a rerun chooses the same settings.
+    was judged on that identity only; dealt identity-major, the identities at one location fell in one
+    fold. Starting each identity's locations one class further on, they fall in different folds.)
+    Deterministic, so a rerun chooses the same settings.
 
     Parameters
     ----------
@@ -241,15 +244,17 @@ def holdout_folds(dataset, n_locations: int = 11, folds: int = HOLDOUT_FOLDS) ->
     grid = fit_class_grid(dataset, n_locations=n_locations)
     tap_class = grid.tap_class(dataset)
     extreme = (dataset.location == dataset.location.min()) | (dataset.location == dataset.location.max())
-    # Dealt identity-major (every location class of one identity, then the next): each fold gets every identity.
-    deal_class = (tap_class % grid.n_identities) * grid.n_locations + tap_class // grid.n_identities
+    # Dealt identity-major, identity i's location classes from the i-th on (cyclically): each identity's
+    # candidates go to every fold in turn, and the identities of one location class to different folds.
+    location_class, identity = np.divmod(tap_class, grid.n_identities)
+    deal_class = identity * grid.n_locations + (location_class - identity) % grid.n_locations
     order = np.lexsort((np.arange(len(dataset)), dataset.location, extreme, deal_class))   # by class; extremes last
     cls = deal_class[order]
     starts = np.flatnonzero(np.r_[True, cls[1:] != cls[:-1]])
     counts = np.diff(np.r_[starts, len(order)])
     if (counts < 2).any():
-        c = int(cls[starts[np.argmax(counts < 2)]])
-        i, l = divmod(c, grid.n_locations)
+        i, l = divmod(int(cls[starts[np.argmax(counts < 2)]]), grid.n_locations)
+        l = (l + i) % grid.n_locations
         raise CalibrationError(f"the class at location {grid.location_centres[l]:g} {dataset.location_unit}, "
                                f"identity {grid.identities[i]:g} {dataset.identity_unit} has a single training tap: "
                                f"nothing to hold out for choosing the fixation and threshold (collect repeats, or "
