@@ -86,8 +86,9 @@ def test_the_torch_models_beliefs_are_calibrated_after_3_and_5_taps(torch_ece):
                                         "(calibration.fit_with_fixation). More members did not help (1-5 members of "
                                         "the same fits, g1 refitted: 0.09-0.12 on seed 1, 0.10-0.12 on seed 2). Those "
                                         "folds held out one gap each; dealt as a Latin square (2026-11-29) 0.052 / "
-                                        "0.065 on seeds 0-1 (main 0.082 / 0.063), the fold models' betas within 1.4x "
-                                        "(4.5 / 5.3 / 3.8 / 5.5 and 4.7 / 4.1 / 3.4 / 4.7). The 96 "
+                                        "0.065 / 0.163 on seeds 0-2 (main 0.082 / 0.063 / 0.091), though the fold "
+                                        "models' betas agree within 1.4-2x (seed 2: 5.7 / 4.6 / 9.3 / 5.0, g1 0.088). "
+                                        "The 96 "
                                         "test taps here measure a calibrated model at 0.07: this test can pass or fail "
                                         "by chance")
 def test_the_torch_models_beliefs_are_calibrated_after_1_tap(torch_ece):
