@@ -22,6 +22,18 @@ the 768 ECE taps 0.082 / 0.063 / 0.091 / 0.029 / 0.047 for seeds 0-4 (floor 0.02
 0.000 on the other three. The models of 4 repeats on the same ECE taps:
 0.026 / 0.066 / 0.047 after one tap (floor 0.02), 0.041 / 0.012 / 0.007 after 3, 0.054 / 0.014 / 0.001
 after 5 (2000 runs).
+
+With the held-out folds balanced (12 taps each) and the model refitted on every training tap
+(`calibration.fit_with_fixation`), on the same ECE taps, ``ece_1_all``: 0.054 / 0.117 / 0.113 / 0.098 for
+seeds 0-3 (fold 0's model kept instead: 0.099 / 0.127 / 0.069 / 0.044); the Gaussian 0.025 / 0.042 / 0.071 / 0.042 /
+0.062 for seeds 0-4 (main before: 0.032 / 0.061 / 0.021 / 0.043 / 0.035). Measured in one process per
+seed on the collections this script wrote, not by rerunning it (the machine was loaded, 13-28 on 2 cores).
+
+With the folds dealt as a Latin square (2026-11-29; before, fold k held out gap k alone), same collections and
+way of measuring: the Gaussian 0.031 / 0.022 / 0.080 / 0.019 / 0.016 for seeds 0-4 (mean 0.034; 0.000 after 3
+and 5 taps), test accuracy 0.925 / 0.965 / 0.962 / 1.00 / 0.99 in 1.32-1.42 taps (main, rerun alike: 0.032 /
+0.061 / 0.021 / 0.043 / 0.035, accuracy 0.99 / 0.961 / 0.938 / 0.952 / 0.962); the torch on seed 0 0.052 (0.067
+after one active tap, 0.000 after 3 and 5), accuracy 0.983 in 1.37 taps. Load 7-18 on 2 cores.
 """
 
 import argparse

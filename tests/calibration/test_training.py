@@ -74,6 +74,58 @@ def test_the_holdout_folds_leave_every_class_in_every_fold(files):
     assert np.array_equal(fold, holdout_folds(train, n_locations=3, folds=4))                # deterministic
 
 
+@pytest.mark.parametrize("taps_per_class", [2, 3, 4, 5])
+@pytest.mark.parametrize("n_locations", [3, 6])
+def test_every_holdout_fold_holds_out_as_many_taps_whatever_the_repeats(taps_per_class, n_locations):
+    # With two taps of a class, one is held out; dealt afresh in each class, every such tap fell in fold 0
+    # (44 of the small station's 48). One deal over every class spreads them over the folds.
+    train = gap_dataset(seed=3, taps_per_class=taps_per_class, **GRID)
+    fold = holdout_folds(train, n_locations=n_locations, folds=4)
+    sizes = np.bincount(fold[fold >= 0], minlength=4)
+    assert len(sizes) == 4 and sizes.max() - sizes.min() <= 1, sizes
+    model_class = fit_model(train, n_locations=n_locations, bins=20).tap_class(train)
+    for c in np.unique(model_class):
+        inside = model_class == c
+        off_extremes = inside & (train.location > 0) & (train.location < 5)
+        if off_extremes.any():                              # extremes stay in where the class has other taps
+            assert (fold[inside & ~off_extremes] == -1).all()
+        for k in range(4):
+            assert (inside & (fold != k)).any()             # one tap of every class stays in every fold's fit
+        held = fold[inside & (fold >= 0)]
+        assert len(held) >= 1 and len(np.unique(held)) == min(len(held), 4)   # a class's taps in different folds
+    assert np.array_equal(fold, holdout_folds(train, n_locations=n_locations, folds=4))   # deterministic
+
+
+@pytest.mark.parametrize("widths", [2, 4, 8])
+def test_every_holdout_fold_holds_out_taps_of_every_identity(widths):
+    # Two repeats at 12 depths in 11 location classes (the small station's shape). Dealt location-major, class
+    # (l, i) held out its repeat in fold (l * widths + i) % 4: with 4 widths fold k held out width k alone, so
+    # each fold's model missed one width's repeats and was judged on that width only.
+    train = gap_dataset(seed=3, taps_per_class=2, depths=12, widths=widths, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=11, folds=4)
+    for k in range(4):
+        held = train.identity[fold == k]
+        assert set(held) == set(train.identity), (k, sorted(set(held)))
+    # Dealt identity-major instead, the identities of one depth fell in one fold: they are in different folds.
+    for depth in range(1, 10):
+        at = (train.location == depth) & (fold >= 0)
+        assert len(np.unique(fold[at])) == min(at.sum(), 4), (depth, fold[at])
+
+
+def test_a_class_of_extreme_taps_only_holds_out_one_and_keeps_the_rest():
+    # 12 depths in 11 classes: the shallowest class holds depth 0 mm alone (3 taps per width), the deepest 10 and
+    # 11 mm. Every class needs held-out taps, so the shallowest holds out one and keeps two in every fold's fit;
+    # the deepest class holds out every 10 mm tap and keeps every 11 mm tap in.
+    train = gap_dataset(seed=3, taps_per_class=3, depths=12, widths=3, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=11, folds=4)
+    for width in (1.0, 2.0, 3.0):
+        shallow = (train.location == 0) & (train.identity == width)
+        assert (fold[shallow] >= 0).sum() == 1
+        assert min((shallow & (fold != k)).sum() for k in range(4)) == 2
+        assert (fold[(train.location == 11) & (train.identity == width)] == -1).all()
+        assert (fold[(train.location == 10) & (train.identity == width)] >= 0).all()
+
+
 def test_the_out_of_fold_likelihoods_come_from_models_that_never_saw_the_tap(files):
     from perception import train_model
 
@@ -98,8 +150,8 @@ def test_a_class_with_one_tap_leaves_nothing_to_hold_out(files):
 
 def test_the_station_model_is_chosen_without_the_test_collection(files):
     """prepare_station_model reads no test taps: its settings are chosen on training taps held out in folds,
-    scored by models fitted on the others, and fold 0's model is kept; the test collection only reports (a
-    test with other taps reports other figures of the same model)."""
+    scored by models fitted on the others, and given to a model fitted on every training tap; the test
+    collection only reports (a test with other taps reports other figures of the same model)."""
     from calibration import final_figures, prepare_station_model
     from perception import load_dataset, train_model
 
@@ -109,9 +161,8 @@ def test_the_station_model_is_chosen_without_the_test_collection(files):
                                   target_accuracy=0.9, tolerance=0.0, runs=300, log=lines.append)
     assert "held out in 4 folds" in lines[0]
     assert model.recommended["fixation_location"] > 2.5 and model.recommended["policy"] == "active"
-    fit = holdout_folds(train, n_locations=6) != 0
-    fitted = train_model(train.subset(np.flatnonzero(fit)), kind="gaussian", n_locations=6)   # all but fold 0
-    assert np.allclose(model.class_means, fitted.class_means)
+    assert np.allclose(model.class_means, train_model(train, kind="gaussian", n_locations=6).class_means)   # every tap
+    assert any("training taps held out (" in line for line in lines)
     assert np.array_equal(model.location_edges, train_model(train, kind="gaussian", n_locations=6).location_edges)
     assert load_model(root / "model.h5").recommended == model.recommended
     test = load_dataset(root / "test.h5")
@@ -121,6 +172,22 @@ def test_the_station_model_is_chosen_without_the_test_collection(files):
     unfair = final_figures(model, shuffled, runs=500)
     assert fair.accuracy > 0.8 > 0.5 > unfair.accuracy
     assert fair.threshold == model.recommended["decision_threshold"] and fair.runs == 500
+
+
+def test_the_model_refitted_on_every_tap_carries_the_settings_chosen_out_of_fold(files):
+    from calibration import fit_with_fixation
+    from perception import train_model
+
+    _, train = files
+    options = dict(kind="gaussian", n_locations=6, target_accuracy=0.9, runs=300, log=lambda _: None)
+    refit, kept = fit_with_fixation(train, **options), fit_with_fixation(train, refit=False, **options)
+    assert refit.recommended == kept.recommended and refit.tap_tempering == kept.tap_tempering
+    assert len(refit.tap_tempering) == 5
+    fold = holdout_folds(train, n_locations=6)
+    assert np.allclose(kept.class_means, train_model(train.subset(np.flatnonzero(fold != 0)), kind="gaussian",
+                                                     n_locations=6).class_means)     # fold 0's model
+    assert np.allclose(refit.class_means, train_model(train, kind="gaussian", n_locations=6).class_means)
+    assert int(refit.taps_per_class.sum()) == len(train) > int(kept.taps_per_class.sum())
 
 
 def test_a_missed_target_still_recommends_a_threshold_above_zero_on_calibrated_beliefs(files):
