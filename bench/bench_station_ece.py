@@ -34,6 +34,12 @@ way of measuring: the Gaussian 0.031 / 0.022 / 0.080 / 0.019 / 0.016 for seeds 0
 and 5 taps), test accuracy 0.925 / 0.965 / 0.962 / 1.00 / 0.99 in 1.32-1.42 taps (main, rerun alike: 0.032 /
 0.061 / 0.021 / 0.043 / 0.035, accuracy 0.99 / 0.961 / 0.938 / 0.952 / 0.962); the torch on seed 0 0.052 (0.067
 after one active tap, 0.000 after 3 and 5), accuracy 0.983 in 1.37 taps. Load 7-18 on 2 cores.
+
+With 12 location classes, one per depth (the suite's station since 2026-11-29; before, 11 classes put 5.0
+and 5.5 mm in one), Latin-square folds and the Gaussian's cross-validation in 4 folds, same collections
+and way of measuring: the Gaussian 0.024 / 0.051 / 0.024 / 0.019 / 0.026 for seeds 0-4 (mean 0.029;
+0.000 after 3 and 5 taps), test accuracy 0.945 / 0.943 / 1.00 / 0.965 / 0.966 in 1.27-1.35 taps. In
+two folds it had 0.27-0.29 (accuracy 0.70-0.75 in 1.0 taps). Load 14-17 on 2 cores.
 """
 
 import argparse

@@ -408,20 +408,17 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     off the full model, and settings carried over to a refit overshot; with balanced folds each
     fold's model has 84 of the 96 taps.)
 
-    Those figures are of folds dealt location-major, in which fold k held out gap k alone. Dealt as a
-    Latin square (`holdout_folds`: every fold holds out 3 taps of every gap, the gaps of one depth in
-    different folds), the Gaussian's one-tap ECE is 0.031 / 0.022 / 0.080 / 0.019 / 0.016 (mean 0.034;
-    main before the folds were balanced: 0.032 / 0.061 / 0.021 / 0.043 / 0.035, mean 0.038), 0.000
-    after 3 and 5 taps, test accuracy 0.925 / 0.965 / 0.962 / 1.00 / 0.99 in 1.32-1.42 taps (main 0.99 /
-    0.961 / 0.938 / 0.952 / 0.962 in 1.32-1.38); the torch's on seed 0 0.052 (main 0.082), accuracy 0.983
-    in 1.37 taps, its fold models' betas 4.5, 5.3, 3.8, 5.5 (refit 8.4). Dealt identity-major (every gap
-    of one depth in one fold) the Gaussian's was 0.020 / 0.024 / 0.032 / 0.013 / 0.024, but the torch on
-    seed 0 chose threshold 0.365 on one fold model's taps at the fixation: accuracy 0.78 in 1.09 taps.
-    The Gaussian's own tempering is still noise (fold models on seed 0: beta 192, 316, 10, 14; the refit
-    645): it splits 10-200x between the folds that hold out a 5.0 mm tap of the one location class
-    spanning two depths (12 depths in 11 classes), whose spread the shared covariance takes for noise,
-    and the others, at any fixed number of components; 8 internal folds or leave-one-out do not mend it
-    (12-73x); with 12 location classes (one depth each) the betas agree within 1.6-3.3x on 4 of 5 seeds.
+    Those figures are of folds dealt location-major, in which fold k held out gap k alone, and of 11
+    location classes over the station's 12 depths. Dealt as a Latin square (`holdout_folds`: every fold
+    holds out 3 taps of every gap, the gaps of one depth in different folds), the Gaussian's one-tap
+    ECE was 0.031 / 0.022 / 0.080 / 0.019 / 0.016, its own tempering still noise (fold models' betas
+    10-200x apart): the class holding 5.0 and 5.5 mm was the only one with within-class residuals in
+    the Gaussian's two-fold cross-validation, so its depth spread was the covariance. With 12 classes
+    (one depth each; main's folds, fold 0 holding out 44 of 48, then cannot fit) and the Gaussian's
+    cross-validation in 4 folds (`perception.fit_gaussian`), the Gaussian's one-tap ECE is 0.024 /
+    0.051 / 0.024 / 0.019 / 0.026 (mean 0.029; main, 11 classes: mean 0.038), 0.000 after 3 and 5
+    taps, test accuracy 0.945 / 0.943 / 1.00 / 0.965 / 0.966 in 1.27-1.35 taps, fold betas within
+    1.15-1.7x of each other.
 
     Parameters
     ----------
