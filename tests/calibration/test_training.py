@@ -98,9 +98,9 @@ def test_every_holdout_fold_holds_out_as_many_taps_whatever_the_repeats(taps_per
 
 @pytest.mark.parametrize("widths", [2, 4, 8])
 def test_every_holdout_fold_holds_out_taps_of_every_identity(widths):
-    # Two repeats at 12 depths in 11 location classes (the small station's shape). Dealt location-major, class
-    # (l, i) held out its repeat in fold (l * widths + i) % 4: with 4 widths fold k held out width k alone, so
-    # each fold's model missed one width's repeats and was judged on that width only.
+    # Two repeats at 12 depths in 11 location classes (the small station's shape until it took 12 classes). Dealt
+    # location-major, class (l, i) held out its repeat in fold (l * widths + i) % 4: with 4 widths fold k held out
+    # width k alone, so each fold's model missed one width's repeats and was judged on that width only.
     train = gap_dataset(seed=3, taps_per_class=2, depths=12, widths=widths, samples=10, dims=8)
     fold = holdout_folds(train, n_locations=11, folds=4)
     for k in range(4):
