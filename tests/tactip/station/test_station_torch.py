@@ -88,6 +88,12 @@ def test_the_torch_models_beliefs_are_calibrated_after_3_and_5_taps(torch_ece):
                                         "folds held out one gap each; dealt as a Latin square (2026-11-29) 0.052 / "
                                         "0.065 / 0.163 on seeds 0-2 (main 0.082 / 0.063 / 0.091), though the fold "
                                         "models' betas agree within 1.4-2x (seed 2: 5.7 / 4.6 / 9.3 / 5.0, g1 0.088). "
+                                        "With one location class per depth (12, 2026-11-29), those folds and the "
+                                        "refit: 0.068 / 0.126 / 0.131 on seeds 0 / 1 / 4 (main, 11 classes: 0.082 / "
+                                        "0.063 / 0.047), test accuracy 0.99-1.00 in 1.36-1.45 taps, fold betas "
+                                        "within 1.5-2.2x, g1 0.16-0.23: the network's own two-fold split keeps one "
+                                        "tap a class, no deviations to augment with, and tempers ~5x too sharply "
+                                        "(in 4 folds, seed 0: betas 0.92-1.10, g1 0.89, ECE 0.108). "
                                         "The 96 "
                                         "test taps here measure a calibrated model at 0.07: this test can pass or fail "
                                         "by chance")
