@@ -39,9 +39,9 @@ With 12 location classes, one per depth (the suite's station since 2026-11-29; b
 and 5.5 mm in one), Latin-square folds and the Gaussian's cross-validation in 4 folds, same collections
 and way of measuring: the Gaussian 0.024 / 0.051 / 0.024 / 0.019 / 0.026 for seeds 0-4 (mean 0.029;
 0.000 after 3 and 5 taps), test accuracy 0.945 / 0.943 / 1.00 / 0.965 / 0.966 in 1.27-1.35 taps. In
-two folds it had 0.27-0.29 (accuracy 0.70-0.75 in 1.0 taps). The torch 0.068 / 0.126 / 0.102 / 0.131 on seeds 0 / 1 /
-2 / 4 (main, 11 classes: 0.082 / 0.063 / 0.091 / 0.047; 0.000 after 3 and 5 taps), accuracy 0.989 / 1.00 /
-0.989 / 1.00 in 1.36-1.45 taps. Load 14-20 on 2 cores.
+two folds it had 0.27-0.29 (accuracy 0.70-0.75 in 1.0 taps). The torch 0.068 / 0.126 / 0.102 / 0.074 / 0.131 for seeds
+0-4, mean 0.100 (main, 11 classes: 0.082 / 0.063 / 0.091 / 0.029 / 0.047, mean 0.062; 0.000 after 3 and 5
+taps), accuracy 0.989 / 1.00 / 0.989 / 1.00 / 1.00 in 1.36-1.45 taps. Load 14-20 on 2 cores.
 """
 
 import argparse

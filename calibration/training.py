@@ -418,8 +418,8 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     cross-validation in 4 folds (`perception.fit_gaussian`), the Gaussian's one-tap ECE is 0.024 /
     0.051 / 0.024 / 0.019 / 0.026 (mean 0.029; main, 11 classes: mean 0.038), 0.000 after 3 and 5
     taps, test accuracy 0.945 / 0.943 / 1.00 / 0.965 / 0.966 in 1.27-1.35 taps, fold betas within
-    1.15-1.7x of each other. The torch's is worse than main's: 0.068 / 0.126 / 0.102 / 0.131 on seeds 0 / 1 /
-    2 / 4 (main 0.082 / 0.063 / 0.091 / 0.047), its g1 0.13-0.23 against fold betas of 4-9.
+    1.15-1.7x of each other. The torch's is worse than main's: 0.068 / 0.126 / 0.102 / 0.074 / 0.131 (mean
+    0.100; main 0.082 / 0.063 / 0.091 / 0.029 / 0.047, mean 0.062), its g1 0.13-0.35 against fold betas 3-9.
 
     Parameters
     ----------
