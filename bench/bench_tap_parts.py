@@ -47,6 +47,7 @@ def main() -> None:
     import calibration
     import pins._rest
     import pins.track
+    from tactip.sim import _render
     from tactip.sim.synthetic import SyntheticTacTip
     from tactip.station import station as station_module
     from tactip.station.config import SIM_PRESET, parse_station_config
@@ -62,9 +63,13 @@ def main() -> None:
 
     spent: dict = defaultdict(float)
     parts = [(SyntheticTacTip, "render", "render (camera frames)"),
+             (_render, "expose", "  of which camera noise (expose)"),
+             (SyntheticTacTip, "_draw", "  of which scene drawn (_draw)"),
              (calibration, "place_reference_pins", "reference pins placed (detect_pins)"),
              (pins.track.PinTracker, "start", "tracker start (rest frame)"),
              (pins._rest._AtRest, "_noise_scatter_sq_px2", "  of which rest-noise scatter"),
+             (pins._rest, "noise_sigma", "    of which noise_sigma"),
+             (pins.track.PinTracker, "_surround_pixels", "  of which surround pixels"),
              (pins.track.PinTracker, "update", "tracking (later frames)")]
     for owner, name, label in parts:
         _timed(owner, name, spent, label)

@@ -95,11 +95,13 @@ class _Following:
         again[:n] &= moved[:n] <= reach
         far = (~done[:n] & ~again[:n]).nonzero()[0]
         if far.size:
-            far = far[self._trusted(positions, which[far], last_seen)]
+            predicted = self._predict(positions, which[far], last_seen)
+            trusted = self._trusted(positions, which[far], last_seen, predicted)
+            far, predicted = far[trusted], predicted[trusted]
         chain = np.concatenate([again.nonzero()[0], far])
         points = placed_at[chain]
         if far.size:
-            start[far] = points[-far.size:] = self._predict(positions, which[far], last_seen)
+            start[far] = points[-far.size:] = predicted
             # Their neighbours' guesses were off too: windows bounded by where the pins now are.
             now = np.where(np.isnan(positions), filled, positions)
             now[which[far]] = start[far]

@@ -23,12 +23,48 @@ def noise_sigma(image: np.ndarray) -> float:
     """Standard deviation of a grey image's pixel noise, grey levels (Immerkaer's Laplacian-difference
     estimator made robust: the median absolute response over 6 sigma, so that edges and tips, a
     minority of pixels, do not count; saturated or flat regions, which show none, are left out)."""
-    kernel = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
-    response = np.abs(cv2.filter2D(image.astype(np.float32), -1, kernel))
     # A saturated surround (and its clipped fringe) or a black margin shows no noise, or less.
-    clipped = cv2.dilate(((image <= 2) | (image >= 253)).astype(np.uint8), np.ones((5, 5), np.uint8))
-    response = response[1:-1, 1:-1][clipped[1:-1, 1:-1] == 0]
+    clipped = cv2.dilate(((image <= 2) | (image >= 253)).astype(np.uint8), np.ones((5, 5), np.uint8))[1:-1, 1:-1]
+    if image.dtype == np.uint8 and image.ndim == 2:
+        return float(_median_response_uint8(image, clipped) / (0.6745 * 6.0))
+    response = np.abs(cv2.filter2D(image.astype(np.float32), -1, _LAPLACE_DIFFERENCE))[1:-1, 1:-1]
+    response = response[clipped == 0]
     return float(np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
+
+
+#: Immerkaer's 3 x 3 kernel: the difference of two Laplacians, blind to a linear ramp.
+_LAPLACE_DIFFERENCE = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
+_MAX_RESPONSE = 16 * 255  # the largest |response| of a uint8 image
+
+
+def _median_response_uint8(image: np.ndarray, clipped: np.ndarray) -> np.float32:
+    """`noise_sigma`'s median absolute response of a 2-D uint8 image over the interior pixels not
+    ``clipped``, as float32 (np.median of the float32 responses, bit for bit; 0 when none), from a
+    histogram of the integer responses (4 x cheaper on a 640 x 480 px frame than sorting them)."""
+    response = np.abs(cv2.filter2D(image, cv2.CV_16S, _LAPLACE_DIFFERENCE)[1:-1, 1:-1])   # exact integers
+    response[clipped != 0] = _MAX_RESPONSE + 1   # counted in a bin past the largest, then dropped
+    n, lower, upper = _middle_values(np.bincount(response.ravel(), minlength=_MAX_RESPONSE + 2)[:_MAX_RESPONSE + 1])
+    return (np.float32(lower) + np.float32(upper)) / np.float32(2.0) if n else np.float32(0.0)
+
+
+def median_uint8(values: np.ndarray) -> float:
+    """``np.median`` of uint8 `values` (any shape), bit for bit, from their histogram (no sort); NaN when empty.
+
+    >>> median_uint8(np.array([3, 1, 200, 4], np.uint8)), median_uint8(np.array([7], np.uint8))
+    (3.5, 7.0)
+    """
+    n, lower, upper = _middle_values(np.bincount(values.ravel(), minlength=256))
+    return 0.5 * (lower + upper) if n else float("nan")
+
+
+def _middle_values(histogram: np.ndarray) -> tuple[int, int, int]:
+    """(n, the values at sorted indices (n - 1) // 2 and n // 2) of n >= 0 integers given by their
+    `histogram` (counts of 0, 1, 2, ...): a median is their mean (equal when n is odd; zeros when n = 0)."""
+    counts = np.cumsum(histogram)
+    n = int(counts[-1])
+    if n == 0:
+        return 0, 0, 0
+    return n, int(np.searchsorted(counts, (n - 1) // 2 + 1)), int(np.searchsorted(counts, n // 2 + 1))
 
 
 def _learn_mean_square(mean_sq: np.ndarray, seen: np.ndarray, index, value: np.ndarray, candidate: np.ndarray) -> None:

@@ -117,10 +117,13 @@ class _Recovery:
         # the round before placed.
         for _ in range(_ROUNDS):
             lost = np.flatnonzero(np.isnan(positions[:, 0]))
-            lost = lost[self._trusted(positions, lost, last_seen)]
             if not (lost.size and free.any()):
                 break
-            predicted = self._predict(positions, lost, last_seen)
+            predicted = self._predict(positions, lost, last_seen)  # once: `_trusted` reads it too
+            trusted = self._trusted(positions, lost, last_seen, predicted)
+            lost, predicted = lost[trusted], predicted[trusted]
+            if not lost.size:
+                break
             free_index = np.flatnonzero(free)
             pins, chosen = _assign(predicted, blobs[free_index], gate)
             if not pins.size:
@@ -175,7 +178,8 @@ class _Recovery:
         which = which[self._fittable[which]]  # (the others' fits never move them)
         if not which.size:
             return positions
-        predicted = self._predict(positions, which, last_seen)
+        # Just lost: where its neighbours are now (a fit needs the tip's place in the gradient of a press).
+        predicted = self._predict_from_neighbours(positions, which, last_seen)
         # (Only the windows' contrast is asked for, before and after the fit: `WindowCentroids.contrast`.)
         shows = self.windows.contrast(crop, predicted - self.origin) >= self._at_least[1, which]
         if not shows.any():

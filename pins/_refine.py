@@ -40,8 +40,8 @@ than that bound (up to 0.5 px in tests where blob detection would have kept them
 touching a tip fools blob detection as much.
 
 Search. A lost pin (or one whose centroid is implausible) is looked for in a window at its
-predicted position (its rest position moved by the median displacement of its tracked
-neighbours), re-centred once; it is found when that move is at most 0.1 spacings, its tip is like
+predicted position (where it was last seen, moved as its neighbours moved since: `pins._predict`),
+re-centred once; it is found when that move is at most 0.1 spacings, its tip is like
 at rest, it lies within the gate (below half the spacing) of the prediction and no neighbour sits
 on the same tip (`Refiner._one_pin_per_tip`), nor any pin expected nearer to it (`pins._identity`).
 Only pins whose predictions can be trusted are searched for (`Refiner._trusted`).
@@ -72,6 +72,7 @@ from .disc import SensorDisc
 from ._flat import _pin_radius_px
 from ._identity import IDENTITY_NEIGHBOURS, keep_own_tips
 from ._follow import _GUESS_FRACTION, _Following
+from ._predict import _Prediction
 from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
 from ._recover import _Recovery, match_to_blobs
 from ._rest import _AtRest
@@ -108,11 +109,9 @@ _REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
-# A lost pin is searched for at its prediction only when this share of its neighbours is placed.
-_TRUSTED_SHARE = 2 / 3
 
 
-class Refiner(_Following, _AtRest, _Recovery):
+class Refiner(_Following, _AtRest, _Recovery, _Prediction):
     """Moves LK estimates onto their tips' windowed centroids; detects blobs only when that fails.
 
     Parameters
@@ -256,6 +255,7 @@ class Refiner(_Following, _AtRest, _Recovery):
         self._fittable = _fittable(self._tip_ellipses, self.tip_fit_radius_px)
         #: (N,) bool: pins that did not move in the last frame (`pins.track.PinTracker` sets it).
         self.still = np.ones(len(positions), dtype=bool)
+        self._then = np.zeros((len(positions), self._neighbour_index.shape[1], 2))  # (`pins._predict.remember`)
 
     def window_radius(self, points: np.ndarray) -> np.ndarray:
         """Radius of each pin's window at finite `points` (N, 2), px: (N,).
@@ -386,11 +386,13 @@ class Refiner(_Following, _AtRest, _Recovery):
             implausible = live[~plausible]
             first, predicted = centres[n:], filled[look]
         retry = look
-        implausible = implausible[self._trusted(positions, implausible, last_seen)]
         if implausible.size:
             # A tracked pin whose centroid is implausible (LK between two tips, or on a vanished
             # one) is searched for from its prediction too (where its neighbours are placed).
             guess = self._predict(positions, implausible, last_seen)
+            trusted = self._trusted(positions, implausible, last_seen, guess)
+            implausible, guess = implausible[trusted], guess[trusted]
+        if implausible.size:
             again = self.windows(crop, guess - self.origin, radius[implausible])[0] + self.origin
             retry = np.concatenate([look, implausible])
             first, predicted = np.concatenate([first, again]), np.concatenate([predicted, guess])
@@ -453,47 +455,3 @@ class Refiner(_Following, _AtRest, _Recovery):
         like = np.logical_and.reduce(measures >= self._at_least[:, which], axis=0)
         like &= measures[0] <= self._area_at_most[which]
         return like
-
-    def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
-        """Where lost pins should be: rest position moved by the median displacement of tracked neighbours."""
-        shift = self.neighbour_median(positions - self.rest_positions, which)
-        return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
-
-    def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
-                 predicted: np.ndarray | None = None) -> np.ndarray:
-        """Whether pins `which` may be searched for at their predictions (`_predict`): (L,) bool.
-
-        Where most of a pin's neighbours are placed (`_TRUSTED_SHARE` of them), its prediction
-        interpolates their displacements. Where fewer are (at least two), only when they did not move
-        in the last frame (`still`) and the prediction lies within the gate of where the pin was last
-        seen: nothing moved there since (a whole rim ring coming back under a held press). From a
-        few on one side of the squeezed skin ahead of a slide (its displacement changes by most of a
-        spacing per spacing there) a prediction lies a spacing off, on another pin's tip (issue 20:
-        tactip-331 slides, 2 or 3 of 6 neighbours placed, predictions 10-25 px off at a 17.7 px spacing).
-        `predicted` (L, 2), px: the pins' predictions from `positions`, when known.
-        """
-        index = self._neighbour_index[which]
-        placed = np.isfinite(positions[index, 0])
-        count = np.count_nonzero(placed, axis=1)
-        trusted = count >= _TRUSTED_SHARE * index.shape[1]
-        few = np.flatnonzero(~trusted & (count >= 2) & ~(placed & ~self.still[index]).any(axis=1))
-        if few.size:
-            guess = self._predict(positions, which[few], last_seen) if predicted is None else predicted[few]
-            moved = _squared_norm(guess - last_seen[which[few]])
-            trusted[few] = moved <= self.gate_px ** 2
-        return trusted
-
-    def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
-        """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.
-
-        Returns (L, 2), NaN for a pin none of whose neighbours has a finite value.
-        """
-        index = self._neighbour_index[which]
-        near = values[index]  # (L, k, 2), a copy
-        count = np.add.reduce(np.isfinite(near[..., 0]), axis=1)
-        # Median over the finite neighbours (sorting puts NaN last): mean of the middle one or two;
-        # NaN where there are none (the middle index is then -1, a NaN too).
-        near.sort(axis=1)
-        rows = np.arange(len(index))
-        return 0.5 * (near[rows, (count - 1) // 2] + near[rows, count // 2])
-

@@ -2,8 +2,7 @@
 
 Each pin is moved from the previous frame to the next one by the Lucas-Kanade step of `pins.lk`
 (`track_pins`, `LKParams`: pyramidal LK with convergence, residual and forward-backward checks).
-A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; it is never frozen
-at an old place.
+A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; never frozen at an old place.
 
 `PinTracker` adds, on top of the pure `track_pins` (`pins._refine` says how):
 
@@ -53,6 +52,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._identity import kept_on_own_tips
+from ._noise import median_uint8
 from ._recover import _as_points, match_to_blobs
 from ._refine import Refiner
 from .detect import DetectionParams, _detect
@@ -397,6 +397,7 @@ class PinTracker:
             # (Still for `Refiner._trusted`: moved by no more than a window settles on its guess.)
             self._refiner.still = np.einsum("ij,ij->i", velocity, velocity) <= self._refiner._guess_px ** 2
             velocity[self._refiner.observe_still(velocity)] = 0.0
+            self._refiner.remember(positions)  # (where lost pins' neighbours were: `pins._predict`)
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
@@ -429,9 +430,9 @@ class PinTracker:
             positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
                                        filled=np.where(need[:, None], tracked, filled))
         # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
-        # missing ones are looked for at their rest positions.
+        # missing ones, retired too (a slide's return: 3-9 left lost 3 frames after it), at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
-        positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, search),
+        positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, np.ones_like(search)),
                                      refiner.rest_positions, guess, refiner._identity_index)
         missing = np.isnan(positions[:, 0])
         if not missing.any():
@@ -483,17 +484,17 @@ class PinTracker:
         outermost = np.hypot(*(pins - (disc.cx, disc.cy)).T).max() + reach   # px from the centre
         if outermost <= disc.radius_px - _DISC_EDGE_PX:
             return None  # no pin reaches the rim (most pads): no need to look at every pixel
-        yy, xx = np.mgrid[0:rest_crop.shape[0], 0:rest_crop.shape[1]]
-        from_centre = np.hypot(xx + x0 - disc.cx, yy + y0 - disc.cy)
+        height, width = rest_crop.shape[:2]  # distances: a row against a column, broadcast (no pixel grids)
+        from_centre = np.hypot(np.arange(width) + x0 - disc.cx, (np.arange(height) + y0 - disc.cy)[:, None])
         beyond = from_centre > disc.radius_px - _DISC_EDGE_PX
         if not beyond.any() or beyond.all():
             return None
-        # Only pixels no farther from the centre than the outermost pin's reach can be within a pin's
-        # reach (triangle inequality): the nearest-pin query skips the crop's corners.
+        # Only pixels no farther out than the outermost pin's reach can be in reach (triangle inequality).
         candidates = np.flatnonzero(beyond & (from_centre <= outermost + 1.0))
-        near = cKDTree(pins - self._origin).query(np.column_stack([xx.ravel()[candidates], yy.ravel()[candidates]]),
+        rows, columns = np.divmod(candidates, width)
+        near = cKDTree(pins - self._origin).query(np.column_stack([columns, rows]),
                                                    distance_upper_bound=reach)[0] <= reach
         if not near.any():
             return None
         bright = cv2.bitwise_not(rest_crop) if self.detection.dark_pins else rest_crop
-        return candidates[near], np.uint8(np.median(bright[~beyond]))
+        return candidates[near], np.uint8(median_uint8(bright[~beyond]))

@@ -7,7 +7,24 @@ minutes that started last would run alone at the end while the other cores idle,
 puts the longest files first, longest first; the rest follow in pytest's own order. The order is only
 a schedule: every test runs, and a file missing from the list (or a name in it that no longer exists)
 changes nothing but when it runs.
+
+Under pytest-xdist the simulated station's collections tap in the worker's own process when the
+workers already use every core (``TACTIP_SIM_WORKERS``, `_free_cpus_per_worker`): a pool of spawned
+processes per collection would only import the package again (~2 s of CPU each) and compete with the
+other workers. test_cli_station.py still collects with a pool, and checks it stores the same taps.
 """
+
+import os
+
+
+def _free_cpus_per_worker() -> int:
+    """The CPUs (at most 4, the product's default) each of this session's pytest-xdist workers may use."""
+    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT") or 1)
+    return max(1, min((os.cpu_count() or 1) // workers, 4))
+
+
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    os.environ.setdefault("TACTIP_SIM_WORKERS", str(_free_cpus_per_worker()))
 
 #: Test files of a worker-minute or more, longest first (seconds of one worker, ``--durations=0`` on a
 #: 2-core VM, 2026-11-28; the station and reproduction files prepare simulated stations).

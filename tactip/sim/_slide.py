@@ -10,6 +10,17 @@ Jacobian determinant ``1 + |S| f'(|q|) cos(angle)`` >= ``1 - pi |S| / 2 L`` >= `
 folds, so pins never cross. Where the base cuts the fall-off short, the longest slide is the one that
 keeps that determinant >= `MIN_JACOBIAN` (`max_slide_mm`); a longer one is refused. The contact
 mechanics then act at the material's new place.
+
+Residual shear (opt-in, ``Contact.shear_x_mm``, ``shear_y_mm``): a real elastomer does not spring back
+at once when the plate lifts; what a slide leaves in the skin creeps back to rest over tens of frames
+(paper 000 waits 1 s between contacts "to ensure transients decayed"). It is laid out as a slide is,
+from the apex when nothing touches, and adds to the plate's drag under contact.
+
+Stiffer skin (opt-in, ``Contact.slide_decay_mm``): by default the skin ahead of a slide may be squeezed
+to ``1 - pi / 4`` (21 %) of its area along the slide, or to `MIN_JACOBIAN` where the base cuts the
+fall-off short: neighbouring tips then merge. A skin of 1-2 mm of elastomer over gel wrinkles long
+before a surface strain of -80 %; a fixed fall-off per stroke (`decay_for_area_mm`, the schedule's
+``min_area``) keeps the squeeze to a given share of the area.
 """
 
 from __future__ import annotations
@@ -21,10 +32,22 @@ DECAY_PER_SLIDE = 2.0  # the fall-off is at least this x the slide: the map's Ja
 MIN_JACOBIAN = 0.05  # a slide may compress the skin round the patch to this share of its area, no further
 
 
-def _decay_mm(indentation_mm: float, slide_mm: float, radius_mm: float) -> float:
-    """Fall-off length of the slide outside the patch, mm: it ends at the latest at the clamped base."""
+def _decay_mm(indentation_mm: float, slide_mm: float, radius_mm: float, given_mm: float = 0.0) -> float:
+    """Fall-off length of the slide outside the patch, mm (`given_mm` when > 0, ``Contact.slide_decay_mm``):
+    it ends at the latest at the clamped base."""
     room = np.pi * radius_mm / 2 - np.sqrt(radius_mm * indentation_mm)
-    return min(max(SLIDE_DECAY_MM, DECAY_PER_SLIDE * slide_mm), room)
+    return min(given_mm if given_mm > 0 else max(SLIDE_DECAY_MM, DECAY_PER_SLIDE * slide_mm), room)
+
+
+def decay_for_area_mm(slide_mm: float, min_area: float) -> float:
+    """The fall-off, mm, that keeps a slide of `slide_mm` from squeezing the skin below `min_area` of its area.
+
+    The map's Jacobian is at least ``1 - pi S / (2 L)`` (a pad's base may cut ``L`` shorter).
+
+    >>> round(decay_for_area_mm(9.0, 0.5), 2)
+    28.27
+    """
+    return max(SLIDE_DECAY_MM, np.pi * slide_mm / (2.0 * (1.0 - min_area)))
 
 
 def max_slide_mm(indentation_mm: float, radius_mm: float) -> float:
@@ -47,6 +70,13 @@ def max_slide_mm(indentation_mm: float, radius_mm: float) -> float:
     return float(max(2 * room * (1 - MIN_JACOBIAN) / np.pi, 0.0))
 
 
+def _drag_mm(contact) -> tuple[float, float]:
+    """How far the skin at the apex is shifted, (x, y) mm: the plate's slide under contact plus the residual shear."""
+    touching = contact.indentation_mm > 0
+    return ((contact.slide_x_mm if touching else 0.0) + contact.shear_x_mm,
+            (contact.slide_y_mm if touching else 0.0) + contact.shear_y_mm)
+
+
 def slide_fraction(arc_mm, contact, radius_mm: float):
     """Share of the slide each material point takes, by its rest arc length from the apex: 1 in the patch.
 
@@ -60,16 +90,18 @@ def slide_fraction(arc_mm, contact, radius_mm: float):
 
     Returns
     -------
-    ndarray shaped like ``arc_mm``, in [0, 1] (zeros when the plate does not touch or does not slide).
+    ndarray shaped like ``arc_mm``, in [0, 1] (zeros when nothing shifts the skin: no slide under
+    contact, no residual shear ``shear_x_mm``, ``shear_y_mm``).
     """
-    d, slide = contact.indentation_mm, np.hypot(contact.slide_x_mm, contact.slide_y_mm)
-    if d <= 0 or slide == 0:
+    d, slide = contact.indentation_mm, np.hypot(*_drag_mm(contact))
+    if slide == 0:
         return np.zeros(np.shape(arc_mm))
+    d = max(d, 0.0)  # a residual shear alone falls off from the apex
     patch = np.sqrt(radius_mm * d)  # Hertz contact radius a
     if slide > max_slide_mm(d, radius_mm) + 1e-9:
         raise ValueError(f"slide_x_mm, slide_y_mm: a slide of {slide:.3g} mm folds the skin of a {2 * radius_mm:g} mm "
                          f"pad at {d:g} mm indentation; at most {max_slide_mm(d, radius_mm):.3g} mm")
-    decay = _decay_mm(d, slide, radius_mm)
+    decay = _decay_mm(d, slide, radius_mm, contact.slide_decay_mm)
     t = np.clip((np.asarray(arc_mm) - patch) / decay, 0.0, 1.0)
     return 0.5 * (1.0 + np.cos(np.pi * t))
 
@@ -89,13 +121,14 @@ def slid_points(x, y, contact, radius_mm: float):
     x, y : ndarray
         The same points shifted along the pad surface (the inputs themselves when nothing slides).
     """
-    if contact.indentation_mm <= 0 or (contact.slide_x_mm == 0 and contact.slide_y_mm == 0):
+    sx, sy = _drag_mm(contact)
+    if sx == 0 and sy == 0:
         return x, y
     r = np.hypot(x, y)
     arc = radius_mm * np.arcsin(np.clip(r / radius_mm, 0.0, 1.0))
     scale = np.divide(arc, r, out=np.ones_like(r), where=r > 0)
     share = slide_fraction(arc, contact, radius_mm)
-    qx, qy = x * scale + contact.slide_x_mm * share, y * scale + contact.slide_y_mm * share
+    qx, qy = x * scale + sx * share, y * scale + sy * share
     arc = np.hypot(qx, qy)
     lateral = radius_mm * np.sin(np.clip(arc / radius_mm, 0.0, np.pi / 2))
     back = np.divide(lateral, arc, out=np.ones_like(arc), where=arc > 0)

@@ -28,6 +28,14 @@ class Contact:
         How far the plate has dragged the skin under it sideways (sticking), along image x and y, mm of
         pad surface: the contact patch moves by all of it, the skin around it less (`tactip.sim._slide`).
         No effect without contact (``indentation_mm <= 0``).
+    shear_x_mm, shear_y_mm : float
+        The skin's residual shear, mm of pad surface: what earlier slides left in it, creeping back to
+        rest (opt-in, `tactip.sim.sequence.schedule`'s ``residual``; 0 by default). It shifts the apex
+        by all of it and the skin round it less (`tactip.sim._slide`), with or without contact; under
+        a slide it adds to the drag.
+    slide_decay_mm : float
+        How far, mm of pad surface, the drag falls off outside the contact patch (opt-in, a stiffer
+        skin: `tactip.sim.sequence.schedule`'s ``min_area``); 0: the default rule (`tactip.sim._slide`).
     """
 
     indentation_mm: float = 0.0
@@ -36,11 +44,17 @@ class Contact:
     gap_angle_deg: float = 0.0
     slide_x_mm: float = 0.0
     slide_y_mm: float = 0.0
+    shear_x_mm: float = 0.0
+    shear_y_mm: float = 0.0
+    slide_decay_mm: float = 0.0
 
     def __post_init__(self):
-        for name in ("indentation_mm", "gap_width_mm", "gap_offset_mm", "gap_angle_deg", "slide_x_mm", "slide_y_mm"):
+        for name in ("indentation_mm", "gap_width_mm", "gap_offset_mm", "gap_angle_deg", "slide_x_mm", "slide_y_mm",
+                     "shear_x_mm", "shear_y_mm", "slide_decay_mm"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"{name} must be finite, got {getattr(self, name)!r}")
+        if self.slide_decay_mm < 0:
+            raise ValueError(f"slide_decay_mm must be >= 0, got {self.slide_decay_mm}")
         if self.gap_width_mm < 0:
             raise ValueError(f"gap_width_mm must be >= 0, got {self.gap_width_mm}")
 

@@ -14,10 +14,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from tactip.sim import _slide
 from tactip.sim.contact import Contact, SyntheticFrame
 
 __all__ = ["ContactEvent", "ContactSequence", "ContactSequences", "Stroke"]
@@ -126,22 +127,37 @@ def _frames(duration_s: float, frame_rate: float, name: str, minimum: int) -> in
 
 
 def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, press_s: float, hold_s: float,
-             slide_s: float, lift_s: float, gap_angle_deg: float = 0.0):
+             slide_s: float, lift_s: float, gap_angle_deg: float = 0.0, residual: float = 0.0,
+             creep_s: float = 0.1, final_rest_s: float | None = None, min_area: float | None = None):
     """The contact state of every frame of a sequence, and its events.
 
     Each phase lasts a whole number of frames (at least one; ``rest_s`` and ``hold_s`` may round to
     one): rest, then per stroke a raised-cosine press to full depth, a hold (press) or a raised-cosine
     slide (slide), a raised-cosine lift releasing depth and slide together (the pad springs back), and
-    a rest. Returns (contacts, events).
+    a rest (the last one ``final_rest_s`` long; None: ``rest_s``). Returns (contacts, events).
+
+    ``residual`` > 0 (opt-in; 0 renders as before) makes the skin viscoelastic: a slide's lift
+    releases the drag only down to that share of it, and the skin's shear then creeps back to rest
+    exponentially with time constant ``creep_s`` s, through the rests and the strokes after (their
+    drags add to what is left of it): a real elastomer relaxes over tens of frames, not at once.
+    ``min_area`` in (0, 1) (opt-in; None as before) squeezes the skin ahead of a slide to no less than
+    that share of its area (where the pad's base leaves room: `tactip.sim._slide.decay_for_area_mm`).
     """
     if not (math.isfinite(frame_rate) and frame_rate > 0):
         raise ValueError(f"frame_rate must be > 0, got {frame_rate!r}")
     n_rest = _frames(rest_s, frame_rate, "rest_s", 1)
     n_press, n_lift = _frames(press_s, frame_rate, "press_s", 1), _frames(lift_s, frame_rate, "lift_s", 1)
     n_hold, n_slide = _frames(hold_s, frame_rate, "hold_s", 1), _frames(slide_s, frame_rate, "slide_s", 1)
+    if not (math.isfinite(residual) and 0.0 <= residual < 1.0):
+        raise ValueError(f"residual must be in [0, 1), got {residual!r}")
+    if not (math.isfinite(creep_s) and creep_s > 0):
+        raise ValueError(f"creep_s must be > 0, got {creep_s!r}")
+    if min_area is not None and not (math.isfinite(min_area) and 0.0 < min_area < 1.0):
+        raise ValueError(f"min_area must be None or in (0, 1), got {min_area!r}")
+    n_final = n_rest if final_rest_s is None else _frames(final_rest_s, frame_rate, "final_rest_s", 1)
     rest = Contact()
     contacts, events = [rest] * n_rest, []
-    for stroke in strokes:
+    for number, stroke in enumerate(strokes):
         start = len(contacts)
         sx = sy = 0.0
         if stroke.kind == "slide":
@@ -153,17 +169,34 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
                  else 0.5 * (1 - np.cos(np.pi * np.arange(1, n_slide + 1) / n_slide)))
         up = 0.5 * (1 + np.cos(np.pi * np.arange(1, n_lift + 1) / (n_lift + 1)))  # (1, 0): still touching
         depth = np.concatenate([down, middle, up])
-        dragged = np.concatenate([np.zeros(n_press), along, up])
+        dragged = np.concatenate([np.zeros(n_press), along, residual + (1.0 - residual) * up])
+        decay = 0.0 if min_area is None else _slide.decay_for_area_mm(stroke.distance_mm, min_area)
         for fraction, share in zip(depth, dragged):
             contacts.append(Contact(stroke.indentation_mm * float(fraction), stroke.gap_width_mm, 0.0, gap_angle_deg,
-                                    sx * float(share), sy * float(share)))
+                                    sx * float(share), sy * float(share), slide_decay_mm=decay))
         stop = len(contacts)
         sliding = stroke.kind == "slide"
         events.append(ContactEvent(stroke.kind, start, stop, start / frame_rate, stop / frame_rate,
                                    stroke.indentation_mm, float(stroke.direction_deg) if sliding else None,
                                    float(stroke.distance_mm) if sliding else 0.0))
-        contacts.extend([rest] * n_rest)
+        contacts.extend([rest] * (n_final if number == len(strokes) - 1 else n_rest))
+    if residual > 0:
+        contacts = _creep(contacts, events, strokes, residual, math.exp(-1.0 / (creep_s * frame_rate)))
     return contacts, events
+
+
+def _creep(contacts, events, strokes, residual: float, decay: float) -> list:
+    """``contacts`` with what each slide's drag leaves in the skin after it (``Contact.shear_x_mm``,
+    ``shear_y_mm``): ``residual`` of it at its last frame, shrinking by the factor ``decay`` per frame after."""
+    left = np.zeros((len(contacts), 2))
+    for event, stroke in zip(events, strokes):
+        if stroke.kind == "slide":
+            angle = math.radians(stroke.direction_deg)
+            frames = np.arange(1, len(contacts) - event.stop_frame + 1)
+            left[event.stop_frame:] += (residual * stroke.distance_mm * np.array([math.cos(angle), math.sin(angle)])
+                                        * decay ** frames[:, None])
+    return [replace(c, shear_x_mm=float(dx), shear_y_mm=float(dy)) if dx or dy else c
+            for c, (dx, dy) in zip(contacts, left)]
 
 
 class ContactSequences:
@@ -171,7 +204,8 @@ class ContactSequences:
 
     def sequence(self, strokes: Sequence[Stroke], *, rest_s: float = 0.25, press_s: float = 0.2,
                  hold_s: float = 0.1, slide_s: float = 0.4, lift_s: float = 0.2,
-                 frame_rate: float | None = None) -> ContactSequence:
+                 frame_rate: float | None = None, residual: float = 0.0, creep_s: float = 0.1,
+                 final_rest_s: float | None = None, min_area: float | None = None) -> ContactSequence:
         """Frames of presses and slides separated by rests, with the contacts' ground truth.
 
         Parameters
@@ -186,6 +220,13 @@ class ContactSequences:
             least one frame).
         frame_rate : float or None
             Frames per second; None: the sensor's `frame_rate`.
+        residual, creep_s, final_rest_s : float
+            Opt-in viscoelastic skin (`schedule`): the share of each slide's drag left when the plate
+            lifts (0: none, the default), its creep back to rest's time constant, s, and the last
+            rest's length, s (None: ``rest_s``).
+        min_area : float or None
+            Opt-in stiffer skin (`schedule`): the least share of its area the skin ahead of a slide
+            is squeezed to (None: the default model, down to 21 %).
 
         Returns
         -------
@@ -202,7 +243,8 @@ class ContactSequences:
         """
         frame_rate = self.frame_rate if frame_rate is None else frame_rate
         contacts, events = schedule(list(strokes), frame_rate=frame_rate, rest_s=rest_s, press_s=press_s,
-                                    hold_s=hold_s, slide_s=slide_s, lift_s=lift_s)
+                                    hold_s=hold_s, slide_s=slide_s, lift_s=lift_s, residual=residual,
+                                    creep_s=creep_s, final_rest_s=final_rest_s, min_area=min_area)
         return ContactSequence(self, contacts, events, frame_rate)
 
     def slides(self, directions_deg, *, distance_mm: float = 3.0, indentation_mm: float = 2.0,
@@ -218,7 +260,8 @@ class ContactSequences:
         indentation_mm : float
             Depth of each press, mm.
         **timing
-            ``rest_s``, ``press_s``, ``slide_s``, ``lift_s``, ``frame_rate`` as in `sequence`.
+            ``rest_s``, ``press_s``, ``slide_s``, ``lift_s``, ``frame_rate`` and the opt-in residual
+            shear (``residual``, ``creep_s``, ``final_rest_s``) and stiffer skin (``min_area``) as in `sequence`.
 
         Returns
         -------

@@ -18,6 +18,7 @@ from tactip.errors import TactipError
 from tactip.station.station import Station
 
 __all__ = ["prepare_model", "model_is_prepared", "calibration_path", "calibrate_station", "load_station_calibration", "collect_station",
+           "default_sim_workers",
            "sensor_description", "protocol_description"]
 
 
@@ -93,8 +94,8 @@ def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = Tr
     progress : bool
         Progress bar with ETA.
     workers : int, optional
-        Processes rendering taps on the simulated station (default: the CPU count, at most 4);
-        a real station always taps one at a time.
+        Processes rendering taps on the simulated station (default: `default_sim_workers`, the CPU
+        count, at most 4); a real station always taps one at a time.
     sets : sequence of str
         The collections to take (e.g. only ``("test",)``: a test set with lateral placement noise for
         paper 002 Fig. 11, beside a model trained without it).
@@ -124,7 +125,7 @@ def collect_station(config: StationConfig, out_dir: Path, *, progress: bool = Tr
                   sensor=sensor_description(config, calibration), progress=progress,
                   protocol=protocol_description(config))
     if workers is None:
-        workers = min(os.cpu_count() or 1, 4)
+        workers = default_sim_workers()
     if config.simulated and workers > 1:
         with _SimPool(config, calibration, workers) as pool:
             return collect_datasets(None, plan, out_dir, tap_many=pool.map, **common)
@@ -138,6 +139,26 @@ DEFAULT_TARGET_ACCURACY = 0.95
 
 
 # -- the simulated station on several processes ---------------------------------------------------
+
+#: Environment variable that sets `default_sim_workers` (the test suite's conftest sets it to the CPUs
+#: its pytest-xdist workers leave free: 1, no process pool, when they already use every core).
+SIM_WORKERS_VARIABLE = "TACTIP_SIM_WORKERS"
+
+
+def default_sim_workers() -> int:
+    """Processes a simulated station's collection renders taps on unless told: ``$TACTIP_SIM_WORKERS``
+    when set, else the CPU count, at most 4 (1 taps in this process, without a pool)."""
+    value = os.environ.get(SIM_WORKERS_VARIABLE, "").strip()
+    if not value:
+        return min(os.cpu_count() or 1, 4)
+    try:
+        workers = int(value)
+    except ValueError:
+        workers = 0
+    if workers < 1:
+        raise TactipError(f"{SIM_WORKERS_VARIABLE}={value!r}: give a whole number of processes, 1 or more")
+    return workers
+
 
 _worker_station: Station | None = None
 

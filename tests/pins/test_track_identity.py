@@ -21,12 +21,13 @@ def _swaps(positions, truth, shown, spacing_px):
     return placed[other][gap >= 0.5 * spacing_px]
 
 
-def _track_slides(name, seed):
+def _track_slides(name, seed, **skin):
     """Two slides of 3 pitches (0 and 180 degrees) from the drawn pins' true rest centres: swapped
-    pin-frames, and the last (rest) frame's positions and truth."""
+    pin-frames, and the last (rest) frame's positions and truth (``skin``: `SyntheticTacTip.sequence`'s
+    opt-in residual shear and stiffer skin)."""
     s = preset_sensor(name, seed)
     s.reseed_noise(seed)
-    run = s.slides([0.0, 180.0], distance_mm=3.0 * s.pin_spacing_mm, rest_s=3 / 120, frame_rate=120.0)
+    run = s.slides([0.0, 180.0], distance_mm=3.0 * s.pin_spacing_mm, rest_s=3 / 120, frame_rate=120.0, **skin)
     frames = iter(run)
     rest = next(frames)
     drawn = np.flatnonzero(rest.visible | rest.partial)
@@ -39,7 +40,7 @@ def _track_slides(name, seed):
         swapped += _swaps(positions, truth, f.visible[drawn] | f.partial[drawn], tracker.spacing_px).size
         moved = max(moved, np.max(np.linalg.norm(truth - rest.centres[drawn], axis=1)[f.visible[drawn]]))
     assert moved > 2.5 * tracker.spacing_px  # the slides moved pins by about 3 pitches
-    return swapped, positions, rest.centres[drawn], f.visible[drawn]
+    return swapped, positions, f.centres[drawn], f.visible[drawn]
 
 
 @pytest.mark.parametrize("name", ["radial-led-120", "small-pad-100"])
@@ -48,16 +49,29 @@ def test_slides_keep_identities_and_every_pin_returns_to_rest(name):
     for seed in (0, 1):
         count, positions, rest, visible = _track_slides(name, seed)
         swapped += count
-        # Back at rest every visible pin is found, within 1 px of its rest position.
+        # Back at rest (the last frame's truth is the rest) every visible pin is found, within 1 px of it.
         assert (np.linalg.norm(positions - rest, axis=1)[visible] <= 1.0).all()
     # Pin-frames on another pin's tip, seeds 0-1: 124 (radial-led-120) and 526 (small-pad-100) before
-    # `pins._identity` and the trusted searches; 14 and 21 after.
+    # `pins._identity` and the trusted searches; 14 and 21 after; 2 and 16 with lost pins predicted from
+    # their neighbours' motion since they were last seen (`pins._predict`).
     assert swapped <= 40
 
 
-@pytest.mark.xfail(reason="issue 20's bar, not yet met: radial-led-120 seeds 0-3 still put 2-29 pin-frames "
-                          "on other pins' tips (pins lost in the squeezed skin ahead of a slide, found "
-                          "from predictions a spacing off)", strict=False)
+@pytest.mark.parametrize("name", ["radial-led-120", "small-pad-100", "tactip-331"])
+def test_a_skin_creeping_back_to_rest_after_slides_leaves_every_pin_on_its_own_tip(name):
+    # A real elastomer keeps part of a slide when the plate lifts and creeps back over tens of frames
+    # (issue 20: 6-18 real pins > 10 px from rest after the last slide). Here 15 % of each slide is
+    # left, creeping back with a 0.1 s time constant over a last rest of 0.4 s: the pad's "back at rest"
+    # test (`pins._rest`) sees a moving pad for most of it.
+    swapped, positions, truth, visible = _track_slides(name, 0, residual=0.15, creep_s=0.1, final_rest_s=0.4)
+    # The last frame: the skin is back within a tenth of a px of rest; every visible pin is found within
+    # 1 px of its true centre.
+    assert (np.linalg.norm(positions - truth, axis=1)[visible] <= 1.0).all()
+
+
+@pytest.mark.xfail(reason="issue 20's bar, not yet met: radial-led-120 seeds 0-3 still put 2/0/10/1 pin-frames "
+                          "on other pins' tips (followed pins slip onto a neighbour's tip where the skin "
+                          "ahead of a slide squeezes tips together)", strict=False)
 def test_slides_swap_no_identity():
     assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (2, 3))
 

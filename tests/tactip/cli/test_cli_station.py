@@ -179,6 +179,19 @@ def test_a_killed_collection_resumes_to_the_uninterrupted_dataset(small_collecti
             assert np.array_equal(getattr(resumed, field), getattr(expected, field)), (name, field)
 
 
+def test_a_collection_on_a_process_pool_stores_the_uninterrupted_dataset(small_collection, tmp_path):
+    """The simulated station's pool of spawned processes (``workers=2``; the suite's own collections tap
+    in the test's process, ``TACTIP_SIM_WORKERS``) stores the taps of the collection taken here."""
+    toml, reference = small_collection
+    pooled = collect_station(load_station_config(toml), tmp_path / "pooled", workers=2, progress=False,
+                             log=lambda _: None)
+    for name, expected in reference.items():
+        stored = load_dataset(pooled[name])
+        assert len(stored) == 12
+        for field in ("taps", "location", "identity", "lateral"):
+            assert np.array_equal(getattr(stored, field), getattr(expected, field)), (name, field)
+
+
 # -- faults ---------------------------------------------------------------------------------------
 
 def test_inspect_exits_1_with_one_line_on_an_arm_fault(sim_station, tmp_path, monkeypatch):

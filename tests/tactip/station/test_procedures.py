@@ -9,8 +9,8 @@ from calibration import CalibrationError, load_calibration
 from perception import load_dataset, load_model
 from tactip.station.config import parse_station_config, simulated_station_config
 from tactip.errors import TactipError
-from tactip.station.procedures import (calibrate_station, calibration_path, collect_station, load_station_calibration,
-                               prepare_model, sensor_description)
+from tactip.station.procedures import (calibrate_station, calibration_path, collect_station, default_sim_workers,
+                                      load_station_calibration, prepare_model, sensor_description)
 from tests.tactip.conftest import small_station_table
 
 
@@ -55,6 +55,24 @@ def test_collecting_needs_a_calibration(tmp_path):
     with pytest.raises(CalibrationError, match="run 'tactip calibrate' first"):
         collect_station(config, tmp_path / "datasets", progress=False, log=lambda _: None)
     assert not (tmp_path / "datasets").exists()
+
+
+@pytest.mark.parametrize("value, workers", [(None, None), ("", None), ("1", 1), (" 3 ", 3)])
+def test_the_default_worker_count_is_the_cpus_or_the_environments(monkeypatch, value, workers):
+    monkeypatch.delenv("TACTIP_SIM_WORKERS", raising=False)
+    if value is not None:
+        monkeypatch.setenv("TACTIP_SIM_WORKERS", value)
+    monkeypatch.setattr("os.cpu_count", lambda: 8)
+    assert default_sim_workers() == (4 if workers is None else workers)
+    monkeypatch.setattr("os.cpu_count", lambda: None)
+    assert default_sim_workers() == (1 if workers is None else workers)
+
+
+@pytest.mark.parametrize("value", ["0", "-2", "two", "1.5"])
+def test_a_bad_worker_count_in_the_environment_is_one_clear_error(monkeypatch, value):
+    monkeypatch.setenv("TACTIP_SIM_WORKERS", value)
+    with pytest.raises(TactipError, match=f"TACTIP_SIM_WORKERS={value!r}: give a whole number"):
+        default_sim_workers()
 
 
 def test_the_datasets_describe_the_sensor(sim_station):
