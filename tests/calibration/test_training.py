@@ -78,11 +78,12 @@ def test_the_holdout_folds_leave_every_class_in_every_fold(files):
 @pytest.mark.parametrize("n_locations", [3, 6])
 def test_every_holdout_fold_holds_out_as_many_taps_whatever_the_repeats(taps_per_class, n_locations):
     # With two taps of a class, one is held out; dealt afresh in each class, every such tap fell in fold 0
-    # (44 of the small station's 48). One deal over every class spreads them over the folds.
+    # (44 of the small station's 48). One deal over every class spreads them over the folds, to within the
+    # taps of one location class's group (one per identity: 3 widths here).
     train = gap_dataset(seed=3, taps_per_class=taps_per_class, **GRID)
     fold = holdout_folds(train, n_locations=n_locations, folds=4)
     sizes = np.bincount(fold[fold >= 0], minlength=4)
-    assert len(sizes) == 4 and sizes.max() - sizes.min() <= 1, sizes
+    assert len(sizes) == 4 and sizes.max() - sizes.min() <= 3, sizes
     model_class = fit_model(train, n_locations=n_locations, bins=20).tap_class(train)
     for c in np.unique(model_class):
         inside = model_class == c
@@ -106,10 +107,30 @@ def test_every_holdout_fold_holds_out_taps_of_every_identity(widths):
     for k in range(4):
         held = train.identity[fold == k]
         assert set(held) == set(train.identity), (k, sorted(set(held)))
-    # Dealt identity-major instead, the identities of one depth fell in one fold: they are in different folds.
-    for depth in range(1, 10):
-        at = (train.location == depth) & (fold >= 0)
-        assert len(np.unique(fold[at])) == min(at.sum(), 4), (depth, fold[at])
+
+
+@pytest.mark.parametrize("taps_per_class, depths, n_locations", [(1, 12, 6), (1, 23, 11), (2, 12, 12), (3, 12, 11)])
+def test_a_held_out_tap_meets_competitors_short_of_the_same_taps(taps_per_class, depths, n_locations):
+    # The identities of one location class are held out together (same fold, same depth), so in a fold's fit the
+    # held-out tap's class and its competitors at that location are short of the same taps. Dealt as a Latin
+    # square (the identities of one depth in different folds), the held-out tap's class alone lacked its depth:
+    # on the packaged station (one tap per depth, two depths per class) the histogram's out-of-fold width
+    # accuracy after one tap was 0.00-0.10 at every depth, 0.47-0.87 on the test collection.
+    train = gap_dataset(seed=3, taps_per_class=taps_per_class, depths=depths, widths=4, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=n_locations, folds=4)
+    model_class = fit_model(train, n_locations=n_locations, bins=20).tap_class(train)
+    location_class = model_class // 4
+    for k in range(4):
+        held = fold == k
+        assert held.any()
+        for l in np.unique(location_class[held]):
+            for depth in np.unique(train.location[held & (location_class == l)]):
+                at = held & (train.location == depth)
+                assert sorted(train.identity[at]) == sorted(set(train.identity)), (k, depth)   # every width
+            # what every class at this location keeps in fold k's fit, depth by depth, is the same for every width
+            kept = [sorted(train.location[(fold != k) & (location_class == l) & (train.identity == w)])
+                    for w in sorted(set(train.identity))]
+            assert all(depths_kept == kept[0] for depths_kept in kept), (k, l, kept)
 
 
 def test_a_class_of_extreme_taps_only_holds_out_one_and_keeps_the_rest():
