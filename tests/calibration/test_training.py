@@ -178,11 +178,11 @@ def test_the_out_of_fold_likelihoods_come_from_models_that_never_saw_the_tap(fil
     assert int(model.taps_per_class.sum()) == int((fold != 0).sum())                      # fold 0's model is kept
 
 
-def test_a_calibrated_kind_gets_one_tempering_fitted_on_the_pooled_out_of_fold_scores(files):
+def test_pooled_tempering_is_one_beta_fitted_on_the_pooled_out_of_fold_scores(files):
     # Each fold's fit tempers itself on its own small split: on the small station the torch's four were 2.6-15.7
-    # (collection seed 1), and the one judging the fixation's taps set the threshold. One beta, fitted on every
-    # held-out tap's untempered scores, goes to every fold's model and to the refit.
-    from calibration import fit_with_fixation
+    # (collection seed 1), and the one judging the fixation's taps set the threshold. Pooled (the torch's default;
+    # the Gaussian here, as it is cheap), one beta fitted on every held-out tap's untempered scores goes to every
+    # fold's model.
     from perception import train_model
     from perception.tempering import fit_tempering
 
@@ -196,12 +196,13 @@ def test_a_calibrated_kind_gets_one_tempering_fitted_on_the_pooled_out_of_fold_s
         untempered[rows] = fitted.log_likelihood_batch(train.taps[held[rows]]).reshape(len(rows), -1) / fitted.tempering
         own.append(fitted.tempering)
     assert max(own) > 1.05 * min(own)                       # the fits' own betas differ
-    model, environment = cross_fitted_environment(train, n_locations=3, kind="gaussian")
+    model, environment = cross_fitted_environment(train, n_locations=3, kind="gaussian", pool_tempering=True)
     beta = fit_tempering(untempered.reshape(-1, 3, 3), environment.tap_class % 3)
     assert model.tempering == pytest.approx(beta)
     assert np.allclose(environment.log_likelihood.reshape(len(held), -1), beta * untempered)
-    kept = fit_with_fixation(train, kind="gaussian", n_locations=3, target_accuracy=0.9, runs=200, log=lambda _: None)
-    assert kept.tempering == pytest.approx(beta)            # the refit on every tap carries it
+    own, _ = cross_fitted_environment(train, n_locations=3, kind="gaussian")      # the Gaussian's default: its own
+    assert own.tempering == pytest.approx(train_model(train.subset(np.flatnonzero(fold != 0)), kind="gaussian",
+                                                      n_locations=3).tempering)
 
 
 def test_a_class_with_one_tap_leaves_nothing_to_hold_out(files):
