@@ -42,6 +42,15 @@ and way of measuring: the Gaussian 0.024 / 0.051 / 0.024 / 0.019 / 0.026 for see
 two folds it had 0.27-0.29 (accuracy 0.70-0.75 in 1.0 taps). The torch 0.068 / 0.126 / 0.102 / 0.074 / 0.131 for seeds
 0-4, mean 0.100 (main, 11 classes: 0.082 / 0.063 / 0.091 / 0.029 / 0.047, mean 0.062; 0.000 after 3 and 5
 taps), accuracy 0.989 / 1.00 / 0.989 / 1.00 / 1.00 in 1.36-1.45 taps. Load 14-20 on 2 cores.
+
+With every identity of a location held out together, every tap off the extremes held out once and the torch's
+tempering one beta fitted on the pooled out-of-fold scores (`calibration.cross_fitted_environment`; 2026-11-29,
+same collections, measured in one process per seed from pickled fits, load 15-20): the Gaussian 0.028 / 0.036 /
+0.024 / 0.016 / 0.031 for seeds 0-4 (mean 0.027), test accuracy 0.945 / 0.961 / 1.00 / 0.965 / 0.989 in
+1.32-1.35 taps; the torch 0.021 / 0.044 / 0.042 / 0.046 for seeds 0-3 (mean 0.038; main 0.082 / 0.063 / 0.091 /
+0.029, mean 0.066; seed 4 not measured), test accuracy 0.949 / 0.956 / 0.966 / 0.959 in 1.32 taps (the target 0.95;
+the Latin folds' pessimism had given 0.99-1.00 in 1.36-1.45), pooled beta 5.0 / 5.4 / 5.3 / 4.0, g1 0.95 / 0.76 /
+0.63 / 0.48; with each fit's own beta 0.023 / 0.081 / 0.049 / 0.046 (fold betas 2.6-15.7 on seed 1).
 """
 
 import argparse
