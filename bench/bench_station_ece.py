@@ -22,6 +22,35 @@ the 768 ECE taps 0.082 / 0.063 / 0.091 / 0.029 / 0.047 for seeds 0-4 (floor 0.02
 0.000 on the other three. The models of 4 repeats on the same ECE taps:
 0.026 / 0.066 / 0.047 after one tap (floor 0.02), 0.041 / 0.012 / 0.007 after 3, 0.054 / 0.014 / 0.001
 after 5 (2000 runs).
+
+With the held-out folds balanced (12 taps each) and the model refitted on every training tap
+(`calibration.fit_with_fixation`), on the same ECE taps, ``ece_1_all``: 0.054 / 0.117 / 0.113 / 0.098 for
+seeds 0-3 (fold 0's model kept instead: 0.099 / 0.127 / 0.069 / 0.044); the Gaussian 0.025 / 0.042 / 0.071 / 0.042 /
+0.062 for seeds 0-4 (main before: 0.032 / 0.061 / 0.021 / 0.043 / 0.035). Measured in one process per
+seed on the collections this script wrote, not by rerunning it (the machine was loaded, 13-28 on 2 cores).
+
+With the folds dealt as a Latin square (2026-11-29; before, fold k held out gap k alone), same collections and
+way of measuring: the Gaussian 0.031 / 0.022 / 0.080 / 0.019 / 0.016 for seeds 0-4 (mean 0.034; 0.000 after 3
+and 5 taps), test accuracy 0.925 / 0.965 / 0.962 / 1.00 / 0.99 in 1.32-1.42 taps (main, rerun alike: 0.032 /
+0.061 / 0.021 / 0.043 / 0.035, accuracy 0.99 / 0.961 / 0.938 / 0.952 / 0.962); the torch on seed 0 0.052 (0.067
+after one active tap, 0.000 after 3 and 5), accuracy 0.983 in 1.37 taps. Load 7-18 on 2 cores.
+
+With 12 location classes, one per depth (the suite's station since 2026-11-29; before, 11 classes put 5.0
+and 5.5 mm in one), Latin-square folds and the Gaussian's cross-validation in 4 folds, same collections
+and way of measuring: the Gaussian 0.024 / 0.051 / 0.024 / 0.019 / 0.026 for seeds 0-4 (mean 0.029;
+0.000 after 3 and 5 taps), test accuracy 0.945 / 0.943 / 1.00 / 0.965 / 0.966 in 1.27-1.35 taps. In
+two folds it had 0.27-0.29 (accuracy 0.70-0.75 in 1.0 taps). The torch 0.068 / 0.126 / 0.102 / 0.074 / 0.131 for seeds
+0-4, mean 0.100 (main, 11 classes: 0.082 / 0.063 / 0.091 / 0.029 / 0.047, mean 0.062; 0.000 after 3 and 5
+taps), accuracy 0.989 / 1.00 / 0.989 / 1.00 / 1.00 in 1.36-1.45 taps. Load 14-20 on 2 cores.
+
+With every identity of a location held out together, every tap off the extremes held out once and the torch's
+tempering one beta fitted on the pooled out-of-fold scores (`calibration.cross_fitted_environment`; 2026-11-29,
+same collections, measured in one process per seed from pickled fits, load 15-20): the Gaussian 0.028 / 0.036 /
+0.024 / 0.016 / 0.031 for seeds 0-4 (mean 0.027), test accuracy 0.945 / 0.961 / 1.00 / 0.965 / 0.989 in
+1.32-1.35 taps; the torch 0.021 / 0.044 / 0.042 / 0.046 for seeds 0-3 (mean 0.038; main 0.082 / 0.063 / 0.091 /
+0.029, mean 0.066; seed 4 not measured), test accuracy 0.949 / 0.956 / 0.966 / 0.959 in 1.32 taps (the target 0.95;
+the Latin folds' pessimism had given 0.99-1.00 in 1.36-1.45), pooled beta 5.0 / 5.4 / 5.3 / 4.0, g1 0.95 / 0.76 /
+0.63 / 0.48; with each fit's own beta 0.023 / 0.081 / 0.049 / 0.046 (fold betas 2.6-15.7 on seed 1).
 """
 
 import argparse

@@ -74,6 +74,94 @@ def test_the_holdout_folds_leave_every_class_in_every_fold(files):
     assert np.array_equal(fold, holdout_folds(train, n_locations=3, folds=4))                # deterministic
 
 
+@pytest.mark.parametrize("taps_per_class", [2, 3, 4, 5])
+@pytest.mark.parametrize("n_locations", [3, 6])
+def test_every_holdout_fold_holds_out_as_many_taps_whatever_the_repeats(taps_per_class, n_locations):
+    # With two taps of a class, one is held out; dealt afresh in each class, every such tap fell in fold 0
+    # (44 of the small station's 48). One deal over every class spreads them over the folds, to within the
+    # taps of one location class's group (one per identity: 3 widths here).
+    train = gap_dataset(seed=3, taps_per_class=taps_per_class, **GRID)
+    fold = holdout_folds(train, n_locations=n_locations, folds=4)
+    sizes = np.bincount(fold[fold >= 0], minlength=4)
+    assert len(sizes) == 4 and sizes.max() - sizes.min() <= 3, sizes
+    model_class = fit_model(train, n_locations=n_locations, bins=20).tap_class(train)
+    for c in np.unique(model_class):
+        inside = model_class == c
+        off_extremes = inside & (train.location > 0) & (train.location < 5)
+        if off_extremes.any():                              # extremes stay in where the class has other taps
+            assert (fold[inside & ~off_extremes] == -1).all()
+        for k in range(4):
+            assert (inside & (fold != k)).any()             # one tap of every class stays in every fold's fit
+        held = fold[inside & (fold >= 0)]
+        assert len(held) >= 1 and len(np.unique(held)) == min(len(held), 4)   # a class's taps in different folds
+    assert np.array_equal(fold, holdout_folds(train, n_locations=n_locations, folds=4))   # deterministic
+
+
+@pytest.mark.parametrize("widths", [2, 4, 8])
+def test_every_holdout_fold_holds_out_taps_of_every_identity(widths):
+    # Two repeats at 12 depths in 11 location classes (the small station's shape until it took 12 classes). Dealt
+    # location-major, class (l, i) held out its repeat in fold (l * widths + i) % 4: with 4 widths fold k held out
+    # width k alone, so each fold's model missed one width's repeats and was judged on that width only.
+    train = gap_dataset(seed=3, taps_per_class=2, depths=12, widths=widths, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=11, folds=4)
+    for k in range(4):
+        held = train.identity[fold == k]
+        assert set(held) == set(train.identity), (k, sorted(set(held)))
+
+
+@pytest.mark.parametrize("taps_per_class, depths, n_locations", [(1, 12, 6), (1, 23, 11), (2, 12, 12), (3, 12, 11)])
+def test_a_held_out_tap_meets_competitors_short_of_the_same_taps(taps_per_class, depths, n_locations):
+    # The identities of one location class are held out together (same fold, same depth), so in a fold's fit the
+    # held-out tap's class and its competitors at that location are short of the same taps. Dealt as a Latin
+    # square (the identities of one depth in different folds), the held-out tap's class alone lacked its depth:
+    # on the packaged station (one tap per depth, two depths per class) the histogram's out-of-fold width
+    # accuracy after one tap was 0.00-0.10 at every depth, 0.47-0.87 on the test collection.
+    train = gap_dataset(seed=3, taps_per_class=taps_per_class, depths=depths, widths=4, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=n_locations, folds=4)
+    model_class = fit_model(train, n_locations=n_locations, bins=20).tap_class(train)
+    location_class = model_class // 4
+    for k in range(4):
+        held = fold == k
+        assert held.any()
+        for l in np.unique(location_class[held]):
+            for depth in np.unique(train.location[held & (location_class == l)]):
+                at = held & (train.location == depth)
+                assert sorted(train.identity[at]) == sorted(set(train.identity)), (k, depth)   # every width
+            # what every class at this location keeps in fold k's fit, depth by depth, is the same for every width
+            kept = [sorted(train.location[(fold != k) & (location_class == l) & (train.identity == w)])
+                    for w in sorted(set(train.identity))]
+            assert all(depths_kept == kept[0] for depths_kept in kept), (k, l, kept)
+
+
+@pytest.mark.parametrize("taps_per_class, depths, n_locations", [(1, 23, 11), (2, 12, 12), (4, 6, 3)])
+def test_every_tap_off_the_extremes_is_held_out_once(taps_per_class, depths, n_locations):
+    # So that a class is judged on all its taps. Holding out all but the last of a class (location order), the
+    # packaged station's classes (two depths each, one tap per depth) were judged on their shallow depth alone, and
+    # the fixation sweep's errors alternated from class to class (3.75 and 4.75 mm low, 4.25 and 5.25 mm high).
+    train = gap_dataset(seed=3, taps_per_class=taps_per_class, depths=depths, widths=3, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=n_locations, folds=4)
+    off_extremes = (train.location > train.location.min()) & (train.location < train.location.max())
+    assert (fold[off_extremes] >= 0).all()
+    model_class = fit_model(train, n_locations=n_locations, bins=20).tap_class(train)
+    for c in np.unique(model_class[~off_extremes]):   # extreme taps stay in, but one of a class of extreme taps only
+        inside = model_class == c
+        assert (fold[inside & ~off_extremes] >= 0).sum() == (0 if (inside & off_extremes).any() else 1)
+
+
+def test_a_class_of_extreme_taps_only_holds_out_one_and_keeps_the_rest():
+    # 12 depths in 11 classes: the shallowest class holds depth 0 mm alone (3 taps per width), the deepest 10 and
+    # 11 mm. Every class needs held-out taps, so the shallowest holds out one and keeps two in every fold's fit;
+    # the deepest class holds out every 10 mm tap and keeps every 11 mm tap in.
+    train = gap_dataset(seed=3, taps_per_class=3, depths=12, widths=3, samples=10, dims=8)
+    fold = holdout_folds(train, n_locations=11, folds=4)
+    for width in (1.0, 2.0, 3.0):
+        shallow = (train.location == 0) & (train.identity == width)
+        assert (fold[shallow] >= 0).sum() == 1
+        assert min((shallow & (fold != k)).sum() for k in range(4)) == 2
+        assert (fold[(train.location == 11) & (train.identity == width)] == -1).all()
+        assert (fold[(train.location == 10) & (train.identity == width)] >= 0).all()
+
+
 def test_the_out_of_fold_likelihoods_come_from_models_that_never_saw_the_tap(files):
     from perception import train_model
 
@@ -90,6 +178,33 @@ def test_the_out_of_fold_likelihoods_come_from_models_that_never_saw_the_tap(fil
     assert int(model.taps_per_class.sum()) == int((fold != 0).sum())                      # fold 0's model is kept
 
 
+def test_pooled_tempering_is_one_beta_fitted_on_the_pooled_out_of_fold_scores(files):
+    # Each fold's fit tempers itself on its own small split: on the small station the torch's four were 2.6-15.7
+    # (collection seed 1), and the one judging the fixation's taps set the threshold. Pooled (the torch's default;
+    # the Gaussian here, as it is cheap), one beta fitted on every held-out tap's untempered scores goes to every
+    # fold's model.
+    from perception import train_model
+    from perception.tempering import fit_tempering
+
+    _, train = files
+    fold = holdout_folds(train, n_locations=3)
+    held = np.flatnonzero(fold >= 0)
+    untempered, own = np.empty((len(held), 9)), []
+    for k in range(4):
+        fitted = train_model(train.subset(np.flatnonzero(fold != k)), kind="gaussian", n_locations=3)
+        rows = np.flatnonzero(fold[held] == k)
+        untempered[rows] = fitted.log_likelihood_batch(train.taps[held[rows]]).reshape(len(rows), -1) / fitted.tempering
+        own.append(fitted.tempering)
+    assert max(own) > 1.05 * min(own)                       # the fits' own betas differ
+    model, environment = cross_fitted_environment(train, n_locations=3, kind="gaussian", pool_tempering=True)
+    beta = fit_tempering(untempered.reshape(-1, 3, 3), environment.tap_class % 3)
+    assert model.tempering == pytest.approx(beta)
+    assert np.allclose(environment.log_likelihood.reshape(len(held), -1), beta * untempered)
+    own, _ = cross_fitted_environment(train, n_locations=3, kind="gaussian")      # the Gaussian's default: its own
+    assert own.tempering == pytest.approx(train_model(train.subset(np.flatnonzero(fold != 0)), kind="gaussian",
+                                                      n_locations=3).tempering)
+
+
 def test_a_class_with_one_tap_leaves_nothing_to_hold_out(files):
     _, train = files
     with pytest.raises(CalibrationError, match="has a single training tap"):
@@ -98,8 +213,8 @@ def test_a_class_with_one_tap_leaves_nothing_to_hold_out(files):
 
 def test_the_station_model_is_chosen_without_the_test_collection(files):
     """prepare_station_model reads no test taps: its settings are chosen on training taps held out in folds,
-    scored by models fitted on the others, and fold 0's model is kept; the test collection only reports (a
-    test with other taps reports other figures of the same model)."""
+    scored by models fitted on the others, and given to a model fitted on every training tap; the test
+    collection only reports (a test with other taps reports other figures of the same model)."""
     from calibration import final_figures, prepare_station_model
     from perception import load_dataset, train_model
 
@@ -109,9 +224,8 @@ def test_the_station_model_is_chosen_without_the_test_collection(files):
                                   target_accuracy=0.9, tolerance=0.0, runs=300, log=lines.append)
     assert "held out in 4 folds" in lines[0]
     assert model.recommended["fixation_location"] > 2.5 and model.recommended["policy"] == "active"
-    fit = holdout_folds(train, n_locations=6) != 0
-    fitted = train_model(train.subset(np.flatnonzero(fit)), kind="gaussian", n_locations=6)   # all but fold 0
-    assert np.allclose(model.class_means, fitted.class_means)
+    assert np.allclose(model.class_means, train_model(train, kind="gaussian", n_locations=6).class_means)   # every tap
+    assert any("training taps held out (" in line for line in lines)
     assert np.array_equal(model.location_edges, train_model(train, kind="gaussian", n_locations=6).location_edges)
     assert load_model(root / "model.h5").recommended == model.recommended
     test = load_dataset(root / "test.h5")
@@ -119,8 +233,27 @@ def test_the_station_model_is_chosen_without_the_test_collection(files):
     shuffled = type(test)(test.taps, test.location, np.random.default_rng(0).permutation(test.identity), None,
                           test.front_end, test.location_unit, test.identity_unit, test.dim_names, test.sensor)
     unfair = final_figures(model, shuffled, runs=500)
-    assert fair.accuracy > 0.8 > 0.5 > unfair.accuracy
+    # At target 0.9 the test accuracy over synthetic collection seeds 1-5 (test seeds 101-105) was 0.78-0.89, mean
+    # 0.83, with every identity of a location held out together (0.76-0.95, mean 0.87, dealt as a Latin square,
+    # whose held-out taps met competitors with more taps than their own class and chose higher thresholds).
+    assert fair.accuracy > 0.75 > 0.5 > unfair.accuracy
     assert fair.threshold == model.recommended["decision_threshold"] and fair.runs == 500
+
+
+def test_the_model_refitted_on_every_tap_carries_the_settings_chosen_out_of_fold(files):
+    from calibration import fit_with_fixation
+    from perception import train_model
+
+    _, train = files
+    options = dict(kind="gaussian", n_locations=6, target_accuracy=0.9, runs=300, log=lambda _: None)
+    refit, kept = fit_with_fixation(train, **options), fit_with_fixation(train, refit=False, **options)
+    assert refit.recommended == kept.recommended and refit.tap_tempering == kept.tap_tempering
+    assert len(refit.tap_tempering) == 5
+    fold = holdout_folds(train, n_locations=6)
+    assert np.allclose(kept.class_means, train_model(train.subset(np.flatnonzero(fold != 0)), kind="gaussian",
+                                                     n_locations=6).class_means)     # fold 0's model
+    assert np.allclose(refit.class_means, train_model(train, kind="gaussian", n_locations=6).class_means)
+    assert int(refit.taps_per_class.sum()) == len(train) > int(kept.taps_per_class.sum())
 
 
 def test_a_missed_target_still_recommends_a_threshold_above_zero_on_calibrated_beliefs(files):

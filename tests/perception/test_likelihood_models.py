@@ -114,6 +114,16 @@ def test_gaussian_beats_the_histogram_on_correlated_noise():
     assert accuracy["gaussian"] > 0.9 > accuracy["histogram"] + 0.1
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_gaussian_of_two_taps_per_class_is_tempered_as_it_is_used(seed):
+    # Two taps per class (a station's 2 repeats, one depth per class): dealt in two folds, every class split one-one,
+    # no fold's fit had within-class residuals and whitened by the total covariance, the final fit by the within
+    # one: beta came out ~70x too large and the one-tap ECE 0.25-0.30 on these seeds (four folds: 0.08-0.11).
+    grid = dict(depths=12, widths=4, samples=10, dims=8, legible_from=0.3)
+    model = train_model(gap_dataset(seed=seed, taps_per_class=2, **grid), kind="gaussian", n_locations=12)
+    assert one_tap_ece(model, gap_dataset(seed=100 + seed, taps_per_class=8, **grid)) < 0.15
+
+
 @pytest.mark.parametrize("kind", ["histogram", "calibrated-histogram", "gaussian"])
 def test_save_and_load_keep_kind_and_likelihood(tmp_path, test, models, kind):
     model = models[kind].with_recommended(decision_threshold=0.95, fixation_location=2.0, policy="active")

@@ -3,8 +3,12 @@
 The station is the packaged simulated one (`tactip.station.config.SIM_PRESET`) cut down to four gaps far apart
 in width (0.5, 1.5, 2.5, 3.5 mm), a 0.5 mm depth step over the paper's 0-5.5 mm and two taps per
 depth, so that one collection is 2 x 96 taps (with one tap per depth the histograms are too sparse
-to tell the widths apart reliably); 11 depth classes make the class width the depth step, so the
-perceiver's moves keep it on the collected depths. `sim_station` runs calibrate, collect, train and
+to tell the widths apart reliably); 12 depth classes put every one of the 12 collected depths (0, 0.5, ...,
+5.5 mm) in a class of its own. (`perception.fit_class_grid` makes ``n`` equal classes spanning the deepest and
+shallowest training depths, so 11 classes, 0.5 mm wide like the depth step, put 5.0 and 5.5 mm in one class:
+a Gaussian's shared covariance then took that class's depth spread for noise, and its fold models' tempering
+split 10-200x on whether a fold held out a 5.0 mm tap. The classes are now 0.46 mm wide: the live station's moves,
+whole classes, land between collected depths, which the simulated station taps like any other.) `sim_station` runs calibrate, collect, train and
 validate through the CLI once per session; the tests read its files and must not change them (copy
 them to change them).
 """
@@ -28,7 +32,7 @@ from tactip.station.config import SIM_PRESET, load_station_config
 SMALL_GAPS = ("g02", "g06", "g10", "g14")
 DEPTH_STEP_MM = 0.5
 REPEATS = 2
-LOCATIONS = 11
+LOCATIONS = 12                    # one class per collected depth (12 depths)
 THRESHOLDS = (0.5, 0.9, 0.99)
 
 # The CLI processes these tests stop with Ctrl-C must feel it: a shell running the suite in the

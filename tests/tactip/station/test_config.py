@@ -119,3 +119,21 @@ def test_ranges_name_the_key_and_the_range(mutate, message):
     with pytest.raises(ConfigError) as err:
         parse_station_config(data, base_dir=SAMPLES)
     assert message in str(err.value)
+
+
+def test_every_depth_of_the_small_station_is_a_class_of_its_own(tmp_path):
+    # The test suite's small station collects 12 depths (0-5.5 mm, 0.5 mm apart). With 11 classes spanning
+    # 0-5.5 mm, 5.0 and 5.5 mm shared a class whose depth spread a Gaussian's covariance took for noise.
+    import numpy as np
+
+    from perception import Dataset
+    from perception.likelihood import fit_class_grid
+    from tests.tactip.conftest import small_station_table
+
+    config = parse_station_config(small_station_table(tmp_path), base_dir=tmp_path)
+    depths = np.asarray(config.protocol.depths)
+    assert len(depths) == 12 and depths[-1] == pytest.approx(5.5)
+    taps = np.random.default_rng(0).normal(size=(len(depths), 4, 2))
+    dataset = Dataset(taps, depths, np.ones(len(depths)), None, "tactip")
+    grid = fit_class_grid(dataset, n_locations=config.perception.locations)
+    assert sorted(grid.location_class(depths)) == list(range(len(depths)))

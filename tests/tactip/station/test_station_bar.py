@@ -9,6 +9,12 @@ Its size is what the bar needs: at a 0.5 mm depth step (12 depths, half the taps
 refuses the station (a class of one training tap leaves nothing to hold out for the fixation and
 threshold), and at full size the margin of active over random is small: 0.042-0.047 mm (errors
 0.083-0.092 against 0.125-0.135 mm; stationary 0.77-0.81 mm) over Monte Carlo seeds 7-9 (2026-11-29).
+With the model refitted on every training tap (calibration.fit_with_fixation) random perception is strong
+too, and the bar holds at the deep fixations only: on collection seeds 0 / 1 / 2 (this test's station is 0)
+active / random at 5.25 mm 0.0005 / 0.030, 0.020 / 0.064, 0.013 / 0.036; at 4.75 mm 0.029 / 0.030, 0.045 / 0.064,
+0.063 / 0.036; at 3.75 mm 0.065 / 0.030 (fails), 0.042 / 0.064, 0.100 / 0.036 (fails). The sweep on held-out
+training taps (calibration.holdout_folds) chooses 4.75 / 4.75 / 5.25 mm; with the Latin-square folds it chose
+3.75 / 4.75 / 3.75 (2026-11-29).
 """
 
 import dataclasses
