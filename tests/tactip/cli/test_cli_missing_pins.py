@@ -18,9 +18,10 @@ from tests.perception.synthetic import gap_dataset
 PINS, LOST = 40, 5
 GRID = dict(depths=4, widths=4, samples=6, dims=2 * PINS, legible_from=0.3, noise=0.05)
 SEEDS = (0, 1, 2)
-# The torch networks train at most 30 epochs (default 100: 2-3x the CPU). On seeds 0-2 either way every drop
-# is 0.0 (complete and missing taps 1.00), the one-tap drop -0.021..0.012 (default -0.002..0.003) and the one-tap
-# accuracy on missing taps 0.68-0.72 (default 0.71-0.74; the bar 0.5); seeds 3-6 at 30 epochs: EPOCHS_SEEDS_3_6.
+# The torch networks train at most 30 epochs (`tactip train --epochs`; the default 100 takes about twice the
+# CPU). On seeds 0-2 either way every drop is 0.0 (complete and missing taps 1.00), the one-tap drop
+# -0.021..0.012 (default -0.002..0.003) and the one-tap accuracy on missing taps 0.68-0.72 (default 0.71-0.74;
+# the bar 0.5); seeds 3-6 at 30 epochs: drops 0.0, one-tap drops -0.010..0.015, one-tap accuracy 0.68-0.72.
 EPOCHS = {"torch": ["--epochs", "30"]}
 
 
