@@ -1,7 +1,7 @@
 """Every README example that calls ``tactip`` runs as written (issue 22).
 
 Each example (a line of a ```sh block whose command is ``tactip``; a line ending in ``\\`` goes on on the
-next) runs in bash, in a fresh folder of its own, with ``tactip`` on the PATH (this tree's CLI). The folder
+next) runs in a fresh folder of its own, with this tree's CLI (below: in this process or in bash). The folder
 holds what the example reads, standing in for the user's files: ``station.toml`` is the session's small
 simulated station (`sim_station`, its gap g02 renamed door-left; without its calibration for
 ``calibrate``, a new station), ``data/`` its taps, calibration and model, ``models/`` its histogram model
@@ -19,9 +19,9 @@ reason.
 Most examples run in this process: ``tactip.cli.main`` with the example's words, in its folder and with its
 environment, stdout and stderr captured; an exception escaping ``main`` is the traceback a user would see. A
 fresh interpreter per example would import the package again (~1.7 s of CPU each) and prove nothing more about
-the example. Three kinds still run in a subprocess through bash, as a user types them: an example that needs
-the shell (a redirection, a parameter expansion; `_needs_shell`), which runs ``tactip`` as ``python -m
-tactip.cli``, and those of `ENTRY_POINT`, which run the installed console script itself.
+the example. Two kinds still run in a subprocess through bash, as a user types them, with ``tactip`` on the
+PATH: an example that needs the shell (a redirection, a parameter expansion; `_needs_shell`), where ``tactip``
+is ``python -m tactip.cli``, and those of `ENTRY_POINT`, where it is the installed console script itself.
 """
 
 from __future__ import annotations
