@@ -136,6 +136,8 @@ def test_cli_sweep_fixation_and_reproduce_with_scheduler(address, tmp_path, caps
     assert load_model(tmp_path / "there.h5").recommended == load_model(tmp_path / "here.h5").recommended
     import tactip.reproduce
 
+    # the same command without --scheduler, run once per session (before the patch: it may run it now)
+    here_rows, _, here_comparisons = quick_reproduction("003")
     real, reports = tactip.reproduce.reproduce, []
 
     def keeping_the_report(*args, **kwargs):
@@ -145,8 +147,7 @@ def test_cli_sweep_fixation_and_reproduce_with_scheduler(address, tmp_path, caps
     monkeypatch.setattr(tactip.reproduce, "reproduce", keeping_the_report)     # the CLI calls it, as it is
     assert main(["reproduce", "003", "--quick", "--quiet", "--json", str(tmp_path / "p003-there.json"), "--scheduler",
                  address]) == 0
-    # the same command without --scheduler, run once per session: the same rows and comparisons (NaN as NaN)
-    here_rows, _, here_comparisons = quick_reproduction("003")
+    # the same rows and comparisons as there (NaN as NaN)
     assert json.loads((tmp_path / "p003-there.json").read_text()) == here_rows and len(here_rows) >= 2
     np.testing.assert_equal([[c.figure, float(c.measured)] for c in reports[0].comparisons], here_comparisons)
     assert len(reports) == 1
