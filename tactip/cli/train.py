@@ -14,8 +14,9 @@ distinct identity (e.g. gap width, mm) is a class (papers 000 and 002). --model 
   torch                 an ensemble of five small networks over the tap (every value, one pooled
                         scale -> 64 ReLU units -> the classes), each early-stopped on held-out
                         taps, the ensemble tempered the same way; trains on every core (large
-                        taps; small networks on one); needs torch (pip install torch==2.13.0,
-                        the CPU build; or tactip[learned])
+                        taps; small networks on one); --epochs caps each network's training
+                        (default 100); needs torch (pip install torch==2.13.0, the CPU build; or
+                        tactip[learned])
 
 The calibrated kinds need at least two taps per class, ideally repeated at the same locations
 ([protocol] repeats = 2). Use a dataset collected separately from the one you validate with
@@ -31,6 +32,7 @@ Examples:
   tactip train data/train.h5 --out models/gaps.h5 --locations 11
   tactip train data/train.h5 --out models/gaps.h5 --model gaussian
   tactip train data/train.h5 --out models/gaps.h5 --model torch
+  tactip train data/train.h5 --out models/quick.h5 --model torch --epochs 30   # a quicker, rougher network
   tactip train data/train.h5 --out models/gaps.h5 --model gaussian --choose-fixation --target-accuracy 0.95 --tolerance 0.25
 """
 
@@ -43,6 +45,8 @@ from perception.choices import MODEL_KINDS
 from tactip.cli._types import fraction, int_at_least, int_in_range, non_negative_float, output_file, positive_float
 
 HELP = "train a perception model (histogram, calibrated histogram, gaussian, torch) from a tap dataset"
+#: --epochs: the torch model's own default (`perception.learned.fit_torch`'s ``max_epochs``) and the most allowed.
+DEFAULT_EPOCHS, MAX_EPOCHS = 100, 10000
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -58,6 +62,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="value bins per sensor dimension, 2..10000, histogram kinds (default 100)")
     parser.add_argument("--epsilon", type=positive_float, default=None,
                         help="count added to every histogram bin, histogram kinds (default 1e-3)")
+    parser.add_argument("--epochs", type=int_in_range(1, MAX_EPOCHS), default=None, metavar="N",
+                        help=f"torch model: most epochs each network trains, 1..{MAX_EPOCHS} (early stopping on "
+                             f"held-out taps may stop sooner; default {DEFAULT_EPOCHS}); fewer trains faster, "
+                             f"and may fit worse")
     parser.add_argument("--min-taps", type=int_at_least(1), default=1, metavar="N",
                         help="fewest training taps a class may have (default 1)")
     parser.add_argument("--choose-fixation", action="store_true",
@@ -96,6 +104,12 @@ def run(args: argparse.Namespace) -> int:
         raise TactipError("--target-accuracy and --tolerance go with --choose-fixation")
     if args.target_accuracy == 0:
         raise TactipError("--target-accuracy must be in (0, 1], got 0")
+    if args.epochs is not None and args.model != "torch":
+        raise TactipError(f"--epochs sets how long the torch model's networks train; a {args.model} model has none "
+                          f"(leave --epochs out)")
+    if args.epochs is not None and args.choose_fixation:
+        raise TactipError("--epochs does not go with --choose-fixation (its folds train the torch model with "
+                          f"the default {DEFAULT_EPOCHS} epochs)")
     refuse_overwriting_inputs([args.out], [args.dataset])
     dataset = load_dataset(args.dataset)
     print(dataset.describe())
@@ -116,6 +130,11 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always", UserWarning)
         if args.choose_fixation:
             model = _choose_fixation(args, dataset, {**options, "min_taps_per_class": args.min_taps})
+        elif args.epochs is not None:
+            from perception.learned import fit_torch
+
+            model = fit_torch(dataset, n_locations=args.locations, min_taps_per_class=args.min_taps,
+                              max_epochs=args.epochs)
         else:
             model = train_model(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
                                 min_taps_per_class=args.min_taps, **options)

@@ -17,8 +17,8 @@ Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved besi
   the angle-only variant over a sweep of belief thresholds (the paper's beta); the adaptive runs'
   learned shift error at every decision is Fig. 8.
 
-``quick`` keeps each to seconds or a minute (002 prepares the station again, with the reproduction's
-seed, and Fig. 11 taps new collections: the slowest); every run is seeded from ``seed``, as the
+``quick`` keeps each to seconds or a minute (002's Fig. 11 taps new collections: the slowest; its
+figure runs share the station the reproduction prepared); every run is seeded from ``seed``, as the
 reproduction it accompanies.
 """
 
@@ -263,14 +263,21 @@ def run_with_figure_runs(paper: str, *, quick: bool = False, seed: int = 0, prog
     """
     from tactip.reproduce import reproduce
 
-    report = reproduce(paper, quick=quick, seed=seed, progress=progress, map_fn=map_fn)
     extra = {}
     if paper == "002":
-        # the station again, as `p002.run` prepares it (the same seed: the same taps and model), kept here
-        # for the figure runs; the reproduction itself goes through `reproduce`, like every other paper
+        # The station prepared once, in one folder, for the reproduction and its figure runs (preparing
+        # it is most of the work: calibration, two collections, the model). `reproduce` would prepare it
+        # in a folder of its own and remove it, so paper 002 is run here as `reproduce` runs it.
+        from tactip.reproduce import p002
+        from tactip.reproduce.fits import mark_fits
+
         with tempfile.TemporaryDirectory(prefix="tactip-002-figures-") as folder:
+            report = mark_fits(p002.run(quick=quick, seed=seed, progress=progress, map_fn=map_fn,
+                                        data_dir=Path(folder)))
             extra = _p002_rows(Path(folder), quick=quick, seed=seed, progress=progress, map_fn=map_fn)
-    elif paper == "004":
+        return report, {name: _json_ready(rows) for name, rows in extra.items()}
+    report = reproduce(paper, quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+    if paper == "004":
         extra = _p004_rows(quick=quick, seed=seed, progress=progress, map_fn=map_fn)
     elif paper == "003":
         extra = _p003_rows(quick=quick, seed=seed)

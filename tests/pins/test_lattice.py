@@ -68,6 +68,19 @@ def test_later_frames_found_with_the_field_parameters(name):
     assert isinstance(field.params, DetectionParams) and field.params.dark_pins == preset_sensor(name).dark_pins
 
 
+@pytest.mark.parametrize("name", ["tactip-127", "tactip-331", "dark-331", "brown-127", "radial-led-120",
+                                  "small-pad-100"])
+def test_a_sensors_own_lattice_is_not_outnumbered_by_its_gaps(name):
+    """The probe of the other polarity at the field's pitch keeps fewer blobs than the sensor's pins
+    (the gaps between pins; reflections), so a right polarity is never searched twice for it."""
+    from pins.disc import as_grey
+    from pins.lattice import _other_keeps_more
+
+    for contact in CONTACTS:
+        f = preset_frame(name, CONTACTS[contact])
+        assert not _other_keeps_more(as_grey(f.image), _field(name, contact), DetectionParams()), (name, contact)
+
+
 def test_rim_ring_is_the_field_boundary():
     """The search stops at the black rim ring's inner edge: its glare never becomes a candidate."""
     sensor, f = preset_sensor("rim-ring-331"), preset_frame("rim-ring-331")

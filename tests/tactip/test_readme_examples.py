@@ -1,7 +1,7 @@
 """Every README example that calls ``tactip`` runs as written (issue 22).
 
 Each example (a line of a ```sh block whose command is ``tactip``; a line ending in ``\\`` goes on on the
-next) runs in bash, in a fresh folder of its own, with ``tactip`` on the PATH (this tree's CLI). The folder
+next) runs in a fresh folder of its own, with this tree's CLI (below: in this process or in bash). The folder
 holds what the example reads, standing in for the user's files: ``station.toml`` is the session's small
 simulated station (`sim_station`, its gap g02 renamed door-left; without its calibration for
 ``calibrate``, a new station), ``data/`` its taps, calibration and model, ``models/`` its histogram model
@@ -15,10 +15,19 @@ the first run does not train the packaged station for minutes.
 An example passes when it exits 0 (3 where it asks ``--fail-on``: a gap failed, as it may) with no
 traceback. `SKIPPED` lists the examples that cannot run here or that another test runs as written, each with the
 reason.
+
+Most examples run in this process: ``tactip.cli.main`` with the example's words, in its folder and with its
+environment, stdout and stderr captured; an exception escaping ``main`` is the traceback a user would see. A
+fresh interpreter per example would import the package again (~1.7 s of CPU each) and prove nothing more about
+the example. Two kinds still run in a subprocess through bash, as a user types them, with ``tactip`` on the
+PATH: an example that needs the shell (a redirection, a parameter expansion; `_needs_shell`), where ``tactip``
+is ``python -m tactip.cli``, and those of `ENTRY_POINT`, where it is the installed console script itself.
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
 import shlex
@@ -65,6 +74,13 @@ SKIPPED = {
 #: Flags whose value is a file or folder the example writes (never provided beforehand).
 _OUTPUT_FLAGS = ("--out", "--json", "--plot", "--annotate")
 
+#: Examples run through the console script ``tactip`` that ``pip install`` put beside this Python (the
+#: ``[project.scripts]`` entry point), in a subprocess: the installed command works, not only ``python -m``.
+ENTRY_POINT = ("tactip detect frame.png --expected-pins 331 --json",)
+
+#: Words of an example that only a shell understands: it runs through bash.
+_SHELL_WORDS = {">", ">>", "<", "|", "||", "&&", ";", "&", "2>", "2>&1"}
+
 
 def readme_examples(text: str | None = None) -> list[str]:
     """The README's ``tactip`` command lines, continuation lines joined, each once, in order."""
@@ -92,6 +108,17 @@ def test_the_readme_has_examples_of_every_command():
     assert used == set(COMMANDS), set(COMMANDS) ^ used
     joined = readme_examples("```sh\ntactip train a.h5 \\\n    --out b.h5   # note\nls\n```\n")
     assert joined == ["tactip train a.h5      --out b.h5   # note"]
+
+
+def test_the_subprocess_examples_are_there():
+    """The examples that prove the installed console script and ``python -m`` in a shell are README examples,
+    not skipped: a README edit cannot silently leave every example to the in-process path."""
+    runnable = [e for e in readme_examples() if not any(key in e for key in SKIPPED)]
+    for entry in ENTRY_POINT:
+        assert sum(e.startswith(entry) for e in runnable) == 1, entry
+    shell = [e for e in runnable if _needs_shell(e)]
+    assert any(">" in shlex.split(e, comments=True) for e in shell) and any("$" in e for e in shell), shell
+    assert not _needs_shell("tactip train a.h5 --out 'b > c.h5'   # a > in quotes is a word")
 
 
 @pytest.fixture(scope="session")
@@ -186,11 +213,49 @@ def _prepare(folder: Path, example: str, readme_inputs) -> dict:
     bin_dir = folder / ".bin"
     bin_dir.mkdir()
     wrapper = bin_dir / "tactip"
-    wrapper.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m tactip.cli "$@"\n')
+    command = f"{shlex.quote(sys.executable)} -m tactip.cli"
+    if any(example.startswith(e) for e in ENTRY_POINT):
+        script = Path(sys.executable).with_name("tactip")
+        assert script.is_file(), f"no console script {script}: install the package (make .venv/.installed)"
+        command = shlex.quote(str(script))
+    wrapper.write_text(f'#!/bin/sh\nexec {command} "$@"\n')
     wrapper.chmod(wrapper.stat().st_mode | stat.S_IXUSR)
     (folder / ".home").mkdir()
     return {**os.environ, "PATH": f"{bin_dir}{os.pathsep}{os.environ['PATH']}", "PYTHONPATH": str(ROOT),
             "TACTIP_SIM_DIR": str(sim), "HOME": str(folder / ".home"), "MPLBACKEND": "Agg"}
+
+
+def _needs_shell(example: str) -> bool:
+    """Whether ``example`` uses the shell's own syntax (a redirection, a pipe, a parameter expansion)."""
+    words = shlex.split(example, comments=True)
+    return any(w in _SHELL_WORDS or "$" in w or "`" in w for w in words)
+
+
+def _run_here(example: str, folder: Path, env: dict, monkeypatch) -> tuple[int, str, str]:
+    """``example`` run by ``tactip.cli.main`` in this process, in ``folder`` with ``env``: (exit code, out, err).
+
+    The example's words are the shell's (`shlex`: quotes and comments as bash reads them); a leading
+    ``VAR=value`` sets that variable for the command, as in bash. Argument errors (argparse's `SystemExit`)
+    give their exit code; any other exception escapes, as the traceback it would print.
+    """
+    from tactip.cli import main
+
+    words = shlex.split(example, comments=True)
+    while re.fullmatch(r"[A-Z_]+=\S*", words[0]):
+        name, value = words.pop(0).split("=", 1)
+        env = {**env, name: value}
+    assert words[0] == "tactip", example
+    for name, value in env.items():
+        if os.environ.get(name) != value:
+            monkeypatch.setenv(name, value)
+    monkeypatch.chdir(folder)
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(words[1:])
+        except SystemExit as exc:   # what the interpreter would make of it
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    return code, out.getvalue(), err.getvalue()
 
 
 def _example_id(example: str) -> str:
@@ -200,16 +265,20 @@ def _example_id(example: str) -> str:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("example", readme_examples(), ids=_example_id)
-def test_a_readme_example_runs_as_written(example, readme_inputs, tmp_path):
+def test_a_readme_example_runs_as_written(example, readme_inputs, tmp_path, monkeypatch):
     reason = next((why for key, why in SKIPPED.items() if key in example), None)
     if reason:
         pytest.skip(reason)
     env = _prepare(tmp_path, example, readme_inputs)
-    done = subprocess.run(["bash", "-c", f"set -o pipefail\n{example}"], cwd=tmp_path, env=env, capture_output=True,
-                          text=True, timeout=900)
+    if _needs_shell(example) or any(example.startswith(e) for e in ENTRY_POINT):
+        done = subprocess.run(["bash", "-c", f"set -o pipefail\n{example}"], cwd=tmp_path, env=env,
+                              capture_output=True, text=True, timeout=900)
+        code, out, err = done.returncode, done.stdout, done.stderr
+    else:
+        code, out, err = _run_here(example, tmp_path, env, monkeypatch)
     allowed = {0, 3} if "--fail-on" in example else {0}
-    assert done.returncode in allowed and "Traceback" not in done.stderr, (
-        f"{example}\nexit {done.returncode}\nstdout: {done.stdout[-3000:]}\nstderr: {done.stderr[-3000:]}")
+    assert code in allowed and "Traceback" not in err, (
+        f"{example}\nexit {code}\nstdout: {out[-3000:]}\nstderr: {err[-3000:]}")
     for output in _outputs(shlex.split(example, comments=True)):
         if output != "-" and not output.startswith("-"):
             assert (tmp_path / output).exists(), f"{example}: {output} not written"

@@ -1,0 +1,48 @@
+"""`tactip train --epochs N`: the torch model's networks train at most N epochs; without it, the default model."""
+
+import inspect
+
+import pytest
+
+from perception import save_dataset
+from tactip.cli import main
+from tactip.cli.train import DEFAULT_EPOCHS
+from tests.perception.synthetic import gap_dataset
+
+GRID = dict(depths=4, widths=4, samples=6, dims=8, legible_from=0.3)
+
+
+def test_the_default_is_the_torch_models_own():
+    from perception.learned import fit_torch
+
+    assert inspect.signature(fit_torch).parameters["max_epochs"].default == DEFAULT_EPOCHS
+
+
+def test_epochs_go_to_the_torch_fit_and_only_there(tmp_path, capsys, monkeypatch):
+    import perception.learned
+    import perception.model
+
+    save_dataset(tmp_path / "train.h5", gap_dataset(seed=1, taps_per_class=4, **GRID))
+    asked = []
+
+    def fit(dataset, **options):                 # records what it was asked; the histogram model stands in
+        asked.append(options)
+        return perception.model.train_model(dataset, n_locations=options["n_locations"])
+
+    monkeypatch.setattr(perception.learned, "fit_torch", fit)
+    train = ["train", str(tmp_path / "train.h5"), "--locations", "4", "--model", "torch"]
+    assert main([*train, "--out", str(tmp_path / "a.h5"), "--epochs", "7"]) == 0
+    assert asked == [dict(n_locations=4, min_taps_per_class=1, max_epochs=7)]
+    monkeypatch.setattr(perception.model, "_KINDS", {**perception.model._KINDS,
+                                                     "torch": (perception.learned.TorchModel, fit, ("seed",))})
+    assert main([*train, "--out", str(tmp_path / "b.h5")]) == 0       # no --epochs: train_model, as before
+    assert asked[1] == dict(n_locations=4, min_taps_per_class=1, seed=0)
+    capsys.readouterr()
+    assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "c.h5"), "--epochs", "7"]) == 1
+    assert "--epochs sets how long the torch model's networks train; a histogram model has none" in \
+        capsys.readouterr().err
+    assert main([*train, "--out", str(tmp_path / "d.h5"), "--epochs", "7", "--choose-fixation"]) == 1
+    assert "--epochs does not go with --choose-fixation" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main([*train, "--out", str(tmp_path / "e.h5"), "--epochs", "0"])
+    assert "--epochs" in capsys.readouterr().err
