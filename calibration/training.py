@@ -327,7 +327,7 @@ def cross_fitted_environment(train, *, n_locations: int = 11, folds: int = HOLDO
     if pool_tempering and model.temperable:   # one beta for all, on the pooled out-of-fold scores
         from perception.tempering import check_tempering, fit_tempering
 
-        betas = np.array([models[k].tempering for k in fold[held]])
+        betas = np.array([models[k].tempering if k in models else np.nan for k in range(folds)])[fold[held]]
         table = table / betas[:, None]
         n_loc, n_id = model.n_locations, model.n_identities
         truth = environment.tap_class % n_id if n_id > 1 else environment.tap_class // n_id
@@ -434,7 +434,8 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     train : perception.Dataset
         The training taps.
     kind, n_locations, bins, **fit_options
-        As `perception.train_model`.
+        As `perception.train_model`; ``pool_tempering`` among them goes to `cross_fitted_environment`
+        (default: the torch kind), and the refit then takes the pooled beta.
     target_accuracy, tolerance, max_taps, runs, seed, fall_back
         As `choose_fixation`.
     folds : int
@@ -453,8 +454,10 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     """
     log(f"choosing the fixation and threshold on the training taps held out in {folds} folds, each scored by a "
         f"model fitted on the others ({folds} fits)")
+    pooled = fit_options.pop("pool_tempering", None)
+    pooled = kind == "torch" if pooled is None else bool(pooled)
     model, environment = cross_fitted_environment(train, n_locations=n_locations, folds=folds, kind=kind, bins=bins,
-                                                  progress=progress, **fit_options)
+                                                  progress=progress, pool_tempering=pooled, **fit_options)
     fold = holdout_folds(train, n_locations, folds)
     sizes = np.bincount(fold[fold >= 0], minlength=folds)
     log(f"{len(environment.test)} of the {len(train)} training taps held out "
@@ -466,7 +469,7 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     if not refit:
         return chosen
     model = train_model(train, kind=kind, n_locations=n_locations, bins=bins, **fit_options)
-    if kind == "torch":   # the beta chosen out of fold (`cross_fitted_environment`'s pool_tempering), as the g_t
+    if pooled and model.temperable:   # the beta chosen out of fold (`cross_fitted_environment`), as the g_t
         model = model.tempered(chosen.tempering / model.tempering)
     if chosen.tap_tempering:
         model = model.with_tap_tempering(chosen.tap_tempering)

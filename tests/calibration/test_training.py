@@ -274,3 +274,28 @@ def test_a_missed_target_still_recommends_a_threshold_above_zero_on_calibrated_b
     schedule = fit_tap_tempering(VirtualEnvironment(model, test), FixationPolicy(fixation), runs=300, seed=0)
     assert len(schedule) == 5 and schedule[-1] != pytest.approx(1.0, abs=0.01)
     assert chosen.tap_tempering == schedule and chosen.tempering == model.tempering and "tap tempering" in line
+
+
+
+def test_fit_with_fixation_passes_pool_tempering_on_and_the_refit_keeps_the_pooled_beta(files, monkeypatch):
+    """``pool_tempering`` given to `fit_with_fixation` reaches the cross-fitting (it went on to the refit's
+    `train_model`, which takes no such option: TypeError), and the refit keeps the pooled beta, for a Gaussian
+    as for the torch."""
+    import calibration.training as training
+
+    seen = {}
+    real = training.cross_fitted_environment
+
+    def spy(*args, **kwargs):
+        model, environment = real(*args, **kwargs)
+        seen.update(pool_tempering=kwargs.get("pool_tempering"), beta=model.tempering)
+        return model, environment
+
+    monkeypatch.setattr(training, "cross_fitted_environment", spy)
+    _, train = files
+    options = dict(kind="gaussian", n_locations=6, target_accuracy=0.9, runs=300, log=lambda _: None)
+    pooled = training.fit_with_fixation(train, pool_tempering=True, **options)
+    assert seen["pool_tempering"] is True and pooled.tempering == pytest.approx(seen["beta"])
+    own = training.fit_with_fixation(train, **options)
+    assert seen["pool_tempering"] is False
+    assert own.tempering == pytest.approx(training.train_model(train, kind="gaussian", n_locations=6).tempering)
