@@ -40,7 +40,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.tactip.conftest import built_once, run_cli, small_station_table, write_station
+from tests.tactip.conftest import LOCATIONS, built_once, run_cli, small_station_table, write_station
 from tests.tactip.dataset import conftest as _recordings
 
 # The labelled recordings of the dataset tests, built once per session (fixtures of that folder's conftest).
@@ -158,7 +158,7 @@ def _build_inputs(root: Path, sim_station) -> None:
     code, _, err = run_cli(["inspect", "--config", _station_toml(station), "--gap", "door-left", "--seed", "0", "-q"])
     assert code == 0, err
     code, _, err = run_cli(["train", sim_station.train, "--out", root / "gaussian.h5", "--model", "gaussian",
-                            "--locations", "11", "--choose-fixation", "--target-accuracy", "0.95",
+                            "--locations", LOCATIONS, "--choose-fixation", "--target-accuracy", "0.95",
                             "--tolerance", "0.25", "-q"])
     assert code == 0, err
     (root / "sim").mkdir()
