@@ -69,7 +69,7 @@ def main() -> None:
              (pins.track.PinTracker, "start", "tracker start (rest frame)"),
              (pins._rest._AtRest, "_noise_scatter_sq_px2", "  of which rest-noise scatter"),
              (pins._rest, "noise_sigma", "    of which noise_sigma"),
-             (pins.track.PinTracker, "_surround_pixels", "  of which surround pixels"),
+             (pins.track, "surround_pixels", "  of which surround pixels"),
              (pins.track.PinTracker, "update", "tracking (later frames)")]
     for owner, name, label in parts:
         _timed(owner, name, spent, label)
