@@ -65,6 +65,18 @@ radial-led-120 61/12/5/10/5/18 -> 18/10/2/15/2/28 (111 -> 75), small-pad-100 28/
 lost per frame 3.06 -> 3.05, 4.75 -> 4.77, 2.04 -> 1.73; small-pad-100 pin-frames > 1 px 2511 -> 2446
 (model), 926 -> 939 (realistic).
 
+Session of issue 20's "slides4" (2-core VM at load ~10-16; old = main f84c508, new = a found pin keeps a
+tip near a missing pin's prediction only when its own start is twice as near, `pins._identity`
+MISSING_MARGIN), seeds 0-5, apart: model skin radial-led-120 18/44/20/33/39/22 -> 19/27/21/37/28/8 (176
+-> 140), tactip-331 1236/1178/1294/1127/1141/1164 -> 1021/1166/1052/1136/1054/1065 (7140 -> 6494),
+small-pad-100 57/32/110/46/65/87 -> 45/28/48/28/46/43 (397 -> 238); realistic skin radial-led-120
+18/10/2/15/2/28 -> 57/4/2/8/2/15 (75 -> 88: seed 0 one cascade), tactip-331 9/28/101/16/26/5 ->
+9/18/99/16/26/5 (185 -> 173), small-pad-100 51/29/32/31/29/4 -> 9/7/13/18/12/2 (176 -> 61); lost per
+frame (mean) 4.11 -> 4.20, 13.56 -> 14.06, 5.37 -> 5.50 (model), 3.05 -> 3.04, 1.73 -> 1.75, 4.77 ->
+4.71 (realistic); rest>1 and end>1 0 everywhere. 4 slides, seed 0: white-dark-331 model 635 -> 468
+(lost 13.05 -> 14.34), realistic 0 -> 0 (1.87 both); dense-1000 model 532 -> 488 (lost 9.17 -> 9.79),
+realistic 149 -> 149 (1.12 both).
+
 Run: .venv/bin/python bench/bench_slides.py [--presets radial-led-120 tactip-331 small-pad-100]
      [--seeds 0 1 2 3 4 5] [--slides 8] [--pitches 3] [--residual R --creep-s S --final-rest-s S]
      [--min-area model 0.5]  (one report per skin: the model's squeeze and a realistic one, both by default)

@@ -13,12 +13,12 @@ A missing pin's expected position is a prediction, up to a spacing off where a s
 keeps the tip only when its own start is `MISSING_MARGIN` times nearer to it than the missing pin's
 prediction (a placed pin's place is measured: nearest wins). Otherwise neither pin is placed there this
 frame: the missing one is searched for again, the found one too, once the tips part. Measured on
-`bench/bench_slides.py` (8 slides of 3 pitches), seeds 0-2, main f84c508 -> margin 2: pin-frames on
-another pin's tip, model skin, radial-led-120 82 -> 67, tactip-331 3708 -> 3239, small-pad-100 199 ->
-121; realistic skin (``min_area=0.5``) 30 -> 63 (seed 0 18 -> 57: one cascade), 138 -> 126, 112 -> 29;
-lost visible pins per frame 3.87 -> 3.99, 13.37 -> 13.89, 5.30 -> 5.43 (model), 2.92 -> 2.90, 1.79 ->
-1.80, 4.74 -> 4.65 (realistic). Margins 1.22 and 1.5 did less (4086 and 3921 pin-frames in all against
-4269; 2: 3645).
+`bench/bench_slides.py` (8 slides of 3 pitches), seeds 0-5, main f84c508 -> margin 2: pin-frames on
+another pin's tip, model skin, radial-led-120 176 -> 140, tactip-331 7140 -> 6494, small-pad-100 397 ->
+238; realistic skin (``min_area=0.5``) 75 -> 88 (seed 0 18 -> 57, one cascade; seeds 1-5 57 -> 31),
+185 -> 173, 176 -> 61; lost visible pins per frame 4.11 -> 4.20, 13.56 -> 14.06, 5.37 -> 5.50 (model:
+the trade, more pins left missing on merged blobs), 3.05 -> 3.04, 1.73 -> 1.75, 4.77 -> 4.71
+(realistic). Seeds 0-2, margins 1.22 / 1.5 / 2: 4086 / 3921 / 3645 pin-frames in all against 4269.
 """
 
 from __future__ import annotations
