@@ -37,19 +37,19 @@ LONGEST_FIRST = (
     "tests/tactip/test_readme_examples.py",             # 200, of which ~75 the session's fixtures
     "tests/tactip/station/test_station_torch.py",       # 70-170
     "tests/perception/test_learned.py",                 # 70-100
-    "tests/tactip/test_cluster.py",                     # 75
-    "tests/pins/test_lattice.py",                       # 70
+    "tests/pins/test_lattice.py",                       # 94
+    "tests/pins/test_accel_detect.py",                  # 65
     "tests/tactip/reproduce/test_reproduce_002.py",     # 65
+    "tests/tactip/test_cluster.py",                     # 41 (+ the quick 001 and 003 when it runs them first)
     "tests/tactip/line/test_dashboard_browser.py",      # 40-60
-    "tests/pins/test_accel_detect.py",                  # 55
-    "tests/pins/test_lattice_seeds.py",                 # 50
-    "tests/calibration/test_training.py",               # 40
+    "tests/pins/test_lattice_seeds.py",                 # 52
     "tests/tactip/reproduce/test_reproduce.py",         # 50 when it runs the quick reproductions
+    "tests/calibration/test_training.py",               # 40
     "tests/tactip/cli/test_cli_missing_pins.py",        # 33
     "tests/perception/test_baselines.py",               # 33
+    "tests/pins/test_flat_gel.py",                      # 32
     "tests/tactip/dataset/test_build.py",               # 31
-    "tests/pins/test_flat_gel.py",                      # 31
-    "tests/tactip/reproduce/test_reproduce_004.py",     # 30
+    "tests/tactip/reproduce/test_reproduce_004.py",     # 28
     "tests/tactip/reproduce/test_acuity.py",            # 28
     "tests/tactip/cli/test_cli_station.py",             # 23
     "tests/pins/test_accel.py",                         # 22
