@@ -26,21 +26,35 @@ def _free_cpus_per_worker() -> int:
 if os.environ.get("PYTEST_XDIST_WORKER"):
     os.environ.setdefault("TACTIP_SIM_WORKERS", str(_free_cpus_per_worker()))
 
-#: Test files of a worker-minute or more, longest first (seconds of one worker, ``--durations=0`` on a
-#: 2-core VM, 2026-11-28; the station and reproduction files prepare simulated stations).
+#: Test files of about 15 CPU-s or more, longest first (CPU-s of one worker, self + children, measured per test on
+#: a 2-core VM under make test's 2 workers, 2026-11-29 on main f84c508, less what suite4 took off; files not yet
+#: measured there from 2026-11-29's earlier run). test_station_bar (its own station, no session fixture) and the
+#: README's examples (which build the session's station and recordings first) start the two workers;
+#: test_station_torch, which needs that station, queues behind test_station_bar, by when it is built.
+#: test_cluster and test_reproduce share quick reproductions (the first to need one builds it): apart.
 LONGEST_FIRST = (
-    "tests/tactip/station/test_station_bar.py",
-    "tests/tactip/test_readme_examples.py",
-    "tests/tactip/reproduce/test_reproduce_002.py",
-    "tests/tactip/station/test_station_torch.py",
-    "tests/tactip/test_cluster.py",
-    "tests/tactip/reproduce/test_reproduce.py",
-    "tests/tactip/reproduce/test_reproduce_004.py",
-    "tests/tactip/line/test_dashboard_browser.py",
-    "tests/tactip/reproduce/test_acuity.py",
-    "tests/calibration/test_sensor.py",
-    "tests/tactip/cli/test_cli_json.py",
-    "tests/tactip/cli/test_cli_missing_pins.py",
+    "tests/tactip/station/test_station_bar.py",         # 125
+    "tests/tactip/test_readme_examples.py",             # 200, of which ~75 the session's fixtures
+    "tests/tactip/station/test_station_torch.py",       # 70-170
+    "tests/perception/test_learned.py",                 # 70-100
+    "tests/pins/test_lattice.py",                       # 94
+    "tests/pins/test_accel_detect.py",                  # 65
+    "tests/tactip/reproduce/test_reproduce_002.py",     # 65
+    "tests/tactip/test_cluster.py",                     # 41 (+ the quick 001 and 003 when it runs them first)
+    "tests/tactip/line/test_dashboard_browser.py",      # 40-60
+    "tests/pins/test_lattice_seeds.py",                 # 52
+    "tests/tactip/reproduce/test_reproduce.py",         # 50 when it runs the quick reproductions
+    "tests/calibration/test_training.py",               # 40
+    "tests/tactip/cli/test_cli_missing_pins.py",        # 33
+    "tests/perception/test_baselines.py",               # 33
+    "tests/pins/test_flat_gel.py",                      # 32
+    "tests/tactip/dataset/test_build.py",               # 31
+    "tests/tactip/reproduce/test_reproduce_004.py",     # 28
+    "tests/tactip/reproduce/test_acuity.py",            # 28
+    "tests/tactip/cli/test_cli_station.py",             # 23
+    "tests/pins/test_accel.py",                         # 22
+    "tests/tactip/dataset/test_cli_dataset.py",         # 18
+    "tests/tactip/cli/test_cli_detect_replay_agree.py",  # 16
 )
 
 

@@ -166,36 +166,40 @@ def follow_contour(env: VirtualEnvironment, *, threshold: float, active: bool, a
             log_belief = bayes.adaptive_prior(predicted, alpha=alpha, shift_classes=delta, circular=True)
         else:
             log_belief = flat.copy()
-        evidence = flat.copy()
+        # The decision's belief and the evidence alone (flat prior), side by side: one update and one shift
+        # of both per tap, of the runs still deciding (a decided run's beliefs are never read again).
+        beliefs = np.stack([log_belief, flat])  # (2, runs, L, I)
         done = np.zeros(runs, bool)
         decided = np.zeros((runs, 2), np.intp)
-        posterior, final_evidence = log_belief.copy(), evidence.copy()
+        posterior, final_evidence = log_belief.copy(), flat.copy()
         x_true = np.zeros(runs)
         p_decided = p.copy()
         phi_true = np.zeros(runs)
         taps = np.zeros(runs)
         for tap in range(1, max_taps + 1):
             x, phi, location, angle = truth(p)
-            likelihood = table[env.draw(location * n_id + angle, rng)]
-            log_belief = bayes.tap_update(likelihood, log_belief, tap, model.tap_tempering)  # g_t: none for the
-            evidence = bayes.tap_update(likelihood, evidence, tap, model.tap_tempering)      # papers' histogram
-            belief, map_location, map_angle = bayes.decide(log_belief)
-            new = ~done & ((belief > threshold) | (tap == max_taps))
-            decided[new] = np.stack([map_location, map_angle], axis=1)[new]
-            posterior[new], final_evidence[new] = log_belief[new], evidence[new]
+            likelihood = table[env.draw(location * n_id + angle, rng)]    # every run's draw: the same stream
+            deciding = np.flatnonzero(~done)
+            # g_t: none for the papers' histogram
+            updated = bayes.tap_update(likelihood[deciding], beliefs[:, deciding], tap, model.tap_tempering)
+            belief, map_location, map_angle = bayes.decide(updated[0])
+            now = (belief > threshold) | (tap == max_taps)
+            new = deciding[now]
+            decided[new] = np.stack([map_location, map_angle], axis=1)[now]
+            posterior[new], final_evidence[new] = updated[0, now], updated[1, now]
             x_true[new], phi_true[new], taps[new], p_decided[new] = x[new], phi[new], tap, p[new]
-            done |= new
+            done[new] = True
             if done.all():
                 break
             if active:
                 # move along the perceived normal to the target: x <- x + (x_target - x_MAP)   (eq. 6)
                 centres = model.location_centres[map_location]
-                offset = np.where(done, 0, np.rint((target_mm - centres) / width).astype(np.intp))
+                offset = np.where(now, 0, np.rint((target_mm - centres) / width).astype(np.intp))
                 offset = np.clip(map_location + offset, 0, n_loc - 1) - map_location
-                normal = np.radians(heading)
-                p = p + (offset * width)[:, None] * np.stack([np.cos(normal), np.sin(normal)], axis=1)
-                log_belief = bayes.shift(log_belief, offset, mode="uniform")
-                evidence = bayes.shift(evidence, offset, mode="uniform")
+                normal = np.radians(heading[deciding])
+                p[deciding] += (offset * width)[:, None] * np.stack([np.cos(normal), np.sin(normal)], axis=1)
+                updated = bayes.shift(updated, np.broadcast_to(offset, (2, len(offset))), mode="uniform")
+            beliefs[:, deciding] = updated
         # the traced contour: the edge point each decision perceives, P - x_decided n(angle_decided)
         normal = np.radians(decided[:, 1] * angle_step)
         traced = p_decided - model.location_centres[decided[:, 0]][:, None] * np.stack([np.cos(normal),

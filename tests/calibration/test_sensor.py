@@ -90,11 +90,15 @@ def test_rim_glare_and_skin_texture_stay_out_of_the_reference_pins(name):
     assert "expected" in calibration.describe()
 
 
+# A noise frame is not here: it shows no sensor disc in either polarity, so the pin field is searched over the
+# whole frame in both (a flat gel's search) among thousands of noise blobs, whose lattice judge iterates 20-50
+# times (2 on a sensor's frame): 29 CPU-s at 480 x 640, 11 at 240 x 320. find_pin_field refuses exactly that
+# frame (240 x 320, seed 0) in both polarities in tests/pins/test_flat_gel.py
+# (test_camera_noise_filling_the_frame_is_no_sensor); the refusal's wrapping is the same for these two.
 @pytest.mark.parametrize("frame", [
     np.full((480, 640), 128, np.uint8),                                          # uniform grey
-    np.random.default_rng(0).integers(0, 256, (480, 640), dtype=np.uint8),      # noise
     np.zeros((480, 640, 3), np.uint8),                                           # lens covered
-], ids=["grey", "noise", "black"])
+], ids=["grey", "black"])
 def test_a_frame_without_a_sensor_is_refused(frame):
     with pytest.raises(CalibrationError, match="no sensor in view"):
         calibrate_sensor([frame, frame], expected_pins=331)

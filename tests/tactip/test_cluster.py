@@ -111,8 +111,10 @@ def test_fixation_sweep_on_the_cluster_equals_a_run_here(client):
     assert here.best_fixation >= 4.0  # not a vacuous equality: the sweep found the legible depths
 
 
-# 003 on the cluster: through the CLI below (the same checks: its rows and its comparisons), not a second time.
-@pytest.mark.parametrize("paper", ["000", "001"])
+# 000 on the cluster: its mapped pieces, the class counts of `acuity_table`, on small collections (below); the
+# quick reproduction itself on Dask would be a second run of ~35 CPU-s of the same code. 003 on the cluster:
+# through the CLI below (the same checks: its rows and its comparisons), not a second time.
+@pytest.mark.parametrize("paper", ["001"])
 def test_reproduce_on_the_cluster_equals_a_run_here(client, paper, quick_reproduction):
     # here: the session's `tactip reproduce PAPER --quick` (seed 0), whose rows test_reproduce.py checks
     here_rows, _, here_comparisons = quick_reproduction(paper)
@@ -120,6 +122,29 @@ def test_reproduce_on_the_cluster_equals_a_run_here(client, paper, quick_reprodu
     assert json.loads(json.dumps(there.json_rows())) == here_rows and len(here_rows) >= 2   # as the CLI writes them
     # measured is NaN where no run decides (001's deadline at 0.99): equal as NaN
     np.testing.assert_equal([[c.figure, float(c.measured)] for c in there.comparisons], here_comparisons)
+
+
+def test_acuity_table_on_the_cluster_equals_a_run_here(client):
+    """Paper 000's pieces (`tactip.reproduce.p000` maps the class counts of `acuity_table`) on Dask: the same
+    rows, seed for seed, and the cluster ran them (a map that ignored it would give the same rows)."""
+    from tactip.reproduce.acuity import acuity_table
+    from tactip.taxel import TaxelSimulator, simulate_taxel_dataset, sweep_locations
+
+    simulator = TaxelSimulator("fingertip", seed=0)
+    where = sweep_locations(simulator.sensor, 600)
+    train = simulate_taxel_dataset(simulator, where, seed=(0, 2), collection="train")
+    test = simulate_taxel_dataset(simulator, where, seed=(0, 3), collection="test")
+    mapped = []
+
+    def on_the_cluster(function, pieces):
+        mapped.append(list(pieces))
+        return cluster_map(client)(function, pieces)
+
+    options = dict(class_counts=(10, 30, 60), fixation_mm=15.0, tap_budget=2.0, runs=300, seed=1)
+    here = acuity_table(train, test, **options)
+    there = acuity_table(train, test, map_fn=on_the_cluster, **options)
+    assert mapped == [[10, 30, 60]] and there == here
+    assert here[0].active_error_mm < here[0].passive_error_mm      # not a vacuous equality: active localises
 
 
 def test_cli_sweep_fixation_and_reproduce_with_scheduler(address, tmp_path, capsys, quick_reproduction, monkeypatch):
