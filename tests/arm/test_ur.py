@@ -168,3 +168,19 @@ def test_no_move_reaching_the_controller_breaks_a_limit(connected_arm, requests)
         cap = limits.max_tap_speed_mm_s if min(here.z, target.z) < 0 else limits.max_speed_mm_s
         assert 0 < move["speed"] <= cap / 1000.0 + 1e-12
         assert 0 < move["acceleration"] <= limits.max_acceleration_mm_s2 / 1000.0 + 1e-12
+
+
+def test_the_emulators_protective_stop_halts_half_way_however_late_its_step_runs(monkeypatch):
+    # The stop test above asks the arm to halt between start and target. On a loaded machine the emulator's
+    # first step after the move can come after the move's whole duration; the stop must still land where
+    # the move had taken the tool at the stop's moment, not at the start (as it did once, z = 30.0).
+    from tests.arm import ur_controller
+    clock = [100.0]
+    monkeypatch.setattr(ur_controller.time, "monotonic", lambda: clock[0])
+    controller = ur_controller.Controller(ur_controller.Options(tcp=[0.0, 0.0, 0.03, np.pi, 0.0, 0.0], time_scale=1.0))
+    controller.stop_during_next_move = True
+    controller._start_motion(np.array([0.0, 0.0, 0.01, np.pi, 0.0, 0.0]), 0.04, sync=False)   # 20 mm at 40 mm/s
+    clock[0] += 5.0                                                   # ten times the move's 0.5 s before a step
+    controller.step()
+    assert controller.safety == "PROTECTIVE_STOP" and controller.motion is None
+    np.testing.assert_allclose(controller.tcp[2], 0.02, atol=1e-12)   # half-way, where the stop was due

@@ -202,11 +202,18 @@ class Controller:
         """Advance the motion and the timed faults to now."""
         now = time.monotonic()
         if self.pending_stop_at is not None and now >= self.pending_stop_at:
+            # The arm halts where the move had taken it at the stop's own moment, however late this step runs
+            # (a loaded machine can run the first step after the whole move's duration).
+            self._advance(self.pending_stop_at)
             self.pending_stop_at = None
             self.protective_stop()
         if self.watchdog_hz > 0 and self.runtime == PLAYING and now - self.last_input > 1.0 / self.watchdog_hz:
             self.log.append({"cmd": "watchdog expired", "t": now - self.start})
             self.stop_program()
+        self._advance(now)
+
+    def _advance(self, now: float) -> None:
+        """Move the tool along the current motion to where it is at monotonic time ``now`` (s)."""
         if self.motion is None:
             return
         start, target, t0, duration, sync = self.motion
