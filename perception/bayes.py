@@ -22,7 +22,6 @@ Example
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import logsumexp
 
 from .choices import DECISION_RULES, SHIFT_MODES
 
@@ -31,6 +30,21 @@ __all__ = ["SHIFT_MODES", "DECISION_RULES", "normalize", "update", "tap_update",
            "decide", "flat_prior", "adaptive_prior"]
 
 _CLASSES = (-2, -1)
+
+
+def logsumexp(values, axis, keepdims: bool = False) -> np.ndarray:
+    """log(sum(exp(values))) over ``axis``, shifted by the largest value for range (as scipy's, for reals).
+
+    scipy.special.logsumexp costs ~0.2 ms of argument handling a call, ten times this on one belief, and
+    the Bayes update normalises once a tap of every Monte Carlo run. Where every value is -inf the result
+    is -inf; results agree with scipy's to ~1e-15.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    peak = values.max(axis=axis, keepdims=True)
+    peak = np.where(np.isfinite(peak), peak, 0.0)
+    with np.errstate(divide="ignore"):
+        total = np.log(np.exp(values - peak).sum(axis=axis, keepdims=True)) + peak
+    return total if keepdims else np.squeeze(total, axis=axis)
 
 
 def normalize(log_belief) -> np.ndarray:

@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import minimize_scalar
-from scipy.special import logsumexp
+
+from .bayes import logsumexp
 
 __all__ = ["cross_validation_folds", "fit_tempering", "decision_log_loss", "check_tempering"]
 
