@@ -269,7 +269,7 @@ class WindowCentroids:
         corner -= half
         # A negative corner, read as unsigned, lies beyond either bound: one comparison a side.
         inside = corner.view(np.uintp) <= bounds
-        everywhere = inside.all()
+        everywhere = np.count_nonzero(inside) == inside.size  # (`ndarray.all` costs 3x more)
         if not everywhere:
             fits = inside[:, 0] & inside[:, 1]
             corner *= fits[:, None]  # a window that does not fit: the image's corner's (its centre NaN)
