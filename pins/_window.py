@@ -161,7 +161,7 @@ class WindowCentroids:
         corner = np.rint(points).astype(np.intp)
         corner -= self.half_px
         inside = corner.view(np.uintp) <= bounds
-        if not inside.all():
+        if np.count_nonzero(inside) < inside.size:
             corner *= (inside[:, 0] & inside[:, 1])[:, None]
         patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)
         top, darkest, _ = self._sums_of(patches, patches.astype(np.float32))
