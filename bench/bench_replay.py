@@ -46,6 +46,22 @@ the tracker alone, 10 interleaved rounds of `PinTracker.update` over the decoded
 ms/frame against 1.52-2.81 before (median of the paired ratios 0.94). The bar (1.5) is not met.
 `bench_replay_parts.py` splits the main thread by part.
 
+Session of issue 20's "replay4" (outcome 9; 2-core VM shared with four other sessions, load average 8-15;
+main f84c508 against this session's code, 3 rounds interleaved, best of 2 repeats each; the tracker's
+positions, lost and retired pins bit for bit the same on both videos and on bench_slides' renders): replay's
+busier thread / decode, per round, MJPG 2.25 / 2.93 / 2.73 -> 2.43 / 2.15 / 2.05, mp4v 2.32 / 2.50 / 1.92 ->
+2.12 / 2.33 / 1.71 (decoding alone 1.7-2.7 ms/frame CPU at that load, 1.2-1.5 at load ~12 before);
+the tracker alone, 12 rounds interleaved over the decoded MJPG frames, twice: medians of the paired ratios 0.96 and 0.98,
+within the noise (single runs vary by +-20 %)
+(fewer NumPy calls round the window measurements: the cost is their number, ~700 calls a frame on arrays
+of 1-120 rows). The bar (1.5) is not met: the main thread would need about half its CPU. What is left, of
+the tracker's updates (`bench_replay_parts.py`): the follow passes 53 % (their window measurements 32 %, 4.3
+calls a frame: a first pass over every pin, then 2.9 passes re-centring ~30, ~10 and ~3 windows even on a
+still pad, whose faint tips on the reflections jitter beyond the 0.24 px a first pass accepts), fitting
+tips on slopes 22 % (`Refiner.fit_tips` on 69 % of the frames, ~1.2 ms a call: batched 8 x 8 solves and
+a dozen NumPy calls round them), snapping to rest 8 %, the neighbours' medians, carried steps and learnt
+scatters 10 %.
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
 """

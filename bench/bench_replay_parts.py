@@ -5,7 +5,8 @@ radial spokes, LED reflections inside the pad, 120 frames/s, slides of 3 pitches
 with 3-frame rests), replays it with `tactip.replay.video.replay_video` and prints the main thread's
 CPU time (``time.thread_time``: other processes disturb it far less than the clock) by part: the
 pin field search, the tracker's start and updates (inside them the follow passes, the window
-measurements, the snap back to rest, LK with refinement and recovery by blobs: nested, so they do
+measurements, the snap back to rest, LK with refinement, recovery by blobs and the fits of tips on
+slopes: nested, so they do
 not add up), the contacts, their features, the HDF5 file and the rest (the frame loop, the queue
 from the decode thread, stacking). Also the window measurements per frame and how many windows each
 measures: each call costs a fixed ~0.1 ms of NumPy calls on a few dozen windows, so their number,
@@ -15,6 +16,11 @@ Figures (2-core VM shared with four other sessions, load average 20-25; 795 fram
 main thread ~2.2 s, of which tracker updates 87-90 % (follow passes 64-67 %, window measurements
 42-44 % in 4.21 calls per frame, snap to rest 9 %), the field search 3-4 %, contacts, features and
 the HDF5 file 3-5 %, the frame loop 3 %.
+
+Session "replay4" (load average 4-7, the code of that session: the tracker's outputs as before, a few %
+less CPU): main thread 4.57 ms/frame, of which tracker updates 91 % (follow passes 51 %, window
+measurements 31 % in 4.3 calls per frame, tip fits on slopes 20 % on 69 % of the frames, snap to rest 7 %,
+recovery by blobs 2 %), the field search 4 %, contacts, features and the HDF5 file 2 %, the frame loop 2 %.
 
 Run: .venv/bin/python bench/bench_replay_parts.py [--slides N] [--codec mp4v|MJPG] [--repeats N]
 """
@@ -46,6 +52,7 @@ _PARTS = [
     (pins._refine.Refiner, "snap_to_rest", "  snap to rest (with its windows)"),
     (pins._refine.Refiner, "refine", "  LK retry and refinement"),
     (pins._refine.Refiner, "recover", "  recovery by blobs"),
+    (pins._refine.Refiner, "fit_tips", "  tip fits on slopes (fit_tips)"),
     (tactip.replay.video, "analyse", "contacts, scale, feature pins"),
     (tactip.pipeline, "contact_features", "contact features"),
     (tactip.replay.video, "write_hdf5", "HDF5 file"),

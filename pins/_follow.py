@@ -64,6 +64,8 @@ class _Following:
         """
         missing = np.isnan(guess[:, 0])
         lost = missing.nonzero()[0]
+        # Per-pin state of the windows measured, indexed by `which` (a slice, no copy, when every pin is).
+        index = slice(None)
         if lost.size == 0:
             filled, which, n = guess, self._every, len(guess)
         else:
@@ -73,19 +75,21 @@ class _Following:
             look = look[self._trusted(guess, look, last_seen, filled[look])]
             live = (~missing).nonzero()[0]
             which, n = np.concatenate([live, look]), live.size
+            index = which
         radius = self.window_radius(filled)[which]
         start = filled[which]
         first, measures = self.windows.measure(crop, start - self.origin, radius)
         first += self.origin
         # A window at the guess is judged by its centroid less the pin's own offset at rest (the
         # window's pull by what lies around the tip), so a still tip is placed where it rested.
-        placed_at = first - self._pull(start, which)
+        placed_at = first - self._pull(start, index)
         moved = _squared_norm(placed_at - start)
-        like = self._like_at_rest(measures, which)
+        like = self._like_at_rest(measures, index)
         fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
         done = (moved <= fine) & like
         done[n:] = False  # a lost pin's prediction is no guess: two passes
-        positions = np.full(guess.shape, np.nan)
+        positions = np.empty(guess.shape)
+        positions.fill(np.nan)  # (np.full costs 2-3x more)
         positions[which[done]] = placed_at[done]
         # Second and third passes: pins that moved but not far re-centred on their last centroid;
         # a pin with a guess that found no tip near it searched for from its prediction from the
@@ -120,9 +124,11 @@ class _Following:
             # veil is re-measured at rest by `snap_to_rest`).
             centres, measures = self.windows.measure(crop, points - self.origin, radius[chain])
             centres += self.origin
-            step, offset = centres - points, centres - start[chain]
-            moved = _squared_norm(step)
-            error = _squared_norm(offset)
+            # The step and the offset from the start, squared, in one array: moved, error.
+            steps = np.empty((2,) + centres.shape)
+            np.subtract(centres, points, out=steps[0])
+            np.subtract(centres, start[chain], out=steps[1])
+            moved, error = _squared_norm(steps)
             # A search settles within its bound, inside the gate around the prediction; a pin
             # followed from its guess settles to a few tenths of a px, near its guess.
             like = self._like_at_rest(measures, pins)
@@ -145,8 +151,8 @@ class _Following:
         # the others can have reached a neighbour's tip.
         placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]
         if placed.size:
-            offset = positions[which[placed]] - start[placed]
-            self._one_pin_per_tip(positions, which[placed], _squared_norm(offset))
-            keep_own_tips(positions, which[placed], start[placed], filled, self._identity_index)
+            pins, start = which[placed], start[placed]
+            self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
+            keep_own_tips(positions, pins, start, filled, self._identity_index)
         return positions, filled
 

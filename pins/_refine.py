@@ -424,8 +424,9 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         to nothing a spacing away (there the window sees other surroundings).
         """
         distance = np.sqrt(_squared_norm(points - self.rest_positions[which]))
-        weight = np.clip((self.spacing_px - distance) / (self.spacing_px - self.gate_px), 0.0, 1.0)
-        return self._rest_offset[which] * np.where(np.isnan(weight), 0.0, weight)[:, None]
+        # (fmax takes a NaN weight, a pin at no point, to 0; np.clip and np.where cost twice as much)
+        weight = np.fmin(np.fmax((self.spacing_px - distance) / (self.spacing_px - self.gate_px), 0.0), 1.0)
+        return self._rest_offset[which] * weight[:, None]
 
     def _one_pin_per_tip(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
         """Unplace (NaN, in place) found pins that share a tip with a neighbour.

@@ -94,7 +94,8 @@ class WindowCentroids:
         self._sums = sums
         self._product_pixels = min(_PRODUCT_PIXELS, _SINGLE_THREAD_MACS // sums.shape[1])
         # The mask index (radius, phase y, phase x) from the phases (x, y) in quarter px and the radius.
-        self._phase_steps = np.array([1.0, float(self._n_phases)])
+        # (x, y phase and radius, in quarter px) -> (radius, phase y, phase x) index, less `_mask_base`.
+        self._mask_steps = np.array([1.0, float(self._n_phases), float(self._n_phases ** 2)])
         self._mask_base = float((_PHASES // 2) * (self._n_phases + 1) - self._n_phases ** 2)
         self._layouts: dict = {}
         self._viewed = (None, None, None)  # (image, corner bounds, sliding view): the last image measured
@@ -158,7 +159,7 @@ class WindowCentroids:
         corner = np.rint(points).astype(np.intp)
         corner -= self.half_px
         inside = corner.view(np.uintp) <= bounds
-        if not inside.all():
+        if np.count_nonzero(inside) < inside.size:
             corner *= (inside[:, 0] & inside[:, 1])[:, None]
         patches = view[corner[:, 1], corner[:, 0]].reshape(n, -1)
         top, darkest, _ = self._sums_of(patches, patches.astype(np.float32))
@@ -266,7 +267,7 @@ class WindowCentroids:
         corner -= half
         # A negative corner, read as unsigned, lies beyond either bound: one comparison a side.
         inside = corner.view(np.uintp) <= bounds
-        everywhere = inside.all()
+        everywhere = np.count_nonzero(inside) == inside.size  # (`ndarray.all` costs 3x more)
         if not everywhere:
             fits = inside[:, 0] & inside[:, 1]
             corner *= fits[:, None]  # a window that does not fit: the image's corner's (its centre NaN)
@@ -290,7 +291,7 @@ class WindowCentroids:
         rise = plane[:, 1:]
         shrink = _FLAT_RISE * contrast / np.sqrt(_squared_norm(rise))
         # (Windows without a tip of some contrast, a lost pin's empty window, need no plane.)
-        sloped = np.flatnonzero((shrink < 1.0) & (contrast > self.least_contrast))  # NaN compares False
+        sloped = ((shrink < 1.0) & (contrast > self.least_contrast)).nonzero()[0]  # NaN compares False
         positive = np.maximum(contrast, 0.0)
         lift = self.threshold_fraction * positive
         if self.above_mean:
@@ -312,16 +313,23 @@ class WindowCentroids:
             weights[sloped] = tilted
         np.maximum(weights, 0.0, out=weights)
         # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
-        # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x).
-        phase = np.rint((points - anchor) * _PHASES)
-        radius = np.rint(np.multiply(radius_px, float(_PHASES)))
+        # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x). All three in
+        # quarter px in one (N, 3) array: a few calls on it instead of one each per column (exact: small integers).
+        quarters = np.empty((n, 3))
+        np.subtract(points, anchor, out=quarters[:, :2])
+        np.multiply(radius_px, 1.0, out=quarters[:, 2])
+        quarters *= _PHASES
+        np.rint(quarters, out=quarters)
+        radius = quarters[:, 2]
         np.fmin(np.maximum(radius, 1.0, out=radius), float(len(self._radii)), out=radius)  # NaN: the widest
         # Phases run from -_PHASES // 2 and radius indices from 1 (the mask of radius r/4 is row r - 1).
-        mask = np.dot(phase, self._phase_steps)
-        mask += radius * self._n_phases ** 2 + self._mask_base
+        mask = np.dot(quarters, self._mask_steps)
+        mask += self._mask_base
+        # (uint8 masks: gathered as float32 they cost more than the cast on 19 x 19 px windows.)
         np.multiply(weights, self._masks[mask.astype(np.intp)], out=weights)
         # (N, 4): mass, sum x, sum y, sum r^2.
-        moments = _dot(weights, self._moments, self._moment_rows).astype(np.float64)
+        moments = (np.dot(weights, self._moments) if n <= self._moment_rows
+                   else _dot(weights, self._moments, self._moment_rows)).astype(np.float64)
         mass = moments[:, 0]
         # Centroid offset (x, y) and mean r^2; an empty window (no mass) gives NaN.
         moments[:, 1:] /= mass[:, None]

@@ -55,6 +55,7 @@ from ._identity import kept_on_own_tips
 from ._recover import _as_points, match_to_blobs
 from ._refine import Refiner
 from ._surround import surround_pixels
+from ._window import _squared_norm
 from .detect import DetectionParams, _detect
 from .disc import SensorDisc, as_grey, find_sensor_disc
 from .errors import PinsError, ShapeError
@@ -297,6 +298,7 @@ class PinTracker:
         self.retired = np.zeros(len(pins), dtype=bool)
         self._lost_run = np.zeros(len(pins), dtype=np.int64)
         self._index = np.arange(len(pins))
+        self._everyone = np.ones(len(pins), dtype=bool)  # (every missing pin looked for at rest: `_refine`)
         self.blank = False
         self.frames = 1
         self.detection_frames = 0
@@ -404,7 +406,7 @@ class PinTracker:
         # off a still pad); the windows re-centre on slow motion anyway.
         if self.refine:
             # (Still for `Refiner._trusted`: moved by no more than a window settles on its guess.)
-            self._refiner.still = np.einsum("ij,ij->i", velocity, velocity) <= self._refiner._guess_px ** 2
+            self._refiner.still = _squared_norm(velocity) <= self._refiner._guess_px ** 2
             velocity = self._refiner.carried_velocity(velocity, self._refiner.observe_still(velocity))
             self._refiner.remember(positions)  # (where lost pins' neighbours were: `pins._predict`)
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
@@ -441,15 +443,15 @@ class PinTracker:
         # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
         # missing ones, retired too (a slide's return: 3-9 left lost 3 frames after it), at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
-        positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, np.ones_like(search)),
+        positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, self._everyone),
                                      refiner.rest_positions, guess, refiner._identity_index)
         missing = np.isnan(positions[:, 0])
-        if not missing.any():
+        if not np.count_nonzero(missing):  # (count_nonzero: `ndarray.any` costs 4x more on a few hundred pins)
             return positions, False, False
         if self._too_few(positions):
             return positions, True, False
         wanted = missing & ~self.retired
-        detected = bool(wanted.any() and self._since_detection + 1 >= self.detect_every)
+        detected = bool(self._since_detection + 1 >= self.detect_every and np.count_nonzero(wanted))
         if detected:
             # Blobs only around the pins that asked for them: retired pins, spread along the rim,
             # would widen the detection to most of the disc; they come back by their own search.
