@@ -119,8 +119,8 @@ def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station
 def test_the_gaussian_models_beliefs_are_calibrated_after_1_tap(gaussian_station, ece_collection):
     # The bar (0.05) for the station's default model, on the session's ECE collection (384 taps of their
     # own, every tap once), where a perfectly calibrated model with these beliefs measures about 0.03; the torch's
-    # test (test_station_torch.py) shares it. Measured on 768 such taps per station (2026-11-29): 0.028 / 0.036 /
-    # 0.024 / 0.016 / 0.031 for collection seeds 0-4 (this station is seed 0).
+    # test (test_station_torch.py) shares it. Measured on such taps (2026-11-29, bench/bench_station_ece.py):
+    # 0.027 / 0.044 / 0.043 / 0.043 / 0.027 for collection seeds 0-4 (this station is seed 0).
     _, _, path, _, _ = gaussian_station
     belief, right = one_tap_beliefs(load_model(path), load_dataset(ece_collection))
     assert len(belief) == 384 and calibration_error_floor(belief, draws=1000, seed=0).mean() < 0.035
