@@ -415,19 +415,18 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     (`choose_fixation`). Then the model kept is fitted on every training tap and given those settings
     (``refit``): no tap a user collected is left out of it. No test tap is read.
 
-    What that does to calibration: the settings were chosen for models that each miss one fold; the model
-    of every tap is a little sharper than they are, so with their tempering it is a little more confident.
-    The torch's tempering beta is one for all (`cross_fitted_environment`): fitted on the pooled
-    out-of-fold scores, given to every fold's model and to the refit. History (small simulated station,
-    12 classes, 2 taps per depth and gap, collection seeds 0-4, one-tap ECE over 768 further taps): folds
-    dealt as a Latin square left a held-out tap's class the only one at its location short of a tap, so out
-    of fold the truth looked worse than its competitors; each fit's own beta (torch: from the network's own
-    split, one tap a class) was then undone by g1 0.13-0.35: torch 0.068 / 0.126 / 0.102 / 0.074 / 0.131
-    (main 0.082 / 0.063 / 0.091 / 0.029 / 0.047), Gaussian 0.024 / 0.051 / 0.024 / 0.019 / 0.026 (main mean
-    0.038). With every identity of a location held out together and every tap off the extremes held out
-    once, the Gaussian (own betas) 0.028 / 0.036 / 0.024 / 0.016 / 0.031, test accuracy 0.945-1.00 in
-    1.32-1.35 taps; the torch 0.023 / 0.081 / 0.049 / 0.046 on seeds 0-3 with own betas (2.6-15.7 on seed
-    1), 0.021 / 0.044 / 0.042 / 0.046 (mean 0.038) with one pooled beta, test accuracy 0.949-0.966 in 1.32 taps.
+    What that does to calibration: the settings were chosen for models that each miss one fold, so the
+    model kept must be of their making. Its tempering beta is one for all (the torch's and, refitted,
+    the Gaussian's; `cross_fitted_environment`): fitted on the pooled out-of-fold scores, given to every
+    fold's model and to the refit; and the fold models take the refit's own cross-validated settings
+    (the Gaussian's components and shrinkage). Each with its own (synthetic `gap_dataset`, 4 taps a
+    class, Gaussian, target 0.9, seeds 1-10), the refit's components, shrinkage and beta (0.03-0.66
+    against its folds' 0.07-0.43) differed from the models its threshold was chosen for: its decisions
+    came in 1.06-1.39 taps against their 1.22-1.47, test accuracy 0.71-0.95 (mean 0.82; the fold model
+    kept, 0.80-0.99, mean 0.94); pooled 0.69-0.99 (mean 0.88); pooled, of the refit's settings 0.82-0.99
+    (mean 0.88). On the small simulated station (12 classes, 2 taps per depth and gap, one-tap ECE over 768
+    further taps, bench/bench_station_ece.py has the history): with every identity of a location held out
+    together, the torch with one pooled beta 0.021 / 0.044 / 0.042 / 0.046 / 0.043 on seeds 0-4.
 
     Parameters
     ----------
@@ -435,7 +434,7 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
         The training taps.
     kind, n_locations, bins, **fit_options
         As `perception.train_model`; ``pool_tempering`` among them goes to `cross_fitted_environment`
-        (default: the torch kind), and the refit then takes the pooled beta.
+        (default: the torch kind, and the Gaussian refitted), and the refit then takes the pooled beta.
     target_accuracy, tolerance, max_taps, runs, seed, fall_back
         As `choose_fixation`.
     folds : int
@@ -455,9 +454,14 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     log(f"choosing the fixation and threshold on the training taps held out in {folds} folds, each scored by a "
         f"model fitted on the others ({folds} fits)")
     pooled = fit_options.pop("pool_tempering", None)
-    pooled = kind == "torch" if pooled is None else bool(pooled)
+    pooled = (kind == "torch" or refit and kind == "gaussian") if pooled is None else bool(pooled)
+    every, same = None, {}
+    if refit:   # the model kept first: the fold models take its settings (the Gaussian's components, shrinkage)
+        every = train_model(train, kind=kind, n_locations=n_locations, bins=bins, **fit_options)
+        if kind == "gaussian":
+            same = dict(components=every.n_components, shrinkages=every.shrinkage)
     model, environment = cross_fitted_environment(train, n_locations=n_locations, folds=folds, kind=kind, bins=bins,
-                                                  progress=progress, pool_tempering=pooled, **fit_options)
+                                                  progress=progress, pool_tempering=pooled, **fit_options, **same)
     fold = holdout_folds(train, n_locations, folds)
     sizes = np.bincount(fold[fold >= 0], minlength=folds)
     log(f"{len(environment.test)} of the {len(train)} training taps held out "
@@ -468,7 +472,7 @@ def fit_with_fixation(train, *, kind: str = "histogram", n_locations: int = 11, 
     log(line)
     if not refit:
         return chosen
-    model = train_model(train, kind=kind, n_locations=n_locations, bins=bins, **fit_options)
+    model = every
     if pooled and model.temperable:   # the beta chosen out of fold (`cross_fitted_environment`), as the g_t
         model = model.tempered(chosen.tempering / model.tempering)
     if chosen.tap_tempering:

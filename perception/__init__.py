@@ -30,7 +30,7 @@ _LAZY = {
     **dict.fromkeys(("Perceiver", "Step"), ".perceiver"),
     **dict.fromkeys(("POLICIES", "FixationPolicy", "Policy", "RandomPolicy", "StationaryPolicy", "make_policy"),
                     ".policies"),
-    **dict.fromkeys(("reliability_bins", "expected_calibration_error", "calibration_error_floor"),
+    **dict.fromkeys(("reliability_bins", "expected_calibration_error", "calibration_error_floor", "one_tap_beliefs"),
                     ".calibration_error"),
     **dict.fromkeys(("CALIBRATION_TAPS", "BeliefTrace", "fit_tap_tempering",
                      "fixation_for_accuracy", "threshold_for_accuracy", "trace_beliefs"),
@@ -50,7 +50,7 @@ __all__ = [
     "DEFAULT_THRESHOLDS", "VirtualEnvironment", "MonteCarloResult", "monte_carlo",
     "compare_policies", "FixationSweep", "fixation_sweep", "LateralSweep", "lateral_sweep",
     "CALIBRATION_TAPS", "BeliefTrace", "trace_beliefs", "expected_calibration_error", "reliability_bins",
-    "calibration_error_floor",
+    "calibration_error_floor", "one_tap_beliefs",
     "threshold_for_accuracy", "fixation_for_accuracy", "fit_tap_tempering",
     "BaselineResult", "BaselineReport", "compare_baselines", "keep_verdict",
 ]

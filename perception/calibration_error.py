@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["reliability_bins", "expected_calibration_error", "calibration_error_floor"]
+__all__ = ["reliability_bins", "expected_calibration_error", "calibration_error_floor", "one_tap_beliefs"]
 
 
 def _bin_index(confidence: np.ndarray, bins: int) -> np.ndarray:
@@ -125,3 +125,37 @@ def calibration_error_floor(confidence, *, bins: int = 10, draws: int = 1000, se
     full = counts > 0
     # ECE = sum_b n_b |acc_b - conf_b| / N = sum_b |right_b - n_b conf_b| / N
     return np.abs(right[:, full] - counts[full] * mean_confidence[full]).sum(axis=1) / confidence.size
+
+
+def one_tap_beliefs(model, dataset):
+    """Every tap of ``dataset`` once, alone: the model's belief in the identity it decides, and whether it is right.
+
+    Each tap's log likelihood (`VirtualEnvironment`, so the model's tempering applies) updates a flat prior
+    once, with the tap tempering of tap 1 (``model.tap_tempering``); the belief is the largest identity
+    marginal. These are independent decisions, one per tap, what `expected_calibration_error` and
+    `calibration_error_floor` need to measure the beliefs after one tap; a Monte Carlo run's first tap
+    draws taps with replacement instead, so its ECE after one tap weighs some taps twice.
+
+    Parameters
+    ----------
+    model : perception.LikelihoodModel
+    dataset : perception.Dataset
+        Taps independent of the model's training taps (e.g. a collection of their own).
+
+    Returns
+    -------
+    belief : (N,) float64 ndarray
+        Belief in the decided identity (for a model of one identity: the location class).
+    right : (N,) bool ndarray
+        Whether the decided identity (location class) is the tap's.
+    """
+    from . import bayes
+    from .montecarlo import VirtualEnvironment
+
+    environment = VirtualEnvironment(model, dataset)
+    n_loc, n_id = model.n_locations, model.n_identities
+    table = environment.log_likelihood.reshape(-1, n_loc, n_id)
+    where, what = bayes.marginals(bayes.tap_update(table, bayes.flat_prior(n_loc, n_id), 1, model.tap_tempering))
+    if n_id == 1:
+        return where.max(axis=1), where.argmax(axis=1) == environment.tap_class // n_id
+    return what.max(axis=1), what.argmax(axis=1) == environment.tap_class % n_id

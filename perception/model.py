@@ -40,13 +40,14 @@ MODEL_SCHEMA = "tactip-model/1"
 _KINDS = {
     "histogram": (HistogramModel, fit_model, ("bins", "epsilon")),
     "calibrated-histogram": (CalibratedHistogramModel, fit_calibrated_histogram, ("bins", "epsilon")),
-    "gaussian": (GaussianModel, fit_gaussian, ()),
-    "torch": (TorchModel, fit_torch, ("seed",)),
+    "gaussian": (GaussianModel, fit_gaussian, ("components", "shrinkages")),
+    "torch": (TorchModel, fit_torch, ("seed", "max_epochs")),
 }
 
 
 def train_model(dataset: Dataset, *, kind: str = "histogram", n_locations: int = 11, bins: int = 100,
-                epsilon: float = DEFAULT_EPSILON, min_taps_per_class: int = 1, seed: int = 0) -> LikelihoodModel:
+                epsilon: float = DEFAULT_EPSILON, min_taps_per_class: int = 1, seed: int = 0, components=None,
+                shrinkages=None, max_epochs: int | None = None) -> LikelihoodModel:
     """Train a likelihood model of any kind on a dataset.
 
     Parameters
@@ -63,6 +64,12 @@ def train_model(dataset: Dataset, *, kind: str = "histogram", n_locations: int =
     min_taps_per_class : int
     seed : int
         Seed of the torch model's initialisation and batches.
+    components, shrinkages : int or sequence, optional
+        The Gaussian's candidate principal components and covariance shrinkages (default: its own
+        candidates, chosen among by cross-validation); one of each fixes them, e.g. to fit models
+        of the same settings on parts of the taps (`calibration.fit_with_fixation`).
+    max_epochs : int, optional
+        Most epochs each of the torch model's networks trains (default: `perception.learned.fit_torch`'s).
 
     Returns
     -------
@@ -75,9 +82,10 @@ def train_model(dataset: Dataset, *, kind: str = "histogram", n_locations: int =
     """
     model_class(kind)
     _, fit, own = _KINDS[kind]
-    given = dict(bins=bins, epsilon=epsilon, seed=seed)
+    given = dict(bins=bins, epsilon=epsilon, seed=seed, components=components, shrinkages=shrinkages,
+                 max_epochs=max_epochs)
     return fit(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class,
-               **{name: given[name] for name in own})
+               **{name: given[name] for name in own if given[name] is not None})
 
 
 def model_class(kind: str) -> type:

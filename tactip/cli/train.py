@@ -25,7 +25,7 @@ The calibrated kinds need at least two taps per class, ideally repeated at the s
 --choose-fixation also picks the fixation location, the decision threshold and (calibrated kinds)
 the tap tempering g1..g5 for taps 1-5, as the station does on its first run, without looking at the test set:
 the training taps are held out in 4 folds, each scored by a model fitted on the others, and the
-settings are chosen on those out-of-fold scores; fold 0's model is written with them. Then 'tactip validate
+settings are chosen on those out-of-fold scores; a model fitted on every training tap is written with them. Then 'tactip validate
 MODEL TEST' gives figures the settings were not chosen on.
 
 Examples:
@@ -107,9 +107,6 @@ def run(args: argparse.Namespace) -> int:
     if args.epochs is not None and args.model != "torch":
         raise TactipError(f"--epochs sets how long the torch model's networks train; a {args.model} model has none "
                           f"(leave --epochs out)")
-    if args.epochs is not None and args.choose_fixation:
-        raise TactipError("--epochs does not go with --choose-fixation (its folds train the torch model with "
-                          f"the default {DEFAULT_EPOCHS} epochs)")
     refuse_overwriting_inputs([args.out], [args.dataset])
     dataset = load_dataset(args.dataset)
     print(dataset.describe())
@@ -118,6 +115,8 @@ def run(args: argparse.Namespace) -> int:
                  what=f"histograms of {args.locations} x {identities} classes x {args.bins} bins",
                  hint="use fewer --locations or --bins")
     options = {} if args.epsilon is None else {"epsilon": args.epsilon}
+    if args.epochs is not None:   # the torch model's own option (`perception.train_model`), as in its folds
+        options["max_epochs"] = args.epochs
     if args.model == "torch":
         _require_torch()
         values = dataset.taps.shape[1] * dataset.taps.shape[2]   # the imputation Gaussian's covariance, and copies
@@ -130,11 +129,6 @@ def run(args: argparse.Namespace) -> int:
         warnings.simplefilter("always", UserWarning)
         if args.choose_fixation:
             model = _choose_fixation(args, dataset, {**options, "min_taps_per_class": args.min_taps})
-        elif args.epochs is not None:
-            from perception.learned import fit_torch
-
-            model = fit_torch(dataset, n_locations=args.locations, min_taps_per_class=args.min_taps,
-                              max_epochs=args.epochs)
         else:
             model = train_model(dataset, kind=args.model, n_locations=args.locations, bins=args.bins,
                                 min_taps_per_class=args.min_taps, **options)

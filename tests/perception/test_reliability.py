@@ -70,6 +70,24 @@ def test_the_ece_floor_is_what_calibrated_beliefs_measure():
         calibration_error_floor(belief, draws=0)
 
 
+@pytest.mark.parametrize("g1", [None, 0.4])
+def test_one_tap_beliefs_are_each_taps_posterior_from_a_flat_prior(environment, g1):
+    # Every test tap once: P(w | z) = sum_l exp(g1 * log P(z | l, w)) / sum_(l, w) exp(g1 * log P(z | l, w)).
+    from scipy.special import softmax
+
+    from perception import one_tap_beliefs
+
+    model, test = environment.model, environment.test
+    if g1 is not None:
+        model = model.with_tap_tempering((g1, 1.0, 1.0, 1.0, 1.0))
+    belief, right = one_tap_beliefs(model, test)
+    log_likelihood = model.log_likelihood_batch(test.taps).reshape(len(test), -1) * (1.0 if g1 is None else g1)
+    what = softmax(log_likelihood, axis=1).reshape(len(test), model.n_locations, model.n_identities).sum(axis=1)
+    assert belief.shape == right.shape == (len(test),)
+    assert np.allclose(belief, what.max(axis=1))
+    assert np.array_equal(right, model.identities[what.argmax(axis=1)] == test.identity)
+
+
 @pytest.mark.parametrize("policy", [FixationPolicy(4), RandomPolicy()])
 def test_trace_decisions_are_the_monte_carlo_decisions(environment, policy):
     thresholds = (0.3, 0.6, 0.9, 0.99)

@@ -29,20 +29,21 @@ def test_epochs_go_to_the_torch_fit_and_only_there(tmp_path, capsys, monkeypatch
         asked.append(options)
         return perception.model.train_model(dataset, n_locations=options["n_locations"])
 
-    monkeypatch.setattr(perception.learned, "fit_torch", fit)
-    train = ["train", str(tmp_path / "train.h5"), "--locations", "4", "--model", "torch"]
-    assert main([*train, "--out", str(tmp_path / "a.h5"), "--epochs", "7"]) == 0
-    assert asked == [dict(n_locations=4, min_taps_per_class=1, max_epochs=7)]
     monkeypatch.setattr(perception.model, "_KINDS", {**perception.model._KINDS,
-                                                     "torch": (perception.learned.TorchModel, fit, ("seed",))})
-    assert main([*train, "--out", str(tmp_path / "b.h5")]) == 0       # no --epochs: train_model, as before
+                                                     "torch": (perception.learned.TorchModel, fit,
+                                                               perception.model._KINDS["torch"][2])})
+    train = ["train", str(tmp_path / "train.h5"), "--locations", "4", "--model", "torch"]
+    assert main([*train, "--out", str(tmp_path / "a.h5"), "--epochs", "7"]) == 0    # through train_model
+    assert asked == [dict(n_locations=4, min_taps_per_class=1, seed=0, max_epochs=7)]
+    assert main([*train, "--out", str(tmp_path / "b.h5")]) == 0       # no --epochs: the torch model's default
     assert asked[1] == dict(n_locations=4, min_taps_per_class=1, seed=0)
     capsys.readouterr()
     assert main(["train", str(tmp_path / "train.h5"), "--out", str(tmp_path / "c.h5"), "--epochs", "7"]) == 1
     assert "--epochs sets how long the torch model's networks train; a histogram model has none" in \
         capsys.readouterr().err
-    assert main([*train, "--out", str(tmp_path / "d.h5"), "--epochs", "7", "--choose-fixation"]) == 1
-    assert "--epochs does not go with --choose-fixation" in capsys.readouterr().err
+    # --choose-fixation: every fit (the folds' and the refit) trains at most N epochs
+    assert main([*train, "--out", str(tmp_path / "d.h5"), "--epochs", "7", "--choose-fixation"]) == 0
+    assert len(asked) == 2 + 5 and all(a["max_epochs"] == 7 for a in asked[2:])
     with pytest.raises(SystemExit):
         main([*train, "--out", str(tmp_path / "e.h5"), "--epochs", "0"])
     assert "--epochs" in capsys.readouterr().err

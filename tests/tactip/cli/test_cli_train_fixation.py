@@ -20,12 +20,14 @@ def test_train_chooses_the_fixation_on_its_own_validation_split(tmp_path, capsys
     assert "held out in 4 folds" in out
     model = load_model(tmp_path / "model.h5")
     assert model.recommended["fixation_location"] > 2.5 and model.recommended["policy"] == "active"
-    # A model of every training tap, with the settings the out-of-fold scores of the held-out taps give.
-    fitted, environment = cross_fitted_environment(train, n_locations=6, kind="gaussian")
+    # A model of every training tap, with the settings the out-of-fold scores of the held-out taps give: those of
+    # fold models of its components and shrinkage, its beta the one fitted on their pooled scores.
+    full = train_model(train, kind="gaussian", n_locations=6)
+    fitted, environment = cross_fitted_environment(train, n_locations=6, kind="gaussian", pool_tempering=True,
+                                                   components=full.n_components, shrinkages=full.shrinkage)
     chosen, _, _ = choose_fixation(fitted, None, environment=environment, target_accuracy=0.9, log=lambda _: None)
     assert model.recommended == chosen.recommended
-    full = train_model(train, kind="gaussian", n_locations=6)
-    assert np.allclose(model.class_means, full.class_means) and model.tempering == full.tempering
+    assert np.allclose(model.class_means, full.class_means) and np.isclose(model.tempering, chosen.tempering)
     assert model.tap_tempering == chosen.tap_tempering and len(model.tap_tempering) == 5
 
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from calibration import CalibrationError, load_calibration
-from perception import load_dataset, load_model
+from perception import (calibration_error_floor, expected_calibration_error, load_dataset, load_model,
+                        one_tap_beliefs)
 from tactip.station.config import parse_station_config, simulated_station_config
 from tactip.errors import TactipError
 from tactip.station.procedures import (calibrate_station, calibration_path, collect_station, default_sim_workers,
@@ -83,13 +84,20 @@ def test_the_datasets_describe_the_sensor(sim_station):
     assert load_dataset(sim_station.train).sensor == description == load_dataset(sim_station.test).sensor
 
 
-def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station, tmp_path):
-    root = tmp_path / "station"
+@pytest.fixture(scope="module")
+def gaussian_station(sim_station, tmp_path_factory):
+    """The session's small station copied and prepared with its default likelihood, the Gaussian."""
+    root = tmp_path_factory.mktemp("gaussian") / "station"
     shutil.copytree(sim_station.root, root, ignore=shutil.ignore_patterns("model.h5", "results.sqlite*"))
     calibration_bytes = (root / "calibration.h5").read_bytes()
     config = parse_station_config(small_station_table(root, perception={"likelihood": "gaussian"}), base_dir=root)
     lines = []
     path = prepare_model(config, progress=False, log=lines.append)
+    return root, config, path, lines, calibration_bytes
+
+
+def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station, gaussian_station):
+    root, config, path, lines, calibration_bytes = gaussian_station
     assert path == root / "model.h5"
     assert (root / "calibration.h5").read_bytes() == calibration_bytes          # not calibrated again
     assert not any(line.startswith("taking") for line in lines)
@@ -106,6 +114,17 @@ def test_prepare_model_reuses_the_calibration_and_the_collected_taps(sim_station
     # Chosen on a split of the training taps; the test collection gives the figures reported, once, at the end.
     assert any("training taps held out in 4 folds" in line for line in lines)
     assert lines[-1].startswith("test collection (used once")
+
+
+def test_the_gaussian_models_beliefs_are_calibrated_after_1_tap(gaussian_station, ece_collection):
+    # The issue's bar (0.05) for the station's default model, on the session's ECE collection (384 taps of their
+    # own, every tap once), where a perfectly calibrated model with these beliefs measures about 0.03; the torch's
+    # test (test_station_torch.py) shares it. Measured on such taps (2026-11-29, bench/bench_station_ece.py):
+    # 0.027 / 0.044 / 0.043 / 0.043 / 0.027 for collection seeds 0-4 (this station is seed 0).
+    _, _, path, _, _ = gaussian_station
+    belief, right = one_tap_beliefs(load_model(path), load_dataset(ece_collection))
+    assert len(belief) == 384 and calibration_error_floor(belief, draws=1000, seed=0).mean() < 0.035
+    assert expected_calibration_error(belief, right) <= 0.05, (belief.mean(), right.mean())
 
 
 def test_prepare_model_needs_a_model_path(tmp_path):
