@@ -329,9 +329,7 @@ def cross_fitted_environment(train, *, n_locations: int = 11, folds: int = HOLDO
 
         betas = np.array([models[k].tempering if k in models else np.nan for k in range(folds)])[fold[held]]
         table = table / betas[:, None]
-        n_loc, n_id = model.n_locations, model.n_identities
-        truth = environment.tap_class % n_id if n_id > 1 else environment.tap_class // n_id
-        beta = fit_tempering(table.reshape(-1, n_loc, n_id), truth)
+        beta = fit_tempering(table.reshape(-1, model.n_locations, model.n_identities), environment.decided_class)
         check_tempering(beta)
         model = model.tempered(beta / model.tempering)
         environment = VirtualEnvironment(model, train.subset(held), _log_likelihood=beta * table)

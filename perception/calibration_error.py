@@ -155,7 +155,6 @@ def one_tap_beliefs(model, dataset):
     environment = VirtualEnvironment(model, dataset)
     n_loc, n_id = model.n_locations, model.n_identities
     table = environment.log_likelihood.reshape(-1, n_loc, n_id)
-    where, what = bayes.marginals(bayes.tap_update(table, bayes.flat_prior(n_loc, n_id), 1, model.tap_tempering))
-    if n_id == 1:
-        return where.max(axis=1), where.argmax(axis=1) == environment.tap_class // n_id
-    return what.max(axis=1), what.argmax(axis=1) == environment.tap_class % n_id
+    belief, location, identity = bayes.decide(bayes.tap_update(table, bayes.flat_prior(n_loc, n_id), 1,
+                                                               model.tap_tempering))
+    return belief, (identity if n_id > 1 else location) == environment.decided_class

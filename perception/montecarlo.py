@@ -92,6 +92,13 @@ class VirtualEnvironment:
     def __repr__(self) -> str:
         return f"<VirtualEnvironment {len(self.test)} test taps, {self.model.n_classes} classes>"
 
+    @property
+    def decided_class(self) -> np.ndarray:
+        """(T,) int ndarray: what a decision on each test tap is judged against: its identity class, or its
+        location class for a model of one identity (as `perception.bayes.decide` decides)."""
+        n_id = self.model.n_identities
+        return self.tap_class % n_id if n_id > 1 else self.tap_class
+
     def restrict(self, keep) -> VirtualEnvironment:
         """The environment with only some test taps (e.g. a band of lateral offsets).
 
