@@ -41,6 +41,19 @@ small-pad-100 5.76/6.07 -> 5.31/5.44, tactip-331 14.97/15.09 -> 13.50/13.47 (old
 3.72-4.48, 6.36-6.85 -> 5.05-5.41, 14.11-14.60 -> 13.16-13.76; ms/frame alike (3.55-3.91 -> 3.56-4.29,
 3.03-3.54 -> 2.82-3.18, 2.03-2.60 -> 1.97-2.62); pin-frames > 1 px on small-pad-100 368-432 -> 354-484.
 
+Session of issue 20's "seams5" (2-core VM at load ~5-8; old = main b811570, new = overlapping tips render
+as the brighter tip, not the sum of their light: no saturated seams, `tactip.sim._render._occlude`; the
+tracker unchanged), seeds 0-5, apart: model skin radial-led-120 19/27/21/37/28/8 -> 5/18/4/20/5/11 (140
+-> 63), tactip-331 1021/1166/1052/1136/1054/1065 -> 1243/1085/1108/964/1286/1157 (6494 -> 6843),
+small-pad-100 45/28/48/28/46/43 -> 68/53/85/68/55/66 (238 -> 395); realistic skin radial-led-120
+57/4/2/8/2/15 -> 2/7/11/40/4/5 (88 -> 69; seed 0's chain gone), tactip-331 9/18/99/16/26/5 ->
+51/51/71/40/26/17 (173 -> 256), small-pad-100 9/7/13/18/12/2 -> 14/14/11/21/22/13 (61 -> 95); lost
+visible pins per frame (mean) 4.20 -> 3.43, 14.06 -> 11.97, 5.50 -> 5.43 (model), 3.04 -> 2.92, 1.75 ->
+1.33, 4.71 -> 4.76 (realistic); rest>1 and end>1 0 everywhere. The seams had kept windows off merged
+blobs (a saturated window is unlike the tip at rest: the pin was left lost); on a merged blob shown as
+it is, a window lagging its tip settles between the two tips (tactip-331 realistic seed 0: 11 of 22
+onsets placed in the first follow pass, at the blob's middle, 0.5-0.67 spacings from the neighbour).
+
 The skin options (opt-in renders, `SyntheticTacTip.sequence`):
 
 - ``--residual 0.15 --creep-s 0.15 --final-rest-s 0.5``: 15 % of each slide left in the skin when the
