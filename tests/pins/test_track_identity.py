@@ -123,16 +123,20 @@ def test_a_found_pin_keeps_only_a_tip_in_its_own_cell():
 def test_a_found_pin_near_a_missing_pins_prediction_keeps_the_tip_only_when_clearly_its_own():
     # Two tips squeezed into one blob ahead of a slide: pin 1 is found on the blob 4 px from where it
     # was expected, pin 2 is missing and predicted 5 px from it (a prediction is up to a spacing off
-    # there). Nearest-wins would give pin 1 the blob; it is not twice as near, so neither takes it.
+    # there). Nearest-wins would give pin 1 the blob; it is not `MISSING_MARGIN` (4) times as near, so neither takes it.
     expected = np.array([[0.0, 0.0], [11.0, 0.0], [20.0, 0.0]])
     near = np.array([[1, 2], [0, 2], [1, 0]])
     positions = np.array([[0.0, 0.0], [15.0, 0.0], [np.nan, np.nan]])
     keep_own_tips(positions, np.array([1]), np.array([[11.0, 0.0]]), expected, near)
     assert np.isnan(positions[1]).all()
-    # Twice as near its own start (3 px against 6): its tip.
+    # Twice as near its own start (3 px against 6): still the merged blob's ambiguity on a render without
+    # seams (the margin of 2 kept it); four times as near (1.5 px against 6.5): its tip.
     positions = np.array([[0.0, 0.0], [14.0, 0.0], [np.nan, np.nan]])
     keep_own_tips(positions, np.array([1]), np.array([[11.0, 0.0]]), expected, near)
-    assert np.allclose(positions[1], [14.0, 0.0])
+    assert np.isnan(positions[1]).all()
+    positions = np.array([[0.0, 0.0], [13.5, 0.0], [np.nan, np.nan]])
+    keep_own_tips(positions, np.array([1]), np.array([[12.0, 0.0]]), expected, near)
+    assert np.allclose(positions[1], [13.5, 0.0])
     # A placed pin's place is measured, not predicted: nearest wins (4 px against 5).
     positions = np.array([[0.0, 0.0], [15.0, 0.0], [20.0, 0.0]])
     keep_own_tips(positions, np.array([1]), np.array([[11.0, 0.0]]), expected, near)
