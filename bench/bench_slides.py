@@ -54,6 +54,13 @@ blobs (a saturated window is unlike the tip at rest: the pin was left lost); on 
 it is, a window lagging its tip settles between the two tips (tactip-331 realistic seed 0: 11 of 22
 onsets placed in the first follow pass, at the blob's middle, 0.5-0.67 spacings from the neighbour).
 
+Then `pins._identity.MISSING_MARGIN` 2 -> 4 (same session and machine), on the render without seams,
+apart seeds 0-5: model skin radial-led-120 63 -> 49, tactip-331 6843 -> 6381, small-pad-100 395 -> 272;
+realistic skin 69 -> 25 (12 on seeds 0-2, 13 on held-out seeds 3-5), 256 -> 180, 95 -> 75; lost per frame
+3.43 -> 3.64, 11.97 -> 13.03, 5.43 -> 5.98 (model), 2.92 -> 2.95, 1.33 -> 1.48, 4.76 -> 5.02 (realistic);
+rest>1 and end>1 0. Against main b811570 (with seams, margin 2): 140 -> 49, 6494 -> 6381, 238 -> 272,
+88 -> 25, 173 -> 180, 61 -> 75.
+
 The skin options (opt-in renders, `SyntheticTacTip.sequence`):
 
 - ``--residual 0.15 --creep-s 0.15 --final-rest-s 0.5``: 15 % of each slide left in the skin when the
