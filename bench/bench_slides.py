@@ -13,7 +13,8 @@ the rim), as from a calibration, and `PinTracker.update` runs over every other f
            squeezes the skin ahead of it so hard that neighbours' tips merge: no image tells
            those apart, and a pin on the merged blob may lie nearer its neighbour's centre);
 - rest>1:  in the rest frames between and after the slides (the pad at rest), tracked visible
-           pin-frames more than 1 px from their own rest centre;
+           pin-frames more than 1 px from their own rest centre; lost@rest: visible pins reported lost
+           per rest frame (mean);
 - end>1:   in the last frame (the pad back at rest), visible pins more than 1 px from their true
            centre (their rest centre, less what a residual shear still holds: creep_px, the largest
            true offset from rest), lost ones counted too (the bar: 0); end>10: more than 10 px;
@@ -60,6 +61,12 @@ realistic skin 69 -> 25 (12 on seeds 0-2, 13 on held-out seeds 3-5), 256 -> 180,
 3.43 -> 3.64, 11.97 -> 13.03, 5.43 -> 5.98 (model), 2.92 -> 2.95, 1.33 -> 1.48, 4.76 -> 5.02 (realistic);
 rest>1 and end>1 0. Against main b811570 (with seams, margin 2): 140 -> 49, 6494 -> 6381, 238 -> 272,
 88 -> 25, 173 -> 180, 61 -> 75.
+
+Visible pins lost in the rest frames (lost@rest), seed 0, main b811570 -> seams5 (render without seams,
+margin 4): 0.00 -> 0.00 on radial-led-120, tactip-331, small-pad-100 (8 slides) and white-dark-331,
+dense-1000 (4 slides), both skins. 4 slides, seed 0, apart (lost per frame): white-dark-331 model 468 ->
+526 (14.34 -> 12.09), realistic 0 -> 15 (1.87 -> 2.13); dense-1000 model 488 -> 397 (9.79 -> 7.56),
+realistic 149 -> 81 (1.12 both).
 
 The skin options (opt-in renders, `SyntheticTacTip.sequence`):
 
@@ -136,7 +143,8 @@ def measure(preset: str, seed: int, slides: int, pitches: float, *, lift_s: floa
     truth_rest = rest.centres[drawn]
     tracker = PinTracker(detection=DetectionParams(dark_pins=sensor.dark_pins), disc=SensorDisc(*sensor.disc))
     tracker.start(rest.image, pins=truth_rest)
-    counts = dict(frames=0, visible=0, lost=0, off1=0, off3=0, swaps=0, apart=0, rest1=0, cpu=0.0)
+    counts = dict(frames=0, visible=0, lost=0, off1=0, off3=0, swaps=0, apart=0, rest1=0, rest_frames=0, rest_lost=0,
+                  cpu=0.0)
     for k, f in enumerate(frames, start=1):
         start = time.thread_time()
         positions = tracker.update(f.image)
@@ -159,6 +167,8 @@ def measure(preset: str, seed: int, slides: int, pitches: float, *, lift_s: floa
         gap = np.linalg.norm(truth[placed[other]] - truth[nearest[other]], axis=1)
         counts["apart"] += int((gap >= 0.5 * tracker.spacing_px).sum())
         if resting[k]:
+            counts["rest_frames"] += 1
+            counts["rest_lost"] += int((visible & ~found).sum())
             counts["rest1"] += int((np.linalg.norm(positions[seen] - truth[seen], axis=1) > 1.0).sum())
     off = np.linalg.norm(positions - truth, axis=1)  # the skin's truth: its rest unless a residual shear is left
     counts["end1"] = int((visible & ~(off <= 1.0)).sum())
@@ -190,12 +200,14 @@ def main() -> None:
         report = dict(skin) if min_area == "model" else dict(skin, min_area=float(min_area))
         print(f"\n{args.slides} slides of {args.pitches} pitches, 3-frame rests, 120 frames/s, lift {args.lift_s} s, "
               f"raw renders, {report or 'the model skin, no residual shear'}")
-        print(f"{'preset':16s} seed frames  lost/f    >1px  >3px swaps apart rest>1 end>1 end>10/visible creep_px  ms/frame")
+        print(f"{'preset':16s} seed frames  lost/f    >1px  >3px swaps apart rest>1 lost@rest end>1 end>10/visible "
+              f"creep_px  ms/frame")
         for preset in args.presets:
             for seed in args.seeds:
                 c = measure(preset, seed, args.slides, args.pitches, lift_s=args.lift_s, **report)
                 print(f"{preset:16s} {seed:4d} {c['frames']:6d} {c['lost'] / c['frames']:7.2f} {c['off1']:7d} "
-                      f"{c['off3']:5d} {c['swaps']:5d} {c['apart']:5d} {c['rest1']:6d} {c['end1']:5d} "
+                      f"{c['off3']:5d} {c['swaps']:5d} {c['apart']:5d} {c['rest1']:6d} "
+                      f"{c['rest_lost'] / max(c['rest_frames'], 1):9.2f} {c['end1']:5d} "
                       f"{c['end10']:5d}/{c['end_visible']:<7d} {c['end_creep']:6.2f} "
                       f"{c['cpu'] / c['frames'] * 1e3:8.3f}", flush=True)
 
