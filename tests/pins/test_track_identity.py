@@ -74,9 +74,11 @@ def test_on_a_realistic_skin_windows_follow_their_tips_where_the_skin_is_squeeze
     # elastomer would before it wrinkles) still brings tactip-331's tips within 0.6 spacings, touching. A
     # window whose steps there were a few tenths of a px had them zeroed as jitter and sat between its tip
     # and the neighbour's, falling behind by 6 px; it now carries its moving neighbours' step
-    # (`Refiner.carried_velocity`). Pin-frames on another pin's tip, seeds 0/1/2: 46/64/76 before, 9/36/47 now.
+    # (`Refiner.carried_velocity`). Pin-frames on another pin's tip, seeds 0/1/2: 46/64/76 before, 9/36/47
+    # after (main b811570, renders with seams where tips overlap); without seams 35/34/28 with `MISSING_MARGIN`
+    # 2, 10/32/19 with 4.
     swapped = sum(_track_slides("tactip-331", seed, min_area=0.5)[0] for seed in (0, 1, 2))
-    assert swapped <= 110
+    assert swapped <= 75
 
 
 def test_on_a_small_pad_a_found_pin_leaves_a_merged_blob_to_its_lost_owner():
