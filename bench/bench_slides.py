@@ -70,8 +70,8 @@ realistic 149 -> 81 (1.12 both).
 
 What is left (seams5, diagnosed by the stage that placed each swap's first frame, final code): on
 tactip-331 realistic seeds 0-2, 27 of 66 onsets are pins placed in the first follow pass whose guess was
-already nearer the neighbour; in the 8 looked at (seed 1) the guess equals the pin's previous position (a step within the
-settling bound: no velocity carried), 4-5 px behind its tip, which moves 0.6-2.2 px a frame: a window
+already nearer the neighbour; in the 8 looked at (seed 1) the guess equals the pin's previous position
+(a step within the settling bound: no velocity carried), 4-5 px behind its tip, which moves 0.6-2.2 px a frame: a window
 stalled on the plateau of two overlapping tips, its neighbours' median step too small to carry
 (`Refiner.carried_velocity`). On small-pad-100 (model skin) tip fits, snaps to rest and later follow
 passes share the onsets.
