@@ -129,8 +129,9 @@ def paint_pins(scene, image_size, centres, shape, levels) -> None:
     Each pin is evaluated on a square patch around its nearest pixel, all pins at once. Coverage
     ramps linearly over `EDGE_PX` across the edge (signed distance along the ray from the centre), and
     the tip is slightly domed, so the profile is point-symmetric about the true centre and its
-    intensity-weighted centroid is that centre. Pins do not overlap, so painting adds
-    ``coverage * (pin - scene)`` over the patches.
+    intensity-weighted centroid is that centre. Painting adds ``coverage * (pin - scene)`` over the
+    patches; where tips overlap (a squeezed skin), the nearer tip occludes the other (`_occlude`): the
+    pixel keeps at most the brighter tip's light (bright tips; the darker for dark tips), never the sum.
 
     Parameters
     ----------
@@ -170,10 +171,42 @@ def paint_pins(scene, image_size, centres, shape, levels) -> None:
         coverage *= (px >= 0) & (px < width) & (py >= 0) & (py < height)
         pixel = np.clip(pixel, 0, width * height - 1)
     np.minimum(q, 1.0, out=q)
-    value = np.asarray(levels, dtype=np.float32)[:, None, None] * (1.0 - np.float32(0.15) * q)
-    value -= scene[pixel]
+    tip = np.asarray(levels, dtype=np.float32)[:, None, None] * (1.0 - np.float32(0.15) * q)
+    under = scene[pixel]
+    value = tip - under
     value *= coverage
     np.add.at(scene, pixel.reshape(-1), value.reshape(-1))
+    _occlude(scene, pixel, coverage, tip, under)
+
+
+def _occlude(scene, pixel, coverage, tip, under) -> None:
+    """Where tips overlap, the pixel shows tip, never the sum of the tips' light: clip it in place.
+
+    `paint_pins` adds each tip's ``coverage * (tip - under)``, which is exact for tips that share a pixel
+    only along their anti-aliased edges (coverages summing to at most 1: the sum is a blend of the
+    tips and what lies under them). Where coverages sum past 1 the tips overlap, and a real skin shows
+    one tip occluding the other: at most the brighter (bright tips) or the darker (dark tips) of the
+    tips there. Each such pixel is clipped to the range of what lies under it and the tips covering it,
+    so two white tips merged into one blob show no saturated seam. Pixels of one tip stay bit-identical.
+
+    Parameters are `paint_pins`' patches: ``pixel`` (M, S, S) flat indices, ``coverage`` (M, S, S) in
+    0-1, ``tip`` (M, S, S) each tip's grey level, ``under`` (M, S, S) the scene before painting.
+    """
+    covered = coverage > 0
+    where = pixel[covered]
+    sum_coverage = np.bincount(where, weights=coverage[covered], minlength=scene.size)
+    shared = sum_coverage[where] > 1.0  # one tip's coverage is at most 1
+    if not shared.any():
+        return
+    where = where[shared]
+    tip = tip[covered][shared]
+    under = under[covered][shared]
+    unique, slot = np.unique(where, return_inverse=True)
+    high = np.full(len(unique), -np.inf, dtype=np.float32)
+    low = np.full(len(unique), np.inf, dtype=np.float32)
+    np.maximum.at(high, slot, np.maximum(tip, under))
+    np.minimum.at(low, slot, np.minimum(tip, under))
+    scene[unique] = np.clip(scene[unique], low, high)
 
 
 def paint_spots(scene, image_size, centres, sigmas, amplitudes, angles=None, *, ring_px: float = 0.0) -> None:

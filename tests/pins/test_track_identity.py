@@ -74,9 +74,11 @@ def test_on_a_realistic_skin_windows_follow_their_tips_where_the_skin_is_squeeze
     # elastomer would before it wrinkles) still brings tactip-331's tips within 0.6 spacings, touching. A
     # window whose steps there were a few tenths of a px had them zeroed as jitter and sat between its tip
     # and the neighbour's, falling behind by 6 px; it now carries its moving neighbours' step
-    # (`Refiner.carried_velocity`). Pin-frames on another pin's tip, seeds 0/1/2: 46/64/76 before, 9/36/47 now.
+    # (`Refiner.carried_velocity`). Pin-frames on another pin's tip, seeds 0/1/2: 46/64/76 before, 9/36/47
+    # after (main b811570, renders with seams where tips overlap); without seams 35/34/28 with `MISSING_MARGIN`
+    # 2, 10/32/19 with 4.
     swapped = sum(_track_slides("tactip-331", seed, min_area=0.5)[0] for seed in (0, 1, 2))
-    assert swapped <= 110
+    assert swapped <= 75
 
 
 def test_on_a_small_pad_a_found_pin_leaves_a_merged_blob_to_its_lost_owner():
@@ -92,12 +94,21 @@ def test_on_a_small_pad_a_found_pin_leaves_a_merged_blob_to_its_lost_owner():
     assert swapped <= 20
 
 
-@pytest.mark.xfail(reason="issue 20's bar, not yet met: radial-led-120 seeds 0-3 still put 8/1/10/14 pin-frames "
-                          "on other pins' tips (2/1/8/16 before the margin of slides4, 2/0/10/1 before the carried "
-                          "step of slides3): where the skin ahead of a slide squeezes tips until they touch, a "
-                          "window on the merged blob lies nearer either pin", strict=False)
+@pytest.mark.xfail(reason="issue 20's bar, not yet met: radial-led-120 seeds 0-3 still put 4/13/12/0 pin-frames "
+                          "on other pins' tips (8/1/10/14 on renders with seams where tips overlap, main b811570): "
+                          "where the skin ahead of a slide squeezes tips into one blob, a window lagging its tip "
+                          "settles in the blob's middle, nearer the neighbour", strict=False)
 def test_slides_swap_no_identity():
     assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (2, 3))
+
+
+def test_on_a_realistic_skin_radial_slides_leave_few_pins_on_other_tips():
+    # radial-led-120 (small tips, 0.4 spacings across, several grey levels of LED reflections and glare),
+    # two slides on a skin squeezed to half its area ahead of them. Pin-frames on another pin's tip, seeds
+    # 0-5: 1/0/0/9/0/0 on renders with seams where tips overlap and `MISSING_MARGIN` 2 (main b811570);
+    # 1/0/1/0/0/1 now, each a window 2 px off its tip between two tips 0.5 spacings apart.
+    swapped = [_track_slides("radial-led-120", seed, min_area=0.5)[0] for seed in range(6)]
+    assert sum(swapped) <= 4 and max(swapped) <= 1
 
 
 def test_a_found_pin_keeps_only_a_tip_in_its_own_cell():
@@ -123,16 +134,20 @@ def test_a_found_pin_keeps_only_a_tip_in_its_own_cell():
 def test_a_found_pin_near_a_missing_pins_prediction_keeps_the_tip_only_when_clearly_its_own():
     # Two tips squeezed into one blob ahead of a slide: pin 1 is found on the blob 4 px from where it
     # was expected, pin 2 is missing and predicted 5 px from it (a prediction is up to a spacing off
-    # there). Nearest-wins would give pin 1 the blob; it is not twice as near, so neither takes it.
+    # there). Nearest-wins would give pin 1 the blob; it is not `MISSING_MARGIN` (4) times as near, so neither takes it.
     expected = np.array([[0.0, 0.0], [11.0, 0.0], [20.0, 0.0]])
     near = np.array([[1, 2], [0, 2], [1, 0]])
     positions = np.array([[0.0, 0.0], [15.0, 0.0], [np.nan, np.nan]])
     keep_own_tips(positions, np.array([1]), np.array([[11.0, 0.0]]), expected, near)
     assert np.isnan(positions[1]).all()
-    # Twice as near its own start (3 px against 6): its tip.
+    # Twice as near its own start (3 px against 6): still the merged blob's ambiguity on a render without
+    # seams (the margin of 2 kept it); four times as near (1.5 px against 6.5): its tip.
     positions = np.array([[0.0, 0.0], [14.0, 0.0], [np.nan, np.nan]])
     keep_own_tips(positions, np.array([1]), np.array([[11.0, 0.0]]), expected, near)
-    assert np.allclose(positions[1], [14.0, 0.0])
+    assert np.isnan(positions[1]).all()
+    positions = np.array([[0.0, 0.0], [13.5, 0.0], [np.nan, np.nan]])
+    keep_own_tips(positions, np.array([1]), np.array([[12.0, 0.0]]), expected, near)
+    assert np.allclose(positions[1], [13.5, 0.0])
     # A placed pin's place is measured, not predicted: nearest wins (4 px against 5).
     positions = np.array([[0.0, 0.0], [15.0, 0.0], [20.0, 0.0]])
     keep_own_tips(positions, np.array([1]), np.array([[11.0, 0.0]]), expected, near)
