@@ -17,17 +17,19 @@ collections tap the same depths, so the test taps sit at trained depths and rand
 all 23 depths of a gap, errs by 0.007-0.089 mm at 10 taps; active perception, once at its fixation, draws
 again and again from the 2 test taps of each gap in that depth class (3 in the deepest), so a single
 confusable tap costs it up to 0.1 mm. No fixation beats random on every seed (3.75 and 4.75 mm on 9 of 10,
-5.25 mm on 8). The fixation is chosen on held-out training taps, which are never at a trained depth: at 3-5.25
-mm a 0.25 mm depth step moves a tap's pin displacements (40 samples x 80 dims, Frobenius, px) by 18, a gap 0.5
-mm wider by 4.1, and a test tap lies 1.1 from its training twin (medians, every seed alike), so held-out taps
-are misread in width (out-of-fold errors 0.36-1.4 mm at 3.25-5.25 mm, the test's 0-0.17). Its ranking of the
-deep fixations is stable (over Monte Carlo seeds the spread is 0.003-0.034 mm, the 4.75 / 5.25 mm gap on seed
-2 0.09 mm) but it measures legibility between trained depths, which ranks them otherwise than the test taps do
-(Spearman 0.45 over 3.25-5.25 mm; 0.68 for a model fitted on the test collection and judged on the training
-one). Seed 2 chooses 4.75 mm: 0.091 mm there against random's 0.035 (and 0.141 with the collections swapped: a
-property of that sensor at 4.75 mm the held-out taps cannot show). Choosing at equal taps, on the mean of 5
-Monte Carlo seeds, or by the worst held-out depth keeps 4.75 mm on seed 2 (the claim then holds on 9, 9 and 8
-of 10 seeds); always 5.25 mm, on 8.
+5.25 mm on 8). The fixation is chosen on held-out training taps, which are never at a trained depth. From the
+3.75 to the 5.25 mm class a gap 0.5 mm wider moves a tap's pin displacements (40 samples x 80 dims, Frobenius,
+px, medians over seeds 0-9) by 3.7 -> 5.8, a depth step of 0.25 mm by 16 -> 23, and a test tap lies 1.07 from
+its training twin at every depth: at trained depths the width grows more legible with depth (3.4 -> 5.4 times
+the noise), between them it does not (0.23-0.25 of a depth step). So the held-out taps are misread in width
+(out-of-fold errors 0.36-1.4 mm at 3.25-5.25 mm, the test's 0-0.17) and the sweep sees no reason to go deep:
+its ranking of the deep fixations is stable (over Monte Carlo seeds the spread is 0.003-0.034 mm, the 4.75 /
+5.25 mm gap on seed 2 0.09 mm) but set by which held-out taps are confusable, and ranks them otherwise than
+the test taps do (Spearman 0.45 over 3.25-5.25 mm; 0.68 for a model fitted on the test collection and judged
+on the training one). Seed 2 chooses 4.75 mm: 0.091 mm there against random's 0.035 (and 0.141 with the
+collections swapped: a property of that sensor at 4.75 mm the held-out taps cannot show). Choosing at equal
+taps, on the mean of 5 Monte Carlo seeds, or by the worst held-out depth keeps 4.75 mm on seed 2 (the claim
+then holds on 9, 9 and 8 of 10 seeds); always 5.25 mm, on 8.
 
 Fitted: the skin's sag over a gap (`tactip.sim._pad.MEMBRANE_RHO_MM`, 8 -> 1 mm) was tuned so that
 the station reproduces Fig. 9; Fig. 9 is therefore a fit, not a prediction. Figs. 10 (the fixation
