@@ -29,7 +29,10 @@ the test taps do (Spearman 0.45 over 3.25-5.25 mm; 0.68 for a model fitted on th
 on the training one). Seed 2 chooses 4.75 mm: 0.091 mm there against random's 0.035 (and 0.141 with the
 collections swapped: a property of that sensor at 4.75 mm the held-out taps cannot show). Choosing at equal
 taps, on the mean of 5 Monte Carlo seeds, or by the worst held-out depth keeps 4.75 mm on seed 2 (the claim
-then holds on 9, 9 and 8 of 10 seeds); always 5.25 mm, on 8.
+then holds on 9, 9 and 8 of 10 seeds); always 5.25 mm, on 8. Full size (depths 0.1 mm apart, seeds 2, 4, 9):
+out-of-fold errors 0.14-0.32 mm at 3.25-5.25 mm, the sweep chooses 4.75 mm on all three and rates 5.25 mm
+worse (0.20-0.27 against 0.14-0.15 mm), where the test taps find 5.25 mm best on two (0.012, 0.015 mm);
+margins +0.012, +0.020, -0.007 mm (seed 9: active 0.040 against random 0.033).
 
 Fitted: the skin's sag over a gap (`tactip.sim._pad.MEMBRANE_RHO_MM`, 8 -> 1 mm) was tuned so that
 the station reproduces Fig. 9; Fig. 9 is therefore a fit, not a prediction. Figs. 10 (the fixation
