@@ -4,6 +4,10 @@ Runs ``tactip reproduce P --quick --seed S`` (or the full size with --full) for 
 judges each claim from its margins' interval, never from one seed (issue 25's bars).
 
     python bench/bench_claims.py [--papers 000 001 002 003 004] [--seeds 0 1 2] [--full] [--json OUT]
+
+Last measured for 002 (quick, seeds 0-9, 2026-11-29, `TACTIP_SIM_WORKERS=1`): margin 0.0274 mm, 95 % interval
+-0.0003 to 0.0552, held on 9 of 10 seeds (partly holds; seed 2 fails, -0.056 mm: its fixation, 4.75 mm, is
+chosen on held-out training taps, never at a trained depth; the README's claims table says why).
 """
 
 from __future__ import annotations

@@ -2,6 +2,7 @@
 that pytest-xdist runs it beside the other papers' reproductions (it prepares a simulated station)."""
 
 import json
+import re
 
 import numpy as np
 
@@ -31,3 +32,6 @@ def test_002_active_beats_random_beats_stationary_at_equal_taps(tmp_path, capsys
         at_10[policy] = np.interp(10, taps, [r["width_error_mm"] for r in mine])
     assert at_10["active"] < at_10["random"] < at_10["stationary"], at_10
     assert "fit, not a prediction" in text and "MEMBRANE_RHO_MM" in text
+    # Quick: depths 0.25 mm apart, depth classes 0.5 mm wide (the deepest 0.75 mm): at its fixation active draws from
+    # 2 or 3 distinct test taps of each gap, random from all 23 (why active's margin over random varies by seed).
+    assert re.search(r"active perception draws from [23] test taps of each gap .*random draws from all 23", text), text
