@@ -35,19 +35,30 @@ LEARNING_RATE = 3e-3
 
 @contextmanager
 def all_cores(torch, *, work: float):
-    """Train on every core (``os.cpu_count()`` threads) when a step is large enough to share, restoring
-    the caller's thread count after.
+    """Train on every core (``os.cpu_count()`` threads, at most ``$OMP_NUM_THREADS`` when it is set) when a
+    step is large enough to share, restoring the caller's thread count after.
 
     ``work`` is the first layer's weights of all members (members x inputs x hidden). Below
     `MIN_SHARED_WORK` a step lasts well under a millisecond, and threads that wait for each other
     make it slower, not faster (measured on two busy cores: 1.5-3x slower), so one thread trains it.
+    ``OMP_NUM_THREADS`` (the variable torch's own default honours) caps it where the cores are shared by
+    processes of one job, e.g. the test suite's pytest-xdist workers. The weights do not depend on it.
     """
     threads = torch.get_num_threads()
-    torch.set_num_threads(max(os.cpu_count() or 1, 1) if work >= MIN_SHARED_WORK else 1)
+    torch.set_num_threads(_shared_threads() if work >= MIN_SHARED_WORK else 1)
     try:
         yield
     finally:
         torch.set_num_threads(threads)
+
+
+def _shared_threads() -> int:
+    """Threads a large step trains on: ``os.cpu_count()``, at most ``$OMP_NUM_THREADS`` (if a number)."""
+    cores = max(os.cpu_count() or 1, 1)
+    try:
+        return max(1, min(cores, int(os.environ.get("OMP_NUM_THREADS", cores))))
+    except ValueError:
+        return cores
 
 
 def _initial_weights(torch, members, inputs, hidden, classes, generator):

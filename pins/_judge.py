@@ -117,18 +117,19 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     centres = blobs.centres
     active = np.ones(n, bool)
     rejoined = np.zeros(n, bool)
+    hood = None   # the last pass's neighbourhood: the next one looks up again only what a removal changed
     while True:
         for _ in range(8):
             if active.sum() < _MIN_PINS:
                 break
-            verdict = _verdicts(blobs, sharpness, active)
+            verdict, hood = _verdicts(blobs, sharpness, active, hood)
             out = active & (verdict != _KEPT)
             if not out.any():
                 break
             reason[out] = verdict[out]
             active &= ~out
         else:
-            verdict = _verdicts(blobs, sharpness, active)
+            verdict, hood = _verdicts(blobs, sharpness, active, hood)
         if active.sum() < _MIN_PINS:
             break
         back = ~active & ~rejoined & (verdict == _KEPT)
@@ -161,14 +162,16 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     return reason, float(_median_nn(centres[reason == _KEPT]))
 
 
-def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray) -> np.ndarray:
-    """Each blob judged against its nearest `members` (bool per blob): -1 (a lattice site) or why not."""
+def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray,
+              previous: _Neighbourhood | None = None) -> tuple[np.ndarray, _Neighbourhood]:
+    """Each blob judged against its nearest `members` (bool per blob): -1 (a lattice site) or why not;
+    and the `_Neighbourhood` it was judged in (`previous`: the last pass's, see `_Neighbourhood`)."""
     n = len(blobs.centres)
     areas = blobs.areas.astype(np.float64)
     fills = blobs.fills
     contrasts = np.maximum(blobs.contrasts, 1e-6)
     strength = contrasts * areas
-    hood = _Neighbourhood(blobs.centres, members)
+    hood = _Neighbourhood(blobs.centres, members, previous)
     # Medians over the blob and its neighbours. Areas compared with a little slack: a 1 px tip
     # covers 3-7 px.
     near = hood.near
@@ -192,7 +195,7 @@ def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray) -> np.nd
     unlike = ((ratio < _WEAK_CONTRAST[0] + strict * (_WEAK_CONTRAST[1] - _WEAK_CONTRAST[0]))
               | (np.abs(np.log(area / area_ref)) > np.log(_WEAK_SIZE[0]) + strict * np.log(_WEAK_SIZE[1] / _WEAK_SIZE[0])))
     verdict[(anchors < _MIN_ANCHORS) & unlike & (verdict == _KEPT)] = _OFF
-    return verdict
+    return verdict, hood
 
 
 def _beyond(hull: np.ndarray, points: np.ndarray, margin: float) -> np.ndarray:
@@ -206,18 +209,41 @@ class _Neighbourhood:
 
     Every point, member or not, gets its nearest members as neighbours (a point is never its own
     neighbour), so that blobs rejected so far can be judged against the blobs kept.
+
+    `previous`, the neighbourhood of the same points among more members (the judge's last pass, which
+    removed a few), saves the tree look-ups whose answers cannot have changed: a point's nearest
+    members, unless one of them was removed; a mirror image's nearest member, unless the point's
+    neighbours changed, that member was removed, or none was found within a smaller bound. The
+    answers are the ones a new look-up gives (the same members at the same distances).
     """
 
-    def __init__(self, points: np.ndarray, members: np.ndarray | None = None):
+    def __init__(self, points: np.ndarray, members: np.ndarray | None = None,
+                 previous: _Neighbourhood | None = None):
         self.points = points
-        index = np.arange(len(points)) if members is None else np.flatnonzero(members)
+        n = len(points)
+        self.members = np.ones(n, bool) if members is None else members.copy()   # the caller's may change after
+        index = np.flatnonzero(self.members)
+        self.index = index
         self.tree = cKDTree(points[index])
         k = min(_NEIGHBOURS + 1, len(index))
-        dist, near = self.tree.query(points, k)
-        dist, near = dist.reshape(len(points), k), index[near.reshape(len(points), k)]
-        if members is not None and not members.all():
+        if (previous is None or previous.k != k or previous.points is not points
+                or (self.members & ~previous.members).any()):
+            previous = None
+        self._previous = previous
+        if previous is None:
+            self.changed = np.ones(n, bool)
+            raw_dist, raw_near = self._nearest(points, k)
+        else:
+            self.removed = previous.members & ~self.members
+            self.changed = self.removed[previous.raw_near].any(axis=1)
+            raw_dist, raw_near = previous.raw_dist.copy(), previous.raw_near.copy()
+            if self.changed.any():
+                raw_dist[self.changed], raw_near[self.changed] = self._nearest(points[self.changed], k)
+        self.k, self.raw_dist, self.raw_near = k, raw_dist, raw_near
+        dist, near = raw_dist.copy(), raw_near.copy()
+        if not self.members.all():
             # A point outside the members is not found first: put it first, before its k - 1 nearest.
-            outside = ~members
+            outside = ~self.members
             dist[outside] = np.column_stack([np.zeros(outside.sum()), dist[outside, :-1]])
             near[outside] = np.column_stack([np.flatnonzero(outside), near[outside, :-1]])
         self.dist, self.near = dist, near
@@ -227,6 +253,35 @@ class _Neighbourhood:
         # along the rim.
         self.pitch, reach = _row_median(self.dist[:, [1, min(2, k - 1)]].T[:, self.near])
         self.link = self.dist[:, 1:] <= _LINK * np.maximum(reach[:, None], reach[self.near[:, 1:]])
+        self._mirrors = {}
+
+    def _nearest(self, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """The `k` nearest members of each query point: distances (px) and point numbers, (M, k) each."""
+        dist, near = self.tree.query(queries, k)
+        return dist.reshape(len(queries), k), self.index[near.reshape(len(queries), k)]
+
+    def _mirror_distances(self, kind: str, targets: np.ndarray, bound: float, wanted: np.ndarray) -> np.ndarray:
+        """Distance (px; inf beyond `bound`) from each `wanted` target (n, k - 1, 2) to its nearest member,
+        looked up again only where `previous` cannot answer; NaN where not wanted."""
+        shape = targets.shape[:2]
+        cached = self._previous._mirrors.get(kind) if self._previous is not None else None
+        if cached is None:
+            dist, found, bounds, have = np.full(shape, np.nan), np.full(shape, -1), np.zeros(shape), np.zeros(shape, bool)
+        else:
+            dist, found, bounds, have = (a.copy() for a in cached)
+            have[self.changed] = False
+            have &= ~((found >= 0) & self.removed[np.maximum(found, 0)])
+            have &= ~((found < 0) & (bounds < bound))
+        todo = wanted & ~have
+        if todo.any():
+            d, i = self.tree.query(targets[todo], distance_upper_bound=bound)
+            inside = np.isfinite(d)
+            dist[todo] = d
+            found[todo] = np.where(inside, self.index[np.minimum(i, len(self.index) - 1)], -1)
+            bounds[todo] = bound
+            have |= todo
+        self._mirrors[kind] = (dist, found, bounds, have)
+        return np.where(wanted, dist, np.nan)
 
     def anchors(self) -> np.ndarray:
         """Per point: linked neighbours j with a point at the mirror image through j, plus the lines
@@ -237,8 +292,7 @@ class _Neighbourhood:
         tolerance = _MIRROR * self.dist[:, 1:]
         bound = float(tolerance.max()) if tolerance.size else 0.0
         # Mirror images of the point through each neighbour j (2 j - p) ...
-        through = self.tree.query((2.0 * others - points[:, None, :]).reshape(-1, 2), distance_upper_bound=bound)[0]
-        through = through.reshape(n, k)
+        through = self._mirror_distances("through", 2.0 * others - points[:, None, :], bound, np.ones((n, k), bool))
         # ... and of each neighbour j through the point (2 p - j): the first kind seen from j, when p is
         # one of j's neighbours (the same numbers: looked up, not queried again).
         back = neighbours[neighbours] == np.arange(n)[:, None, None]  # (n, k, k): p among j's neighbours
@@ -247,12 +301,12 @@ class _Neighbourhood:
         beyond[mutual] = through[neighbours[mutual], back.argmax(axis=2)[mutual]]
         if not mutual.all():
             lone = ~mutual
-            beyond[lone] = self.tree.query(2.0 * np.broadcast_to(points[:, None, :], others.shape)[lone] - others[lone],
-                                           distance_upper_bound=bound)[0]
+            beyond[lone] = self._mirror_distances("beyond", 2.0 * points[:, None, :] - others, bound, lone)[lone]
         # A point between two neighbours j and 2 p - j is seen from both: one line, counted once (else
         # the midpoint of two pins of a radial layout's diverging spokes, a reflection there, would
         # have two anchors from one pair).
         between = np.sum(self.link & (beyond < tolerance), axis=1)
+        self._previous = None   # its answers are carried over: no chain of every pass's neighbourhood
         return np.sum(self.link & (through < tolerance), axis=1) + (between + 1) // 2
 
     def graph(self) -> coo_matrix:

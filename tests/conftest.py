@@ -25,36 +25,48 @@ def _free_cpus_per_worker() -> int:
 
 if os.environ.get("PYTEST_XDIST_WORKER"):
     os.environ.setdefault("TACTIP_SIM_WORKERS", str(_free_cpus_per_worker()))
+    # The same for the threads of numpy's BLAS and of torch (OpenMP; `perception._ensemble_training.all_cores`
+    # honours OMP_NUM_THREADS too): by default each worker starts one per core, so two workers on two cores
+    # would run four threads, which spin while they wait for each other (CPU time without work); the few
+    # tests that ask for more threads (the torch training's reproducibility on 2 and 4) have theirs sleep
+    # while they wait (OMP_WAIT_POLICY). Set before numpy and torch are imported (they read them once);
+    # subprocesses inherit them.
+    for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_variable, str(_free_cpus_per_worker()))
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 #: Test files of about 15 CPU-s or more, longest first (CPU-s of one worker, self + children, measured per test on
-#: a 2-core VM under make test's 2 workers, 2026-11-29 on main f84c508, less what suite4 took off; files not yet
-#: measured there from 2026-11-29's earlier run). test_station_bar (its own station, no session fixture) and the
-#: README's examples (which build the session's station and recordings first) start the two workers;
-#: test_station_torch, which needs that station, queues behind test_station_bar, by when it is built.
-#: test_cluster and test_reproduce share quick reproductions (the first to need one builds it): apart.
+#: the 2-core VM under make test's 2 workers, 2026-11-29 on branch suite5 = main b811570 with one BLAS/OpenMP thread
+#: per worker; load 4-8, so somewhat inflated; /work/scratch/s14/suite5-durations.txt). test_station_bar (its own
+#: station, no session fixture) and the README's examples (which build the session's station and recordings first)
+#: start the two workers; test_station_torch, which needs that station, queues behind test_station_bar, by when it
+#: is built (its 166: the torch station's preparation ~126, the session's ECE collection ~39 when it builds it).
+#: test_cluster and test_reproduce share quick reproductions (the first to need one builds it): apart. Simulated
+#: with these per-test figures (xdist's loadfile rule: a worker gets its next file when <= 2 of its tests are
+#: pending), the two workers end within 1 % of each other (662 and 665 CPU-s).
 LONGEST_FIRST = (
-    "tests/tactip/station/test_station_bar.py",         # 125
-    "tests/tactip/test_readme_examples.py",             # 200, of which ~75 the session's fixtures
-    "tests/tactip/station/test_station_torch.py",       # 70-170
-    "tests/perception/test_learned.py",                 # 70-100
-    "tests/pins/test_lattice.py",                       # 94
-    "tests/pins/test_accel_detect.py",                  # 65
-    "tests/tactip/reproduce/test_reproduce_002.py",     # 65
-    "tests/tactip/test_cluster.py",                     # 41 (+ the quick 001 and 003 when it runs them first)
-    "tests/tactip/line/test_dashboard_browser.py",      # 40-60
-    "tests/pins/test_lattice_seeds.py",                 # 52
-    "tests/tactip/reproduce/test_reproduce.py",         # 50 when it runs the quick reproductions
-    "tests/calibration/test_training.py",               # 40
-    "tests/tactip/cli/test_cli_missing_pins.py",        # 33
-    "tests/perception/test_baselines.py",               # 33
-    "tests/pins/test_flat_gel.py",                      # 32
-    "tests/tactip/dataset/test_build.py",               # 31
-    "tests/tactip/reproduce/test_reproduce_004.py",     # 28
-    "tests/tactip/reproduce/test_acuity.py",            # 28
-    "tests/tactip/cli/test_cli_station.py",             # 23
-    "tests/pins/test_accel.py",                         # 22
-    "tests/tactip/dataset/test_cli_dataset.py",         # 18
-    "tests/tactip/cli/test_cli_detect_replay_agree.py",  # 16
+    "tests/tactip/station/test_station_bar.py",         # 100 (one test)
+    "tests/tactip/test_readme_examples.py",             # 141, of which 43 its first example with the session's fixtures
+    "tests/tactip/station/test_station_torch.py",       # 166
+    "tests/pins/test_lattice.py",                       # 76
+    "tests/tactip/test_faults_data.py",                 # 59 (subprocesses)
+    "tests/perception/test_learned.py",                 # 48
+    "tests/tactip/reproduce/test_reproduce_002.py",     # 47 (one test)
+    "tests/tactip/line/test_dashboard_browser.py",      # 45
+    "tests/tactip/test_one_scale.py",                   # 44
+    "tests/pins/test_lattice_seeds.py",                 # 38
+    "tests/tactip/cli/test_cli_station.py",             # 31
+    "tests/pins/test_accel_detect.py",                  # 29
+    "tests/tactip/test_cluster.py",                     # 27 (+ the quick 001 and 003 when it runs them first)
+    "tests/tactip/test_faults_input.py",                # 27
+    "tests/tactip/dataset/test_build.py",               # 26
+    "tests/pins/test_flat_gel.py",                      # 22
+    "tests/tactip/replay/test_batch.py",                # 21
+    "tests/tactip/replay/test_replay_contacts.py",      # 17
+    "tests/pins/test_track_identity.py",                # 17
+    "tests/tactip/reproduce/test_reproduce.py",         # 16 (more when it runs the quick reproductions first)
+    "tests/tactip/reproduce/test_figure_samples.py",    # 14
+    "tests/tactip/replay/test_replay.py",               # 13
 )
 
 

@@ -109,6 +109,7 @@ def test_training_uses_every_core_and_gives_the_callers_threads_back(monkeypatch
 
     seen = []
     real = training.train_ensemble
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)      # no cap (the suite's xdist workers set one)
     monkeypatch.setattr(training, "MIN_SHARED_WORK", 0)       # this small network as if it were a large one
     monkeypatch.setattr(training, "train_ensemble",
                         lambda *a, **k: seen.append(torch.get_num_threads()) or real(*a, **k))
@@ -123,6 +124,22 @@ def test_training_uses_every_core_and_gives_the_callers_threads_back(monkeypatch
         torch.set_num_threads(before)
 
 
+def test_omp_num_threads_caps_the_training_threads(monkeypatch):
+    # Where processes of one job share the cores (the suite's pytest-xdist workers), OMP_NUM_THREADS caps them.
+    import perception._ensemble_training as training
+
+    monkeypatch.setattr(training.os, "cpu_count", lambda: 8)
+    before = torch.get_num_threads()
+    for value, expected in (("2", 2), ("16", 8), ("many", 8), (None, 8)):
+        if value is None:
+            monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+        else:
+            monkeypatch.setenv("OMP_NUM_THREADS", value)
+        with training.all_cores(torch, work=training.MIN_SHARED_WORK):
+            assert torch.get_num_threads() == expected, value
+        assert torch.get_num_threads() == before
+
+
 @pytest.mark.parametrize("threads", [1, 2, 4])
 def test_training_is_reproducible_whatever_the_cores(monkeypatch, threads):
     # Seeded initialisations and batch orders: the same taps and seed give the same weights, bit for bit,
@@ -132,6 +149,7 @@ def test_training_is_reproducible_whatever_the_cores(monkeypatch, threads):
     from perception.learned import fit_torch
 
     train = gap_dataset(seed=1, taps_per_class=4, **GRID)
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)      # no cap (the suite's xdist workers set one)
     monkeypatch.setattr(training, "MIN_SHARED_WORK", 0)
     monkeypatch.setattr(training.os, "cpu_count", lambda: 1)
     one = fit_torch(train, n_locations=3, max_epochs=5, seed=3)
