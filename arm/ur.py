@@ -44,6 +44,35 @@ _ARRIVED_MM = 0.5          # a finished move must end this close to its target
 _SETTLED_MM = 0.01         # ... and is settled once the pose read back is this close (UR repeatability)
 _STILL_MM = 0.001          # ... and moved less than this since the previous RTDE cycle
 _SETTLE_CYCLES = 10        # RTDE cycles to wait for the receive interface to catch up after a move
+_RECEIVE_STALL_S = 2.0     # no new RTDE data for this long (s) while waiting on it: the connection has failed
+
+
+class _FreshPackages:
+    """Counts the receive interface's fresh data packages (a new controller timestamp) since it was made.
+
+    Waits after a move are counted in these, the controller's own cycles, so that a loaded computer which
+    delays the packages is not mistaken for the arm; `stalled` says no new package came for
+    `_RECEIVE_STALL_S` s.
+    """
+
+    def __init__(self, receive):
+        self._receive = receive
+        self._stamp = receive.getTimestamp()
+        self._fresh_at = time.monotonic()
+        self.count = 0
+
+    def update(self) -> int:
+        """Read the receive interface's timestamp: the fresh packages seen so far."""
+        stamp = self._receive.getTimestamp()
+        if stamp != self._stamp:
+            self._stamp, self._fresh_at = stamp, time.monotonic()
+            self.count += 1
+        return self.count
+
+    @property
+    def stalled(self) -> bool:
+        """No fresh package for `_RECEIVE_STALL_S` s (wall-clock time)."""
+        return time.monotonic() - self._fresh_at > _RECEIVE_STALL_S
 
 
 class UrArm(BaseArm):
@@ -165,11 +194,11 @@ class UrArm(BaseArm):
 
         A protective or emergency stop also halts the control program, and the control interface sees
         the program stop a few RTDE cycles before the receive interface reports the safety bits: when
-        the program has stopped, wait up to `_SETTLE_CYCLES` for the stop that caused it.
+        the program has stopped, wait up to `_SETTLE_CYCLES` fresh packages of the receive interface for the stop that caused it.
         """
-        deadline = time.monotonic() + _SETTLE_CYCLES / self.frequency_hz
+        fresh = _FreshPackages(self._receive)
         while (state.connected and not state.program_running and not (state.protective_stop or state.emergency_stop)
-               and time.monotonic() < deadline):
+               and fresh.update() < _SETTLE_CYCLES and not fresh.stalled):
             time.sleep(1.0 / self.frequency_hz)
             state = self._read_state()
         return state.problem
@@ -198,11 +227,13 @@ class UrArm(BaseArm):
             time.sleep(period)
         # The receive interface has its own RTDE connection and may lag the control one by a few cycles:
         # wait for the pose it reports to settle on the target, so pose() after a move reads where it ended.
-        settle_deadline = time.monotonic() + _SETTLE_CYCLES * period
+        # The wait is counted in the receive interface's fresh packages (the controller's cycles), not in
+        # this computer's time: a loaded computer that delays the packages is not an arm that stopped short.
+        fresh = _FreshPackages(self._receive)
         previous = None
         while True:
+            late = fresh.update() >= _SETTLE_CYCLES          # read first: the pose read next is at least as new
             problem, arrived = self._read_state().problem, self._read_base_pose()
-            late = time.monotonic() > settle_deadline
             still = previous is not None and arrived.distance_to(previous) <= _STILL_MM
             if problem is None and (arrived.distance_to(target) <= _ARRIVED_MM if late
                                     else still and arrived.distance_to(target) <= _SETTLED_MM):
@@ -213,6 +244,9 @@ class UrArm(BaseArm):
                     problem = self._root_cause(self._read_state())
                 raise ArmFault(f"the move to {where} ended at {self._describe(arrived)}: "
                                f"{problem or 'short of the target'}")
+            if fresh.stalled:
+                raise ArmFault(f"the move to {where} finished, but the controller's RTDE data (port 30004) "
+                               f"stopped arriving for {_RECEIVE_STALL_S:.0f} s: check the network")
             time.sleep(period)
 
     def _stop_motion(self) -> None:
