@@ -80,9 +80,10 @@ Appearance (`tactip.sim._render`). Bright casing around the disc (about 200 grey
 membrane (about 25) with a radial illumination gradient towards the LED ring; six LED glare spots on
 the rim; white pin tips (about 215, +-5 % per pin, lit like the membrane, slightly domed) with an
 anti-aliased 1 px edge ramp; where a squeezed skin brings tips over each other, a pixel shows the
-brighter tip (the darker for dark tips), never the sum of their light; sensor noise of ``noise_sigma`` grey levels (near-Gaussian, a sum of four
-uniform bytes, fresh every frame and deterministic given the seed); optional optical blur and JPEG
-compression (as from an MJPG webcam). ``dark_pins`` inverts the scene for dark-marker sensors.
+brighter tip (the darker for dark tips), never the sum of their light; sensor noise of ``noise_sigma``
+grey levels (near-Gaussian, a sum of four uniform bytes, fresh every frame and deterministic given the
+seed); optional optical blur and JPEG compression (as from an MJPG webcam). ``dark_pins`` inverts the
+scene for dark-marker sensors.
 Rendering is vectorised over pins: about 2-5 ms per 640x480 frame.
 
 What makes real TacTips hard for the front end, as options

@@ -130,8 +130,8 @@ def paint_pins(scene, image_size, centres, shape, levels) -> None:
     ramps linearly over `EDGE_PX` across the edge (signed distance along the ray from the centre), and
     the tip is slightly domed, so the profile is point-symmetric about the true centre and its
     intensity-weighted centroid is that centre. Painting adds ``coverage * (pin - scene)`` over the
-    patches; where tips overlap (a squeezed skin), the nearer tip occludes the other (`_occlude`): the
-    pixel keeps at most the brighter tip's light (bright tips; the darker for dark tips), never the sum.
+    patches; where tips overlap (a squeezed skin), one tip occludes the other (`_occlude`): the pixel
+    keeps at most the brighter tip's light (bright tips; the darker for dark tips), never the sum.
 
     Parameters
     ----------
