@@ -261,8 +261,10 @@ class _Neighbourhood:
         return dist.reshape(len(queries), k), self.index[near.reshape(len(queries), k)]
 
     def _mirror_distances(self, kind: str, targets: np.ndarray, bound: float, wanted: np.ndarray) -> np.ndarray:
-        """Distance (px; inf beyond `bound`) from each `wanted` target (n, k - 1, 2) to its nearest member,
-        looked up again only where `previous` cannot answer; NaN where not wanted."""
+        """Distance (px) from each `wanted` target (n, k - 1, 2) to its nearest member, looked up again only
+        where `previous` cannot answer; NaN where not wanted. inf where no member lies within `bound`; a
+        distance kept from a pass with a larger bound may exceed this one's, which is the same to the
+        callers: they compare it with tolerances within `bound`."""
         shape = targets.shape[:2]
         cached = self._previous._mirrors.get(kind) if self._previous is not None else None
         if cached is None:
