@@ -24,7 +24,8 @@ def _free_cpus_per_worker() -> int:
 
 
 if os.environ.get("PYTEST_XDIST_WORKER"):
-    os.environ.setdefault("TACTIP_SIM_WORKERS", str(_free_cpus_per_worker()))
+    _cpus = str(_free_cpus_per_worker())
+    os.environ.setdefault("TACTIP_SIM_WORKERS", _cpus)
     # The same for the threads of numpy's BLAS and of torch (OpenMP; `perception._ensemble_training.all_cores`
     # honours OMP_NUM_THREADS too): by default each worker starts one per core, so two workers on two cores
     # would run four threads, which spin while they wait for each other (CPU time without work); the few
@@ -32,7 +33,7 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     # while they wait (OMP_WAIT_POLICY). Set before numpy and torch are imported (they read them once);
     # subprocesses inherit them.
     for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(_variable, str(_free_cpus_per_worker()))
+        os.environ.setdefault(_variable, _cpus)
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 #: Test files of about 15 CPU-s or more, longest first (CPU-s of one worker, self + children, measured per test on
