@@ -22,14 +22,30 @@ less CPU): main thread 4.57 ms/frame, of which tracker updates 91 % (follow pass
 measurements 31 % in 4.3 calls per frame, tip fits on slopes 20 % on 69 % of the frames, snap to rest 7 %,
 recovery by blobs 2 %), the field search 4 %, contacts, features and the HDF5 file 2 %, the frame loop 2 %.
 
+Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
+video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
+with every Python-level call counted by part (``sys.setprofile``: Python functions and the C
+functions called from Python, NumPy's included; a ufunc or array method called as such is not an
+event, so the count is a floor of the NumPy calls): call counts do not vary with load. And
+``--against TREE`` (another source tree of the project, e.g. ``git archive main | tar -x -C TREE``):
+the tracker's CPU by part (``time.thread_time``), this tree against TREE in interleaved rounds
+(``--rounds``, each in a fresh process per tree, the order alternating), with the median of the
+paired ratios per part, and whether the two trees' positions, lost and retired pins are identical.
+
 Run: .venv/bin/python bench/bench_replay_parts.py [--slides N] [--codec mp4v|MJPG] [--repeats N]
+     .venv/bin/python bench/bench_replay_parts.py --calls [--slides N] [--codec mp4v|MJPG]
+     .venv/bin/python bench/bench_replay_parts.py --against TREE [--rounds N] [--slides N] [--codec mp4v|MJPG]
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
+import json
+import os
 import pathlib
+import subprocess
+import sys
 import tempfile
 import time
 
@@ -40,7 +56,7 @@ import pins._window
 import pins.track
 import tactip.pipeline
 import tactip.replay.video
-from bench_replay import write_slides
+from bench_replay import decode, write_slides
 
 # (owner, attribute, label); labels indented by two spaces are parts of the tracker's updates.
 _PARTS = [
@@ -76,13 +92,160 @@ def timed(seconds: collections.Counter, windows: list) -> None:
         setattr(owner, name, wrapper)
 
 
+# The tracker's own parts (`--calls`, `--against`): the labels of `_PARTS` inside the tracker's updates.
+_TRACKER = [part for part in _PARTS if part[2] == "tracker updates" or part[2].startswith(" ")]
+
+
+class _Counted:
+    """Wraps the tracker's parts: main-thread CPU (s) and, with `calls`, Python-level calls by part
+    (``sys.setprofile``: 'call' and 'c_call' events, each counted for every part it runs inside)."""
+
+    def __init__(self, calls: bool) -> None:
+        self.seconds: collections.Counter = collections.Counter()
+        self.calls: collections.Counter = collections.Counter()
+        self.windows: list[int] = []
+        self._active: list[str] = []
+        self._count = calls
+        self._restore = []
+        for owner, name, label in _TRACKER:
+            function = getattr(owner, name)
+            self._restore.append((owner, name, function))
+            setattr(owner, name, self._wrap(function, label))
+
+    def _wrap(self, function, label):
+        def wrapper(*args, **kwargs):
+            self._active.append(label)
+            start = time.thread_time()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                self.seconds[label] += time.thread_time() - start
+                self._active.pop()
+                if label.endswith("window measurements"):
+                    self.windows.append(len(args[2]))
+        return wrapper
+
+    def _profile(self, frame, event, arg) -> None:
+        if event == "call" or event == "c_call":
+            for label in set(self._active):
+                self.calls[label] += 1
+
+    def run(self, images: list) -> dict:
+        """Start a tracker on the first image (`find_pin_field`), update it on the others: its per-frame
+        positions, lost and retired pins (arrays) and CPU seconds of the updates alone."""
+        field = pins.find_pin_field(images[0])
+        tracker = pins.track.PinTracker(detection=field.params, disc=field.disc)
+        tracker.start(images[0], field.centres)
+        self.seconds.clear()
+        self.calls.clear()
+        self.windows.clear()
+        positions, lost, retired = [], [], []
+        if self._count:
+            sys.setprofile(self._profile)
+        start = time.thread_time()
+        try:
+            for image in images[1:]:
+                positions.append(tracker.update(image))
+                lost.append(tracker.lost.copy())
+                retired.append(tracker.retired.copy())
+        finally:
+            total = time.thread_time() - start
+            sys.setprofile(None)
+        return dict(total=total, positions=np.array(positions), lost=np.array(lost), retired=np.array(retired))
+
+
+def _frames(args, folder: str) -> tuple[list, pathlib.Path]:
+    """The slide video's decoded frames (cached as .npy in `folder` for the workers) and that file."""
+    video = pathlib.Path(folder) / ("slides.avi" if args.codec == "MJPG" else "slides.mp4")
+    write_slides(video, "radial-led-120", args.slides, codec=args.codec)
+    images = decode(video)
+    stored = pathlib.Path(folder) / "frames.npy"
+    np.save(stored, np.array(images))
+    return images, stored
+
+
+def count_calls(args) -> None:
+    """`--calls`: the tracker's Python-level calls per frame by part (load-independent), and its windows."""
+    with tempfile.TemporaryDirectory() as folder:
+        images, _ = _frames(args, folder)
+    counted = _Counted(calls=True)
+    counted.run(images)
+    frames = len(images) - 1
+    sizes = np.array(counted.windows)
+    print(f"radial-led-120, {args.slides} slides, {args.codec}: tracker updates over {frames} frames; "
+          f"Python-level calls (Python functions and C functions called from Python) per frame, by part")
+    print(f"{'':40s}{'calls/frame':>12s}{'%':>7s}")
+    whole = counted.calls["tracker updates"]
+    for _, _, label in _TRACKER:
+        print(f"{label:40s}{counted.calls[label] / frames:12.1f}{100 * counted.calls[label] / max(whole, 1):7.1f}")
+    print(f"window measurements: {len(sizes) / frames:.2f} per frame, windows per call: median {np.median(sizes):g}")
+
+
+def _worker(frames_path: str, out_path: str) -> None:
+    """One tree's tracker over the stored frames: CPU by part (JSON on stdout), outputs to `out_path` (.npz)."""
+    images = list(np.load(frames_path))
+    counted = _Counted(calls=False)
+    result = counted.run(images)
+    np.savez(out_path, positions=result["positions"], lost=result["lost"], retired=result["retired"])
+    print(json.dumps(dict(total=result["total"], parts=dict(counted.seconds))))
+
+
+def against(args) -> None:
+    """`--against TREE`: the tracker's CPU by part, this tree against TREE, in interleaved rounds (fresh
+    processes, order alternating): per-round figures, the median of the paired ratios, identical outputs."""
+    here = pathlib.Path(__file__).resolve().parents[1]
+    trees = {"this": here, "other": pathlib.Path(args.against).resolve()}
+    runs: dict[str, list[dict]] = {"this": [], "other": []}
+    with tempfile.TemporaryDirectory() as folder:
+        images, stored = _frames(args, folder)
+        frames = len(images) - 1
+        del images
+        outputs = {}
+        for round_ in range(args.rounds):
+            for name in (("this", "other") if round_ % 2 == 0 else ("other", "this")):
+                out = pathlib.Path(folder) / f"{name}.npz"
+                environment = dict(os.environ, PYTHONPATH=f"{trees[name]}{os.pathsep}{trees[name] / 'bench'}",
+                                   PYTHONDONTWRITEBYTECODE="1")
+                done = subprocess.run([sys.executable, str(trees["this"] / "bench" / "bench_replay_parts.py"),
+                                       "--worker", str(stored), str(out)], env=environment, check=True,
+                                      capture_output=True, text=True, cwd=folder)
+                runs[name].append(json.loads(done.stdout.strip().splitlines()[-1]))
+                with np.load(out) as data:
+                    outputs[name] = {key: data[key] for key in data.files}
+            figures = " ".join(f"{name} {runs[name][-1]['total'] / frames * 1e3:.3f}" for name in runs)
+            print(f"round {round_ + 1}: tracker updates, ms/frame CPU: {figures}", flush=True)
+    same = {key: np.array_equal(outputs["this"][key], outputs["other"][key], equal_nan=True)
+            for key in ("positions", "lost", "retired")}
+    gap = np.nanmax(np.abs(outputs["this"]["positions"] - outputs["other"]["positions"]))
+    print(f"outputs identical: {same}; largest position difference {gap:.3g} px")
+    print(f"{'':40s}{'this ms/f':>10s}{'other ms/f':>11s}{'ratio':>7s}  (medians; ratio: median of paired)")
+    labels = ["tracker updates"] + [label for _, _, label in _TRACKER if label.startswith(" ")]
+    for label in labels:
+        mine = np.array([run["parts"].get(label, 0.0) for run in runs["this"]])
+        theirs = np.array([run["parts"].get(label, 0.0) for run in runs["other"]])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.median(mine / theirs)
+        print(f"{label:40s}{np.median(mine) / frames * 1e3:10.3f}{np.median(theirs) / frames * 1e3:11.3f}{ratio:7.2f}")
+    print(f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+
+
 def main() -> None:
     """Write the video, replay it `--repeats` times, print the main thread's CPU by part (best run)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--slides", type=int, default=8)
     parser.add_argument("--codec", choices=("mp4v", "MJPG"), default="MJPG")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--calls", action="store_true", help="the tracker's Python-level calls per frame by part")
+    parser.add_argument("--against", metavar="TREE", help="the tracker's CPU by part against another source tree")
+    parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds of --against")
+    parser.add_argument("--worker", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.worker:
+        return _worker(*args.worker)
+    if args.calls:
+        return count_calls(args)
+    if args.against:
+        return against(args)
     seconds: collections.Counter = collections.Counter()
     windows: list[int] = []
     timed(seconds, windows)
