@@ -34,6 +34,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+from numpy.linalg import _umath_linalg
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
@@ -139,22 +140,33 @@ class _Windows:
 
     def __init__(self, image, start, reach, neighbours, nearest):
         height, width = image.shape
-        gx, gy = _disc_offsets(int(np.ceil(reach.max())) + 1)
-        anchor = np.rint(start).astype(np.intp)
-        ix, iy = anchor[:, 0, None] + gx, anchor[:, 1, None] + gy  # (N, P) int
-        self.xy = np.stack([ix, iy], axis=1).astype(np.float64)  # (N, 2, P)
+        half = int(np.ceil(reach.max())) + 1
+        offsets, flat = _disc_grid(half, width)
+        # Whole pixels: the float anchor plus the offsets are the integer coordinates, exactly.
+        anchor = np.rint(start)
+        self.xy = anchor[:, :, None] + offsets  # (N, 2, P), px
         self.x, self.y = self.xy[:, 0], self.xy[:, 1]
-        # (A negative index, read as unsigned, lies beyond the bound: one comparison a side.)
-        inside = (ix.view(np.uintp) <= width - 1) & (iy.view(np.uintp) <= height - 1)
-        if inside.all():
-            values = image[iy, ix]
+        # Every window's square inside the image (most calls): its pixels are a flat gather.
+        low, high = anchor.min(axis=0), anchor.max(axis=0)
+        if low[0] >= half and low[1] >= half and high[0] <= width - 1 - half and high[1] <= height - 1 - half:
+            corner = anchor.astype(np.intp)
+            values = image.reshape(-1)[corner[:, 1, None] * width + corner[:, 0, None] + flat]
+            inside = None
         else:
+            gx, gy = _disc_offsets(half)
+            ix, iy = corner_x, corner_y = anchor.astype(np.intp).T
+            ix, iy = corner_x[:, None] + gx, corner_y[:, None] + gy  # (N, P) int
+            # (A negative index, read as unsigned, lies beyond the bound: one comparison a side.)
+            inside = (ix.view(np.uintp) <= width - 1) & (iy.view(np.uintp) <= height - 1)
             values = image[np.clip(iy, 0, height - 1), np.clip(ix, 0, width - 1)]
         self.values = values.astype(np.float64)
         # A pixel counts when it lies in the image and nearer to its own tip than half the distance
         # to the nearest neighbour from every neighbour (no neighbour's foot), within the reach.
-        own = _squared_norm(self.xy.transpose(0, 2, 1)[:, None] - neighbours[:, :, None, :])  # (N, k, P), px^2
-        self.usable = inside & (np.minimum.reduce(own, axis=1) > np.square(0.5 * nearest)[:, None])
+        apart = self.xy[:, None] - neighbours[:, :, :, None]  # (N, k, 2, P), px
+        apart *= apart
+        own = np.add(apart[:, :, 0], apart[:, :, 1])  # (N, k, P), px^2
+        usable = np.minimum.reduce(own, axis=1) > np.square(0.5 * nearest)[:, None]
+        self.usable = usable if inside is None else inside & usable
         self.reach = reach
 
 
@@ -168,6 +180,17 @@ def _disc_offsets(half: int) -> tuple[np.ndarray, np.ndarray]:
     gx, gy = gx[disc], gy[disc]
     gx.flags.writeable = gy.flags.writeable = False
     return gx, gy
+
+
+@functools.lru_cache(maxsize=16)
+def _disc_grid(half: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """`_disc_offsets(half)` as (2, P) float64 offsets (x, y), px, and as (P,) offsets into a flattened
+    image `width` px wide (``y * width + x``). Cached: the same few a frame, frame after frame."""
+    gx, gy = _disc_offsets(half)
+    offsets = np.stack([gx, gy]).astype(np.float64)
+    flat = gy * width + gx
+    offsets.flags.writeable = flat.flags.writeable = False
+    return offsets, flat
 
 
 def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius_px: float, *, free: int,
@@ -283,7 +306,7 @@ def _centre_step(window: _Windows, theta: np.ndarray, start: np.ndarray) -> np.n
     basis[:, 8] = window.values
     weighted = basis[:, :8] * weight[:, None, :]
     products = weighted @ basis.transpose(0, 2, 1)  # (N, 8, 9)
-    beta = np.linalg.solve(products[:, :, :8] + _RIDGE, products[:, :, 8:])
+    beta = _solve(products[:, :, :8] + _RIDGE, products[:, :, 8:])
     surface = (beta[:, None, :6, 0] @ surface_rows)[:, 0]
     rise = beta[:, 6] + beta[:, 7] * dome - surface  # the tip above the membrane behind it
     residual = window.values - (surface + coverage * rise)
@@ -304,6 +327,18 @@ def _centre_step(window: _Windows, theta: np.ndarray, start: np.ndarray) -> np.n
     new = theta[:, :2] + np.minimum(np.maximum(step, -0.5), 0.5)
     good = _squared_norm(new - start) <= _REACH_PX ** 2  # (NaN compares False)
     return np.where(good[:, None], new, theta[:, :2])
+
+
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.linalg.solve(a, b)`` of float64 stacks (..., M, M) and (..., M, K), bit for bit (the same LAPACK
+    gufunc), without its checks and conversions: a third of its cost on a few small systems. Raises
+    `numpy.linalg.LinAlgError` on a singular matrix, as it does."""
+    with np.errstate(call=_singular, invalid="call", over="ignore", divide="ignore", under="ignore"):
+        return _umath_linalg.solve(a, b, signature="dd->d")
+
+
+def _singular(error: str, flag: int) -> None:
+    raise np.linalg.LinAlgError("Singular matrix")
 
 
 def _fittable(ellipses: np.ndarray, radius_px: float) -> np.ndarray:

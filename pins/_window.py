@@ -24,6 +24,9 @@ _SIDE_RUN = 4
 # Windows x pixels up to which one float32 product sums the windows' pixels (fewer NumPy calls);
 # beyond, reductions of the gathered pixels cost less (measured at 9x9 and 19x19 windows).
 _PRODUCT_PIXELS = 4096
+# Window pixels up to which the masks are gathered as float32 (9 x 9 px windows: 1.2 of 4.9 us a
+# product saved on 25 windows); beyond, as uint8 and cast in the product (19 x 19 px: cheaper so).
+_FLOAT_MASK_PIXELS = 169
 
 class WindowCentroids:
     """Centroids of pin tips in square windows of side ``2 * half_px + 1`` around guesses.
@@ -71,6 +74,9 @@ class WindowCentroids:
         masks = d2[None] <= (self._radii ** 2)[:, None, None, None]
         self._n_phases = len(phases)
         self._masks = masks.reshape(-1, gx.size).astype(np.uint8)  # (radius, phase y, phase x) -> P
+        # The masks `_measure` gathers: float32 on small windows (no cast in the product with the
+        # weights), uint8 on large ones (a quarter of the bytes to gather; `_FLOAT_MASK_PIXELS`).
+        self._gathered_masks = self._masks.astype(np.float32) if gx.size <= _FLOAT_MASK_PIXELS else self._masks
         # The four sides' pixels (left, right, top, bottom) and each pixel's (x, y) for the
         # threshold plane.
         index = np.arange(gx.size).reshape(side, side)
@@ -95,8 +101,9 @@ class WindowCentroids:
         self._product_pixels = min(_PRODUCT_PIXELS, _SINGLE_THREAD_MACS // sums.shape[1])
         # The mask index (radius, phase y, phase x) from the phases (x, y) in quarter px and the radius.
         # (x, y phase and radius, in quarter px) -> (radius, phase y, phase x) index, less `_mask_base`.
-        self._mask_steps = np.array([1.0, float(self._n_phases), float(self._n_phases ** 2)])
         self._mask_base = float((_PHASES // 2) * (self._n_phases + 1) - self._n_phases ** 2)
+        # (Its fourth step takes `_mask_base` from a column of ones scaled to quarter px: exact, -13 / 4.)
+        self._mask_steps = np.array([1.0, float(self._n_phases), float(self._n_phases ** 2), self._mask_base / _PHASES])
         self._layouts: dict = {}
         self._viewed = (None, None, None)  # (image, corner bounds, sliding view): the last image measured
 
@@ -291,7 +298,7 @@ class WindowCentroids:
         rise = plane[:, 1:]
         shrink = _FLAT_RISE * contrast / np.sqrt(_squared_norm(rise))
         # (Windows without a tip of some contrast, a lost pin's empty window, need no plane.)
-        sloped = ((shrink < 1.0) & (contrast > self.least_contrast)).nonzero()[0]  # NaN compares False
+        sloped = (shrink < 1.0) & (contrast > self.least_contrast)  # NaN compares False
         positive = np.maximum(contrast, 0.0)
         lift = self.threshold_fraction * positive
         if self.above_mean:
@@ -301,32 +308,27 @@ class WindowCentroids:
         level = background + lift  # the threshold at the window's centre, <= top
         # Each pixel weighs its grey level above the threshold (its positive part), in whole grey levels
         # so that weights are integers: windows on a slope above the threshold plane, the others above
-        # a flat threshold.
-        if sloped.size:
-            coefficients = np.empty((sloped.size, 3), np.float32)  # level, slope x, y (grey levels per px)
-            coefficients[:, 0] = level[sloped]
-            coefficients[:, 1:] = rise[sloped] * ((1.0 - np.maximum(shrink[sloped], 0.0)) / half)[:, None]
-            tilted = np.rint(np.dot(coefficients, self._plane))  # (k, P) threshold plane
-            np.subtract(weights[sloped], tilted, out=tilted)
-        np.subtract(weights, np.rint(level).astype(np.float32)[:, None], out=weights)
-        if sloped.size:
-            weights[sloped] = tilted
+        # a flat threshold. One plane for all (fewer NumPy calls): a flat window's has no slope and its
+        # level already whole (rounded in float64, as its threshold always was), so that it is exact.
+        coefficients = np.empty((n, 3), np.float32)  # level, slope x, y (grey levels per px)
+        coefficients[:, 0] = np.where(sloped, level, np.rint(level))
+        coefficients[:, 1:] = rise * np.where(sloped, (1.0 - np.maximum(shrink, 0.0)) / half, 0.0)[:, None]
+        np.subtract(weights, np.rint(np.dot(coefficients, self._plane)), out=weights)
         np.maximum(weights, 0.0, out=weights)
         # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
         # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x). All three in
-        # quarter px in one (N, 3) array: a few calls on it instead of one each per column (exact: small integers).
-        quarters = np.empty((n, 3))
+        # quarter px in one (N, 4) array: a few calls on it instead of one each per column (exact: small
+        # integers); its last column a 1 that carries `_mask_base` through the product.
+        quarters = np.ones((n, 4))
         np.subtract(points, anchor, out=quarters[:, :2])
-        np.multiply(radius_px, 1.0, out=quarters[:, 2])
+        quarters[:, 2] = radius_px
         quarters *= _PHASES
         np.rint(quarters, out=quarters)
         radius = quarters[:, 2]
         np.fmin(np.maximum(radius, 1.0, out=radius), float(len(self._radii)), out=radius)  # NaN: the widest
         # Phases run from -_PHASES // 2 and radius indices from 1 (the mask of radius r/4 is row r - 1).
         mask = np.dot(quarters, self._mask_steps)
-        mask += self._mask_base
-        # (uint8 masks: gathered as float32 they cost more than the cast on 19 x 19 px windows.)
-        np.multiply(weights, self._masks[mask.astype(np.intp)], out=weights)
+        np.multiply(weights, self._gathered_masks[mask.astype(np.intp)], out=weights)
         # (N, 4): mass, sum x, sum y, sum r^2.
         moments = (np.dot(weights, self._moments) if n <= self._moment_rows
                    else _dot(weights, self._moments, self._moment_rows)).astype(np.float64)
