@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import dis
 import json
 import os
 import pathlib
@@ -92,17 +93,26 @@ def timed(seconds: collections.Counter, windows: list) -> None:
         setattr(owner, name, wrapper)
 
 
+# The opcodes counted as operations (`--calls`): calls, and the operators a NumPy call hides behind.
+_OPERATIONS = frozenset(dis.opmap[name] for name in ("CALL", "CALL_FUNCTION_EX", "BINARY_OP", "COMPARE_OP",
+                                                     "BINARY_SUBSCR", "STORE_SUBSCR", "UNARY_NEGATIVE",
+                                                     "UNARY_INVERT") if name in dis.opmap)
+
 # The tracker's own parts (`--calls`, `--against`): the labels of `_PARTS` inside the tracker's updates.
 _TRACKER = [part for part in _PARTS if part[2] == "tracker updates" or part[2].startswith(" ")]
 
 
 class _Counted:
-    """Wraps the tracker's parts: main-thread CPU (s) and, with `calls`, Python-level calls by part
-    (``sys.setprofile``: 'call' and 'c_call' events, each counted for every part it runs inside)."""
+    """Wraps the tracker's parts: main-thread CPU (s) and, with `calls`, Python-level calls and operations
+    by part, each counted for every part it runs inside: calls from ``sys.setprofile`` ('call' and 'c_call'
+    events: Python functions, and C functions called from Python, NumPy's functions included), operations
+    from ``sys.settrace`` opcode events (calls, arithmetic, comparisons, subscripts: `_OPERATIONS`; a NumPy
+    ufunc or operator on arrays is one of these, not a call)."""
 
     def __init__(self, calls: bool) -> None:
         self.seconds: collections.Counter = collections.Counter()
         self.calls: collections.Counter = collections.Counter()
+        self.operations: collections.Counter = collections.Counter()
         self.windows: list[int] = []
         self._active: list[str] = []
         self._count = calls
@@ -130,6 +140,15 @@ class _Counted:
             for label in set(self._active):
                 self.calls[label] += 1
 
+    def _trace(self, frame, event, arg):
+        if event == "call":
+            frame.f_trace_opcodes = True
+            frame.f_trace_lines = False
+        elif event == "opcode" and frame.f_code.co_code[frame.f_lasti] in _OPERATIONS:
+            for label in set(self._active):
+                self.operations[label] += 1
+        return self._trace
+
     def run(self, images: list) -> dict:
         """Start a tracker on the first image (`find_pin_field`), update it on the others: its per-frame
         positions, lost and retired pins (arrays) and CPU seconds of the updates alone."""
@@ -142,6 +161,7 @@ class _Counted:
         positions, lost, retired = [], [], []
         if self._count:
             sys.setprofile(self._profile)
+            sys.settrace(self._trace)
         start = time.thread_time()
         try:
             for image in images[1:]:
@@ -151,6 +171,7 @@ class _Counted:
         finally:
             total = time.thread_time() - start
             sys.setprofile(None)
+            sys.settrace(None)
         return dict(total=total, positions=np.array(positions), lost=np.array(lost), retired=np.array(retired))
 
 
@@ -172,12 +193,14 @@ def count_calls(args) -> None:
     counted.run(images)
     frames = len(images) - 1
     sizes = np.array(counted.windows)
-    print(f"radial-led-120, {args.slides} slides, {args.codec}: tracker updates over {frames} frames; "
-          f"Python-level calls (Python functions and C functions called from Python) per frame, by part")
-    print(f"{'':40s}{'calls/frame':>12s}{'%':>7s}")
-    whole = counted.calls["tracker updates"]
+    print(f"radial-led-120, {args.slides} slides, {args.codec}: tracker updates over {frames} frames; per frame, "
+          f"by part: Python-level calls (functions, NumPy's C functions included) and operations (calls, "
+          f"operators, comparisons, subscripts: a NumPy ufunc or array operator is one)")
+    print(f"{'':40s}{'calls/frame':>12s}{'%':>7s}{'ops/frame':>11s}{'%':>7s}")
+    whole, ops = counted.calls["tracker updates"], counted.operations["tracker updates"]
     for _, _, label in _TRACKER:
-        print(f"{label:40s}{counted.calls[label] / frames:12.1f}{100 * counted.calls[label] / max(whole, 1):7.1f}")
+        print(f"{label:40s}{counted.calls[label] / frames:12.1f}{100 * counted.calls[label] / max(whole, 1):7.1f}"
+              f"{counted.operations[label] / frames:11.1f}{100 * counted.operations[label] / max(ops, 1):7.1f}")
     print(f"window measurements: {len(sizes) / frames:.2f} per frame, windows per call: median {np.median(sizes):g}")
 
 
