@@ -22,6 +22,18 @@ less CPU): main thread 4.57 ms/frame, of which tracker updates 91 % (follow pass
 measurements 31 % in 4.3 calls per frame, tip fits on slopes 20 % on 69 % of the frames, snap to rest 7 %,
 recovery by blobs 2 %), the field search 4 %, contacts, features and the HDF5 file 2 %, the frame loop 2 %.
 
+Session "speed6" (2026-11-29; load average 5-10; main 9a221aa against this session's code, outputs bit for
+bit): main thread 2.11 -> 2.01 ms/frame (best of 2; wrapped parts), of which tracker updates 91-92 % (follow
+passes 48-50 %, window measurements 27-29 % in 4.3 calls per frame, tip fits on slopes 19 %, snap to rest
+7 %, recovery by blobs 2 %), the field search 3 %, contacts, features and the HDF5 file 2 %, the frame loop
+2 %. ``--against`` main, 5 rounds each, tracker updates ms/frame CPU (median of the paired ratios): MJPG
+1.508 -> 1.402 (0.93; window measurements 0.475 -> 0.416, 0.87; tip fits 0.332 -> 0.302, 0.91; snap to
+rest 0.92), mp4v 1.651 -> 1.497 (0.91; 0.85; 0.88; 0.92); follow passes 0.92 / 0.91 through their window
+measurements alone (their own code is another session's). ``--calls``, MJPG, per frame: calls 543 -> 507
+(tip fits 115 -> 86, window measurements 177 -> 170, snap to rest 53 -> 52), operations 1670 -> 1638;
+the counts say less than the time: a reduction costs several elementwise calls, `np.linalg.solve` three
+calls of its LAPACK gufunc, and a window measurement of one window ~50 us against ~90 us for 120.
+
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C
