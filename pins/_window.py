@@ -278,7 +278,9 @@ class WindowCentroids:
             return np.empty((0, 2)), np.empty((3, 0))
         # Called a few times a frame, mostly on a few dozen windows: each NumPy call's own cost
         # counts, so the work is in as few calls as possible (ufuncs and np.dot called directly).
-        bounds, view = self._view(image)
+        seen, bounds, view = self._viewed
+        if image is not seen:  # (a frame's windows are measured a few times on the same crop)
+            bounds, view = self._view(image)
         anchor = np.rint(points)
         corner = anchor.astype(np.intp)
         corner -= half
@@ -320,18 +322,22 @@ class WindowCentroids:
         # so that weights are integers: windows on a slope above the threshold plane, the others above
         # a flat threshold. One plane for all (fewer NumPy calls): a flat window's has no slope and its
         # level already whole (rounded in float64, as its threshold always was), so that it is exact.
+        # (Written as float32 by the ufuncs themselves: computed in float64 and cast, as assigned.)
         coefficients = np.empty((n, 3), np.float32)  # level, slope x, y (grey levels per px)
-        coefficients[:, 0] = np.where(sloped, level, np.rint(level))
-        coefficients[:, 1:] = rise * np.where(sloped, (1.0 - np.maximum(shrink, 0.0)) / half, 0.0)[:, None]
+        np.rint(level, out=coefficients[:, 0])
+        np.copyto(coefficients[:, 0], level, where=sloped)
+        np.multiply(rise, np.where(sloped, (1.0 - np.maximum(shrink, 0.0)) / half, 0.0)[:, None],
+                    out=coefficients[:, 1:])
         np.subtract(weights, np.rint(np.dot(coefficients, self._plane)), out=weights)
         np.maximum(weights, 0.0, out=weights)
         # Mask of the guess's quarter-pixel phase (in [-0.5, 0.5] where the window fits) and radius
         # (in quarter px, clipped to the masks'), as one index: (radius, phase y, phase x). All three in
         # quarter px in one (N, 4) array: a few calls on it instead of one each per column (exact: small
         # integers); its last column a 1 that carries `_mask_base` through the product.
-        quarters = np.ones((n, 4))
+        quarters = np.empty((n, 4))
         np.subtract(points, anchor, out=quarters[:, :2])
         quarters[:, 2] = radius_px
+        quarters[:, 3] = 1.0
         quarters *= _PHASES
         np.rint(quarters, out=quarters)
         radius = quarters[:, 2]
@@ -343,12 +349,13 @@ class WindowCentroids:
         moments = (np.dot(weights, self._moments) if n <= self._moment_rows
                    else _dot(weights, self._moments, self._moment_rows)).astype(np.float64)
         mass = moments[:, 0]
-        # Centroid offset (x, y) and mean r^2; an empty window (no mass) gives NaN.
-        moments[:, 1:] /= mass[:, None]
-        offset = moments[:, 1:3]
+        # Centroid offset (x, y) and mean r^2; an empty window (no mass) gives NaN. (A new array: in
+        # place, the divisor's overlap with the quotient costs numpy a buffered pass, twice the time.)
+        means = moments[:, 1:] / moments[:, :1]
+        offset = means[:, :2]
         np.divide(mass, top - level, out=measures[0])
         # Mean squared distance from the centroid; a disc of area A has A / (2 pi).
-        spread = moments[:, 3] - _squared_norm(offset)
+        spread = means[:, 2] - _squared_norm(offset)
         np.divide(measures[0], 2 * np.pi * spread, out=measures[2])
         centres = anchor + offset
         if not everywhere:
