@@ -62,19 +62,21 @@ tips on slopes 22 % (`Refiner.fit_tips` on 69 % of the frames, ~1.2 ms a call: b
 a dozen NumPy calls round them), snapping to rest 8 %, the neighbours' medians, carried steps and learnt
 scatters 10 %.
 
-Session of issue 20's "speed6" (2026-11-29; 2-core VM shared with four other sessions, load average 4-9;
-main 9a221aa against this session's code, 3 rounds interleaved, best of 2 repeats each; the tracker's
+Session of issue 20's "speed6" (2026-11-29; 2-core VM shared with four other sessions, load average 4-12;
+main 9a221aa against this session's code, interleaved rounds, best of 2 repeats each; the tracker's
 positions, lost and retired pins bit for bit the same on both videos and on bench_slides' renders): fewer
 NumPy calls per window measurement and per tip fit, the same arithmetic. Replay's busier thread / decode,
-per round, MJPG 1.74 / 2.12 / 1.86 -> 1.45 / 1.53 / 1.71 (medians 1.86 -> 1.53), mp4v 1.65 / 1.71 / 1.81 ->
-1.50 / 1.65 / 1.58 (1.71 -> 1.58); decoding alone 0.96-1.27 ms/frame CPU; the tracker alone, MJPG 1.34-1.68
--> 1.20-1.26, mp4v 1.46-1.49 -> 1.40-1.54 (single runs: within the noise). `bench_replay_parts.py --against`
-(5 rounds): tracker updates, median of the paired ratios, 0.93 (MJPG) and 0.91 (mp4v); window measurements
-0.87 / 0.85, tip fits 0.91 / 0.88. The bar (1.5) is reached in 2 of the 6 rounds (MJPG 1.45, mp4v 1.50), not
-by their medians: replay's main thread is the field search (0.2 ms/frame over this video) and the tracker's
-updates, 91 % of it, whose cost is the number of their NumPy calls (~50 us for a window measurement of one
-window, ~90 us for all 120) more than their work: what is left needs fewer calls a frame (fewer follow
-passes, fewer fits), not cheaper ones.
+per round, MJPG 1.74 / 2.12 / 1.86 / 1.62 / 1.79 / 1.84 -> 1.45 / 1.53 / 1.71 / 1.77 / 1.61 / 1.61 (medians
+1.82 -> 1.61), mp4v 1.65 / 1.71 / 1.81 / 1.74 / 1.77 / 1.72 -> 1.50 / 1.65 / 1.58 / 1.62 / 1.57 / 1.58 (1.74
+-> 1.58; the last three rounds of each on the final code, the first three on all but its last commit);
+decoding alone 0.96-1.27 ms/frame CPU; the tracker alone (single runs, noisy), MJPG 1.34-1.68 -> 1.20-1.37,
+mp4v 1.44-1.53 -> 1.40-1.54. `bench_replay_parts.py --against` (5 rounds, the final code): tracker updates,
+median of the paired ratios, 0.88 (MJPG) and 0.95 (mp4v); window measurements 0.81 / 0.87, tip fits 0.86 /
+0.92. The bar (1.5) is reached in 2 of the 12 rounds (MJPG 1.45, mp4v 1.50), not by their medians: replay's
+main thread is the field search (0.2 ms/frame over this video) and the tracker's updates, 91 % of it, whose
+cost is the number of their NumPy calls (~50 us for a window measurement of one window, ~90 us for all 120)
+more than their work: what is left needs fewer calls a frame (fewer follow passes, fewer fits), not cheaper
+ones.
 
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG

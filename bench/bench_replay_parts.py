@@ -9,8 +9,8 @@ measurements, the snap back to rest, LK with refinement, recovery by blobs and t
 slopes: nested, so they do
 not add up), the contacts, their features, the HDF5 file and the rest (the frame loop, the queue
 from the decode thread, stacking). Also the window measurements per frame and how many windows each
-measures: each call costs a fixed ~0.1 ms of NumPy calls on a few dozen windows, so their number,
-not their size, sets the tracker's cost. Best of the repeats (the least disturbed run).
+measures: each call costs a fixed ~0.05 ms of NumPy calls (~0.09 ms for all 120 windows), so their
+number, not their size, sets the tracker's cost. Best of the repeats (the least disturbed run).
 
 Figures (2-core VM shared with four other sessions, load average 20-25; 795 frames, MJPG):
 main thread ~2.2 s, of which tracker updates 87-90 % (follow passes 64-67 %, window measurements
@@ -22,23 +22,26 @@ less CPU): main thread 4.57 ms/frame, of which tracker updates 91 % (follow pass
 measurements 31 % in 4.3 calls per frame, tip fits on slopes 20 % on 69 % of the frames, snap to rest 7 %,
 recovery by blobs 2 %), the field search 4 %, contacts, features and the HDF5 file 2 %, the frame loop 2 %.
 
-Session "speed6" (2026-11-29; load average 5-10; main 9a221aa against this session's code, outputs bit for
-bit): main thread 2.11 -> 2.01 ms/frame (best of 2; wrapped parts), of which tracker updates 91-92 % (follow
-passes 48-50 %, window measurements 27-29 % in 4.3 calls per frame, tip fits on slopes 19 %, snap to rest
-7 %, recovery by blobs 2 %), the field search 3 %, contacts, features and the HDF5 file 2 %, the frame loop
-2 %. ``--against`` main, 5 rounds each, tracker updates ms/frame CPU (median of the paired ratios): MJPG
-1.508 -> 1.402 (0.93; window measurements 0.475 -> 0.416, 0.87; tip fits 0.332 -> 0.302, 0.91; snap to
-rest 0.92), mp4v 1.651 -> 1.497 (0.91; 0.85; 0.88; 0.92); follow passes 0.92 / 0.91 through their window
-measurements alone (their own code is another session's). ``--calls``, MJPG, per frame: calls 543 -> 507
-(tip fits 115 -> 86, window measurements 177 -> 170, snap to rest 53 -> 52), operations 1670 -> 1638;
-the counts say less than the time: a reduction costs several elementwise calls, `np.linalg.solve` three
-calls of its LAPACK gufunc, and a window measurement of one window ~50 us against ~90 us for 120.
+Session "speed6" (2026-11-29; load average 5-12; main 9a221aa against this session's code, outputs bit for
+bit): main thread 2.11 -> 2.01 ms/frame (best of 2, wrapped parts; before the last commit), of which tracker
+updates 91-92 % (follow passes 48-50 %, window measurements 27-29 % in 4.3 calls per frame, tip fits on
+slopes 19 %, snap to rest 7 %, recovery by blobs 2 %), the field search 3 %, contacts, features and the HDF5
+file 2 %, the frame loop 2 %. ``--against`` main, 5 rounds, the final code, tracker updates ms/frame CPU
+(median of the paired ratios): MJPG 1.562 -> 1.394 (0.88; window measurements 0.493 -> 0.405, 0.81; tip fits
+0.345 -> 0.304, 0.86; snap to rest 0.88), mp4v 1.504 -> 1.341 (0.95; 0.87; 0.92; 0.93); two earlier runs
+(all but the last commit) 0.93 (MJPG) and 0.91 (mp4v). Follow passes 0.87 / 0.94 through their window
+measurements alone (their own code is another session's). ``--calls``, MJPG, per frame: calls 543 -> 495
+(tip fits 115 -> 86, window measurements 177 -> 159, snap to rest 53 -> 51), operations 1670 -> 1630; the
+counts say less than the time: a reduction costs several elementwise calls, `np.linalg.solve` three calls of
+its LAPACK gufunc, an in-place division whose divisor overlaps it twice a new one, and a window measurement
+of one window ~50 us against ~90 us for 120.
 
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C
-functions called from Python, NumPy's included; a ufunc or array method called as such is not an
-event, so the count is a floor of the NumPy calls): call counts do not vary with load. And
+functions called from Python, NumPy's included; a ufunc or an operator on arrays is not such an
+event) and every operation (``sys.settrace`` opcode events: calls, operators, comparisons and
+subscripts, which a ufunc or an operator on arrays is): counts do not vary with load. And
 ``--against TREE`` (another source tree of the project, e.g. ``git archive main | tar -x -C TREE``):
 the tracker's CPU by part (``time.thread_time``), this tree against TREE in interleaved rounds
 (``--rounds``, each in a fresh process per tree, the order alternating), with the median of the
