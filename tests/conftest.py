@@ -36,38 +36,48 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
         os.environ.setdefault(_variable, _cpus)
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-#: Test files of about 15 CPU-s or more, longest first (CPU-s of one worker, self + children, measured per test on
-#: the 2-core VM under make test's 2 workers, 2026-11-29 on branch suite5 = main b811570 with one BLAS/OpenMP thread
-#: per worker; load 4-8, so somewhat inflated; /work/scratch/s14/suite5-durations.txt). test_station_bar (its own
-#: station, no session fixture) and the README's examples (which build the session's station and recordings first)
-#: start the two workers; test_station_torch, which needs that station, queues behind test_station_bar, by when it
-#: is built (its 166: the torch station's preparation ~126, the session's ECE collection ~39 when it builds it).
-#: test_cluster and test_reproduce share quick reproductions (the first to need one builds it): apart. Simulated
-#: with these per-test figures (xdist's loadfile rule: a worker gets its next file when <= 2 of its tests are
-#: pending), the two workers end within 1 % of each other (662 and 665 CPU-s).
+#: Test files of about 20 s or more, longest first (seconds of one worker, setup + call + teardown, from pytest's
+#: --durations under 2 xdist workers on the 2-core VM, 2026-11-29 on branch suite6 = main 9a221aa; the machine was
+#: shared (load 7-9), so every figure is about 3x its CPU-s; /work/scratch/s15/suite6/before.txt). test_station_bar
+#: (its own station, no session fixture) and the README's examples (which build the session's station and
+#: recordings first) start the two workers; test_station_torch, which needs that station, queues behind
+#: test_station_bar, by when it is built (its 323 was the torch station's preparation 238, the session's ECE
+#: collection 81; the preparation is now about a third of that: Adam's foreach update and fold models that take
+#: the refit's input and deviations, 103.8 -> 29.7 CPU-s). test_cluster and test_reproduce share quick
+#: reproductions (the first to need one builds it): apart. test_dashboard_browser was skipped there (no Chromium):
+#: its 45 is suite5's CPU-s.
 LONGEST_FIRST = (
-    "tests/tactip/station/test_station_bar.py",         # 100 (one test)
-    "tests/tactip/test_readme_examples.py",             # 141, of which 43 its first example with the session's fixtures
-    "tests/tactip/station/test_station_torch.py",       # 166
-    "tests/pins/test_lattice.py",                       # 76
-    "tests/tactip/test_faults_data.py",                 # 59 (subprocesses)
-    "tests/perception/test_learned.py",                 # 48
-    "tests/tactip/reproduce/test_reproduce_002.py",     # 47 (one test)
-    "tests/tactip/line/test_dashboard_browser.py",      # 45
-    "tests/tactip/test_one_scale.py",                   # 44
-    "tests/pins/test_lattice_seeds.py",                 # 38
-    "tests/tactip/cli/test_cli_station.py",             # 31
-    "tests/pins/test_accel_detect.py",                  # 29
-    "tests/tactip/test_cluster.py",                     # 27 (+ the quick 001 and 003 when it runs them first)
-    "tests/tactip/test_faults_input.py",                # 27
-    "tests/tactip/dataset/test_build.py",               # 26
-    "tests/pins/test_flat_gel.py",                      # 22
-    "tests/tactip/replay/test_batch.py",                # 21
-    "tests/tactip/replay/test_replay_contacts.py",      # 17
-    "tests/pins/test_track_identity.py",                # 17
-    "tests/tactip/reproduce/test_reproduce.py",         # 16 (more when it runs the quick reproductions first)
-    "tests/tactip/reproduce/test_figure_samples.py",    # 14
-    "tests/tactip/replay/test_replay.py",               # 13
+    "tests/tactip/station/test_station_bar.py",         # 109 (one test)
+    "tests/tactip/test_readme_examples.py",             # 164, with the session's station and recordings
+    "tests/tactip/station/test_station_torch.py",       # 323 before the cheaper preparation (above)
+    "tests/tactip/test_faults_data.py",                 # 133 (subprocesses)
+    "tests/pins/test_lattice.py",                       # 128
+    "tests/tactip/reproduce/test_reproduce_002.py",     # 100 (one test)
+    "tests/perception/test_learned.py",                 # 92 before Adam's foreach update
+    "tests/tactip/test_one_scale.py",                   # 74
+    "tests/pins/test_lattice_seeds.py",                 # 73
+    "tests/tactip/cli/test_cli_station.py",             # 73
+    "tests/pins/test_track_identity.py",                # 67
+    "tests/pins/test_accel_detect.py",                  # 66
+    "tests/tactip/line/test_dashboard_browser.py",      # 45 (suite5)
+    "tests/tactip/reproduce/test_reproduce.py",         # 44 (the quick reproductions it runs first)
+    "tests/tactip/line/test_results_postgres.py",       # 39
+    "tests/pins/test_track.py",                         # 36
+    "tests/tactip/test_faults_input.py",                # 34
+    "tests/pins/test_flat_gel.py",                      # 31
+    "tests/tactip/dataset/test_cli_dataset.py",         # 30
+    "tests/tactip/dataset/test_build.py",               # 29
+    "tests/tactip/replay/test_batch.py",                # 29
+    "tests/tactip/replay/test_replay_contacts.py",      # 27
+    "tests/tactip/reproduce/test_figure_samples.py",    # 27
+    "tests/perception/test_baselines.py",               # 26
+    "tests/tactip/replay/test_replay.py",               # 24
+    "tests/pins/test_accel.py",                         # 23
+    "tests/tactip/replay/test_replay_presets.py",       # 22
+    "tests/tactip/line/test_dashboard.py",              # 22
+    "tests/tactip/test_cluster.py",                     # 22 (+ the quick 001 and 003 when it runs them first)
+    "tests/tactip/reproduce/test_reproduce_004.py",     # 22
+    "tests/tactip/cli/test_cli_detect_replay_agree.py",  # 20
 )
 
 
