@@ -37,47 +37,39 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 #: Test files of about 20 s or more, longest first (seconds of one worker, setup + call + teardown, from pytest's
-#: --durations under 2 xdist workers on the 2-core VM, 2026-11-29 on branch suite6 = main 9a221aa; the machine was
-#: shared (load 7-9), so every figure is about 3x its CPU-s; /work/scratch/s15/suite6/before.txt). test_station_bar
-#: (its own station, no session fixture) and the README's examples (which build the session's station and
-#: recordings first) start the two workers; test_station_torch, which needs that station, queues behind
-#: test_station_bar, by when it is built (its 323 was the torch station's preparation 238, the session's ECE
-#: collection 81; the preparation is now about a third of that: Adam's foreach update and fold models that take
-#: the refit's input and deviations, 103.8 -> 29.7 CPU-s). test_cluster and test_reproduce share quick
-#: reproductions (the first to need one builds it): apart. test_dashboard_browser was skipped there (no Chromium):
-#: its 45 is suite5's CPU-s.
+#: --durations under 2 xdist workers on the 2-core VM, 2026-11-29 on branch suite6; the machine was shared (load
+#: 6-8), so every figure is about 2.4x its CPU-s; /work/scratch/s15/suite6/after.txt). test_station_bar (its own
+#: station, no session fixture) and the README's examples (which build the session's station and recordings
+#: first) start the two workers; test_station_torch, which needs that station, queues behind test_station_bar, by
+#: when it is built (before suite6 its 323 was the torch station's preparation 238 and the session's ECE
+#: collection 81: now 35 and 24). test_cluster (under 20 s now) and test_reproduce share quick reproductions (the
+#: first to need one builds it): apart. test_dashboard_browser was skipped there (no Chromium): 45 is suite5's.
 LONGEST_FIRST = (
-    "tests/tactip/station/test_station_bar.py",         # 109 (one test)
-    "tests/tactip/test_readme_examples.py",             # 164, with the session's station and recordings
-    "tests/tactip/station/test_station_torch.py",       # 323 before the cheaper preparation (above)
-    "tests/tactip/test_faults_data.py",                 # 133 (subprocesses)
-    "tests/pins/test_lattice.py",                       # 128
-    "tests/tactip/reproduce/test_reproduce_002.py",     # 100 (one test)
-    "tests/perception/test_learned.py",                 # 92 before Adam's foreach update
-    "tests/tactip/test_one_scale.py",                   # 74
-    "tests/pins/test_lattice_seeds.py",                 # 73
-    "tests/tactip/cli/test_cli_station.py",             # 73
-    "tests/pins/test_track_identity.py",                # 67
-    "tests/pins/test_accel_detect.py",                  # 66
+    "tests/tactip/station/test_station_bar.py",         # 72 (one test)
+    "tests/tactip/test_readme_examples.py",             # 205, with the session's station and recordings
+    "tests/tactip/station/test_station_torch.py",       # 63
+    "tests/pins/test_lattice.py",                       # 89
+    "tests/perception/test_learned.py",                 # 77
+    "tests/tactip/test_faults_data.py",                 # 74 (subprocesses)
+    "tests/tactip/test_one_scale.py",                   # 71
+    "tests/tactip/reproduce/test_reproduce_002.py",     # 65 (one test)
+    "tests/pins/test_lattice_seeds.py",                 # 60
+    "tests/tactip/reproduce/test_reproduce.py",         # 52 (the quick reproductions it runs first)
+    "tests/pins/test_track_identity.py",                # 50
+    "tests/pins/test_accel_detect.py",                  # 50
+    "tests/tactip/test_faults_input.py",                # 49
     "tests/tactip/line/test_dashboard_browser.py",      # 45 (suite5)
-    "tests/tactip/reproduce/test_reproduce.py",         # 44 (the quick reproductions it runs first)
-    "tests/tactip/line/test_results_postgres.py",       # 39
-    "tests/pins/test_track.py",                         # 36
-    "tests/tactip/test_faults_input.py",                # 34
-    "tests/pins/test_flat_gel.py",                      # 31
-    "tests/tactip/dataset/test_cli_dataset.py",         # 30
-    "tests/tactip/dataset/test_build.py",               # 29
-    "tests/tactip/replay/test_batch.py",                # 29
-    "tests/tactip/replay/test_replay_contacts.py",      # 27
-    "tests/tactip/reproduce/test_figure_samples.py",    # 27
-    "tests/perception/test_baselines.py",               # 26
+    "tests/tactip/cli/test_cli_station.py",             # 43
+    "tests/tactip/dataset/test_build.py",               # 42
+    "tests/pins/test_flat_gel.py",                      # 30
+    "tests/tactip/replay/test_batch.py",                # 27
+    "tests/pins/test_track.py",                         # 26
+    "tests/tactip/line/test_results_postgres.py",       # 25
     "tests/tactip/replay/test_replay.py",               # 24
-    "tests/pins/test_accel.py",                         # 23
-    "tests/tactip/replay/test_replay_presets.py",       # 22
-    "tests/tactip/line/test_dashboard.py",              # 22
-    "tests/tactip/test_cluster.py",                     # 22 (+ the quick 001 and 003 when it runs them first)
-    "tests/tactip/reproduce/test_reproduce_004.py",     # 22
-    "tests/tactip/cli/test_cli_detect_replay_agree.py",  # 20
+    "tests/tactip/reproduce/test_figure_samples.py",    # 23
+    "tests/tactip/replay/test_replay_contacts.py",      # 22
+    "tests/tactip/dataset/test_cli_dataset.py",         # 22
+    "tests/perception/test_baselines.py",               # 22
 )
 
 
