@@ -138,7 +138,11 @@ def train_ensemble(torch, x, tap_class, n_classes: int, *, members: int, hidden:
     generator = torch.Generator().manual_seed(int(seed))
     torch.manual_seed(int(seed))
     weights = _initial_weights(torch, members, x.shape[1], hidden, n_classes, generator)
-    optimiser = torch.optim.Adam(weights, lr=LEARNING_RATE, weight_decay=weight_decay)
+    # foreach: Adam's update of the four weight tensors in one multi-tensor pass each, not tensor by tensor
+    # (torch's CPU default). The same arithmetic (the weights came out bit-identical on the small station's
+    # taps), in half the CPU: there a step's elementwise update of the first layer cost more than its
+    # products (a fold's early stopping 3.5-4.9 CPU-s against 1.6-2.5 on one thread).
+    optimiser = torch.optim.Adam(weights, lr=LEARNING_RATE, weight_decay=weight_decay, foreach=True)
     inputs = torch.as_tensor(np.asarray(x), dtype=torch.float32)
     targets = torch.as_tensor(np.asarray(tap_class), dtype=torch.long)
     stop = np.broadcast_to(np.asarray(epochs, dtype=np.int64), (members,)).copy()

@@ -133,6 +133,11 @@ class TorchModel(LikelihoodModel):
     imputation_residual : float
         Variance per standardised value outside the directions; NaN (and the arrays None) in a
         model file written before imputation (such a model scores complete taps only).
+    choices : dict
+        What `fit_torch` chose on its held-out taps, as its keywords take them: ``{"inputs": "values" or
+        "directions", "deviations": "pooled", "own class" or None (not augmented)}``; not stored, so empty
+        for a model read from a file. Models fitted on parts of the same taps can take them
+        (`calibration.fit_with_fixation`).
     location_edges, identities, front_end, samples, dim_names, sensor, location_unit, identity_unit,
     taps_per_class, recommended
         As for `perception.HistogramModel`.
@@ -162,6 +167,7 @@ class TorchModel(LikelihoodModel):
     imputation_basis: np.ndarray | None = None
     imputation_variances: np.ndarray | None = None
     imputation_residual: float = float("nan")
+    choices: dict = field(default_factory=dict, compare=False)   # not stored
 
     KIND = "torch"
     _ARRAYS = ("mean", "scale", "hidden_weight", "hidden_bias", "output_weight", "output_bias", "imputation_basis",
@@ -317,9 +323,15 @@ def require_torch() -> None:
                           f"torch pulls gigabytes of GPU wheels), or install tactip[learned]")
 
 
+#: `fit_torch`'s ``inputs`` and ``deviations``, each chosen on held-out taps unless given.
+INPUTS = ("values", "directions")
+DEVIATIONS = ("pooled", "own class")
+
+
 def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: int = 1, members: int = 5,
               hidden: int = 64, max_epochs: int = 100, patience: int = 25, weight_decay: float = 1e-3,
-              folds: int = 2, seed: int = 0, augment: bool = True) -> TorchModel:
+              folds: int = 2, seed: int = 0, augment: bool = True, inputs: str | None = None,
+              deviations: str | None = None) -> TorchModel:
     """Train the ensemble likelihood: early stopping and temperature on held-out taps, then all taps.
 
     Parameters
@@ -345,6 +357,12 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
     augment : bool
         Train on taps moved by within-class deviations (`within_class_residuals`, drawn afresh at every
         step) rather than on the taps alone; see the module docstring.
+    inputs, deviations : str, optional
+        The networks' input, ``"values"`` (every value) or ``"directions"`` (the imputation Gaussian's
+        leading directions), and the augmentation's deviations, ``"pooled"`` (from every class) or
+        ``"own class"``; by default each is chosen by the lower held-out loss (every pair tried, one early
+        stopping each). Given, only that one is trained: e.g. the choices (`TorchModel.choices`) of a model
+        fitted on every tap, for models fitted on parts of them (`calibration.fit_with_fixation`).
 
     Returns
     -------
@@ -357,11 +375,15 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
     DatasetError
         No class has training taps in two folds, or the held-out taps are told apart no better than chance.
     ValueError
-        ``members``, ``hidden``, ``max_epochs`` or ``patience`` is below 1.
+        ``members``, ``hidden``, ``max_epochs`` or ``patience`` is below 1; ``inputs`` or ``deviations``
+        is not one of `INPUTS` or `DEVIATIONS`.
     """
     for name, value in (("members", members), ("hidden", hidden), ("max_epochs", max_epochs), ("patience", patience)):
         if int(value) != value or value < 1:
             raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+    for name, value, allowed in (("inputs", inputs, INPUTS), ("deviations", deviations, DEVIATIONS)):
+        if value is not None and value not in allowed:
+            raise ValueError(f"{name} must be one of {', '.join(map(repr, allowed))} or None, got {value!r}")
     require_torch()
     import torch
 
@@ -389,7 +411,7 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
         raise DatasetError("no class has training taps in two folds: collect at least two taps per class")
     knobs = dict(members=int(members), hidden=int(hidden), weight_decay=weight_decay, seed=seed)
 
-    def deviations(xi, rows, own_class):
+    def augmentation(xi, rows, own_class):
         """Augmentation: a tap moved by another's deviation from its class mean (of the taps trained on),
         drawn from every class (pooled) or from the tap's own class only."""
         if not augment:
@@ -404,7 +426,7 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
         xi = x if projection is None else x @ projection
         _, epochs, held_scores = train_ensemble(torch, xi[train], cls[train], grid.n_classes, epochs=max_epochs,
                                                 held=(xi[held], cls[held]), patience=patience,
-                                                **deviations(xi, train, own_class), **knobs)
+                                                **augmentation(xi, train, own_class), **knobs)
         loss = _tempered_losses(torch, torch.as_tensor(held_scores.mean(axis=0)[None]), torch.as_tensor(cls[held]))
         return float(loss[0]), projection, own_class, epochs, held_scores
 
@@ -418,11 +440,12 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
         # deviations keep the classes apart. The held-out loss chooses both, the input first.
         # (The directions tried are fitted on the taps trained on only: fitted on the held-out taps too, they
         # would hold part of those taps' noise and flatter their loss.)
-        inputs = [None]
-        if imputation.basis.shape[1] <= x.shape[1] // 2:
-            inputs.append(fit_low_rank_gaussian(x[train], imputation.basis.shape[1]).basis)
-        tried = [early_stopping(projection, own_class) for projection in inputs
-                 for own_class in ((False, True) if augment else (False,))]
+        directions = inputs == "directions" or inputs is None and imputation.basis.shape[1] <= x.shape[1] // 2
+        projections = ([None] if inputs != "directions" else []) + \
+            ([fit_low_rank_gaussian(x[train], imputation.basis.shape[1]).basis] if directions else [])
+        own_classes = [own for own, name in ((False, "pooled"), (True, "own class"))
+                       if deviations in (None, name)] if augment else [False]
+        tried = [early_stopping(projection, own_class) for projection in projections for own_class in own_classes]
         _, projection, own_class, epochs, held_scores = min(tried, key=lambda t: t[0])
         if projection is not None:
             projection = imputation.basis
@@ -433,7 +456,7 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
         check_tempering(beta)
         xi = x if projection is None else x @ projection
         (w1, b1, w2, b2), _, _ = train_ensemble(torch, xi, cls, grid.n_classes, epochs=epochs,
-                                               **deviations(xi, slice(None), own_class), **knobs)
+                                               **augmentation(xi, slice(None), own_class), **knobs)
     if projection is not None:   # a first layer on the directions is one on every value: W1 = Q W1'
         w1 = np.einsum("dk,mkh->mdh", projection, w1).astype(np.float32)
     w1[:, never] = 0.0   # a value never observed in training has no say, whatever a tap holds there
@@ -441,4 +464,6 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
                       grid.identities, grid.front_end, grid.samples, grid.dim_names, grid.sensor, grid.location_unit,
                       grid.identity_unit, grid.taps_per_class, imputation_basis=imputation.basis,
                       imputation_variances=imputation.variances, imputation_residual=imputation.residual_variance,
-                      identity_period=grid.identity_period, identity_names=grid.identity_names)
+                      identity_period=grid.identity_period, identity_names=grid.identity_names,
+                      choices={"inputs": INPUTS[projection is not None],
+                               "deviations": DEVIATIONS[own_class] if augment else None})

@@ -41,13 +41,14 @@ _KINDS = {
     "histogram": (HistogramModel, fit_model, ("bins", "epsilon")),
     "calibrated-histogram": (CalibratedHistogramModel, fit_calibrated_histogram, ("bins", "epsilon")),
     "gaussian": (GaussianModel, fit_gaussian, ("components", "shrinkages")),
-    "torch": (TorchModel, fit_torch, ("seed", "max_epochs")),
+    "torch": (TorchModel, fit_torch, ("seed", "max_epochs", "inputs", "deviations")),
 }
 
 
 def train_model(dataset: Dataset, *, kind: str = "histogram", n_locations: int = 11, bins: int = 100,
                 epsilon: float = DEFAULT_EPSILON, min_taps_per_class: int = 1, seed: int = 0, components=None,
-                shrinkages=None, max_epochs: int | None = None) -> LikelihoodModel:
+                shrinkages=None, max_epochs: int | None = None, inputs: str | None = None,
+                deviations: str | None = None) -> LikelihoodModel:
     """Train a likelihood model of any kind on a dataset.
 
     Parameters
@@ -70,6 +71,9 @@ def train_model(dataset: Dataset, *, kind: str = "histogram", n_locations: int =
         of the same settings on parts of the taps (`calibration.fit_with_fixation`).
     max_epochs : int, optional
         Most epochs each of the torch model's networks trains (default: `perception.learned.fit_torch`'s).
+    inputs, deviations : str, optional
+        The torch model's input and augmentation (default: chosen on held-out taps); one of each fixes
+        them, as ``components`` and ``shrinkages`` do the Gaussian's (`perception.learned.fit_torch`).
 
     Returns
     -------
@@ -83,7 +87,7 @@ def train_model(dataset: Dataset, *, kind: str = "histogram", n_locations: int =
     model_class(kind)
     _, fit, own = _KINDS[kind]
     given = dict(bins=bins, epsilon=epsilon, seed=seed, components=components, shrinkages=shrinkages,
-                 max_epochs=max_epochs)
+                 max_epochs=max_epochs, inputs=inputs, deviations=deviations)
     return fit(dataset, n_locations=n_locations, min_taps_per_class=min_taps_per_class,
                **{name: given[name] for name in own if given[name] is not None})
 

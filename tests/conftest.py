@@ -36,38 +36,40 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
         os.environ.setdefault(_variable, _cpus)
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-#: Test files of about 15 CPU-s or more, longest first (CPU-s of one worker, self + children, measured per test on
-#: the 2-core VM under make test's 2 workers, 2026-11-29 on branch suite5 = main b811570 with one BLAS/OpenMP thread
-#: per worker; load 4-8, so somewhat inflated; /work/scratch/s14/suite5-durations.txt). test_station_bar (its own
-#: station, no session fixture) and the README's examples (which build the session's station and recordings first)
-#: start the two workers; test_station_torch, which needs that station, queues behind test_station_bar, by when it
-#: is built (its 166: the torch station's preparation ~126, the session's ECE collection ~39 when it builds it).
-#: test_cluster and test_reproduce share quick reproductions (the first to need one builds it): apart. Simulated
-#: with these per-test figures (xdist's loadfile rule: a worker gets its next file when <= 2 of its tests are
-#: pending), the two workers end within 1 % of each other (662 and 665 CPU-s).
+#: Test files of about 20 s or more, longest first (seconds of one worker, setup + call + teardown, from pytest's
+#: --durations under 2 xdist workers on the 2-core VM, 2026-11-29 on branch suite6; the machine was shared (load
+#: 6-8), so every figure is about 2.4x its CPU-s; /work/scratch/s15/suite6/after.txt). test_station_bar (its own
+#: station, no session fixture) and the README's examples (which build the session's station and recordings
+#: first) start the two workers; test_station_torch, which needs that station, queues behind test_station_bar, by
+#: when it is built (before suite6 its 323 was the torch station's preparation 238 and the session's ECE
+#: collection 81: now 35 and 24). test_cluster (under 20 s now) and test_reproduce share quick reproductions (the
+#: first to need one builds it): apart. test_dashboard_browser was skipped there (no Chromium): 45 is suite5's.
 LONGEST_FIRST = (
-    "tests/tactip/station/test_station_bar.py",         # 100 (one test)
-    "tests/tactip/test_readme_examples.py",             # 141, of which 43 its first example with the session's fixtures
-    "tests/tactip/station/test_station_torch.py",       # 166
-    "tests/pins/test_lattice.py",                       # 76
-    "tests/tactip/test_faults_data.py",                 # 59 (subprocesses)
-    "tests/perception/test_learned.py",                 # 48
-    "tests/tactip/reproduce/test_reproduce_002.py",     # 47 (one test)
-    "tests/tactip/line/test_dashboard_browser.py",      # 45
-    "tests/tactip/test_one_scale.py",                   # 44
-    "tests/pins/test_lattice_seeds.py",                 # 38
-    "tests/tactip/cli/test_cli_station.py",             # 31
-    "tests/pins/test_accel_detect.py",                  # 29
-    "tests/tactip/test_cluster.py",                     # 27 (+ the quick 001 and 003 when it runs them first)
-    "tests/tactip/test_faults_input.py",                # 27
-    "tests/tactip/dataset/test_build.py",               # 26
-    "tests/pins/test_flat_gel.py",                      # 22
-    "tests/tactip/replay/test_batch.py",                # 21
-    "tests/tactip/replay/test_replay_contacts.py",      # 17
-    "tests/pins/test_track_identity.py",                # 17
-    "tests/tactip/reproduce/test_reproduce.py",         # 16 (more when it runs the quick reproductions first)
-    "tests/tactip/reproduce/test_figure_samples.py",    # 14
-    "tests/tactip/replay/test_replay.py",               # 13
+    "tests/tactip/station/test_station_bar.py",         # 72 (one test)
+    "tests/tactip/test_readme_examples.py",             # 205, with the session's station and recordings
+    "tests/tactip/station/test_station_torch.py",       # 63
+    "tests/pins/test_lattice.py",                       # 89
+    "tests/perception/test_learned.py",                 # 77
+    "tests/tactip/test_faults_data.py",                 # 74 (subprocesses)
+    "tests/tactip/test_one_scale.py",                   # 71
+    "tests/tactip/reproduce/test_reproduce_002.py",     # 65 (one test)
+    "tests/pins/test_lattice_seeds.py",                 # 60
+    "tests/tactip/reproduce/test_reproduce.py",         # 52 (the quick reproductions it runs first)
+    "tests/pins/test_track_identity.py",                # 50
+    "tests/pins/test_accel_detect.py",                  # 50
+    "tests/tactip/test_faults_input.py",                # 49
+    "tests/tactip/line/test_dashboard_browser.py",      # 45 (suite5)
+    "tests/tactip/cli/test_cli_station.py",             # 43
+    "tests/tactip/dataset/test_build.py",               # 42
+    "tests/pins/test_flat_gel.py",                      # 30
+    "tests/tactip/replay/test_batch.py",                # 27
+    "tests/pins/test_track.py",                         # 26
+    "tests/tactip/line/test_results_postgres.py",       # 25
+    "tests/tactip/replay/test_replay.py",               # 24
+    "tests/tactip/reproduce/test_figure_samples.py",    # 23
+    "tests/tactip/replay/test_replay_contacts.py",      # 22
+    "tests/tactip/dataset/test_cli_dataset.py",         # 22
+    "tests/perception/test_baselines.py",               # 22
 )
 
 

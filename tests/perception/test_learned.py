@@ -20,8 +20,10 @@ def model():
 
 
 def test_train_model_makes_a_torch_model():
-    model = train_model(gap_dataset(seed=1, taps_per_class=2, **GRID), kind="torch", n_locations=3)
+    # Its own knobs reach it (5 epochs: what is asserted does not need a trained network; 100 took 13 s).
+    model = train_model(gap_dataset(seed=1, taps_per_class=2, **GRID), kind="torch", n_locations=3, max_epochs=5)
     assert model.KIND == "torch" and model.summary().endswith(f"tempering {model.tempering:.4g}")
+    assert model.epochs <= 5 and "up to 5 epochs" in model.summary()
 
 
 def test_numpy_scores_equal_the_torch_networks(model):
@@ -261,3 +263,56 @@ def test_depths_along_one_code_among_many_noisy_values_are_decided(seed):
     test = labelled_taps(seed=seed + 100, per_class=50, **options)
     decided = model.log_likelihood_batch(test.taps)[:, 0].argmax(axis=1)
     assert np.mean(decided == model.identity_class(test.identity)) >= 0.85
+
+
+def test_given_its_input_and_deviations_a_network_trains_only_those(monkeypatch):
+    # The choices made on held-out taps are the model's (`TorchModel.choices`); given back, early stopping runs
+    # once, on them, not once per candidate (the station's fold models take the refit's: fit_with_fixation).
+    from perception import _ensemble_training
+    from perception.learned import DEVIATIONS, INPUTS, fit_torch
+
+    calls = []
+    real = _ensemble_training.train_ensemble
+
+    def spy(torch, x, *a, **k):   # inputs trained on, and whether deviations come from each tap's own class
+        calls.append((x.shape[1], k.get("residual_class") is not None))
+        return real(torch, x, *a, **k)
+
+    monkeypatch.setattr(_ensemble_training, "train_ensemble", spy)
+    data = gap_dataset(seed=1, taps_per_class=4, **GRID)
+    chosen = fit_torch(data, n_locations=3, max_epochs=3)
+    assert chosen.choices["inputs"] in INPUTS and chosen.choices["deviations"] in DEVIATIONS
+    assert len(calls) in (3, 5)
+    values = data.taps[0].size
+    for inputs in INPUTS:
+        for deviations in DEVIATIONS:
+            calls.clear()
+            model = fit_torch(data, n_locations=3, max_epochs=3, inputs=inputs, deviations=deviations)
+            assert model.choices == {"inputs": inputs, "deviations": deviations}
+            assert len(calls) == 2 and calls[0] == calls[1]                  # early stopping, then the final fit
+            assert (calls[0][0] == values) == (inputs == "values") and calls[0][1] == (deviations == "own class")
+    # Given what it chose itself, the same model, bit for bit.
+    again = fit_torch(data, n_locations=3, max_epochs=3, **chosen.choices)
+    assert np.array_equal(again.hidden_weight, chosen.hidden_weight) and again.tempering == chosen.tempering
+    assert fit_torch(data, n_locations=3, max_epochs=3, augment=False).choices["deviations"] is None
+    with pytest.raises(ValueError, match="inputs must be one of 'values', 'directions'"):
+        fit_torch(data, n_locations=3, inputs="pixels")
+
+
+def test_the_stations_fold_models_take_the_refits_input_and_deviations(monkeypatch):
+    # fit_with_fixation: the model kept (every tap) chooses its input and deviations on held-out taps; the fold
+    # models the settings are chosen with are of its making (as the Gaussian's take its components and
+    # shrinkage), each one early stopping and one final fit.
+    import perception.learned as learned
+    from calibration import fit_with_fixation
+    from perception.model import _KINDS
+
+    fits = []
+    real = learned.fit_torch
+    monkeypatch.setitem(_KINDS, "torch", (_KINDS["torch"][0], lambda *a, **k: fits.append(k) or real(*a, **k),
+                                          _KINDS["torch"][2]))
+    data = gap_dataset(seed=1, taps_per_class=4, **GRID)
+    model = fit_with_fixation(data, kind="torch", n_locations=3, max_epochs=3, target_accuracy=0.8, tolerance=0.5,
+                              runs=100, log=lambda line: None)
+    assert len(fits) == 1 + 4 and "inputs" not in fits[0]
+    assert all({k: f[k] for k in ("inputs", "deviations")} == model.choices for f in fits[1:])

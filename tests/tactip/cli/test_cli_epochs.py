@@ -27,7 +27,9 @@ def test_epochs_go_to_the_torch_fit_and_only_there(tmp_path, capsys, monkeypatch
 
     def fit(dataset, **options):                 # records what it was asked; the histogram model stands in
         asked.append(options)
-        return perception.model.train_model(dataset, n_locations=options["n_locations"])
+        model = perception.model.train_model(dataset, n_locations=options["n_locations"])
+        object.__setattr__(model, "choices", {"inputs": "values", "deviations": "pooled"})   # as a torch fit's
+        return model
 
     monkeypatch.setattr(perception.model, "_KINDS", {**perception.model._KINDS,
                                                      "torch": (perception.learned.TorchModel, fit,
@@ -44,6 +46,7 @@ def test_epochs_go_to_the_torch_fit_and_only_there(tmp_path, capsys, monkeypatch
     # --choose-fixation: every fit (the folds' and the refit) trains at most N epochs
     assert main([*train, "--out", str(tmp_path / "d.h5"), "--epochs", "7", "--choose-fixation"]) == 0
     assert len(asked) == 2 + 5 and all(a["max_epochs"] == 7 for a in asked[2:])
+    assert all(a["inputs"] == "values" and a["deviations"] == "pooled" for a in asked[3:])   # the refit's choices
     with pytest.raises(SystemExit):
         main([*train, "--out", str(tmp_path / "e.h5"), "--epochs", "0"])
     assert "--epochs" in capsys.readouterr().err
