@@ -23,24 +23,36 @@ def main() -> None:
     parser.add_argument("--papers", nargs="+", default=["000", "001", "002", "003", "004"])
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     parser.add_argument("--full", action="store_true", help="full-size runs (minutes each) instead of --quick")
-    parser.add_argument("--json", help="write the verdicts as JSON")
+    parser.add_argument("--json", help="write the verdicts as JSON (a variant's with its name under 'variant')")
+    parser.add_argument("--per-seed", action="store_true", help="print each seed's margin as it comes")
     args = parser.parse_args()
 
     from tactip.reproduce import reproduce
-    from tactip.reproduce.seeds import judge_claim
+    from tactip.reproduce.seeds import VARIANTS, judge_claim
 
     verdicts = []
     for paper in args.papers:
-        started = time.monotonic()
-        rows = {seed: reproduce(paper, quick=not args.full, seed=seed).rows for seed in args.seeds}
+        started, cpu = time.monotonic(), time.process_time()
+        rows = {}
+        for seed in args.seeds:
+            rows[seed] = reproduce(paper, quick=not args.full, seed=seed).rows
+            if args.per_seed:
+                print(f"  seed {seed}: margin {judge_claim(paper, {seed: rows[seed]}).mean:.4g}" + "".join(
+                    f", variant {judge_claim(paper, {seed: read(rows[seed])}).mean:.4g}"
+                    for _, read in VARIANTS.get(paper, ())), flush=True)
         verdict = judge_claim(paper, rows)
-        verdicts.append(verdict)
+        verdicts.append(verdict.json())
         margins = ", ".join(f"{m:.3g}" for m in verdict.margins)
-        print(f"paper {paper} ({time.monotonic() - started:.0f} s, seeds {', '.join(map(str, args.seeds))}; "
-              f"margins {margins})\n{verdict.line()}", flush=True)
+        print(f"paper {paper} ({time.monotonic() - started:.0f} s, {time.process_time() - cpu:.0f} s CPU, seeds "
+              f"{', '.join(map(str, args.seeds))}; margins {margins})\n{verdict.line()}", flush=True)
+        for name, read in VARIANTS.get(paper, ()):        # beside the claim, never instead of it
+            variant = judge_claim(paper, {seed: read(r) for seed, r in rows.items()})
+            verdicts.append(dict(variant.json(), variant=name))
+            print(f"  variant {name}: margins {', '.join(f'{m:.3g}' for m in variant.margins)}\n  {variant.line()}",
+                  flush=True)
     if args.json:
         with open(args.json, "w") as out:
-            json.dump([v.json() for v in verdicts], out, indent=1)
+            json.dump(verdicts, out, indent=1)
 
 
 if __name__ == "__main__":
