@@ -4,11 +4,12 @@ Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved besi
 
 - 002 Fig. 10 (`fixation_rows`): active perception at every fixation depth of the station's model,
   the best width error within 2, 4, 8 and 12 mean taps (`perception.fixation_sweep`), on the same test
-  collection as Fig. 9;
+  collection as Fig. 9; `tactip.reproduce.p002.run` makes this sweep itself (it gives Fig. 9 its
+  fixation, as the paper's), so `run_with_figure_runs` takes its rows from the report;
 - 002 Fig. 11 (`lateral_rows`): a test collection per lateral noise sigma (offsets uniform over
   [-sigma, sigma] mm, ``[protocol] lateral_jitter_mm``) tapped on the same simulated station, the model
-  trained without noise; each policy's width error at 10 mean taps (as Fig. 9) over the error at
-  sigma 0;
+  trained without noise; each policy's width error at 10 mean taps (as Fig. 9, at Fig. 9's fixation)
+  over the error at sigma 0;
 - 000 Figs 7, 8B, 10 and 11 on the simulated fingertip (`tactip.reproduce.taxel_runs`);
 - 003 Fig. 5 over a sweep of test depth offsets (`fig5_sweep_rows`);
 - 004 Fig. 6, the traced contours of passive, active and adaptive perception at thresholds 0.2 and 0.9
