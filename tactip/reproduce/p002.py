@@ -236,7 +236,8 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None, data_
     comparisons = [Comparison(f"Fig. 9 {name}: width error at {COMPARED_AT_TAPS:g} mean taps",
                               _at_taps(results[name], COMPARED_AT_TAPS), PAPER_ERROR_MM[name], "mm")
                    for name in POLICIES]
-    comparisons += [Comparison(f"Fig. 9 variant, {STATION_FIXATION}: width error at {COMPARED_AT_TAPS:g} mean taps",
+    comparisons += [Comparison(f"Fig. 9 variant, fixation from training taps: width error at {COMPARED_AT_TAPS:g} "
+                               "mean taps",
                                _at_taps(results[STATION_FIXATION], COMPARED_AT_TAPS), PAPER_ERROR_MM["active"], "mm"),
                     Comparison(f"Fig. 10 best fixation (lowest error within {FIXATION_BUDGET_TAPS:g} mean taps)",
                                fixation_mm["active"], 4.75, "mm")]
