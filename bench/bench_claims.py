@@ -1,13 +1,16 @@
 """Each paper's headline claim over several seeds (`tactip.reproduce.seeds`): margins, 95 % interval, verdict.
 
 Runs ``tactip reproduce P --quick --seed S`` (or the full size with --full) for every paper and seed and
-judges each claim from its margins' interval, never from one seed (issue 25's bars).
+judges each claim from its margins' interval, never from one seed (issue 25's bars). A claim's variants
+(`tactip.reproduce.seeds.VARIANTS`) are judged beside it, never instead of it.
 
-    python bench/bench_claims.py [--papers 000 001 002 003 004] [--seeds 0 1 2] [--full] [--json OUT]
+    python bench/bench_claims.py [--papers 000 001 002 003 004] [--seeds 0 1 2] [--full] [--per-seed] [--json OUT]
 
-Last measured for 002 (quick, seeds 0-9, 2026-11-29, `TACTIP_SIM_WORKERS=1`): margin 0.0274 mm, 95 % interval
--0.0003 to 0.0552, held on 9 of 10 seeds (partly holds; seed 2 fails, -0.056 mm: its fixation, 4.75 mm, is
-chosen on held-out training taps, never at a trained depth; the README's claims table says why).
+Last measured for 002 (quick, seeds 0-9, 2026-11-29, `TACTIP_SIM_WORKERS=1`, 281 s of CPU): active fixated
+as the paper chose (the Fig. 10 sweep's best within 12 mean taps on the test collection) holds, margin
+0.0438 mm, 95 % interval 0.0263 to 0.0613, held on 10 of 10 seeds; the variant, active at the station's own
+fixation (chosen on held-out training taps), partly holds: 0.0274 mm, -0.0003 to 0.0552, 9 of 10 (seed 2,
+-0.056 mm: its 4.75 mm is poor on the test taps; `tactip/reproduce/p002.py` says why).
 """
 
 from __future__ import annotations
