@@ -35,7 +35,11 @@ to 0.0552; seed 2: 0.091 mm at 4.75 against random's 0.035, where the sweep's 4.
 within 10 taps). On seeds 0, 1, 4, 5 and 9 both fixations read every gap right at 10 taps, and the margin is
 random's own error (0.007-0.082 mm). Which tied class wins moves with the Monte Carlo draws (seed 0: 4.25,
 4.75 or 5.25 mm at 1000, 3000 or 300 runs, all 0 mm within 12 taps; seed 1: 4.75 or 3.75 mm, 0 against
-0.0002 mm), never to a class that errs within 12 taps.
+0.0002 mm), never to a class that errs within 12 taps. How much of the margin is the choice reading the
+judged taps (`bench/bench_002_fixation.py`): the same sweep on a second collection of the same sensor and
+depths, its tap noise drawn anew, chooses a fixation that also holds on all 10 seeds (0.0350 mm, 0.0157 to
+0.0543; seed 6 +0.0005): so about 0.009 mm of the faithful margin is selection on the test taps, and the
+variant's failure on seed 2 is its choosing on taps between trained depths, not the lack of test taps.
 
 Why the station's own choice is weaker (the variant): both collections tap the same depths, so the test taps
 sit at trained depths and random perception, drawing from all 23 depths of a gap, errs by 0.007-0.089 mm at
