@@ -77,10 +77,13 @@ import numpy as np
 from perception.choices import POLICIES
 from tactip.reproduce.report import Comparison, Report
 
-__all__ = ["FIXATION_BUDGET_TAPS", "PAPER_ERROR_MM", "STATION_FIXATION", "fixation_from_sweep", "run", "sweep_rows"]
+__all__ = ["FIXATION_BUDGET_TAPS", "PAPER_ERROR_MM", "PAPER_FIXATION_MM", "STATION_FIXATION", "fixation_from_sweep",
+           "run", "sweep_rows"]
 
 #: The paper's width error after 8-12 taps of each policy of Fig. 9 (`perception.POLICIES`), mm.
 PAPER_ERROR_MM = {"active": 0.35, "random": 0.6, "stationary": 0.8}
+#: Paper 002 Fig. 10: the best fixation depth (red dashed line), used in Fig. 9, mm.
+PAPER_FIXATION_MM = 4.75
 #: Mean taps at which the policies are compared (the paper: 8-12 taps).
 COMPARED_AT_TAPS = 10.0
 #: Thresholds on the width marginal, fine enough to interpolate any policy's error at 10 mean taps (the
@@ -247,7 +250,7 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None, data_
                                "mean taps",
                                _at_taps(results[STATION_FIXATION], COMPARED_AT_TAPS), PAPER_ERROR_MM["active"], "mm"),
                     Comparison(f"Fig. 10 best fixation (lowest error within {FIXATION_BUDGET_TAPS:g} mean taps)",
-                               fixation_mm["active"], 4.75, "mm")]
+                               fixation_mm["active"], PAPER_FIXATION_MM, "mm")]
     widths = np.unique(environment.test.identity)
     at_fixation = model.location_class(environment.test.location) == fixation
     distinct = len(np.unique(environment.test.location[at_fixation]))

@@ -14,14 +14,13 @@ from __future__ import annotations
 from perception.choices import POLICIES
 
 from tactip.reproduce.figures import COLOURS, PAPER_STYLE, legend, new_figure, values
+from tactip.reproduce.p002 import PAPER_FIXATION_MM
 
 __all__ = ["NAMES", "PAPER_FIXATION_MM", "PAPER_LATERAL_RATIO", "figures"]
 
 #: The figures this module may draw (`make_figures` keys).
 NAMES = ("fig9", "fig10", "fig11")
 
-#: Paper 002 Fig. 10: the best fixation depth (red dashed line), mm.
-PAPER_FIXATION_MM = 4.75
 #: Paper 002 Fig. 11 (text): error ratio e(sigma) / e(0) "within 25 %" at sigma <= 0.5 mm, "doubling" at 2 mm.
 PAPER_LATERAL_RATIO = {0.5: 1.25, 2.0: 2.0}
 
