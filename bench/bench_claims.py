@@ -10,7 +10,9 @@ Last measured for 002 (quick, seeds 0-9, 2026-11-29, `TACTIP_SIM_WORKERS=1`, 281
 as the paper chose (the Fig. 10 sweep's best within 12 mean taps on the test collection) holds, margin
 0.0438 mm, 95 % interval 0.0263 to 0.0613, held on 10 of 10 seeds; the variant, active at the station's own
 fixation (chosen on held-out training taps), partly holds: 0.0274 mm, -0.0003 to 0.0552, 9 of 10 (seed 2,
--0.056 mm: its 4.75 mm is poor on the test taps; `tactip/reproduce/p002.py` says why).
+-0.056 mm: its 4.75 mm is poor on the test taps; `tactip/reproduce/p002.py` says why). Full size (--full, seeds
+0-9, 126-139 s of CPU a seed): holds, 0.0242 mm, 0.0199 to 0.0285, 10 of 10; the variant partly holds, 0.0153,
+0.0073 to 0.0233, 9 of 10 (seed 9, -0.007 mm).
 """
 
 from __future__ import annotations

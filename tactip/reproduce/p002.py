@@ -55,10 +55,11 @@ test's 0-0.17) and the station's sweep ranks the deep fixations stably (over Mon
 0.003-0.034 mm) but otherwise than the test taps do (Spearman 0.45 over 3.25-5.25 mm; 0.68 for a model fitted on
 the test collection and judged on the training one). Choosing at equal taps, on the mean of 5 Monte Carlo seeds,
 or by the worst held-out depth keeps 4.75 mm on seed 2 (9, 9 and 8 of 10 seeds); always 5.25 mm, 8.
-Full size (depths 0.1 mm apart, 5000 runs, seeds 2, 4, 9 so far): the sweep fixates at 5.25, 4.75, 5.25 mm,
-the station at 4.75 on all three; margins +0.021, +0.020, +0.019 mm (active 0.014-0.017 against random
-0.034-0.037), the variant's +0.012, +0.020, -0.007 (seed 9: 0.041 against random's 0.035). 134-139 s of CPU a
-seed.
+Full size (depths 0.1 mm apart, 5000 runs, seeds 0-9, 2026-11-29, 126-139 s of CPU a seed): the sweep
+fixates at 4.75, 5.25, 5.25, 5.25, 4.75, 5.25, 5.25, 3.25, 5.25, 5.25 mm, the station at 4.75 on all but seed
+1 (4.25). Active < random < stationary holds on all 10 (margin 0.0242 mm, 0.0199 to 0.0285; active 0.014-0.040
+mm, random 0.034-0.062, stationary 0.62-0.80); the variant on 9 (0.0153, 0.0073 to 0.0233; seed 9 -0.007:
+0.041 at 4.75 mm against random's 0.035, where 5.25 mm errs 0.016).
 
 Fitted: the skin's sag over a gap (`tactip.sim._pad.MEMBRANE_RHO_MM`, 8 -> 1 mm) was tuned so that
 the station reproduces Fig. 9 (before Fig. 9 fixated as the paper did; it was not retuned);
