@@ -83,3 +83,27 @@ def test_the_claim_judges_the_faithful_active_row(station):
     swapped = [dict(r, policy={"active": "x", p002.STATION_FIXATION: "active"}.get(r["policy"], r["policy"]))
                for r in report.rows]
     assert claim_margin("002", swapped) < faithful - 0.1
+
+
+def test_a_map_fn_runs_the_sweep_and_the_policies_with_the_same_report(station, tmp_path, monkeypatch):
+    # `tactip reproduce 002 --scheduler`: the fixations of the sweep and Fig. 9's rows go through map_fn, same numbers
+    import tactip.station.procedures
+
+    report, model, test = station
+
+    def prepare(config, *, progress, log):
+        (config.data_dir / "datasets").mkdir(parents=True)
+        save_dataset(config.data_dir / "datasets" / "test.h5", test)
+        save_model(config.perception.model, model)
+
+    mapped = []
+
+    def map_fn(function, items):
+        mapped.append(list(items))
+        return [function(item) for item in items]
+
+    monkeypatch.setattr(tactip.station.procedures, "prepare_model", prepare)
+    again = p002.run(quick=True, seed=0, data_dir=tmp_path, map_fn=map_fn)
+    assert mapped[0] == list(range(model.n_locations))                              # the sweep's fixations
+    assert [name for name, _ in mapped[1]] == ["active", "random", "stationary", p002.STATION_FIXATION]
+    assert again.rows == report.rows and again.samples["fig10"] == report.samples["fig10"]
