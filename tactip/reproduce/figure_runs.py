@@ -4,11 +4,12 @@ Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved besi
 
 - 002 Fig. 10 (`fixation_rows`): active perception at every fixation depth of the station's model,
   the best width error within 2, 4, 8 and 12 mean taps (`perception.fixation_sweep`), on the same test
-  collection as Fig. 9;
+  collection as Fig. 9; `tactip.reproduce.p002.run` makes this sweep itself (it gives Fig. 9 its
+  fixation, as the paper's), so `run_with_figure_runs` takes its rows from the report;
 - 002 Fig. 11 (`lateral_rows`): a test collection per lateral noise sigma (offsets uniform over
   [-sigma, sigma] mm, ``[protocol] lateral_jitter_mm``) tapped on the same simulated station, the model
-  trained without noise; each policy's width error at 10 mean taps (as Fig. 9) over the error at
-  sigma 0;
+  trained without noise; each policy's width error at 10 mean taps (as Fig. 9, at Fig. 9's fixation)
+  over the error at sigma 0;
 - 000 Figs 7, 8B, 10 and 11 on the simulated fingertip (`tactip.reproduce.taxel_runs`);
 - 003 Fig. 5 over a sweep of test depth offsets (`fig5_sweep_rows`);
 - 004 Fig. 6, the traced contours of passive, active and adaptive perception at thresholds 0.2 and 0.9
@@ -53,6 +54,9 @@ FIG8_THRESHOLDS = (0.5, 0.9)
 def fixation_rows(environment, *, runs: int, seed: int, progress=None, map_fn=None) -> list[dict]:
     """002 Fig. 10: ``{fixation_mm, tap_budget, width_error_mm, mean_taps}`` per fixation and budget.
 
+    The sweep `tactip.reproduce.p002.run` makes to choose Fig. 9's fixation (`p002.fixation_from_sweep`,
+    `p002.sweep_rows`); `run_with_figure_runs` takes its rows from the report rather than sweeping again.
+
     Parameters
     ----------
     environment : perception.VirtualEnvironment
@@ -63,18 +67,9 @@ def fixation_rows(environment, *, runs: int, seed: int, progress=None, map_fn=No
     progress, map_fn : callable, optional
         As `perception.fixation_sweep`.
     """
-    from perception import fixation_sweep
-    from tactip.reproduce.p002 import THRESHOLDS
+    from tactip.reproduce.p002 import fixation_from_sweep, sweep_rows
 
-    sweep = fixation_sweep(environment, thresholds=THRESHOLDS, runs=runs, seed=seed, max_taps=20, progress=progress,
-                           map_fn=map_fn)
-    rows = []
-    for fixation, result in zip(sweep.fixations, sweep.results):
-        for budget in TAP_BUDGETS:
-            k = result.best_within(budget)
-            rows.append({"fixation_mm": float(fixation), "tap_budget": budget,
-                         "width_error_mm": float(result.mean_identity_error[k]), "mean_taps": float(result.mean_taps[k])})
-    return rows
+    return sweep_rows(fixation_from_sweep(environment, runs=runs, seed=seed, progress=progress, map_fn=map_fn))
 
 
 def _policy_error(environment, fixation: int, runs: int, seed: int) -> dict:
@@ -87,7 +82,7 @@ def _policy_error(environment, fixation: int, runs: int, seed: int) -> dict:
 
 
 def lateral_rows(config, model, test, *, sigmas_mm, runs: int, seed: int, progress: bool = False,
-                 log=lambda line: None) -> list[dict]:
+                 log=lambda line: None, fixation: int | None = None) -> list[dict]:
     """002 Fig. 11: ``{policy, sigma_mm, width_error_mm, ratio}``, sigma 0 first (ratio 1).
 
     Parameters
@@ -105,13 +100,15 @@ def lateral_rows(config, model, test, *, sigmas_mm, runs: int, seed: int, progre
         Progress bars of the collections.
     log : callable
         Where the collections' lines go.
+    fixation : int, optional
+        The active policy's location class (Fig. 9's: the Fig. 10 sweep's best); default the model's own.
     """
     import dataclasses
 
     from perception import VirtualEnvironment, load_dataset
     from tactip.station.procedures import collect_station
 
-    fixation = model.fixation_class()
+    fixation = model.fixation_class() if fixation is None else int(fixation)
     rows = []
     base = None
     for sigma in (0.0, *sigmas_mm):
@@ -227,22 +224,21 @@ def _p003_rows(*, quick: bool, seed: int) -> dict:
                                           runs=600 if quick else 2000, seed=seed + 1)}
 
 
-def _p002_rows(root: Path, *, quick: bool, seed: int, progress=None, map_fn=None, log=lambda line: None) -> dict:
-    from perception import VirtualEnvironment, load_dataset, load_model
+def _p002_rows(root: Path, report, *, quick: bool, seed: int, progress=None, log=lambda line: None) -> dict:
+    """002 Figs 10 and 11 on the station `p002.run` prepared under ``root``: Fig. 10 is the report's own sweep
+    (``report.samples["fig10"]``, not run again), Fig. 11 fixates where Fig. 9's active rows do."""
+    from perception import load_dataset, load_model
     from tactip.reproduce.p002 import _station_table
     from tactip.station.config import parse_station_config
-    from tactip.station.procedures import prepare_model
 
     config = parse_station_config(_station_table(root, quick=quick, seed=seed), base_dir=root)
-    if not config.perception.model.exists():
-        prepare_model(config, progress=progress is not None, log=log)
     model = load_model(config.perception.model)
     test = load_dataset(root / "datasets" / "test.h5")
-    runs = 300 if quick else 2000
-    return {"fig10": fixation_rows(VirtualEnvironment(model, test), runs=runs, seed=seed + 1, progress=progress,
-                                   map_fn=map_fn),
+    fixation_mm, = {r["fixation_mm"] for r in report.rows if r["policy"] == "active"}
+    return {"fig10": report.samples["fig10"],
             "fig11": lateral_rows(config, model, test, sigmas_mm=QUICK_SIGMAS_MM if quick else SIGMAS_MM,
-                                  runs=runs, seed=seed + 1, progress=progress is not None, log=log)}
+                                  runs=300 if quick else 2000, seed=seed + 1, progress=progress is not None, log=log,
+                                  fixation=int(model.location_class(fixation_mm)))}
 
 
 def run_with_figure_runs(paper: str, *, quick: bool = False, seed: int = 0, progress=None, map_fn=None):
@@ -274,7 +270,7 @@ def run_with_figure_runs(paper: str, *, quick: bool = False, seed: int = 0, prog
         with tempfile.TemporaryDirectory(prefix="tactip-002-figures-") as folder:
             report = mark_fits(p002.run(quick=quick, seed=seed, progress=progress, map_fn=map_fn,
                                         data_dir=Path(folder)))
-            extra = _p002_rows(Path(folder), quick=quick, seed=seed, progress=progress, map_fn=map_fn)
+            extra = _p002_rows(Path(folder), report, quick=quick, seed=seed, progress=progress)
         return report, {name: _json_ready(rows) for name, rows in extra.items()}
     report = reproduce(paper, quick=quick, seed=seed, progress=progress, map_fn=map_fn)
     if paper == "004":

@@ -107,26 +107,29 @@ def test_beta_sweep_rows_are_the_contour_runs_and_fig8_their_learning_curves(edg
 
 def test_002_figure_runs_share_the_station_the_reproduction_prepared(monkeypatch):
     """`run_with_figure_runs("002")` prepares the simulated station once: the reproduction's Monte Carlo and
-    the figure runs read the same collections and model (preparing is most of the work). A small model and
-    test set stand in for the station's; the figure runs (tested above) only record what they were given."""
+    the figure runs read the same collections and model (preparing is most of the work). Fig. 10 is the
+    reproduction's own sweep (it chose Fig. 9's fixation), not swept again; Fig. 11 fixates where Fig. 9's
+    active rows do. A small model and test set stand in for the station's; the figure runs (tested above)
+    only record what they were given."""
     import tactip.station.procedures
     from perception import save_model
 
     prepared, given = [], {}
     test = gap_dataset(seed=2, taps_per_class=10, **GRID)
+    model = fit_model(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=6).with_recommended(
+        fixation_location=0.2)                       # the station's own fixation: shallow, where the width is illegible
 
     def prepare(config, *, progress, log):
         prepared.append(config.data_dir)
         (config.data_dir / "datasets").mkdir(parents=True)
         save_dataset(config.data_dir / "datasets" / "test.h5", test)
-        save_model(config.perception.model, fit_model(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=6))
+        save_model(config.perception.model, model)
 
     def fixation_rows(environment, **options):
-        given["fig10"] = environment.test
-        return [{"fixation_mm": 1.0}]
+        raise AssertionError("Fig. 10 swept again")
 
     def lateral_rows(config, model, test, **options):
-        given["fig11"] = config.data_dir, test
+        given["fig11"] = config.data_dir, test, options["fixation"]
         return [{"sigma_mm": 0.0}]
 
     monkeypatch.setattr(tactip.station.procedures, "prepare_model", prepare)
@@ -134,9 +137,13 @@ def test_002_figure_runs_share_the_station_the_reproduction_prepared(monkeypatch
     monkeypatch.setattr(figure_runs, "lateral_rows", lateral_rows)
     report, extra = figure_runs.run_with_figure_runs("002", quick=True, seed=0)
     assert len(prepared) == 1
-    assert report.paper == "002" and {r["policy"] for r in report.rows} == {"active", "random", "stationary"}
+    from tactip.reproduce.p002 import STATION_FIXATION
+
+    assert report.paper == "002"
+    assert {r["policy"] for r in report.rows} == {"active", "random", "stationary", STATION_FIXATION}
     assert any(c.fit for c in report.comparisons)                          # marked as `reproduce` marks it
-    assert extra == {"fig10": [{"fixation_mm": 1.0}], "fig11": [{"sigma_mm": 0.0}]}
+    assert extra["fig10"] == report.samples["fig10"] and extra["fig11"] == [{"sigma_mm": 0.0}]
     assert given["fig11"][0] == prepared[0]                                # the folder the reproduction prepared
-    for figure_test in (given["fig10"], given["fig11"][1]):
-        np.testing.assert_array_equal(figure_test.taps, test.taps)
+    np.testing.assert_array_equal(given["fig11"][1].taps, test.taps)
+    active_mm, = {r["fixation_mm"] for r in report.rows if r["policy"] == "active"}
+    assert given["fig11"][2] == model.location_class(active_mm) != model.fixation_class()

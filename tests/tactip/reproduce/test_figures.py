@@ -98,8 +98,12 @@ def test_001_curves_per_deadline_and_the_papers_numbers_at_their_threshold():
 
 
 def test_002_fig9_is_marked_a_fit_and_figs_10_11_need_their_runs(tmp_path):
-    rows = [{"seed": 0, "policy": p, "threshold": t, "width_error_mm": e, "mean_taps": n, "accuracy": 0.5}
-            for p, base in (("active", 0.3), ("random", 0.5), ("stationary", 0.7))
+    from tactip.reproduce.p002 import STATION_FIXATION
+
+    rows = [{"seed": 0, "policy": p, "fixation_mm": f, "threshold": t, "width_error_mm": e, "mean_taps": n,
+             "accuracy": 0.5}
+            for p, base, f in (("active", 0.3, 5.25), ("random", 0.5, None), ("stationary", 0.7, None),
+                               (STATION_FIXATION, 0.4, 4.75))
             for t, e, n in ((0.5, base + 0.2, 3.0), (0.9, base, 11.0), (0.2, base + 0.4, 1.0))]
     report = Report("002", "t", rows)
     figures = make_figures(report)
@@ -111,6 +115,9 @@ def test_002_fig9_is_marked_a_fit_and_figs_10_11_need_their_runs(tmp_path):
     x, y = line(figures["fig9"], "active (paper, 8-12 taps)")
     np.testing.assert_allclose(x, [8, 12])
     np.testing.assert_allclose(y, [0.35, 0.35])
+    x, y = line(figures["fig9"], f"variant: {STATION_FIXATION} (simulated)")   # beside active, named a variant
+    np.testing.assert_allclose(x, [1.0, 3.0, 11.0])
+    np.testing.assert_allclose(y, [0.8, 0.6, 0.4])
 
     fig10 = [{"fixation_mm": f, "tap_budget": b, "width_error_mm": 1 / (f + b), "mean_taps": b}
              for b in (4.0, 12.0) for f in (4.75, 0.25, 2.5)]
@@ -121,6 +128,10 @@ def test_002_fig9_is_marked_a_fit_and_figs_10_11_need_their_runs(tmp_path):
     x, y = line(figures["fig10"], "within 12 mean taps (simulated)")
     np.testing.assert_allclose(x, [0.25, 2.5, 4.75])
     np.testing.assert_allclose(y, [1 / 12.25, 1 / 14.5, 1 / 16.75])
+    x, _ = line(figures["fig10"], "simulated best within 12 mean taps, Fig. 9's fixation: 5.25 mm")
+    np.testing.assert_allclose(x, [5.25, 5.25])
+    x, _ = line(figures["fig10"], "variant: the station's, from training taps: 4.75 mm")
+    np.testing.assert_allclose(x, [4.75, 4.75])
     x, y = line(figures["fig11"], "stationary (simulated)", 0)
     np.testing.assert_allclose(x, [0.0, 0.5, 2.0])
     np.testing.assert_allclose(y, [1.0, 1.5, 3.0])

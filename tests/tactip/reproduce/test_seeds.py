@@ -21,6 +21,16 @@ def test_002_margin_compares_the_policies_at_10_taps():
             {"active": (0.4, 0.2), "random": (0.6, 0.4), "stationary": (0.9, 0.7)}.items()
             for t, e in ((5.0, e5), (15.0, e15))]
     assert claim_margin("002", rows) == pytest.approx(0.2)                          # 0.3, 0.5, 0.8 at 10 taps
+    # the variant (the station's own fixation) is a row of its own: the claim judges the faithful active row,
+    # and `VARIANTS` judges the variant beside it
+    from tactip.reproduce.p002 import STATION_FIXATION
+    from tactip.reproduce.seeds import VARIANTS
+
+    rows += [{"policy": STATION_FIXATION, "mean_taps": t, "width_error_mm": e} for t, e in ((5.0, 0.8), (15.0, 0.6))]
+    assert claim_margin("002", rows) == pytest.approx(0.2)
+    (name, read), = VARIANTS["002"]
+    assert name == STATION_FIXATION
+    assert claim_margin("002", read(rows)) == pytest.approx(0.5 - 0.7)               # variant 0.7 at 10 taps
 
 
 def test_004_an_open_contour_fails_whatever_the_angle():
