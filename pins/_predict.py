@@ -31,8 +31,10 @@ a frame left such windows 4-5 px behind, on the neighbour's tip. Measured on `be
 slides of 3 pitches; tuned on seeds 0-2, seeds 3-5 held out), main 9a221aa -> now, pin-frames on another
 pin's tip: realistic skin tactip-331 107 -> 27 (held out 73 -> 29), small-pad-100 32 -> 23 (43 -> 38),
 radial-led-120 12 -> 9 (13 -> 17); model skin tactip-331 3118 -> 2745 (3263 -> 2780), small-pad-100 108
--> 69 (164 -> 74), radial-led-120 17 -> 24 (32 -> 31); visible pins lost per frame fall on every preset
-but the realistic small pad's (4.88 -> 4.96); back at rest nothing changes (0 pins > 1 px).
+-> 69 (164 -> 74), radial-led-120 17 -> 24 (32 -> 31); visible pins lost per frame, seeds 0-5, realistic
+1.48 -> 0.88 (tactip-331), 5.02 -> 5.01, 2.95 -> 2.93, model 13.03 -> 11.59, 5.97 -> 5.65, 3.64 -> 3.37;
+back at rest nothing changes (0 pins > 1 px). Two slides (`tests/pins/test_track_identity.py`),
+radial-led-120 seeds 0-5: 4/13/12/0/0/1 -> 0 pin-frames on another pin's tip.
 """
 
 from __future__ import annotations
