@@ -87,6 +87,23 @@ end>1 0 and lost@rest 0-0.08 as before. 4 slides, seed 0: white-dark-331 model 5
 of two overlapping tips while both move 0.2-0.4 px a frame as the skin relaxes (no carried step moves a
 window off that fixed point: it would take a fit of the two tips).
 
+Window measurements on radial-led-120 (the real-like replay video's preset) do not depend on the guesses:
+its faint tips' windows scatter in noise by 0.2-0.7 px a step against a first-pass bound of 0.23 px (a
+still pad ran 3.8-4.0 follow passes a frame), and on 671 of 794 frames (realistic skin, seed 0) some
+window ran all four passes, 61 % of those in the fourth swinging back on the same image (a limit cycle of
+a few tenths of a px). Tried and dropped, seeds 0-5 against the carried-step code: faint tips placed in
+the first pass within twice their scatter, everywhere: replay MJPG 4.30 -> 3.65 window measurements per
+frame, but pin-frames on other tips realistic tactip-331 27 -> 67 (seeds 0-2); only where no neighbour
+carried a step: 4.25 -> 3.57 (model, seeds 0-2), but realistic radial-led-120 26 -> 47, small-pad-100 61
+-> 76; faint tips in a still neighbourhood placed by their first re-centring within the settling bound,
+4.28 -> 4.01 / 4.14 -> 3.83 (replay MJPG 4.16, mp4v 4.24), identities equal here (55 -> 44, 26 -> 22,
+small-pad-100 identical) but two slides on radial-led-120 0 -> 0/1/1/0/1/0 (seeds 0-5); a window swinging
+back placed between its last two centres, 4.28 -> 4.10 (replay MJPG 4.22, mp4v 4.24), identities equal.
+Carrying the median of 12 neighbours' steps (less noise): radial-led-120 24 -> 11 / 9 -> 1, small-pad-100
+69 -> 116 / 23 -> 47 (seeds 0-2). 2 and 4 standard deviations for the carried step's bound instead of 3:
+seeds 0-2, tactip-331 model 2745 -> 2468 / 2782, realistic 27 -> 27 / 28, small-pad-100 69 -> 89 / 100,
+23 -> 32 / 25, radial-led-120 24 -> 20 / 19, 9 -> 34 / 6.
+
 What was left before (seams5, diagnosed by the stage that placed each swap's first frame, final code): on
 tactip-331 realistic seeds 0-2, 27 of 66 onsets are pins placed in the first follow pass whose guess was
 already nearer the neighbour; in the 8 looked at (seed 1) the guess equals the pin's previous position
