@@ -23,18 +23,21 @@ gradient puts it, not where its offset from its neighbours a frame ago does (car
 A prediction is searched at only where it can be trusted (`_trusted`).
 
 Followed pins' guesses: a step within the settling bound (0.1 spacings) is a still pin's jitter, not
-carried, unless its neighbourhood moves: the median of its neighbours' steps lies beyond that median's
-own scatter in noise (`carried_velocity`). In the skin squeezed ahead of a slide a window sitting on the
-plateau of two overlapping tips steps by a few tenths of a px while its tip moves by px; it carried its
-neighbours' median step only beyond the settling bound (1.8 px on tactip-331), and tips moving 0.6-2.2 px
-a frame left such windows 4-5 px behind, on the neighbour's tip. Measured on `bench/bench_slides.py` (8
+carried, unless its neighbourhood moves: the median of its neighbours' steps lies beyond what the camera's
+noise gives such a median (`carried_velocity`). In the skin squeezed ahead of a slide a window sitting on
+the plateau of two overlapping tips steps by a few tenths of a px while its tip moves by px; it carried
+its neighbours' median step only beyond the settling bound (1.8 px on tactip-331), and tips moving
+0.4-0.8 px a frame for tens of frames left such windows 4-5 px behind, on the neighbour's tip. The noise
+is the rest frame's (`_drift_bound_sq`), not the scatter learnt from still steps: a slide's slow steps
+count as still ones and that scatter grows with them (tactip-331: the bound rose from 0.75 to 1.16 px
+under a pin moving 0.6-0.78 px a frame, and nothing was carried). Measured on `bench/bench_slides.py` (8
 slides of 3 pitches; tuned on seeds 0-2, seeds 3-5 held out), main 9a221aa -> now, pin-frames on another
-pin's tip: realistic skin tactip-331 107 -> 27 (held out 73 -> 29), small-pad-100 32 -> 23 (43 -> 38),
-radial-led-120 12 -> 9 (13 -> 17); model skin tactip-331 3118 -> 2745 (3263 -> 2780), small-pad-100 108
--> 69 (164 -> 74), radial-led-120 17 -> 24 (32 -> 31); visible pins lost per frame, seeds 0-5, realistic
-1.48 -> 0.88 (tactip-331), 5.02 -> 5.01, 2.95 -> 2.93, model 13.03 -> 11.59, 5.97 -> 5.65, 3.64 -> 3.37;
-back at rest nothing changes (0 pins > 1 px). Two slides (`tests/pins/test_track_identity.py`),
-radial-led-120 seeds 0-5: 4/13/12/0/0/1 -> 0 pin-frames on another pin's tip.
+pin's tip: realistic skin tactip-331 107 -> 15 (held out 73 -> 5), small-pad-100 32 -> 24 (43 -> 15),
+radial-led-120 12 -> 4 (13 -> 13); model skin tactip-331 3118 -> 2392 (3263 -> 2415), small-pad-100 108
+-> 92 (164 -> 78), radial-led-120 17 -> 7 (32 -> 21); visible pins lost per frame, seeds 0-5, realistic
+1.48 -> 0.90 (tactip-331), 5.02 -> 4.86, 2.95 -> 2.91, model 13.03 -> 10.74, 5.97 -> 5.52, 3.64 -> 3.21;
+back at rest nothing changes (0 pins > 1 px). Two slides (`tests/pins/test_track_identity.py`), seeds 0-5,
+radial-led-120 4/13/12/0/0/1 -> 0/0/0/0/0/6 pin-frames on another pin's tip.
 """
 
 from __future__ import annotations
@@ -68,7 +71,7 @@ class _Prediction:
     """The prediction side of `pins._refine.Refiner`.
 
     Reads `rest_positions`, `_neighbour_index`, `gate_px`, `still`, `_guess_px`, `_settled_px`, the
-    windows' scatter in noise (`_jitter_sq`, `_noise_scatter_sq`: `pins._rest`), and `_then` ((N, k, 2)
+    windows' scatter in the rest frame's noise (`_noise_scatter_sq`: `pins._rest`), and `_then` ((N, k, 2)
     px: each pin's neighbours' displacements from rest when it was last placed; zeros at the start, at rest).
     """
 
@@ -138,7 +141,7 @@ class _Prediction:
         slow, coherent motion: a slide's start and end), else the median (a window stalled on the
         plateau of two overlapping tips in the skin squeezed ahead of a slide steps by a few tenths of a
         px while its tip and neighbours step by px: issue 20, tactip-331 realistic skin, guesses 4-5 px
-        behind tips moving 0.6-2.2 px a frame). Elsewhere (a still pad, a faint tip's jitter) zero.
+        behind tips moving 0.4-2.2 px a frame). Elsewhere (a still pad, a faint tip's jitter) zero.
         """
         bound_sq = self._drift_bound_sq()
         with np.errstate(invalid="ignore"):
@@ -162,11 +165,12 @@ class _Prediction:
     def _drift_bound_sq(self) -> np.ndarray:
         """Each pin's bound on its neighbours' median step that is noise, px^2 (N,): `_DRIFT_SIGMAS` times
         that median's scatter in the camera's noise, at least the guess bound. A step is the difference of
-        two noisy centroids (each of the pin's learnt scatter, `observe_still`, or from the rest frame's
-        noise, whichever is larger); the median of k of them scatters about sqrt(pi / 2k) times as much."""
-        scatter_sq = np.maximum(self._jitter_sq, self._noise_scatter_sq)
+        two noisy centroids, each of the scatter the rest frame's own noise gives the pin's window
+        (`_noise_scatter_sq`); the median of k of them scatters about sqrt(pi / 2k) times as much. (Not the
+        scatter learnt from still steps, `observe_still`: a slide's slow steps lie within the settling
+        bound, and that scatter grows with them.)"""
         k = self._neighbour_index.shape[1]
-        return np.maximum(_DRIFT_SIGMAS ** 2 * 2.0 * scatter_sq * np.pi / (2 * k), self._guess_px ** 2)
+        return np.maximum(_DRIFT_SIGMAS ** 2 * 2.0 * self._noise_scatter_sq * np.pi / (2 * k), self._guess_px ** 2)
 
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.

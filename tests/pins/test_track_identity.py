@@ -45,7 +45,7 @@ def _track_slides(name, seed, **skin):
     return swapped, positions, f.centres[drawn], f.visible[drawn]
 
 
-@pytest.mark.parametrize("name, bound", [("radial-led-120", 5), ("small-pad-100", 30)])
+@pytest.mark.parametrize("name, bound", [("radial-led-120", 5), ("small-pad-100", 20)])
 def test_slides_keep_identities_and_every_pin_returns_to_rest(name, bound):
     swapped = 0
     for seed in (0, 1):
@@ -56,7 +56,7 @@ def test_slides_keep_identities_and_every_pin_returns_to_rest(name, bound):
     # Pin-frames on another pin's tip, seeds 0-1: 124 (radial-led-120) and 526 (small-pad-100) before
     # `pins._identity` and the trusted searches; 14 and 21 after; 2 and 16 with lost pins predicted from
     # their neighbours' motion since they were last seen (`pins._predict`); 17 and 16 on main 9a221aa, 0 and
-    # 14 with a slowly moving neighbourhood's step carried (`Refiner.carried_velocity`).
+    # 9 with a slowly moving neighbourhood's step carried (`Refiner.carried_velocity`).
     assert swapped <= bound
 
 
@@ -72,16 +72,16 @@ def test_a_skin_creeping_back_to_rest_after_slides_leaves_every_pin_on_its_own_t
     assert (np.linalg.norm(positions - truth, axis=1)[visible] <= 1.0).all()
 
 
-@pytest.mark.parametrize("name, bound", [("tactip-331", 40), ("dark-331", 100)])
+@pytest.mark.parametrize("name, bound", [("tactip-331", 20), ("dark-331", 100)])
 def test_on_a_realistic_skin_windows_follow_their_tips_where_the_skin_is_squeezed(name, bound):
     # A skin that squeezes ahead of a slide to no less than half its area (``min_area=0.5``, as a 1-2 mm
     # elastomer would before it wrinkles) still brings tactip-331's tips within 0.6 spacings, touching. A
     # window whose steps there were a few tenths of a px had them zeroed as jitter and sat between its tip
     # and the neighbour's, falling behind by 6 px; it carried its moving neighbours' step only when their
-    # median step passed the settling bound (about 1.8 px here), and now when it passes their noise
-    # (`Refiner.carried_velocity`). Pin-frames on another pin's tip, seeds 0/1/2, tactip-331: 46/64/76
-    # (main b811570, renders with seams where tips overlap), 10/32/19 on main 9a221aa, 4/6/13 now; dark-331
-    # (dark markers): 63/30/45 -> 12/25/33.
+    # median step passed the settling bound (about 1.8 px here), and now when it passes what the camera's
+    # noise gives such a median (`Refiner.carried_velocity`). Pin-frames on another pin's tip, seeds 0/1/2,
+    # tactip-331: 46/64/76 (main b811570, renders with seams where tips overlap), 10/32/19 on main 9a221aa,
+    # 0/0/0 now; dark-331 (dark markers): 63/30/45 -> 7/8/46.
     assert sum(_track_slides(name, seed, min_area=0.5)[0] for seed in (0, 1, 2)) <= bound
 
 
@@ -89,19 +89,20 @@ def test_on_a_small_pad_a_found_pin_leaves_a_merged_blob_to_its_lost_owner():
     # small-pad-100 (tips 2 px apart on a 4 px spacing where a slide squeezes a realistic skin): a pin
     # searched for from its prediction settled on the blob of its own and a lost neighbour's tip, nearer
     # its own prediction than the neighbour's, and took it. With `MISSING_MARGIN` neither takes an
-    # ambiguous blob. Pin-frames on another pin's tip, seeds 0/1/2/3: 6/6/11/10 before, 6/7/2/0 now.
+    # ambiguous blob. Pin-frames on another pin's tip, seeds 0/1/2/3: 6/6/11/10 before, 6/7/2/0 after, 0/9/1/3
+    # on main 9a221aa, 1/1/1/0 with a slowly moving neighbourhood's step carried (`Refiner.carried_velocity`).
     swapped = 0
     for seed in (0, 1, 2, 3):
         count, positions, rest, visible = _track_slides("small-pad-100", seed, min_area=0.5)
         swapped += count
         assert (np.linalg.norm(positions - rest, axis=1)[visible] <= 1.0).all()
-    assert swapped <= 20
+    assert swapped <= 10
 
 
 def test_slides_swap_no_identity():
     # Issue 20's bar on radial-led-120: two slides of 3 pitches, no pin on another pin's tip. Seeds 0-5: 4/13/12/0/0/1
     # pin-frames on main 9a221aa (a window lagging its tip settled in the middle of a blob of two squeezed
-    # tips, nearer the neighbour), 0 on every seed with a slowly moving neighbourhood's step carried.
+    # tips, nearer the neighbour), 0/0/0/0/0/6 with a slowly moving neighbourhood's step carried.
     assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (1, 2))
 
 
@@ -110,9 +111,9 @@ def test_on_a_realistic_skin_radial_slides_leave_few_pins_on_other_tips():
     # two slides on a skin squeezed to half its area ahead of them. Pin-frames on another pin's tip, seeds
     # 0-5: 1/0/0/9/0/0 on renders with seams where tips overlap and `MISSING_MARGIN` 2 (main b811570);
     # 1/0/1/0/0/1 on main 9a221aa, each a window 2 px off its tip between two tips 0.5 spacings apart;
-    # 0/0/1/0/0/0 with a slowly moving neighbourhood's step carried (`Refiner.carried_velocity`).
+    # 0 on every seed with a slowly moving neighbourhood's step carried (`Refiner.carried_velocity`).
     swapped = [_track_slides("radial-led-120", seed, min_area=0.5)[0] for seed in range(6)]
-    assert sum(swapped) <= 3 and max(swapped) <= 1
+    assert sum(swapped) <= 2 and max(swapped) <= 1
 
 
 def test_a_found_pin_keeps_only_a_tip_in_its_own_cell():
@@ -163,8 +164,7 @@ class _Steps(_Prediction):
 
     def __init__(self, n=9, *, scatter_px=0.05, guess_px=0.5, settled_px=1.8):
         self._neighbour_index = np.array([[(i + d) % n for d in (-2, -1, 1, 2)] for i in range(n)])
-        self._jitter_sq = np.full(n, scatter_px ** 2)
-        self._noise_scatter_sq = np.zeros(n)
+        self._noise_scatter_sq = np.full(n, scatter_px ** 2)  # (the rest frame's noise: `Refiner`)
         self._guess_px, self._settled_px = guess_px, settled_px
 
     def carried(self, steps):
