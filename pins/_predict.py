@@ -23,20 +23,21 @@ gradient puts it, not where its offset from its neighbours a frame ago does (car
 A prediction is searched at only where it can be trusted (`_trusted`).
 
 Followed pins' guesses: a step within the settling bound (0.1 spacings) is a still pin's jitter, not
-carried, unless its neighbourhood moves: the median of its neighbours' steps lies beyond what the camera's
-noise gives such a median (`carried_velocity`). In the skin squeezed ahead of a slide a window sitting on
-the plateau of two overlapping tips steps by a few tenths of a px while its tip moves by px; it carried
-its neighbours' median step only beyond the settling bound (1.8 px on tactip-331), and tips moving
-0.4-0.8 px a frame for tens of frames left such windows 4-5 px behind, on the neighbour's tip. The noise
-is the rest frame's (`_drift_bound_sq`), not the scatter learnt from still steps: a slide's slow steps
-count as still ones and that scatter grows with them (tactip-331: the bound rose from 0.75 to 1.16 px
-under a pin moving 0.6-0.78 px a frame, seed 4, and nothing was carried). Measured on
+carried, unless its neighbourhood moves: the median of its neighbours' steps lies beyond what the
+camera's noise gives such a median (`carried_velocity`). In the skin squeezed ahead of a slide a window
+sitting on the plateau of two overlapping tips steps by a few tenths of a px while its tip moves by px;
+it carried its neighbours' median step only beyond the settling bound (1.8 px on tactip-331), and tips
+moving 0.4-0.8 px a frame for tens of frames left such windows 4-5 px behind, on the neighbour's tip. The
+noise is the rest frame's (`_drift_bound_sq`), not the scatter learnt from still steps: a slide's slow
+steps count as still ones and that scatter grows with them (tactip-331: the bound rose from 0.75 to 1.16
+px under a pin moving 0.6-0.78 px a frame, seed 4, and nothing was carried). Measured on
 `bench/bench_slides.py` (8 slides of 3 pitches; tuned on seeds 0-2, seeds 3-5 held out of the tuning,
 seed 4 not of that diagnosis), main 9a221aa -> now, pin-frames on another pin's tip: realistic skin
-tactip-331 107 -> 15 (held out 73 -> 5), small-pad-100 32 -> 24 (43 -> 15), radial-led-120 12 -> 4 (13 -> 13); model skin tactip-331 3118 -> 2392 (3263 -> 2415), small-pad-100 108
--> 92 (164 -> 78), radial-led-120 17 -> 7 (32 -> 21); visible pins lost per frame, seeds 0-5, realistic
-1.48 -> 0.90 (tactip-331), 5.02 -> 4.86, 2.95 -> 2.91, model 13.03 -> 10.74, 5.97 -> 5.52, 3.64 -> 3.21;
-back at rest nothing changes (0 pins > 1 px). Two slides (`tests/pins/test_track_identity.py`), seeds 0-5,
+tactip-331 107 -> 15 (held out 73 -> 5), small-pad-100 32 -> 24 (43 -> 15), radial-led-120 12 -> 4 (13 ->
+13); model skin tactip-331 3118 -> 2392 (3263 -> 2415), small-pad-100 108 -> 92 (164 -> 78),
+radial-led-120 17 -> 7 (32 -> 21); visible pins lost per frame, seeds 0-5, realistic 1.48 -> 0.90
+(tactip-331), 5.02 -> 4.86, 2.95 -> 2.91, model 13.03 -> 10.74, 5.97 -> 5.52, 3.64 -> 3.21; back at rest
+nothing changes (0 pins > 1 px). Two slides (`tests/pins/test_track_identity.py`), seeds 0-5,
 radial-led-120 4/13/12/0/0/1 -> 0/0/0/0/0/6 pin-frames on another pin's tip.
 """
 
