@@ -403,7 +403,7 @@ class PinTracker:
                 velocity[fresh] = self._refiner.neighbour_median(velocity, fresh)
         # A step within the search's settling bound is no motion to carry on (a faint tip's centroid
         # jitters by a few tenths of a px in noise; extrapolated, the jitter would walk the guesses
-        # off a still pad); the windows re-centre on slow motion anyway.
+        # off a still pad), unless the pin's neighbourhood moves beyond its noise (`carried_velocity`).
         if self.refine:
             # (Still for `Refiner._trusted`: moved by no more than a window settles on its guess.)
             self._refiner.still = _squared_norm(velocity) <= self._refiner._guess_px ** 2

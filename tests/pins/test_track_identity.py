@@ -8,6 +8,8 @@ from scipy.spatial import cKDTree
 
 from pins import DetectionParams, PinTracker, SensorDisc
 from pins._identity import keep_own_tips
+from pins._predict import _Prediction
+from pins._window import _squared_norm
 from tests.pins.conftest import preset_sensor
 
 
@@ -43,8 +45,8 @@ def _track_slides(name, seed, **skin):
     return swapped, positions, f.centres[drawn], f.visible[drawn]
 
 
-@pytest.mark.parametrize("name", ["radial-led-120", "small-pad-100"])
-def test_slides_keep_identities_and_every_pin_returns_to_rest(name):
+@pytest.mark.parametrize("name, bound", [("radial-led-120", 5), ("small-pad-100", 20)])
+def test_slides_keep_identities_and_every_pin_returns_to_rest(name, bound):
     swapped = 0
     for seed in (0, 1):
         count, positions, rest, visible = _track_slides(name, seed)
@@ -53,8 +55,9 @@ def test_slides_keep_identities_and_every_pin_returns_to_rest(name):
         assert (np.linalg.norm(positions - rest, axis=1)[visible] <= 1.0).all()
     # Pin-frames on another pin's tip, seeds 0-1: 124 (radial-led-120) and 526 (small-pad-100) before
     # `pins._identity` and the trusted searches; 14 and 21 after; 2 and 16 with lost pins predicted from
-    # their neighbours' motion since they were last seen (`pins._predict`).
-    assert swapped <= 40
+    # their neighbours' motion since they were last seen (`pins._predict`); 17 and 16 on main 9a221aa, 0 and
+    # 9 with a slowly moving neighbourhood's step carried (`Refiner.carried_velocity`).
+    assert swapped <= bound
 
 
 @pytest.mark.parametrize("name", ["radial-led-120", "small-pad-100", "tactip-331"])
@@ -69,46 +72,48 @@ def test_a_skin_creeping_back_to_rest_after_slides_leaves_every_pin_on_its_own_t
     assert (np.linalg.norm(positions - truth, axis=1)[visible] <= 1.0).all()
 
 
-def test_on_a_realistic_skin_windows_follow_their_tips_where_the_skin_is_squeezed():
+@pytest.mark.parametrize("name, bound", [("tactip-331", 20), ("dark-331", 100)])
+def test_on_a_realistic_skin_windows_follow_their_tips_where_the_skin_is_squeezed(name, bound):
     # A skin that squeezes ahead of a slide to no less than half its area (``min_area=0.5``, as a 1-2 mm
     # elastomer would before it wrinkles) still brings tactip-331's tips within 0.6 spacings, touching. A
     # window whose steps there were a few tenths of a px had them zeroed as jitter and sat between its tip
-    # and the neighbour's, falling behind by 6 px; it now carries its moving neighbours' step
-    # (`Refiner.carried_velocity`). Pin-frames on another pin's tip, seeds 0/1/2: 46/64/76 before, 9/36/47
-    # after (main b811570, renders with seams where tips overlap); without seams 35/34/28 with `MISSING_MARGIN`
-    # 2, 10/32/19 with 4.
-    swapped = sum(_track_slides("tactip-331", seed, min_area=0.5)[0] for seed in (0, 1, 2))
-    assert swapped <= 75
+    # and the neighbour's, falling behind by 6 px; it carried its moving neighbours' step only when their
+    # median step passed the settling bound (about 1.8 px here), and now when it passes what the camera's
+    # noise gives such a median (`Refiner.carried_velocity`). Pin-frames on another pin's tip, seeds 0/1/2,
+    # tactip-331: 46/64/76 (main b811570, renders with seams where tips overlap), 10/32/19 on main 9a221aa,
+    # 0/0/0 now; dark-331 (dark markers): 63/30/45 -> 7/8/46.
+    assert sum(_track_slides(name, seed, min_area=0.5)[0] for seed in (0, 1, 2)) <= bound
 
 
 def test_on_a_small_pad_a_found_pin_leaves_a_merged_blob_to_its_lost_owner():
     # small-pad-100 (tips 2 px apart on a 4 px spacing where a slide squeezes a realistic skin): a pin
     # searched for from its prediction settled on the blob of its own and a lost neighbour's tip, nearer
     # its own prediction than the neighbour's, and took it. With `MISSING_MARGIN` neither takes an
-    # ambiguous blob. Pin-frames on another pin's tip, seeds 0/1/2/3: 6/6/11/10 before, 6/7/2/0 now.
+    # ambiguous blob. Pin-frames on another pin's tip, seeds 0/1/2/3: 6/6/11/10 before, 6/7/2/0 after, 0/9/1/3
+    # on main 9a221aa, 1/1/1/0 with a slowly moving neighbourhood's step carried (`Refiner.carried_velocity`).
     swapped = 0
     for seed in (0, 1, 2, 3):
         count, positions, rest, visible = _track_slides("small-pad-100", seed, min_area=0.5)
         swapped += count
         assert (np.linalg.norm(positions - rest, axis=1)[visible] <= 1.0).all()
-    assert swapped <= 20
+    assert swapped <= 10
 
 
-@pytest.mark.xfail(reason="issue 20's bar, not yet met: radial-led-120 seeds 0-3 still put 4/13/12/0 pin-frames "
-                          "on other pins' tips (8/1/10/14 on renders with seams where tips overlap, main b811570): "
-                          "where the skin ahead of a slide squeezes tips into one blob, a window lagging its tip "
-                          "settles in the blob's middle, nearer the neighbour", strict=False)
 def test_slides_swap_no_identity():
-    assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (2, 3))
+    # Issue 20's bar on radial-led-120: two slides of 3 pitches, no pin on another pin's tip. Seeds 0-5: 4/13/12/0/0/1
+    # pin-frames on main 9a221aa (a window lagging its tip settled in the middle of a blob of two squeezed
+    # tips, nearer the neighbour), 0/0/0/0/0/6 with a slowly moving neighbourhood's step carried.
+    assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (1, 2))
 
 
 def test_on_a_realistic_skin_radial_slides_leave_few_pins_on_other_tips():
     # radial-led-120 (small tips, 0.4 spacings across, several grey levels of LED reflections and glare),
     # two slides on a skin squeezed to half its area ahead of them. Pin-frames on another pin's tip, seeds
     # 0-5: 1/0/0/9/0/0 on renders with seams where tips overlap and `MISSING_MARGIN` 2 (main b811570);
-    # 1/0/1/0/0/1 now, each a window 2 px off its tip between two tips 0.5 spacings apart.
+    # 1/0/1/0/0/1 on main 9a221aa, each a window 2 px off its tip between two tips 0.5 spacings apart;
+    # 0 on every seed with a slowly moving neighbourhood's step carried (`Refiner.carried_velocity`).
     swapped = [_track_slides("radial-led-120", seed, min_area=0.5)[0] for seed in range(6)]
-    assert sum(swapped) <= 4 and max(swapped) <= 1
+    assert sum(swapped) <= 2 and max(swapped) <= 1
 
 
 def test_a_found_pin_keeps_only_a_tip_in_its_own_cell():
@@ -152,3 +157,45 @@ def test_a_found_pin_near_a_missing_pins_prediction_keeps_the_tip_only_when_clea
     positions = np.array([[0.0, 0.0], [15.0, 0.0], [20.0, 0.0]])
     keep_own_tips(positions, np.array([1]), np.array([[11.0, 0.0]]), expected, near)
     assert np.allclose(positions[1], [15.0, 0.0])
+
+
+class _Steps(_Prediction):
+    """`carried_velocity` on a ring of pins, each pin's neighbours the two on either side of it."""
+
+    def __init__(self, n=9, *, scatter_px=0.05, guess_px=0.5, settled_px=1.8):
+        self._neighbour_index = np.array([[(i + d) % n for d in (-2, -1, 1, 2)] for i in range(n)])
+        self._noise_scatter_sq = np.full(n, scatter_px ** 2)  # (the rest frame's noise: `Refiner`)
+        self._guess_px, self._settled_px = guess_px, settled_px
+
+    def carried(self, steps):
+        steps = np.asarray(steps, dtype=float)
+        return self.carried_velocity(steps.copy(), _squared_norm(steps) <= self._settled_px ** 2)
+
+
+def test_a_window_stalled_between_two_tips_carries_its_neighbours_slow_step():
+    # tactip-331's settling bound is 1.8 px: a slide's tips move 0.6-2.2 px a frame, and in the skin squeezed
+    # ahead of it a window sitting on the plateau of two overlapping tips steps 0.1 px. Its neighbours' median
+    # step (1.2 px, beyond their noise) was zeroed with its own; the window stayed 4-5 px behind its tip.
+    rows = _Steps()
+    steps = np.tile([1.2, 0.0], (9, 1))
+    steps[4] = [0.1, 0.0]  # the stalled window
+    carried = rows.carried(steps)
+    assert np.allclose(carried[4], [1.2, 0.0])
+    # A slow coherent motion (a slide's start): each pin carries its own step, which agrees with its neighbours'.
+    steps = np.outer(np.linspace(0.8, 1.2, 9), [1.0, 0.5])
+    assert np.allclose(rows.carried(steps)[1:-1], steps[1:-1])
+    # Beyond the settling bound a step is carried as it is.
+    steps[:] = [3.0, 0.0]
+    assert np.allclose(rows.carried(steps), steps)
+
+
+def test_a_still_pads_jitter_is_not_carried():
+    # Faint tips in glare (radial-led-120: windows scattering by 0.2-0.4 px, a settling bound of 0.8 px):
+    # steps of a few tenths of a px, and their neighbours' median, are noise, not a slide.
+    rows = _Steps(scatter_px=0.2, guess_px=0.25, settled_px=0.8)
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        assert not rows.carried(rng.normal(0.0, 0.2, (9, 2))).any()  # (a step's scatter: the centroid's times sqrt 2)
+    # Crisp tips: steps of a few hundredths of a px, below the guess bound.
+    rows = _Steps()
+    assert not rows.carried(rng.normal(0.0, 0.05, (9, 2))).any()
