@@ -106,6 +106,13 @@ def test_slides_swap_no_identity():
     assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (1, 2))
 
 
+@pytest.mark.xfail(reason="issue 20's bar, not yet met on every seed: radial-led-120 seed 5 puts 6 pin-frames on "
+                          "another pin's tip through the two slides (0 on seeds 0-4)", strict=False)
+def test_slides_swap_no_identity_on_seed_5():
+    # The seed the bar still fails on, kept visible in the report (`-ra`) rather than left out of the test above.
+    assert _track_slides("radial-led-120", 5)[0] == 0
+
+
 def test_on_a_realistic_skin_radial_slides_leave_few_pins_on_other_tips():
     # radial-led-120 (small tips, 0.4 spacings across, several grey levels of LED reflections and glare),
     # two slides on a skin squeezed to half its area ahead of them. Pin-frames on another pin's tip, seeds
