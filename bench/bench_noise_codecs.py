@@ -49,6 +49,15 @@ every codec (raw included: its faint tips' centroids scatter by 0.2 px at the 90
 extra passes on the slide video come from the bound's formula, not from the codec's effect on
 `noise_sigma`. No pin is lost on these still frames (lost/frame 0 everywhere).
 
+Tried in the tracker (session 15; radial-led-120 realistic-skin slides through each codec, seeds 0-5):
+the rest windows' noise scatter redrawn at `temporal_noise_sigma` of the rest frame and the next
+(widening only) left raw renders bit-identical and the passes unchanged, swaps MJPG 18 -> 23, mp4v
+9 -> 9; a first-pass bound of 2 sigma of a still step in that noise cut window measurements on the
+MJPG slide video 4.29 -> 3.66 a frame (4.30 -> 4.10 mp4v; a still pad 4.92 -> 4.15 MJPG) but placed
+moving pins short: > 1 px errors 1733 -> 2169 (MJPG), swaps 9 -> 29 (mp4v). Neither was merged. On a
+still pad one window of 120 stepping beyond the bound keeps every pass running (18-24 % of
+radial-led-120's windows do in the first pass).
+
 Run: .venv/bin/python bench/bench_noise_codecs.py [--frames 24] [--presets radial-led-120 ...]
 """
 
