@@ -1,7 +1,10 @@
 """Noise of the camera and of each window's centroid, for `pins._refine.Refiner` (paper 002, III-A.3).
 
 `noise_sigma` measures a grey image's pixel noise (the rest frame's, whose level then draws the noise
-that bounds each rest window's scatter before any is learnt, `pins._rest`); `_learn_mean_square` is
+that bounds each rest window's scatter before any is learnt, `pins._rest`); `temporal_noise_sigma`
+measures it from two frames of a still pad instead, as a video codec leaves it (a codec smooths the
+noise within a frame, which `noise_sigma` reads, but not the noise that moves a window's centroid:
+`bench/bench_noise_codecs.py`); `_learn_mean_square` is
 the running mean square by which each window learns its scatter frame by frame while its pin is still.
 """
 
@@ -10,7 +13,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["noise_sigma"]
+__all__ = ["noise_sigma", "temporal_noise_sigma"]
 
 # Weight of each still step in a window's learnt scatter (`Refiner.observe_still`), and how many
 # times that scatter a still pin's window may lie from where its still neighbours place it.
@@ -31,6 +34,44 @@ def noise_sigma(image: np.ndarray) -> float:
     response = response[clipped == 0]
     return float(np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
 
+
+def temporal_noise_sigma(first: np.ndarray, second: np.ndarray) -> float:
+    """Standard deviation of the pixel noise, grey levels, from two uint8 frames of a still scene of the
+    same shape: the rms difference of their pixels over sqrt 2, clipped at `_CLIP_SIGMAS` times itself
+    (three rounds: pixels that changed, a minority such as tips that moved, do not count); saturated
+    or black pixels in either frame, which show no noise, are left out; 0 when none is left.
+
+    Through a video codec it reads the noise that survives the codec, which moves the windows'
+    centroids; `noise_sigma` of one such frame reads 2-10 x less (a codec smooths the noise within a
+    frame), and a median of the differences reads 1.7-6 x less (an mp4v P-frame copies most blocks of
+    a still scene, their differences 0): `bench/bench_noise_codecs.py`.
+
+    >>> rng = np.random.default_rng(0)
+    >>> scene = np.full((200, 200), 120.0)
+    >>> a, b = (np.clip(np.rint(scene + rng.normal(0, 4.0, scene.shape)), 0, 255).astype(np.uint8) for _ in range(2))
+    >>> round(temporal_noise_sigma(a, b), 1)
+    4.0
+    """
+    if first.shape != second.shape:
+        raise ValueError(f"the frames differ in shape: {first.shape} and {second.shape}")
+    first, second = np.asarray(first, np.uint8), np.asarray(second, np.uint8)
+    usable = ~((first <= 2) | (first >= 253) | (second <= 2) | (second >= 253))
+    difference = cv2.absdiff(first, second)[usable]
+    counts = np.bincount(difference.ravel(), minlength=256).astype(np.float64)   # of |d| = 0 ... 255
+    levels = np.arange(256.0)
+    bound = 255.0
+    for _ in range(3):
+        kept = counts * (levels <= bound)
+        n = kept.sum()
+        if n == 0:
+            return 0.0
+        rms = float(np.sqrt((kept * levels ** 2).sum() / n))
+        bound = max(_CLIP_SIGMAS * rms, 1.0)
+    return rms / float(np.sqrt(2.0))
+
+
+#: Differences of two frames beyond this many times their rms are change, not noise (`temporal_noise_sigma`).
+_CLIP_SIGMAS = 3.5
 
 #: Immerkaer's 3 x 3 kernel: the difference of two Laplacians, blind to a linear ramp.
 _LAPLACE_DIFFERENCE = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
