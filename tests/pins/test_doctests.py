@@ -10,7 +10,7 @@ import pytest
 
 MODULES = ["pins.detect", "pins.disc", "pins.lattice", "pins.track", "pins.lk", "pins.displacement", "pins.select",
            "pins.scale", "pins.features", "pins.segment", "pins.accel_detect", "pins._tipfit", "pins._rescue",
-           "pins._tipprobe"]
+           "pins._tipprobe", "pins._noise"]
 
 
 @pytest.mark.parametrize("name", MODULES)
