@@ -86,20 +86,22 @@ def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, e
     >>> positions[1]
     array([nan, nan])
     """
-    placed = np.isfinite(positions[found, 0])
-    found, start = found[placed], start[placed]
-    if found.size == 0:
-        return
-    at = np.where(np.isfinite(positions), positions, expected)
-    at[found] = start
     tips = positions[found]
+    placed = np.isfinite(tips[:, 0])
+    if not placed.all():  # (one call where, as mostly, every found pin is placed)
+        found, start, tips = found[placed], start[placed], tips[placed]
+        if found.size == 0:
+            return
+    finite = np.isfinite(positions)
+    at = np.where(finite, positions, expected)
+    at[found] = start
     own = _squared_norm(tips - start)
     # (NaN, a pin expected nowhere, compares False.)
     around = near[found]
     others = _squared_norm(at[around] - tips[:, None, :])  # (F, m)
     # A missing pin's prediction (uncertain) wins unless the pin's own start is MISSING_MARGIN times nearer.
-    missing = np.isnan(positions[around, 0])
-    others[missing] /= MISSING_MARGIN ** 2
+    # (Found pins are placed: `finite` before `at[found] = start` says which are missing.)
+    np.divide(others, MISSING_MARGIN ** 2, out=others, where=~finite[around, 0])
     positions[found[(others < own[:, None]).any(axis=1)]] = np.nan
 
 

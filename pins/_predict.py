@@ -90,15 +90,19 @@ class _Prediction:
         such neighbours: its rest position moved by the median displacement of its placed neighbours;
         without any: `last_seen`.
         """
-        rest = self.rest_positions[which]
-        now = (positions - self.rest_positions)[self._neighbour_index[which]]  # (L, k, 2), a copy
-        either = _median(now.copy())  # over the neighbours placed now
-        then = self._then[which]
+        index = self._neighbour_index[which]
+        # The three medians in one (3 L, k, 2) sort: over the neighbours placed now (`either`), and
+        # over those placed both now and then, now and then (their change).
+        stack = np.empty((3,) + index.shape + (2,))
+        now, both_now, then = stack
+        np.subtract(positions[index], self.rest_positions[index], out=now)
+        then[...] = self._then[which]
         both = np.isfinite(now[..., 0]) & np.isfinite(then[..., 0])
-        now[~both] = np.nan
-        change = _median(now) - _median(np.where(both[..., None], then, np.nan))
-        carried = last_seen[which] + change
-        fallback = np.where(np.isnan(either), last_seen[which], rest + either)
+        np.copyto(both_now, now)
+        stack[1:, ~both] = np.nan
+        either, now_both, then_both = _median(stack.reshape((-1,) + stack.shape[2:])).reshape(3, len(index), 2)
+        carried = last_seen[which] + (now_both - then_both)
+        fallback = np.where(np.isnan(either), last_seen[which], self.rest_positions[which] + either)
         return np.where(np.isfinite(carried), carried, fallback)
 
     def _predict_from_neighbours(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
