@@ -1,4 +1,4 @@
-"""The fewer-call forms of `_Prediction._predict` and `keep_own_tips` agree bit for bit with the forms they replaced.
+"""The fewer-call forms of `_Prediction._predict`, `keep_own_tips` and their gathers agree bit for bit with the forms they replaced.
 
 The references below are the earlier code (main 187772a), kept here only as oracles: NaN rows, neighbours all
 NaN, ties (values on a coarse grid), one pin, no pins.
@@ -7,7 +7,7 @@ NaN, ties (values on a coarse grid), one pin, no pins.
 import numpy as np
 import pytest
 
-from pins._identity import MISSING_MARGIN, keep_own_tips
+from pins._identity import MISSING_MARGIN, gathered, keep_own_tips, squared_distances
 from pins._predict import _Prediction, _median
 from pins._window import _squared_norm
 
@@ -106,3 +106,37 @@ def test_keep_own_tips_agrees_with_its_reference(seed):
     _reference_keep_own_tips(want, np.array([0]), np.array([[30.0, 30.0]]), expected, near)
     np.testing.assert_array_equal(got, want)
     assert np.isnan(got[0, 0])
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_complex_gathers_agree_with_row_gathers(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 40))
+    points = _points(rng, n, [0.0, 0.3, 1.0][seed % 3], [0.0, 1.0][seed % 2])
+    for shape in ((0,), (1,), (n,), (int(rng.integers(0, 9)), int(rng.integers(1, 37)))):
+        index = rng.integers(0, n, shape)
+        want = points[index]
+        got = gathered(points, index)
+        assert got.shape == want.shape
+        np.testing.assert_array_equal(got, want)
+        got[...] = -1.0  # a fresh array: `points` untouched
+        assert not (points == -1.0).any()
+    index = rng.integers(0, n, (int(rng.integers(0, 9)), int(rng.integers(1, 37))))
+    to = _points(rng, len(index), 0.3, 0.0)
+    # (a non-contiguous view of `points` too: the gather copies it first)
+    for source in (points, np.asfortranarray(points)):
+        np.testing.assert_array_equal(squared_distances(source, index, to),
+                                      _squared_norm(points[index] - to[:, None, :]))
+
+
+def test_drift_bound_follows_a_new_noise_scatter():
+    predictor = _Predictor(np.zeros((3, 2)), np.array([[1, 2], [0, 2], [0, 1]]), np.zeros((3, 2, 2)))
+    predictor._guess_px = 0.1
+    predictor._noise_scatter_sq = np.array([0.0, 1.0, 4.0])
+    first = predictor._drift_bound_sq()
+    assert first[0] == pytest.approx(0.01) and first[2] == pytest.approx(9.0 * 2.0 * 4.0 * np.pi / 4)
+    assert predictor._drift_bound_sq() is first  # kept
+    predictor._noise_scatter_sq = np.array([1.0, 1.0, 1.0])  # assigned anew (as `Refiner` does): recomputed
+    np.testing.assert_allclose(predictor._drift_bound_sq(), 9.0 * 2.0 * np.pi / 4)
+    predictor._guess_px = 10.0
+    np.testing.assert_allclose(predictor._drift_bound_sq(), 100.0)
