@@ -43,6 +43,10 @@ from ._window import _squared_norm
 # lattice: the skin squeezed ahead of a slide brings the outer rings near; on tactip-331 slides two
 # rings let 12 % more pin-frames onto other pins' tips than all pins do, three as few).
 IDENTITY_NEIGHBOURS = 36
+# Gathers of at least this many points go through complex numbers (`gathered`): below it the few more
+# calls cost more than the gather saves (microbenchmark: 36 neighbours of 1 / 3 / 10 / 30 pins, 4.0 / 5.2
+# / 9.0 / 20 us by rows against 5.6 / 6.0 / 6.8 / 8.9; 6 neighbours of 10 / 80 pins 1.5 / 5.5 against 2.5 / 2.9).
+_COMPLEX_GATHER_SIZE = 160
 # A found pin keeps a tip near a missing pin's prediction only when its own start is this many times nearer
 # (2 on renders with seams where tips overlap; 4 without, see the module docstring).
 MISSING_MARGIN = 4.0
@@ -108,26 +112,30 @@ def squared_distances(points: np.ndarray, index: np.ndarray, to: np.ndarray) -> 
     """Squared distances, px^2 (F, m), from (F, 2) points `to` to (N, 2) `points` gathered at (F, m) `index`.
 
     Bit for bit ``_squared_norm(points[index] - to[:, None, :])``: the same subtractions, squares and sum,
-    with the points gathered as complex numbers (one 16-byte element a point: a gather of single
-    elements costs a third of one of rows). NaN where either point is NaN.
+    with a large gather's points as complex numbers (`gathered`: one 16-byte element a point, a third of
+    the cost of gathering rows). NaN where either point is NaN.
 
     >>> squared_distances(np.array([[0.0, 0.0], [3.0, 4.0]]), np.array([[1, 0]]), np.array([[0.0, 0.0]]))
     array([[25.,  0.]])
     """
+    if index.size < _COMPLEX_GATHER_SIZE:
+        return _squared_norm(points[index] - to[:, None, :])
     gap = np.take(_as_complex(points), index) - _as_complex(to)[:, None]
     return gap.real * gap.real + gap.imag * gap.imag
 
 
 def gathered(points: np.ndarray, index: np.ndarray) -> np.ndarray:
-    """``points[index]`` (index.shape + (2,)) of (N, 2) float `points`, bit for bit, gathered as complex numbers
-    (a fresh array: a gather of single 16-byte elements costs less than one of rows).
+    """``points[index]`` (index.shape + (2,)) of (N, 2) float `points` (a fresh array), bit for bit: a large
+    gather (`_COMPLEX_GATHER_SIZE`) as complex numbers, single 16-byte elements, which costs less than one of rows.
 
     >>> gathered(np.array([[0.0, 1.0], [2.0, 3.0]]), np.array([[1, 1, 0]]))
     array([[[2., 3.],
             [2., 3.],
             [0., 1.]]])
     """
-    return np.take(_as_complex(points), index).view(np.float64).reshape(np.shape(index) + (2,))
+    if index.size < _COMPLEX_GATHER_SIZE:
+        return points[index]
+    return np.take(_as_complex(points), index).view(np.float64).reshape(index.shape + (2,))
 
 
 def _as_complex(points: np.ndarray) -> np.ndarray:

@@ -81,7 +81,7 @@ class _Prediction:
         """Keep, for the pins placed in a frame's final (N, 2) `positions`, px, their neighbours' displacements."""
         which = np.flatnonzero(np.isfinite(positions[:, 0]))
         if which.size:
-            self._then[which] = (positions - self.rest_positions)[self._neighbour_index[which]]
+            self._then[which] = gathered(positions - self.rest_positions, self._neighbour_index[which])
 
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
         """Where lost pins `which` should be, px (L, 2): where last seen, moved as their neighbours did since.

@@ -113,7 +113,8 @@ def test_complex_gathers_agree_with_row_gathers(seed):
     rng = np.random.default_rng(seed)
     n = int(rng.integers(1, 40))
     points = _points(rng, n, [0.0, 0.3, 1.0][seed % 3], [0.0, 1.0][seed % 2])
-    for shape in ((0,), (1,), (n,), (int(rng.integers(0, 9)), int(rng.integers(1, 37)))):
+    # (below and above the size at which the gather goes through complex numbers)
+    for shape in ((0,), (1,), (n,), (200,), (7, 36), (int(rng.integers(0, 9)), int(rng.integers(1, 37)))):
         index = rng.integers(0, n, shape)
         want = points[index]
         got = gathered(points, index)
@@ -121,12 +122,13 @@ def test_complex_gathers_agree_with_row_gathers(seed):
         np.testing.assert_array_equal(got, want)
         got[...] = -1.0  # a fresh array: `points` untouched
         assert not (points == -1.0).any()
-    index = rng.integers(0, n, (int(rng.integers(0, 9)), int(rng.integers(1, 37))))
-    to = _points(rng, len(index), 0.3, 0.0)
-    # (a non-contiguous view of `points` too: the gather copies it first)
-    for source in (points, np.asfortranarray(points)):
-        np.testing.assert_array_equal(squared_distances(source, index, to),
-                                      _squared_norm(points[index] - to[:, None, :]))
+    for shape in ((1, 36), (7, 36), (int(rng.integers(0, 9)), int(rng.integers(1, 37)))):
+        index = rng.integers(0, n, shape)
+        to = _points(rng, len(index), 0.3, 0.0)
+        # (a non-contiguous view of `points` too: the gather copies it first)
+        for source in (points, np.asfortranarray(points)):
+            np.testing.assert_array_equal(squared_distances(source, index, to),
+                                          _squared_norm(points[index] - to[:, None, :]))
 
 
 def test_drift_bound_follows_a_new_noise_scatter():
