@@ -90,9 +90,11 @@ def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, e
     >>> positions[1]
     array([nan, nan])
     """
+    if not found.size:
+        return
     tips = positions[found]
     placed = np.isfinite(tips[:, 0])
-    if not placed.all():  # (one call where, as mostly, every found pin is placed)
+    if not np.logical_and.reduce(placed):  # (one call where, as mostly, every found pin is placed)
         found, start, tips = found[placed], start[placed], tips[placed]
         if found.size == 0:
             return
@@ -104,7 +106,7 @@ def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, e
     around = near[found]
     others = squared_distances(at, around, tips)  # (F, m)
     # A missing pin's prediction (uncertain) wins unless the pin's own start is MISSING_MARGIN times nearer.
-    others = np.where(np.take(missing, around), others / MISSING_MARGIN ** 2, others)
+    others = np.where(missing.take(around), others / MISSING_MARGIN ** 2, others)
     positions[found[np.logical_or.reduce(others < own[:, None], axis=1)]] = np.nan
 
 
@@ -120,7 +122,7 @@ def squared_distances(points: np.ndarray, index: np.ndarray, to: np.ndarray) -> 
     """
     if index.size < _COMPLEX_GATHER_SIZE:
         return _squared_norm(points[index] - to[:, None, :])
-    gap = np.take(_as_complex(points), index) - _as_complex(to)[:, None]
+    gap = _as_complex(points).take(index) - _as_complex(to)[:, None]
     return gap.real * gap.real + gap.imag * gap.imag
 
 
@@ -135,12 +137,14 @@ def gathered(points: np.ndarray, index: np.ndarray) -> np.ndarray:
     """
     if index.size < _COMPLEX_GATHER_SIZE:
         return points[index]
-    return np.take(_as_complex(points), index).view(np.float64).reshape(index.shape + (2,))
+    return _as_complex(points).take(index).view(np.float64).reshape(index.shape + (2,))
 
 
 def _as_complex(points: np.ndarray) -> np.ndarray:
     """(N, 2) float points as (N,) complex x + iy: a view when `points` is C-contiguous float64."""
-    return np.ascontiguousarray(points, dtype=np.float64).view(np.complex128)[:, 0]
+    if points.dtype != np.float64 or not points.flags.c_contiguous:
+        points = np.ascontiguousarray(points, dtype=np.float64)
+    return points.view(np.complex128)[:, 0]  # (method calls: `np.take` and the like wrap them in three)
 
 
 def kept_on_own_tips(before: np.ndarray, after: np.ndarray, start: np.ndarray, guess: np.ndarray,
