@@ -1,4 +1,5 @@
-"""The fewer-call forms of `_Prediction._predict`, `keep_own_tips` and their gathers agree bit for bit with the forms they replaced.
+"""The cheaper forms of `_Prediction._predict`, `keep_own_tips` and their gathers agree bit for bit with
+the forms they replaced.
 
 The references below are the earlier code (main 187772a), kept here only as oracles: NaN rows, neighbours all
 NaN, ties (values on a coarse grid), one pin, no pins.
