@@ -40,7 +40,8 @@ Session "speed7" (2026-11-29; load average 3-5; main 187772a against this sessio
 bit on both videos and on bench_slides' renders): cheaper bookkeeping round the window measurements.
 ``--against`` main, tracker updates ms/frame CPU (median of the paired ratios), the final code, 5 rounds
 MJPG 1.273 -> 1.218 (0.94; follow passes 0.653 -> 0.605, 0.92, their own code less their window
-measurements 0.292 -> 0.247; tip fits 0.99; window measurements 0.98, not this session's: the load); the
+measurements 0.292 -> 0.247; tip fits 0.99; window measurements 0.98, not this session's: the load), mp4v
+1.312 -> 1.229 (0.95, faster in 5 of 5 rounds; follow 0.92, own code 0.307 -> 0.250; tip fits 1.00); the
 commit before, 7 rounds each, MJPG 1.397 -> 1.302 (0.95; follow 0.92), mp4v 1.297 -> 1.236 (0.96, faster in
 7 of 7 rounds; follow 0.93; tip fits 1.00). ``--calls``, MJPG, per frame: calls 512 -> 543, operations 1680
 -> 1706: more calls, cheaper ones. A gather of the 36 identity neighbours of 30 pins as rows costs ~20 us,
