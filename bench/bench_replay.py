@@ -78,6 +78,19 @@ cost is the number of their NumPy calls (~50 us for a window measurement of one 
 more than their work: what is left needs fewer calls a frame (fewer follow passes, fewer fits), not cheaper
 ones.
 
+Session of issue 20's "speed7" (2026-11-29; load average 3-5; main 187772a against this session's code
+(59fa25f), interleaved rounds, best of 2 repeats each; the tracker's positions, lost and
+retired pins bit for bit the same on both videos and on bench_slides' renders): the tracker's bookkeeping
+round the window measurements cheaper (neighbour gathers as complex numbers, the three medians of a
+prediction in one sort, fewer Python-level reduction wrappers). Replay's busier thread / decode, per round,
+MJPG 1.38 / 1.68 / 1.64 -> 1.55 / 1.50 / 1.57 (medians 1.64 -> 1.55), mp4v 1.75 / 1.68 / 1.67 -> 1.60 / 1.68
+/ 1.59 (1.68 -> 1.60); decoding alone 0.85-1.09 ms/frame CPU; the tracker alone (ms/frame CPU) MJPG 1.23-1.28 ->
+1.20-1.22, mp4v 1.21-1.25 -> 1.18-1.22. A first set of rounds while other work ran on the machine (after the
+first commit): MJPG 1.87 / 1.65 / 1.79 -> 1.55 / 1.96 / 1.56, mp4v 1.79 / 1.67 / 1.72 -> 1.36 / 1.78 / 1.79:
+single rounds vary by 15-20 %, more than the few % the tracker gained (`bench_replay_parts.py --against`:
+0.94-0.96). The bar (1.5) is not met; the tracker's cost past its window measurements and tip fits
+(`pins._window`, `pins._tipfit`) is now a few hundred small calls a frame, each a few us.
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
 """

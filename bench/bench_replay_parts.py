@@ -36,6 +36,18 @@ counts say less than the time: a reduction costs several elementwise calls, `np.
 its LAPACK gufunc, an in-place division whose divisor overlaps it twice a new one, and a window measurement
 of one window ~50 us against ~90 us for 120.
 
+Session "speed7" (2026-11-29; load average 3-5; main 187772a against this session's code, outputs bit for
+bit on both videos and on bench_slides' renders): cheaper bookkeeping round the window measurements.
+``--against`` main, tracker updates ms/frame CPU (median of the paired ratios), the final code, 5 rounds
+MJPG 1.273 -> 1.218 (0.94; follow passes 0.653 -> 0.605, 0.92, their own code less their window
+measurements 0.292 -> 0.247; tip fits 0.99; window measurements 0.98, not this session's: the load), mp4v
+1.312 -> 1.229 (0.95, faster in 5 of 5 rounds; follow 0.92, own code 0.307 -> 0.250; tip fits 1.00); the
+commit before, 7 rounds each, MJPG 1.397 -> 1.302 (0.95; follow 0.92), mp4v 1.297 -> 1.236 (0.96, faster in
+7 of 7 rounds; follow 0.93; tip fits 1.00). ``--calls``, MJPG, per frame: calls 512 -> 543, operations 1680
+-> 1706: more calls, cheaper ones. A gather of the 36 identity neighbours of 30 pins as rows costs ~20 us,
+as complex numbers (a view, a take, a view) ~9 us; below ~160 points the rows win (`pins._identity.gathered`).
+Counted calls include each Python function and each NumPy wrapper (`np.take`, `ndarray.any` are three).
+
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C

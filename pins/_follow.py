@@ -102,18 +102,19 @@ class _Following:
             predicted = self._predict(positions, which[far], last_seen)
             trusted = self._trusted(positions, which[far], last_seen, predicted)
             far, predicted = far[trusted], predicted[trusted]
-        chain = np.concatenate([again.nonzero()[0], far])
+        chain = np.concatenate([again.nonzero()[0], far]) if far.size else again.nonzero()[0]
         points = placed_at[chain]
+        searched = chain >= n
+        fresh = None  # (searches start fresh in the first of these passes only: those from predictions)
         if far.size:
             start[far] = points[-far.size:] = predicted
             # Their neighbours' guesses were off too: windows bounded by where the pins now are.
             now = np.where(np.isnan(positions), filled, positions)
             now[which[far]] = start[far]
             radius = self.window_radius(now)[which]
-        searched = chain >= n
-        searched[chain.size - far.size:] = True
-        fresh = np.zeros(chain.size, dtype=bool)
-        fresh[chain.size - far.size:] = True
+            searched[chain.size - far.size:] = True
+            fresh = np.zeros(chain.size, dtype=bool)
+            fresh[chain.size - far.size:] = True
         placed = [done.nonzero()[0]]
         for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
             if chain.size == 0:
@@ -146,7 +147,7 @@ class _Following:
             going = ~ok & np.isfinite(centres[:, 0]) & (searched | (error <= reach))
             going &= like if fresh is None else like | fresh
             chain, points, searched = chain[going], centres[going], searched[going]
-            fresh = None  # (searches start fresh in the first of these passes only)
+            fresh = None
         # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
         # the others can have reached a neighbour's tip.
         placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._identity import gathered
 from ._window import _squared_norm
 
 # A lost pin is searched for at its prediction only when this share of its neighbours is placed.
@@ -80,7 +81,7 @@ class _Prediction:
         """Keep, for the pins placed in a frame's final (N, 2) `positions`, px, their neighbours' displacements."""
         which = np.flatnonzero(np.isfinite(positions[:, 0]))
         if which.size:
-            self._then[which] = (positions - self.rest_positions)[self._neighbour_index[which]]
+            self._then[which] = gathered(positions - self.rest_positions, self._neighbour_index[which])
 
     def _predict(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
         """Where lost pins `which` should be, px (L, 2): where last seen, moved as their neighbours did since.
@@ -90,15 +91,19 @@ class _Prediction:
         such neighbours: its rest position moved by the median displacement of its placed neighbours;
         without any: `last_seen`.
         """
-        rest = self.rest_positions[which]
-        now = (positions - self.rest_positions)[self._neighbour_index[which]]  # (L, k, 2), a copy
-        either = _median(now.copy())  # over the neighbours placed now
-        then = self._then[which]
+        index = self._neighbour_index[which]
+        # The three medians in one (3 L, k, 2) sort: over the neighbours placed now (`either`), and
+        # over those placed both now and then, now and then (their change).
+        stack = np.empty((3,) + index.shape + (2,))
+        now, both_now, then = stack
+        np.subtract(gathered(positions, index), gathered(self.rest_positions, index), out=now)
+        then[...] = self._then[which]
         both = np.isfinite(now[..., 0]) & np.isfinite(then[..., 0])
-        now[~both] = np.nan
-        change = _median(now) - _median(np.where(both[..., None], then, np.nan))
-        carried = last_seen[which] + change
-        fallback = np.where(np.isnan(either), last_seen[which], rest + either)
+        np.copyto(both_now, now)
+        stack[1:, ~both] = np.nan
+        either, now_both, then_both = _median(stack.reshape((-1,) + stack.shape[2:])).reshape(3, len(index), 2)
+        carried = last_seen[which] + (now_both - then_both)
+        fallback = np.where(np.isnan(either), last_seen[which], self.rest_positions[which] + either)
         return np.where(np.isfinite(carried), carried, fallback)
 
     def _predict_from_neighbours(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray) -> np.ndarray:
@@ -126,7 +131,7 @@ class _Prediction:
         placed = np.isfinite(positions[index, 0])
         count = np.count_nonzero(placed, axis=1)
         trusted = count >= _TRUSTED_SHARE * index.shape[1]
-        few = np.flatnonzero(~trusted & (count >= 2) & ~(placed & ~self.still[index]).any(axis=1))
+        few = np.flatnonzero(~trusted & (count >= 2) & ~np.logical_or.reduce(placed & ~self.still[index], axis=1))
         if few.size:
             moved = _squared_norm(predicted[few] - last_seen[which[few]])
             trusted[few] = moved <= self.gate_px ** 2
@@ -149,14 +154,14 @@ class _Prediction:
             active = ~still | (_squared_norm(velocity) > bound_sq)  # (NaN, a lost pin: active, not finite)
         active &= np.isfinite(velocity[:, 0])
         if not active.any():
-            velocity[still] = 0.0
+            np.copyto(velocity, 0.0, where=still[:, None])  # (`velocity[still] = 0.0` costs more)
             return velocity  # (a still pad: nothing to carry)
         # Only still pins near a step beyond noise (a gather of bools: the medians are the cost).
         which = np.flatnonzero(still)
-        which = which[active[which] | active[self._neighbour_index[which]].any(axis=1)]
+        which = which[active[which] | np.logical_or.reduce(active[self._neighbour_index[which]], axis=1)]
         own = velocity[which]  # (a copy)
         around = self.neighbour_median(velocity, which)  # (of the steps as they are: still ones too)
-        velocity[still] = 0.0
+        np.copyto(velocity, 0.0, where=still[:, None])
         size = _squared_norm(around)
         moving = size > bound_sq[which]  # (NaN compares False)
         agree = _squared_norm(own - around) <= _AGREE_SHARE ** 2 * size
@@ -170,12 +175,20 @@ class _Prediction:
         (`_noise_scatter_sq`); the median of k of them scatters about sqrt(pi / 2k) times as much. (Not the
         scatter learnt from still steps, `observe_still`: a slide's slow steps lie within the settling
         bound, and that scatter grows with them.)"""
+        # (Fixed once the rest frame is measured: kept while `_noise_scatter_sq`, `_guess_px` and the
+        # neighbours are those it was computed from; each is assigned, never changed in place.)
+        key = (self._noise_scatter_sq, self._guess_px, self._neighbour_index)
+        memo = self.__dict__.get("_drift_bound_memo")
+        if memo is not None and all(a is b for a, b in zip(memo[0], key)):
+            return memo[1]
         k = self._neighbour_index.shape[1]
-        return np.maximum(_DRIFT_SIGMAS ** 2 * 2.0 * self._noise_scatter_sq * np.pi / (2 * k), self._guess_px ** 2)
+        bound = np.maximum(_DRIFT_SIGMAS ** 2 * 2.0 * self._noise_scatter_sq * np.pi / (2 * k), self._guess_px ** 2)
+        self._drift_bound_memo = (key, bound)
+        return bound
 
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.
 
         Returns (L, 2), NaN for a pin none of whose neighbours has a finite value.
         """
-        return _median(values[self._neighbour_index[which]])  # (L, k, 2), a copy
+        return _median(gathered(values, self._neighbour_index[which]))  # (L, k, 2), a copy

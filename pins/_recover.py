@@ -188,16 +188,16 @@ class _Recovery:
         which, start = which[shows], predicted[shows] - self.origin
         around = self._window_neighbours[:, which].T  # (L, k)
         neighbours = np.where(np.isnan(positions[around]), last_seen[around], positions[around]) - self.origin
-        nearest = np.sqrt(_squared_norm(neighbours - start[:, None, :]).min(axis=1))
+        nearest = np.sqrt(np.minimum.reduce(_squared_norm(neighbours - start[:, None, :]), axis=1))
         tip = self.tip_fit_radius_px
         reach = np.minimum(1.5 * tip + 1.0 + _MARGIN_PX, nearest - 0.5 * tip)
         theta = np.concatenate([start, self._tip_ellipses[which]], axis=1)  # (L, 5): centre, Q_xx, Q_xy, Q_yy
         window = _Windows(crop, start, reach, neighbours, nearest)
         fitted = _centre_step(window, theta, start)
         # A fit that took a step and ended on a tip of the pin's least contrast places it.
-        moved = (fitted != start).any(axis=1)
+        moved = np.logical_or.reduce(fitted != start, axis=1)
         # (The contrast depends on the window's centre pixel alone: a fit that stayed on it keeps its contrast.)
-        again = moved & (np.rint(fitted) != np.rint(start)).any(axis=1)
+        again = moved & np.logical_or.reduce(np.rint(fitted) != np.rint(start), axis=1)
         moved[again] = self.windows.contrast(crop, fitted[again]) >= self._at_least[1, which[again]]
         if not moved.any():
             return positions

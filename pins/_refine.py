@@ -70,7 +70,7 @@ from scipy.spatial import cKDTree
 from .detect import DetectionParams
 from .disc import SensorDisc
 from ._flat import _pin_radius_px
-from ._identity import IDENTITY_NEIGHBOURS, keep_own_tips
+from ._identity import IDENTITY_NEIGHBOURS, keep_own_tips, squared_distances
 from ._follow import _GUESS_FRACTION, _Following
 from ._predict import _Prediction
 from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
@@ -437,9 +437,8 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         placed otherwise (not in `found`) never yields to a found one; ties: both yield.
         """
         neighbours = self._identity_index[found]  # (F, m)
-        gap = positions[neighbours] - positions[found][:, None, :]
-        near = _squared_norm(gap) < (_SAME_TIP_FRACTION * self.spacing_px) ** 2
-        if near.any():
+        near = squared_distances(positions, neighbours, positions[found]) < (_SAME_TIP_FRACTION * self.spacing_px) ** 2
+        if np.count_nonzero(near):  # (count_nonzero: `ndarray.any` costs more)
             rank = np.full(len(positions), -1.0)
             rank[found] = error
             yields = (near & (rank[neighbours] <= error[:, None])).any(axis=1)
