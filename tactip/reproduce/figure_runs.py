@@ -32,11 +32,10 @@ from pathlib import Path
 import numpy as np
 
 from _shared import map_pieces
+from tactip.reproduce.p002 import TAP_BUDGETS  # (002 Fig. 10's budgets: p002 sweeps them itself)
 
 __all__ = ["TAP_BUDGETS", "beta_sweep_rows", "fig5_sweep_rows", "fixation_rows", "lateral_rows", "run_with_figure_runs"]
 
-#: Mean-tap budgets of 002 Fig. 10 (the paper's grey shading of decision times; its optimum: 12 taps).
-TAP_BUDGETS = (2.0, 4.0, 8.0, 12.0)
 #: Lateral noise sigmas of 002 Fig. 11, mm (quick: two of them).
 SIGMAS_MM = (0.25, 0.5, 1.0, 2.0)
 QUICK_SIGMAS_MM = (0.5, 2.0)

@@ -93,6 +93,8 @@ THRESHOLDS = tuple(np.round(np.concatenate([np.arange(0.05, 0.9, 0.01), [0.9, 0.
 #: Paper 002 Sec. IV-C: Fig. 9's fixation is "the location class with lowest mean error after 12 taps" of the
 #: Fig. 10 sweep, mean taps.
 FIXATION_BUDGET_TAPS = 12.0
+#: Mean-tap budgets of Fig. 10 (the paper's grey shading of decision times; its optimum: 12 taps).
+TAP_BUDGETS = (2.0, 4.0, 8.0, FIXATION_BUDGET_TAPS)
 #: The variant row's policy: active perception at the fixation the station itself chose on held-out training
 #: taps (`calibration.fit_with_fixation`), what a station that never saw its test taps would use.
 STATION_FIXATION = "active (fixation from training taps)"
@@ -171,9 +173,7 @@ def fixation_from_sweep(environment, *, runs: int, seed: int, progress=None, map
 
 def sweep_rows(sweep) -> list[dict]:
     """002 Fig. 10's rows: ``{fixation_mm, tap_budget, width_error_mm, mean_taps}`` per fixation and budget
-    (`tactip.reproduce.figure_runs.TAP_BUDGETS`), the best threshold within each budget."""
-    from tactip.reproduce.figure_runs import TAP_BUDGETS
-
+    (`TAP_BUDGETS`), the best threshold within each budget."""
     rows = []
     for fixation, result in zip(sweep.fixations, sweep.results):
         for budget in TAP_BUDGETS:
