@@ -11,6 +11,8 @@ width_error_mm, ratio``) come from their own runs (`tactip.reproduce.figure_runs
 
 from __future__ import annotations
 
+import numpy as np
+
 from perception.choices import POLICIES
 
 from tactip.reproduce.figures import COLOURS, PAPER_STYLE, legend, new_figure, values
@@ -84,9 +86,14 @@ def _fig11(rows):
     for ax, key in zip(axes, ("ratio", "width_error_mm")):
         for policy in POLICIES:
             mine = sorted((r for r in rows if r["policy"] == policy), key=lambda r: r["sigma_mm"])
-            if mine:
-                ax.plot(values(mine, "sigma_mm"), values(mine, key), "o-", color=COLOURS[policy],
-                        label=f"{policy} (simulated)")
+            if not mine:
+                continue
+            label = f"{policy} (simulated)"
+            if key == "ratio" and not np.isfinite(values(mine, key)).any():
+                # A noise-free error of 0 mm (the policy judged every gap right) has no ratio: say so
+                # here rather than leave the policy out of A without a word (B draws its errors).
+                label = f"{policy}: no ratio, its noise-free error is 0 mm (B)"
+            ax.plot(values(mine, "sigma_mm"), values(mine, key), "o-", color=COLOURS[policy], label=label)
         ax.set_xlabel("lateral noise sigma: offsets uniform over [-sigma, sigma] (mm)")
     axes[0].plot(list(PAPER_LATERAL_RATIO), list(PAPER_LATERAL_RATIO.values()), "s", mfc="none", ms=8,
                  label="paper (text): <= 1.25 at 0.5 mm, 2 at 2 mm", **PAPER_STYLE)

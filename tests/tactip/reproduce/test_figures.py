@@ -139,6 +139,15 @@ def test_002_fig9_is_marked_a_fit_and_figs_10_11_need_their_runs(tmp_path):
     np.testing.assert_allclose(y, [0.1, 0.15, 0.3])
     for path in save_figures(figures, tmp_path, paper="002"):
         assert_png(path)
+    # A policy whose noise-free error is 0 mm has no ratio: panel A names it and says why, B draws its errors.
+    for r in fig11:
+        if r["policy"] == "active":
+            r["width_error_mm"], r["ratio"] = (0.0, None) if r["sigma_mm"] == 0 else (r["width_error_mm"], None)
+    figures = make_figures(report, {"fig11": fig11})
+    _, y = line(figures["fig11"], "active: no ratio, its noise-free error is 0 mm (B)", 0)
+    assert np.isnan(y).all()
+    _, y = line(figures["fig11"], "active (simulated)", 1)
+    np.testing.assert_allclose(y, [0.0, 0.15, 0.3])
 
 
 def test_003_fig7_bars_are_the_mean_over_seeds_each_seed_a_dot():
