@@ -440,11 +440,12 @@ def fit_torch(dataset: Dataset, *, n_locations: int = 11, min_taps_per_class: in
         # deviations keep the classes apart. The held-out loss chooses both, the input first.
         # (The directions tried are fitted on the taps trained on only: fitted on the held-out taps too, they
         # would hold part of those taps' noise and flatter their loss.)
-        directions = inputs == "directions" or inputs is None and imputation.basis.shape[1] <= x.shape[1] // 2
-        projections = ([None] if inputs != "directions" else []) + \
-            ([fit_low_rank_gaussian(x[train], imputation.basis.shape[1]).basis] if directions else [])
-        own_classes = [own for own, name in ((False, "pooled"), (True, "own class"))
-                       if deviations in (None, name)] if augment else [False]
+        # The given choice, else every one that applies (the directions only where they are few).
+        few = imputation.basis.shape[1] <= x.shape[1] // 2
+        projections = [None if name == "values" else fit_low_rank_gaussian(x[train], imputation.basis.shape[1]).basis
+                       for name in ([inputs] if inputs else INPUTS[:1 + few])]
+        own_classes = [name == "own class" for name in ([deviations] if deviations else DEVIATIONS)] if augment \
+            else [False]
         tried = [early_stopping(projection, own_class) for projection in projections for own_class in own_classes]
         _, projection, own_class, epochs, held_scores = min(tried, key=lambda t: t[0])
         if projection is not None:

@@ -2,10 +2,9 @@
 
 Each returns JSON-ready rows, drawn by `tactip.reproduce.figures` and saved beside the PNGs:
 
-- 002 Fig. 10 (`fixation_rows`): active perception at every fixation depth of the station's model,
-  the best width error within 2, 4, 8 and 12 mean taps (`perception.fixation_sweep`), on the same test
-  collection as Fig. 9; `tactip.reproduce.p002.run` makes this sweep itself (it gives Fig. 9 its
-  fixation, as the paper's), so `run_with_figure_runs` takes its rows from the report;
+- 002 Fig. 10: not here. `tactip.reproduce.p002.run` sweeps every fixation depth itself (it gives Fig. 9
+  its fixation, as the paper's: `p002.fixation_from_sweep`, rows by `p002.sweep_rows`), so
+  `run_with_figure_runs` takes those rows from the report's samples;
 - 002 Fig. 11 (`lateral_rows`): a test collection per lateral noise sigma (offsets uniform over
   [-sigma, sigma] mm, ``[protocol] lateral_jitter_mm``) tapped on the same simulated station, the model
   trained without noise; each policy's width error at 10 mean taps (as Fig. 9, at Fig. 9's fixation)
@@ -32,9 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from _shared import map_pieces
-from tactip.reproduce.p002 import TAP_BUDGETS  # (002 Fig. 10's budgets: p002 sweeps them itself)
 
-__all__ = ["TAP_BUDGETS", "beta_sweep_rows", "fig5_sweep_rows", "fixation_rows", "lateral_rows", "run_with_figure_runs"]
+__all__ = ["beta_sweep_rows", "fig5_sweep_rows", "lateral_rows", "run_with_figure_runs"]
 
 #: Lateral noise sigmas of 002 Fig. 11, mm (quick: two of them).
 SIGMAS_MM = (0.25, 0.5, 1.0, 2.0)
@@ -48,27 +46,6 @@ FIG5_OFFSETS_MM = tuple(np.round(np.arange(-1.0, 0.81, 0.1), 2))
 QUICK_FIG5_OFFSETS_MM = (-0.6, -0.4, -0.2, 0.0, 0.2, 0.4, 0.6)
 #: Thresholds whose learning curves make 004 Fig. 8.
 FIG8_THRESHOLDS = (0.5, 0.9)
-
-
-def fixation_rows(environment, *, runs: int, seed: int, progress=None, map_fn=None) -> list[dict]:
-    """002 Fig. 10: ``{fixation_mm, tap_budget, width_error_mm, mean_taps}`` per fixation and budget.
-
-    The sweep `tactip.reproduce.p002.run` makes to choose Fig. 9's fixation (`p002.fixation_from_sweep`,
-    `p002.sweep_rows`); `run_with_figure_runs` takes its rows from the report rather than sweeping again.
-
-    Parameters
-    ----------
-    environment : perception.VirtualEnvironment
-        The station's model and test collection.
-    runs : int
-        Monte Carlo runs per threshold and fixation.
-    seed : int
-    progress, map_fn : callable, optional
-        As `perception.fixation_sweep`.
-    """
-    from tactip.reproduce.p002 import fixation_from_sweep, sweep_rows
-
-    return sweep_rows(fixation_from_sweep(environment, runs=runs, seed=seed, progress=progress, map_fn=map_fn))
 
 
 def _policy_error(environment, fixation: int, runs: int, seed: int) -> dict:

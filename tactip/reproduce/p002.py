@@ -255,16 +255,16 @@ def run(*, quick: bool = False, seed: int = 0, progress=None, map_fn=None, data_
     widths = np.unique(environment.test.identity)
     at_fixation = model.location_class(environment.test.location) == fixation
     distinct = len(np.unique(environment.test.location[at_fixation]))
-    deep = ", ".join(f"{f:g} {e:.3f}" for f, e in zip(sweep.fixations, sweep.errors) if f >= 2.5)
+    deep = [(f, e) for f, e in zip(sweep.fixations, sweep.errors) if f >= 2.5]   # (where the width is legible)
+    deep = f"at {deep[0][0]:g} mm and deeper: " + ", ".join(f"{f:g} {e:.3f}" for f, e in deep) if deep else "none"
     notes = [f"{len(widths)} gaps {widths.min():g}-{widths.max():g} mm, depths {config.protocol.depth_step:g} mm apart "
              f"over {config.protocol.depth_min:g}-{config.protocol.depth_max:g} mm, one tap per depth and gap per "
              f"collection; histogram likelihood, {model.n_locations} depth classes; {runs} runs per threshold, "
              f"seed {seed}.",
              f"fixation {fixation_mm['active']:g} mm, as the paper chose it (Sec. IV-C): the depth class with the "
              f"lowest width error within {FIXATION_BUDGET_TAPS:g} mean taps (ties: the one reaching it in fewer mean "
-             f"taps) in the Fig. 10 sweep on the test "
-             f"collection ({runs} runs per threshold and fixation; errors, mm, at 2.75 mm and deeper: "
-             f"{deep}). It reads the test taps, as the paper did: 'active' is the paper's procedure.",
+             f"taps) in the Fig. 10 sweep on the test collection ({runs} runs per threshold and fixation; errors, "
+             f"mm, {deep}). It reads the test taps, as the paper did: 'active' is the paper's procedure.",
              f"variant '{STATION_FIXATION}': fixation {fixation_mm[STATION_FIXATION]:g} mm, chosen by the station on "
              "its held-out training taps (what a station that never saw its test taps would use); its held-out "
              "taps are never at a trained depth, the test taps always are, so it can rank the deep fixations "

@@ -18,15 +18,16 @@ def model():
     return fit_model(gap_dataset(seed=1, taps_per_class=4, **GRID), n_locations=6)
 
 
-def test_fixation_rows_are_the_sweeps_best_errors_within_each_budget(model):
+def test_fig10_rows_are_the_sweeps_best_errors_within_each_budget(model):
+    from tactip.reproduce.p002 import TAP_BUDGETS, THRESHOLDS, fixation_from_sweep, sweep_rows
+
     env = VirtualEnvironment(model, gap_dataset(seed=2, taps_per_class=10, **GRID))
-    rows = figure_runs.fixation_rows(env, runs=200, seed=3)
-    assert len(rows) == 6 * len(figure_runs.TAP_BUDGETS)
-    from tactip.reproduce.p002 import THRESHOLDS
+    rows = sweep_rows(fixation_from_sweep(env, runs=200, seed=3))
+    assert len(rows) == 6 * len(TAP_BUDGETS)
 
     sweep = fixation_sweep(env, thresholds=THRESHOLDS, runs=200, seed=3, max_taps=20)
     for fixation, result in zip(sweep.fixations, sweep.results):
-        for budget in figure_runs.TAP_BUDGETS:
+        for budget in TAP_BUDGETS:
             row, = [r for r in rows if r["fixation_mm"] == fixation and r["tap_budget"] == budget]
             k = result.best_within(budget)
             assert row["width_error_mm"] == result.mean_identity_error[k] and row["mean_taps"] <= max(budget, 1.0)
@@ -125,18 +126,24 @@ def test_002_figure_runs_share_the_station_the_reproduction_prepared(monkeypatch
         save_dataset(config.data_dir / "datasets" / "test.h5", test)
         save_model(config.perception.model, model)
 
-    def fixation_rows(environment, **options):
-        raise AssertionError("Fig. 10 swept again")
+    swept = []
+
+    def fixation_from_sweep(environment, **options):                   # counted: Fig. 10 is swept once
+        swept.append(options)
+        return sweep_once(environment, **options)
 
     def lateral_rows(config, model, test, **options):
         given["fig11"] = config.data_dir, test, options["fixation"]
         return [{"sigma_mm": 0.0}]
 
     monkeypatch.setattr(tactip.station.procedures, "prepare_model", prepare)
-    monkeypatch.setattr(figure_runs, "fixation_rows", fixation_rows)
+    import tactip.reproduce.p002 as p002
+
+    sweep_once = p002.fixation_from_sweep
+    monkeypatch.setattr(p002, "fixation_from_sweep", fixation_from_sweep)
     monkeypatch.setattr(figure_runs, "lateral_rows", lateral_rows)
     report, extra = figure_runs.run_with_figure_runs("002", quick=True, seed=0)
-    assert len(prepared) == 1
+    assert len(prepared) == 1 and len(swept) == 1        # the station prepared and Fig. 10 swept, once each
     from tactip.reproduce.p002 import STATION_FIXATION
 
     assert report.paper == "002"
