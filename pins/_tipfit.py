@@ -38,6 +38,7 @@ from numpy.linalg import _umath_linalg
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
+from ._kernels import compiled
 from ._window import _squared_norm
 
 __all__ = ["fit_tip_centres", "tip_shapes"]
@@ -136,11 +137,30 @@ def _free_fit(grey: np.ndarray, start: np.ndarray, radius_px: float, dark_pins: 
 
 
 class _Windows:
-    """The pixels round each tip: grey levels (N, P), coordinates (N, P) and which may count."""
+    """The pixels round each tip: grey levels (N, P), coordinates (N, P) and which may count.
+
+    Gathered when first asked for: `_centre_step`'s compiled kernel (`pins._kernels`) reads the
+    image itself, from the arguments kept as they were given.
+    """
+
+    _GATHERED = frozenset(("xy", "x", "y", "values", "usable"))
 
     def __init__(self, image, start, reach, neighbours, nearest):
+        self.image, self.start, self.neighbours, self.nearest = image, start, neighbours, nearest
+        self.reach = reach
+        self.half = int(np.ceil(reach.max())) + 1
+
+    def __getattr__(self, name):
+        # (Only called for an attribute not yet set: the gathered arrays, on first use.)
+        if name not in _Windows._GATHERED:
+            raise AttributeError(name)
+        self._gather()
+        return self.__dict__[name]
+
+    def _gather(self) -> None:
+        """The windows' coordinates, grey levels and usable pixels, as attributes."""
+        image, start, neighbours, nearest, half = self.image, self.start, self.neighbours, self.nearest, self.half
         height, width = image.shape
-        half = int(np.ceil(reach.max())) + 1
         offsets, flat = _disc_grid(half, width)
         # Whole pixels: the float anchor plus the offsets are the integer coordinates, exactly.
         anchor = np.rint(start)
@@ -167,7 +187,6 @@ class _Windows:
         own = np.add(apart[:, :, 0], apart[:, :, 1])  # (N, k, P), px^2
         usable = np.minimum.reduce(own, axis=1) > np.square(0.5 * nearest)[:, None]
         self.usable = usable if inside is None else inside & usable
-        self.reach = reach
 
 
 @functools.lru_cache(maxsize=8)
@@ -273,8 +292,25 @@ def _centre_step(window: _Windows, theta: np.ndarray, start: np.ndarray) -> np.n
 
     `theta` (N, 5) as there, its ellipses acceptable (`_ellipse_ok`; the caller checks them once);
     returns the centres (N, 2), px: each moved by its step where that stays finite and within
-    `_REACH_PX` of `start`, else as in `theta`.
+    `_REACH_PX` of `start`, else as in `theta`. By the compiled kernel (`pins._jit.centre_step`, one
+    call) unless ``TACTIP_KERNELS=numpy`` or Numba is missing (`pins._kernels`); else in NumPy.
     """
+    kernels = compiled()
+    # (The kernel gathers its own pixels; a window already gathered, by a caller that read its pixels,
+    # takes the NumPy step on them.)
+    if kernels is not None and "values" not in window.__dict__:
+        gx, gy = _disc_offsets(window.half)
+        image = np.ascontiguousarray(window.image)
+        return kernels.centre_step(image, np.ascontiguousarray(start, dtype=np.float64),
+                                   np.ascontiguousarray(window.reach, dtype=np.float64),
+                                   np.ascontiguousarray(window.neighbours, dtype=np.float64),
+                                   np.ascontiguousarray(window.nearest, dtype=np.float64),
+                                   np.ascontiguousarray(theta, dtype=np.float64), gx, gy)
+    return _centre_step_numpy(window, theta, start)
+
+
+def _centre_step_numpy(window: _Windows, theta: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """`_centre_step` in NumPy: the reference of the compiled kernel."""
     n, pixels = window.x.shape
     e = window.xy - theta[:, :2, None]  # (N, 2, P): each pixel from the centre, px
     ex, ey = e[:, 0], e[:, 1]

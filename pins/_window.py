@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._kernels import compiled
+
 __all__ = ["WindowCentroids"]
 
 # Sub-pixel steps per px of the window masks' centres and radii.
@@ -272,6 +274,26 @@ class WindowCentroids:
         return top, darkest, mean
 
     def _measure(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`measure`'s work: the compiled kernel (`pins._jit.window_measure`, one call) or, with
+        ``TACTIP_KERNELS=numpy`` or without Numba (`pins._kernels`), the NumPy reference."""
+        kernels = compiled()
+        if kernels is None:
+            return self._measure_numpy(image, points, radius_px)
+        return self._measure_compiled(kernels, image, points, radius_px)
+
+    def _measure_compiled(self, kernels, image: np.ndarray, points: np.ndarray,
+                          radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`_measure` by the compiled kernel `kernels.window_measure` (`kernels`: `pins._jit`)."""
+        image = np.ascontiguousarray(image)
+        self._layout(image.shape)  # (a ValueError for an image smaller than a window)
+        points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+        radius_px = np.ascontiguousarray(np.broadcast_to(radius_px, len(points)), dtype=np.float64)
+        return kernels.window_measure(image, points, radius_px, self.half_px, self.threshold_fraction, self.above_mean,
+                                      float(self.least_contrast), self._masks, self._n_phases, self._top, self._sides,
+                                      self._runs)
+
+    def _measure_numpy(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`_measure` in NumPy: the reference of the compiled kernel."""
         half = self.half_px
         n = len(points)
         if n == 0:
