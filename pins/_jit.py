@@ -1,10 +1,12 @@
 """Compiled kernels (Numba) of the tracker's hot paths, one call a pass: `pins._kernels` picks them.
 
 Each kernel is the NumPy reference it names, written as a loop over the windows: the same
-arithmetic, in float64 where the reference sums exact integers in float32 (the same sums), with
-the float32 threshold plane rounded as OpenBLAS's ``sgemm`` rounds it (fused multiply-adds in
-turn: `_plane_level`). Sums in another order differ in the last bits; the tests hold the kernels
-to the reference within 1e-9 px.
+arithmetic, with integer sums where the reference sums whole grey levels in float32 (exact there
+too), and the window's float32 threshold plane rounded as OpenBLAS's ``sgemm`` rounds it on this
+machine (``c0 + c1 x + c2 y`` by two fused multiply-adds, each rounded to float32; here each exact
+in float64, then rounded): the window measurements come out bit for bit the reference's. The tip
+fit's sums and its 8 x 8 solve run in another order than NumPy's and LAPACK's and differ in the
+last bits (~1e-14 px). The tests hold the kernels to the reference within 1e-9 px.
 
 ``cache=True``: compiled once per machine (a few seconds), then loaded from ``__pycache__``.
 """
@@ -23,34 +25,85 @@ _PHASES = 4  # `pins._window._PHASES`
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _plane_level(c0, c1, c2, gx, gy):
-    """``rint(c0 + c1 gx + c2 gy)`` of float32 coefficients as ``np.dot`` of float32 gives it (two fused
-    multiply-adds, each rounded to float32; here each exact in float64, then rounded), float64."""
-    first = np.float32(np.float64(c0) + np.float64(c1) * gx)
-    return np.rint(np.float64(np.float32(np.float64(first) + np.float64(c2) * gy)))
+def _corner(x, y, half, width, height):
+    """The window's corner (column, row) at the point (x, y), px, and whether the window fits in the
+    image (else the image's corner, (0, 0), as the reference measures it there)."""
+    side = 2 * half + 1
+    ax, ay = np.rint(x), np.rint(y)
+    if ax - half >= 0 and ay - half >= 0 and ax - half <= width - side and ay - half <= height - side:
+        return int(ax) - half, int(ay) - half, True
+    return 0, 0, False
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def window_measure(image, points, radius_px, half, threshold_fraction, above_mean, least_contrast,
-                   masks, n_phases, top, sides, runs):
+def _tip_and_sides(image, cx, cy, half):
+    """A window's tip (the mean of its five centre pixels) and the plane through the darkest runs of
+    `_SIDE_RUN` pixels along its sides (left, right, top, bottom; `pins._window`'s ``_sides``, the
+    runs end to end along the middle of each side): its level at the centre and its rise across half
+    the window (x, y), grey levels. Sums of whole grey levels: exact, as the reference's."""
+    side = 2 * half + 1
+    middle_x, middle_y = cx + half, cy + half
+    tip = (np.int64(image[middle_y, middle_x]) + np.int64(image[middle_y, middle_x - 1])
+           + np.int64(image[middle_y, middle_x + 1]) + np.int64(image[middle_y - 1, middle_x])
+           + np.int64(image[middle_y + 1, middle_x])) / 5.0
+    runs = side // _SIDE_RUN
+    first = (side - runs * _SIDE_RUN) // 2
+    darkest = np.empty(4, np.int64)  # left, right, top, bottom
+    for s in range(4):
+        least = np.int64(1) << 40
+        for run in range(runs):
+            summed = np.int64(0)
+            for j in range(_SIDE_RUN):
+                along = first + run * _SIDE_RUN + j
+                if s == 0:
+                    summed += image[cy + along, cx]
+                elif s == 1:
+                    summed += image[cy + along, cx + side - 1]
+                elif s == 2:
+                    summed += image[cy, cx + along]
+                else:
+                    summed += image[cy + side - 1, cx + along]
+            least = min(least, summed)
+        darkest[s] = least
+    background = np.float64(darkest[0] + darkest[1] + darkest[2] + darkest[3]) * (0.25 / _SIDE_RUN)
+    rise_x = np.float64(darkest[1] - darkest[0]) * (0.5 / _SIDE_RUN)
+    rise_y = np.float64(darkest[3] - darkest[2]) * (0.5 / _SIDE_RUN)
+    return tip, background, rise_x, rise_y
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def window_contrast(image, points, half):
+    """`pins._window.WindowCentroids.contrast`: the tips' contrast (N,), grey levels, of the windows at
+    `points` (N, 2), px, in the uint8 `image` (a window that does not fit: at the image's corner)."""
+    n = points.shape[0]
+    height, width = image.shape
+    out = np.empty(n)
+    for i in range(n):
+        cx, cy, _ = _corner(points[i, 0], points[i, 1], half, width, height)
+        tip, background, _, _ = _tip_and_sides(image, cx, cy, half)
+        out[i] = tip - background
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def window_measure(image, points, radius_px, half, threshold_fraction, above_mean, least_contrast):
     """`pins._window.WindowCentroids._measure` (its NumPy reference: `_measure_numpy`), a loop over the windows.
 
-    image (H, W) uint8; points (N, 2) float64, px; radius_px (N,) float64, px; the window's settings
-    (half side, threshold fraction, above the mean, least contrast); masks (radius x phase y x
-    phase x, P) uint8; n_phases; the five centre pixels `top` and the sides' runs `sides` (side, run,
-    pixel) as indices into a window's P pixels; runs per side. Returns the centroids (N, 2), px (NaN
-    where the window does not fit in the image or the point is not finite) and (area, contrast,
-    compactness) (3, N). A window that does not fit is measured at the image's corner, as there.
+    image (H, W) uint8; points (N, 2) float64, px; radius_px (N,) float64, px; the windows' settings
+    (half side, threshold fraction, above the mean, least contrast). Returns the centroids (N, 2), px
+    (NaN where the window does not fit in the image or the point is not finite) and (area, contrast,
+    compactness) (3, N). A window that does not fit is measured at the image's corner, as there. The
+    disc masks are the reference's (``_masks``): pixels within the quarter-px radius of the point's
+    quarter-px phase (squares of quarters: exact).
     """
     n = points.shape[0]
     height, width = image.shape
     side = 2 * half + 1
     pixels = side * side
-    n_radii = masks.shape[0] // (n_phases * n_phases)
-    middle_phase = n_phases // 2
+    widest = int((half + 0.5) * _PHASES)  # the masks' radii: 1 .. widest quarter px
     centres = np.empty((n, 2))
     measures = np.empty((3, n))
-    grey = np.empty(pixels)
+    across, dx2 = np.empty(side), np.empty(side)
     for i in range(n):
         px, py = points[i, 0], points[i, 1]
         if not (np.isfinite(px) and np.isfinite(py)):
@@ -58,69 +111,58 @@ def window_measure(image, points, radius_px, half, threshold_fraction, above_mea
             measures[0, i] = measures[1, i] = measures[2, i] = np.nan
             continue
         ax, ay = np.rint(px), np.rint(py)
-        fits = ax - half >= 0 and ay - half >= 0 and ax - half <= width - side and ay - half <= height - side
-        cx, cy = (int(ax) - half, int(ay) - half) if fits else (0, 0)
-        total = 0.0
-        for r in range(side):
-            for c in range(side):
-                value = np.float64(image[cy + r, cx + c])
-                grey[r * side + c] = value
-                total += value
-        tip = 0.0
-        for k in range(top.size):
-            tip += grey[top[k]]
-        tip /= top.size
-        # The darkest run of each side (left, right, top, bottom); the plane through them.
-        darkest = np.empty(4)
-        for s in range(4):
-            least = np.inf
-            for run in range(runs):
-                start = (s * runs + run) * _SIDE_RUN
-                summed = 0.0
-                for j in range(_SIDE_RUN):
-                    summed += grey[sides[start + j]]
-                least = min(least, summed)
-            darkest[s] = least
-        background = (darkest[0] + darkest[1] + darkest[2] + darkest[3]) * (0.25 / _SIDE_RUN)
-        rise_x = (darkest[1] - darkest[0]) * (0.5 / _SIDE_RUN)
-        rise_y = (darkest[3] - darkest[2]) * (0.5 / _SIDE_RUN)
+        cx, cy, fits = _corner(px, py, half, width, height)
+        tip, background, rise_x, rise_y = _tip_and_sides(image, cx, cy, half)
         contrast = tip - background
         shrink = _FLAT_RISE * contrast / np.sqrt(rise_x * rise_x + rise_y * rise_y)
         sloped = shrink < 1.0 and contrast > least_contrast
         positive = max(contrast, 0.0)
         lift = threshold_fraction * positive
         if above_mean:
+            total = np.int64(0)
+            for r in range(side):
+                for c in range(side):
+                    total += image[cy + r, cx + c]
             lift = min(max(lift, total / pixels - background), positive)
         level = background + lift
+        # The mask: the point's quarter-px phase (x, y) and its radius in quarter px (NaN: the widest).
+        phase_x, phase_y = np.rint((px - ax) * _PHASES) / _PHASES, np.rint((py - ay) * _PHASES) / _PHASES
+        quarter = np.rint(radius_px[i] * _PHASES)
+        if not quarter <= widest:  # (NaN too)
+            quarter = np.float64(widest)
+        elif quarter < 1.0:
+            quarter = 1.0
+        reach = (quarter / _PHASES) ** 2
+        # Each pixel weighs its grey level above the threshold, in whole grey levels (a flat threshold
+        # rounded, a sloped plane rounded pixel by pixel): integer sums, exact as the reference's.
         if sloped:
             factor = (1.0 - max(shrink, 0.0)) / half
             c0, c1, c2 = np.float32(level), np.float32(rise_x * factor), np.float32(rise_y * factor)
         else:
-            c0, c1, c2 = np.float32(np.rint(level)), np.float32(0.0), np.float32(0.0)
-        # The mask of the point's quarter-pixel phase and its radius (NaN: the widest).
-        qx = int(np.rint((px - ax) * _PHASES)) + middle_phase
-        qy = int(np.rint((py - ay) * _PHASES)) + middle_phase
-        quarter = np.rint(radius_px[i] * _PHASES)
-        if not quarter <= n_radii:  # (NaN too)
-            quarter = np.float64(n_radii)
-        elif quarter < 1.0:
-            quarter = 1.0
-        mask = masks[qx + n_phases * qy + n_phases * n_phases * (int(quarter) - 1)]
-        mass = sum_x = sum_y = sum_r2 = 0.0
+            c0 = c1 = c2 = np.float32(0.0)
+        flat = np.int64(np.rint(level))
+        # Per column: the plane's first fused multiply-add (c0 + c1 x, rounded to float32 as ``sgemm`` does;
+        # the product exact in float64) and the squared distance from the phase in x.
+        for c in range(side):
+            across[c] = np.float64(np.float32(np.float64(c0) + np.float64(c1) * (c - half)))
+            dx2[c] = (c - half - phase_x) ** 2
+        mass = sum_x = sum_y = sum_r2 = np.int64(0)
         for r in range(side):
-            gy = np.float64(r - half)
+            dy = r - half
+            dy2 = (dy - phase_y) ** 2
+            down = np.float64(c2) * dy
             for c in range(side):
-                k = r * side + c
-                if mask[k] == 0:
-                    continue
-                gx = np.float64(c - half)
-                weight = grey[k] - _plane_level(c0, c1, c2, gx, gy)
-                if weight > 0.0:
-                    mass += weight
-                    sum_x += weight * gx
-                    sum_y += weight * gy
-                    sum_r2 += weight * (gx * gx + gy * gy)
-        offset_x, offset_y = sum_x / mass, sum_y / mass
+                dx = c - half
+                threshold = flat
+                if sloped:
+                    threshold = np.int64(np.rint(np.float64(np.float32(across[c] + down))))
+                inside = np.int64(dy2 + dx2[c] <= reach)
+                weight = max(np.int64(image[cy + r, cx + c]) - threshold, 0) * inside
+                mass += weight
+                sum_x += weight * dx
+                sum_y += weight * dy
+                sum_r2 += weight * (dx * dx + dy * dy)
+        offset_x, offset_y = sum_x / mass, sum_y / mass  # (int64 / int64: float64, NaN for no mass)
         area = mass / (tip - level)
         spread = sum_r2 / mass - (offset_x * offset_x + offset_y * offset_y)
         measures[0, i] = area

@@ -167,6 +167,15 @@ class WindowCentroids:
         n = len(points)
         if n == 0:
             return np.empty(0)
+        kernels = compiled()
+        if kernels is not None:  # (the compiled kernel, `pins._jit.window_contrast`: one call)
+            image, points = self._kernel_arguments(image, points)
+            return kernels.window_contrast(image, points, self.half_px)
+        return self._contrast_numpy(image, points)
+
+    def _contrast_numpy(self, image: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """`contrast` in NumPy: the reference of the compiled kernel."""
+        n = len(points)
         bounds, view = self._view(image)
         corner = np.rint(points).astype(np.intp)
         corner -= self.half_px
@@ -284,13 +293,23 @@ class WindowCentroids:
     def _measure_compiled(self, kernels, image: np.ndarray, points: np.ndarray,
                           radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`_measure` by the compiled kernel `kernels.window_measure` (`kernels`: `pins._jit`)."""
-        image = np.ascontiguousarray(image)
-        self._layout(image.shape)  # (a ValueError for an image smaller than a window)
-        points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
-        radius_px = np.ascontiguousarray(np.broadcast_to(radius_px, len(points)), dtype=np.float64)
+        image, points = self._kernel_arguments(image, points)
+        if not (type(radius_px) is np.ndarray and radius_px.dtype == np.float64 and radius_px.shape == (len(points),)
+                and radius_px.flags.c_contiguous):
+            radius_px = np.ascontiguousarray(np.broadcast_to(radius_px, len(points)), dtype=np.float64)
         return kernels.window_measure(image, points, radius_px, self.half_px, self.threshold_fraction, self.above_mean,
-                                      float(self.least_contrast), self._masks, self._n_phases, self._top, self._sides,
-                                      self._runs)
+                                      float(self.least_contrast))
+
+    def _kernel_arguments(self, image: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`image` and `points` as the kernels are compiled for them: C-contiguous uint8 (H, W) and float64
+        (N, 2) (no copy when they are). Raises ValueError when the image is smaller than a window."""
+        if image.shape not in self._layouts:
+            self._layout(image.shape)
+        if not (image.flags.c_contiguous and image.dtype == np.uint8):
+            image = np.ascontiguousarray(image, dtype=np.uint8)
+        if not (type(points) is np.ndarray and points.dtype == np.float64 and points.flags.c_contiguous):
+            points = np.ascontiguousarray(points, dtype=np.float64)
+        return image, points.reshape(-1, 2)
 
     def _measure_numpy(self, image: np.ndarray, points: np.ndarray, radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`_measure` in NumPy: the reference of the compiled kernel."""
