@@ -48,6 +48,22 @@ commit before, 7 rounds each, MJPG 1.397 -> 1.302 (0.95; follow 0.92), mp4v 1.29
 as complex numbers (a view, a take, a view) ~9 us; below ~160 points the rows win (`pins._identity.gathered`).
 Counted calls include each Python function and each NumPy wrapper (`np.take`, `ndarray.any` are three).
 
+Session "speed8" (2026-11-29; load average 5-7; main f24c3ab against this session's code): compiled kernels
+(Numba, `pins._jit`) for the window measurements, the contrast alone and the tip fits' centre step, one call
+a pass. ``--against`` main, 5 rounds, tracker updates ms/frame CPU (median of the paired ratios): MJPG 1.306
+-> 0.875 (0.70; window measurements 0.383 -> 0.107, 0.29; tip fits 0.295 -> 0.169, 0.61; follow passes 0.648
+-> 0.381, 0.61, through their windows; snap to rest 0.097 -> 0.073, 0.79; recovery by blobs 0.99), mp4v 1.369
+-> 0.944 (0.66; 0.28; 0.56; 0.59; 0.75; 1.01). Lost and retired pins identical, positions within 1.3e-12 px
+(MJPG) and 1.1e-11 px (mp4v), 0 of 95280 pin-frames apart by more than 1e-6 px (the window measurements are
+the reference's bit for bit; the centre step's sums and 8 x 8 solve run in another order). ``--calls``,
+MJPG, per frame: calls 543 -> 503 (window measurements 158 -> 103: each measurement now ~24 Python-level calls
+round one kernel, the error state and the environment's choice of kernels among them; tip fits 89 -> 104,
+the kernel's arguments), operations 1706 -> 1209. What is left of the tracker's 0.875 ms/frame (MJPG): the
+follow passes' own code ~0.3 (`pins._follow`), the tip fits' own ~0.12 (`pins._recover`: predictions from
+neighbours, one pin per tip, kept own tips), snap to rest ~0.05, recovery by blobs 0.05, and the update's
+bookkeeping outside these parts ~0.2 (predictions, carried steps, learnt scatters, identities): a few hundred
+NumPy calls a frame in files this session did not own.
+
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C
