@@ -3,6 +3,11 @@
 All windows are gathered at once from the grey crop (a fancy index into its sliding-window view,
 as `numpy.lib.stride_tricks.sliding_window_view` makes) and processed as one (N, P) array,
 O(pins x window). `pins._refine` says how the centroids are used and judged.
+
+That NumPy code is the reference: unless ``TACTIP_KERNELS=numpy`` or Numba is missing
+(`pins._kernels`), `WindowCentroids.measure` and `WindowCentroids.contrast` run compiled kernels
+(`pins._jit`: the same arithmetic, a loop over the windows, bit for bit the same answers) in one
+call instead of a few dozen NumPy calls, whose fixed cost, not the pixels, set the time.
 """
 
 from __future__ import annotations
@@ -293,6 +298,8 @@ class WindowCentroids:
     def _measure_compiled(self, kernels, image: np.ndarray, points: np.ndarray,
                           radius_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`_measure` by the compiled kernel `kernels.window_measure` (`kernels`: `pins._jit`)."""
+        if len(points) == 0:
+            return np.empty((0, 2)), np.empty((3, 0))
         image, points = self._kernel_arguments(image, points)
         if not (type(radius_px) is np.ndarray and radius_px.dtype == np.float64 and radius_px.shape == (len(points),)
                 and radius_px.flags.c_contiguous):
