@@ -25,6 +25,25 @@ on seeds nobody tuned on (``--seeds 6-15``). Each bar, against the renderer's gr
              replay's rest positions within 0.5 px of detect's, one to one), and on a frame with no sensor
              (a blank frame; a dozen pins of a preset) both refuse with the same message.
 
+Figures (session 16's audit8, 2-core VM; seeds 0-5 tuned on, 6-35 held out; CPU per row in the table):
+- same, every preset: met on seeds 16-35 (1.5 min); on 6-15 radial-led-120 loses 1 of 120 on seeds 6 and 8
+  (a faint tip by an LED reflection, in the brightest tenth of backgrounds), every other preset 0;
+- phenomena, seeds 6-15 (5.5 min): white-dark-331, radial-120, tactip-331 meet every bar; radial-led-120
+  meets the count (120/120), swaps (0), contacts (8/8 slides, 6/6 taps) but loses 1-2 pins on still
+  frames on 8 of 10 seeds (16-25: 3 of 10; 0-5: seed 5) and 1 after the return on seeds 8 and 10 (the
+  same faint pins); on tuned seed 1 one faint pin ends 1.8 px off its rest position;
+- missing, seeds 6-15 (1 min): every drop 0.000 (both decide every tap right); one tap per decision:
+  mean drops histogram 0.020, Gaussian 0.011, torch -0.001;
+- scale, every preset, seeds 6-15 (with agree: 6 min): detect = replay on the same frame, calibrate
+  (three frames averaged) within 1.18 % (radial-led-120; small-pad-100 1.13 %, the others <= 0.25 %);
+  `tactip calibrate --sensor NAME` on the simulated station within 1.12 % of detect;
+- agree, every preset, seeds 6-15: polarity and pins the same everywhere; the no-sensor frames refused
+  by both with one message on every seed.
+The mends behind these figures (before -> after): replay's pitch from the pin field, not the tracker's
+windows (radial-led-120 seed 6: 2.13 % -> 1.18 %); the simulated station filming the named preset
+(calibrate 55-86 % off -> <= 1.12 %); a borrowed disc's lattice must be regular (a dozen bright pins taken
+for 58-154 dark markers on seeds 5, 8, 15 of 0-15 -> refused).
+
 Run: .venv/bin/python bench/bench_issue20_bars.py [--bars same,phenomena,missing,scale,agree] [--seeds 6-15]
      [--presets a,b] [--phenomena-presets radial-led-120,white-dark-331,radial-120,tactip-331]
      [--missing-seeds 6-9] [--models histogram,gaussian,torch]
