@@ -17,6 +17,18 @@ For each preset and seed, against the renderer's ground truth (`tactip.sim`):
 Bars (issue 20): no pin lost on the same or still frames, zero swaps, all pins within 1 px after the
 return, contacts found = rendered, the radial count within 1 %.
 
+Figures on held-out seeds 6-15 (session 16's audit8, main f24c3ab, 2-core VM; 5-10 s CPU per preset and
+seed; seeds 0-5 were tuned on and meet every bar): white-dark-331, radial-120 and tactip-331 meet every
+bar on every seed (found = true, no spurious; same 0; still 0 lost, none retired; 0 swaps; after the
+return 0 pins > 1 px, none lost; slides 8/8, taps 6/6; radial-120's count 120/120). radial-led-120: the
+count 120/120 with no spurious pin, 0 swaps, slides 8/8 and taps 6/6 on every seed, but pins are lost at
+rest: same 1 on seeds 6 and 8, still max 1-2 lost on 8 of 10 seeds (6-10, 12, 14, 15; none retired), and
+after the return 1 pin lost on seeds 8 and 10 (none > 1 px). The pins lost are faint tips beside an LED
+reflection whose windowed contrast at rest, one noisy frame, is near 0 or negative (-5.5 to 33.8 grey
+levels over seeds 0-15 for the pin at (259.8, 276.2) px; the median pin's 45-50): the tracker's bounds
+on a tip (half its contrast and area at rest, `pins._refine`) then fail on its own rest frame
+(`bench/bench_issue20_bars.py`, the lead's report of audit8).
+
 Run: .venv/bin/python bench/bench_phenomena.py [--presets radial-led-120,white-dark-331] [--seeds 0,1,2]
 """
 

@@ -65,7 +65,7 @@ def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, r
 
 
 def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: float, sensor, pins_on_pad,
-             pad_diameter_mm, mm_per_px, expected_pins, rest_frame: int) -> dict:
+             pad_diameter_mm, mm_per_px, expected_pins, rest_frame: int, pitch_positions=None) -> dict:
     """Scale, feature pins, rest-frame check and contacts of a replay; every problem becomes a warning.
 
     Returns a dict: ``scale`` (`pins.PadScale` or None with a calibration), ``mm_per_px``,
@@ -74,6 +74,8 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     its direction), ``warnings`` and ``tap_thresholds_px`` (high, low).
 
     Contacts separated by any rest are separate, however short the rest: no quiet frame is bridged.
+    The pin pitch of the scale is measured on ``pitch_positions`` ((M, 2) px: the rest frame's pin field,
+    as `tactip detect` and `tactip calibrate` measure it), else on the tracked rest positions.
     """
     warnings = list(track.warnings)
     rest, disc, displacements = track.rest_positions, track.disc, track.displacements
@@ -87,7 +89,7 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
         scale_mm_per_px, selected = float(calibration.mm_per_px), np.asarray(calibration.selected_pins)
     else:
         try:  # the rule detect and calibrate apply too
-            scale = sensor_scale(rest, sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
+            scale = sensor_scale(rest if pitch_positions is None else pitch_positions, sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
                                  mm_per_px=mm_per_px, expected_pins=expected_pins)
         except (PinsError, ValueError) as exc:
             pad = pad_diameter_mm or DEFAULT_PAD_DIAMETER_MM

@@ -347,6 +347,7 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
                          sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
                          mm_per_px=mm_per_px, expected_pins=expected_pins, rest_frame=int(rest_frame))
             start = _Start(params=params, expected_pins=expected_pins, calibration=calibration, wrap=wrap_windows)
+            plan.start = start
             try:
                 track = frames_to_features(reader, start=start, rest_frame=int(rest_frame), selected=plan.selected,
                                            contacts=plan.contacts, n_samples=int(n_samples), progress=progress,
@@ -364,10 +365,12 @@ class _Plan:
     def __init__(self, **options):
         self.options = options
         self.analysis: dict = {}
+        self.start = None  # the `_Start` of the rest frame: its pin field's centres give the pitch
 
     def selected(self, track) -> np.ndarray:
         """The feature pins (the analysis is made here, once the pins are tracked)."""
-        self.analysis = analyse(track, **self.options)
+        centres = getattr(self.start, "centres", None)
+        self.analysis = analyse(track, pitch_positions=centres, **self.options)
         return self.analysis["selected"]
 
     def contacts(self, track) -> list:
@@ -411,20 +414,26 @@ class _Start:
         # Without parameters the polarity is decided from the rest frame, as `tactip detect` does.
         self.params = calibration.detection if calibration is not None else params
         self.expected_pins, self.calibration, self.wrap = expected_pins, calibration, wrap
+        #: The rest frame's pin field centres, px (None with a calibration, or before the start): the
+        #: pins `tactip detect` reports, whose pitch gives the scale (the tracker's rest positions are its
+        #: windows' fixed points, up to 0.4 px off them on a reflection's flank).
+        self.centres = None
 
     def __call__(self, image):
         """(tracker, rest positions, pins found, detection params, field line, warnings) of the rest frame."""
         warnings: list[str] = []
         started = _start(image, params=self.params, expected_pins=self.expected_pins, calibration=self.calibration,
                          warnings=warnings)
-        tracker = started[0]
+        tracker, self.centres = started[0], started[5]
+        started = started[:5]
         if self.wrap is not None and tracker.windows is not None:  # e.g. measured with other videos' windows
             tracker.windows = self.wrap(tracker.windows)
         return (*started, warnings)
 
 
 def _start(image, *, params, expected_pins, calibration, warnings):
-    """The tracker started on the rest frame: (tracker, rest positions, pins found, detection params, field line).
+    """The tracker started on the rest frame: (tracker, rest positions, pins found, detection params, field line,
+    the pin field's centres (None with a calibration)).
 
     Without a calibration the pins are the rest frame's pin field (`pins.find_pin_field`: the blobs
     that form the pin lattice, the rim ring's glare, specks and skin texture rejected); its
@@ -437,7 +446,7 @@ def _start(image, *, params, expected_pins, calibration, warnings):
 
         tracker = PinTracker(detection=params, disc=calibration.disc)
         rest = tracker.start(image, pins=place_reference_pins(calibration, image))
-        return tracker, rest, len(rest), params, "the calibration's pins"
+        return tracker, rest, len(rest), params, "the calibration's pins", None
     # Default parameters are no hint: the field search finds its own (polarity apart).
     hint = None if params is None or params == DetectionParams(dark_pins=params.dark_pins) else params
     field = find_pin_field(image, expected_pins=expected_pins, params=hint,
@@ -445,4 +454,4 @@ def _start(image, *, params, expected_pins, calibration, warnings):
     tracker = PinTracker(detection=field.params, disc=field.disc)
     rest = tracker.start(image, field.centres)
     line = field.summary(pitch=False) + ("; dark markers on a light membrane" if field.params.dark_pins else "")
-    return tracker, rest, field.count, field.params, line  # the pitch: on the scale's line
+    return tracker, rest, field.count, field.params, line, field.centres  # the pitch: on the scale's line

@@ -14,7 +14,7 @@ import numpy as np
 from tactip.errors import TactipError
 from tactip.sim.contact import Contact
 from tactip.sim.gel import SyntheticGel
-from tactip.sim.presets import GEL_PRESETS
+from tactip.sim.presets import GEL_PRESETS, PRESETS
 from tactip.sim.synthetic import SyntheticTacTip
 
 __all__ = ["SimulatedCamera"]
@@ -37,8 +37,9 @@ class SimulatedCamera:
         Seed of the sensor (pin layout and noise).
     preset : str
         A flat gel's preset (`tactip.sim.GEL_PRESETS`, e.g. "gelsight-mini") to film instead of a
-        TacTip of ``pins`` pins ("" or any other name: the TacTip). A gap in the plate is not
-        modelled on a flat gel: its frames show the press only.
+        TacTip of ``pins`` pins, or a TacTip's (`tactip.sim.PRESETS`, e.g. "radial-led-120": its own
+        pins, layout and look, ``noise_sigma`` as given); "" or any other name: the TacTip of ``pins``
+        pins. A gap in the plate is not modelled on a flat gel: its frames show the press only.
     """
 
     def __init__(self, *, pins: int = 331, frame_rate: float = 20.0, tap_speed_mm_s: float = 20.0,
@@ -46,6 +47,8 @@ class SimulatedCamera:
                  preset: str = ""):
         if preset in GEL_PRESETS:
             self.sensor = SyntheticGel.from_preset(preset, seed=seed)
+        elif preset in PRESETS:  # the named TacTip (its layout, pad and look), with the station's noise
+            self.sensor = SyntheticTacTip.from_preset(preset, noise_sigma=noise_sigma, seed=seed)
         else:
             self.sensor = SyntheticTacTip(pins=pins, noise_sigma=noise_sigma, seed=seed)
         self.frame_rate = float(frame_rate)
