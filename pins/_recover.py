@@ -194,8 +194,19 @@ class _Recovery:
         theta = np.concatenate([start, self._tip_ellipses[which]], axis=1)  # (L, 5): centre, Q_xx, Q_xy, Q_yy
         window = _Windows(crop, start, reach, neighbours, nearest)
         fitted = _centre_step(window, theta, start)
-        # A fit that took a step and ended on a tip of the pin's least contrast places it.
+        # A fit that took a step and ended on a tip of the pin's least contrast places it, unless a neighbour is
+        # expected (placed, or missing where its neighbours put it) within two tip radii of it: the tips overlap,
+        # one blob, on which a fit of one tip lands anywhere (issue 20: radial-led-120 slides, three tips squeezed
+        # within 4 px, of 2 px radius; fitted pins landed on a missing neighbour's tip).
         moved = np.logical_or.reduce(fitted != start, axis=1)
+        if not moved.any():
+            return positions
+        missing = np.flatnonzero(np.isnan(positions[:, 0]))
+        expected = positions.copy()
+        expected[missing] = self._predict_from_neighbours(positions, missing, last_seen)
+        with np.errstate(invalid="ignore"):
+            moved &= ~(np.fmin.reduce(_squared_norm(expected[around] - self.origin - fitted[:, None, :]), axis=1)
+                       < self._overlap_px[which] ** 2)
         # (The contrast depends on the window's centre pixel alone: a fit that stayed on it keeps its contrast.)
         again = moved & np.logical_or.reduce(np.rint(fitted) != np.rint(start), axis=1)
         moved[again] = self.windows.contrast(crop, fitted[again]) >= self._at_least[1, which[again]]
@@ -208,9 +219,7 @@ class _Recovery:
         self._one_pin_per_tip(positions, which, _squared_norm(fitted - start))
         # ... nor any pin expected nearer to it (`pins._identity`; a missing pin where its neighbours put it):
         # a faint tip fitted on a slide's squeezed skin may be its lost neighbour's (issue 20).
-        missing = np.flatnonzero(np.isnan(positions[:, 0]))
-        expected = positions.copy()
-        expected[missing] = self._predict_from_neighbours(positions, missing, last_seen)
+        expected[which] = np.where(np.isnan(positions[which]), start, fitted)
         keep_own_tips(positions, which, start, expected, self._identity_index)
         return positions
 

@@ -457,7 +457,8 @@ class PinTracker:
             # would widen the detection to most of the disc; they come back by their own search.
             before = positions
             positions = refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted)
-            positions = kept_on_own_tips(before, positions, np.where(np.isfinite(tracked), tracked, filled), guess,
+            # (A missing pin is expected at its guess, or where lost at its prediction: `filled`.)
+            positions = kept_on_own_tips(before, positions, np.where(np.isfinite(tracked), tracked, filled), filled,
                                          refiner._identity_index)
         # Pins just seen, on a sloped background at rest (a veil's or a reflection's flank, which their
         # windows weigh as tip), and missing now: fitted as opaque ellipses where their tips show.

@@ -106,10 +106,12 @@ def test_slides_swap_no_identity():
     assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (1, 2))
 
 
-@pytest.mark.xfail(reason="issue 20's bar, not yet met on every seed: radial-led-120 seed 5 puts 6 pin-frames on "
-                          "another pin's tip through the two slides (0 on seeds 0-4)", strict=False)
 def test_slides_swap_no_identity_on_seed_5():
-    # The seed the bar still fails on, kept visible in the report (`-ra`) rather than left out of the test above.
+    # Seed 5 of the bar: three tips on one spoke squeezed within 4 px (tips of 2 px radius) ahead of the slide.
+    # A faint tip fitted on that blob (`fit_tips`) went to a pin whose missing neighbour was expected within two
+    # tip radii of the fit, and a blob detected there (`recover`) to a pin whose lost neighbour was expected
+    # nearer (recovery's identity test saw no lost pin's prediction): 6 pin-frames on another pin's tip on main
+    # f24c3ab, 0 now (seeds 0-4: 0 before and after; held-out seeds 6-9: 2/1/0/5 -> 2/1/0/0).
     assert _track_slides("radial-led-120", 5)[0] == 0
 
 
