@@ -5,10 +5,14 @@ Recovery (`Refiner.recover`, at a rate `PinTracker` bounds). The frame's blobs a
 (`match_to_blobs`; no blob: lost), and blobs no pin claimed are assigned to lost pins one-to-one
 (Hungarian method, `scipy.optimize.linear_sum_assignment`) within the same gate around each lost
 pin's predicted position (its rest position moved by the median displacement of its tracked
-neighbours). Gates below half the pin spacing and one-to-one assignments keep identities.
+neighbours). Gates below half the pin spacing and one-to-one assignments keep identities; a pin that
+takes a blob keeps it only where no other pin is expected nearer (`pins._identity`; `PinTracker`
+expects a lost pin at its prediction there, as the follow passes do).
 
 Fitting (`Refiner.fit_tips`, every frame, for the few pins just lost on a sloped background): tips
-that their windows lose are fitted as opaque ellipses where their windows show a tip.
+that their windows lose are fitted as opaque ellipses where their windows show a tip. A fit is not
+placed where another pin is expected within two tip radii (the tips overlap: one blob, on which a fit
+of one tip lands anywhere; issue 20's slides).
 
 `match_to_blobs` and the Hungarian assignment are plain functions; `_Recovery` holds the steps that
 use them; `pins._refine.Refiner` inherits it and sets the state it reads.
@@ -158,7 +162,8 @@ class _Recovery:
         (`pins._tipfit._centre_step`; on radial-led-120's tap, seeds 0-11, three steps tracked as many
         pins with an RMSE max of 0.26 px against 0.23 with one). It is placed where the fit ends when the fit took its step (a
         failed fit keeps its start) and the window there shows its least contrast too, unless a
-        neighbour sits on the same tip (`_one_pin_per_tip`).
+        neighbour sits on the same tip (`_one_pin_per_tip`) or is expected (placed, or missing where its
+        neighbours put it) within two of the pin's tip radii at rest: their tips overlap in one blob.
 
         Parameters
         ----------
