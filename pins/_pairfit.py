@@ -1,0 +1,141 @@
+"""Two overlapping tips parted by a fit of two discs (issue 20: windows lagging on squeezed skin).
+
+Ahead of a slide the skin squeezes tips together until they overlap: one blob, on which a window
+(a centroid) settles between the two tips, nearer the neighbour's when it lags. Here the blob is
+modelled as what the camera sees::
+
+    m(x) = b0 + b1 x + b2 y + A * (1 - (1 - c1(x)) (1 - c2(x)))
+
+two opaque discs of the tips' radius at rest (soft edges: a logistic of the distance beyond the
+radius, `_EDGE_PX`) over a plane, their union drawn as one level (a renderer draws overlapping
+tips as the brighter one). The linear parameters are solved in closed form for each pair of
+centres, and the centres by damped Gauss-Newton, all pairs at once as (L, P) arrays. The blob's
+two ends fix both centres where one centroid cannot.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+_EDGE_PX = 0.6
+_PASSES = 4
+_DAMPING = 1e-3
+_MARGIN_PX = 2.0
+
+
+def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radius_px: float,
+                  others: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centres of pairs of overlapping tips, fitted as two discs over a plane: (L, 2), (L, 2) px (NaN: failed).
+
+    Parameters
+    ----------
+    crop : (h, w) ndarray of uint8
+        Bright pins.
+    first, second : (L, 2) ndarray
+        Starting centres (x, y) of each pair's two tips, px in `crop`.
+    radius_px : float
+        The tips' radius, px.
+    others : (L, k, 2) ndarray
+        Other pins expected nearby, px in `crop` (NaN: none): pixels nearer to them than to the pair are left out.
+    """
+    middle = 0.5 * (first + second)
+    half = int(np.ceil(np.nanmax(0.5 * np.linalg.norm(first - second, axis=1)) + radius_px + _MARGIN_PX))
+    offsets = np.arange(-half, half + 1)
+    gx, gy = np.meshgrid(offsets, offsets)
+    gx, gy = gx.ravel(), gy.ravel()
+    corner = np.rint(middle).astype(np.intp)
+    x = corner[:, :1] + gx  # (L, P)
+    y = corner[:, 1:] + gy
+    h, w = crop.shape
+    inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
+    values = crop[np.clip(y, 0, h - 1), np.clip(x, 0, w - 1)].astype(np.float64)
+    xf, yf = x.astype(np.float64), y.astype(np.float64)
+
+    def squared(points):  # (L, 2) -> (L, P), px^2
+        dx, dy = xf - points[:, :1], yf - points[:, 1:]
+        dx *= dx
+        dy *= dy
+        dx += dy
+        return dx
+
+    def distance(points):  # (L, 2) -> (L, P)
+        return np.sqrt(squared(points))
+
+    near = np.minimum(squared(first), squared(second))
+    keep = inside & (near <= (radius_px + _MARGIN_PX) ** 2)
+    with np.errstate(invalid="ignore"):
+        closest = np.fmin.reduce([squared(others[:, j]) for j in range(others.shape[1])], axis=0)
+        keep &= ~(closest < near)
+    weight = keep.astype(np.float64)
+    mu = np.concatenate([first, second], axis=1)  # (L, 4)
+    for _ in range(_PASSES):
+        d1, d2 = distance(mu[:, :2]), distance(mu[:, 2:])
+        c1 = 1.0 / (1.0 + np.exp(np.clip((d1 - radius_px) / _EDGE_PX, -50, 50)))
+        c2 = 1.0 / (1.0 + np.exp(np.clip((d2 - radius_px) / _EDGE_PX, -50, 50)))
+        cover = 1.0 - (1.0 - c1) * (1.0 - c2)
+        design = np.stack([np.ones_like(xf), xf - middle[:, :1], yf - middle[:, 1:], cover], axis=2)  # (L, P, 4)
+        weighted = np.swapaxes(design * weight[..., None], 1, 2)  # (L, 4, P)
+        normal = weighted @ design + 1e-6 * np.eye(4)
+        beta = np.linalg.solve(normal, weighted @ values[..., None])[..., 0]
+        residual = values - (design @ beta[..., None])[..., 0]
+        amplitude = beta[:, 3:]
+        # d cover / d mu: (1 - c_other) * c (1 - c) / edge * (x - mu) / d
+        with np.errstate(invalid="ignore", divide="ignore"):
+            g1 = amplitude * (1.0 - c2) * c1 * (1.0 - c1) / _EDGE_PX / np.maximum(d1, 1e-6)
+            g2 = amplitude * (1.0 - c1) * c2 * (1.0 - c2) / _EDGE_PX / np.maximum(d2, 1e-6)
+        jac = np.stack([g1 * (xf - mu[:, :1]), g1 * (yf - mu[:, 1:2]), g2 * (xf - mu[:, 2:3]), g2 * (yf - mu[:, 3:])],
+                       axis=2)
+        weighted = np.swapaxes(jac * weight[..., None], 1, 2)  # (L, 4, P)
+        jtj = weighted @ jac
+        jtj += _DAMPING * np.einsum("lii->li", jtj)[:, :, None] * np.eye(4) + 1e-9 * np.eye(4)
+        step = np.linalg.solve(jtj, weighted @ residual[..., None])[..., 0]
+        mu = mu + np.clip(step, -1.5, 1.5)
+    bad = ~np.isfinite(mu).all(axis=1) | (beta[:, 3] <= 0)
+    mu[bad] = np.nan
+    return mu[:, :2], mu[:, 2:]
+
+
+def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected: np.ndarray) -> np.ndarray:
+    """Placed pins whose tips overlap a neighbour's (expected within two tip radii) moved onto a fit of the two tips.
+
+    `refiner`: the `pins._refine.Refiner`; `positions` (N, 2) px (NaN: missing), `expected` (N, 2) px where
+    every pin is expected (missing ones at their guesses or predictions). Returns `positions` or a copy, px.
+    """
+    at = np.where(np.isfinite(positions), positions, expected)
+    placed = np.flatnonzero(np.isfinite(positions[:, 0]))
+    if not placed.size:
+        return positions
+    around = refiner._window_neighbours[:, placed].T  # (L, k)
+    gap = np.sqrt(_sq(at[around] - at[placed][:, None, :]))
+    with np.errstate(invalid="ignore"):
+        nearest = np.nanargmin(np.where(np.isfinite(gap), gap, np.inf), axis=1)
+    rows = np.arange(placed.size)
+    close = gap[rows, nearest] < refiner._overlap_px[placed]
+    if not close.any():
+        return positions
+    first, second = placed[close], around[rows[close], nearest[close]]
+    # One fit per pair.
+    key = np.minimum(first, second) * len(positions) + np.maximum(first, second)
+    _, unique = np.unique(key, return_index=True)
+    first, second = first[unique], second[unique]
+    neighbours = np.concatenate([refiner._window_neighbours[:, first].T, refiner._window_neighbours[:, second].T], axis=1)
+    others = at[neighbours] - refiner.origin
+    others[(neighbours == first[:, None]) | (neighbours == second[:, None])] = np.nan
+    start1, start2 = at[first] - refiner.origin, at[second] - refiner.origin
+    fit1, fit2 = fit_tip_pairs(crop, start1, start2, refiner.tip_fit_radius_px, others)
+    gate = refiner.gate_px ** 2
+    with np.errstate(invalid="ignore"):
+        ok = (_sq(fit1 - start1) <= gate) & (_sq(fit2 - start2) <= gate)
+        ok &= _sq(fit1 - start1) + _sq(fit2 - start2) <= _sq(fit1 - start2) + _sq(fit2 - start1)
+        ok &= _sq(fit1 - fit2) >= (0.5 * refiner.tip_fit_radius_px) ** 2
+    if not ok.any():
+        return positions
+    positions = positions.copy()
+    positions[first[ok]] = fit1[ok] + refiner.origin
+    both = ok & np.isfinite(positions[second, 0])
+    positions[second[both]] = fit2[both] + refiner.origin
+    return positions
+
+
+def _sq(v: np.ndarray) -> np.ndarray:
+    return v[..., 0] ** 2 + v[..., 1] ** 2
