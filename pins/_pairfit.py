@@ -21,6 +21,7 @@ _EDGE_PX = 0.6
 _PASSES = 4
 _DAMPING = 1e-3
 _MARGIN_PX = 2.0
+_OTHERS = 4  # other pins nearest a pair whose cells bound its pixels
 
 
 def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radius_px: float,
@@ -63,9 +64,22 @@ def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radiu
 
     near = np.minimum(squared(first), squared(second))
     keep = inside & (near <= (radius_px + _MARGIN_PX) ** 2)
+    # Only the few others nearest the pair can reach its pixels (each a pass over the (L, P) arrays).
     with np.errstate(invalid="ignore"):
-        closest = np.fmin.reduce([squared(others[:, j]) for j in range(others.shape[1])], axis=0)
+        reach = _sq(others - middle[:, None, :])
+        order = np.argsort(np.where(np.isfinite(reach), reach, np.inf), axis=1)[:, :_OTHERS]
+        others = np.take_along_axis(others, order[..., None], axis=1)
+        closest = squared(others[:, 0])
+        for j in range(1, others.shape[1]):
+            np.fmin(closest, squared(others[:, j]), out=closest)
         keep &= ~(closest < near)
+    # Only the kept pixels (two discs' worth of a square patch, about a third of it) go on: each pair's first,
+    # padded to the most any pair keeps.
+    most = int(np.count_nonzero(keep, axis=1).max())
+    if most == 0:
+        return np.full_like(first, np.nan), np.full_like(second, np.nan)
+    order = np.argsort(~keep, axis=1, kind="stable")[:, :most]
+    keep, values, xf, yf = (np.take_along_axis(v, order, axis=1) for v in (keep, values, xf, yf))
     weight = keep.astype(np.float64)
     mu = np.concatenate([first, second], axis=1)  # (L, 4)
     for _ in range(_PASSES):
