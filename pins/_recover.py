@@ -204,17 +204,17 @@ class _Recovery:
         # one blob, on which a fit of one tip lands anywhere (issue 20: radial-led-120 slides, three tips squeezed
         # within 4 px, of 2 px radius; fitted pins landed on a missing neighbour's tip).
         moved = np.logical_or.reduce(fitted != start, axis=1)
+        # (The contrast depends on the window's centre pixel alone: a fit that stayed on it keeps its contrast.)
+        again = moved & np.logical_or.reduce(np.rint(fitted) != np.rint(start), axis=1)
+        moved[again] = self.windows.contrast(crop, fitted[again]) >= self._at_least[1, which[again]]
         if not moved.any():
             return positions
         missing = np.flatnonzero(np.isnan(positions[:, 0]))
         expected = positions.copy()
         expected[missing] = self._predict_from_neighbours(positions, missing, last_seen)
-        with np.errstate(invalid="ignore"):
-            moved &= ~(np.fmin.reduce(_squared_norm(expected[around] - self.origin - fitted[:, None, :]), axis=1)
-                       < self._overlap_px[which] ** 2)
-        # (The contrast depends on the window's centre pixel alone: a fit that stayed on it keeps its contrast.)
-        again = moved & np.logical_or.reduce(np.rint(fitted) != np.rint(start), axis=1)
-        moved[again] = self.windows.contrast(crop, fitted[again]) >= self._at_least[1, which[again]]
+        # (NaN, a neighbour expected nowhere, is left out by fmin and compares False.)
+        moved &= ~(np.fmin.reduce(_squared_norm(expected[around] - self.origin - fitted[:, None, :]), axis=1)
+                   < self._overlap_px[which] ** 2)
         if not moved.any():
             return positions
         positions = positions.copy()
