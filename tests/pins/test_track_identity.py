@@ -250,3 +250,22 @@ def test_windows_lagging_between_overlapping_tips_are_parted_by_a_fit_of_both():
     assert lost <= 120
     # Back at rest every visible pin is found within 1 px of its true centre.
     assert (np.linalg.norm(positions - truth, axis=1)[visible] <= 1.0).all()
+
+
+@pytest.mark.parametrize("name", ["radial-led-120", "tactip-331"])
+def test_fitting_overlapping_tips_leaves_a_still_pad_as_it_was(name):
+    # At rest no two tips overlap: `part_overlaps` fits nothing, and a still pad (fresh camera noise every frame)
+    # is tracked exactly as without it, no pin lost.
+    s = preset_sensor(name, 0)
+    s.reseed_noise(0)
+    rest = s.render()
+    drawn = np.flatnonzero(rest.visible | rest.partial)
+    trackers = [PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc),
+                           part_overlaps=part) for part in (False, True)]
+    for tracker in trackers:
+        tracker.start(rest.image, pins=rest.centres[drawn])
+    for _ in range(8):
+        image = s.render().image
+        plain, parted = (tracker.update(image) for tracker in trackers)
+        assert np.array_equal(plain, parted, equal_nan=True)
+        assert not trackers[1].lost[rest.visible[drawn]].any()
