@@ -138,14 +138,13 @@ def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected:
     if not placed.size:
         return positions
     around = refiner._window_neighbours[:, placed].T  # (L, k)
-    gap = np.sqrt(_sq(at[around] - at[placed][:, None, :]))
-    with np.errstate(invalid="ignore"):
-        nearest = np.nanargmin(np.where(np.isfinite(gap), gap, np.inf), axis=1)
-    rows = np.arange(placed.size)
-    close = gap[rows, nearest] < refiner._overlap_px[placed]
-    if not close.any():
+    gap = _sq(at[around] - at[placed][:, None, :])  # px^2 (NaN compares False)
+    close = gap < (refiner._overlap_px[placed] ** 2)[:, None]
+    if not np.count_nonzero(close):  # (most frames: no two tips overlap)
         return positions
-    first, second = placed[close], around[rows[close], nearest[close]]
+    rows = np.flatnonzero(np.logical_or.reduce(close, axis=1))
+    nearest = np.argmin(np.where(close[rows], gap[rows], np.inf), axis=1)
+    first, second = placed[rows], around[rows, nearest]
     # One fit per pair.
     key = np.minimum(first, second) * len(positions) + np.maximum(first, second)
     _, unique = np.unique(key, return_index=True)
