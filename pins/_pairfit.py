@@ -27,7 +27,11 @@ frame 0.90 -> 0.12; model skin tactip-331 4735 -> 1154 (lost 10.8 -> 6.6), radia
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
+
+from ._tipfit import _solve
 
 _EDGE_PX = 0.6
 _PASSES = 4
@@ -57,15 +61,13 @@ def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radiu
     """
     middle = 0.5 * (first + second)
     half = int(np.ceil(np.nanmax(0.5 * np.linalg.norm(first - second, axis=1)) + radius_px + _MARGIN_PX))
-    offsets = np.arange(-half, half + 1)
-    gx, gy = np.meshgrid(offsets, offsets)
-    gx, gy = gx.ravel(), gy.ravel()
+    gx, gy = _grid(half)
     corner = np.rint(middle).astype(np.intp)
     x = corner[:, :1] + gx  # (L, P)
     y = corner[:, 1:] + gy
     h, w = crop.shape
     inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
-    values = crop[np.clip(y, 0, h - 1), np.clip(x, 0, w - 1)].astype(np.float64)
+    values = crop[np.minimum(np.maximum(y, 0), h - 1), np.minimum(np.maximum(x, 0), w - 1)].astype(np.float64)
     xf, yf = x.astype(np.float64), y.astype(np.float64)
 
     def squared(points):  # (L, 2) -> (L, P), px^2
@@ -75,20 +77,16 @@ def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radiu
         dx += dy
         return dx
 
-    def distance(points):  # (L, 2) -> (L, P)
-        return np.sqrt(squared(points))
-
     near = np.minimum(squared(first), squared(second))
     keep = inside & (near <= (radius_px + _MARGIN_PX) ** 2)
     # Only the few others nearest the pair can reach its pixels (each a pass over the (L, P) arrays).
-    with np.errstate(invalid="ignore"):
-        reach = _sq(others - middle[:, None, :])
-        order = np.argsort(np.where(np.isfinite(reach), reach, np.inf), axis=1)[:, :_OTHERS]
-        others = np.take_along_axis(others, order[..., None], axis=1)
-        closest = squared(others[:, 0])
-        for j in range(1, others.shape[1]):
-            np.fmin(closest, squared(others[:, j]), out=closest)
-        keep &= ~(closest < near)
+    reach = _sq(others - middle[:, None, :])
+    order = np.argsort(np.where(np.isfinite(reach), reach, np.inf), axis=1)[:, :_OTHERS]
+    others = np.take_along_axis(others, order[..., None], axis=1)
+    closest = squared(others[:, 0])
+    for j in range(1, others.shape[1]):
+        np.fmin(closest, squared(others[:, j]), out=closest)
+    keep &= ~(closest < near)  # (NaN, no other, compares False)
     # Only the kept pixels (two discs' worth of a square patch, about a third of it) go on: each pair's first,
     # padded to the most any pair keeps.
     most = int(np.count_nonzero(keep, axis=1).max())
@@ -96,33 +94,52 @@ def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radiu
         return np.full_like(first, np.nan), np.full_like(second, np.nan)
     order = np.argsort(~keep, axis=1, kind="stable")[:, :most]
     keep, values, xf, yf = (np.take_along_axis(v, order, axis=1) for v in (keep, values, xf, yf))
-    weight = keep.astype(np.float64)
+    weight = keep.astype(np.float64)[..., None]
     mu = np.concatenate([first, second], axis=1)  # (L, 4)
-    for _ in range(_PASSES):
-        d1, d2 = distance(mu[:, :2]), distance(mu[:, 2:])
-        c1 = 1.0 / (1.0 + np.exp(np.clip((d1 - radius_px) / _EDGE_PX, -50, 50)))
-        c2 = 1.0 / (1.0 + np.exp(np.clip((d2 - radius_px) / _EDGE_PX, -50, 50)))
-        cover = 1.0 - (1.0 - c1) * (1.0 - c2)
-        design = np.stack([np.ones_like(xf), xf - middle[:, :1], yf - middle[:, 1:], cover], axis=2)  # (L, P, 4)
-        weighted = np.swapaxes(design * weight[..., None], 1, 2)  # (L, 4, P)
-        normal = weighted @ design + 1e-6 * np.eye(4)
-        beta = np.linalg.solve(normal, weighted @ values[..., None])[..., 0]
-        residual = values - (design @ beta[..., None])[..., 0]
-        amplitude = beta[:, 3:]
-        # d cover / d mu: (1 - c_other) * c (1 - c) / edge * (x - mu) / d
-        with np.errstate(invalid="ignore", divide="ignore"):
-            g1 = amplitude * (1.0 - c2) * c1 * (1.0 - c1) / _EDGE_PX / np.maximum(d1, 1e-6)
-            g2 = amplitude * (1.0 - c1) * c2 * (1.0 - c2) / _EDGE_PX / np.maximum(d2, 1e-6)
-        jac = np.stack([g1 * (xf - mu[:, :1]), g1 * (yf - mu[:, 1:2]), g2 * (xf - mu[:, 2:3]), g2 * (yf - mu[:, 3:])],
-                       axis=2)
-        weighted = np.swapaxes(jac * weight[..., None], 1, 2)  # (L, 4, P)
-        jtj = weighted @ jac
-        jtj += _DAMPING * np.einsum("lii->li", jtj)[:, :, None] * np.eye(4) + 1e-9 * np.eye(4)
-        step = np.linalg.solve(jtj, weighted @ residual[..., None])[..., 0]
-        mu = mu + np.clip(step, -1.5, 1.5)
-    bad = ~np.isfinite(mu).all(axis=1) | (beta[:, 3] <= 0)
+    # The design (L, P, 4): a plane and the tips' coverage (the last column, new each pass); the Jacobian likewise.
+    design = np.empty(xf.shape + (4,))
+    design[..., 0] = 1.0
+    np.subtract(xf, middle[:, :1], out=design[..., 1])
+    np.subtract(yf, middle[:, 1:], out=design[..., 2])
+    jac = np.empty(xf.shape + (4,))
+    ridge, eye = 1e-6 * np.eye(4), np.eye(4)
+    try:
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for _ in range(_PASSES):
+                dx1, dy1, dx2, dy2 = xf - mu[:, :1], yf - mu[:, 1:2], xf - mu[:, 2:3], yf - mu[:, 3:]
+                d1, d2 = np.sqrt(dx1 * dx1 + dy1 * dy1), np.sqrt(dx2 * dx2 + dy2 * dy2)
+                c1 = 1.0 / (1.0 + np.exp((d1 - radius_px) / _EDGE_PX))  # (exp overflows to inf: c 0)
+                c2 = 1.0 / (1.0 + np.exp((d2 - radius_px) / _EDGE_PX))
+                np.subtract(1.0, (1.0 - c1) * (1.0 - c2), out=design[..., 3])
+                weighted = np.swapaxes(design * weight, 1, 2)  # (L, 4, P)
+                beta = (_solve(weighted @ design + ridge, weighted @ values[..., None]))[..., 0]
+                residual = values - (design @ beta[..., None])[..., 0]
+                amplitude = beta[:, 3:] / _EDGE_PX
+                # d cover / d mu: (1 - c_other) * c (1 - c) / edge * (x - mu) / d
+                g1 = amplitude * (1.0 - c2) * c1 * (1.0 - c1) / np.maximum(d1, 1e-6)
+                g2 = amplitude * (1.0 - c1) * c2 * (1.0 - c2) / np.maximum(d2, 1e-6)
+                np.multiply(g1, dx1, out=jac[..., 0])
+                np.multiply(g1, dy1, out=jac[..., 1])
+                np.multiply(g2, dx2, out=jac[..., 2])
+                np.multiply(g2, dy2, out=jac[..., 3])
+                weighted = np.swapaxes(jac * weight, 1, 2)  # (L, 4, P)
+                jtj = weighted @ jac
+                jtj += (_DAMPING * jtj.diagonal(axis1=1, axis2=2))[:, :, None] * eye + 1e-9 * eye
+                step = _solve(jtj, weighted @ residual[..., None])[..., 0]
+                mu = mu + np.minimum(np.maximum(step, -1.5), 1.5)
+    except np.linalg.LinAlgError:  # (a singular system: no fit)
+        return np.full_like(first, np.nan), np.full_like(second, np.nan)
+    bad = ~np.isfinite(mu).all(axis=1) | ~(beta[:, 3] > 0)
     mu[bad] = np.nan
     return mu[:, :2], mu[:, 2:]
+
+
+@functools.lru_cache(maxsize=None)
+def _grid(half: int) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (x, y) of a square of side 2 half + 1 px, flattened: (P,), (P,) of int."""
+    offsets = np.arange(-half, half + 1)
+    gx, gy = np.meshgrid(offsets, offsets)
+    return gx.ravel(), gy.ravel()
 
 
 def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected: np.ndarray) -> np.ndarray:
