@@ -139,7 +139,11 @@ tips (1.25 px) fitted too: realistic apart 9 -> 15, lost 4.99 -> 6.58, model 160
 tips below 1.5 px are not fitted (`pins._pairfit._SMALLEST_TIP_PX`, chosen after that result). The fit has no
 other tuned constant but its passes (4 against 3 on two tactip-331 slides, seeds 0/1: lost 20/59 against
 40/74 pin-frames). Cost, CPU of an update (loaded VM): tactip-331 1.07-1.47 -> 1.97-2.71 ms a frame,
-radial-led-120 1.23-1.67 -> 1.54-2.08, small-pad-100 (fitted) 0.83-1.01 -> 1.29-1.59: off by default.
+radial-led-120 1.23-1.67 -> 1.54-2.08, small-pad-100 (fitted) 0.83-1.01 -> 1.29-1.59; then with fewer NumPy
+calls (the same fits) two tactip-331 slides 1.3-1.4 -> 2.2-2.3 ms a frame, and on the real-like slide video
+(`bench_replay_parts.py --calls`, MJPG) 548 -> 701 Python-level calls and 1722 -> 2169 operations a frame
+(window measurements 4.29 -> 4.28): off by default. This session's default tracker there: calls 543.2 -> 547.7,
+operations 1706 -> 1722, window measurements 4.29 -> 4.29 (mp4v 544.9 -> 549.1, 1715 -> 1730, 4.30 -> 4.31).
 
 What was left before (seams5, diagnosed by the stage that placed each swap's first frame, final code): on
 tactip-331 realistic seeds 0-2, 27 of 66 onsets are pins placed in the first follow pass whose guess was

@@ -131,7 +131,7 @@ class PinTracker:
         radii: skin squeezed ahead of a slide) is moved onto a fit of the two tips as two discs
         (`pins._pairfit`), where a window settles between them. Off by default for its cost: CPU of an update
         on tactip-331's slides 1.1-1.5 -> 2.0-2.7 ms a frame (bench/bench_slides.py ``--part-overlaps``), and
-        on the real-like slide video (radial-led-120, MJPG) 548 -> 969 Python-level calls a frame.
+        on the real-like slide video (radial-led-120, MJPG) 548 -> 701 Python-level calls a frame.
 
     Attributes
     ----------
