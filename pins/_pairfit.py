@@ -22,7 +22,7 @@ own start than the other's, and the two at least half a radius apart; a missing 
 Measured on `bench/bench_slides.py` (8 slides of 3 pitches, seeds 0-5; new against the tracker without it):
 realistic skin tactip-331 pin-frames on another pin's tip 20 -> 0, > 3 px off 480 -> 1, lost visible pins per
 frame 0.90 -> 0.12; model skin tactip-331 4735 -> 1154 (lost 10.8 -> 6.6), radial-led-120 34 -> 4 (3.41 ->
-2.87), CPU of an update on tactip-331 1.1-1.5 -> 2.0-2.7 ms a frame (see `bench/bench_slides.py`).
+2.87); its cost is in `pins.track.PinTracker` (`part_overlaps`) and `bench/bench_slides.py`.
 """
 
 from __future__ import annotations
