@@ -5,10 +5,14 @@ Recovery (`Refiner.recover`, at a rate `PinTracker` bounds). The frame's blobs a
 (`match_to_blobs`; no blob: lost), and blobs no pin claimed are assigned to lost pins one-to-one
 (Hungarian method, `scipy.optimize.linear_sum_assignment`) within the same gate around each lost
 pin's predicted position (its rest position moved by the median displacement of its tracked
-neighbours). Gates below half the pin spacing and one-to-one assignments keep identities.
+neighbours). Gates below half the pin spacing and one-to-one assignments keep identities; a pin that
+takes a blob keeps it only where no other pin is expected nearer (`pins._identity`; `PinTracker`
+expects a lost pin at its prediction there, as the follow passes do).
 
 Fitting (`Refiner.fit_tips`, every frame, for the few pins just lost on a sloped background): tips
-that their windows lose are fitted as opaque ellipses where their windows show a tip.
+that their windows lose are fitted as opaque ellipses where their windows show a tip. A fit is not
+placed where another pin is expected within two tip radii (the tips overlap: one blob, on which a fit
+of one tip lands anywhere; issue 20's slides).
 
 `match_to_blobs` and the Hungarian assignment are plain functions; `_Recovery` holds the steps that
 use them; `pins._refine.Refiner` inherits it and sets the state it reads.
@@ -158,7 +162,8 @@ class _Recovery:
         (`pins._tipfit._centre_step`; on radial-led-120's tap, seeds 0-11, three steps tracked as many
         pins with an RMSE max of 0.26 px against 0.23 with one). It is placed where the fit ends when the fit took its step (a
         failed fit keeps its start) and the window there shows its least contrast too, unless a
-        neighbour sits on the same tip (`_one_pin_per_tip`).
+        neighbour sits on the same tip (`_one_pin_per_tip`) or is expected (placed, or missing where its
+        neighbours put it) within two of the pin's tip radii at rest: their tips overlap in one blob.
 
         Parameters
         ----------
@@ -194,11 +199,22 @@ class _Recovery:
         theta = np.concatenate([start, self._tip_ellipses[which]], axis=1)  # (L, 5): centre, Q_xx, Q_xy, Q_yy
         window = _Windows(crop, start, reach, neighbours, nearest)
         fitted = _centre_step(window, theta, start)
-        # A fit that took a step and ended on a tip of the pin's least contrast places it.
+        # A fit that took a step and ended on a tip of the pin's least contrast places it, unless a neighbour is
+        # expected (placed, or missing where its neighbours put it) within two tip radii of it: the tips overlap,
+        # one blob, on which a fit of one tip lands anywhere (issue 20: radial-led-120 slides, three tips squeezed
+        # within 4 px, of 2 px radius; fitted pins landed on a missing neighbour's tip).
         moved = np.logical_or.reduce(fitted != start, axis=1)
         # (The contrast depends on the window's centre pixel alone: a fit that stayed on it keeps its contrast.)
         again = moved & np.logical_or.reduce(np.rint(fitted) != np.rint(start), axis=1)
         moved[again] = self.windows.contrast(crop, fitted[again]) >= self._at_least[1, which[again]]
+        if not moved.any():
+            return positions
+        missing = np.flatnonzero(np.isnan(positions[:, 0]))
+        expected = positions.copy()
+        expected[missing] = self._predict_from_neighbours(positions, missing, last_seen)
+        # (NaN, a neighbour expected nowhere, is left out by fmin and compares False.)
+        moved &= ~(np.fmin.reduce(_squared_norm(expected[around] - self.origin - fitted[:, None, :]), axis=1)
+                   < self._overlap_px[which] ** 2)
         if not moved.any():
             return positions
         positions = positions.copy()
@@ -208,9 +224,7 @@ class _Recovery:
         self._one_pin_per_tip(positions, which, _squared_norm(fitted - start))
         # ... nor any pin expected nearer to it (`pins._identity`; a missing pin where its neighbours put it):
         # a faint tip fitted on a slide's squeezed skin may be its lost neighbour's (issue 20).
-        missing = np.flatnonzero(np.isnan(positions[:, 0]))
-        expected = positions.copy()
-        expected[missing] = self._predict_from_neighbours(positions, missing, last_seen)
+        expected[which] = np.where(np.isnan(positions[which]), start, fitted)
         keep_own_tips(positions, which, start, expected, self._identity_index)
         return positions
 

@@ -109,6 +109,9 @@ _REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
 _SAME_TIP_FRACTION = 0.25
+# Two tips whose centres lie nearer than this many tip radii (at rest) overlap: one blob, which no one-tip
+# fit parts (issue 20: radial-led-120 slides, three tips squeezed within 4 px, of 2 px radius).
+_OVERLAP_TIPS = 2.0
 
 
 class Refiner(_Following, _AtRest, _Recovery, _Prediction):
@@ -173,6 +176,9 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         # Windows no wider than the tip needs: less membrane (texture, shadows) in them.
         tip = np.sqrt(np.where(area > 0, area, np.nan) / np.pi)
         self._radius_cap = np.where(np.isfinite(tip), _TIP_REACH * tip + _TIP_MARGIN_PX, np.inf)
+        # Another pin expected nearer than this to a pin's tip (`_OVERLAP_TIPS` of its radii at rest) overlaps
+        # it: one blob, on which a one-tip fit lands anywhere (`pins._recover`'s `fit_tips`).
+        self._overlap_px = np.where(np.isfinite(tip), _OVERLAP_TIPS * tip, 0.0)
         tip_px = tip[np.isfinite(tip)]
         #: Median radius of the tips at rest, px (their area above the window's threshold), nan without tips.
         self.tip_radius_px = float(np.median(tip_px)) if tip_px.size else float("nan")

@@ -52,6 +52,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._identity import kept_on_own_tips
+from ._pairfit import part_overlapping
 from ._recover import _as_points, match_to_blobs
 from ._refine import Refiner
 from ._surround import surround_pixels
@@ -125,6 +126,12 @@ class PinTracker:
         At most one frame in this many detects blobs, >= 1 (1: any frame with a missing pin).
     disc : SensorDisc, optional
         The sensor disc; found in the first frame when not given.
+    part_overlaps : bool
+        With refinement: each frame, a placed pin whose tip overlaps a neighbour's (expected within two tip
+        radii: skin squeezed ahead of a slide) is moved onto a fit of the two tips as two discs
+        (`pins._pairfit`), where a window settles between them. Off by default for its cost: CPU of an update
+        on tactip-331's slides 1.1-1.5 -> 2.0-2.7 ms a frame (bench/bench_slides.py ``--part-overlaps``), and
+        on the real-like slide video (radial-led-120, MJPG) 548 -> 701 Python-level calls a frame.
 
     Attributes
     ----------
@@ -160,7 +167,7 @@ class PinTracker:
     def __init__(self, *, lk: LKParams | None = None, detection: DetectionParams | None = None,
                  refine: bool = True, gate_fraction: float = 0.4, neighbours: int = 6,
                  retire_after: int = 5, check_every: int = 5, detect_every: int = 30,
-                 disc: SensorDisc | None = None) -> None:
+                 disc: SensorDisc | None = None, part_overlaps: bool = False) -> None:
         if not 0.0 < gate_fraction < 0.5:
             raise ValueError(f"gate_fraction must be in (0, 0.5), got {gate_fraction}")
         for name, value in (("neighbours", neighbours), ("retire_after", retire_after),
@@ -178,6 +185,7 @@ class PinTracker:
         self.check_every = int(check_every)
         self.detect_every = int(detect_every)
         self.disc = disc
+        self.part_overlaps = bool(part_overlaps)
         self.rest_positions: np.ndarray | None = None
         self.positions: np.ndarray | None = None
         self.lost: np.ndarray | None = None
@@ -207,7 +215,7 @@ class PinTracker:
         return (f"PinTracker(lk={self.lk!r}, detection={self.detection!r}, refine={self.refine}, "
                 f"gate_fraction={self.gate_fraction}, neighbours={self.neighbours}, "
                 f"retire_after={self.retire_after}, check_every={self.check_every}, "
-                f"detect_every={self.detect_every}) [{state}]")
+                f"detect_every={self.detect_every}, part_overlaps={self.part_overlaps}) [{state}]")
 
     @property
     def windows(self):
@@ -445,6 +453,9 @@ class PinTracker:
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
         positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, self._everyone),
                                      refiner.rest_positions, guess, refiner._identity_index)
+        if self.part_overlaps:
+            # Placed pins whose tips overlap a neighbour's (squeezed skin ahead of a slide): a fit of both tips.
+            positions = part_overlapping(refiner, crop, positions, filled)
         missing = np.isnan(positions[:, 0])
         if not np.count_nonzero(missing):  # (count_nonzero: `ndarray.any` costs 4x more on a few hundred pins)
             return positions, False, False
@@ -457,7 +468,8 @@ class PinTracker:
             # would widen the detection to most of the disc; they come back by their own search.
             before = positions
             positions = refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted)
-            positions = kept_on_own_tips(before, positions, np.where(np.isfinite(tracked), tracked, filled), guess,
+            # (A missing pin is expected at its guess, or where lost at its prediction: `filled`.)
+            positions = kept_on_own_tips(before, positions, np.where(np.isfinite(tracked), tracked, filled), filled,
                                          refiner._identity_index)
         # Pins just seen, on a sloped background at rest (a veil's or a reflection's flank, which their
         # windows weigh as tip), and missing now: fitted as opaque ellipses where their tips show.

@@ -106,10 +106,12 @@ def test_slides_swap_no_identity():
     assert all(_track_slides("radial-led-120", seed)[0] == 0 for seed in (1, 2))
 
 
-@pytest.mark.xfail(reason="issue 20's bar, not yet met on every seed: radial-led-120 seed 5 puts 6 pin-frames on "
-                          "another pin's tip through the two slides (0 on seeds 0-4)", strict=False)
 def test_slides_swap_no_identity_on_seed_5():
-    # The seed the bar still fails on, kept visible in the report (`-ra`) rather than left out of the test above.
+    # Seed 5 of the bar: three tips on one spoke squeezed within 4 px (tips of 2 px radius) ahead of the slide.
+    # A faint tip fitted on that blob (`fit_tips`) went to a pin whose missing neighbour was expected within two
+    # tip radii of the fit, and a blob detected there (`recover`) to a pin whose lost neighbour was expected
+    # nearer (recovery's identity test saw no lost pin's prediction): 6 pin-frames on another pin's tip on main
+    # f24c3ab, 0 now (seeds 0-4: 0 before and after; held-out seeds 6-9: 2/1/0/5 -> 2/1/0/0).
     assert _track_slides("radial-led-120", 5)[0] == 0
 
 
@@ -206,3 +208,64 @@ def test_a_still_pads_jitter_is_not_carried():
     # Crisp tips: steps of a few hundredths of a px, below the guess bound.
     rows = _Steps()
     assert not rows.carried(rng.normal(0.0, 0.05, (9, 2))).any()
+
+
+def test_two_overlapping_discs_are_parted_by_their_fit():
+    # Two tips of 5 px radius 8.4 px apart (overlapping: one blob) on a sloped membrane with noise; the fit starts
+    # 2.7 px and 1.6 px off, as a window lagging between them would leave them.
+    from pins._pairfit import fit_tip_pairs
+    rng = np.random.default_rng(0)
+    yy, xx = np.mgrid[0:50, 0:60]
+    image = 60.0 + 0.3 * xx
+    a, b = np.array([20.3, 20.2]), np.array([28.6, 21.0])
+    for centre in (a, b):
+        image = np.where(np.hypot(xx - centre[0], yy - centre[1]) <= 5.0, 200.0, image)
+    image = np.clip(image + rng.normal(0.0, 4.0, image.shape), 0, 255).astype(np.uint8)
+    first, second = fit_tip_pairs(image, np.array([[23.0, 20.0]]), np.array([[27.0, 20.5]]), 5.0,
+                                  np.full((1, 1, 2), np.nan))
+    assert np.linalg.norm(first[0] - a) < 0.3 and np.linalg.norm(second[0] - b) < 0.3
+
+
+def test_windows_lagging_between_overlapping_tips_are_parted_by_a_fit_of_both():
+    # tactip-331 on a realistic skin (``min_area=0.5``): ahead of a slide tips 5.5 px in radius come within 8-9 px
+    # (overlapping), and a window settles between a tip and its neighbour's, up to 7 px behind its own. Two slides,
+    # seed 0: visible pin-frames more than 3 px off their truth 45 and lost 551 with windows alone (57 / 462 on seed
+    # 1); 0 and 32 (0 / 58) with overlapping tips fitted as two discs (`PinTracker(part_overlaps=True)`).
+    s = preset_sensor("tactip-331", 0)
+    s.reseed_noise(0)
+    run = s.slides([0.0, 180.0], distance_mm=3.0 * s.pin_spacing_mm, rest_s=3 / 120, frame_rate=120.0, min_area=0.5)
+    frames = iter(run)
+    rest = next(frames)
+    drawn = np.flatnonzero(rest.visible | rest.partial)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc), part_overlaps=True)
+    tracker.start(rest.image, pins=rest.centres[drawn])
+    off, lost, swapped = 0, 0, 0
+    for f in frames:
+        positions = tracker.update(f.image)
+        truth, visible = f.centres[drawn], f.visible[drawn]
+        off += int((np.linalg.norm(positions - truth, axis=1)[visible] > 3.0).sum())
+        lost += int((visible & np.isnan(positions[:, 0])).sum())
+        swapped += _swaps(positions, truth, visible | f.partial[drawn], tracker.spacing_px).size
+    assert off == 0 and swapped == 0
+    assert lost <= 120
+    # Back at rest every visible pin is found within 1 px of its true centre.
+    assert (np.linalg.norm(positions - truth, axis=1)[visible] <= 1.0).all()
+
+
+@pytest.mark.parametrize("name", ["radial-led-120", "tactip-331"])
+def test_fitting_overlapping_tips_leaves_a_still_pad_as_it_was(name):
+    # At rest no two tips overlap: `part_overlaps` fits nothing, and a still pad (fresh camera noise every frame)
+    # is tracked exactly as without it, no pin lost.
+    s = preset_sensor(name, 0)
+    s.reseed_noise(0)
+    rest = s.render()
+    drawn = np.flatnonzero(rest.visible | rest.partial)
+    trackers = [PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc),
+                           part_overlaps=part) for part in (False, True)]
+    for tracker in trackers:
+        tracker.start(rest.image, pins=rest.centres[drawn])
+    for _ in range(8):
+        image = s.render().image
+        plain, parted = (tracker.update(image) for tracker in trackers)
+        assert np.array_equal(plain, parted, equal_nan=True)
+        assert not trackers[1].lost[rest.visible[drawn]].any()
