@@ -313,3 +313,11 @@ def centre_step(image, start, reach, neighbours, nearest, theta, gx, gy):
         else:
             out[i, 0], out[i, 1] = mu_x, mu_y
     return out
+
+
+# The tracker's bookkeeping round its window measurements (`pins._follow`, `pins._predict`, `pins._identity`).
+from ._jit_track import (displacement_median, follow_first, follow_pass, keep_own_tips,  # noqa: E402
+                         neighbour_median, one_pin_per_tip, predict)
+
+_TRACK_KERNELS = (displacement_median, follow_first, follow_pass, keep_own_tips, neighbour_median, one_pin_per_tip,
+                  predict)

@@ -46,6 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._identity import gathered
+from ._kernels import compiled
 from ._window import _squared_norm
 
 # A lost pin is searched for at its prediction only when this share of its neighbours is placed.
@@ -89,8 +90,13 @@ class _Prediction:
         Over each pin's neighbours placed both in `positions` (N, 2), px, and when it was last placed
         (`remember`): its `last_seen` position plus the change of their median displacement. Without
         such neighbours: its rest position moved by the median displacement of its placed neighbours;
-        without any: `last_seen`.
+        without any: `last_seen`. By the compiled kernel (`pins._jit_track.predict`) unless
+        ``TACTIP_KERNELS=numpy`` or Numba is missing; the same figures.
         """
+        kernels = compiled()
+        if kernels is not None:
+            return kernels.predict(positions, self.rest_positions, self._then, self._neighbour_index[which],
+                                   np.asarray(which, dtype=np.int64), last_seen)
         index = self._neighbour_index[which]
         # The three medians in one (3 L, k, 2) sort: over the neighbours placed now (`either`), and
         # over those placed both now and then, now and then (their change).
@@ -111,7 +117,7 @@ class _Prediction:
 
         (`last_seen` where none is placed.)
         """
-        shift = self.neighbour_median(positions - self.rest_positions, which)
+        shift = self.displacement_median(positions, which)
         return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
 
     def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
@@ -186,9 +192,21 @@ class _Prediction:
         self._drift_bound_memo = (key, bound)
         return bound
 
+    def displacement_median(self, positions: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """``neighbour_median(positions - rest_positions, which)``, px (L, 2), of (N, 2) `positions`, px:
+        compiled without forming the displacements (`pins._jit_track.displacement_median`)."""
+        kernels = compiled()
+        if kernels is not None:
+            return kernels.displacement_median(positions, self.rest_positions, self._neighbour_index[which])
+        return self.neighbour_median(positions - self.rest_positions, which)
+
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.
 
-        Returns (L, 2), NaN for a pin none of whose neighbours has a finite value.
+        Returns (L, 2), NaN for a pin none of whose neighbours has a finite value. By the compiled kernel
+        (`pins._jit_track.neighbour_median`, no gather) unless ``TACTIP_KERNELS=numpy`` or Numba is missing.
         """
+        kernels = compiled()
+        if kernels is not None:
+            return kernels.neighbour_median(values, self._neighbour_index[which])
         return _median(gathered(values, self._neighbour_index[which]))  # (L, k, 2), a copy

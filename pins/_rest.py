@@ -146,7 +146,7 @@ class _AtRest:
         far = distance > self.gate_px ** 2
         between = np.flatnonzero(~still & ~far & np.isfinite(distance))
         if between.size:
-            around = _squared_norm(self.neighbour_median(positions - self.rest_positions, between))
+            around = _squared_norm(self.displacement_median(positions, between))
             jitter = (around <= (_STILL_FRACTION * self.spacing_px) ** 2) & (
                 distance[between] <= (2.0 * _STILL_FRACTION * self.spacing_px) ** 2)
             between = between[~jitter]
@@ -161,7 +161,7 @@ class _AtRest:
         # continuous: no pin moves by a px alone), and a window that settles within a few times its
         # own scatter in noise (`observe_still`; up to twice the search's bound) shows the pin there.
         # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
-        shift = self.neighbour_median(positions - self.rest_positions, look)
+        shift = self.displacement_median(positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
         residual = _squared_norm(centres - rest - shift)
         scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
