@@ -316,8 +316,8 @@ def centre_step(image, start, reach, neighbours, nearest, theta, gx, gy):
 
 
 # The tracker's bookkeeping round its window measurements (`pins._follow`, `pins._predict`, `pins._identity`).
-from ._jit_track import (displacement_median, follow_first, follow_pass, keep_own_tips,  # noqa: E402
-                         neighbour_median, one_pin_per_tip, predict)
+from ._jit_track import (carried_velocity, displacement_median, follow_first, follow_pass,  # noqa: E402
+                         keep_own_tips, neighbour_median, one_pin_per_tip, predict, remember, rest_distances)
 
-_TRACK_KERNELS = (displacement_median, follow_first, follow_pass, keep_own_tips, neighbour_median, one_pin_per_tip,
-                  predict)
+_TRACK_KERNELS = (carried_velocity, displacement_median, follow_first, follow_pass, keep_own_tips, neighbour_median,
+                  one_pin_per_tip, predict, remember, rest_distances)

@@ -290,3 +290,92 @@ def keep_own_tips(positions, found, start, expected, near, margin_sq):
         if yields[i]:
             positions[found[i], 0] = np.nan
             positions[found[i], 1] = np.nan
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def carried_velocity(velocity, still, bound_sq, index, agree_sq):
+    """`pins._predict._Prediction.carried_velocity` in place on `velocity` (N, 2), px: `still` (N,) pins'
+    steps zeroed unless their (N, k) `index` neighbours' median step lies beyond `bound_sq` (N,), px^2;
+    then their own step where within `agree_sq` times that median's square of it, else the median."""
+    n, k = index.shape
+    active = np.empty(n, np.bool_)
+    anything = False
+    for i in range(n):
+        x, y = velocity[i, 0], velocity[i, 1]
+        active[i] = (not still[i] or x * x + y * y > bound_sq[i]) and x == x and abs(x) != np.inf
+        anything = anything or active[i]
+    if anything:
+        # Still pins near a step beyond noise: their neighbours' medians, of the steps as they are.
+        which = np.empty(n, np.int64)
+        count = 0
+        for i in range(n):
+            if still[i]:
+                near = active[i]
+                for j in range(k):
+                    near = near or active[index[i, j]]
+                if near:
+                    which[count] = i
+                    count += 1
+        around = np.empty((count, 2))
+        own = np.empty((count, 2))
+        xs = np.empty(k)
+        ys = np.empty(k)
+        for r in range(count):
+            i = which[r]
+            own[r, 0], own[r, 1] = velocity[i, 0], velocity[i, 1]
+            for j in range(k):
+                xs[j] = velocity[index[i, j], 0]
+                ys[j] = velocity[index[i, j], 1]
+            _median_into(xs, ys, k, around, r)
+    for i in range(n):
+        if still[i]:
+            velocity[i, 0] = 0.0
+            velocity[i, 1] = 0.0
+    if anything:
+        for r in range(count):
+            i = which[r]
+            ax, ay = around[r, 0], around[r, 1]
+            size = ax * ax + ay * ay
+            if size > bound_sq[i]:
+                dx, dy = own[r, 0] - ax, own[r, 1] - ay
+                if dx * dx + dy * dy <= agree_sq * size:
+                    velocity[i, 0], velocity[i, 1] = own[r, 0], own[r, 1]
+                else:
+                    velocity[i, 0], velocity[i, 1] = ax, ay
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def remember(positions, rest_positions, index, then):
+    """`pins._predict._Prediction.remember`: for each pin placed in (N, 2) `positions`, px, its (N, k) `index`
+    neighbours' displacements from `rest_positions`, px, into `then` (N, k, 2), in place."""
+    n, k = index.shape
+    for i in range(n):
+        if positions[i, 0] == positions[i, 0]:
+            for j in range(k):
+                other = index[i, j]
+                then[i, j, 0] = positions[other, 0] - rest_positions[other, 0]
+                then[i, j, 1] = positions[other, 1] - rest_positions[other, 1]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def rest_distances(positions, rest_positions, search, drift_sq, still_sq, still_share):
+    """`pins._rest._AtRest.snap_to_rest`'s first checks: each pin's squared distance from rest (N,), px^2
+    (NaN where missing), and whether to go on: some pin drifted beyond `drift_sq` or is missing and
+    searched for (`search` (N,) bool), and at least `still_share` of the placed pins lie within `still_sq`."""
+    n = positions.shape[0]
+    distance = np.empty(n)
+    wanted = 0
+    still = 0
+    placed = 0
+    for i in range(n):
+        dx = positions[i, 0] - rest_positions[i, 0]
+        dy = positions[i, 1] - rest_positions[i, 1]
+        d = dx * dx + dy * dy
+        distance[i] = d
+        if d > drift_sq or (d != d and search[i]):
+            wanted += 1
+        if d <= still_sq:
+            still += 1
+        if d == d and abs(d) != np.inf:
+            placed += 1
+    return distance, wanted > 0 and not (still < still_share * placed)

@@ -80,6 +80,10 @@ class _Prediction:
 
     def remember(self, positions: np.ndarray) -> None:
         """Keep, for the pins placed in a frame's final (N, 2) `positions`, px, their neighbours' displacements."""
+        kernels = compiled()
+        if kernels is not None:
+            kernels.remember(positions, self.rest_positions, self._neighbour_index, self._then)
+            return
         which = np.flatnonzero(np.isfinite(positions[:, 0]))
         if which.size:
             self._then[which] = gathered(positions - self.rest_positions, self._neighbour_index[which])
@@ -154,8 +158,14 @@ class _Prediction:
         plateau of two overlapping tips in the skin squeezed ahead of a slide steps by a few tenths of a
         px while its tip and neighbours step by px: issue 20, tactip-331 realistic skin, guesses 4-5 px
         behind tips moving 0.4-2.2 px a frame). Elsewhere (a still pad, a faint tip's jitter) zero.
+        `velocity` is changed in place and returned; by the compiled kernel (`pins._jit_track`, one call)
+        unless ``TACTIP_KERNELS=numpy`` or Numba is missing.
         """
         bound_sq = self._drift_bound_sq()
+        kernels = compiled()
+        if kernels is not None and velocity.dtype == np.float64 and velocity.flags.writeable:
+            kernels.carried_velocity(velocity, still, bound_sq, self._neighbour_index, _AGREE_SHARE ** 2)
+            return velocity
         with np.errstate(invalid="ignore"):
             active = ~still | (_squared_norm(velocity) > bound_sq)  # (NaN, a lost pin: active, not finite)
         active &= np.isfinite(velocity[:, 0])

@@ -21,6 +21,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ._kernels import compiled
 from ._noise import _JITTER_FIRST, _learn_mean_square, noise_sigma
 from ._window import _squared_norm
 
@@ -128,6 +129,13 @@ class _AtRest:
         positions : (N, 2) ndarray of float64
             `positions`, or a copy with the pins found at their rest positions, px.
         """
+        kernels = compiled()
+        if kernels is not None:
+            # (The checks below to the pad's stillness in one compiled call: most frames stop there.)
+            distance, go = kernels.rest_distances(positions, self.rest_positions, search, self._guess_px ** 2,
+                                                  (_STILL_FRACTION * self.spacing_px) ** 2, _STILL_SHARE)
+            if not go:
+                return positions
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
         # Pins that drifted from rest by more than a window's settling in noise are looked at again.
         # (count_nonzero: `ndarray.any` costs several times more on a hundred pins.)
