@@ -317,7 +317,8 @@ def centre_step(image, start, reach, neighbours, nearest, theta, gx, gy):
 
 # The tracker's bookkeeping round its window measurements (`pins._follow`, `pins._predict`, `pins._identity`).
 from ._jit_track import (carried_velocity, displacement_median, follow_first, follow_pass,  # noqa: E402
-                         keep_own_tips, neighbour_median, one_pin_per_tip, predict, remember, rest_distances)
+                         keep_own_tips, neighbour_median, observe_still, one_pin_per_tip, predict, remember,
+                         rest_judge, rest_look)
 
 _TRACK_KERNELS = (carried_velocity, displacement_median, follow_first, follow_pass, keep_own_tips, neighbour_median,
-                  one_pin_per_tip, predict, remember, rest_distances)
+                  observe_still, one_pin_per_tip, predict, remember, rest_judge, rest_look)

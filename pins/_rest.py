@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from ._kernels import compiled
-from ._noise import _JITTER_FIRST, _learn_mean_square, noise_sigma
+from ._noise import _JITTER_BOUND, _JITTER_FIRST, _JITTER_RATE, _learn_mean_square, noise_sigma
 from ._window import _squared_norm
 
 # The pad is back at rest when this share of the placed pins lie within this fraction of the
@@ -86,11 +86,16 @@ class _AtRest:
         square updates the pin's running mean square scatter (the mean of its first `_JITTER_FIRST`,
         then weight `_JITTER_RATE` for steps within `_JITTER_BOUND` times the scatter so far).
         """
-        half = _squared_norm(steps)
-        still = half <= self._settled_px ** 2  # NaN (lost) compares False
-        half *= 0.5
-        # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
-        _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
+        kernels = compiled()
+        if kernels is not None and self._jitter_seen.dtype == np.float64:  # (one compiled call, the same figures)
+            still = kernels.observe_still(steps, self._settled_px ** 2, self._jitter_sq, self._jitter_seen,
+                                          _JITTER_FIRST, _JITTER_BOUND ** 2, _JITTER_RATE)
+        else:
+            half = _squared_norm(steps)
+            still = half <= self._settled_px ** 2  # NaN (lost) compares False
+            half *= 0.5
+            # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
+            _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
         seen, jitter = self._jitter_seen, self._jitter_sq
         self._observed += 1
         if self._observed % _FLOOR_EVERY == 1:
@@ -131,11 +136,7 @@ class _AtRest:
         """
         kernels = compiled()
         if kernels is not None:
-            # (The checks below to the pad's stillness in one compiled call: most frames stop there.)
-            distance, go = kernels.rest_distances(positions, self.rest_positions, search, self._guess_px ** 2,
-                                                  (_STILL_FRACTION * self.spacing_px) ** 2, _STILL_SHARE)
-            if not go:
-                return positions
+            return self._snap_to_rest_compiled(kernels, crop, positions, search)
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
         # Pins that drifted from rest by more than a window's settling in noise are looked at again.
         # (count_nonzero: `ndarray.any` costs several times more on a hundred pins.)
@@ -193,3 +194,22 @@ class _AtRest:
         positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
 
+
+    def _snap_to_rest_compiled(self, kernels, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
+        """`snap_to_rest` by two compiled kernels (`pins._jit_track.rest_look`, `rest_judge`; `kernels`: `pins._jit`)
+        round its window measurement: the same positions and learnt scatters, bit for bit."""
+        spacing = self.spacing_px
+        distance, look, go = kernels.rest_look(
+            positions, self.rest_positions, search, self._neighbour_index, self._guess_px ** 2,
+            (_STILL_FRACTION * spacing) ** 2, _STILL_SHARE, self.gate_px ** 2, (2.0 * _STILL_FRACTION * spacing) ** 2,
+            _BETWEEN_SHARE)
+        if not go:
+            return positions
+        rest = self.rest_positions[look]
+        centres, measures = self.windows.measure(crop, rest - self.origin, self._rest_radius[look])
+        return kernels.rest_judge(
+            centres, measures, look, positions, distance, self.rest_positions, self._rest_offset, self.origin,
+            self._neighbour_index, self._guess_px ** 2, _CALM_BOUND ** 2, self._settled_px, self.gate_px ** 2,
+            self._jitter_sq, self._rest_scatter_sq, self._rest_scatter_seen, self._noise_scatter_sq,
+            float(self._jitter_floor), self._at_least, self._area_at_most, _JITTER_FIRST, _JITTER_BOUND ** 2,
+            _JITTER_RATE)[0]
