@@ -60,7 +60,7 @@ def follow_first(first, start, measures, which, n, rest_positions, rest_offset, 
         if done:
             positions[pin, 0] = x
             positions[pin, 1] = y
-        elif first[i, 0] == first[i, 0] and (i >= n or moved <= reach):
+        elif np.isfinite(first[i, 0]) and (i >= n or moved <= reach):
             again[n_again] = i
             n_again += 1
         elif i < n:
@@ -106,7 +106,7 @@ def follow_pass(centres, measures, points, start, chain, which, radius, searched
             positions[pin, 1] = centres[i, 1]
             placed[n_placed] = row
             n_placed += 1
-        elif centres[i, 0] == centres[i, 0] and (searched[i] or error <= reach) and (like or fresh[i]):
+        elif np.isfinite(centres[i, 0]) and (searched[i] or error <= reach) and (like or fresh[i]):
             going[n_going] = i
             n_going += 1
     going = going[:n_going]
@@ -140,11 +140,11 @@ def _sort_nan_last(values, count):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _median_into(xs, ys, k, out, row):
     """`pins._predict._median` of one row: the k (x, y) values `xs`, `ys` (sorted in place), into `out[row]`:
-    each column's mean of its middle one or two values among the count of finite x, NaN last (with none
+    each column's mean of its middle one or two values by the count of finite x, sorted NaN last (with none
     finite, the reference's indices -1 and 0: the mean of the last and first)."""
     count = 0
     for j in range(k):
-        if xs[j] == xs[j]:
+        if xs[j] == xs[j] and abs(xs[j]) != np.inf:
             count += 1
     _sort_nan_last(xs, k)
     _sort_nan_last(ys, k)
@@ -205,7 +205,7 @@ def predict(positions, rest_positions, then, index, which, last_seen):
             y = positions[other, 1] - rest_positions[other, 1]
             tx, ty = then[pin, j, 0], then[pin, j, 1]
             now_x[j], now_y[j] = x, y
-            if x == x and tx == tx:
+            if np.isfinite(x) and np.isfinite(tx):
                 both_x[j], both_y[j], then_x[j], then_y[j] = x, y, tx, ty
             else:
                 both_x[j] = both_y[j] = then_x[j] = then_y[j] = np.nan
@@ -259,13 +259,13 @@ def keep_own_tips(positions, found, start, expected, near, margin_sq):
     slot = np.full(n, -1, np.int64)  # each placed found pin's row (the last one, as ``at[found] = start``)
     count = found.shape[0]
     for i in range(count):
-        if positions[found[i], 0] == positions[found[i], 0]:
+        if np.isfinite(positions[found[i], 0]):
             slot[found[i]] = i
     yields = np.zeros(count, np.bool_)
     for i in range(count):
         pin = found[i]
         tx, ty = positions[pin, 0], positions[pin, 1]
-        if tx != tx:
+        if not np.isfinite(tx):
             continue
         ox, oy = tx - start[i, 0], ty - start[i, 1]
         own = ox * ox + oy * oy
@@ -275,9 +275,9 @@ def keep_own_tips(positions, found, start, expected, near, margin_sq):
                 ax, ay = start[slot[other], 0], start[slot[other], 1]
             else:
                 ax, ay = positions[other, 0], positions[other, 1]
-                if ax != ax:
+                if not np.isfinite(ax):
                     ax = expected[other, 0]
-                if ay != ay:
+                if not np.isfinite(ay):
                     ay = expected[other, 1]
             dx, dy = ax - tx, ay - ty
             distance = dx * dx + dy * dy
@@ -350,7 +350,7 @@ def remember(positions, rest_positions, index, then):
     neighbours' displacements from `rest_positions`, px, into `then` (N, k, 2), in place."""
     n, k = index.shape
     for i in range(n):
-        if positions[i, 0] == positions[i, 0]:
+        if np.isfinite(positions[i, 0]):
             for j in range(k):
                 other = index[i, j]
                 then[i, j, 0] = positions[other, 0] - rest_positions[other, 0]
