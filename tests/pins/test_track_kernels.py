@@ -15,6 +15,7 @@ from pins._noise import _JITTER_BOUND, _JITTER_FIRST, _JITTER_RATE
 from pins._predict import _median, _Prediction
 from pins._refine import _SAME_TIP_FRACTION, Refiner
 from pins._rest import _AtRest
+from pins.disc import as_grey
 from tests.pins.conftest import preset_sensor
 
 kernels = compiled()
@@ -243,3 +244,79 @@ def test_follow_and_snap_to_rest_agree_with_the_reference(name, seed, monkeypatc
         _same(lost, want_lost)
     assert calls["follow_pass"] > len(run) // 2 and calls["rest_judge"] > 5  # the kernels' passes ran
     assert np.nanmax(np.abs(tracks[0][len(run) // 3][0] - tracks[0][0][0])) > 4.0  # the pins moved
+
+
+def _refiner_and_frames(name, seed):
+    """A tracker's refiner started on a preset's rest frame, and the bright crops of a press and slide."""
+    s = preset_sensor(name, seed)
+    s.reseed_noise(seed)
+    run = list(s.slides([60], distance_mm=5.0, rest_s=2 / 120, press_s=0.05, slide_s=0.1, lift_s=0.03,
+                        frame_rate=120.0))
+    drawn = np.flatnonzero(run[0].visible | run[0].partial)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
+    tracker.start(run[0].image, pins=run[0].centres[drawn])
+    crops = [tracker._bright(tracker._cropped(as_grey(f.image))) for f in run[1::4]]
+    truths = [f.centres[drawn] for f in run[1::4]]
+    return tracker._refiner, crops, truths
+
+
+@pytest.mark.parametrize("name, seed", [("radial-led-120", 3), ("tactip-331", 1)])
+def test_follow_passes_are_the_reference_from_awkward_guesses(name, seed, monkeypatch):
+    # Guesses on the tips, a fraction of a spacing off (re-centred), most of a spacing off (no tip near
+    # them: searched for from their predictions), lost pins searched for or not: positions and the
+    # filled guesses bit for bit the NumPy passes'.
+    refiner, crops, truths = _refiner_and_frames(name, seed)
+    rng = np.random.default_rng(seed)
+    spacing = refiner.spacing_px
+    far_pins = 0
+    for k, (crop, truth) in enumerate(zip(crops, truths)):
+        for spread in (0.02, 0.2, 0.45, None, "stale"):
+            if spread == "stale":  # guesses from another frame of the slide: stale by up to px
+                truth = truths[(k + 1) % len(truths)]
+            guess = truth + rng.normal(0.0, (0.02 if spread in (None, "stale") else spread) * spacing, truth.shape)
+            if spread in (None, "stale"):  # a few pins far off among placed neighbours: trusted searches
+                off = rng.random(len(guess)) < 0.15
+                angle = rng.uniform(0, 2 * np.pi, off.sum())
+                guess[off] += rng.uniform(0.45, 0.9, off.sum())[:, None] * spacing * np.stack(
+                    [np.cos(angle), np.sin(angle)], axis=1)
+            guess[rng.random(len(guess)) < 0.1] = np.nan
+            last_seen = np.where(np.isnan(guess), refiner.rest_positions, guess)
+            search = rng.random(len(guess)) < 0.7
+            got = refiner.follow(crop, guess, last_seen, search)
+            monkeypatch.setattr("pins._follow.compiled", lambda: None)
+            want = refiner.follow(crop, guess, last_seen, search)
+            monkeypatch.undo()
+            _same(got[0], want[0])
+            _same(got[1], want[1])
+            far_pins += int(np.count_nonzero(np.isnan(got[0][:, 0]) & np.isfinite(guess[:, 0])))
+    assert far_pins > 10  # some guesses found no tip: the searches from predictions ran
+
+
+@pytest.mark.parametrize("name, seed", [("radial-led-120", 4), ("small-pad-100", 2)])
+def test_snap_to_rest_is_the_reference_on_awkward_positions(name, seed, monkeypatch):
+    # A pad at rest with pins jittered, drifted, on a neighbour's tip, missing (searched for or not), and
+    # the pad moving: the positions and the learnt rest scatter bit for bit the reference's.
+    refiner, crops, _ = _refiner_and_frames(name, seed)
+    rng = np.random.default_rng(seed)
+    rest, n = refiner.rest_positions, len(refiner.rest_positions)
+    snapped = 0
+    for trial in range(12):
+        positions = rest + rng.normal(0.0, (0.02, 0.1, 0.3)[trial % 3], rest.shape)
+        swapped = rng.choice(n, 3, replace=False)
+        positions[swapped] = rest[refiner._neighbour_index[swapped, 0]]
+        positions[rng.random(n) < 0.1] = np.nan
+        if trial == 11:
+            positions = positions + 2.0  # a moving pad: nothing moves
+        search = rng.random(n) < 0.6
+        state = (refiner._rest_scatter_sq.copy(), refiner._rest_scatter_seen.copy())
+        got = refiner.snap_to_rest(crops[0], positions, search)
+        learnt = (refiner._rest_scatter_sq.copy(), refiner._rest_scatter_seen.copy())
+        refiner._rest_scatter_sq, refiner._rest_scatter_seen = state
+        monkeypatch.setattr("pins._rest.compiled", lambda: None)
+        want = refiner.snap_to_rest(crops[0], positions, search)
+        monkeypatch.undo()
+        _same(got, want)
+        _same(learnt[0], refiner._rest_scatter_sq)
+        _same(learnt[1], refiner._rest_scatter_seen)
+        snapped += got is not positions
+    assert snapped >= 3  # pins were put back at rest
