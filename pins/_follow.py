@@ -14,7 +14,7 @@ import numpy as np
 
 from ._identity import keep_own_tips
 from ._kernels import compiled
-from ._window import _squared_norm
+from ._window import WindowCentroids, _squared_norm
 
 # A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
 # this fraction of the spacing (a few tenths of a px: the window was centred on the tip as LK
@@ -162,13 +162,13 @@ class _Following:
             keep_own_tips(positions, pins, start, filled, self._identity_index)
         return positions, filled
 
-
     def _follow_compiled(self, kernels, crop: np.ndarray, guess: np.ndarray, last_seen: np.ndarray, filled: np.ndarray,
                          which: np.ndarray, n: int, radius: np.ndarray, start: np.ndarray, first: np.ndarray,
                          measures: np.ndarray) -> np.ndarray:
         """`follow`'s passes after the first window measurement, each pass's judgement by one compiled kernel
-        (`pins._jit_track.follow_first`, `follow_pass`; `kernels`: `pins._jit`): the positions, bit for bit
-        the NumPy passes' in `follow`."""
+        (`pins._jit_track.follow_first`, `follow_pass`; `kernels`: `pins._jit`), the re-centring passes with
+        their window measurements in one (`pins._jit.follow_passes`) when the windows are `WindowCentroids`
+        themselves: the positions, bit for bit the NumPy passes' in `follow`."""
         fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
         settled_sq, gate_sq = self._settled_px ** 2, self.gate_px ** 2
         at_least, area_at_most = self._at_least, self._area_at_most
@@ -198,7 +198,18 @@ class _Following:
             points = placed_at[chain]
             searched = chain >= n
         none = np.zeros(chain.size, dtype=bool)
-        placed = []
+        windows = self.windows
+        if type(windows) is WindowCentroids and crop.dtype == np.uint8 and crop.flags.c_contiguous:
+            # The windows' own kernel inside the passes' (not a stand-in: `pins.accel`'s batches its windows).
+            placed = kernels.follow_passes(
+                crop, self.origin, windows.half_px, windows.threshold_fraction, windows.above_mean,
+                float(windows.least_contrast), points, start, chain, which, radius, searched,
+                none if fresh is None else fresh, settled_sq, fine, reach, gate_sq, _FOLLOW_PASSES - 1, at_least,
+                area_at_most, positions)
+            placed = [placed] if placed.size else []
+            chain = chain[:0]
+        else:
+            placed = []
         chain_radius = radius[chain]
         for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
             if chain.size == 0:

@@ -315,10 +315,44 @@ def centre_step(image, start, reach, neighbours, nearest, theta, gx, gy):
     return out
 
 
-# The tracker's bookkeeping round its window measurements (`pins._follow`, `pins._predict`, `pins._identity`).
+# The tracker's bookkeeping round its window measurements (`pins._follow`, `pins._predict`, `pins._identity`,
+# `pins._rest`), and the follow passes with their window measurements (`follow_passes`, below).
 from ._jit_track import (carried_velocity, displacement_median, follow_first, follow_pass,  # noqa: E402
                          keep_own_tips, neighbour_median, observe_still, one_pin_per_tip, predict, remember,
                          rest_judge, rest_look)
 
 _TRACK_KERNELS = (carried_velocity, displacement_median, follow_first, follow_pass, keep_own_tips, neighbour_median,
                   observe_still, one_pin_per_tip, predict, remember, rest_judge, rest_look)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def follow_passes(image, origin, half, threshold_fraction, above_mean, least_contrast, points, start, chain, which,
+                  radius, searched, fresh, settled_sq, fine, reach, gate_sq, passes, at_least, area_at_most, positions):
+    """`pins._follow`'s re-centring passes in one call: up to `passes` rounds of `window_measure` (the windows'
+    settings as there; `image` the crop at `origin` (2,), px) of the windows `chain` from `points` (C, 2),
+    px, each judged by `pins._jit_track.follow_pass` (its arguments as there; `fresh` for the first round
+    only; the last round its last pass). Returns the rows placed, in the order the passes placed them."""
+    placed = np.empty(chain.shape[0], np.int64)
+    count = 0
+    chain_radius = np.empty(chain.shape[0])
+    for i in range(chain.shape[0]):
+        chain_radius[i] = radius[chain[i]]
+    none = np.zeros(chain.shape[0], np.bool_)
+    for round_ in range(passes):
+        if chain.shape[0] == 0:
+            break
+        local = np.empty(points.shape)
+        for i in range(points.shape[0]):
+            local[i, 0] = points[i, 0] - origin[0]
+            local[i, 1] = points[i, 1] - origin[1]
+        centres, measures = window_measure(image, local, chain_radius, half, threshold_fraction, above_mean,
+                                           least_contrast)
+        for i in range(centres.shape[0]):
+            centres[i, 0] += origin[0]
+            centres[i, 1] += origin[1]
+        ok, chain, points, searched, chain_radius = follow_pass(
+            centres, measures, points, start, chain, which, radius, searched, fresh if round_ == 0 else none,
+            settled_sq, fine, reach, gate_sq, round_ == passes - 1, at_least, area_at_most, positions)
+        placed[count:count + ok.shape[0]] = ok
+        count += ok.shape[0]
+    return placed[:count]
