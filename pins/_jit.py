@@ -319,10 +319,10 @@ def centre_step(image, start, reach, neighbours, nearest, theta, gx, gy):
 # `pins._rest`), and the follow passes with their window measurements (`follow_passes`, below).
 from ._jit_track import (carried_velocity, displacement_median, follow_first, follow_pass,  # noqa: E402
                          keep_own_tips, neighbour_median, observe_still, one_pin_per_tip, predict, remember,
-                         rest_judge, rest_look)
+                         rest_judge, rest_look, trusted)
 
 _TRACK_KERNELS = (carried_velocity, displacement_median, follow_first, follow_pass, keep_own_tips, neighbour_median,
-                  observe_still, one_pin_per_tip, predict, remember, rest_judge, rest_look)
+                  observe_still, one_pin_per_tip, predict, remember, rest_judge, rest_look, trusted)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

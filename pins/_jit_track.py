@@ -505,3 +505,29 @@ def observe_still(steps, settled_sq, mean_sq, seen, first_count, bound_sq, rate)
         else:
             mean_sq[i] = so_far + 0.0
     return still
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def trusted(positions, index, which, still, predicted, last_seen, least, gate_sq):
+    """`pins._predict._Prediction._trusted`: whether pins `which` (L,) may be searched for at their
+    `predicted` (L, 2), px: at least `least` of their (N, k) `index` neighbours placed in `positions`
+    (N, 2), px; or at least two, none of them moved (`still` (N,) bool) and the prediction within
+    `gate_sq`, px^2, of where the pin was last seen (`last_seen` (N, 2), px). (L,) bool."""
+    rows = which.shape[0]
+    k = index.shape[1]
+    out = np.empty(rows, np.bool_)
+    for r in range(rows):
+        pin = which[r]
+        count = 0
+        moved = False
+        for j in range(k):
+            other = index[pin, j]
+            if np.isfinite(positions[other, 0]):
+                count += 1
+                moved = moved or not still[other]
+        out[r] = count >= least
+        if not out[r] and count >= 2 and not moved:
+            dx = predicted[r, 0] - last_seen[pin, 0]
+            dy = predicted[r, 1] - last_seen[pin, 1]
+            out[r] = dx * dx + dy * dy <= gate_sq
+    return out

@@ -137,6 +137,11 @@ class _Prediction:
         tactip-331 slides, 2 or 3 of 6 neighbours placed, predictions 10-25 px off at a 17.7 px spacing).
         `predicted` (L, 2), px: the pins' predictions from `positions` (`_predict`; every caller has them).
         """
+        kernels = compiled()
+        if kernels is not None:
+            return kernels.trusted(positions, self._neighbour_index, np.asarray(which, dtype=np.int64), self.still,
+                                   predicted, last_seen, _TRUSTED_SHARE * self._neighbour_index.shape[1],
+                                   self.gate_px ** 2)
         index = self._neighbour_index[which]
         placed = np.isfinite(positions[index, 0])
         count = np.count_nonzero(placed, axis=1)

@@ -95,6 +95,14 @@ def test_predictions_are_the_references(seed, monkeypatch):
         _same(got, want)
         if n > 2:
             _same(got[0], last_seen[0])
+        # Whether to search there: most neighbours placed, or a few still ones and the prediction near.
+        state.still, state.gate_px = rng.random(n) < 0.7, 3.0
+        predicted = last_seen[which] + rng.normal(0.0, 3.0, (len(which), 2))
+        got = _Prediction._trusted(state, positions, which, last_seen, predicted)
+        monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+        want = _Prediction._trusted(state, positions, which, last_seen, predicted)
+        monkeypatch.delenv("TACTIP_KERNELS")
+        _same(got, want)
         state._then[:] = 0.0  # `remember` against its reference
         _Prediction.remember(state, positions)
         got = state._then.copy()
