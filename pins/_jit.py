@@ -8,6 +8,10 @@ in float64, then rounded): the window measurements come out bit for bit the refe
 fit's sums and its 8 x 8 solve run in another order than NumPy's and LAPACK's and differ in the
 last bits (~1e-14 px). The tests hold the kernels to the reference within 1e-9 px.
 
+The tracker's bookkeeping kernels (`pins._jit_track`) are exported here too, so that `pins._kernels`
+hands out one module; `follow_passes` runs the follow passes' re-centring rounds with their window
+measurements in one call.
+
 ``cache=True``: compiled once per machine (a few seconds), then loaded from ``__pycache__``.
 """
 
