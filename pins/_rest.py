@@ -118,7 +118,9 @@ class _AtRest:
         px, and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its
         steps, `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip shown by its contrast. A pin placed
         near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
-        the check costs a few vector operations per frame.
+        the check costs a few vector operations per frame. By two compiled kernels round the window
+        measurement (`pins._jit_rest`: the same positions and learnt scatters) unless
+        ``TACTIP_KERNELS=numpy`` or Numba is missing.
 
         Parameters
         ----------
