@@ -76,9 +76,9 @@ rest. ``--against`` main, 5 rounds, tracker updates ms/frame CPU (median of the 
 passes' re-centring rounds (1.35 calls a frame against 4.30; 0.50-0.51 of main's time). Lost and retired
 pins identical, positions bit for bit (0 px apart) on both codecs, as on bench_slides' renders (12 videos:
 radial-led-120, tactip-331, small-pad-100; seeds 0-1; model and realistic skins) and `bench_phenomena.py`
-seeds 0-2 (the same lines). ``--calls``, MJPG, per frame: calls 504 (503 on f24c3ab: each kernel call
-through Numba's dispatcher is several), operations 1209 -> 819 (follow passes 258, snap to rest 82, tip
-fits 201). What is left of the tracker's ~0.47-0.5 ms/frame on a quieter machine: the window measurements'
+seeds 0-2 (the same lines). ``--calls``, MJPG, per frame, main -> this: calls 507 -> 504 (follow passes
+202 -> 163, snap to rest 51 -> 56, tip fits 104 -> 119: a kernel's call through Numba's dispatcher counts
+as several), operations 1218 -> 819 (561 -> 258, 121 -> 82, 211 -> 201). What is left of the tracker's ~0.47-0.5 ms/frame on a quieter machine: the window measurements'
 own work (their kernels, ~0.1), the tip fits (~0.12-0.16, `pins._recover`, `pins._tipfit`), the update's
 own code in `pins.track` (~0.07), recovery by blobs (0.05).
 
