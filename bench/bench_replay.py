@@ -114,6 +114,27 @@ import it and ~0.4 s to load the kernels from their cache (4.4 s to compile them
 the best of the repeats leaves out and the first repeat's line below shows; on this 795-frame video that is
 ~0.7 ms/frame, on a minute of video at 120 frames/s under 0.1.
 
+Session of issue 20's "speed9" (2026-11-29; load average 14-18 from other sessions; main ee48907 against this
+session's code, 3 rounds interleaved per codec, order alternating, best of 2 repeats each; the tracker's
+positions, lost and retired pins bit for bit main's on both videos, on bench_slides' renders and in
+`bench_phenomena.py` seeds 0-2): compiled kernels for the tracker's bookkeeping round its window
+measurements (`pins._jit_track`, `pins._jit_rest`; the follow passes' re-centring rounds with their windows
+in one call, `pins._jit.follow_passes`). CPU, ms/frame, main -> this, per round: the tracker alone MJPG
+0.95 / 0.85 / 0.89 -> 0.49 / 0.46 / 0.46, mp4v 0.87 / 0.96 / 0.87 -> 0.48 / 0.44 / 0.49; replay's main thread
+MJPG 1.17 / 1.16 / 1.11 -> 0.68 / 0.77 / 0.75, mp4v 1.10 / 1.12 / 1.12 -> 0.70 / 0.68 / 0.78, now below its
+decode thread (0.96-1.03 in the same rounds): replay's busier thread / decode MJPG 1.23 / 1.14 / 1.06 -> 1.02 /
+1.02 / 1.04, mp4v 1.01 / 1.13 / 0.80 -> 1.04 / 1.04 / 0.99 (the decode thread's, ~1.0 whatever the tracker).
+The clock at that load: replay, s (795 frames), MJPG 4.31 / 4.59 / 3.59 -> 3.45 / 3.34 / 2.94, mp4v 3.45 /
+3.48 / 3.94 -> 2.64 / 2.66 / 2.94; replay / decode MJPG 3.80 / 2.80 / 2.20 -> 3.98 / 3.44 / 3.87, mp4v 2.06
+/ 2.29 / 3.61 -> 2.88 / 1.79 / 1.91 (decoding alone took 0.76-1.64 s in the same processes: these ratios
+say nothing at load 15 on 2 cores; the bar, 1.5 on a quiet machine, is not shown here). The main thread is
+now within the ~0.75 ms/frame the bar asks of it for mp4v (with decode's ~1.0 ms/frame CPU in its own
+thread and decoding alone 0.58 ms/frame by the clock on both cores): what is left of it is the tracker
+(~0.47: window measurements' and tip fits' own work, the update's code in `pins.track`), the field search
+(~0.2 over this video, once) and replay's own loop. The first repeat pays Numba's one-off cost: the
+bookkeeping kernels add ~0.07-0.09 s CPU to load from their cache (a 300-frame tracker run, first against
+second pass), the first repeat's main thread 1.20-1.60 -> 0.96-1.36 s CPU.
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
 """
@@ -273,7 +294,8 @@ def main() -> None:
     print(f"the first repeat's replay (the process's first tracking: Numba imported and the kernels loaded, "
           f"`pins._kernels`): {times['replay'][0]:.3f} s clock, main thread {cpu['replay main'][0]:.3f} s CPU")
     two_cores = max(least["replay main"], least["replay decode"]) / least["decode"]
-    print(f"window measurements {calls / (frames - 1):.2f} per frame; replay's busier thread / decode = "
+    print(f"window measurements {calls / (frames - 1):.2f} per frame (besides the follow passes' re-centring rounds, "
+          f"in one compiled call a frame: `pins._jit.follow_passes`); replay's busier thread / decode = "
           f"{two_cores:.2f} (a lower bound on replay / decode: decoding alone uses every core); load average "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
 

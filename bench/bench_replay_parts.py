@@ -64,6 +64,24 @@ neighbours, one pin per tip, kept own tips), snap to rest ~0.05, recovery by blo
 bookkeeping outside these parts ~0.2 (predictions, carried steps, learnt scatters, identities): a few hundred
 NumPy calls a frame in files this session did not own.
 
+Session "speed9" (2026-11-29; load average 14-15 from other sessions; main ee48907 against this session's
+code): compiled kernels for the tracker's bookkeeping round its window measurements (`pins._jit_track`,
+`pins._jit_rest`): the follow passes' judgements, their re-centring rounds with their window measurements
+in one call (`pins._jit.follow_passes`), neighbours' medians, predictions, trusted searches, carried
+steps, remembered displacements, one pin per tip, kept own tips, the still steps' scatter and snap to
+rest. ``--against`` main, 5 rounds, tracker updates ms/frame CPU (median of the paired ratios): MJPG 1.028
+-> 0.736 (0.64; follow passes 0.449 -> 0.258, 0.52; snap to rest 0.088 -> 0.048, 0.52; tip fits 0.192 ->
+0.175, 0.82, through their kept own tips and predictions; recovery by blobs 1.08, noise), mp4v 1.034 ->
+0.661 (0.64; 0.52; 0.49; 0.84; 1.16). "window measurements" now counts only those outside the follow
+passes' re-centring rounds (1.35 calls a frame against 4.30; 0.50-0.51 of main's time). Lost and retired
+pins identical, positions bit for bit (0 px apart) on both codecs, as on bench_slides' renders (12 videos:
+radial-led-120, tactip-331, small-pad-100; seeds 0-1; model and realistic skins) and `bench_phenomena.py`
+seeds 0-2 (the same lines). ``--calls``, MJPG, per frame, main -> this: calls 507 -> 504 (follow passes
+202 -> 163, snap to rest 51 -> 56, tip fits 104 -> 119: a kernel's call through Numba's dispatcher counts
+as several), operations 1218 -> 819 (561 -> 258, 121 -> 82, 211 -> 201). What is left of the tracker's ~0.47-0.5 ms/frame on a quieter machine: the window measurements'
+own work (their kernels, ~0.1), the tip fits (~0.12-0.16, `pins._recover`, `pins._tipfit`), the update's
+own code in `pins.track` (~0.07), recovery by blobs (0.05).
+
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C

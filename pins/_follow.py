@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from ._identity import keep_own_tips
-from ._window import _squared_norm
+from ._kernels import compiled
+from ._window import WindowCentroids, _squared_norm
 
 # A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
 # this fraction of the spacing (a few tenths of a px: the window was centred on the tip as LK
@@ -80,6 +81,10 @@ class _Following:
         start = filled[which]
         first, measures = self.windows.measure(crop, start - self.origin, radius)
         first += self.origin
+        kernels = compiled()
+        if kernels is not None:
+            return self._follow_compiled(kernels, crop, guess, last_seen, filled, which, n, radius, start, first,
+                                         measures), filled
         # A window at the guess is judged by its centroid less the pin's own offset at rest (the
         # window's pull by what lies around the tip), so a still tip is placed where it rested.
         placed_at = first - self._pull(start, index)
@@ -157,3 +162,72 @@ class _Following:
             keep_own_tips(positions, pins, start, filled, self._identity_index)
         return positions, filled
 
+    def _follow_compiled(self, kernels, crop: np.ndarray, guess: np.ndarray, last_seen: np.ndarray, filled: np.ndarray,
+                         which: np.ndarray, n: int, radius: np.ndarray, start: np.ndarray, first: np.ndarray,
+                         measures: np.ndarray) -> np.ndarray:
+        """`follow`'s passes after the first window measurement, each pass's judgement by one compiled kernel
+        (`pins._jit_track.follow_first`, `follow_pass`; `kernels`: `pins._jit`), the re-centring passes with
+        their window measurements in one (`pins._jit.follow_passes`) when the windows are `WindowCentroids`
+        themselves: the positions, bit for bit the NumPy passes' in `follow`."""
+        fine, reach = self._guess_px ** 2, (_FOLLOW_FRACTION * self.spacing_px) ** 2
+        settled_sq, gate_sq = self._settled_px ** 2, self.gate_px ** 2
+        at_least, area_at_most = self._at_least, self._area_at_most
+        positions = np.empty(guess.shape)
+        positions.fill(np.nan)
+        which = np.ascontiguousarray(which, dtype=np.int64)
+        placed_at, again, far = kernels.follow_first(first, start, measures, which, n, self.rest_positions,
+                                                     self._rest_offset, self.spacing_px, self.gate_px, fine, reach,
+                                                     at_least, area_at_most, positions)
+        if far.size:
+            predicted = self._predict(positions, which[far], last_seen)
+            trusted = self._trusted(positions, which[far], last_seen, predicted)
+            far, predicted = far[trusted], predicted[trusted]
+        fresh = None
+        if far.size:
+            chain = np.concatenate([again, far])
+            points = placed_at[chain]
+            start[far] = points[-far.size:] = predicted
+            now = np.where(np.isnan(positions), filled, positions)
+            now[which[far]] = start[far]
+            radius = self.window_radius(now)[which]
+            fresh = np.zeros(chain.size, dtype=bool)
+            fresh[chain.size - far.size:] = True
+            searched = (chain >= n) | fresh
+        else:
+            chain = again
+            points = placed_at[chain]
+            searched = chain >= n
+        none = np.zeros(chain.size, dtype=bool)
+        windows = self.windows
+        if type(windows) is WindowCentroids and crop.dtype == np.uint8 and crop.flags.c_contiguous:
+            # The windows' own kernel inside the passes' (not a stand-in: `pins.accel`'s batches its windows).
+            placed = kernels.follow_passes(
+                crop, self.origin, windows.half_px, windows.threshold_fraction, windows.above_mean,
+                float(windows.least_contrast), points, start, chain, which, radius, searched,
+                none if fresh is None else fresh, settled_sq, fine, reach, gate_sq, _FOLLOW_PASSES - 1, at_least,
+                area_at_most, positions)
+            placed = [placed] if placed.size else []
+            chain = chain[:0]
+        else:
+            placed = []
+        chain_radius = radius[chain]
+        for last in [False] * (_FOLLOW_PASSES - 2) + [True]:
+            if chain.size == 0:
+                break
+            centres, measures = self.windows.measure(crop, points - self.origin, chain_radius)
+            centres += self.origin
+            ok, chain, points, searched, chain_radius = kernels.follow_pass(
+                centres, measures, points, start, chain, which, radius, searched, none if fresh is None else fresh,
+                settled_sq, fine, reach, gate_sq, last, at_least, area_at_most, positions)
+            placed.append(ok)
+            fresh = None
+        # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
+        # the others can have reached a neighbour's tip.
+        placed = np.concatenate(placed) if placed else again[:0]
+        if placed.size:
+            from ._refine import _SAME_TIP_FRACTION  # (`Refiner._one_pin_per_tip`'s bound; _refine imports this module)
+            pins, start = which[placed], start[placed]
+            kernels.one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start), self._identity_index,
+                                    (_SAME_TIP_FRACTION * self.spacing_px) ** 2)
+            keep_own_tips(positions, pins, start, filled, self._identity_index)
+        return positions

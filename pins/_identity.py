@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._kernels import compiled
 from ._window import _squared_norm
 
 # Pins whose tips a found pin may have taken: its nearest this many at rest (three rings of a hexagonal
@@ -89,9 +90,23 @@ def keep_own_tips(positions: np.ndarray, found: np.ndarray, start: np.ndarray, e
     >>> keep_own_tips(positions, np.array([1]), np.array([[11.0, 0.0]]), expected, near)
     >>> positions[1]
     array([nan, nan])
+
+    By the compiled kernel (`pins._jit_track.keep_own_tips`, one call, the same decisions) unless
+    ``TACTIP_KERNELS=numpy`` or Numba is missing (`pins._kernels`).
     """
     if not found.size:
         return
+    kernels = compiled()
+    if kernels is not None and positions.dtype == np.float64:
+        kernels.keep_own_tips(positions, np.asarray(found, dtype=np.int64), np.asarray(start, dtype=np.float64),
+                              np.asarray(expected, dtype=np.float64), near, MISSING_MARGIN ** 2)
+        return
+    _keep_own_tips_numpy(positions, found, start, expected, near)
+
+
+def _keep_own_tips_numpy(positions: np.ndarray, found: np.ndarray, start: np.ndarray, expected: np.ndarray,
+                         near: np.ndarray) -> None:
+    """`keep_own_tips` in NumPy: the reference of the compiled kernel (`pins._jit_track.keep_own_tips`)."""
     tips = positions[found]
     placed = np.isfinite(tips[:, 0])
     if not np.logical_and.reduce(placed):  # (one call where, as mostly, every found pin is placed)

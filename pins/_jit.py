@@ -8,6 +8,10 @@ in float64, then rounded): the window measurements come out bit for bit the refe
 fit's sums and its 8 x 8 solve run in another order than NumPy's and LAPACK's and differ in the
 last bits (~1e-14 px). The tests hold the kernels to the reference within 1e-9 px.
 
+The tracker's bookkeeping kernels (`pins._jit_track`) are exported here too, so that `pins._kernels`
+hands out one module; `follow_passes` runs the follow passes' re-centring rounds with their window
+measurements in one call.
+
 ``cache=True``: compiled once per machine (a few seconds), then loaded from ``__pycache__``.
 """
 
@@ -313,3 +317,47 @@ def centre_step(image, start, reach, neighbours, nearest, theta, gx, gy):
         else:
             out[i, 0], out[i, 1] = mu_x, mu_y
     return out
+
+
+# The tracker's bookkeeping round its window measurements (`pins._follow`, `pins._predict`, `pins._identity`,
+# `pins._rest`), and the follow passes with their window measurements (`follow_passes`, below).
+from ._jit_rest import observe_still, rest_judge, rest_look  # noqa: E402
+from ._jit_track import (carried_velocity, displacement_median, follow_first, follow_pass,  # noqa: E402
+                         keep_own_tips, neighbour_median, one_pin_per_tip, predict, remember, trusted)
+
+# (Named here: the kernels `pins._kernels` hands out with this module.)
+_TRACK_KERNELS = (carried_velocity, displacement_median, follow_first, follow_pass, keep_own_tips, neighbour_median,
+                  observe_still, one_pin_per_tip, predict, remember, rest_judge, rest_look, trusted)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def follow_passes(image, origin, half, threshold_fraction, above_mean, least_contrast, points, start, chain, which,
+                  radius, searched, fresh, settled_sq, fine, reach, gate_sq, passes, at_least, area_at_most, positions):
+    """`pins._follow`'s re-centring passes in one call: up to `passes` rounds of `window_measure` (the windows'
+    settings as there; `image` the crop at `origin` (2,), px) of the windows `chain` from `points` (C, 2),
+    px, each judged by `pins._jit_track.follow_pass` (its arguments as there; `fresh` for the first round
+    only; the last round its last pass). Returns the rows placed, in the order the passes placed them."""
+    placed = np.empty(chain.shape[0], np.int64)
+    count = 0
+    chain_radius = np.empty(chain.shape[0])
+    for i in range(chain.shape[0]):
+        chain_radius[i] = radius[chain[i]]
+    none = np.zeros(chain.shape[0], np.bool_)
+    for round_ in range(passes):
+        if chain.shape[0] == 0:
+            break
+        local = np.empty(points.shape)
+        for i in range(points.shape[0]):
+            local[i, 0] = points[i, 0] - origin[0]
+            local[i, 1] = points[i, 1] - origin[1]
+        centres, measures = window_measure(image, local, chain_radius, half, threshold_fraction, above_mean,
+                                           least_contrast)
+        for i in range(centres.shape[0]):
+            centres[i, 0] += origin[0]
+            centres[i, 1] += origin[1]
+        ok, chain, points, searched, chain_radius = follow_pass(
+            centres, measures, points, start, chain, which, radius, searched, fresh if round_ == 0 else none,
+            settled_sq, fine, reach, gate_sq, round_ == passes - 1, at_least, area_at_most, positions)
+        placed[count:count + ok.shape[0]] = ok
+        count += ok.shape[0]
+    return placed[:count]

@@ -2,7 +2,9 @@
 
 The tracker measures windows and fits tips a few times a frame on arrays of a few to 120 rows,
 where each NumPy call's fixed cost (a few us), not the arithmetic, sets the time: ~500 calls a
-frame (issue 20, outcome 9). The compiled kernels do each pass in one call, a loop over the windows.
+frame (issue 20, outcome 9). The compiled kernels do each pass in one call, a loop over the windows;
+the bookkeeping round them too (`pins._jit_track`: the follow passes' judgements, neighbours' medians,
+predictions, carried steps, identities, snap to rest), bit for bit their references.
 The NumPy code stays the reference: it runs when the environment variable ``TACTIP_KERNELS`` is
 ``numpy`` or when Numba cannot be imported, and the tests hold the kernels to it.
 

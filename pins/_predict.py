@@ -46,6 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._identity import gathered
+from ._kernels import compiled
 from ._window import _squared_norm
 
 # A lost pin is searched for at its prediction only when this share of its neighbours is placed.
@@ -79,6 +80,10 @@ class _Prediction:
 
     def remember(self, positions: np.ndarray) -> None:
         """Keep, for the pins placed in a frame's final (N, 2) `positions`, px, their neighbours' displacements."""
+        kernels = compiled()
+        if kernels is not None:
+            kernels.remember(positions, self.rest_positions, self._neighbour_index, self._then)
+            return
         which = np.flatnonzero(np.isfinite(positions[:, 0]))
         if which.size:
             self._then[which] = gathered(positions - self.rest_positions, self._neighbour_index[which])
@@ -89,8 +94,13 @@ class _Prediction:
         Over each pin's neighbours placed both in `positions` (N, 2), px, and when it was last placed
         (`remember`): its `last_seen` position plus the change of their median displacement. Without
         such neighbours: its rest position moved by the median displacement of its placed neighbours;
-        without any: `last_seen`.
+        without any: `last_seen`. By the compiled kernel (`pins._jit_track.predict`) unless
+        ``TACTIP_KERNELS=numpy`` or Numba is missing; the same figures.
         """
+        kernels = compiled()
+        if kernels is not None:
+            return kernels.predict(positions, self.rest_positions, self._then, self._neighbour_index[which],
+                                   np.asarray(which, dtype=np.int64), last_seen)
         index = self._neighbour_index[which]
         # The three medians in one (3 L, k, 2) sort: over the neighbours placed now (`either`), and
         # over those placed both now and then, now and then (their change).
@@ -111,7 +121,7 @@ class _Prediction:
 
         (`last_seen` where none is placed.)
         """
-        shift = self.neighbour_median(positions - self.rest_positions, which)
+        shift = self.displacement_median(positions, which)
         return np.where(np.isnan(shift), last_seen[which], self.rest_positions[which] + shift)
 
     def _trusted(self, positions: np.ndarray, which: np.ndarray, last_seen: np.ndarray,
@@ -127,6 +137,11 @@ class _Prediction:
         tactip-331 slides, 2 or 3 of 6 neighbours placed, predictions 10-25 px off at a 17.7 px spacing).
         `predicted` (L, 2), px: the pins' predictions from `positions` (`_predict`; every caller has them).
         """
+        kernels = compiled()
+        if kernels is not None:
+            return kernels.trusted(positions, self._neighbour_index, np.asarray(which, dtype=np.int64), self.still,
+                                   predicted, last_seen, _TRUSTED_SHARE * self._neighbour_index.shape[1],
+                                   self.gate_px ** 2)
         index = self._neighbour_index[which]
         placed = np.isfinite(positions[index, 0])
         count = np.count_nonzero(placed, axis=1)
@@ -148,8 +163,14 @@ class _Prediction:
         plateau of two overlapping tips in the skin squeezed ahead of a slide steps by a few tenths of a
         px while its tip and neighbours step by px: issue 20, tactip-331 realistic skin, guesses 4-5 px
         behind tips moving 0.4-2.2 px a frame). Elsewhere (a still pad, a faint tip's jitter) zero.
+        `velocity` is changed in place and returned; by the compiled kernel (`pins._jit_track`, one call)
+        unless ``TACTIP_KERNELS=numpy`` or Numba is missing.
         """
         bound_sq = self._drift_bound_sq()
+        kernels = compiled()
+        if kernels is not None and velocity.dtype == np.float64 and velocity.flags.writeable:
+            kernels.carried_velocity(velocity, still, bound_sq, self._neighbour_index, _AGREE_SHARE ** 2)
+            return velocity
         with np.errstate(invalid="ignore"):
             active = ~still | (_squared_norm(velocity) > bound_sq)  # (NaN, a lost pin: active, not finite)
         active &= np.isfinite(velocity[:, 0])
@@ -186,9 +207,21 @@ class _Prediction:
         self._drift_bound_memo = (key, bound)
         return bound
 
+    def displacement_median(self, positions: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """``neighbour_median(positions - rest_positions, which)``, px (L, 2), of (N, 2) `positions`, px:
+        compiled without forming the displacements (`pins._jit_track.displacement_median`)."""
+        kernels = compiled()
+        if kernels is not None:
+            return kernels.displacement_median(positions, self.rest_positions, self._neighbour_index[which])
+        return self.neighbour_median(positions - self.rest_positions, which)
+
     def neighbour_median(self, values: np.ndarray, which: np.ndarray) -> np.ndarray:
         """Median of the finite (N, 2) `values` of each pin's `neighbours` nearest pins at rest, for pins `which`.
 
-        Returns (L, 2), NaN for a pin none of whose neighbours has a finite value.
+        Returns (L, 2), NaN for a pin none of whose neighbours has a finite value. By the compiled kernel
+        (`pins._jit_track.neighbour_median`, no gather) unless ``TACTIP_KERNELS=numpy`` or Numba is missing.
         """
+        kernels = compiled()
+        if kernels is not None:
+            return kernels.neighbour_median(values, self._neighbour_index[which])
         return _median(gathered(values, self._neighbour_index[which]))  # (L, k, 2), a copy

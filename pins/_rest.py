@@ -21,7 +21,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from ._noise import _JITTER_FIRST, _learn_mean_square, noise_sigma
+from ._kernels import compiled
+from ._noise import _JITTER_BOUND, _JITTER_FIRST, _JITTER_RATE, _learn_mean_square, noise_sigma
 from ._window import _squared_norm
 
 # The pad is back at rest when this share of the placed pins lie within this fraction of the
@@ -85,11 +86,16 @@ class _AtRest:
         square updates the pin's running mean square scatter (the mean of its first `_JITTER_FIRST`,
         then weight `_JITTER_RATE` for steps within `_JITTER_BOUND` times the scatter so far).
         """
-        half = _squared_norm(steps)
-        still = half <= self._settled_px ** 2  # NaN (lost) compares False
-        half *= 0.5
-        # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
-        _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
+        kernels = compiled()
+        if kernels is not None and self._jitter_seen.dtype == np.float64:  # (one compiled call, the same figures)
+            still = kernels.observe_still(steps, self._settled_px ** 2, self._jitter_sq, self._jitter_seen,
+                                          _JITTER_FIRST, _JITTER_BOUND ** 2, _JITTER_RATE)
+        else:
+            half = _squared_norm(steps)
+            still = half <= self._settled_px ** 2  # NaN (lost) compares False
+            half *= 0.5
+            # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
+            _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
         seen, jitter = self._jitter_seen, self._jitter_sq
         self._observed += 1
         if self._observed % _FLOOR_EVERY == 1:
@@ -112,7 +118,9 @@ class _AtRest:
         px, and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its
         steps, `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip shown by its contrast. A pin placed
         near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
-        the check costs a few vector operations per frame.
+        the check costs a few vector operations per frame. By two compiled kernels round the window
+        measurement (`pins._jit_rest`: the same positions and learnt scatters) unless
+        ``TACTIP_KERNELS=numpy`` or Numba is missing.
 
         Parameters
         ----------
@@ -128,6 +136,9 @@ class _AtRest:
         positions : (N, 2) ndarray of float64
             `positions`, or a copy with the pins found at their rest positions, px.
         """
+        kernels = compiled()
+        if kernels is not None:
+            return self._snap_to_rest_compiled(kernels, crop, positions, search)
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
         # Pins that drifted from rest by more than a window's settling in noise are looked at again.
         # (count_nonzero: `ndarray.any` costs several times more on a hundred pins.)
@@ -146,7 +157,7 @@ class _AtRest:
         far = distance > self.gate_px ** 2
         between = np.flatnonzero(~still & ~far & np.isfinite(distance))
         if between.size:
-            around = _squared_norm(self.neighbour_median(positions - self.rest_positions, between))
+            around = _squared_norm(self.displacement_median(positions, between))
             jitter = (around <= (_STILL_FRACTION * self.spacing_px) ** 2) & (
                 distance[between] <= (2.0 * _STILL_FRACTION * self.spacing_px) ** 2)
             between = between[~jitter]
@@ -161,7 +172,7 @@ class _AtRest:
         # continuous: no pin moves by a px alone), and a window that settles within a few times its
         # own scatter in noise (`observe_still`; up to twice the search's bound) shows the pin there.
         # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
-        shift = self.neighbour_median(positions - self.rest_positions, look)
+        shift = self.displacement_median(positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
         residual = _squared_norm(centres - rest - shift)
         scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
@@ -185,3 +196,22 @@ class _AtRest:
         positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
 
+
+    def _snap_to_rest_compiled(self, kernels, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
+        """`snap_to_rest` by two compiled kernels (`pins._jit_track.rest_look`, `rest_judge`; `kernels`: `pins._jit`)
+        round its window measurement: the same positions and learnt scatters, bit for bit."""
+        spacing = self.spacing_px
+        distance, look, go = kernels.rest_look(
+            positions, self.rest_positions, search, self._neighbour_index, self._guess_px ** 2,
+            (_STILL_FRACTION * spacing) ** 2, _STILL_SHARE, self.gate_px ** 2, (2.0 * _STILL_FRACTION * spacing) ** 2,
+            _BETWEEN_SHARE)
+        if not go:
+            return positions
+        rest = self.rest_positions[look]
+        centres, measures = self.windows.measure(crop, rest - self.origin, self._rest_radius[look])
+        return kernels.rest_judge(
+            centres, measures, look, positions, distance, self.rest_positions, self._rest_offset, self.origin,
+            self._neighbour_index, self._guess_px ** 2, _CALM_BOUND ** 2, self._settled_px, self.gate_px ** 2,
+            self._jitter_sq, self._rest_scatter_sq, self._rest_scatter_seen, self._noise_scatter_sq,
+            float(self._jitter_floor), self._at_least, self._area_at_most, _JITTER_FIRST, _JITTER_BOUND ** 2,
+            _JITTER_RATE)[0]
