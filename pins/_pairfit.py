@@ -28,6 +28,7 @@ frame 0.90 -> 0.12; model skin tactip-331 4735 -> 1154 (lost 10.8 -> 6.6), radia
 from __future__ import annotations
 
 import functools
+import os
 
 import numpy as np
 
@@ -150,6 +151,10 @@ def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected:
     """
     if not refiner.tip_fit_radius_px >= _SMALLEST_TIP_PX:
         return positions
+    kernels = _compiled()
+    if kernels is not None:  # (one call: pairing, fits, acceptance)
+        return kernels.part_pairs(crop, positions, expected, refiner._window_neighbours, refiner._overlap_px,
+                                  float(refiner.tip_fit_radius_px), float(refiner.gate_px), refiner.origin)
     at = np.where(np.isfinite(positions), positions, expected)
     placed = np.flatnonzero(np.isfinite(positions[:, 0]))
     if not placed.size:
@@ -183,6 +188,24 @@ def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected:
     both = ok & np.isfinite(positions[second, 0])
     positions[second[both]] = fit2[both] + refiner.origin
     return positions
+
+
+_LOADED: list = []  # [the kernel module, or None when Numba cannot be imported], once tried
+
+
+def _compiled():
+    """The compiled pair fit (the module `pins._jit_pairs`), or None: ``TACTIP_KERNELS=numpy`` in the environment
+    (read at every call, so a test may switch it; as `pins._kernels.compiled`), or Numba missing. Loaded on the
+    first call that needs it."""
+    if os.environ.get("TACTIP_KERNELS") == "numpy":
+        return None
+    if not _LOADED:
+        try:
+            from . import _jit_pairs
+        except ImportError:  # (Numba or its LLVM missing: the NumPy reference)
+            _jit_pairs = None
+        _LOADED.append(_jit_pairs)
+    return _LOADED[0]
 
 
 def _sq(v: np.ndarray) -> np.ndarray:
