@@ -25,6 +25,7 @@ _PASSES = 4
 _DAMPING = 1e-3
 _MARGIN_PX = 2.0
 _OTHERS = 4
+_LEAST_RISE = 1.0
 _STEP_PX = 1.5  # the largest step of a centre's coordinate in one pass
 
 
@@ -165,7 +166,7 @@ def _fit_one(crop, x1, y1, x2, y2, others, radius_px, half, xs, ys, vs, fit):
         for r in range(4):
             step = b[r]
             mu[r] += step if step != step else min(max(step, -_STEP_PX), _STEP_PX)
-    if np.isfinite(mu[0]) and np.isfinite(mu[1]) and np.isfinite(mu[2]) and np.isfinite(mu[3]) and beta[3] > 0:
+    if np.isfinite(mu[0]) and np.isfinite(mu[1]) and np.isfinite(mu[2]) and np.isfinite(mu[3]) and beta[3] > _LEAST_RISE:
         fit[:] = mu
 
 

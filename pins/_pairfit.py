@@ -43,6 +43,9 @@ _OTHERS = 4  # other pins nearest a pair whose cells bound its pixels
 # them overlapping show no ends a fit could find (small-pad-100, tips of 1.25 px: lost visible pins per frame
 # 4.99 -> 6.58 on bench_slides' realistic skin with them fitted; radial-led-120's tips of 2 px gain).
 _SMALLEST_TIP_PX = 1.5
+# A fit whose tips rise less than this above the plane, grey levels, found no tips (a flat patch: its rise is the
+# sums' rounding, and the centres wander with it).
+_LEAST_RISE = 1.0
 
 
 def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radius_px: float,
@@ -130,7 +133,7 @@ def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radiu
                 mu = mu + np.minimum(np.maximum(step, -1.5), 1.5)
     except np.linalg.LinAlgError:  # (a singular system: no fit)
         return np.full_like(first, np.nan), np.full_like(second, np.nan)
-    bad = ~np.isfinite(mu).all(axis=1) | ~(beta[:, 3] > 0)
+    bad = ~np.isfinite(mu).all(axis=1) | ~(beta[:, 3] > _LEAST_RISE)
     mu[bad] = np.nan
     return mu[:, :2], mu[:, 2:]
 
