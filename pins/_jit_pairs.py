@@ -71,9 +71,10 @@ def _half(first, second, radius_px):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _fit_one(crop, x1, y1, x2, y2, others, radius_px, half, xs, ys, vs, fit):
+def _fit_one(crop, x1, y1, x2, y2, others, radius_px, half, xs, ys, vs, scratch, fit):
     """One pair's fit (`pins._pairfit.fit_tip_pairs` for one row) into `fit` (4,): x1, y1, x2, y2 px, NaN when
-    it fails. `others` (k, 2) px (NaN: none); `xs`, `ys`, `vs`: scratch of (2 half + 1)^2 pixels."""
+    it fails. `others` (k, 2) px (NaN: none); `xs`, `ys`, `vs` (P,), `scratch` (4, P): room for the
+    (2 half + 1)^2 pixels."""
     height, width = crop.shape
     mx, my = 0.5 * (x1 + x2), 0.5 * (y1 + y2)
     # The `_OTHERS` others nearest the middle (ties in the order given), NaN ones last.
@@ -124,21 +125,26 @@ def _fit_one(crop, x1, y1, x2, y2, others, radius_px, half, xs, ys, vs, fit):
     mu = np.array([x1, y1, x2, y2])
     a, b, beta, design, jac = np.empty((4, 4)), np.empty(4), np.empty(4), np.empty(4), np.empty(4)
     for _ in range(_PASSES):
-        # The plane and the tips' coverage: normal equations, solved.
+        # The plane and the tips' coverage: normal equations (upper triangle, mirrored), solved. Each pixel's
+        # distances and coverages kept for the Jacobian's pass.
         a[:] = 0.0
         b[:] = 0.0
         for p in range(count):
             dx1, dy1, dx2, dy2 = xs[p] - mu[0], ys[p] - mu[1], xs[p] - mu[2], ys[p] - mu[3]
-            c1 = 1.0 / (1.0 + np.exp((np.sqrt(dx1 * dx1 + dy1 * dy1) - radius_px) / _EDGE_PX))
-            c2 = 1.0 / (1.0 + np.exp((np.sqrt(dx2 * dx2 + dy2 * dy2) - radius_px) / _EDGE_PX))
+            d1, d2 = np.sqrt(dx1 * dx1 + dy1 * dy1), np.sqrt(dx2 * dx2 + dy2 * dy2)
+            c1 = 1.0 / (1.0 + np.exp((d1 - radius_px) / _EDGE_PX))
+            c2 = 1.0 / (1.0 + np.exp((d2 - radius_px) / _EDGE_PX))
+            scratch[0, p], scratch[1, p], scratch[2, p], scratch[3, p] = d1, d2, c1, c2
             design[0], design[1], design[2] = 1.0, xs[p] - mx, ys[p] - my
             design[3] = 1.0 - (1.0 - c1) * (1.0 - c2)
             for r in range(4):
                 b[r] += design[r] * vs[p]
-                for c in range(4):
+                for c in range(r, 4):
                     a[r, c] += design[r] * design[c]
         for r in range(4):
             a[r, r] += 1e-6
+            for c in range(r):
+                a[r, c] = a[c, r]
         if not _solve4(a, b):
             return
         beta[:] = b
@@ -147,9 +153,7 @@ def _fit_one(crop, x1, y1, x2, y2, others, radius_px, half, xs, ys, vs, fit):
         b[:] = 0.0
         for p in range(count):
             dx1, dy1, dx2, dy2 = xs[p] - mu[0], ys[p] - mu[1], xs[p] - mu[2], ys[p] - mu[3]
-            d1, d2 = np.sqrt(dx1 * dx1 + dy1 * dy1), np.sqrt(dx2 * dx2 + dy2 * dy2)
-            c1 = 1.0 / (1.0 + np.exp((d1 - radius_px) / _EDGE_PX))
-            c2 = 1.0 / (1.0 + np.exp((d2 - radius_px) / _EDGE_PX))
+            d1, d2, c1, c2 = scratch[0, p], scratch[1, p], scratch[2, p], scratch[3, p]
             model = beta[0] + beta[1] * (xs[p] - mx) + beta[2] * (ys[p] - my) + beta[3] * (1.0 - (1.0 - c1) * (1.0 - c2))
             residual = vs[p] - model
             g1 = amplitude * (1.0 - c2) * c1 * (1.0 - c1) / max(d1, 1e-6)
@@ -157,10 +161,12 @@ def _fit_one(crop, x1, y1, x2, y2, others, radius_px, half, xs, ys, vs, fit):
             jac[0], jac[1], jac[2], jac[3] = g1 * dx1, g1 * dy1, g2 * dx2, g2 * dy2
             for r in range(4):
                 b[r] += jac[r] * residual
-                for c in range(4):
+                for c in range(r, 4):
                     a[r, c] += jac[r] * jac[c]
         for r in range(4):
             a[r, r] += _DAMPING * a[r, r] + 1e-9
+            for c in range(r):
+                a[r, c] = a[c, r]
         if not _solve4(a, b):
             return
         for r in range(4):
@@ -181,9 +187,10 @@ def fit_pairs(crop, first, second, radius_px, others):
     half = _half(first, second, radius_px)
     side = 2 * half + 1
     xs, ys, vs = np.empty(side * side), np.empty(side * side), np.empty(side * side)
-    fit = np.empty(4)
+    scratch, fit = np.empty((4, side * side)), np.empty(4)
     for i in range(n):
-        _fit_one(crop, first[i, 0], first[i, 1], second[i, 0], second[i, 1], others[i], radius_px, half, xs, ys, vs, fit)
+        _fit_one(crop, first[i, 0], first[i, 1], second[i, 0], second[i, 1], others[i], radius_px, half, xs, ys, vs,
+                 scratch, fit)
         fit1[i, 0], fit1[i, 1], fit2[i, 0], fit2[i, 1] = fit[0], fit[1], fit[2], fit[3]
     return fit1, fit2
 
