@@ -23,6 +23,10 @@ Measured on `bench/bench_slides.py` (8 slides of 3 pitches, seeds 0-5; new again
 realistic skin tactip-331 pin-frames on another pin's tip 20 -> 0, > 3 px off 480 -> 1, lost visible pins per
 frame 0.90 -> 0.12; model skin tactip-331 4735 -> 1154 (lost 10.8 -> 6.6), radial-led-120 34 -> 4 (3.41 ->
 2.87); its cost is in `pins.track.PinTracker` (`part_overlaps`) and `bench/bench_slides.py`.
+
+The NumPy code here is the reference. `part_overlapping` runs the compiled kernel of `pins._jit_pairs` (Numba:
+pairing, fits and acceptance in one call a frame) unless ``TACTIP_KERNELS=numpy`` or Numba is missing; the
+tests hold it to this code within 1e-9 px.
 """
 
 from __future__ import annotations
