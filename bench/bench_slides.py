@@ -145,6 +145,22 @@ calls (the same fits) two tactip-331 slides 1.3-1.4 -> 2.2-2.3 ms a frame, and o
 (window measurements 4.29 -> 4.28): off by default. This session's default tracker there: calls 543.2 -> 547.7,
 operations 1706 -> 1722, window measurements 4.29 -> 4.29 (mp4v 544.9 -> 549.1, 1715 -> 1730, 4.30 -> 4.31).
 
+Session 16's "pair9" (2-core VM at load 9-18): the pair fit compiled (`pins._jit_pairs`, Numba; the fits the
+NumPy reference's within 1.1e-13 px over every call of seeds 0, 1 and 3, model skin), so its figures above
+hold, nothing tuned. Cost with it on: on the real-like slide video (`bench_replay_parts.py --calls`, MJPG,
+kernels warmed) calls 484.9 -> 492.0 and operations 1202.7 -> 1214.9 a frame; CPU of `part_overlapping` 0.033
+ms a frame against the tracker's 1.2 (2.7 %; 5.4 us a frame without a pair), the tracker's updates 1.207 ->
+1.299 ms a frame (``--against``, median of 6 interleaved rounds, paired ratio 1.08); here, two interleaved runs
+each, realistic skin, tactip-331 seeds 0/1 1.01-1.07 -> 1.40-1.46 ms a frame, radial-led-120 1.21-1.28 ->
+1.22-1.30. Still off by default: realistic radial-led-120 loses more visible pins on every seed (3.20/2.87/
+2.19/3.12/2.64/3.43 -> 3.28/2.94/2.45/3.33/2.79/3.69 a frame; fitted pins were 0.20 px off their truth before
+the fit and 0.22 after, median, seed 2). Tried and dropped: moving a pin only when its fit lies 0.5 / 1.0 px
+from its window (seed 2, lost pin-frames 1736 without the fit, 1943 with it: 1899 / 1798; the 26 moves left at
+1.0 px were 0.51 px off before and 0.74 after). Model skin radial-led-120 seed 3 (5 -> 20 apart on main
+794cd9b without the fit): pin 54's window, placed by `fit_tips` in frames 155-157 and then by the follow
+passes, lags its tip on the blob it shares with lost pin 20 (4 px apart; 2.1 px behind at frame 161, 3.2 at
+163), 13 frames on 20's tip; main f24c3ab lost pin 54 at frame 158 instead. With the fit: 2.
+
 What was left before (seams5, diagnosed by the stage that placed each swap's first frame, final code): on
 tactip-331 realistic seeds 0-2, 27 of 66 onsets are pins placed in the first follow pass whose guess was
 already nearer the neighbour; in the 8 looked at (seed 1) the guess equals the pin's previous position

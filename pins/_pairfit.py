@@ -23,11 +23,16 @@ Measured on `bench/bench_slides.py` (8 slides of 3 pitches, seeds 0-5; new again
 realistic skin tactip-331 pin-frames on another pin's tip 20 -> 0, > 3 px off 480 -> 1, lost visible pins per
 frame 0.90 -> 0.12; model skin tactip-331 4735 -> 1154 (lost 10.8 -> 6.6), radial-led-120 34 -> 4 (3.41 ->
 2.87); its cost is in `pins.track.PinTracker` (`part_overlaps`) and `bench/bench_slides.py`.
+
+The NumPy code here is the reference. `part_overlapping` runs the compiled kernel of `pins._jit_pairs` (Numba:
+pairing, fits and acceptance in one call a frame) unless ``TACTIP_KERNELS=numpy`` or Numba is missing; the
+tests hold it to this code within 1e-9 px.
 """
 
 from __future__ import annotations
 
 import functools
+import os
 
 import numpy as np
 
@@ -42,6 +47,9 @@ _OTHERS = 4  # other pins nearest a pair whose cells bound its pixels
 # them overlapping show no ends a fit could find (small-pad-100, tips of 1.25 px: lost visible pins per frame
 # 4.99 -> 6.58 on bench_slides' realistic skin with them fitted; radial-led-120's tips of 2 px gain).
 _SMALLEST_TIP_PX = 1.5
+# A fit whose tips rise less than this above the plane, grey levels, found no tips (a flat patch: its rise is the
+# sums' rounding, and the centres wander with it).
+_LEAST_RISE = 1.0
 
 
 def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radius_px: float,
@@ -129,7 +137,7 @@ def fit_tip_pairs(crop: np.ndarray, first: np.ndarray, second: np.ndarray, radiu
                 mu = mu + np.minimum(np.maximum(step, -1.5), 1.5)
     except np.linalg.LinAlgError:  # (a singular system: no fit)
         return np.full_like(first, np.nan), np.full_like(second, np.nan)
-    bad = ~np.isfinite(mu).all(axis=1) | ~(beta[:, 3] > 0)
+    bad = ~np.isfinite(mu).all(axis=1) | ~(beta[:, 3] > _LEAST_RISE)
     mu[bad] = np.nan
     return mu[:, :2], mu[:, 2:]
 
@@ -150,6 +158,10 @@ def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected:
     """
     if not refiner.tip_fit_radius_px >= _SMALLEST_TIP_PX:
         return positions
+    kernels = _compiled()
+    if kernels is not None:  # (one call: pairing, fits, acceptance)
+        return kernels.part_pairs(crop, positions, expected, refiner._window_neighbours, refiner._overlap_px,
+                                  float(refiner.tip_fit_radius_px), float(refiner.gate_px), refiner.origin)
     at = np.where(np.isfinite(positions), positions, expected)
     placed = np.flatnonzero(np.isfinite(positions[:, 0]))
     if not placed.size:
@@ -183,6 +195,24 @@ def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected:
     both = ok & np.isfinite(positions[second, 0])
     positions[second[both]] = fit2[both] + refiner.origin
     return positions
+
+
+_LOADED: list = []  # [the kernel module, or None when Numba cannot be imported], once tried
+
+
+def _compiled():
+    """The compiled pair fit (the module `pins._jit_pairs`), or None: ``TACTIP_KERNELS=numpy`` in the environment
+    (read at every call, so a test may switch it; as `pins._kernels.compiled`), or Numba missing. Loaded on the
+    first call that needs it."""
+    if os.environ.get("TACTIP_KERNELS") == "numpy":
+        return None
+    if not _LOADED:
+        try:
+            from . import _jit_pairs
+        except ImportError:  # (Numba or its LLVM missing: the NumPy reference)
+            _jit_pairs = None
+        _LOADED.append(_jit_pairs)
+    return _LOADED[0]
 
 
 def _sq(v: np.ndarray) -> np.ndarray:

@@ -129,9 +129,9 @@ class PinTracker:
     part_overlaps : bool
         With refinement: each frame, a placed pin whose tip overlaps a neighbour's (expected within two tip
         radii: skin squeezed ahead of a slide) is moved onto a fit of the two tips as two discs
-        (`pins._pairfit`), where a window settles between them. Off by default for its cost: CPU of an update
-        on tactip-331's slides 1.1-1.5 -> 2.0-2.7 ms a frame (bench/bench_slides.py ``--part-overlaps``), and
-        on the real-like slide video (radial-led-120, MJPG) 548 -> 701 Python-level calls a frame.
+        (`pins._pairfit`, compiled: `pins._jit_pairs`), where a window settles between them. Off by default: on a
+        realistic skin radial-led-120 loses more visible pins (2.91 -> 3.08 a frame; bench/bench_slides.py), and
+        on the real-like slide video (MJPG) CPU rises 6-9 % (calls 485 -> 492 a frame; bench_slides.py's figures).
 
     Attributes
     ----------
