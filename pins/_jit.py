@@ -188,13 +188,17 @@ _ERF_SLOPE = 1.0 / (math.sqrt(math.pi) * _EDGE_PX)  # `pins._tipfit._ERF_SLOPE`
 @njit(cache=True, nogil=True, error_model="numpy")
 def _solve_in_place(a, b):
     """Solve ``a x = b`` (M, M) and (M,) float64 by Gaussian elimination with partial pivoting, as LAPACK's
-    ``gesv`` does (`np.linalg.solve`); `a` and `b` are overwritten, `b` with x. A zero pivot gives inf/NaN."""
+    ``gesv`` does (`np.linalg.solve`); `a` and `b` are overwritten, `b` with x. A zero pivot gives inf/NaN
+    and False (singular); True otherwise."""
     m = b.size
+    regular = True
     for col in range(m):
         pivot = col
         for row in range(col + 1, m):
             if abs(a[row, col]) > abs(a[pivot, col]):
                 pivot = row
+        if a[pivot, col] == 0.0:
+            regular = False
         if pivot != col:
             for k in range(m):
                 a[col, k], a[pivot, k] = a[pivot, k], a[col, k]
@@ -209,6 +213,7 @@ def _solve_in_place(a, b):
         for k in range(row + 1, m):
             total -= a[row, k] * b[k]
         b[row] = total / a[row, row]
+    return regular
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._jit import _solve_in_place
+
 # (The reference's constants, by value: `pins._pairfit`'s.)
 _EDGE_PX = 0.6
 _PASSES = 4
@@ -27,35 +29,6 @@ _MARGIN_PX = 2.0
 _OTHERS = 4
 _LEAST_RISE = 1.0
 _STEP_PX = 1.5  # the largest step of a centre's coordinate in one pass
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _solve4(a, b):
-    """Solve ``a x = b`` (4, 4) and (4,) float64 in place (`b` becomes x) by Gaussian elimination with partial
-    pivoting (LAPACK's ``gesv``); False on a zero pivot (singular)."""
-    m = 4
-    for col in range(m):
-        pivot = col
-        for row in range(col + 1, m):
-            if abs(a[row, col]) > abs(a[pivot, col]):
-                pivot = row
-        if a[pivot, col] == 0.0:
-            return False
-        if pivot != col:
-            for k in range(m):
-                a[col, k], a[pivot, k] = a[pivot, k], a[col, k]
-            b[col], b[pivot] = b[pivot], b[col]
-        for row in range(col + 1, m):
-            factor = a[row, col] / a[col, col]
-            for k in range(col + 1, m):
-                a[row, k] -= factor * a[col, k]
-            b[row] -= factor * b[col]
-    for row in range(m - 1, -1, -1):
-        total = b[row]
-        for k in range(row + 1, m):
-            total -= a[row, k] * b[k]
-        b[row] = total / a[row, row]
-    return True
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -145,7 +118,7 @@ def _fit_one(crop, x1, y1, x2, y2, others, radius_px, half, xs, ys, vs, scratch,
             a[r, r] += 1e-6
             for c in range(r):
                 a[r, c] = a[c, r]
-        if not _solve4(a, b):
+        if not _solve_in_place(a, b):
             return
         beta[:] = b
         amplitude = beta[3] / _EDGE_PX
@@ -167,7 +140,7 @@ def _fit_one(crop, x1, y1, x2, y2, others, radius_px, half, xs, ys, vs, scratch,
             a[r, r] += _DAMPING * a[r, r] + 1e-9
             for c in range(r):
                 a[r, c] = a[c, r]
-        if not _solve4(a, b):
+        if not _solve_in_place(a, b):
             return
         for r in range(4):
             step = b[r]

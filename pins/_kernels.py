@@ -11,26 +11,66 @@ The NumPy code stays the reference: it runs when the environment variable ``TACT
 Numba is imported, and the kernels loaded (compiled once per machine, then read from their cache
 next to `pins._jit`), on the first call that needs them, not on ``import pins``: a command that
 does not track pays nothing.
+
+Numba's cache is checked against each kernel's own file only: a kernel that calls one in another module
+(`pins._jit_rest` and `pins._jit_pairs` call `pins._jit_track`'s and `pins._jit`'s) keeps its cached code
+when only that other module changes (Numba's documented limit). So the first load in a process compares a
+digest of every kernel module's source (``pins/_jit*.py``) with the one stored beside the cache and, when they
+differ (an edit, an upgrade), drops the kernels' cached code first (`_fresh_cache`).
 """
 
 from __future__ import annotations
 
+import hashlib
+import importlib
 import os
+import pathlib
 
 __all__ = ["compiled"]
 
-_LOADED: list = []  # [the kernels module, or None when Numba cannot be imported], once tried
+_LOADED: dict = {}  # kernel module name -> the module, or None when Numba cannot be imported; once tried
 
 
-def compiled():
-    """The compiled kernels (the module `pins._jit`), or None: ``TACTIP_KERNELS=numpy`` in the
-    environment (read at every call, so a test may switch it), or Numba missing."""
+def compiled(module: str = "_jit"):
+    """The compiled kernels (the module `pins._jit`, or ``pins.<module>``: ``"_jit_pairs"`` for the pair fit),
+    or None: ``TACTIP_KERNELS=numpy`` in the environment (read at every call, so a test may switch it), or
+    Numba missing. Loaded on the first call that needs them."""
     if os.environ.get("TACTIP_KERNELS") == "numpy":
         return None
-    if not _LOADED:
+    if module not in _LOADED:
         try:
-            from . import _jit
+            _LOADED[module] = importlib.import_module(f"{__package__}.{module}")
         except ImportError:  # (Numba or its LLVM missing: the NumPy reference)
-            _jit = None
-        _LOADED.append(_jit)
-    return _LOADED[0]
+            _LOADED[module] = None
+        else:
+            _fresh_cache(_LOADED[module])
+    return _LOADED[module]
+
+
+_STAMP = "_jit_kernels.sha256"  # the kernel sources' digest, in the cache's folder
+
+
+def _fresh_cache(kernels) -> None:
+    """Drop every kernel module's cached machine code (``_jit*.nbi``, ``_jit*.nbc``) when the kernel sources
+    changed since the digest stored beside it was written, then store theirs. Called once a module is imported,
+    before any kernel runs (Numba reads its cache at a kernel's first call). Unwritable caches are left as they
+    are (Numba then compiles in memory)."""
+    sources = sorted(pathlib.Path(__file__).parent.glob("_jit*.py"))
+    digest = hashlib.sha256(b"".join(path.read_bytes() for path in sources)).hexdigest()
+    dispatchers = [value for value in vars(kernels).values() if hasattr(value, "_cache")]
+    folder = getattr(getattr(dispatchers[0], "_cache", None), "_cache_path", None) if dispatchers else None
+    if folder is None:
+        return
+    stamp = pathlib.Path(folder) / _STAMP
+    try:
+        if stamp.read_text() == digest:
+            return
+    except OSError:
+        pass
+    try:
+        for cached in [*stamp.parent.glob("_jit*.nbi"), *stamp.parent.glob("_jit*.nbc")]:
+            cached.unlink(missing_ok=True)
+        stamp.parent.mkdir(parents=True, exist_ok=True)
+        stamp.write_text(digest)
+    except OSError:
+        pass

@@ -32,10 +32,10 @@ tests hold it to this code within 1e-9 px.
 from __future__ import annotations
 
 import functools
-import os
 
 import numpy as np
 
+from ._kernels import compiled
 from ._tipfit import _solve
 
 _EDGE_PX = 0.6
@@ -158,7 +158,7 @@ def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected:
     """
     if not refiner.tip_fit_radius_px >= _SMALLEST_TIP_PX:
         return positions
-    kernels = _compiled()
+    kernels = compiled("_jit_pairs")
     if kernels is not None:  # (one call: pairing, fits, acceptance)
         return kernels.part_pairs(crop, positions, expected, refiner._window_neighbours, refiner._overlap_px,
                                   float(refiner.tip_fit_radius_px), float(refiner.gate_px), refiner.origin)
@@ -195,24 +195,6 @@ def part_overlapping(refiner, crop: np.ndarray, positions: np.ndarray, expected:
     both = ok & np.isfinite(positions[second, 0])
     positions[second[both]] = fit2[both] + refiner.origin
     return positions
-
-
-_LOADED: list = []  # [the kernel module, or None when Numba cannot be imported], once tried
-
-
-def _compiled():
-    """The compiled pair fit (the module `pins._jit_pairs`), or None: ``TACTIP_KERNELS=numpy`` in the environment
-    (read at every call, so a test may switch it; as `pins._kernels.compiled`), or Numba missing. Loaded on the
-    first call that needs it."""
-    if os.environ.get("TACTIP_KERNELS") == "numpy":
-        return None
-    if not _LOADED:
-        try:
-            from . import _jit_pairs
-        except ImportError:  # (Numba or its LLVM missing: the NumPy reference)
-            _jit_pairs = None
-        _LOADED.append(_jit_pairs)
-    return _LOADED[0]
 
 
 def _sq(v: np.ndarray) -> np.ndarray:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from pins import _pairfit
+from pins._kernels import compiled
 from pins._pairfit import fit_tip_pairs, part_overlapping
 
 pytest.importorskip("numba")
@@ -129,10 +129,10 @@ def _lattice_scene(seed):
 def test_part_overlapping_compiled_as_the_reference(seed, monkeypatch):
     crop, positions, expected, refiner, truth = _lattice_scene(seed)
     monkeypatch.setenv("TACTIP_KERNELS", "numpy")
-    assert _pairfit._compiled() is None
+    assert compiled("_jit_pairs") is None
     reference = part_overlapping(refiner, crop, positions, expected)
     monkeypatch.delenv("TACTIP_KERNELS")
-    assert _pairfit._compiled() is not None
+    assert compiled("_jit_pairs") is not None
     kernel = part_overlapping(refiner, crop, positions, expected)
     assert np.array_equal(np.isnan(reference), np.isnan(kernel))
     assert np.nanmax(np.abs(reference - kernel)) < 1e-9
