@@ -5,8 +5,9 @@ scale themselves: ``mm_per_px = pitch_mm / pitch_px``, with ``pitch_px`` the pin
 pins near the centre of the field (where the dome faces the camera: towards the rim it is seen
 obliquely and the spacing shrinks in the image; `central_spacing_px`: on a hexagonal lattice or
 spokes the median distance to the first shell of neighbours, not the nearest, which pins scattered
-by 2 % of the pitch make 3-4 % short) and ``pitch_mm`` from a description of the sensor. The disc's diameter is a poorer ruler: where the membrane ends in the image depends
-on the casing, a black rim ring or LED glare, and differs between TacTips.
+by 2 % of the pitch make 3-4 % short) and ``pitch_mm`` from a description of the sensor. The
+disc's diameter is a poorer ruler: where the membrane ends in the image depends on the casing, a
+black rim ring or LED glare, and differs between TacTips.
 
 Geometry assumed for ``pitch_mm`` from a pin count and a pad diameter (`pin_pitch_mm`): the pad is a
 hemisphere of radius ``R = pad_diameter / 2``; the pins' bases lie on a hexagonal lattice laid out
@@ -268,11 +269,14 @@ def _spokes(radial: np.ndarray) -> bool:
     beyond a tenth of the furthest), their azimuths repeat every ``2 pi / S`` for some S in
     `_SPOKE_COUNTS` (``|mean exp(i S azimuth)|`` above `_SPOKE_ORDER`)."""
     ray = np.hypot(*radial.T)
-    azimuth = np.arctan2(radial[:, 1], radial[:, 0])[ray > 0.1 * ray.max()]
-    if len(azimuth) < 2 * _SPOKE_COUNTS[0]:
+    outer = radial[ray > 0.1 * ray.max()]
+    if len(outer) < 2 * _SPOKE_COUNTS[0]:
         return False
-    order = np.abs(np.exp(1j * _SPOKE_COUNTS[:, None] * azimuth[None]).mean(axis=1))
-    return bool(order.max() > _SPOKE_ORDER)
+    turn = (outer[:, 0] + 1j * outer[:, 1]) / np.hypot(*outer.T)  # exp(i azimuth)
+    # exp(i S azimuth) for S = 6, 7, ...: running products, cheaper than exponentials
+    steps = np.broadcast_to(turn, (len(_SPOKE_COUNTS) - 1, len(turn)))
+    powers = np.cumprod(np.vstack([turn ** _SPOKE_COUNTS[0], steps]), axis=0)
+    return bool(np.abs(powers.mean(axis=1)).max() > _SPOKE_ORDER)
 
 
 @dataclass(frozen=True)
