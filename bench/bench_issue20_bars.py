@@ -37,6 +37,11 @@ Figures (session 16's audit8, 2-core VM; seeds 0-5 tuned on, 6-35 held out; CPU 
 - scale, every preset, seeds 6-15 (with agree: 6 min): detect = replay on the same frame, calibrate
   (three frames averaged) within 1.18 % (radial-led-120; small-pad-100 1.13 %, the others <= 0.25 %);
   `tactip calibrate --sensor NAME` on the simulated station within 1.12 % of detect;
+  against the renderer's true scale (session 16's scale9, `bench/bench_scale_truth.py`, seeds 0-39, 20-39
+  held out): the three sat 2.0-5.4 % high on hexagonal and radial pads (the nearest of several tied
+  neighbours, short by the pins' 2 % scatter: +3.4 % hexagonal, +2.3 % spokes; the dome +0.4 / +0.9 %;
+  description 0; detection +-0.1 %); with the first shell's median there, -0.7 to +1.6 % (mean +0.2 %
+  hexagonal, +0.8 % spokes); concentric circles (532, 1000, small pad) keep the nearest, -1.4 to +4.6 %;
 - agree, every preset, seeds 6-15: polarity and pins the same everywhere; the no-sensor frames refused
   by both with one message on every seed.
 The mends behind these figures (before -> after): replay's pitch from the pin field, not the tracker's

@@ -151,7 +151,8 @@ class PinField:
         The sensor disc, px (the pins were searched inside it, or inside a black rim ring's inner
         edge when there is one); ``disc.whole_frame`` when the sensing region is the whole frame.
     pitch_px : float
-        The pin pitch, px: median nearest-neighbour distance of the kept pins near the field's centre
+        The pin pitch, px, of the kept pins near the field's centre (their first shell's median distance
+        on a hexagonal lattice or spokes, else their nearest neighbours')
         (`pins.central_spacing_px`, the pitch the scale `pins.pad_scale` divides by; nan with fewer
         than two).
     rejected : (M, 2) ndarray of float64
@@ -253,7 +254,7 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     >>> sensor = SyntheticTacTip(pins=331, seed=0)
     >>> field = find_pin_field(sensor.render().image)
     >>> 300 <= field.count <= 331, round(field.pitch_px)
-    (True, 18)
+    (True, 19)
 
     Later frames are detected fast with the field's parameters and region:
 

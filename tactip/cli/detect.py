@@ -10,8 +10,8 @@ confirms the result: the summary says how far off it is (a warning when more tha
 
 The scale (mm/px) is derived as ``tactip calibrate`` and ``tactip replay`` derive it (`pins.sensor_scale`):
 the sensor's pin pitch in mm (--sensor, or --pins-on-pad / --expected-pins / the pins found on a pad of
---pad-diameter-mm, default 40) over the central pin pitch in px (the median nearest-neighbour distance of
-the pins near the field's centre; the one pitch printed). The summary says how it was derived.
+--pad-diameter-mm, default 40) over the central pin pitch in px (`pins.central_spacing_px`: the pins near
+the field's centre; the one pitch printed). The summary says how it was derived.
 
 With --json [FILE|-] (standard output with no value or -) the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
 "rejected": [[x, y, "reason"], ...], "dark_pins": bool, "scale": {"mm_per_px", "pitch_px", "pitch_mm",

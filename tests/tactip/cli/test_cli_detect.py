@@ -54,8 +54,8 @@ def test_expected_pins_confirms_and_does_not_steer(capsys):
 def test_human_summary(capsys):
     assert main(["detect", str(FRAME), "--expected-pins", "331"]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("331 pins in") and "radius" in out and out.count("pitch 18.") == 1
-    assert "scale 0.15" in out and "mm/px (pin pitch 2.793 mm" in out
+    assert out.startswith("331 pins in") and "radius" in out and out.count("pitch 19.") == 1
+    assert "scale 0.14" in out and "mm/px (pin pitch 2.793 mm" in out  # the sample: 0.1460 mm/px true
     assert "expected 331 pins: exactly as expected" in out and "rejected" in out
 
 
