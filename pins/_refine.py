@@ -35,9 +35,9 @@ LK estimate (half a px at 331 pins in 640x480), and the tip's area (mass over th
 contrast (top minus darkest pixel) and compactness (area over 2 pi times the mean squared
 distance from the centroid: 1 for a disc) are like the pin's own at rest (`pins._like`): a hidden pin
 has no contrast; a neighbour, glare or a speck in the window pulls the centroid, adds area and spreads
-the mass. Each bound reaches as far as the rest frame's noise may have moved the measure it comes from:
-a faint tip (by an LED reflection) whose contrast at rest lies within that noise's reach of nothing is
-judged by its contrast alone. Limit: a small bright speck detached from a tip but inside its window pulls it by less
+the mass. A faint tip (by an LED reflection) whose contrast at rest lies within a few times its scatter
+in the rest frame's noise of nothing shows no area or compactness to be judged by: its contrast alone
+bounds it. Limit: a small bright speck detached from a tip but inside its window pulls it by less
 than that bound (up to 0.5 px in tests where blob detection would have kept them apart); a speck
 touching a tip fools blob detection as much.
 
@@ -226,7 +226,7 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
         # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above;
-        # measured in one noisy frame, each bound reaches as far as that frame's noise may have moved it.
+        # a tip within the rest frame's noise of nothing, by its contrast alone (`pins._like`).
         #: Scatter of a window's contrast in the camera's noise, grey levels (the rest frame's, `pins._like.contrast_noise`).
         self.contrast_noise = contrast_noise(self.windows, rest_crop, positions - origin)
         self._at_least, self._area_at_most = bounds_at_rest(area, contrast, compactness, self.contrast_noise)

@@ -1,10 +1,11 @@
 """pins.track judges a faint tip fairly at rest (issue 20, outcome 1): its bounds on a tip like at rest
-(`pins._like.bounds_at_rest`) reach as far as the rest frame's own noise may have moved its measures.
+(`pins._like.bounds_at_rest`) ask of a tip within the rest frame's noise of nothing a contrast alone.
 
 A tip of a few grey levels in camera noise of 5 (a faint pin beside an LED reflection, whose windowed
 contrast at rest was -5.5 to 33.8 grey levels over radial-led-120's seeds, the median pin's 45-50) shows
-in one noisy rest frame an area and compactness that are mostly noise; bounds set from them alone (half
-and twice that area) reject the pin on later frames of a still pad, or on its own rest frame.
+in one noisy rest frame an area and compactness that are mostly noise; bounds set from them (half and
+twice that area) rejected the pin on later frames of a still pad, or on its own rest frame. Such a tip is
+now judged by its contrast alone.
 """
 
 import numpy as np
@@ -55,7 +56,7 @@ def test_a_faint_tip_on_a_still_pad_is_never_lost(seed):
 
 
 def test_a_crisp_tip_that_vanishes_is_still_lost():
-    # Bounds widened by the rest frame's noise stay the tip's own where its contrast stands far above it.
+    # A crisp tip keeps the bounds of its own measures at rest: hidden, it is lost.
     pins = _pins()
     contrasts = np.full(len(pins), 40.0)
     rng = np.random.default_rng(0)
@@ -69,16 +70,18 @@ def test_a_crisp_tip_that_vanishes_is_still_lost():
         assert tracker.lost[hidden] and tracker.lost.sum() == 1
 
 
-def test_bounds_at_rest_are_the_ratios_without_noise_and_none_for_a_tip_within_its_reach():
+def test_bounds_at_rest_are_the_ratios_but_for_a_tip_within_the_noise_of_nothing():
     area, contrast, compactness = np.array([30.0, 30.0, 30.0]), np.array([45.0, 6.0, -4.0]), np.array([1.0, 1.0, 1.0])
     at_least, at_most = bounds_at_rest(area, contrast, compactness, 0.0)
     np.testing.assert_allclose(at_least[:, :2], [[15.0, 15.0], [22.5, 3.0], [0.6, 0.6]])
     np.testing.assert_allclose(at_most[:2], [60.0, 60.0])
     assert not np.isfinite(at_most[2])  # no contrast at rest: no area to bound by
-    at_least, at_most = bounds_at_rest(area, contrast, compactness, 2.0)  # reach 10 grey levels
-    # The crisp tip: its contrast bound stays the ratio's; area and compactness stretch by 45 / (45 -+ 10).
-    np.testing.assert_allclose(at_least[:, 0], [15.0 * 45 / 55, 22.5, 0.6 * 45 / 55])
-    assert at_most[0] == pytest.approx(60.0 * 45 / 35)
-    # The faint ones: bounded by their contrast alone, as low as theirs less the reach.
+    at_least, at_most = bounds_at_rest(area, contrast, compactness, 2.0)  # a reach of 10 grey levels
+    # The crisp tip keeps its ratios; the faint ones are bounded by their contrast alone, less the reach.
+    np.testing.assert_allclose(at_least[:, 0], [15.0, 22.5, 0.6])
+    assert at_most[0] == 60.0
     np.testing.assert_allclose(at_least[1, 1:], [-4.0, -14.0])
     assert np.isneginf(at_least[[0, 2]][:, 1:]).all() and np.isposinf(at_most[1:]).all()
+    # A window off the image at rest (NaN) is like nothing.
+    at_least, at_most = bounds_at_rest(*np.full((3, 1), np.nan), 2.0)
+    assert not np.logical_and.reduce(np.ones((3, 1)) >= at_least, axis=0)[0]
