@@ -82,7 +82,7 @@ def bounds_at_rest(area: np.ndarray, contrast: np.ndarray, compactness: np.ndarr
     reach = _NOISE_REACH * noise
     judged = contrast > reach  # NaN compares False
     at_least = np.stack([np.where(judged, _AREA_RATIO[0] * area, -np.inf),
-                         np.where(judged, _MIN_CONTRAST_RATIO * contrast, contrast - reach),
+                         np.minimum(_MIN_CONTRAST_RATIO * contrast, contrast - reach),
                          np.where(judged, _MIN_COMPACTNESS_RATIO * compactness, -np.inf)])
     area_at_most = np.where(judged, _AREA_RATIO[1] * area, np.inf)
     return at_least, area_at_most
