@@ -40,7 +40,11 @@ _MIN_COMPACTNESS_RATIO = 0.6
 # 83). On tactip-331, dark-331, white-dark-331, radial-120, brown-127 and small-pad-100 (seeds 0-5) no tip
 # goes unjudged and no bound changes. The reach (5) was chosen on radial-led-120 seeds 0-25 (at 3 and 4
 # still frames fail in 44/39 pin-frames on 6-25, and more tips' bounds change); seeds 26-45 held out.
-# Tried and dropped: every tip's area and compactness bounds stretched by its contrast's reach
+# Cost: bench/bench_slides.py on the realistic skin (min_area 0.5), radial-led-120 seeds 0-5, pin-frames on
+# another pin's true centre 1 -> 10 (apart 0 -> 9), every one an unjudged tip's (seeds 1, 3, 5), though
+# neither a search nor an upper bound on its contrast placed them (tried: no change); lost visible pins per
+# frame 2.91 -> 2.63 there, 3.41 -> 3.18 on the model skin (its swaps 277 -> 276); tactip-331 and
+# small-pad-100 unchanged. Tried and dropped: every tip's area and compactness bounds stretched by its contrast's reach
 # (c / (c -+ reach)): still frames 0/0/3 pin-frames, but crisp tips' bounds loosened by a third on
 # radial-led-120 and two-slide runs swapped identities (`tests/pins/test_track_identity.py`: seeds 1, 2,
 # 5; small-pad-100 23 > 20 pin-frames).
