@@ -55,9 +55,10 @@ reach of nothing is judged by its contrast alone. ``--bars same,phenomena`` on r
 tip below twice the reach, seeds 0-5). Left: tuned seed 1's pin 118 ends 1.79 px from its true rest
 centre before and after: the tracker returns it to its own rest position, which the pin field
 (`find_pin_field`) placed 1.7 px off a faint tip on a reflection's flank (the window's fixed point lay
-beyond the plausibility bound, so the given position stood). What got worse: `bench/bench_slides.py`'s
-realistic skin on radial-led-120, seeds 0-5, pin-frames on another pin's centre 1 -> 10 (apart 0 -> 9),
-all of tips judged by their contrast alone (`pins._like`).
+beyond the plausibility bound, so the given position stood). What got worse: `bench/bench_slides.py` on
+radial-led-120, seeds 0-5, pin-frames > 3 px off their centres 18 -> 87 on the realistic skin (79 -> 80 on
+the model skin): faint tips placed off their centres where they were lost before (swaps 1 -> 1 and
+277 -> 269; lost per frame 2.91 -> 2.77 and 3.41 -> 3.24; see `pins._like`).
 
 Run: .venv/bin/python bench/bench_issue20_bars.py [--bars same,phenomena,missing,scale,agree] [--seeds 6-15]
      [--presets a,b] [--phenomena-presets radial-led-120,white-dark-331,radial-120,tactip-331]

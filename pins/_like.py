@@ -40,12 +40,15 @@ _MIN_COMPACTNESS_RATIO = 0.6
 # 83). On tactip-331, dark-331, white-dark-331, radial-120, brown-127 and small-pad-100 (seeds 0-5) no tip
 # goes unjudged and no bound changes. The reach (5) was chosen on radial-led-120 seeds 0-25 (at 3 and 4
 # still frames fail in 44/39 pin-frames on 6-25, and more tips' bounds change); seeds 26-45 held out.
-# Cost: bench/bench_slides.py on the realistic skin (min_area 0.5), radial-led-120 seeds 0-5, pin-frames on
-# another pin's true centre 1 -> 10 (apart 0 -> 9), every one an unjudged tip's (seeds 1, 3, 5), though
-# neither a search nor an upper bound on its contrast placed them (tried: no change); lost visible pins per
-# frame 2.91 -> 2.63 there, 3.41 -> 3.18 on the model skin (its swaps 277 -> 276); tactip-331 and
-# small-pad-100 unchanged. Tried and dropped: every tip's area and compactness bounds stretched by its contrast's reach
-# (c / (c -+ reach)): still frames 0/0/3 pin-frames, but crisp tips' bounds loosened by a third on
+# Such a tip is told from the membrane only where it rests: `pins._refine.Refiner` places it by its window
+# only while it is still. bench/bench_slides.py, radial-led-120 seeds 0-5 (before -> now): lost visible pins
+# per frame 3.41 -> 3.24 (model skin), 2.91 -> 2.77 (realistic, min_area 0.5); pin-frames on another pin's
+# centre 277 -> 269 (apart 34 -> 34), 1 -> 1 (0 -> 0); but pin-frames > 3 px off 79 -> 80 and, on the
+# realistic skin, 18 -> 87 (faint tips placed off their centres where the old bounds left them lost).
+# Placed while moving too: apart 0 -> 9 and > 3 px 18 -> 202 there; and not fitted (`pins._recover`)
+# either: apart 0, > 3 px 18 -> 360. tactip-331 and small-pad-100 unchanged. Tried and dropped: every tip's
+# area and compactness bounds stretched by its contrast's reach (c / (c -+ reach)): still frames 0/0/3
+# pin-frames, but crisp tips' bounds loosened by a third on
 # radial-led-120 and two-slide runs swapped identities (`tests/pins/test_track_identity.py`: seeds 1, 2,
 # 5; small-pad-100 23 > 20 pin-frames).
 _NOISE_REACH = 5.0

@@ -37,7 +37,7 @@ distance from the centroid: 1 for a disc) are like the pin's own at rest (`pins.
 has no contrast; a neighbour, glare or a speck in the window pulls the centroid, adds area and spreads
 the mass. A faint tip (by an LED reflection) whose contrast at rest lies within a few times its scatter
 in the rest frame's noise of nothing shows no area or compactness to be judged by: its contrast alone
-bounds it. Limit: a small bright speck detached from a tip but inside its window pulls it by less
+bounds it, and its window places it only while it is still (`still`). Limit: a small bright speck detached from a tip but inside its window pulls it by less
 than that bound (up to 0.5 px in tests where blob detection would have kept them apart); a speck
 touching a tip fools blob detection as much.
 
@@ -230,6 +230,8 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         #: Scatter of a window's contrast in the camera's noise, grey levels (the rest frame's, `pins._like.contrast_noise`).
         self.contrast_noise = contrast_noise(self.windows, rest_crop, positions - origin)
         self._at_least, self._area_at_most = bounds_at_rest(area, contrast, compactness, self.contrast_noise)
+        # A tip judged by its contrast alone is told from the membrane only where it rests: placed while still.
+        self._judged = np.isfinite(self._area_at_most)
         # Only tips on a slope (their windows tilt their thresholds there) are fitted: on a flat membrane
         # a window that loses its tip has lost it to contact, to the rim or to a neighbour.
         #: (N,) bool: pins whose windows at rest lie on a sloped background (a reflection, a veil).
@@ -460,4 +462,5 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         """Whether tips' (area, contrast, compactness), stacked (3, L), are like those of pins `which` at rest."""
         like = np.logical_and.reduce(measures >= self._at_least[:, which], axis=0)
         like &= measures[0] <= self._area_at_most[which]
+        like &= self._judged[which] | self.still[which]
         return like
