@@ -29,6 +29,14 @@ levels over seeds 0-15 for the pin at (259.8, 276.2) px; the median pin's 45-50)
 on a tip (half its contrast and area at rest, `pins._refine`) then fail on its own rest frame
 (`bench/bench_issue20_bars.py`, the lead's report of audit8).
 
+Session 16's faint9 (a tip within the rest frame's noise of nothing judged by its contrast alone, and
+every tip's contrast allowed to fall by that noise's reach where that is below half: `pins._like`):
+radial-led-120 seeds 6-35 meet every bar (same 0, still 0 lost and none retired, 0 swaps, after the
+return 0 > 1 px and none lost, slides 8/8, taps 6/6, count 120/120); seeds 0-2 meet every bar but seed 1's
+one pin > 1 px after the return (1.79 px, before and after: the pin field placed its rest position 1.7 px
+off a faint tip on a reflection's flank). On the other presets no tip's bounds change (none lies below
+twice the reach, seeds 0-5): their figures are as before.
+
 Run: .venv/bin/python bench/bench_phenomena.py [--presets radial-led-120,white-dark-331] [--seeds 0,1,2]
 """
 

@@ -33,9 +33,11 @@ against ground truth (blob detection: 0.03).
 Plausibility. A centroid is kept when it lies within 0.03 pin spacings (0.4 px at least) of the
 LK estimate (half a px at 331 pins in 640x480), and the tip's area (mass over the threshold-to-top height, px),
 contrast (top minus darkest pixel) and compactness (area over 2 pi times the mean squared
-distance from the centroid: 1 for a disc) are like the pin's own at rest: a hidden pin has no
-contrast; a neighbour, glare or a speck in the window pulls the centroid, adds area and spreads
-the mass. Limit: a small bright speck detached from a tip but inside its window pulls it by less
+distance from the centroid: 1 for a disc) are like the pin's own at rest (`pins._like`): a hidden pin
+has no contrast; a neighbour, glare or a speck in the window pulls the centroid, adds area and spreads
+the mass. A faint tip (by an LED reflection) whose contrast at rest lies within a few times its scatter
+in the rest frame's noise of nothing shows no area or compactness to be judged by: its contrast alone
+bounds it, and its window places it only while it is still (`still`). Limit: a small bright speck detached from a tip but inside its window pulls it by less
 than that bound (up to 0.5 px in tests where blob detection would have kept them apart); a speck
 touching a tip fools blob detection as much.
 
@@ -75,6 +77,7 @@ from ._follow import _GUESS_FRACTION, _Following
 from ._predict import _Prediction
 from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
 from ._recover import _Recovery, match_to_blobs
+from ._like import bounds_at_rest, contrast_noise
 from ._rest import _AtRest
 from ._window import _FLAT_RISE, WindowCentroids, _squared_norm
 
@@ -88,13 +91,8 @@ _TIP_MARGIN_PX = 1.5
 _TEXTURE_GAP = 0.2
 _SMALL_TIP_PX = 3.0
 # A windowed centroid is plausible when it lies within this fraction of the pin spacing of the LK
-# estimate, and the tip's area, contrast and compactness are within these factors of the pin's own
-# at rest. On renders and the sample video (5-6 mm taps) centroids stay within 0.01 spacings of
-# LK, area within 0.9-1.3 and compactness within 0.92-1.09 of rest.
+# estimate, and the tip is like the pin's own at rest (`pins._like`).
 _MAX_SHIFT_FRACTION = 0.03
-_AREA_RATIO = (0.5, 2.0)
-_MIN_CONTRAST_RATIO = 0.5
-_MIN_COMPACTNESS_RATIO = 0.6
 # Neighbours whose distance bounds each refinement window (a hexagonal lattice has six), and the
 # window's radius as a fraction of the distance to the nearest one (see `Refiner.window_radius`).
 _WINDOW_NEIGHBOURS = 6
@@ -227,10 +225,13 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
-        # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above.
-        self._at_least = np.stack([_AREA_RATIO[0] * area, _MIN_CONTRAST_RATIO * contrast,
-                                   _MIN_COMPACTNESS_RATIO * compactness])  # (3, N)
-        self._area_at_most = _AREA_RATIO[1] * area
+        # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above;
+        # a tip within the rest frame's noise of nothing, by its contrast alone (`pins._like`).
+        #: Scatter of a window's contrast in the camera's noise, grey levels (the rest frame's, `pins._like.contrast_noise`).
+        self.contrast_noise = contrast_noise(self.windows, rest_crop, positions - origin)
+        self._at_least, self._area_at_most = bounds_at_rest(area, contrast, compactness, self.contrast_noise)
+        # A tip judged by its contrast alone is told from the membrane only where it rests: placed while still.
+        self._judged = np.isfinite(self._area_at_most)
         # Only tips on a slope (their windows tilt their thresholds there) are fitted: on a flat membrane
         # a window that loses its tip has lost it to contact, to the rim or to a neighbour.
         #: (N,) bool: pins whose windows at rest lie on a sloped background (a reflection, a veil).
@@ -461,4 +462,5 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         """Whether tips' (area, contrast, compactness), stacked (3, L), are like those of pins `which` at rest."""
         like = np.logical_and.reduce(measures >= self._at_least[:, which], axis=0)
         like &= measures[0] <= self._area_at_most[which]
+        like &= self._judged[which] | self.still[which]
         return like

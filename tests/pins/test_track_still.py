@@ -98,11 +98,13 @@ def test_a_still_pad_with_shimmer_keeps_its_pins_on_reflections(seed):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_still_pad_hardly_loses_a_faint_rim_pin_from_the_first_frame(seed):
     """Before any window's scatter is learnt, its calm test uses what the rest frame's own noise does
-    to it (`pins._noise.noise_sigma`, windows measured again under such noise): over 10 still frames
-    at most 3 visible pin-frames are lost (4, 6 and 0 when the bound started at nothing; outcome 1
-    asks for none: faint veil tips still fail their window's plausibility now and then)."""
+    to it (`pins._noise.noise_sigma`, windows measured again under such noise), and a tip within the rest
+    frame's noise of nothing is judged by its contrast alone (`pins._like`): over 10 still frames no visible
+    pin-frame is lost (4, 6 and 0 when the calm bound started at nothing; 0, 1 and 0 with bounds from the one
+    rest frame's measures alone). Seeds 0-11: 0 but seed 8's 4 (before 0, 1, 0, 0, 1, 0, 6, 0, 7, 0, 4, 0),
+    a rim tip of contrast 2 at rest whose window the veil pulls 2.4 px off its place."""
     s, rest, drawn, lost, tracker = _still_run(seed)
-    assert lost[:, rest.visible[drawn]].sum() <= 3
+    assert lost[:, rest.visible[drawn]].sum() == 0
 
 
 @pytest.mark.parametrize("sigma", [0.0, 2.0, 5.0])
