@@ -229,9 +229,11 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         # a tip within the rest frame's noise of nothing, by its contrast alone (`pins._like`).
         #: Scatter of a window's contrast in the camera's noise, grey levels (the rest frame's, `pins._like.contrast_noise`).
         self.contrast_noise = contrast_noise(self.windows, rest_crop, positions - origin)
-        self._at_least, self._area_at_most = bounds_at_rest(area, contrast, compactness, self.contrast_noise)
+        self._at_least, self._area_at_most_rest = bounds_at_rest(area, contrast, compactness, self.contrast_noise)
         # A tip judged by its contrast alone is told from the membrane only where it rests: placed while still.
-        self._judged = np.isfinite(self._area_at_most)
+        # (`still`'s setter keeps `_area_at_most`, the bound the passes and their compiled kernels read, -inf for
+        # such a tip that moved: no tip is like it.)
+        self._judged = np.isfinite(self._area_at_most_rest)
         # Only tips on a slope (their windows tilt their thresholds there) are fitted: on a flat membrane
         # a window that loses its tip has lost it to contact, to the rim or to a neighbour.
         #: (N,) bool: pins whose windows at rest lie on a sloped background (a reflection, a veil).
@@ -260,7 +262,6 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
                     np.concatenate([every[sloped, None], every[near[sloped]]], axis=1), axis=1)
         # Pins whose ellipses a fit can keep (`pins._tipfit._fittable`): the others' fits never move them.
         self._fittable = _fittable(self._tip_ellipses, self.tip_fit_radius_px)
-        #: (N,) bool: pins that did not move in the last frame (`pins.track.PinTracker` sets it).
         self.still = np.ones(len(positions), dtype=bool)
         self._then = np.zeros((len(positions), self._neighbour_index.shape[1], 2))  # (`pins._predict.remember`)
 
@@ -461,6 +462,16 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
     def _like_at_rest(self, measures: np.ndarray, which: np.ndarray | slice) -> np.ndarray:
         """Whether tips' (area, contrast, compactness), stacked (3, L), are like those of pins `which` at rest."""
         like = np.logical_and.reduce(measures >= self._at_least[:, which], axis=0)
-        like &= measures[0] <= self._area_at_most[which]
-        like &= self._judged[which] | self.still[which]
+        like &= measures[0] <= self._area_at_most[which]  # (-inf for a tip judged by contrast alone that moved)
         return like
+
+    @property
+    def still(self) -> np.ndarray:
+        """(N,) bool: pins that did not move in the last frame (`pins.track.PinTracker` sets it)."""
+        return self._still
+
+    @still.setter
+    def still(self, still: np.ndarray) -> None:
+        self._still = still
+        # A tip judged by its contrast alone (`pins._like`) is placed only while still: above, its area bound.
+        self._area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
