@@ -54,7 +54,7 @@ identities), NaN for taps that did not enter the belief (invalid, or after the d
 ``decided_at_tap`` (-1 if never), ``decision_threshold``, ``model`` (path) and the units.
 
 Speed: frames are decoded on a thread (`tactip.sources.ThreadedReader`, blocking, so no frame is
-dropped) while the main thread tracks, so a replay costs about the larger of decoding and
+dropped; up to 64 MB of frames ahead, so decoding goes on while the pin field is searched for) while the main thread tracks, so a replay costs about the larger of decoding and
 tracking rather than their sum (`bench/bench_replay.py`). The decoder gets one thread fewer than
 the cores (one on a 2-core machine): its extra threads would only contend with the tracking.
 
@@ -105,6 +105,21 @@ def _opencv_threads(count: int):
         yield
     finally:
         cv2.setNumThreads(before)
+
+
+# Decoded grey frames replay's reader may hold ahead of the tracking, bytes: while the pin field is searched for
+# in the rest frame (0.14 s on the slide bench, ~150-230 frames of decoding) the decoder runs on instead of
+# stopping at a short queue (8 frames). Slide bench, quiet 2-core VM, replay / decode: interleaved in one
+# process, medians of 3 rounds, 1.51 -> 1.42 (mp4v) and 1.28 -> 1.02 (MJPG); bench_replay.py's medians of its
+# repeats, separate runs, 1.64 -> 1.60 and 1.31 -> 1.27. 218 frames of 640x480, 32 of 1920x1080.
+_QUEUE_BYTES = 64 * 2 ** 20
+
+
+def _queue_frames(frame_size) -> int:
+    """Frames of `frame_size` (width, height) px, grey, that fill `_QUEUE_BYTES` (at least 8)."""
+    width, height = (int(v) for v in frame_size)
+    pixels = width * height
+    return 8 if pixels <= 0 else max(8, _QUEUE_BYTES // pixels)  # (a size the source does not know: 8)
 
 
 def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
@@ -341,7 +356,7 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
         # Decode on a thread while this one tracks; blocking, so that no frame is dropped. OpenCV's
         # own worker pool stays at one thread meanwhile: the two threads already fill a 2-core
         # machine, and the pool's workers only contend with them.
-        with _opencv_threads(1), ThreadedReader(source, maxsize=8, when_full="block",
+        with _opencv_threads(1), ThreadedReader(source, maxsize=_queue_frames(source.frame_size), when_full="block",
                                                 close_source=False) as reader:
             plan = _Plan(calibration=calibration, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),
                          sensor=sensor, pins_on_pad=pins_on_pad, pad_diameter_mm=pad_diameter_mm,
