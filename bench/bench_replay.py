@@ -135,6 +135,20 @@ thread and decoding alone 0.58 ms/frame by the clock on both cores): what is lef
 bookkeeping kernels add ~0.07-0.09 s CPU to load from their cache (a 300-frame tracker run, first against
 second pass), the first repeat's main thread 1.20-1.60 -> 0.96-1.36 s CPU.
 
+The bar judged on a quiet machine (session 16's lead, 2026-11-29, load average 1.2-1.5 after the helpers
+stopped; main with speed8, speed9, the faint-tip rule and the 64 MB read-ahead; ``--slides 8``). MJPG, best of
+3: replay / decode by the clock 1.31 (median of the repeats 1.31, 1.05-2.24): met; 1.26 with 5 repeats (median
+1.27, 1.16-2.17). mp4v, best of 3: 1.61 (median 1.64, 1.61-2.32); best of 5: 1.76 with the fastest decoding
+of the session (median 1.60, 1.46-2.13): not met. Last session on the same machine: 2.06 and 2.73. CPU,
+ms/frame: replay's main thread 0.62-0.68 (MJPG), 0.59-0.63 (mp4v), its decode thread 0.96-0.99 and
+0.88-0.92, decoding alone 1.40 / 0.97-1.12 on both cores in 0.80 / 0.52-0.60 ms/frame of clock. Replay's
+decode thread (one FFmpeg thread, `tactip.replay.video._decode_threads`) is now its critical path on mp4v:
+0.92 ms/frame of CPU for 0.93 of clock. Two decode threads did no better (interleaved, medians of 3: mp4v
+1.47 against 1.42 with one, MJPG 1.13 against 1.02). What is left for mp4v: decoding in replay as fast as
+alone, or a tracker so cheap that two-thread decoding fits beside it (total CPU 0.97 + 0.63 ms/frame on two
+cores is already 0.80 ms/frame, 1.54 x decoding's 0.52). The first repeat in a fresh process also loads Numba
+and the kernels' cache: 1.2-2.0 s of clock against 0.74-0.83 for the best repeat (a one-off cost per process).
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
 """
