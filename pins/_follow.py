@@ -23,6 +23,8 @@ from ._window import WindowCentroids, _squared_norm
 _GUESS_FRACTION = 0.03
 _FOLLOW_FRACTION = 0.4
 _FOLLOW_PASSES = 4
+# Two pins found within this fraction of the spacing of each other sit on one tip (`Refiner._one_pin_per_tip`).
+_SAME_TIP_FRACTION = 0.25
 
 
 class _Following:
@@ -225,7 +227,6 @@ class _Following:
         # the others can have reached a neighbour's tip.
         placed = np.concatenate(placed) if placed else again[:0]
         if placed.size:
-            from ._refine import _SAME_TIP_FRACTION  # (`Refiner._one_pin_per_tip`'s bound; _refine imports this module)
             pins, start = which[placed], start[placed]
             kernels.one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start), self._identity_index,
                                     (_SAME_TIP_FRACTION * self.spacing_px) ** 2)

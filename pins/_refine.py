@@ -73,7 +73,7 @@ from .detect import DetectionParams
 from .disc import SensorDisc
 from ._flat import _pin_radius_px
 from ._identity import IDENTITY_NEIGHBOURS, keep_own_tips, squared_distances
-from ._follow import _GUESS_FRACTION, _Following
+from ._follow import _GUESS_FRACTION, _SAME_TIP_FRACTION, _Following
 from ._predict import _Prediction
 from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
 from ._recover import _Recovery, match_to_blobs
@@ -106,7 +106,6 @@ _SEARCH_SETTLED_FRACTION = 0.1
 _REST_PASSES = 4
 _MIN_SHIFT_PX = 0.4
 _MIN_GUESS_PX = 0.1
-_SAME_TIP_FRACTION = 0.25
 # Two tips whose centres lie nearer than this many tip radii (at rest) overlap: one blob, which no one-tip
 # fit parts (issue 20: radial-led-120 slides, three tips squeezed within 4 px, of 2 px radius).
 _OVERLAP_TIPS = 2.0
@@ -472,6 +471,7 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
 
     @still.setter
     def still(self, still: np.ndarray) -> None:
+        """Set the pins that did not move in the last frame, (N,) bool, and with them the area bound."""
         self._still = still
         # A tip judged by its contrast alone (`pins._like`) is placed only while still: above, its area bound.
         self._area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
