@@ -213,13 +213,18 @@ Run: .venv/bin/python bench/bench_slides.py [--presets radial-led-120 tactip-331
 from __future__ import annotations
 
 import argparse
+import os
+import sys
 import time
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from pins import DetectionParams, PinTracker, SensorDisc
-from tactip.sim import SyntheticTacTip
+# This tree's packages, not an installed copy (the bench is run from other trees to compare them).
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from pins import DetectionParams, PinTracker, SensorDisc  # noqa: E402
+from tactip.sim import SyntheticTacTip  # noqa: E402
 
 
 def slide_video(preset: str, seed: int, slides: int, pitches: float, *, frame_rate: float = 120.0,
