@@ -20,8 +20,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._noise import noise_sigma
-from ._rest import _NOISE_DRAWS, _standard_draws
 from ._window import WindowCentroids
 
 __all__ = ["bounds_at_rest", "contrast_noise"]
@@ -54,26 +52,22 @@ _MIN_COMPACTNESS_RATIO = 0.6
 _NOISE_REACH = 5.0
 
 
-def contrast_noise(windows: WindowCentroids, rest_crop: np.ndarray, points: np.ndarray) -> float:
+def contrast_noise(windows: WindowCentroids, rest_crop: np.ndarray, noisy: tuple, points: np.ndarray) -> float:
     """The scatter of a window's contrast in the rest frame's own noise, grey levels: the median over the
-    windows at `points` (N, 2), px, of the rms change of their contrast when noise of the crop's level
-    (`noise_sigma`, the draws of `pins._rest`) is added to it; 0 in a noiseless frame.
+    windows at `points` (N, 2), px, of the rms change of their contrast from `rest_crop` to its `noisy`
+    copies (`pins._rest.noisy_copies`); 0 without copies (a noiseless frame) or points.
 
     One figure for all windows (the contrast is the top's five pixels above the sides' darkest runs, the
     same pixels in every window): four draws of each of a hundred windows measure it to a few per cent.
     """
-    sigma = noise_sigma(rest_crop)
-    if not sigma > 0 or len(points) == 0:
+    if not noisy or len(points) == 0:
         return 0.0
     base = windows.contrast(rest_crop, points)
     total = np.zeros(len(points))
-    for draw in _standard_draws(rest_crop.shape):
-        noisy = np.multiply(draw, sigma)
-        noisy += rest_crop
-        noisy = np.clip(noisy, 0, 255, out=noisy).astype(np.uint8)
-        change = windows.contrast(noisy, points) - base
+    for copy in noisy:
+        change = windows.contrast(copy, points) - base
         total += change * change
-    scatter = np.sqrt(total[np.isfinite(total)] / _NOISE_DRAWS)
+    scatter = np.sqrt(total[np.isfinite(total)] / len(noisy))
     return float(np.median(scatter)) if scatter.size else 0.0
 
 

@@ -78,7 +78,7 @@ from ._predict import _Prediction
 from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
 from ._recover import _Recovery, match_to_blobs
 from ._like import bounds_at_rest, contrast_noise
-from ._rest import _AtRest
+from ._rest import _AtRest, noisy_copies
 from ._window import _FLAT_RISE, WindowCentroids, _squared_norm
 
 __all__ = ["match_to_blobs", "WindowCentroids", "Refiner"]
@@ -220,14 +220,15 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         self._rest_scatter_seen = np.zeros(len(positions))
         # ... and, before any is learnt (the first frames), what the camera's noise does to it: the
         # windows at rest measured again under noise like the rest frame's (`_noise_scatter_sq`).
-        self._noise_scatter_sq = self._noise_scatter_sq_px2(rest_crop, positions)
+        noisy = noisy_copies(rest_crop)  # (the rest crop in camera noise: the two scatters below)
+        self._noise_scatter_sq = self._noise_scatter_sq_px2(rest_crop, noisy, positions)
         self.settled_share = float(np.mean(settled & (contrast > 0)))
         positive = contrast[contrast > 0]
         self.windows.least_contrast = 0.25 * float(np.percentile(positive, 5)) if positive.size else 0.0
         # Each pin's tip at rest bounds its tip later: (area, contrast, compactness) from below, area above;
         # a tip within the rest frame's noise of nothing, by its contrast alone (`pins._like`).
         #: Scatter of a window's contrast in the camera's noise, grey levels (the rest frame's, `pins._like.contrast_noise`).
-        self.contrast_noise = contrast_noise(self.windows, rest_crop, positions - origin)
+        self.contrast_noise = contrast_noise(self.windows, rest_crop, noisy, positions - origin)
         self._at_least, self._area_at_most_rest = bounds_at_rest(area, contrast, compactness, self.contrast_noise)
         # A tip judged by its contrast alone is told from the membrane only where it rests: placed while still.
         # (`still`'s setter keeps `_area_at_most`, the bound the passes and their compiled kernels read, -inf for

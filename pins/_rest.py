@@ -55,24 +55,36 @@ def _standard_draws(shape: tuple[int, int]) -> tuple[np.ndarray, ...]:
     return draws
 
 
+def noisy_copies(crop: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The grey `crop` with each of the `_NOISE_DRAWS` fixed draws of Gaussian noise of its own level
+    (`noise_sigma`) added, clipped and truncated to uint8: what another frame of a still pad could show.
+    Empty for a noiseless crop. (Measured once at a tracker's start for the windows' scatter in noise,
+    `_AtRest._noise_scatter_sq_px2`, and their contrast's, `pins._like.contrast_noise`.)"""
+    sigma = noise_sigma(crop)
+    if not sigma > 0:
+        return ()
+    copies = []
+    for draw in _standard_draws(crop.shape):
+        noisy = np.multiply(draw, sigma)  # `rng.normal(0.0, sigma, shape)` of seed 0, bit for bit
+        noisy += crop  # in place: the crop plus the draw, clipped and truncated to uint8
+        copies.append(np.clip(noisy, 0, 255, out=noisy).astype(np.uint8))
+    return tuple(copies)
+
+
 class _AtRest:
     """The rest side of `pins._refine.Refiner`: noise of the rest windows, still steps, snapping to rest."""
 
-    def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, positions: np.ndarray) -> np.ndarray:
-        """Each rest window's mean square displacement, px^2 (N,), under `_NOISE_DRAWS` draws of Gaussian
-        noise of the rest crop's own level (`noise_sigma`) added to it: how far one frame's noise
-        moves the window (a faint tip in glare: tenths of a px; a crisp one: hundredths)."""
-        sigma = noise_sigma(rest_crop)
-        if not sigma > 0:
+    def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, noisy: tuple, positions: np.ndarray) -> np.ndarray:
+        """Each rest window's mean square displacement, px^2 (N,), in the `noisy` copies of the rest crop
+        (`noisy_copies`): how far one frame's noise moves the window (a faint tip in glare: tenths of a
+        px; a crisp one: hundredths); 0 without copies (a noiseless crop)."""
+        if not noisy:
             return np.zeros(len(positions))
         points, radius = positions - self.origin, self.window_radius(positions)
         base = self.windows.measure(rest_crop, points, radius)[0]
         total = np.zeros(len(positions))
-        for draw in _standard_draws(rest_crop.shape):
-            noisy = np.multiply(draw, sigma)  # `rng.normal(0.0, sigma, shape)` of seed 0, bit for bit
-            noisy += rest_crop  # in place: the crop plus the draw, clipped and truncated to uint8
-            noisy = np.clip(noisy, 0, 255, out=noisy).astype(np.uint8)
-            total += _squared_norm(self.windows.measure(noisy, points, radius)[0] - base)
+        for copy in noisy:
+            total += _squared_norm(self.windows.measure(copy, points, radius)[0] - base)
         return np.where(np.isfinite(total), total / _NOISE_DRAWS, 0.0)
 
     def still(self, steps: np.ndarray) -> np.ndarray:

@@ -110,7 +110,7 @@ def _opencv_threads(count: int):
 # Decoded grey frames replay's reader may hold ahead of the tracking, bytes: while the pin field is searched for
 # in the rest frame (0.14 s on the slide bench, ~150-230 frames of decoding) the decoder runs on instead of
 # stopping at a short queue (8 frames). Slide bench, quiet 2-core VM, replay / decode: interleaved in one
-# process, medians of 3 rounds, 1.51 -> 1.42 (mp4v) and 1.28 -> 1.02 (MJPG); bench_replay.py's medians of its
+# process, medians of 3 rounds, 8 -> 256 frames, 1.51 -> 1.42 (mp4v) and 1.28 -> 1.02 (MJPG); bench_replay.py's medians of its
 # repeats, separate runs, 1.64 -> 1.60 and 1.31 -> 1.27. 218 frames of 640x480, 32 of 1920x1080.
 _QUEUE_BYTES = 64 * 2 ** 20
 
