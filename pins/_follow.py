@@ -228,7 +228,6 @@ class _Following:
         placed = np.concatenate(placed) if placed else again[:0]
         if placed.size:
             pins, start = which[placed], start[placed]
-            kernels.one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start), self._identity_index,
-                                    (_SAME_TIP_FRACTION * self.spacing_px) ** 2)
+            self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
             keep_own_tips(positions, pins, start, filled, self._identity_index)
         return positions

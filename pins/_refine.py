@@ -77,6 +77,7 @@ from ._follow import _GUESS_FRACTION, _SAME_TIP_FRACTION, _Following
 from ._predict import _Prediction
 from ._tipfit import _SHAPE_NEIGHBOURS, _fittable, tip_shapes
 from ._recover import _Recovery, match_to_blobs
+from ._kernels import compiled
 from ._like import bounds_at_rest, contrast_noise
 from ._rest import _AtRest, noisy_copies
 from ._window import _FLAT_RISE, WindowCentroids, _squared_norm
@@ -442,8 +443,18 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         Two pins on one tip are among each other's nearest `IDENTITY_NEIGHBOURS` at rest (not only the
         6 nearest: on radial layouts a followed pin slid onto the tip of a pin a ring away, 1.5 px from
         it, issue 20): the one farther from its prediction (squared distance `error`, px^2) yields; a pin
-        placed otherwise (not in `found`) never yields to a found one; ties: both yield.
+        placed otherwise (not in `found`) never yields to a found one; ties: both yield. By the compiled
+        kernel (`pins._jit_track.one_pin_per_tip`, the same decisions) unless ``TACTIP_KERNELS=numpy``.
         """
+        kernels = compiled()
+        if kernels is None:
+            self._one_pin_per_tip_numpy(positions, found, error)
+        else:
+            kernels.one_pin_per_tip(positions, np.asarray(found, dtype=np.int64), np.asarray(error, dtype=np.float64),
+                                    self._identity_index, (_SAME_TIP_FRACTION * self.spacing_px) ** 2)
+
+    def _one_pin_per_tip_numpy(self, positions: np.ndarray, found: np.ndarray, error: np.ndarray) -> None:
+        """`_one_pin_per_tip` in NumPy: the reference of its compiled kernel."""
         neighbours = self._identity_index[found]  # (F, m)
         near = squared_distances(positions, neighbours, positions[found]) < (_SAME_TIP_FRACTION * self.spacing_px) ** 2
         if np.count_nonzero(near):  # (count_nonzero: `ndarray.any` costs more)

@@ -164,7 +164,7 @@ def test_one_pin_per_tip_is_the_reference(seed):
             error = np.round(rng.uniform(0.0, 4.0, len(found)))  # ties
             got, want = positions.copy(), positions.copy()
             kernels.one_pin_per_tip(got, found, error, near, (_SAME_TIP_FRACTION * 10.0) ** 2)
-            Refiner._one_pin_per_tip(state, want, found, error)
+            Refiner._one_pin_per_tip_numpy(state, want, found, error)
             _same(got, want)
 
 
