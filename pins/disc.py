@@ -374,12 +374,15 @@ def _rim_ring_inner_px(grey: np.ndarray, disc: SensorDisc, dark_pins: bool) -> f
         # candidate blobs.
         return np.inf
     steps = int(np.ceil(disc.radius_px))
+    # WARP_FILL_OUTLIERS: without it, OpenCV leaves the samples beyond the frame as the new array's
+    # memory held them (BORDER_TRANSPARENT). In a long-running process that is an earlier array's
+    # bytes: rays leaving the frame then passed for whole, and the black beyond the frame for a ring.
     polar = cv2.warpPolar(grey, (steps, _RING_AZIMUTHS), (disc.cx, disc.cy), disc.radius_px,
-                          cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR)
+                          cv2.WARP_POLAR_LINEAR + cv2.INTER_LINEAR + cv2.WARP_FILL_OUTLIERS)
     # A disc cut by the frame edge: only the azimuths whose ray stays in the frame see a ring (the
     # samples beyond the frame are black).
     seen = cv2.warpPolar(np.full(grey.shape, 255, np.uint8), (steps, _RING_AZIMUTHS), (disc.cx, disc.cy),
-                         disc.radius_px, cv2.WARP_POLAR_LINEAR + cv2.INTER_NEAREST)
+                         disc.radius_px, cv2.WARP_POLAR_LINEAR + cv2.INTER_NEAREST + cv2.WARP_FILL_OUTLIERS)
     whole = (seen == 255).all(axis=1)
     if whole.sum() < _RING_AZIMUTHS // 4:
         return np.inf

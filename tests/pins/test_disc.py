@@ -120,3 +120,33 @@ def test_dark_regions_cut_by_the_frame_edge_that_are_no_disc_are_refused(shape):
         cv2.circle(image, (630, 470), 25, 30, -1)
     with pytest.raises(NoSensorError, match="cut by the frame edge"):
         find_sensor_disc(image)
+
+
+def test_a_cut_disc_shows_no_rim_ring_whatever_memory_the_polar_samples_reuse(monkeypatch):
+    """The rim-ring search samples the disc on rays (cv2.warpPolar). Rays that leave a cut frame must
+    read black beyond it, not whatever an earlier array left in the memory OpenCV writes into: in a
+    long test run that was an earlier call's bytes (the ray's own all-255 "seen" samples), the rays
+    passed for whole and the frame edge for a black ring, and the field search kept only the pins
+    inside it (CI: recall 0.79 on tactip-331 cut on the left, never seen in a fresh process)."""
+    import pins.disc
+    from pins import find_pin_field
+    from pins.disc import _rim_ring_inner_px
+
+    real = cv2.warpPolar
+
+    def reused(src, dsize, center, max_radius, flags):
+        # Memory that last held the all-255 samples of the frame's own rays, or black.
+        value = 255 if src.min() == 255 else 0
+        return real(src, dsize, center, max_radius, flags, dst=np.full(dsize[::-1], value, np.uint8))
+
+    for name in ("tactip-331", "radial-120"):
+        f, _, sensor = _cut(name, 0, "left")
+        disc = find_sensor_disc(f.image, dark_pins=sensor.dark_pins)
+        fresh = _rim_ring_inner_px(as_grey(f.image), disc, sensor.dark_pins)
+        expected = find_pin_field(f.image)
+        with monkeypatch.context() as patched:
+            patched.setattr(pins.disc.cv2, "warpPolar", reused)
+            assert _rim_ring_inner_px(as_grey(f.image), disc, sensor.dark_pins) == fresh == np.inf
+            field = find_pin_field(f.image)
+        np.testing.assert_array_equal(field.centres, expected.centres)
+        assert field.params == expected.params
