@@ -165,6 +165,7 @@ import cv2
 import numpy as np
 
 from pins import PinTracker, find_pin_field
+from tactip.replay.luma import LumaVideoSource
 from tactip.replay.video import replay_video
 from tactip.sources import open_source
 from tactip.sim import Contact, SyntheticTacTip, tap_profile
@@ -227,6 +228,13 @@ def decode(path: pathlib.Path) -> list:
         return [frame.image for frame in source]
 
 
+def decode_luma(path: pathlib.Path) -> tuple[int, bool]:
+    """Every frame of the video, grey, as replay's reader decodes them (`tactip.replay.luma`: the luma plane where
+    it gives the same frames), FFmpeg's own threads: (frames, whether the luma plane was read)."""
+    with LumaVideoSource(path) as source:
+        return sum(1 for _ in source), source.luma
+
+
 def field_and_track(images: list) -> tuple[float, float, float, float, int]:
     """`find_pin_field` on the first frame and `PinTracker.update` over the others: (seconds, CPU
     seconds) of each, and the tracker's window measurements (`WindowCentroids.measure` calls)."""
@@ -266,14 +274,18 @@ def main() -> None:
         video = pathlib.Path(folder) / ("taps.avi" if args.codec == "MJPG" else "taps.mp4")
         frames = (write_slides(video, args.preset, args.slides, codec=args.codec) if args.slides
                   else write_video(video, args.preset, args.taps, codec=args.codec))
-        times: dict[str, list[float]] = {"decode": [], "replay": [], "field": [], "tracker": []}
-        cpu: dict[str, list[float]] = {"decode": [], "replay main": [], "replay decode": [], "field": [],
-                                       "tracker": []}
+        times: dict[str, list[float]] = {"decode": [], "decode luma": [], "replay": [], "field": [], "tracker": []}
+        cpu: dict[str, list[float]] = {"decode": [], "decode luma": [], "replay main": [], "replay decode": [],
+                                       "field": [], "tracker": []}
         for repeat in range(args.repeats):
             start, process = time.perf_counter(), time.process_time()
             images = decode(video)
             times["decode"].append(time.perf_counter() - start)
             cpu["decode"].append(time.process_time() - process)
+            start, process = time.perf_counter(), time.process_time()
+            _, luma = decode_luma(video)
+            times["decode luma"].append(time.perf_counter() - start)
+            cpu["decode luma"].append(time.process_time() - process)
             start, process, main = time.perf_counter(), time.process_time(), time.thread_time()
             sensor = None if args.slides else args.preset  # a home-built pad: no named sensor
             result = replay_video(video, pathlib.Path(folder) / f"replay{repeat}.h5", sensor=sensor)
@@ -292,14 +304,17 @@ def main() -> None:
     print(f"{args.preset}: {frames} frames {width}x{height} {args.codec}, {result.pins} pins; "
           f"lost per frame median {np.median(result.lost_per_frame):g}, max {result.lost_per_frame.max()}; "
           f"{len(result.tap_bounds)} contacts; best of {args.repeats}")
-    print(f"{'':10s}{'s':>8s}{'ms/frame':>10s}{'/ decode':>10s}")
-    for name in ("decode", "replay", "field", "tracker"):
-        print(f"{name:10s}{best[name]:8.3f}{best[name] / frames * 1e3:10.2f}{best[name] / best['decode']:10.2f}")
+    print(f"{'':12s}{'s':>8s}{'ms/frame':>10s}{'/ decode':>10s}")
+    for name in ("decode", "decode luma", "replay", "field", "tracker"):
+        print(f"{name:12s}{best[name]:8.3f}{best[name] / frames * 1e3:10.2f}{best[name] / best['decode']:10.2f}")
     per_frame = best["replay"] - best["field"]
     print(f"replay / decode = {best['replay'] / best['decode']:.2f} (bar <= {bar:g}); without the one-off pin field "
           f"{per_frame / best['decode']:.2f}; tracker / decode = {best['tracker'] / best['decode']:.2f}; "
           f"decode + field + tracker = {(best['decode'] + best['field'] + best['tracker']) / best['decode']:.2f}")
     paired = np.array(times["replay"]) / np.array(times["decode"])
+    print(f"replay / decode luma = {best['replay'] / best['decode luma']:.2f} (decoding alone as replay's reader "
+          f"decodes: {'the luma plane' if luma else 'BGR, converted: the luma plane would not give the same frames'}, "
+          f"`tactip.replay.luma`)")
     print(f"replay / decode per repeat: median {np.median(paired):.2f}, range {paired.min():.2f}-{paired.max():.2f} "
           f"({args.repeats} repeats)")
     print(f"CPU, best of {args.repeats}: {'ms/frame':>10s}{'/ decode':>10s}")

@@ -56,7 +56,10 @@ identities), NaN for taps that did not enter the belief (invalid, or after the d
 Speed: frames are decoded on a thread (`tactip.sources.ThreadedReader`, blocking, so no frame is
 dropped; up to 64 MB of frames ahead, so decoding goes on while the pin field is searched for) while the main thread tracks, so a replay costs about the larger of decoding and
 tracking rather than their sum (`bench/bench_replay.py`). The decoder gets one thread fewer than
-the cores (one on a 2-core machine): its extra threads would only contend with the tracking.
+the cores (one on a 2-core machine): its extra threads would only contend with the tracking. A video
+file's grey frames are read from the decoder's luma plane, without converting each to BGR and back
+(`tactip.replay.luma`), where its first frame shows that this gives the same frames (grey content: a
+monochrome pad, the synthetic videos); a colour recording is read as before.
 
 The file is written to a temporary name next to the target and renamed at the end, so a failure
 never leaves a half-written result; the output paths are checked before any processing.
@@ -339,12 +342,12 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
     PinsError
         No sensor in the rest frame.
     """
-    from tactip.sources import ThreadedReader, open_source
+    from tactip.sources import ThreadedReader
 
     # The decoder on one thread fewer than the cores: this thread tracks on the last one, and
     # FFmpeg's second thread on a 2-core machine only adds its own overhead to the contention.
     threads = _decode_threads() if decode_threads is None else max(1, int(decode_threads))
-    with open_source(video, grey=True, decode_threads=threads) as source:
+    with _open_grey(video, threads) as source:
         if source.live:
             raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
         if calibration is not None and tuple(source.frame_size) != tuple(calibration.frame_size):
@@ -372,6 +375,20 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
                                 f"with the pad lit and in view") from None
             frame_size, frame_rate = source.frame_size, source.frame_rate
     return track, plan.analysis, frame_size, frame_rate
+
+
+def _open_grey(video, threads: int):
+    """`tactip.sources.open_source`'s grey source for `video`; a video file read from its luma plane where that
+    gives the same frames (`tactip.replay.luma.LumaVideoSource`: no colour conversion on the decode thread)."""
+    from tactip.replay.luma import LumaVideoSource
+    from tactip.sources import VideoSource, open_source
+
+    source = open_source(video, grey=True, decode_threads=threads)
+    if type(source) is not VideoSource:
+        return source
+    path = source.path
+    source.close()
+    return LumaVideoSource(path, decode_threads=threads)
 
 
 class _Plan:

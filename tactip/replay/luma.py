@@ -1,0 +1,155 @@
+"""Grey frames of a video file from the decoder's luma plane, without a colour conversion (replay's reader).
+
+OpenCV's FFmpeg backend converts every decoded frame to BGR (swscale, with bicubic chroma upsampling),
+and a grey source then converts BGR to grey (`cv2.cvtColor`): on replay's slide bench (640 x 480,
+mp4v or MJPG, one decoder thread) that is ~0.25 of the decode thread's ~0.87 ms/frame of CPU, which
+on mp4v is replay's critical path. With ``cv2.CAP_PROP_CONVERT_RGB`` off (a documented property,
+given when the capture is opened) the backend returns the frame "in its original format": for planar
+YUV (yuv420p, yuvj420p, yuv422p ...) a (H, W) uint8 image that is the luma plane Y. That grey differs
+from grey-of-BGR by the colour range alone (mp4v stores limited-range Y, 16-235: grey ~ (Y - 16)
+255 / 219), so a 256-entry table (`cv2.LUT`) maps one to the other.
+
+OpenCV says of this mode, when the capture opens, that multiplanar formats "have not been tested"
+(and warns on every frame that it treats the format as 8UC1), so the path proves itself on each
+video before it is used: the first frame is decoded both ways, the table is read off the pair, and
+the luma path is taken only when the table reproduces the first frame's grey-of-BGR exactly, pixel
+for pixel; otherwise (another backend, a colour recording whose chroma rounds differently, a packed or
+10-bit pixel format whose first plane is not luma, an OpenCV that refuses the property) the source
+reads BGR and converts, as `tactip.sources.VideoSource` does. On the slide bench's videos (grey
+content, both codecs) every pixel of all 795 frames equals today's grey; on a tinted colour recording
+with a saturated LED the first frame disagrees by up to 6 grey levels and the fallback is taken.
+OpenCV's warnings are silenced (log level ERROR) while such a capture is open.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from tactip.sources.files import VideoSource
+
+__all__ = ["LumaVideoSource", "luma_table"]
+
+_quiet_lock = threading.Lock()
+_quiet_count = 0
+_quiet_before = None
+
+
+def _quiet(enter: bool) -> None:
+    """OpenCV's log level at ERROR while any luma capture is open (it warns on each frame); restored after the last."""
+    import cv2
+
+    global _quiet_count, _quiet_before
+    with _quiet_lock:
+        if enter:
+            if _quiet_count == 0:
+                _quiet_before = cv2.utils.logging.getLogLevel()
+                cv2.utils.logging.setLogLevel(min(_quiet_before, cv2.utils.logging.LOG_LEVEL_ERROR))
+            _quiet_count += 1
+        else:
+            _quiet_count -= 1
+            if _quiet_count == 0:
+                cv2.utils.logging.setLogLevel(_quiet_before)
+
+
+def luma_table(luma: np.ndarray, grey: np.ndarray) -> np.ndarray | None:
+    """The 256-entry table that maps a frame's luma plane to its grey-of-BGR, or None when none does exactly.
+
+    Parameters
+    ----------
+    luma, grey : (H, W) uint8 ndarray
+        One frame decoded both ways: the luma plane (``CAP_PROP_CONVERT_RGB`` off) and
+        ``cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)``.
+
+    Returns
+    -------
+    (256,) uint8 ndarray or None
+        Each luma value seen maps to its grey (the mean over its pixels, rounded); values not seen
+        in this frame are interpolated between the nearest seen ones (a linear fit beyond them,
+        clipped to 0-255). None when shapes or dtypes differ or when the table does not
+        reproduce `grey` pixel for pixel (chroma or a pixel format that is not planar YUV).
+    """
+    if luma.shape != grey.shape or luma.dtype != np.uint8 or grey.dtype != np.uint8 or luma.ndim != 2:
+        return None
+    values, flat = luma.ravel(), grey.ravel().astype(np.float64)
+    count = np.bincount(values, minlength=256)
+    seen = np.flatnonzero(count)
+    if len(seen) < 2:
+        return None
+    mean = np.bincount(values, weights=flat, minlength=256)[seen] / count[seen]
+    slope, intercept = np.polyfit(seen.astype(np.float64), mean, 1, w=np.sqrt(count[seen]))
+    levels = np.arange(256, dtype=np.float64)
+    table = np.interp(levels, seen, mean)
+    outside = (levels < seen[0]) | (levels > seen[-1])
+    table[outside] = slope * levels[outside] + intercept
+    table = np.clip(np.round(table), 0, 255).astype(np.uint8)
+    import cv2
+
+    return table if np.array_equal(cv2.LUT(luma, table), grey) else None
+
+
+class LumaVideoSource(VideoSource):
+    """A grey `tactip.sources.VideoSource` that reads the decoder's luma plane when that gives the same frames.
+
+    Opens the video as `VideoSource` does (``grey=True``; its first frame decoded to BGR and
+    converted), then a second capture of it with ``CAP_PROP_CONVERT_RGB`` off; when `luma_table`
+    maps that capture's first frame onto the first's grey exactly, the second capture replaces
+    the first and every later frame is its luma plane through the table; otherwise it is
+    released and the source reads BGR and converts. `luma` says which path was taken.
+
+    Parameters
+    ----------
+    path : str or path-like
+    decode_threads : int, optional
+        Threads of the FFmpeg decoder (`VideoSource`).
+    """
+
+    def __init__(self, path, *, decode_threads: int | None = None):
+        super().__init__(path, grey=True, decode_threads=decode_threads)
+        self._table = None
+        self._quieted = False
+        try:
+            self._open_luma(decode_threads)
+        except Exception:  # an OpenCV that refuses the property: the BGR path, as before
+            self._drop_luma()
+        #: True when frames after the first are read from the luma plane.
+        self.luma = self._table is not None
+
+    def _open_luma(self, decode_threads) -> None:
+        cv2 = self._cv2
+        if self._capture.getBackendName() != "FFMPEG" or self._pending is None or self._pending.ndim != 3:
+            return
+        _quiet(True)
+        self._quieted = True
+        options = [cv2.CAP_PROP_CONVERT_RGB, 0] + ([] if decode_threads is None else
+                                                    [cv2.CAP_PROP_N_THREADS, int(decode_threads)])
+        capture = cv2.VideoCapture(str(self.path), cv2.CAP_FFMPEG, options)
+        ok, luma = capture.read() if capture.isOpened() else (False, None)
+        table = None
+        if ok and luma is not None and capture.get(cv2.CAP_PROP_CONVERT_RGB) == 0:
+            table = luma_table(luma, cv2.cvtColor(self._pending, cv2.COLOR_BGR2GRAY))
+        if table is None:
+            capture.release()
+            self._drop_luma()
+            return
+        self._capture.release()
+        self._capture, self._table = capture, table
+
+    def _drop_luma(self) -> None:
+        self._table = None
+        if self._quieted:
+            self._quieted = False
+            _quiet(False)
+
+    def _read(self):
+        item = super()._read()
+        if item is not None and self._table is not None and item[0].ndim == 2:
+            self._cv2.LUT(item[0], self._table, dst=item[0])
+        return item
+
+    def _close(self) -> None:
+        try:
+            super()._close()
+        finally:
+            self._drop_luma()
