@@ -18,7 +18,8 @@ for pixel; otherwise (another backend, a colour recording whose chroma rounds di
 reads BGR and converts, as `tactip.sources.VideoSource` does. On the slide bench's videos (grey
 content, both codecs) every pixel of all 795 frames equals today's grey; on a tinted colour recording
 with a saturated LED the first frame disagrees by up to 6 grey levels and the fallback is taken.
-OpenCV's warnings are silenced (log level ERROR) while such a capture is open.
+OpenCV's warnings are silenced (log level ERROR) while such a capture is open. Replay maps luma to grey
+on its tracking thread (`LumaVideoSource.defer_table`), which has time to spare, not on the decoder's.
 """
 
 from __future__ import annotations
@@ -109,6 +110,7 @@ class LumaVideoSource(VideoSource):
         super().__init__(path, grey=True, decode_threads=decode_threads)
         self._table = None
         self._quieted = False
+        self._deferred = False
         try:
             self._open_luma(decode_threads)
         except Exception:  # an OpenCV that refuses the property: the BGR path, as before
@@ -134,7 +136,7 @@ class LumaVideoSource(VideoSource):
             self._drop_luma()
             return
         self._capture.release()
-        self._capture, self._table = capture, table
+        self._capture, self._table, self._pending = capture, table, luma  # (its first frame mapped as the others)
 
     def _drop_luma(self) -> None:
         self._table = None
@@ -142,9 +144,15 @@ class LumaVideoSource(VideoSource):
             self._quieted = False
             _quiet(False)
 
+    def defer_table(self) -> np.ndarray | None:
+        """Stop mapping luma to grey here and return the table (None on the BGR path): the caller maps every frame
+        read from now on (``cv2.LUT(image, table, dst=image)``), e.g. on another thread than the decoder's."""
+        table, self._deferred = self._table, self._table is not None
+        return table
+
     def _read(self):
         item = super()._read()
-        if item is not None and self._table is not None and item[0].ndim == 2:
+        if item is not None and self._table is not None and not self._deferred:
             self._cv2.LUT(item[0], self._table, dst=item[0])
         return item
 
