@@ -10,7 +10,9 @@ written through ``cv2.VideoWriter`` as `tactip record` writes a camera: MPEG-4 p
 each repeat so that machine load falls on both alike:
 
 - decode:  every frame read through the project's video source (`tactip.sources.open_source`, grey,
-           as replay reads them) and nothing else;
+           as replay read them until session 17) and nothing else: the bar's baseline;
+- decode luma: the same through replay's reader (`tactip.replay.luma`: the decoder's luma plane where it gives
+           the same frames), FFmpeg's own threads;
 - replay:  `tactip.replay.video.replay_video` on the same file (no --annotate, no progress bar): decode
            on a thread, pin detection on the rest frame, tracking, displacements, taps, features
            and the HDF5 file;
@@ -148,6 +150,30 @@ decode thread (one FFmpeg thread, `tactip.replay.video._decode_threads`) is now 
 alone, or a tracker so cheap that two-thread decoding fits beside it (total CPU 0.97 + 0.63 ms/frame on two
 cores is already 0.80 ms/frame, 1.54 x decoding's 0.52). The first repeat in a fresh process also loads Numba
 and the kernels' cache: 1.2-2.0 s of clock against 0.74-0.83 for the best repeat (a one-off cost per process).
+
+Session of issue 20's "speed10" (2026-11-29; 2-core VM shared with three other sessions, load average 4-22;
+main ccd37d5 against this session's code, 3 rounds interleaved per codec, order alternating, best of 3 repeats
+each; the replay files' positions, lost and retired pins, contacts and features identical to main's on both
+videos): replay reads grey frames from the decoder's luma plane (``CAP_PROP_CONVERT_RGB`` off,
+`tactip.replay.luma`) with a 256-entry table to today's grey, checked exact on the first frame (all 795 frames
+of both videos 0 grey levels apart), and looks the table up on its tracking thread. Decoding on one thread
+(CPU, ms/frame, OpenCV's pool at one thread as in replay): BGR and converted 0.81 (mp4v) / 0.84-0.86 (MJPG),
+luma and the table 0.69-0.73 / 0.77, luma alone 0.62-0.66, FFmpeg's decoding alone (``grab``) 0.60-0.63.
+Replay's threads, CPU ms/frame, main -> this, per round: with the table on the decode thread (load 4-11),
+decode thread mp4v 0.98 / 0.99 / 0.97 -> 0.84 / 0.90 / 0.90, MJPG 0.99 / 1.07 / 0.98 -> 0.97 / 0.93 / 0.82, main
+thread unchanged (0.62-0.73 on both sides); the final code (load 9-22), decode thread mp4v 0.98 / 1.03 / 0.98 ->
+0.84 / 0.93 / 0.84, MJPG 1.02 / 0.99 / 0.94 -> 0.88 / 0.84 / 0.87, main thread mp4v 0.65 / 0.70 / 0.62 -> 0.77 /
+0.83 / 0.77, MJPG 0.68 / 0.64 / 0.62 -> 0.93 / 0.79 / 0.79 (the lookup, ~0.08 ms/frame on the thread that decoded
+the frame, costs more on the other core). The table's place alone, 4 rounds interleaved in one process (load
+15; `track_video`, field search included), on the decode thread -> on the tracking thread: decode thread mp4v
+0.93-1.00 -> 0.79-0.91, MJPG 1.02-1.06 -> 0.84-0.92; tracking thread mp4v 0.69-0.72 -> 0.75-0.79, MJPG 0.73-0.75
+-> 0.75-0.83. The clock at that load says nothing (replay / decode per round 1.6-6.0 on either side). Decoding
+alone through the luma reader ("decode luma", FFmpeg's threads) takes 0.67-0.75 ms/frame of CPU against
+0.80-1.16 through the project's source: against it, the ratio is worse than against "decode" (the bar's
+baseline until now), since decoding alone gains more than replay does. On a quiet machine, from the lead's
+figures above less the CPU saved, replay's busier thread on mp4v would be ~0.75-0.8 ms/frame (1.3-1.5 x
+decoding's 0.52-0.60 of clock): not measured here. A colour recording (a webcam's) keeps the BGR path: its
+luma is not grey-of-BGR (up to 6 levels apart on a tinted render with a saturated LED).
 
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
