@@ -17,7 +17,10 @@ for pixel; otherwise (another backend, a colour recording whose chroma rounds di
 10-bit pixel format whose first plane is not luma, an OpenCV that refuses the property) the source
 reads BGR and converts, as `tactip.sources.VideoSource` does. On the slide bench's videos (grey
 content, both codecs) every pixel of all 795 frames equals today's grey; on a tinted colour recording
-with a saturated LED the first frame disagrees by up to 6 grey levels and the fallback is taken.
+with a saturated LED the first frame disagrees by up to 6 grey levels and the fallback is taken. Grey
+content at 320x240 to 1920x1080 px takes the luma path in mp4v at every size tried; in MJPG at 320x240,
+640x480 and 1280x720 only (at 328x246, 800x600 or 1920x1080 swscale's full-range conversion rounds by
+pixel position, one level apart, and no table reproduces it: the BGR path).
 OpenCV's warnings are silenced (log level ERROR) while such a capture is open. Replay maps luma to grey
 on its tracking thread (`LumaVideoSource.defer_table`), which has time to spare, not on the decoder's.
 """
@@ -30,7 +33,7 @@ import numpy as np
 
 from tactip.sources.files import VideoSource
 
-__all__ = ["LumaVideoSource", "luma_table"]
+__all__ = ["LumaVideoSource", "luma_table", "open_grey", "mapped"]
 
 _quiet_lock = threading.Lock()
 _quiet_count = 0
@@ -69,14 +72,15 @@ def luma_table(luma: np.ndarray, grey: np.ndarray) -> np.ndarray | None:
         Each luma value seen maps to its grey (the mean over its pixels, rounded); values not seen
         in this frame are interpolated between the nearest seen ones (a linear fit beyond them,
         clipped to 0-255). None when shapes or dtypes differ or when the table does not
-        reproduce `grey` pixel for pixel (chroma or a pixel format that is not planar YUV).
+        reproduce `grey` pixel for pixel (chroma or a pixel format that is not planar YUV), or when
+        the frame shows fewer than 16 luma levels (too few to map the others).
     """
     if luma.shape != grey.shape or luma.dtype != np.uint8 or grey.dtype != np.uint8 or luma.ndim != 2:
         return None
     values, flat = luma.ravel(), grey.ravel().astype(np.float64)
     count = np.bincount(values, minlength=256)
     seen = np.flatnonzero(count)
-    if len(seen) < 2:
+    if len(seen) < _LEVELS:
         return None
     mean = np.bincount(values, weights=flat, minlength=256)[seen] / count[seen]
     slope, intercept = np.polyfit(seen.astype(np.float64), mean, 1, w=np.sqrt(count[seen]))
@@ -88,6 +92,12 @@ def luma_table(luma: np.ndarray, grey: np.ndarray) -> np.ndarray | None:
     import cv2
 
     return table if np.array_equal(cv2.LUT(luma, table), grey) else None
+
+
+# Fewest luma levels a first frame must show for its table to be trusted on the levels it does not show (a dark or
+# blank first frame: the BGR path). Slide bench, tables read off 30-100 levels of 16 frames (mp4v, MJPG) against
+# the table of all 152-167 levels: within one grey level on every level, interpolated or extrapolated.
+_LEVELS = 16
 
 
 class LumaVideoSource(VideoSource):
@@ -161,3 +171,31 @@ class LumaVideoSource(VideoSource):
             super()._close()
         finally:
             self._drop_luma()
+
+
+def mapped(frames, table):
+    """`frames`, their luma mapped to grey in place by `table` (`tactip.replay.luma.LumaVideoSource.defer_table`) on
+    the thread that iterates: replay's decode thread is its critical path on mp4v, the tracking thread has ~0.1
+    ms/frame to spare for the lookup (slide bench: decode thread ~0.9 ms/frame of CPU against the tracking's ~0.6
+    with both on the decode thread). None: the frames as they are."""
+    if table is None:
+        yield from frames
+        return
+    import cv2
+
+    for frame in frames:
+        cv2.LUT(frame.image, table, dst=frame.image)
+        yield frame
+
+
+def open_grey(video, threads: int | None = None):
+    """`tactip.sources.open_source`'s grey source for `video`; a video file read from its luma plane where that
+    gives the same frames (`tactip.replay.luma.LumaVideoSource`: no colour conversion on the decode thread)."""
+    from tactip.sources import open_source
+
+    source = open_source(video, grey=True, decode_threads=threads)
+    if type(source) is not VideoSource:
+        return source
+    path = source.path
+    source.close()
+    return LumaVideoSource(path, decode_threads=threads)

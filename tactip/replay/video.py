@@ -60,7 +60,7 @@ the cores (one on a 2-core machine): its extra threads would only contend with t
 file's grey frames are read from the decoder's luma plane, without converting each to BGR and back
 (`tactip.replay.luma`), where its first frame shows that this gives the same frames (grey content: a
 monochrome pad, the synthetic videos); a colour recording is read as before. The table from luma to
-grey is looked up on the tracking thread (`_mapped`), the decoder's being the busier.
+grey is looked up on the tracking thread, the decoder's being the busier.
 
 The file is written to a temporary name next to the target and renamed at the end, so a failure
 never leaves a half-written result; the output paths are checked before any processing.
@@ -343,12 +343,13 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
     PinsError
         No sensor in the rest frame.
     """
+    from tactip.replay.luma import mapped, open_grey
     from tactip.sources import ThreadedReader
 
     # The decoder on one thread fewer than the cores: this thread tracks on the last one, and
     # FFmpeg's second thread on a 2-core machine only adds its own overhead to the contention.
     threads = _decode_threads() if decode_threads is None else max(1, int(decode_threads))
-    with _open_grey(video, threads) as source:
+    with open_grey(video, threads) as source:
         if source.live:
             raise SourceError(f"{video!r} is a live source; replay reads recorded videos (use a file)")
         if calibration is not None and tuple(source.frame_size) != tuple(calibration.frame_size):
@@ -360,7 +361,7 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
         # Decode on a thread while this one tracks; blocking, so that no frame is dropped. OpenCV's
         # own worker pool stays at one thread meanwhile: the two threads already fill a 2-core
         # machine, and the pool's workers only contend with them. Luma is mapped to grey on this
-        # thread, which has the time to spare (`_mapped`).
+        # thread, which has the time to spare (`tactip.replay.luma.mapped`).
         table = source.defer_table() if hasattr(source, "defer_table") else None  # (a `LumaVideoSource`)
         with _opencv_threads(1), ThreadedReader(source, maxsize=_queue_frames(source.frame_size), when_full="block",
                                                 close_source=False) as reader:
@@ -370,43 +371,14 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
             start = _Start(params=params, expected_pins=expected_pins, calibration=calibration, wrap=wrap_windows)
             plan.start = start
             try:
-                track = frames_to_features(_mapped(reader, table), start=start, rest_frame=int(rest_frame), selected=plan.selected,
-                                           contacts=plan.contacts, n_samples=int(n_samples), progress=progress,
-                                           total=getattr(source, "frame_count", None))
+                track = frames_to_features(mapped(reader, table), start=start, rest_frame=int(rest_frame),
+                                           selected=plan.selected, contacts=plan.contacts, n_samples=int(n_samples),
+                                           progress=progress, total=getattr(source, "frame_count", None))
             except PinsError as exc:  # say which frame, and how to choose another (a black first frame)
                 raise type(exc)(f"rest frame {rest_frame}: {exc}; give --rest-frame of a frame off contact "
                                 f"with the pad lit and in view") from None
             frame_size, frame_rate = source.frame_size, source.frame_rate
     return track, plan.analysis, frame_size, frame_rate
-
-
-def _mapped(frames, table):
-    """`frames`, their luma mapped to grey in place by `table` (`tactip.replay.luma.LumaVideoSource.defer_table`) on
-    the thread that iterates: replay's decode thread is its critical path on mp4v, the tracking thread has ~0.1
-    ms/frame to spare for the lookup (slide bench: decode thread ~0.9 ms/frame of CPU against the tracking's ~0.6
-    with both on the decode thread). None: the frames as they are."""
-    if table is None:
-        yield from frames
-        return
-    import cv2
-
-    for frame in frames:
-        cv2.LUT(frame.image, table, dst=frame.image)
-        yield frame
-
-
-def _open_grey(video, threads: int):
-    """`tactip.sources.open_source`'s grey source for `video`; a video file read from its luma plane where that
-    gives the same frames (`tactip.replay.luma.LumaVideoSource`: no colour conversion on the decode thread)."""
-    from tactip.replay.luma import LumaVideoSource
-    from tactip.sources import VideoSource, open_source
-
-    source = open_source(video, grey=True, decode_threads=threads)
-    if type(source) is not VideoSource:
-        return source
-    path = source.path
-    source.close()
-    return LumaVideoSource(path, decode_threads=threads)
 
 
 class _Plan:
