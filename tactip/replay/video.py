@@ -60,7 +60,7 @@ the cores (one on a 2-core machine): its extra threads would only contend with t
 file's grey frames are read from the decoder's luma plane, without converting each to BGR and back
 (`tactip.replay.luma`), where its first frame shows that this gives the same frames (grey content: a
 monochrome pad, the synthetic videos); a colour recording is read as before. The table from luma to
-grey is looked up on the tracking thread, the decoder's being the busier.
+grey is looked up on the tracking thread when the decoder has one thread (it is then the busier).
 
 The file is written to a temporary name next to the target and renamed at the end, so a failure
 never leaves a half-written result; the output paths are checked before any processing.
@@ -360,9 +360,10 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
                                    f"{source.frame_size[0]}x{source.frame_size[1]} px")
         # Decode on a thread while this one tracks; blocking, so that no frame is dropped. OpenCV's
         # own worker pool stays at one thread meanwhile: the two threads already fill a 2-core
-        # machine, and the pool's workers only contend with them. Luma is mapped to grey on this
-        # thread, which has the time to spare (`tactip.replay.luma.mapped`).
-        table = source.defer_table() if hasattr(source, "defer_table") else None  # (a `LumaVideoSource`)
+        # machine, and the pool's workers only contend with them. With a one-thread decoder (2 cores)
+        # luma is mapped to grey on this thread, which has the time to spare (`tactip.replay.luma.mapped`);
+        # with more, the decoder's own threads decode and this one is the busier: the reader maps.
+        table = source.defer_table() if threads == 1 and hasattr(source, "defer_table") else None
         with _opencv_threads(1), ThreadedReader(source, maxsize=_queue_frames(source.frame_size), when_full="block",
                                                 close_source=False) as reader:
             plan = _Plan(calibration=calibration, n_pins=int(n_pins), min_separation_mm=float(min_separation_mm),

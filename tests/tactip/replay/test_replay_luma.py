@@ -150,9 +150,13 @@ def test_luma_table_refuses_what_it_cannot_reproduce():
     assert np.array_equal(luma_table(luma, luma), np.arange(256))                       # grey is luma
 
 
-def test_replay_the_same_with_and_without_the_luma_plane(tmp_path, monkeypatch):
-    video = tmp_path / "tap.avi"
-    _write(video, "MJPG", frames=16)
+@pytest.mark.parametrize("threads", [1, 2])  # (one: luma mapped on the tracking thread; two: on the reader's)
+def test_replay_the_same_with_and_without_the_luma_plane(tmp_path, monkeypatch, threads):
+    video = tmp_path / "tap.mp4"
+    _write(video, "mp4v", frames=16)
+    deferred = []
+    defer = LumaVideoSource.defer_table
+    monkeypatch.setattr(LumaVideoSource, "defer_table", lambda self: deferred.append(1) or defer(self))
     tables = []
 
     def spied(luma, grey):
@@ -160,10 +164,11 @@ def test_replay_the_same_with_and_without_the_luma_plane(tmp_path, monkeypatch):
         return tables[-1]
 
     monkeypatch.setattr(luma_module, "luma_table", spied)
-    replay_video(video, tmp_path / "luma.h5")
+    replay_video(video, tmp_path / "luma.h5", decode_threads=threads)
     assert len(tables) == 1 and tables[0] is not None  # replay read the luma plane
+    assert len(deferred) == (threads == 1)
     monkeypatch.setattr(luma_module, "luma_table", lambda luma, grey: None)  # the BGR path throughout
-    replay_video(video, tmp_path / "bgr.h5")
+    replay_video(video, tmp_path / "bgr.h5", decode_threads=threads)
     with h5py.File(tmp_path / "luma.h5") as a, h5py.File(tmp_path / "bgr.h5") as b:
         for name in ("positions", "lost", "retired", "blank"):
             assert np.array_equal(a[name][:], b[name][:], equal_nan=name == "positions")
