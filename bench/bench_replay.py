@@ -164,7 +164,10 @@ decode thread mp4v 0.98 / 0.99 / 0.97 -> 0.84 / 0.90 / 0.90, MJPG 0.99 / 1.07 / 
 thread unchanged (0.62-0.73 on both sides); the final code (load 9-22), decode thread mp4v 0.98 / 1.03 / 0.98 ->
 0.84 / 0.93 / 0.84, MJPG 1.02 / 0.99 / 0.94 -> 0.88 / 0.84 / 0.87, main thread mp4v 0.65 / 0.70 / 0.62 -> 0.77 /
 0.83 / 0.77, MJPG 0.68 / 0.64 / 0.62 -> 0.93 / 0.79 / 0.79 (the lookup, ~0.08 ms/frame on the thread that decoded
-the frame, costs more on the other core). The table's place alone, 4 rounds interleaved in one process (load
+the frame, costs more on the other core); again with the last commit (load 12-15), decode thread mp4v 0.93 /
+0.99 / 1.13 -> 0.83 / 0.83 / 0.74, MJPG 1.05 / 0.99 / 1.00 -> 0.87 / 0.90 / 0.82, main thread mp4v 0.62 / 0.66 /
+0.86 -> 0.74 / 0.79 / 0.72, MJPG 0.72 / 0.65 / 0.68 -> 0.76 / 0.83 / 0.76, replay's busier thread / decode (CPU)
+mp4v 1.25 / 1.15 / 1.02 -> 1.02 / 0.93 / 0.86, MJPG 1.20 / 1.00 / 1.18 -> 0.99 / 1.00 / 0.97. The table's place alone, 4 rounds interleaved in one process (load
 15; `track_video`, field search included), on the decode thread -> on the tracking thread: decode thread mp4v
 0.93-1.00 -> 0.79-0.91, MJPG 1.02-1.06 -> 0.84-0.92; tracking thread mp4v 0.69-0.72 -> 0.75-0.79, MJPG 0.73-0.75
 -> 0.75-0.83. The clock at that load says nothing (replay / decode per round 1.6-6.0 on either side). Decoding
