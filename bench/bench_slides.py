@@ -207,7 +207,7 @@ realistic 149 -> 149 (1.12 both).
 
 Run: .venv/bin/python bench/bench_slides.py [--presets radial-led-120 tactip-331 small-pad-100]
      [--seeds 0 1 2 3 4 5] [--slides 8] [--pitches 3] [--residual R --creep-s S --final-rest-s S]
-     [--min-area model 0.5] [--part-overlaps]  (one report per skin: the model's squeeze and a realistic one, both by default)
+     [--min-area model 0.5] [--part-overlaps | --no-part-overlaps]  (one report per skin: the model's squeeze and a realistic one, both by default)
 """
 
 from __future__ import annotations
@@ -239,18 +239,18 @@ def slide_video(preset: str, seed: int, slides: int, pitches: float, *, frame_ra
     return sensor, run
 
 
-def measure(preset: str, seed: int, slides: int, pitches: float, *, lift_s: float = 0.2, part_overlaps: bool = False,
-            **skin) -> dict:
+def measure(preset: str, seed: int, slides: int, pitches: float, *, lift_s: float = 0.2,
+            part_overlaps: bool | None = None, **skin) -> dict:
     """Track the slide video of `preset` (seed) and count its errors against the renderer's truth
-    (`part_overlaps`: `PinTracker`'s fit of overlapping tips)."""
+    (`part_overlaps`: `PinTracker`'s fit of overlapping tips; None: the tracker's default)."""
     sensor, run = slide_video(preset, seed, slides, pitches, lift_s=lift_s, **skin)
     resting = ~run.in_contact()
     frames = iter(run)
     rest = next(frames)
     drawn = np.flatnonzero(rest.visible | rest.partial)
     truth_rest = rest.centres[drawn]
-    tracker = PinTracker(detection=DetectionParams(dark_pins=sensor.dark_pins), disc=SensorDisc(*sensor.disc),
-                         part_overlaps=part_overlaps)
+    fit = {} if part_overlaps is None else dict(part_overlaps=part_overlaps)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=sensor.dark_pins), disc=SensorDisc(*sensor.disc), **fit)
     tracker.start(rest.image, pins=truth_rest)
     counts = dict(frames=0, visible=0, lost=0, off1=0, off3=0, swaps=0, apart=0, rest1=0, rest_frames=0, rest_lost=0,
                   cpu=0.0)
@@ -302,8 +302,11 @@ def main() -> None:
     parser.add_argument("--min-area", nargs="+", default=["model", "0.5"],
                         help="least share of its area the skin ahead of a slide is squeezed to, one report each "
                              "('model': the model's own squeeze, 21 %%; default: both it and 0.5, a realistic skin)")
-    parser.add_argument("--part-overlaps", action="store_true",
-                        help="PinTracker(part_overlaps=True): overlapping tips fitted as two discs")
+    parser.add_argument("--part-overlaps", action="store_true", default=None,
+                        help="PinTracker(part_overlaps=True): overlapping tips fitted as two discs "
+                             "(default: the tracker's)")
+    parser.add_argument("--no-part-overlaps", action="store_false", dest="part_overlaps",
+                        help="PinTracker(part_overlaps=False)")
     args = parser.parse_args()
     skin = {} if args.residual == 0 else dict(residual=args.residual, creep_s=args.creep_s,
                                               final_rest_s=args.final_rest_s)

@@ -167,7 +167,7 @@ class PinTracker:
     def __init__(self, *, lk: LKParams | None = None, detection: DetectionParams | None = None,
                  refine: bool = True, gate_fraction: float = 0.4, neighbours: int = 6,
                  retire_after: int = 5, check_every: int = 5, detect_every: int = 30,
-                 disc: SensorDisc | None = None, part_overlaps: bool = False) -> None:
+                 disc: SensorDisc | None = None, part_overlaps: bool = True) -> None:
         if not 0.0 < gate_fraction < 0.5:
             raise ValueError(f"gate_fraction must be in (0, 0.5), got {gate_fraction}")
         for name, value in (("neighbours", neighbours), ("retire_after", retire_after),
