@@ -129,9 +129,12 @@ class PinTracker:
     part_overlaps : bool
         With refinement: each frame, a placed pin whose tip overlaps a neighbour's (expected within two tip
         radii: skin squeezed ahead of a slide) is moved onto a fit of the two tips as two discs
-        (`pins._pairfit`, compiled: `pins._jit_pairs`), where a window settles between them. Off by default: on a
-        realistic skin radial-led-120 loses more visible pins (2.91 -> 3.08 a frame; bench/bench_slides.py), and
-        on the real-like slide video (MJPG) CPU rises 6-9 % (calls 485 -> 492 a frame; bench_slides.py's figures).
+        (`pins._pairfit`, compiled: `pins._jit_pairs`), where a window settles between them. On by default, for
+        tips of 3 px or more only (`pins._pairfit._SMALLEST_TIP_PX`): on tactip-331 slides (bench/bench_slides.py,
+        seeds 0-5; 6-11 held out alike) pin-frames on another pin's tip fall 4735 -> 1154 (model skin) and
+        20 -> 0 (realistic);
+        radial-led-120's 2 px tips are not fitted (fitted, they lost more visible pins: 2.91 -> 3.08 a frame).
+        While tips overlap on a 331-pin pad the tracker's CPU rises ~40 %; with no pair to fit, nothing.
 
     Attributes
     ----------
