@@ -58,6 +58,16 @@ moving pins short: > 1 px errors 1733 -> 2169 (MJPG), swaps 9 -> 29 (mp4v). Neit
 still pad one window of 120 stepping beyond the bound keeps every pass running (18-24 % of
 radial-led-120's windows do in the first pass).
 
+Session 17 (codec10): what the tips' bounds need is the scatter of the windows' contrast, and that too
+hardly depends on the codec (radial-led-120 seeds 0-11, median window's std over 9 still frames: raw
+2.13-2.34, MJPG 2.16-2.44, mp4v 1.87-2.18 grey levels) while the rest frame's noise predicts 2.2-2.6, 1.2-1.4
+and 0.6. The median change of the windows' contrast from the rest frame to the first still frame, over
+0.6745 sqrt 2, reads 0.94-1.26 x that std through both codecs (tactip-331, white-dark-331: 1.2-1.55 x, as
+raw renders' own prediction reads 1.3-1.4 x): `pins._rest._AtRest.heed_camera_noise` widens the bounds to it
+(`bench/bench_phenomena.py --codec`). The windows' centroid scatter (``_noise_scatter_sq``) grown by the same
+ratio was tried again: radial-led-120 slides through MJPG, seeds 0-5, swaps 213 -> 259 (apart 8 -> 22) against
+210 (8) without; mp4v 280 -> 210 (24 -> 11) against 283 (24). Left as the rest frame draws it.
+
 Run: .venv/bin/python bench/bench_noise_codecs.py [--frames 24] [--presets radial-led-120 ...]
 """
 

@@ -37,7 +37,21 @@ one pin > 1 px after the return (1.79 px, before and after: the pin field placed
 off a faint tip on a reflection's flank). On the other presets no tip's bounds change (none lies below
 twice the reach, seeds 0-5): their figures are as before.
 
+Through a codec (``--codec MJPG`` or ``mp4v``: the rest, still and slide frames written as one 120 frames/s
+video and read back, as a webcam or `tactip record` leaves them; session 17's codec10, --no-contacts): pin-frames
+lost over the 40 still frames, radial-led-120 (seeds 0-11 developed on, 12-23 held out; before -> after the
+first still frame widens the tips' contrast bounds to the scatter it shows, `pins._rest._AtRest.heed_camera_noise`):
+MJPG 8 on 6 seeds -> 1 on 1 (held out 23 on 6 -> 7 on 2), mp4v 32 on 8 -> 2 on 2 (held out 54 on 7 -> 43 on 2),
+raw 0 -> 0 (bit for bit: the rule never fires on raw renders). Swaps 0, slides' returns unchanged (> 1 px: 1 pin
+on MJPG seeds 5, 17, 19 and mp4v 3, 13, 17, before and after). What is left are faint tips whose area or
+compactness at rest (one frame) the codec inflated, not their contrast: mp4v seed 15's pin of contrast 12 (just
+above the reach 11.2, so judged by all three measures) shows half its rest area and compactness in every
+still frame; MJPG seed 13's pin shows compactness 1.2-1.7 against a bound of 2.0; mp4v seed 22's pin 0 is lost
+on the rest frame itself (same 1) and never found again. tactip-331, small-pad-100 and white-dark-331 lose no
+pin through either codec, before or after (seeds 0-11).
+
 Run: .venv/bin/python bench/bench_phenomena.py [--presets radial-led-120,white-dark-331] [--seeds 0,1,2]
+[--codec MJPG]
 """
 
 from __future__ import annotations
@@ -85,28 +99,50 @@ def contacts_found(sensor, name, run) -> int:
         return f"refused ({type(exc).__name__})"
 
 
-def measure(name: str, seed: int, *, contacts: bool) -> dict:
+def grey(image: np.ndarray) -> np.ndarray:
+    """A render's image as grey uint8 (as a codec's frames are read back)."""
+    import cv2
+
+    return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+
+
+def measure(name: str, seed: int, *, contacts: bool, codec: str = "raw") -> dict:
+    """The figures of one preset and seed (see the module's docstring); through `codec` (MJPG, mp4v:
+    the rest frame, the still frames and the slides written as one video at `FRAME_RATE` and read back,
+    as a webcam or `tactip record` leaves them; raw: as rendered), the same, the still frames' and the
+    return's figures are those of the decoded frames (the contacts' replay is of an mp4v video either way)."""
     sensor = SyntheticTacTip.from_preset(name, seed=seed, frame_rate=FRAME_RATE)
     first = sensor.render()
     row = {"preset": name, "seed": seed, "true": int(first.visible.sum())}
+    still = [sensor.render().image for _ in range(STILL_FRAMES)]
+    slides = sensor.slides(range(0, 360, 45), distance_mm=3 * sensor.pin_spacing_mm, indentation_mm=2.0,
+                           rest_s=3 / FRAME_RATE, press_s=0.05, slide_s=0.15, lift_s=0.05)
+    rendered = list(slides)
+    images = [first.image] + still + [frame.image for frame in rendered]
+    if codec != "raw":
+        from bench_noise_codecs import through_codec
+
+        images = through_codec([grey(image) for image in images], codec, FRAME_RATE)
+        if len(images) != 1 + STILL_FRAMES + len(rendered):
+            raise SystemExit(f"{codec}: {len(images)} frames read back")
     try:
-        tracker, rest = start(first.image)
+        tracker, rest = start(images[0])
     except NoSensorError:
         return {**row, "found": "no sensor"}
     distance, identity = cKDTree(first.centres).query(rest)
     real = distance < 2.0
     row.update(found=len(rest), matched=int(real.sum()), spurious=int((~real).sum()))
-    tracker.update(first.image)
+    tracker.update(images[0])
     row["same"] = int(tracker.lost.sum())
     lost = []
-    for _ in range(STILL_FRAMES):
-        tracker.update(sensor.render().image)
+    for image in images[1:1 + STILL_FRAMES]:
+        tracker.update(image)
         lost.append(int(tracker.lost.sum()))
-    row.update(still_max=max(lost), still_median=int(np.median(lost)), retired=int(tracker.retired.sum()))
-    slides = sensor.slides(range(0, 360, 45), distance_mm=3 * sensor.pin_spacing_mm, indentation_mm=2.0,
-                           rest_s=3 / FRAME_RATE, press_s=0.05, slide_s=0.15, lift_s=0.05)
-    for frame in slides:
-        positions = tracker.update(frame.image)
+    row.update(still_max=max(lost), still_median=int(np.median(lost)), still_sum=int(sum(lost)),
+               retired=int(tracker.retired.sum()))
+    for image in images[1 + STILL_FRAMES:]:
+        positions = tracker.update(image)
+    frame = rendered[-1]
     error = np.linalg.norm(positions - frame.centres[identity], axis=1)[real]
     seen = ~np.isnan(positions[:, 0]) & real
     _, nearest = cKDTree(frame.centres).query(positions[seen]) if seen.any() else (None, identity[seen])
@@ -124,10 +160,12 @@ def main() -> None:
     parser.add_argument("--presets", default="radial-led-120,white-dark-331,radial-120,tactip-331")
     parser.add_argument("--seeds", default="0,1,2")
     parser.add_argument("--no-contacts", action="store_true", help="skip the replay of the sequences")
+    parser.add_argument("--codec", default="raw", choices=("raw", "MJPG", "mp4v"),
+                        help="pass the rest, still and slide frames through this codec (one video, read back)")
     args = parser.parse_args()
     for name in args.presets.split(","):
         for seed in (int(s) for s in args.seeds.split(",")):
-            row = measure(name, seed, contacts=not args.no_contacts)
+            row = measure(name, seed, contacts=not args.no_contacts, codec=args.codec)
             print("  ".join(f"{key}={value}" for key, value in row.items()), flush=True)
 
 

@@ -11,7 +11,8 @@ LED reflection of radial-led-120 showed a windowed contrast of -5.5 to 33.8 grey
 0-15, the median pin's 45-50, and bounds of half and twice its measures lay above those measures
 themselves, or left its area unbounded but for noise). So a tip's contrast may fall later by as much as
 that frame's noise may have raised it at rest (a few times the contrast's scatter in the rest frame's own
-noise, `contrast_noise`), and a tip whose contrast at rest lies within that reach of nothing shows no area
+noise, `contrast_noise`; through a video codec, which hides most of that noise from one frame, the scatter
+the first still frame shows instead: `pins._rest._AtRest.heed_camera_noise`), and a tip whose contrast at rest lies within that reach of nothing shows no area
 or compactness to be judged by: its contrast alone bounds it (`bounds_at_rest`). Crisp tips keep the
 bounds of their own measures.
 """

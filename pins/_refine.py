@@ -235,6 +235,7 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         # (`still`'s setter keeps `_area_at_most`, the bound the passes and their compiled kernels read, -inf for
         # such a tip that moved: no tip is like it.)
         self._judged = np.isfinite(self._area_at_most_rest)
+        self._await_still_pair(rest_crop, (area, contrast, compactness))  # (redrawn at a still frame's noise: `pins._rest`)
         # Only tips on a slope (their windows tilt their thresholds there) are fitted: on a flat membrane
         # a window that loses its tip has lost it to contact, to the rim or to a neighbour.
         #: (N,) bool: pins whose windows at rest lie on a sloped background (a reflection, a veil).

@@ -11,6 +11,12 @@ from rest, drifted by more than a few tenths of a px, and missing ones are looke
 rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on their
 neighbours' tips, nor a faint rim tip's window on the veil beside it.
 
+Noise. The bounds the camera's noise sets (each window's scatter in it, its contrast's scatter and with
+it the tips' bounds at rest, `pins._like`) are drawn from the rest frame's own noise; through a video
+codec, which smooths the noise within a frame but not from frame to frame, that is too little, and the
+first still frame after the rest frame widens the tips' bounds to the scatter of the contrast it shows
+(`_AtRest.heed_camera_noise`).
+
 `_AtRest` holds these steps; `pins._refine.Refiner` inherits them and sets the state they read
 (`rest_positions`, `_rest_offset`, `_rest_radius`, the learnt scatters, `_settled_px`, `_guess_px`).
 """
@@ -22,6 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from ._kernels import compiled
+from ._like import bounds_at_rest
 from ._noise import _JITTER_BOUND, _JITTER_FIRST, _JITTER_RATE, _learn_mean_square, noise_sigma
 from ._window import _squared_norm
 
@@ -38,6 +45,14 @@ _CALM_BOUND = 5.0
 _FLOOR_EVERY = 8
 # Draws of noise that measure each rest window's scatter before any is learnt.
 _NOISE_DRAWS = 4
+# The first frame after the rest frame with at least this share of the pins within `_STILL_FRACTION` of the
+# spacing of rest (and any pixel changed) is a still pair with it: the camera's noise, as it moves the windows,
+# is read from the windows' change between them (`heed_camera_noise`) ...
+_PAIR_STILL_SHARE = 0.9
+# ... and when the windows' contrast scatters between them by more than this factor times what the rest frame's
+# own noise predicts (a codec smoothed that frame: 1.3-11 x on renders through MJPG and mp4v; raw renders never,
+# radial-led-120, tactip-331, small-pad-100, white-dark-331 seeds 0-11), the tips' bounds are widened to it.
+_WIDER_NOISE = 1.25
 
 
 @lru_cache(maxsize=1)
@@ -59,7 +74,8 @@ def noisy_copies(crop: np.ndarray) -> tuple[np.ndarray, ...]:
     """The grey `crop` with each of the `_NOISE_DRAWS` fixed draws of Gaussian noise of its own level
     (`noise_sigma`) added, clipped and truncated to uint8: what another frame of a still pad could show.
     Empty for a noiseless crop. (Measured once at a tracker's start for the windows' scatter in noise,
-    `_AtRest._noise_scatter_sq_px2`, and their contrast's, `pins._like.contrast_noise`.)"""
+    `_AtRest._noise_scatter_sq_px2`, and their contrast's, `pins._like.contrast_noise`: widened if the
+    first still frame shows more, `_AtRest.heed_camera_noise`.)"""
     sigma = noise_sigma(crop)
     if not sigma > 0:
         return ()
@@ -86,6 +102,51 @@ class _AtRest:
         for copy in noisy:
             total += _squared_norm(self.windows.measure(copy, points, radius)[0] - base)
         return np.where(np.isfinite(total), total / _NOISE_DRAWS, 0.0)
+
+    def _await_still_pair(self, rest_crop: np.ndarray, measures: tuple) -> None:
+        """Keep the rest crop and its tips' (area, contrast, compactness) at rest, (N,) each, for `heed_camera_noise`."""
+        self._rest_for_noise = (rest_crop, measures)
+
+    def heed_camera_noise(self, crop: np.ndarray, positions: np.ndarray) -> bool:
+        """Widen the bounds that the camera's noise sets to the noise the first still frame after the rest
+        frame shows, once, when a codec hid it from the rest frame; whether they were widened.
+
+        A video codec smooths the noise within a frame: the windows at rest measured again under noise of
+        the rest frame's own level (Immerkaer's estimate, `noisy_copies`) scatter 0.25-0.85 times as much as
+        they do from frame to frame through MJPG and mp4v, and faint tips on reflections, whose contrast may
+        fall by a few times that scatter (`pins._like`), were lost on a still pad. The windows' contrast in
+        the rest crop and in `crop` (a frame, bright pins, whose placed `positions` (N, 2), px, lie mostly
+        within `_STILL_FRACTION` of the spacing of rest: `_PAIR_STILL_SHARE`) differ by the noise that moves
+        them: the median absolute difference over 0.6745 sqrt 2 is the contrast's scatter. Above
+        `_WIDER_NOISE` times the rest frame's figure (`contrast_noise`), it replaces it and the tips' bounds at
+        rest are drawn again from it (never narrower). The first such pair decides (a frame identical to the
+        rest frame is none): till then a frame costs a few vector operations, after it nothing.
+
+        Each window's scatter in noise (`_noise_scatter_sq`: the calm test at rest, the drift bound) is left
+        as the rest frame draws it. Grown by the square of the same ratio it swapped more identities through
+        slides (radial-led-120, 8 slides of 3 pitches, seeds 0-5, MJPG: pin-frames on another pin's tip 213
+        -> 259, half a spacing apart 8 -> 22, > 3 px 56 -> 86; without it 210, 8, 57).
+        """
+        if self._rest_for_noise is None:
+            return False
+        distance = _squared_norm(positions - self.rest_positions)  # NaN where missing: not near
+        if np.count_nonzero(distance <= (_STILL_FRACTION * self.spacing_px) ** 2) < _PAIR_STILL_SHARE * len(distance):
+            return False
+        rest_crop, (area, contrast, compactness) = self._rest_for_noise
+        points = self.rest_positions - self.origin
+        change = np.abs(self.windows.contrast(crop, points) - self.windows.contrast(rest_crop, points))
+        change = change[np.isfinite(change)]
+        scatter = float(np.median(change)) / (0.6745 * np.sqrt(2.0)) if change.size else 0.0
+        if scatter == 0.0:
+            return False  # the rest frame again: no pair
+        self._rest_for_noise = None
+        if not scatter > _WIDER_NOISE * self.contrast_noise:
+            return False
+        self.contrast_noise = scatter
+        self._at_least, self._area_at_most_rest = bounds_at_rest(area, contrast, compactness, scatter)
+        self._judged = np.isfinite(self._area_at_most_rest)
+        self.still = self.still  # (its setter redraws the area bound the passes read)
+        return True
 
     def still(self, steps: np.ndarray) -> np.ndarray:
         """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
@@ -130,7 +191,9 @@ class _AtRest:
         px, and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its
         steps, `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip shown by its contrast. A pin placed
         near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
-        the check costs a few vector operations per frame. By two compiled kernels round the window
+        the check costs a few vector operations per frame. (First, till a still frame has been paired with
+        the rest frame, the bounds the camera's noise sets are checked against it: `heed_camera_noise`.)
+        By two compiled kernels round the window
         measurement (`pins._jit_rest`: the same positions and learnt scatters) unless
         ``TACTIP_KERNELS=numpy`` or Numba is missing.
 
@@ -148,6 +211,8 @@ class _AtRest:
         positions : (N, 2) ndarray of float64
             `positions`, or a copy with the pins found at their rest positions, px.
         """
+        if self._rest_for_noise is not None:
+            self.heed_camera_noise(crop, positions)
         kernels = compiled()
         if kernels is not None:
             return self._snap_to_rest_compiled(kernels, crop, positions, search)
