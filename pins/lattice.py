@@ -446,9 +446,11 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
             centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
             apart = cKDTree(probed).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
             rejected, reason = rejected[apart], reason[apart]
-    if disc.whole_frame and len(centres):
-        # Markers cut by the frame's edge: their centroids lean inwards; only those with enough in
-        # view to measure stay (`_cut_by_frame`).
+    if len(centres):
+        # Pins cut by the frame's edge (a gel's markers; a pad off-centre or filmed close): their
+        # centroids lean inwards; only those with enough in view to measure stay (`_cut_by_frame`).
+        # The tracker cannot follow a tip the frame cuts through: kept, they were lost on every still
+        # frame and retired (12 of 320 on tactip-331 and dark-331 with the pad 0.45 radius low).
         cut = _cut_by_frame(centres, _pin_radius_px(grey, centres, run.pitch, start.dark_pins), grey.shape)
         rejected = np.vstack([rejected, centres[cut]])
         reason = np.concatenate([reason, np.full(int(cut.sum()), REJECTION_REASONS.index("outside field"))])
