@@ -19,7 +19,8 @@ finds that lattice without being told the pin count:
    pads); the strongest lattice (most contrast x area kept) gives the pitch, measured as the median
    nearest-neighbour distance of its blobs;
 2. candidates: a dozen parameter sets at that pitch (neighbourhood blocks of 1-2.2 pitches,
-   offsets of 5-25 grey levels);
+   offsets of 5-25 grey levels, each at least two standard deviations of the camera's noise after
+   the candidate's blur: a noisy camera's low offsets make a lattice of noise blobs);
 3. lattice consistency, per candidate set, iterated until nothing changes (removing an impostor
    changes its neighbours' statistics), each blob against the medians of its six nearest
    neighbours: ``size`` when its area is below 0.4 or above 2.2 of theirs (or its box poorly
@@ -102,7 +103,8 @@ from ._draw import draw_pin_field
 from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._tipprobe import flat_pins
-from ._candidates import _MATCH, _SharedCache, _candidates, _consensus, _evaluate, _evaluate_all, _final_params
+from ._candidates import (_MATCH, _SharedCache, _candidates, _consensus, _distinct, _evaluate, _evaluate_all,
+                          _final_params, _noise_floored)
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
@@ -404,8 +406,8 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
     first = max(coarse, key=lambda run: run.strength)
     pitch = first.pitch if np.isfinite(first.pitch) else float(np.median(pitches))
     pitch = float(np.clip(pitch, 0.5 * pitches.min(), 1.5 * pitches.max()))
-    # Fine: blocks and offsets at the measured pitch.
-    fine = list(_candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS))
+    # Fine: blocks and offsets at the measured pitch, no offset within the blurred noise's reach.
+    fine = _distinct(_noise_floored(_candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS), grey))
     runs = _evaluate_all(grey, search, fine + ([start] if hinted else []), cache)
     # The pins are the blobs that most candidate sets agree on, where they agree on them: the run
     # that keeps the most of those (and the fewest others), with centres nearest the consensus.
