@@ -12,11 +12,13 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ._judge import _KEPT, _MIN_PINS, _judge_lattice, _sharpness
-from .detect import Blobs, DetectionParams, _detect
+from ._noise import noise_sigma
+from .detect import Blobs, DetectionParams, _blur_size_px, _detect
 from .disc import SensorDisc
 
 _FIELD_MARGIN = 0.5
@@ -26,6 +28,8 @@ _AREA_RANGE = (0.25, 2.5)
 _MATCH = 0.3
 _SAME_PINS = 0.005
 _VOTER = 0.97
+# No candidate offset below this many standard deviations of the blurred camera noise (`_noise_floored`).
+_NOISE_OFFSET = 2.0
 
 
 @dataclass(frozen=True)
@@ -150,6 +154,37 @@ def _candidates(pitches: np.ndarray, start: DetectionParams, blocks, offsets):
             size = max(2 * int(round(block * pitch / 2.0)) + 1, 3)
             for offset in offsets:
                 yield start.replace(block_size_px=size, offset=offset, **loose)
+
+
+def _noise_floored(candidates, grey: np.ndarray) -> list:
+    """`candidates` with each offset raised to `_NOISE_OFFSET` standard deviations of the camera's noise
+    (`pins._noise.noise_sigma`) after the candidate's blur, where it is below that.
+
+    The offsets (5-25 grey levels) were set on frames with noise sigma 2-5. A noisier camera (sigma
+    10: a cheap webcam in dim light) at offset 5 thresholds a pixel of bare membrane above its
+    neighbourhood's mean one time in six: a lattice of noise blobs at about the pins' pitch, kept by
+    more candidate sets than the pins are, won the vote (radial-led-120, sigma 10: 126-141 pins found
+    of 120, 74-78 of them true).
+    """
+    sigma = noise_sigma(grey)
+    floored = []
+    for params in candidates:
+        blurred = sigma * _blur_gain(params.blur_sigma_px)
+        floored.append(params.replace(offset=round(max(params.offset, _NOISE_OFFSET * blurred), 1)))
+    return floored
+
+
+def _blur_gain(sigma_px: float) -> float:
+    """The factor by which `pins.detect`'s Gaussian blur of `sigma_px` scales white noise's standard deviation."""
+    if sigma_px <= 0:
+        return 1.0
+    kernel = cv2.getGaussianKernel(_blur_size_px(sigma_px), sigma_px)[:, 0]
+    return float(np.sum(kernel ** 2))
+
+
+def _distinct(candidates: list) -> list:
+    """`candidates` without repeats, in order."""
+    return list(dict.fromkeys(candidates))
 
 
 def _final_params(run: _Run, centres: np.ndarray, disc: SensorDisc, pitch: float, reach_px: float) -> DetectionParams:

@@ -50,6 +50,16 @@ _FLAT_CONTRAST = 0.2
 _FLAT_NEIGHBOURS = 6
 # The pins whose feet are left out of the membrane round a point: its nearest this many (itself included).
 _FOOT_PINS = 7
+# The membrane ring round a tip (`flat_pins`): from 1.5 to 3.5 px beyond its edge, or from 0.26 to 0.6
+# tip radii where that is more. The px figures were set on tips of 2-6 px; on a frame filmed larger
+# (1920x1080: tips of 13 px, their soft edge 2-3 px wide) a 2 px ring caught the tip's edge and fitted a
+# bowl under the core: 2-39 of 331 true pins taken for flat tops (0 with the fractions, which are the px
+# figures at a 5.7 px tip, tactip-331 at 640x480).
+_RING_PX = (1.5, 3.5)
+_RING_FRACTION = (0.26, 0.6)
+# `tip_evidence` fits at most this many window pixels at once (points x pixels; its arrays of 8 basis
+# functions then take about 8 x 8 bytes x this = 16 MB, all of its arrays about 80 MB).
+_BATCH_PIXELS = 1 << 18
 
 
 def threshold(false_alarm: float, cells: np.ndarray | float) -> np.ndarray:
@@ -99,6 +109,22 @@ def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins
     shapes = np.asarray(shapes, dtype=np.float64).reshape(-1, 2, 2)
     if not len(points):
         return np.zeros(0), np.zeros(0), np.zeros(0)
+    # Points in batches of at most `_BATCH_PIXELS` window pixels: a 1080p frame's tips are 2-3x wider,
+    # their windows 5-9x the pixels and the places searched 5-9x as many (11 GB at once, where 640x480
+    # takes 0.1); each point's fit is its own, so batches give the same figures.
+    major = np.sqrt(np.linalg.eigvalsh(shapes)[:, 1])
+    pixels = len(_disc_offsets(float(1.5 * major.max() + 2.0) + np.sqrt(0.5))[0])
+    batch = max(1, _BATCH_PIXELS // pixels)
+    if len(points) > batch:
+        parts = [_tip_evidence(image, points[k:k + batch], shapes[k:k + batch], pins, noise_sigma)
+                 for k in range(0, len(points), batch)]
+        return tuple(np.concatenate(column) for column in zip(*parts))
+    return _tip_evidence(image, points, shapes, pins, noise_sigma)
+
+
+def _tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins: np.ndarray,
+                  noise_sigma: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`tip_evidence` on one batch of points (float64 (P, 2) and (P, 2, 2), P >= 1)."""
     inverse = np.linalg.inv(shapes)
     major = np.sqrt(np.linalg.eigvalsh(shapes)[:, 1])
     radius = 1.5 * major + 2.0  # each point's window, px
@@ -171,11 +197,17 @@ def _gather(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray
     return values.astype(np.float64), inside
 
 
+def _ring_px(radius_px: float) -> tuple[float, float]:
+    """Inner and outer radius of the membrane ring round a tip of `radius_px` (`_core_above_membrane`),
+    px: `_RING_PX` beyond the tip, or `_RING_FRACTION` of its radius where that is more."""
+    return tuple(radius_px + max(px, fraction * radius_px) for px, fraction in zip(_RING_PX, _RING_FRACTION))
+
+
 def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
                          pins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """How far the core of a tip at each point stands above a quadratic fit of the membrane round it.
 
-    The membrane is the ring 1.5-3.5 px beyond the tip radius (pixels at the foot of another pin of
+    The membrane is the ring `_ring_px` beyond the tip radius (pixels at the foot of another pin of
     `pins` left out); the core is the disc of the tip radius less half a pixel (at least 1 px).
 
     Returns
@@ -188,11 +220,12 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
     position : (P, 2) ndarray
         Centroid of the core's grey levels above the fit, px (the point where none stands above).
     """
-    dx, dy = _disc_offsets(radius_px + 3.5)
+    inner, outer = _ring_px(radius_px)
+    dx, dy = _disc_offsets(outer)
     distance = np.hypot(dx, dy)
-    used = (distance <= max(radius_px - 0.5, 1.0)) | (distance >= radius_px + 1.5)  # the tip's edge: neither
+    used = (distance <= max(radius_px - 0.5, 1.0)) | (distance >= inner)  # the tip's edge: neither
     dx, dy, distance = dx[used], dy[used], distance[used]
-    core, ring = distance < radius_px + 1.5, distance >= radius_px + 1.5
+    core, ring = distance < inner, distance >= inner
     anchor = np.rint(points)
     x, y = anchor[:, 0, None] + dx[None], anchor[:, 1, None] + dy[None]
     values, inside = _gather(image, x, y)
@@ -204,8 +237,8 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
                            axis=2))
     # Saturated pixels (the surround's veil near the rim) show no membrane level.
     weight = np.zeros(values.shape)
-    weight[:, ring] = inside[:, ring] & (other > radius_px + 1.5) & (values[:, ring] < _SATURATED)
-    scale = radius_px + 3.5
+    weight[:, ring] = inside[:, ring] & (other > inner) & (values[:, ring] < _SATURATED)
+    scale = outer
     u, v = dx / scale, dy / scale
     basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
     # Weighted least squares for every point at once, as two matrix products over the pixels.

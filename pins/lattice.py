@@ -19,7 +19,8 @@ finds that lattice without being told the pin count:
    pads); the strongest lattice (most contrast x area kept) gives the pitch, measured as the median
    nearest-neighbour distance of its blobs;
 2. candidates: a dozen parameter sets at that pitch (neighbourhood blocks of 1-2.2 pitches,
-   offsets of 5-25 grey levels);
+   offsets of 5-25 grey levels, each at least two standard deviations of the camera's noise after
+   the candidate's blur: a noisy camera's low offsets make a lattice of noise blobs);
 3. lattice consistency, per candidate set, iterated until nothing changes (removing an impostor
    changes its neighbours' statistics), each blob against the medians of its six nearest
    neighbours: ``size`` when its area is below 0.4 or above 2.2 of theirs (or its box poorly
@@ -102,7 +103,8 @@ from ._draw import draw_pin_field
 from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._tipprobe import flat_pins
-from ._candidates import _MATCH, _SharedCache, _candidates, _consensus, _evaluate, _evaluate_all, _final_params
+from ._candidates import (_MATCH, _SharedCache, _candidates, _consensus, _distinct, _evaluate, _evaluate_all,
+                          _final_params, _noise_floored)
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
@@ -369,11 +371,19 @@ def _other_keeps_more(grey: np.ndarray, field: PinField, start: DetectionParams)
     if field.count < 2 or not np.isfinite(field.pitch_px):
         return False
     other = start.replace(dark_pins=not field.params.dark_pins)
-    probe = next(_candidates(np.array([field.pitch_px]), other, _COARSE_BLOCK, _COARSE_OFFSETS))
-    # Touching blobs are not split: the other polarity's pins stand apart, and splitting the network
-    # of a membrane seen the wrong way round costs more than the rest of the probe.
-    probe = probe.replace(split_radius_px=0.0)
-    return int(_evaluate(grey, field.disc, probe, {}).kept.sum()) > field.count
+    # At the field's pitch, and at the pitch of the hexagonal lattice whose triangles' centres the
+    # field's blobs would be (the gaps between pins lie 1/sqrt(3) pitch apart): on white-dark-331
+    # filmed at 1920x1080 (tips of 13 px) a probe at the gaps' pitch, its blur and block too small for
+    # the pins, kept 81 of them and the gaps (177 of them) won; at sqrt(3) of it, 331.
+    cache: dict = {}
+    for pitch in (field.pitch_px, np.sqrt(3.0) * field.pitch_px):
+        probe = next(_candidates(np.array([pitch]), other, _COARSE_BLOCK, _COARSE_OFFSETS))
+        # Touching blobs are not split: the other polarity's pins stand apart, and splitting the
+        # network of a membrane seen the wrong way round costs more than the rest of the probe.
+        probe = probe.replace(split_radius_px=0.0)
+        if int(_evaluate(grey, field.disc, probe, cache).kept.sum()) > field.count:
+            return True
+    return False
 
 
 def _sparse(field: PinField) -> bool:
@@ -404,8 +414,8 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
     first = max(coarse, key=lambda run: run.strength)
     pitch = first.pitch if np.isfinite(first.pitch) else float(np.median(pitches))
     pitch = float(np.clip(pitch, 0.5 * pitches.min(), 1.5 * pitches.max()))
-    # Fine: blocks and offsets at the measured pitch.
-    fine = list(_candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS))
+    # Fine: blocks and offsets at the measured pitch, no offset within the blurred noise's reach.
+    fine = _distinct(_noise_floored(_candidates(np.array([pitch]), start, _BLOCK_PITCHES, _OFFSETS), grey))
     runs = _evaluate_all(grey, search, fine + ([start] if hinted else []), cache)
     # The pins are the blobs that most candidate sets agree on, where they agree on them: the run
     # that keeps the most of those (and the fewest others), with centres nearest the consensus.
@@ -446,9 +456,11 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
             centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
             apart = cKDTree(probed).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
             rejected, reason = rejected[apart], reason[apart]
-    if disc.whole_frame and len(centres):
-        # Markers cut by the frame's edge: their centroids lean inwards; only those with enough in
-        # view to measure stay (`_cut_by_frame`).
+    if len(centres):
+        # Pins cut by the frame's edge (a gel's markers; a pad off-centre or filmed close): their
+        # centroids lean inwards; only those with enough in view to measure stay (`_cut_by_frame`).
+        # The tracker cannot follow a tip the frame cuts through: kept, they were lost on every still
+        # frame and retired (12 of 320 on tactip-331 and dark-331 with the pad 0.45 radius low).
         cut = _cut_by_frame(centres, _pin_radius_px(grey, centres, run.pitch, start.dark_pins), grey.shape)
         rejected = np.vstack([rejected, centres[cut]])
         reason = np.concatenate([reason, np.full(int(cut.sum()), REJECTION_REASONS.index("outside field"))])
