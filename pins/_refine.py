@@ -110,6 +110,8 @@ _MIN_GUESS_PX = 0.1
 # Two tips whose centres lie nearer than this many tip radii (at rest) overlap: one blob, which no one-tip
 # fit parts (issue 20: radial-led-120 slides, three tips squeezed within 4 px, of 2 px radius).
 _OVERLAP_TIPS = 2.0
+# ... of at most this many times the median tip's radius at rest (a faint tip's own area is noise).
+_OVERLAP_CAP = 1.5
 
 
 class Refiner(_Following, _AtRest, _Recovery, _Prediction):
@@ -175,9 +177,13 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         tip = np.sqrt(np.where(area > 0, area, np.nan) / np.pi)
         self._radius_cap = np.where(np.isfinite(tip), _TIP_REACH * tip + _TIP_MARGIN_PX, np.inf)
         # Another pin expected nearer than this to a pin's tip (`_OVERLAP_TIPS` of its radii at rest) overlaps
-        # it: one blob, on which a one-tip fit lands anywhere (`pins._recover`'s `fit_tips`).
-        self._overlap_px = np.where(np.isfinite(tip), _OVERLAP_TIPS * tip, 0.0)
+        # it: one blob, on which a one-tip fit lands anywhere (`pins._recover`'s `fit_tips`). A faint tip's
+        # area at rest is mostly noise (a contrast of 3 in noise 5: radii of 5-12 px for tips of 3, which
+        # paired it with neighbours 16 px away and moved it 1.2 px: `pins._pairfit`); no radius counts for
+        # more than `_OVERLAP_CAP` times the median tip's.
         tip_px = tip[np.isfinite(tip)]
+        capped = np.minimum(tip, _OVERLAP_CAP * np.median(tip_px)) if tip_px.size else tip
+        self._overlap_px = np.where(np.isfinite(tip), _OVERLAP_TIPS * capped, 0.0)  # (no tip measured: none)
         #: Median radius of the tips at rest, px (their area above the window's threshold), nan without tips.
         self.tip_radius_px = float(np.median(tip_px)) if tip_px.size else float("nan")
         self.windows.above_mean |= bool(tip_px.size and np.median(tip_px) < _SMALL_TIP_PX)
