@@ -206,8 +206,7 @@ class PinTracker:
         self._lost_run: np.ndarray | None = None
         self._origin = np.zeros(2)
         self._crop = (slice(None), slice(None))
-        self._pad = 0                                 # the widest of `_borders`
-        self._borders = (0, 0, 0, 0)                  # px of replicated border (top, bottom, left, right) beyond the frame
+        self._pad, self._borders = 0, (0, 0, 0, 0)    # px of replicated border beyond the frame: widest, each side
         self._last_seen: np.ndarray | None = None
         self._refiner: Refiner | None = None
         self._surround = None                         # (flat indices, membrane level) in the crop
@@ -320,36 +319,25 @@ class PinTracker:
         return self.positions.copy()
 
     def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:
-        """LK works on the part of the frame the pins can reach (the disc, else the pins' box).
-
-        Where that part reaches beyond the frame (a flat gel's whole frame; a pad cut by the frame's
-        edge or filmed off-centre), the crop is grown there by up to a pin spacing of replicated border
-        (`_borders`): the windows of pins next to the frame's edge, whose tips are whole in the frame,
-        stay in the crop and are measured (without it they did not fit and were lost on the very frame
-        tracking started from: tactip-127 cut by the frame's edge, 8 of 120 pins, tips 4-7 px inside it).
-        Pins the edge cuts are lost (`_off_frame`).
-        """
+        """LK works on the part of the frame the pins can reach (the disc, else the pins' box), grown beyond the frame
+        by up to a spacing of replicated border (`_borders`) where pins' windows reach (a flat gel's whole frame, a pad
+        cut by the edge; plain LK, as `track_pins`, keeps to the frame): whole tips next to the edge are measured (their
+        windows clipped: tactip-127 cut lost 8 of 120 on its start frame), cut ones lost (`_off_frame`)."""
         margin = self.lk.window_px * 2 ** self.lk.levels + 2
-        reach = int(np.ceil(self.spacing_px)) + 2  # a window (half a spacing) and its search around a pin
+        reach = int(np.ceil(self.spacing_px)) + 2  # a window (half a spacing) and its search round a pin
         height, width = shape[:2]
         if self.disc is not None and self.disc.whole_frame:
             x0, y0, x1, y1 = -reach, -reach, width + reach, height + reach
         else:
+            reach *= self.refine
+            low, high = pins.min(axis=0), pins.max(axis=0)
             if self.disc is not None:
-                low = np.array([self.disc.cx, self.disc.cy]) - self.disc.radius_px
-                high = np.array([self.disc.cx, self.disc.cy]) + self.disc.radius_px
-            else:
-                low, high = pins.min(axis=0), pins.max(axis=0)
-            x0, y0 = np.floor(low).astype(int) - margin
-            x1, y1 = np.ceil(high).astype(int) + margin + 1
-            # Beyond the frame, no farther than the pins' windows reach (their box grown by `reach`; plain LK,
-            # without windows, as `track_pins`: none).
-            beyond = reach if self.refine else 0
-            x0, y0 = np.maximum((x0, y0), np.minimum(np.floor(pins.min(axis=0)).astype(int) - beyond, 0))
-            x1, y1 = np.minimum((x1, y1), np.maximum(np.ceil(pins.max(axis=0)).astype(int) + beyond + 1, (width, height)))
+                low, high = np.array([self.disc.cx, self.disc.cy]) + [[-self.disc.radius_px], [self.disc.radius_px]]
+            x0, y0 = np.maximum(np.floor(low).astype(int) - margin, np.minimum(np.floor(pins.min(axis=0)) - reach, 0))
+            x1, y1 = np.minimum(np.ceil(high).astype(int) + margin + 1,
+                                np.maximum(np.ceil(pins.max(axis=0)) + reach + 1, (width, height)))
             x0, y0, x1, y1 = int(x0), int(y0), int(x1), int(y1)
-        # Border px (top, bottom, left, right) where the crop reaches beyond the frame.
-        self._borders = (max(-y0, 0), max(y1 - height, 0), max(-x0, 0), max(x1 - width, 0))
+        self._borders = (max(-y0, 0), max(y1 - height, 0), max(-x0, 0), max(x1 - width, 0))  # top, bottom, left, right
         self._pad = max(self._borders)
         self._crop = (slice(max(y0, 0), min(y1, height)), slice(max(x0, 0), min(x1, width)))
         self._origin = np.array([max(x0, 0) - self._borders[2], max(y0, 0) - self._borders[0]], dtype=np.float64)
