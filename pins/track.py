@@ -206,7 +206,7 @@ class PinTracker:
         self._lost_run: np.ndarray | None = None
         self._origin = np.zeros(2)
         self._crop = (slice(None), slice(None))
-        self._pad = 0                                 # px of replicated border round a whole-frame crop
+        self._pad, self._borders = 0, (0, 0, 0, 0)    # px of replicated border beyond the frame: widest, each side
         self._last_seen: np.ndarray | None = None
         self._refiner: Refiner | None = None
         self._surround = None                         # (flat indices, membrane level) in the crop
@@ -319,27 +319,28 @@ class PinTracker:
         return self.positions.copy()
 
     def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:
-        """LK works on the part of the frame the pins can reach (the disc, else the pins' box).
-
-        A sensing region that is the whole frame (a flat gel) is the frame grown by a pin spacing of
-        replicated border: the windows of markers next to the frame's edge stay in the crop.
-        """
+        """LK works on the part of the frame the pins can reach (the disc, else the pins' box), grown beyond the frame
+        by up to a spacing of replicated border (`_borders`) where pins' windows reach (a flat gel's whole frame, a pad
+        cut by the edge; plain LK, as `track_pins`, keeps to the frame): whole tips next to the edge are measured (their
+        windows clipped: tactip-127 cut lost 8 of 120 on its start frame), cut ones lost (`_off_frame`)."""
         margin = self.lk.window_px * 2 ** self.lk.levels + 2
+        reach = int(np.ceil(self.spacing_px)) + 2  # a window (half a spacing) and its search round a pin
+        height, width = shape[:2]
         if self.disc is not None and self.disc.whole_frame:
-            self._pad = int(np.ceil(self.spacing_px)) + 2
-            self._crop = (slice(None), slice(None))
-            self._origin = np.array([-self._pad, -self._pad], dtype=np.float64)
-            return
-        self._pad = 0
-        if self.disc is not None:
-            low = np.array([self.disc.cx, self.disc.cy]) - self.disc.radius_px
-            high = np.array([self.disc.cx, self.disc.cy]) + self.disc.radius_px
+            x0, y0, x1, y1 = -reach, -reach, width + reach, height + reach
         else:
+            reach *= self.refine
             low, high = pins.min(axis=0), pins.max(axis=0)
-        x0, y0 = np.maximum(np.floor(low).astype(int) - margin, 0)
-        x1, y1 = np.ceil(high).astype(int) + margin + 1
-        self._crop = (slice(y0, min(y1, shape[0])), slice(x0, min(x1, shape[1])))
-        self._origin = np.array([x0, y0], dtype=np.float64)
+            if self.disc is not None:
+                low, high = np.array([self.disc.cx, self.disc.cy]) + [[-self.disc.radius_px], [self.disc.radius_px]]
+            x0, y0 = np.maximum(np.floor(low).astype(int) - margin, np.minimum(np.floor(pins.min(axis=0)) - reach, 0))
+            x1, y1 = np.minimum(np.ceil(high).astype(int) + margin + 1,
+                                np.maximum(np.ceil(pins.max(axis=0)) + reach + 1, (width, height)))
+            x0, y0, x1, y1 = int(x0), int(y0), int(x1), int(y1)
+        self._borders = (max(-y0, 0), max(y1 - height, 0), max(-x0, 0), max(x1 - width, 0))  # top, bottom, left, right
+        self._pad = max(self._borders)
+        self._crop = (slice(max(y0, 0), min(y1, height)), slice(max(x0, 0), min(x1, width)))
+        self._origin = np.array([max(x0, 0) - self._borders[2], max(y0, 0) - self._borders[0]], dtype=np.float64)
 
     def _off_frame(self, positions: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
         """Positions with those cut by the frame's edge lost (NaN): a marker whose tip (its rest
@@ -361,7 +362,7 @@ class PinTracker:
     def _cropped(self, grey: np.ndarray) -> np.ndarray:
         """The crop of a grey frame that tracking works on (a copy)."""
         if self._pad:
-            return cv2.copyMakeBorder(grey, *(self._pad,) * 4, cv2.BORDER_REPLICATE)
+            return cv2.copyMakeBorder(grey[self._crop], *self._borders, cv2.BORDER_REPLICATE)
         return grey[self._crop].copy()
 
     def update(self, frame: np.ndarray) -> np.ndarray:
