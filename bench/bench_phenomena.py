@@ -50,6 +50,15 @@ still frame; MJPG seed 13's pin shows compactness 1.2-1.7 against a bound of 2.0
 on the rest frame itself (same 1) and never found again. tactip-331, small-pad-100 and white-dark-331 lose no
 pin through either codec, before or after (seeds 0-11).
 
+On main a91b0e4 (its overlap radius cap; session 17's codec11) those three are kept (mp4v seeds 12-23: 0 lost
+pin-frames; on b4070ad, before the cap, seeds 15 and 22 still lost 10 and 33). Lost pin-frames over the 40
+still frames, radial-led-120, seeds 0-35 (developed on) / 36-47 (held out), before -> after a judged tip that
+was still may lose sqrt 2 times its contrast's reach once a still pair widened the bounds
+(`pins._rest._PAIR_REACH`): mp4v 4 -> 1 / 12 -> 3, MJPG 1 -> 0 / 0 -> 0, raw 0 -> 0 (bit for bit). Swaps 0;
+after the return > 1 px mp4v 4, MJPG 5 / 0, 0 (unchanged). What is left are single frames: a faint tip's
+window whose area reads 240 against a bound of 131 (mp4v seed 3, the first still frame), and faint tips on
+reflections below even the wider bound (held out 38, 39, 47: one frame each).
+
 Run: .venv/bin/python bench/bench_phenomena.py [--presets radial-led-120,white-dark-331] [--seeds 0,1,2]
 [--codec MJPG]
 """

@@ -12,7 +12,8 @@ LED reflection of radial-led-120 showed a windowed contrast of -5.5 to 33.8 grey
 themselves, or left its area unbounded but for noise). So a tip's contrast may fall later by as much as
 that frame's noise may have raised it at rest (a few times the contrast's scatter in the rest frame's own
 noise, `contrast_noise`; through a video codec, which hides most of that noise from one frame, the scatter
-the first still frame shows instead: `pins._rest._AtRest.heed_camera_noise`), and a tip whose contrast at rest lies within that reach of nothing shows no area
+the first still frame shows instead, and sqrt 2 times that reach for a still tip judged by all three
+measures: `pins._rest._AtRest.heed_camera_noise`), and a tip whose contrast at rest lies within that reach of nothing shows no area
 or compactness to be judged by: its contrast alone bounds it (`bounds_at_rest`). Crisp tips keep the
 bounds of their own measures.
 """
@@ -73,7 +74,7 @@ def contrast_noise(windows: WindowCentroids, rest_crop: np.ndarray, noisy: tuple
 
 
 def bounds_at_rest(area: np.ndarray, contrast: np.ndarray, compactness: np.ndarray,
-                   noise: float) -> tuple[np.ndarray, np.ndarray]:
+                   noise: float, fall: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Bounds on each pin's tip from its tip at rest: (area, contrast, compactness) from below (3, N), area
     above (N,), for a rest frame whose windows' contrast scatters by `noise` grey levels.
 
@@ -82,12 +83,14 @@ def bounds_at_rest(area: np.ndarray, contrast: np.ndarray, compactness: np.ndarr
     noise where that is lower (a tip of less than twice that reach). A tip whose contrast at rest lies within
     that reach of nothing (a faint tip beside a reflection: -5.5 to 33.8 grey levels over radial-led-120's
     seeds 0-15, the median tip's 45-50) shows no area or compactness at rest to be judged by: only its
-    contrast bounds it (NaN at rest: nothing is like it).
+    contrast bounds it (NaN at rest: nothing is like it). A judged tip's contrast may fall by `fall` reaches
+    (`pins._rest._PAIR_REACH`: a still tip through a codec).
     """
     reach = _NOISE_REACH * noise
     judged = contrast > reach  # NaN compares False
     at_least = np.stack([np.where(judged, _AREA_RATIO[0] * area, -np.inf),
-                         np.minimum(_MIN_CONTRAST_RATIO * contrast, contrast - reach),
+                         np.minimum(_MIN_CONTRAST_RATIO * contrast,
+                                    contrast - np.where(judged, fall * reach, reach)),
                          np.where(judged, _MIN_COMPACTNESS_RATIO * compactness, -np.inf)])
     area_at_most = np.where(judged, _AREA_RATIO[1] * area, np.inf)
     return at_least, area_at_most

@@ -494,3 +494,5 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
         self._still = still
         # A tip judged by its contrast alone (`pins._like`) is placed only while still: above, its area bound.
         self._area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
+        if self._contrast_still is not None:
+            self._at_least[1] = np.where(still, self._contrast_still, self._contrast_moving)

@@ -53,6 +53,13 @@ _PAIR_STILL_SHARE = 0.9
 # own noise predicts (a codec smoothed that frame: 1.3-11 x on renders through MJPG and mp4v; raw renders never,
 # radial-led-120, tactip-331, small-pad-100, white-dark-331 seeds 0-11), the tips' bounds are widened to it.
 _WIDER_NOISE = 1.25
+# ... and a tip judged by all three measures (`pins._like`) that was still in the last frame may lose this many
+# times the reach of its contrast (so much more than the rest frame's noise allows, `pins._like._NOISE_REACH`):
+# through a codec the rest frame (an I-frame through mp4v) is less like the frames after it than they are like
+# each other, and faint tips on reflections read 3-8 grey levels lower in them on average (radial-led-120 seeds 7,
+# 24: 18.7 and 23.2 at rest, 15.3 over 40 still frames, scatter 2.6). sqrt 2: the scatter of a difference of two
+# frames. A moving pin keeps the bound of 1 reach (identity through slides unchanged).
+_PAIR_REACH = 2.0 ** 0.5
 
 
 @lru_cache(maxsize=1)
@@ -90,6 +97,11 @@ def noisy_copies(crop: np.ndarray) -> tuple[np.ndarray, ...]:
 class _AtRest:
     """The rest side of `pins._refine.Refiner`: noise of the rest windows, still steps, snapping to rest."""
 
+    # The contrast bounds of still and moving pins, (N,) each, once a still pair widened them (`heed_camera_noise`):
+    # `pins._refine.Refiner.still`'s setter puts them in `_at_least`.
+    _contrast_still = None
+    _contrast_moving = None
+
     def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, noisy: tuple, positions: np.ndarray) -> np.ndarray:
         """Each rest window's mean square displacement, px^2 (N,), in the `noisy` copies of the rest crop
         (`noisy_copies`): how far one frame's noise moves the window (a faint tip in glare: tenths of a
@@ -119,7 +131,9 @@ class _AtRest:
         within `_STILL_FRACTION` of the spacing of rest: `_PAIR_STILL_SHARE`) differ by the noise that moves
         them: the median absolute difference over 0.6745 sqrt 2 is the contrast's scatter. Above
         `_WIDER_NOISE` times the rest frame's figure (`contrast_noise`), it replaces it and the tips' bounds at
-        rest are drawn again from it (never narrower). The first such pair decides (a frame identical to the
+        rest are drawn again from it (never narrower), and a judged tip still in the last frame may lose
+        `_PAIR_REACH` times the contrast's reach (the still setter, `pins._refine.Refiner.still`, picks the
+        bound per pin each frame). The first such pair decides (a frame identical to the
         rest frame is none): till then a frame costs a few vector operations, after it nothing.
 
         Each window's scatter in noise (`_noise_scatter_sq`: the calm test at rest, the drift bound) is left
@@ -144,6 +158,8 @@ class _AtRest:
             return False
         self.contrast_noise = scatter
         self._at_least, self._area_at_most_rest = bounds_at_rest(area, contrast, compactness, scatter)
+        self._contrast_moving = self._at_least[1].copy()
+        self._contrast_still = bounds_at_rest(area, contrast, compactness, scatter, _PAIR_REACH)[0][1]
         self._judged = np.isfinite(self._area_at_most_rest)
         self.still = self.still  # (its setter redraws the area bound the passes read)
         return True
