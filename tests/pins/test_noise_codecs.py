@@ -23,21 +23,10 @@ def _still(preset, seed, frames=2):
 
 
 def _through(images, codec, folder: pathlib.Path):
-    height, width = images[0].shape
-    path = str(folder / ("still.avi" if codec == "MJPG" else "still.mp4"))
-    writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*codec), 30.0, (width, height), True)
-    if not writer.isOpened():
-        pytest.skip(f"no {codec} encoder in this OpenCV build")
-    for image in images:
-        writer.write(cv2.cvtColor(image, cv2.COLOR_GRAY2BGR))
-    writer.release()
-    capture, out = cv2.VideoCapture(path), []
-    ok, frame = capture.read()
-    while ok:
-        out.append(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
-        ok, frame = capture.read()
-    capture.release()
-    return out
+    """`images` through `codec` and back, at 30 frames/s (`tests.pins.test_track_codec_still._through`)."""
+    from tests.pins.test_track_codec_still import _through as through
+
+    return through(images, codec, folder, frame_rate=30.0)
 
 
 @pytest.mark.parametrize("preset", ["radial-led-120", "tactip-331", "white-dark-331", "small-pad-100"])

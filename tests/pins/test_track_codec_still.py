@@ -112,13 +112,9 @@ def test_a_still_pad_through_a_codec_loses_no_pin(codec, kernels, tmp_path, monk
             assert not tracker.lost.any(), f"seed {seed}, frame {k}: pins {np.flatnonzero(tracker.lost)} lost"
 
 
-@pytest.mark.parametrize("seed", [15, 22])
-def test_faint_tips_whose_area_the_codec_inflated_at_rest_are_kept(seed, tmp_path):
-    # codec10's leftovers through mp4v (replay's start, 40 still frames): seed 15's tip of contrast 12, just
-    # above the reach, showed half its rest frame's area and compactness in every P-frame (10 pin-frames
-    # lost), seed 22's pin 0 failed its own rest frame and was never found again (33). Both still fail on
-    # b4070ad (follow10's overlaps merged) and pass since a91b0e4 capped the overlap radius (a faint tip's
-    # area at rest, inflated by the codec, no longer pairs it with neighbours).
+def _still_through_mp4v(seed, tmp_path):
+    """Replay's start on 41 still frames of radial-led-120 through mp4v, no pin lost in any (asserted): the
+    tracker and each pin's distance to the nearest true tip at the end, px."""
     sensor, images = _still_pad("radial-led-120", seed, 41, "mp4v", tmp_path)
     field = find_pin_field(images[0])
     tracker = PinTracker(detection=field.params, disc=field.disc)
@@ -127,7 +123,17 @@ def test_faint_tips_whose_area_the_codec_inflated_at_rest_are_kept(seed, tmp_pat
     for k, image in enumerate(images):
         positions = tracker.update(image)
         assert not tracker.lost.any(), f"frame {k}: pins {np.flatnonzero(tracker.lost)} lost"
-    error = np.linalg.norm(positions[:, None] - truth[None], axis=2).min(axis=1)
+    return tracker, np.linalg.norm(positions[:, None] - truth[None], axis=2).min(axis=1)
+
+
+@pytest.mark.parametrize("seed", [15, 22])
+def test_faint_tips_whose_area_the_codec_inflated_at_rest_are_kept(seed, tmp_path):
+    # codec10's leftovers through mp4v (replay's start, 40 still frames): seed 15's tip of contrast 12, just
+    # above the reach, showed half its rest frame's area and compactness in every P-frame (10 pin-frames
+    # lost), seed 22's pin 0 failed its own rest frame and was never found again (33). Both still fail on
+    # b4070ad (follow10's overlaps merged) and pass since a91b0e4 capped the overlap radius (a faint tip's
+    # area at rest, inflated by the codec, no longer pairs it with neighbours).
+    _, error = _still_through_mp4v(seed, tmp_path)
     assert np.all(error < 1.0)  # each on a true tip at the end
 
 
@@ -137,19 +143,11 @@ def test_a_still_faint_tip_may_read_fainter_than_in_the_rest_frame(seed, tmp_pat
     # other: radial-led-120's faint tip beside a reflection (pin 98 on these seeds) read 18.7 / 23.2 grey levels
     # at rest and 15.3 on average over 40 still frames, and was lost in 1 / 2 of them below its bound of its
     # contrast less 5 scatters. A still judged tip may now fall by sqrt 2 times that (`pins._rest._PAIR_REACH`).
-    sensor, images = _still_pad("radial-led-120", seed, 41, "mp4v", tmp_path)
-    field = find_pin_field(images[0])
-    tracker = PinTracker(detection=field.params, disc=field.disc)
-    tracker.start(images[0], field.centres)
-    truth = sensor.render().centres
-    for k, image in enumerate(images):
-        positions = tracker.update(image)
-        assert not tracker.lost.any(), f"frame {k}: pins {np.flatnonzero(tracker.lost)} lost"
-    error = np.linalg.norm(positions[:, None] - truth[None], axis=2).min(axis=1)
+    tracker, error = _still_through_mp4v(seed, tmp_path)
     assert np.all(error < 1.0)
     # A pin that moves keeps the bound of one reach: identities through slides hold as before.
     refiner = tracker._refiner
-    moving = np.zeros(len(positions), dtype=bool)
+    moving = np.zeros(len(error), dtype=bool)
     moving[::2] = True
     refiner.still = ~moving
     np.testing.assert_array_equal(refiner._at_least[1, moving], refiner._contrast_moving[moving])
