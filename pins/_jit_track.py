@@ -224,6 +224,15 @@ def predict(positions, rest_positions, then, index, which, last_seen):
     return out
 
 
+@njit(cache=True, nogil=True)
+def _unplace(positions, found, yields):
+    """Rows `found[i]` of `positions` (N, 2), px, set NaN (unplaced) where `yields[i]`, in place."""
+    for i in range(found.shape[0]):
+        if yields[i]:
+            positions[found[i], 0] = np.nan
+            positions[found[i], 1] = np.nan
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def one_pin_per_tip(positions, found, error, near, same_sq):
     """`pins._refine.Refiner._one_pin_per_tip`: found pins `found` (F,) within `same_sq` (px^2) of a pin among
@@ -244,10 +253,7 @@ def one_pin_per_tip(positions, found, error, near, same_sq):
             if dx * dx + dy * dy < same_sq and rank[other] <= error[i]:
                 yields[i] = True
                 break
-    for i in range(count):
-        if yields[i]:
-            positions[found[i], 0] = np.nan
-            positions[found[i], 1] = np.nan
+    _unplace(positions, found, yields)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -287,10 +293,7 @@ def keep_own_tips(positions, found, start, expected, near, margin_sq):
             if distance < own:
                 yields[i] = True
                 break
-    for i in range(count):
-        if yields[i]:
-            positions[found[i], 0] = np.nan
-            positions[found[i], 1] = np.nan
+    _unplace(positions, found, yields)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -206,7 +206,7 @@ class PinTracker:
         self._lost_run: np.ndarray | None = None
         self._origin = np.zeros(2)
         self._crop = (slice(None), slice(None))
-        self._pad, self._borders = 0, (0, 0, 0, 0)    # px of replicated border beyond the frame: widest, each side
+        self._borders = (0, 0, 0, 0)                  # px of replicated border beyond the frame, each side
         self._last_seen: np.ndarray | None = None
         self._refiner: Refiner | None = None
         self._surround = None                         # (flat indices, membrane level) in the crop
@@ -338,7 +338,6 @@ class PinTracker:
                                 np.maximum(np.ceil(pins.max(axis=0)) + reach + 1, (width, height)))
             x0, y0, x1, y1 = int(x0), int(y0), int(x1), int(y1)
         self._borders = (max(-y0, 0), max(y1 - height, 0), max(-x0, 0), max(x1 - width, 0))  # top, bottom, left, right
-        self._pad = max(self._borders)
         self._crop = (slice(max(y0, 0), min(y1, height)), slice(max(x0, 0), min(x1, width)))
         self._origin = np.array([max(x0, 0) - self._borders[2], max(y0, 0) - self._borders[0]], dtype=np.float64)
 
@@ -361,7 +360,7 @@ class PinTracker:
 
     def _cropped(self, grey: np.ndarray) -> np.ndarray:
         """The crop of a grey frame that tracking works on (a copy)."""
-        if self._pad:
+        if any(self._borders):
             return cv2.copyMakeBorder(grey[self._crop], *self._borders, cv2.BORDER_REPLICATE)
         return grey[self._crop].copy()
 
@@ -394,7 +393,7 @@ class PinTracker:
             moved, _ = _track(self._previous, current, self._reference - origin, self.lk, guess=guess - origin)
             positions = moved + origin
             blank = self._too_few(positions)
-        if self._pad and self.refine:
+        if self.refine and any(self._borders):
             positions = self._off_frame(positions, grey.shape)
         self.frames += 1
         self.blank = blank

@@ -46,6 +46,16 @@ def preset_sensor(name: str, seed: int = 0, **overrides) -> SyntheticTacTip:
     return SyntheticTacTip.from_preset(name, seed=seed, **overrides)
 
 
+def slide_run(name: str, seed: int, directions, **slides):
+    """The preset's sensor (its noise restarted from `seed`), the frames of its `slides` in `directions`
+    (degrees; `SyntheticTacTip.slides`, at 120 frames/s) as a list, and the indices of the pins drawn in the
+    first (rest) frame, whole or cut."""
+    s = preset_sensor(name, seed)
+    s.reseed_noise(seed)
+    run = list(s.slides(directions, frame_rate=120.0, **slides))
+    return s, run, np.flatnonzero(run[0].visible | run[0].partial)
+
+
 @functools.lru_cache(maxsize=None)
 def preset_frame(name: str, contact: Contact | None = None, seed: int = 0):
     """One rendered frame of the preset ``name`` (cached: tests must not modify it).

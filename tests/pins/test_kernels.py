@@ -10,7 +10,7 @@ from pins._kernels import compiled
 from pins._tipfit import _Windows, _centre_step, _centre_step_numpy
 from pins._window import WindowCentroids
 from pins.disc import as_grey
-from tests.pins.conftest import preset_sensor
+from tests.pins.conftest import preset_sensor, slide_run
 from tests.pins.test_tipfit import _grid, _scene
 
 kernels = compiled()
@@ -126,11 +126,8 @@ def test_the_environment_selects_the_numpy_reference(monkeypatch):
 def test_tracking_through_slides_agrees_with_the_reference(name, seed, monkeypatch):
     # The whole tracker on the kernels and on the NumPy reference: the same lost and retired pins and
     # positions within 1e-6 px in every frame of two slides.
-    s = preset_sensor(name, seed)
-    s.reseed_noise(seed)
-    run = list(s.slides([45, 270], distance_mm=8.0, rest_s=3 / 120, press_s=0.1, slide_s=0.25, lift_s=0.05,
-                        frame_rate=120.0))
-    drawn = np.flatnonzero(run[0].visible | run[0].partial)
+    s, run, drawn = slide_run(name, seed, [45, 270], distance_mm=8.0, rest_s=3 / 120,
+                              press_s=0.1, slide_s=0.25, lift_s=0.05)
     tracks = []
     for choice in ("numba", "numpy"):
         monkeypatch.setenv("TACTIP_KERNELS", choice)

@@ -17,7 +17,7 @@ from pins._refine import _SAME_TIP_FRACTION, Refiner
 from pins._rest import _AtRest
 from pins._window import WindowCentroids
 from pins.disc import as_grey
-from tests.pins.conftest import preset_sensor
+from tests.pins.conftest import slide_run
 
 kernels = compiled()
 pytestmark = pytest.mark.skipif(kernels is None, reason="Numba missing or TACTIP_KERNELS=numpy: no kernels to test")
@@ -227,11 +227,8 @@ def test_still_steps_learn_as_the_reference():
 def test_follow_and_snap_to_rest_agree_with_the_reference(name, seed, monkeypatch):
     # The follow passes and snap to rest on their kernels and on their references, the same window
     # measurements: a press and a slide and their return to rest, every frame's positions bit for bit.
-    s = preset_sensor(name, seed)
-    s.reseed_noise(seed)
-    run = list(s.slides([0, 135], distance_mm=6.0, rest_s=3 / 120, press_s=0.08, slide_s=0.2, lift_s=0.05,
-                        frame_rate=120.0))
-    drawn = np.flatnonzero(run[0].visible | run[0].partial)
+    s, run, drawn = slide_run(name, seed, [0, 135], distance_mm=6.0, rest_s=3 / 120,
+                              press_s=0.08, slide_s=0.2, lift_s=0.05)
     calls = {"rest_judge": 0, "follow_passes": 0}
     for label in calls:
         def counted(*args, _kernel=getattr(kernels, label), _label=label):
@@ -257,11 +254,8 @@ def test_follow_and_snap_to_rest_agree_with_the_reference(name, seed, monkeypatc
 
 def _refiner_and_frames(name, seed):
     """A tracker's refiner started on a preset's rest frame, and the bright crops of a press and slide."""
-    s = preset_sensor(name, seed)
-    s.reseed_noise(seed)
-    run = list(s.slides([60], distance_mm=5.0, rest_s=2 / 120, press_s=0.05, slide_s=0.1, lift_s=0.03,
-                        frame_rate=120.0))
-    drawn = np.flatnonzero(run[0].visible | run[0].partial)
+    s, run, drawn = slide_run(name, seed, [60], distance_mm=5.0, rest_s=2 / 120,
+                              press_s=0.05, slide_s=0.1, lift_s=0.03)
     tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
     tracker.start(run[0].image, pins=run[0].centres[drawn])
     crops = [tracker._bright(tracker._cropped(as_grey(f.image))) for f in run[1::4]]

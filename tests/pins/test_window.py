@@ -9,7 +9,7 @@ import pins._refine
 from pins import DetectionParams, PinTracker, SensorDisc
 from pins.disc import as_grey
 from pins._window import _FLAT_RISE, _PHASES, _SIDE_RUN, WindowCentroids, _squared_norm
-from tests.pins.conftest import preset_sensor
+from tests.pins.conftest import preset_sensor, slide_run
 
 
 class ReferenceWindows(WindowCentroids):
@@ -169,11 +169,8 @@ def test_windows_equal_the_reference_bit_for_bit(name, above_mean, seed):
 def test_tracking_through_slides_gives_the_reference_positions(name, seed, monkeypatch):
     # The whole tracker (rest passes, following, search, snap to rest) on the reference windows and
     # on the measured ones: the same positions, lost and retired pins in every frame.
-    s = preset_sensor(name, seed)
-    s.reseed_noise(seed)
-    run = list(s.slides([0, 135], distance_mm=8.0, rest_s=3 / 120, press_s=0.1, slide_s=0.25, lift_s=0.05,
-                        frame_rate=120.0))
-    drawn = np.flatnonzero(run[0].visible | run[0].partial)
+    s, run, drawn = slide_run(name, seed, [0, 135], distance_mm=8.0, rest_s=3 / 120,
+                              press_s=0.1, slide_s=0.25, lift_s=0.05)
     tracks = []
     for windows in (WindowCentroids, ReferenceWindows):
         monkeypatch.setattr(pins._refine, "WindowCentroids", windows)
