@@ -23,6 +23,17 @@ content at 320x240 to 1920x1080 px takes the luma path in mp4v at every size tri
 pixel position, one level apart, and no table reproduces it: the BGR path).
 OpenCV's warnings are silenced (log level ERROR) while such a capture is open. Replay maps luma to grey
 on its tracking thread (`LumaVideoSource.defer_table`), which has time to spare, not on the decoder's.
+Opening costs ~1 ms of decoding and 0.4 ms for the table (its joint histogram, `cv2.calcHist`), on replay's
+serial start: `open_grey` takes over the capture `open_source` opened instead of opening it again.
+
+Not used: FFmpeg's grey-only decoding (``AV_CODEC_FLAG_GRAY``, ``flags;gray``), which would skip the chroma
+planes. OpenCV's FFmpeg backend (4.x and the installed 5.0) gives ``OPENCV_FFMPEG_CAPTURE_OPTIONS`` to
+``avformat_open_input`` alone and opens the decoder with ``avcodec_open2(context, codec, NULL)``: of that
+dictionary the decoder sees only ``video_codec``, ``avdiscard`` and the HW-acceleration keys, never
+``flags``. And the FFmpeg inside opencv-python (``--enable-openssl --enable-libvpx --enable-shared
+--enable-pic``) is built without ``--enable-gray``, so its MPEG-4 decoder ignores the flag even when given
+(``CONFIG_GRAY`` 0). Measured: with ``flags;gray`` (or ``flags;+gray``) a colour recording still decodes in
+colour (B - R 83.0 grey levels on average, as without) in the same CPU time, mp4v and MJPG.
 """
 
 from __future__ import annotations
@@ -77,22 +88,35 @@ def luma_table(luma: np.ndarray, grey: np.ndarray) -> np.ndarray | None:
     """
     if luma.shape != grey.shape or luma.dtype != np.uint8 or grey.dtype != np.uint8 or luma.ndim != 2:
         return None
-    values, flat = luma.ravel(), grey.ravel().astype(np.float64)
-    count = np.bincount(values, minlength=256)
+    joint = _joint_histogram(luma, grey)
+    count = joint.sum(axis=1)
     seen = np.flatnonzero(count)
     if len(seen) < _LEVELS:
         return None
-    mean = np.bincount(values, weights=flat, minlength=256)[seen] / count[seen]
+    mean = joint[seen] @ np.arange(256.0) / count[seen]
     slope, intercept = np.polyfit(seen.astype(np.float64), mean, 1, w=np.sqrt(count[seen]))
     levels = np.arange(256, dtype=np.float64)
     table = np.interp(levels, seen, mean)
     outside = (levels < seen[0]) | (levels > seen[-1])
     table[outside] = slope * levels[outside] + intercept
     table = np.clip(np.round(table), 0, 255).astype(np.uint8)
-    import cv2
+    # Every pixel of each luma value seen has the table's grey: cv2.LUT(luma, table) equals `grey` pixel for pixel.
+    return table if np.array_equal(joint[seen, table[seen]], count[seen]) else None
 
-    return table if np.array_equal(cv2.LUT(luma, table), grey) else None
 
+def _joint_histogram(luma: np.ndarray, grey: np.ndarray) -> np.ndarray:
+    """(256, 256) float64 counts of the pixels with luma i and grey j: each luma value's count and mean grey are in
+    its row, and the entries off a table's say whether it reproduces the grey. `cv2.calcHist` (0.3 ms for 640 x 480
+    px against 0.5 for `np.bincount` of the pairs; float32 counts, exact below 2**24 pixels)."""
+    if luma.size < _EXACT_FLOAT32:
+        import cv2
+
+        return cv2.calcHist([luma, grey], [0, 1], None, [256, 256], [0, 256, 0, 256]).astype(np.float64)
+    pairs = luma.astype(np.uint16) << 8 | grey
+    return np.bincount(pairs.ravel(), minlength=65536).reshape(256, 256).astype(np.float64)
+
+
+_EXACT_FLOAT32 = 2 ** 24  # pixels: below, any count in float32 is exact (`cv2.calcHist`'s counts)
 
 # Fewest luma levels a first frame must show for its table to be trusted on the levels it does not show (a dark or
 # blank first frame: the BGR path). Slide bench, tables read off 30-100 levels of 16 frames (mp4v, MJPG) against
@@ -104,7 +128,8 @@ class LumaVideoSource(VideoSource):
     """A grey `tactip.sources.VideoSource` that reads the decoder's luma plane when that gives the same frames.
 
     Opens the video as `VideoSource` does (``grey=True``; its first frame decoded to BGR and
-    converted), then a second capture of it with ``CAP_PROP_CONVERT_RGB`` off; when `luma_table`
+    converted; or takes over such a source, `adopt`), then a second capture of it with
+    ``CAP_PROP_CONVERT_RGB`` off; when `luma_table`
     maps that capture's first frame onto the first's grey exactly, the second capture replaces
     the first and every later frame is its luma plane through the table; otherwise it is
     released and the source reads BGR and converts. `luma` says which path was taken.
@@ -118,6 +143,22 @@ class LumaVideoSource(VideoSource):
 
     def __init__(self, path, *, decode_threads: int | None = None):
         super().__init__(path, grey=True, decode_threads=decode_threads)
+        self._take_luma(decode_threads)
+
+    @classmethod
+    def adopt(cls, video: VideoSource, *, decode_threads: int | None = None) -> "LumaVideoSource":
+        """`video` (a grey `VideoSource` not yet read from) as a `LumaVideoSource`: its capture and first frame taken
+        over, not a second BGR capture opened and its first frame decoded again (`open_grey`); `video` is left closed.
+        """
+        if type(video) is not VideoSource or not video.grey or video._closed or video._index or video._pending is None:
+            raise ValueError(f"a grey VideoSource not yet read from is adopted, not {video!r}")
+        source = cls.__new__(cls)
+        source.__dict__.update(video.__dict__)  # the capture, its first frame, rate, size and count
+        video._closed = True  # its capture is the new source's: closing `video` must not release it
+        source._take_luma(decode_threads)
+        return source
+
+    def _take_luma(self, decode_threads) -> None:
         self._table = None
         self._quieted = False
         self._deferred = False
@@ -194,8 +235,4 @@ def open_grey(video, threads: int | None = None):
     from tactip.sources import open_source
 
     source = open_source(video, grey=True, decode_threads=threads)
-    if type(source) is not VideoSource:
-        return source
-    path = source.path
-    source.close()
-    return LumaVideoSource(path, decode_threads=threads)
+    return LumaVideoSource.adopt(source, decode_threads=threads) if type(source) is VideoSource else source

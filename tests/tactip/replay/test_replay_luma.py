@@ -193,3 +193,80 @@ def test_deferred_table_maps_every_frame_to_grey(tmp_path, codec, suffix):
     _write(colour, codec, tint=(0.8, 1.0, 1.15), frames=3)
     with LumaVideoSource(colour) as fallback:
         assert fallback.defer_table() is None  # BGR converted by the source: nothing to map
+
+
+def _reference_table(luma, grey):
+    """`luma_table` as it was (session 17): means by weighted bincount, checked by looking the table up."""
+    values, flat = luma.ravel(), grey.ravel().astype(np.float64)
+    count = np.bincount(values, minlength=256)
+    seen = np.flatnonzero(count)
+    if len(seen) < 16:
+        return None
+    mean = np.bincount(values, weights=flat, minlength=256)[seen] / count[seen]
+    slope, intercept = np.polyfit(seen.astype(np.float64), mean, 1, w=np.sqrt(count[seen]))
+    levels = np.arange(256, dtype=np.float64)
+    table = np.interp(levels, seen, mean)
+    outside = (levels < seen[0]) | (levels > seen[-1])
+    table[outside] = slope * levels[outside] + intercept
+    table = np.clip(np.round(table), 0, 255).astype(np.uint8)
+    return table if np.array_equal(cv2.LUT(luma, table), grey) else None
+
+
+@pytest.mark.parametrize("exact_below", [2 ** 24, 1])  # cv2.calcHist's float32 counts; np.bincount's, for the largest
+def test_luma_table_from_the_joint_histogram_is_the_reference(monkeypatch, exact_below):
+    monkeypatch.setattr(luma_module, "_EXACT_FLOAT32", exact_below)
+    rng = np.random.default_rng(48)
+    made = refused = 0
+    for trial in range(60):
+        height, width = int(rng.integers(8, 120)), int(rng.integers(8, 160))
+        luma = rng.integers(int(rng.integers(0, 40)), int(rng.integers(60, 256)), (height, width), dtype=np.uint8)
+        shift = rng.uniform(-0.5, 0.5, 256)  # each luma value's own rounding
+        grey = np.clip(np.round((luma - 16.0) * 255 / 219 + shift[luma]), 0, 255).astype(np.uint8)
+        if trial % 3 == 1:  # one pixel off its luma's grey (chroma): no table reproduces the frame
+            y, x = rng.integers(height), rng.integers(width)
+            grey[y, x] = grey[y, x] + 1 if grey[y, x] < 255 else 254
+        if trial % 5 == 4:
+            luma = luma[:, ::2]  # (a strided view)
+            grey = grey[:, ::2].copy()
+        expected, table = _reference_table(luma, grey), luma_table(luma, grey)
+        assert (table is None) == (expected is None)
+        if expected is not None:
+            assert np.array_equal(table, expected) and np.array_equal(cv2.LUT(luma, table), grey)
+        made, refused = made + (expected is not None), refused + (expected is None)
+    assert made >= 20 and refused >= 15  # both outcomes exercised
+
+
+@pytest.mark.parametrize("codec,suffix", CODECS)
+def test_open_grey_takes_over_the_sources_capture(tmp_path, monkeypatch, codec, suffix):
+    video = tmp_path / f"grey{suffix}"
+    _write(video, codec, frames=5)
+    expected = _frames(VideoSource(video, grey=True))
+    real, opened = cv2.VideoCapture, []
+    monkeypatch.setattr(cv2, "VideoCapture", lambda *args: opened.append(args[0]) or real(*args))
+    source = luma_module.open_grey(video, 1)
+    assert isinstance(source, LumaVideoSource) and source.luma
+    assert len(opened) == 2  # the source's BGR capture and the luma one: the first frame decoded once by each
+    table = source.defer_table()
+    got = _frames(source)
+    assert len(got) == len(expected) == 5
+    for (index, time_s, image), (index0, time0_s, image0) in zip(got, expected):
+        assert index == index0 and time_s == time0_s and np.array_equal(cv2.LUT(image, table), image0)
+
+
+def test_adopt_takes_fresh_grey_video_sources_only(tmp_path):
+    video = tmp_path / "colour.mp4"
+    _write(video, "mp4v", tint=(0.8, 1.0, 1.15), frames=4)
+    expected = _frames(VideoSource(video, grey=True))
+    original = VideoSource(video, grey=True)
+    source = LumaVideoSource.adopt(original)
+    assert not source.luma  # a colour recording: the BGR path, on the adopted capture
+    original.close()  # closed already: the capture is the new source's, still open
+    got = _frames(source)
+    assert all(np.array_equal(image, image0) for (_, _, image), (_, _, image0) in zip(got, expected))
+    assert len(got) == len(expected) == 4
+    read_from = VideoSource(video, grey=True)
+    read_from.read()
+    for refused in (read_from, VideoSource(video), source):  # read from; BGR; closed
+        with pytest.raises(ValueError):
+            LumaVideoSource.adopt(refused)
+    read_from.close()
