@@ -262,8 +262,9 @@ def replay_video(video: str | os.PathLike, out_path: str | os.PathLike, *,
                 else:
                     write_annotated(video, part, track, bounds, analysis["selected"], frame_size=frame_size,
                                     frame_rate=frame_rate, decisions=decisions)
-                with open(part, "rb+") as written:
-                    os.fsync(written.fileno())
+                if annotate is not None:  # both on the disk before either is published (a single one: `publish`)
+                    with open(part, "rb+") as written:
+                        os.fsync(written.fileno())
             except (OSError, RuntimeError) as exc:
                 raise write_error(exc, final) from None
             if final is annotate:  # OpenCV's writer says nothing of a full disk: count the frames stored
