@@ -178,6 +178,37 @@ figures above less the CPU saved, replay's busier thread on mp4v would be ~0.75-
 decoding's 0.52-0.60 of clock): not measured here. A colour recording (a webcam's) keeps the BGR path: its
 luma is not grey-of-BGR (up to 6 levels apart on a tinted render with a saturated LED).
 
+Session of issue 20's "speed12" (2026-11-30; 2-core VM shared with four other sessions, load average 4-16;
+main 8510ee8 against this session's code). FFmpeg's grey-only decoding (``AV_CODEC_FLAG_GRAY``, ``flags;gray``
+through ``OPENCV_FFMPEG_CAPTURE_OPTIONS``) cannot be had: OpenCV's FFmpeg backend gives that dictionary to
+``avformat_open_input`` alone and opens the decoder with no options (``avcodec_open2(context, codec, NULL)``),
+and the bundled FFmpeg is built without ``--enable-gray`` (its MPEG-4 decoder would ignore the flag); a colour
+video decodes in colour with it, in the same CPU (`tactip.replay.luma`'s docstring). Of the other decoder
+options only the thread count reaches FFmpeg through OpenCV (not ``thread_type``): two decoder threads in
+replay (luma path, `track_video`, 6 interleaved rounds, CPU ms/frame, medians) main thread 0.77 -> 0.66 (the
+table lookup moves to the reader), decode side 0.82 -> 1.07, total 1.59 -> 1.74: more CPU for two cores that
+are already ~90 % busy. Replay's decode thread is FFmpeg's decoding: ``grab`` 0.51 ms/frame alone, the luma
+copy out (``retrieve``) 0.04, the Python round them 0.01-0.03; beside the tracking it takes 0.65-0.79 (this
+bench's "replay decode", best of 3: mp4v 0.79, MJPG 0.86, main thread 0.76 / 0.77, at load 12). What replay
+adds to it is serial: its start (`open_grey`: mp4v 8.9 -> 4.2 ms CPU, MJPG 9.5 -> 4.8, 1920x1080 mp4v 35.8 ->
+15.7; this session: one capture fewer, the table from a joint histogram) and its tail, after the last frame is
+tracked: 37.5 ms CPU (median of 5), of which the contacts' kinds 12.4 (`pins.contact_kinds`: NumPy's
+nanmedian on masked arrays), tap thresholds 5.9 (the jitter floor 5.7), the rest-frame check 3.2, the
+features 3.2, the HDF5 file 7.5; then the disk: an fsync of the result (median 10.6 ms of clock here) and of
+its folder, no longer a second one of the result (3.9 ms). On a quiet machine, from the lead's decode thread
+(0.74-0.78 ms/frame), replay ~ start + 795 x 0.76 ms + tail: before this session 9 + 604 + ~56 ms = 0.67 s,
+1.51 x decoding's 0.445 s, where the lead measured 1.54-1.55 (best of 5: ~15-20 ms this sum leaves out);
+this session takes ~9 ms off it (4.7 of CPU at the start, ~4 of clock at the end): ~1.52-1.53 expected, the
+bar (1.5) still not met by the best of 5. The tail is the largest part left besides decoding (~0.1 of the
+ratio; `pins.contact_kinds` and the jitter floor, 18 ms, are NumPy calls on masked arrays). Tried and dropped: the luma decoded into
+recycled buffers (slabs NumPy backs with huge pages, a buffer reused once no view of it is left): frames held
+as replay's read-ahead holds them fault 76.7 pages a frame into fresh arrays against ~20 (0.77-0.82 ->
+0.65-0.68 ms/frame of decoding for those frames), but a process that replays again (this bench's repeats)
+already reuses the memory of the replay before: decode thread 0.669 (fresh arrays) against 0.677 ms/frame,
+faults 1.8 against 3.2 a frame (7 interleaved rounds): no gain where the bar is measured. Not built: two
+decoders on alternate chunks (OpenCV's seek decodes ~27 frames, 10-16 ms, per chunk; at best the busier
+thread would go from ~0.76 to the two threads' mean, ~0.7 ms/frame, before the seeks).
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
 """
