@@ -215,7 +215,7 @@ def _reference_table(luma, grey):
 @pytest.mark.parametrize("exact_below", [2 ** 24, 1])  # cv2.calcHist's float32 counts; np.bincount's, for the largest
 def test_luma_table_from_the_joint_histogram_is_the_reference(monkeypatch, exact_below):
     monkeypatch.setattr(luma_module, "_EXACT_FLOAT32", exact_below)
-    rng = np.random.default_rng(48)
+    rng = np.random.default_rng(7)
     made = refused = 0
     for trial in range(60):
         height, width = int(rng.integers(8, 120)), int(rng.integers(8, 160))
