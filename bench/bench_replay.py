@@ -200,8 +200,8 @@ its folder, no longer a second one of the result (3.9 ms). On a quiet machine, f
 1.51 x decoding's 0.445 s, where the lead measured 1.54-1.55 (best of 5: ~15-20 ms this sum leaves out);
 this session takes ~9 ms off it (4.7 of CPU at the start, ~4 of clock at the end): ~1.52-1.53 expected, the
 bar (1.5) still not met by the best of 5. The tail is the largest part left besides decoding (~0.1 of the
-ratio; `pins.contact_kinds` and the jitter floor, 18 ms, are NumPy calls on masked arrays). Tried and dropped: the luma decoded into
-recycled buffers (slabs NumPy backs with huge pages, a buffer reused once no view of it is left): frames held
+ratio; `pins.contact_kinds` and the jitter floor, 18 ms, are NumPy calls on masked arrays). Tried and dropped:
+the luma decoded into recycled buffers (slabs NumPy backs with huge pages, a buffer reused once no view of it is left): frames held
 as replay's read-ahead holds them fault 76.7 pages a frame into fresh arrays against ~20 (0.77-0.82 ->
 0.65-0.68 ms/frame of decoding for those frames), but a process that replays again (this bench's repeats)
 already reuses the memory of the replay before: decode thread 0.669 (fresh arrays) against 0.677 ms/frame,
