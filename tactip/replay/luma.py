@@ -27,10 +27,10 @@ Opening costs ~1 ms of decoding and 0.4 ms for the table (its joint histogram, `
 serial start: `open_grey` takes over the capture `open_source` opened instead of opening it again.
 
 Not used: FFmpeg's grey-only decoding (``AV_CODEC_FLAG_GRAY``, ``flags;gray``), which would skip the chroma
-planes. OpenCV's FFmpeg backend (4.x and the installed 5.0) gives ``OPENCV_FFMPEG_CAPTURE_OPTIONS`` to
+planes. OpenCV's FFmpeg backend (``cap_ffmpeg_impl.hpp``, 4.x) gives ``OPENCV_FFMPEG_CAPTURE_OPTIONS`` to
 ``avformat_open_input`` alone and opens the decoder with ``avcodec_open2(context, codec, NULL)``: of that
 dictionary the decoder sees only ``video_codec``, ``avdiscard`` and the HW-acceleration keys, never
-``flags``. And the FFmpeg inside opencv-python (``--enable-openssl --enable-libvpx --enable-shared
+``flags``; the installed 5.0 behaves alike (below). And the FFmpeg inside opencv-python (``--enable-openssl --enable-libvpx --enable-shared
 --enable-pic``) is built without ``--enable-gray``, so its MPEG-4 decoder ignores the flag even when given
 (``CONFIG_GRAY`` 0). Measured: with ``flags;gray`` (or ``flags;+gray``) a colour recording still decodes in
 colour (B - R 83.0 grey levels on average, as without) in the same CPU time, mp4v and MJPG.
