@@ -130,7 +130,8 @@ def _run_frames(args: argparse.Namespace) -> int:
                                    source=str(args.frames))
     save_calibration(args.out, calibration)
     if not args.quiet:
-        print(f"calibrated on {len(frames)} rest frames of {args.frames}: {calibration.describe()}")
+        frames_text = f"{len(frames)} rest frame" + ("s" if len(frames) != 1 else "")
+        print(f"calibrated on {frames_text} of {args.frames}: {calibration.describe()}")
         print(f"wrote {args.out}")
     return 0
 
