@@ -31,6 +31,26 @@ that chain through the CLI (`tactip.cli.main`), scoring it against the renderer'
 - outcome 6 (detect = replay): the same polarity, one pitch, the same pins (replay's rest positions within
   0.5 px of detect's, one to one).
 
+Figures (session 18's user12, a busy 2-core VM; seeds 0-2 developed on, 48-50 held out; about 60-75 s of
+CPU per preset and seed, half of it rendering the recordings):
+- residual 0 (a skin that springs back), seeds 0-2: outcomes 4, 5, 6 met on every set but one (radial-led-120
+  seed 2: one-tap accuracy 1.000 -> 0.934 with 5 more of 40 pins unseen: one of 16 test taps); scale spread
+  0.1-0.9 %, every scale within 1.3 % of the truth; detect = replay everywhere (119-120 pins on radial-led-120,
+  331 on white-dark-331). Outcome 3 met on white-dark-331 (11/11 on every seed, class videos 32/32) and
+  radial-led-120 seed 0; on seeds 1 and 2 the tracker loses 30-62 of 119 pins for ~8 frames after a slide's
+  lift, so the tap signal lingers at 1-3 px: contact stops 5-7 frames late, a spurious 7-frame contact,
+  and a press one frame after a slide merged with it (6/11 right, 11 and 10 found);
+- residual 0.2, creep 0.1 s, seeds 0-2: class videos 32/32 on every set (slides 1-3 frames apart split at
+  the dip, `tactip.replay.contacts.split_at_dips`: the seed-1 tour 7 -> 9 found of 11); a press right after
+  a slide reads as a slide (the skin still creeping back under it: white-dark-331 10/11 right on each seed)
+  or stays merged with it (radial-led-120, where a press moves the pins 1-2 px: 9, 5 and 2 of 11 right):
+  outcome 3 met on no set; 4, 5, 6 met on every set;
+- held out, seeds 48-50, residual 0: outcome 3 met on 5 of 6 sets (11/11), 4 and 6 on every set, 5 on 5 of
+  6: radial-led-120 seed 50 (noise 7.6, MJPG) `tactip detect` keeps 136 pins, 18 of them noise blobs
+  between the spokes, pitch 5.97 px, 0.5373 mm/px (+41 %), and `tactip replay` agrees with it (15 contacts,
+  4 spurious), while `tactip calibrate --frames` (10 frames averaged) and the dataset's calibration give
+  0.3865 and 0.3888 (truth 0.3810).
+
 Run: .venv/bin/python bench/bench_user_chain.py [--presets radial-led-120,white-dark-331] [--seeds 0-2]
      [--keep DIR] [--residual 0.2 --creep-s 0.1]
 """
