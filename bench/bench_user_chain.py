@@ -43,8 +43,9 @@ CPU per preset and seed, half of it rendering the recordings):
   `tactip.replay.contacts.split_at_dips`, 8 and 9 found: the lingering signal merged slides too);
 - residual 0.2, creep 0.1 s, seeds 0-2: class videos 32/32 on every set (slides 1-3 frames apart split at
   the dip: radial-led-120 tours 11, 7, 8 -> 11, 9, 9 found of 11; white-dark-331 11 before and after); a
-  press right after a slide reads as a slide (the skin still creeping back under it: white-dark-331 10/11 right on each seed)
-  or stays merged with it (radial-led-120, where a press moves the pins 1-2 px: 9, 5 and 2 of 11 right):
+  press right after a slide reads as a slide (the skin still creeping back under it: white-dark-331 10/11
+  right on each seed) or stays merged with it (radial-led-120, where a press moves the pins 1-2 px: 9, 5
+  and 2 of 11 right):
   outcome 3 met on no set; 4, 5, 6 met on every set;
 - held out, seeds 48-50, residual 0: outcome 3 met on 5 of 6 sets (11/11), 4 and 6 on every set, 5 on 5 of
   6: radial-led-120 seed 50 (noise 7.6, MJPG) `tactip detect` keeps 136 pins, 18 of them noise blobs
