@@ -7,9 +7,10 @@ frame's 90th percentile), the *drag ratio* is the length of their median displac
 over their median displacement magnitude: about 0 for displacements that cancel, 1 for a rigid
 translation. Medians, not means, so that a few pins tracked wrongly (a swap moves a pin by a
 pitch) cannot make a press look like a slide or turn a slide. A contact is a slide when, at the
-frame where that median displacement is longest, the ratio reaches `slide_ratio` and the median
-is longer than `min_drag_px`; the slide's direction is the median's, in degrees from image x
-towards image y (image y points down).
+frame where that median displacement is longest (among the frames where the tap signal is at least
+half its peak in the contact: after a lift, a few pins the tracker misplaced are not the contact),
+the ratio reaches `slide_ratio` and the median is longer than `min_drag_px`; the slide's direction
+is the median's, in degrees from image x towards image y (image y points down).
 """
 
 from __future__ import annotations
@@ -100,7 +101,9 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
         if not moved.any():
             kinds.append(ContactKind("press", float("nan"), 0.0, 0.0))
             continue
-        frames = np.flatnonzero(moved.any(axis=1))
+        # frames of the contact at half its peak signal or more: a few pins misplaced as the pad springs back
+        # (the signal low, those pins far) must not outweigh the drag
+        frames = np.flatnonzero(moved.any(axis=1) & (level >= 0.5 * np.nanmax(level)))
         chosen = np.where(moved[frames, :, None], part[frames], np.nan)
         drag = np.nanmedian(chosen, axis=1)                          # (F', 2) px: the moved pins' median motion
         spread = np.nanmedian(np.where(moved[frames], magnitude[frames], np.nan), axis=1)

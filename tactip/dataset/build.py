@@ -228,7 +228,8 @@ def make_calibration(frame: np.ndarray, *, expected_pins: int | None = None, n_p
                      min_separation_mm: float = 4.0, sensor: str | None = None, pins_on_pad: int | None = None,
                      pad_diameter_mm: float | None = None, mm_per_px: float | None = None,
                      dark_pins: bool | None = None, source: str = ""):
-    """A sensor calibration from one rest frame, with replay's defaults for what is not said.
+    """A sensor calibration from one rest frame (or a list of them, averaged as `calibration.calibrate_sensor`
+    averages them), with replay's defaults for what is not said.
 
     The pins in view default to those found (`pins.find_pin_field`); the scale is `pins.sensor_scale`'s
     (the sensor's pin pitch, or `pins_on_pad` pins on a `pad_diameter_mm` pad, 40 mm assumed).
@@ -246,16 +247,18 @@ def make_calibration(frame: np.ndarray, *, expected_pins: int | None = None, n_p
 
     from calibration import CalibrationError, calibrate_sensor
 
+    frames = list(frame) if isinstance(frame, (list, tuple)) else [frame]
     if expected_pins is None:
+        seen = frames[0] if len(frames) == 1 else np.rint(np.mean(np.stack(frames), axis=0)).astype(np.uint8)
         try:
-            expected_pins = find_pin_field(frame, dark_pins=dark_pins).count
+            expected_pins = find_pin_field(seen, dark_pins=dark_pins).count
         except NoSensorError as exc:
             raise CalibrationError(f"no sensor in view: {exc}") from None
     description = sensor_preset(sensor) if sensor else None
     if pins_on_pad is not None:
         description = (dataclasses.replace(description, pins=int(pins_on_pad)) if description else
                        SensorDescription("pad", int(pins_on_pad), pad_diameter_mm or DEFAULT_PAD_DIAMETER_MM))
-    return calibrate_sensor([frame], expected_pins=int(expected_pins), pad_diameter_mm=pad_diameter_mm,
+    return calibrate_sensor(frames, expected_pins=int(expected_pins), pad_diameter_mm=pad_diameter_mm,
                             selected_pins=min(int(n_pins), int(expected_pins)), min_separation_mm=min_separation_mm,
                             mm_per_px=mm_per_px, dark_pins=dark_pins, description=description,
                             sensor={"source": source or "tactip dataset build", "preset": sensor or ""})

@@ -15,7 +15,8 @@ from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, co
 
 from tactip.pipeline import PinTrack
 
-__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "tap_thresholds_px"]
+__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "split_at_dips",
+           "tap_thresholds_px"]
 # Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
 REFERENCE_PITCH_PX = 17.5
 
@@ -118,8 +119,10 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px,
                                         usable=track.tracked & ~track.blank, signal=signal)
     try:
-        bounds = segment_taps(_bridge_blank(signal, track.blank), high_px=high_px, low_px=low_px, merge_gap_frames=0)
-        kinds = contact_kinds(displacements, bounds, signal=signal)
+        bridged = _bridge_blank(signal, track.blank)
+        bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
+        bounds = split_at_dips(bridged, bounds, min_drop_px=high_px)
+        kinds = _kinds(displacements, bounds, signal, low_px)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")
@@ -127,6 +130,69 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
         warnings.append(f"no tap features ({exc})")
     return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
                 bounds=bounds, kinds=kinds, warnings=warnings, tap_thresholds_px=(high_px, low_px))
+
+
+def split_at_dips(signal: np.ndarray, bounds, *, min_drop_px: float, share: float = 0.5) -> list[tuple[int, int]]:
+    """Contacts split where the tap signal falls deep between two peaks: the plate lifted and came back
+    before the skin had crept back to rest.
+
+    A real elastomer does not spring back at once when a slide's plate lifts: what the slide left in
+    the skin creeps back over tens of frames, so with a rest of a few frames the signal never falls
+    below `segment_taps`' low threshold and two slides read as one contact. Within each contact, two
+    peaks of the signal (median of 3 frames, so a one-frame jump of the tracker makes no peak) are
+    two contacts when the signal between them falls to at most ``share`` of the lower peak and by at
+    least ``min_drop_px`` below it; the contact is cut where the lift brought it a quarter of the way
+    from the dip to the lower peak (the first contact's end, +- a frame). A press's plateau or
+    a slide's drag never falls so far while the plate is down. A press too weak to rise above what
+    the last slide left stays merged with it.
+
+    Parameters
+    ----------
+    signal : (T,) ndarray
+        The tap signal (`pins.tap_signal`), px.
+    bounds : sequence of (start, stop)
+        Contacts, stop exclusive (`pins.segment_taps`).
+    min_drop_px : float
+        Least fall from the lower peak to the dip, px (the tap threshold: above the tracking noise).
+    share : float
+        Highest dip, as a share of the lower peak, in (0, 1).
+
+    Returns
+    -------
+    list of (start, stop)
+        The contacts, split, in order, not overlapping.
+
+    Examples
+    --------
+    >>> slides = np.array([0, 5, 10, 20, 3, 2, 8, 16, 24, 4, 2, 0], float)   # two slides, a 2 px residual
+    >>> split_at_dips(slides, [(1, 11)], min_drop_px=1.0)
+    [(1, 4), (4, 11)]
+    """
+    from scipy.ndimage import median_filter
+    from scipy.signal import find_peaks
+
+    smooth = median_filter(np.asarray(signal, dtype=np.float64), 3, mode="nearest")
+    split = []
+    for start, stop in bounds:
+        part = smooth[start:stop]
+        peaks = np.union1d(find_peaks(part)[0], [int(np.argmax(part))])
+        cuts, held = [], None
+        for peak in peaks:
+            if held is None:
+                held = peak
+                continue
+            dip = held + int(np.argmin(part[held:peak]))
+            lower = min(part[held], part[peak])
+            if part[dip] <= share * lower and lower - part[dip] >= min_drop_px:
+                # the lift: the first frame down to a quarter of the way from the dip to the lower peak (the
+                # dip itself may lie in the next contact, whose drag can cancel what the last one left)
+                cuts.append(held + int(np.argmax(part[held:dip + 1] <= part[dip] + 0.25 * (lower - part[dip]))))
+                held = peak
+            elif part[peak] > part[held]:
+                held = peak
+        edges = [start, *(start + c for c in cuts), stop]
+        split += [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+    return split
 
 
 def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None,
@@ -161,6 +227,20 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
     floor = min(floor, jitter_floor_px(displacements, usable=usable))
     low = max(0.5 * factor, 2.0 * floor)
     return max(1.5 * factor, 2.0 * low), low
+
+
+def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float) -> list:
+    """`pins.contact_kinds` of each contact, measured from its first frame where the pad was not back at rest
+    there (the signal above ``low_px``: what the last slide left in the skin, creeping back, would otherwise
+    turn this contact's drag towards that slide's direction); from the rest frame elsewhere."""
+    kinds = []
+    for start, stop in bounds:
+        if signal[start] > low_px:
+            moved = displacements[start:stop] - displacements[start]  # NaN where lost at the start: left out
+            kinds += contact_kinds(moved, [(0, stop - start)])
+        else:
+            kinds += contact_kinds(displacements, [(start, stop)], signal=signal)
+    return kinds
 
 
 def _bridge_blank(signal: np.ndarray, blank: np.ndarray) -> np.ndarray:

@@ -109,6 +109,8 @@ class ReplayResult:
         ]
         if self.pins_seen:
             lines[-1] += f"; pins seen {min(self.pins_seen)}/{len(self.selected_pins)} in the poorest tap"
+            if min(self.pins_seen) < max(self.pins_seen):  # which contacts missed pins, and how many
+                lines[-1] += f" (per tap: {' '.join(map(str, self.pins_seen))})"
         lines += [f"Warning: {w}" for w in self.warnings]
         if self.invalid_taps:
             lines.append(f"Warning: taps {self.invalid_taps} have fewer than half the selected pins seen (features NaN)")

@@ -106,6 +106,37 @@ def slide_fraction(arc_mm, contact, radius_mm: float):
     return 0.5 * (1.0 + np.cos(np.pi * t))
 
 
+def textured_points(qx, qy, share, contact):
+    """Unrolled pad positions (qx, qy), mm, moved by a textured plate's ridges under a slide.
+
+    Ridges ``texture_period_mm`` apart across the slide direction ``u`` catch and release the skin the
+    plate drags: a point moves along ``u`` by ``texture_mm * share * sin(2 pi (q.u + |S|) / period)``,
+    where ``share`` is its part of the slide ``S`` (1 in the contact patch, `slide_fraction`) and
+    ``|S|`` how far the plate has gone, so each pin wobbles back and forth as ridges pass under it, and
+    neighbours a part of a period apart along ``u`` move differently. Nothing moves without a slide
+    under contact (a residual shear alone is not textured).
+
+    Parameters
+    ----------
+    qx, qy : ndarray
+        Unrolled positions after the slide, mm.
+    share : ndarray
+        Each point's share of the slide, in [0, 1].
+    contact : Contact
+        With ``texture_mm`` > 0 and ``texture_period_mm``.
+
+    Returns
+    -------
+    qx, qy : ndarray
+    """
+    slide = np.hypot(contact.slide_x_mm, contact.slide_y_mm)
+    if contact.indentation_mm <= 0 or slide == 0:
+        return qx, qy
+    ux, uy = contact.slide_x_mm / slide, contact.slide_y_mm / slide
+    wobble = contact.texture_mm * share * np.sin(2 * np.pi * (qx * ux + qy * uy + slide) / contact.texture_period_mm)
+    return qx + wobble * ux, qy + wobble * uy
+
+
 def slid_points(x, y, contact, radius_mm: float):
     """Lateral positions (x, y), mm, of membrane points at rest (x, y) after the plate's slide.
 
@@ -129,6 +160,8 @@ def slid_points(x, y, contact, radius_mm: float):
     scale = np.divide(arc, r, out=np.ones_like(r), where=r > 0)
     share = slide_fraction(arc, contact, radius_mm)
     qx, qy = x * scale + sx * share, y * scale + sy * share
+    if contact.texture_mm > 0:
+        qx, qy = textured_points(qx, qy, share, contact)
     arc = np.hypot(qx, qy)
     lateral = radius_mm * np.sin(np.clip(arc / radius_mm, 0.0, np.pi / 2))
     back = np.divide(lateral, arc, out=np.ones_like(arc), where=arc > 0)

@@ -36,6 +36,11 @@ class Contact:
     slide_decay_mm : float
         How far, mm of pad surface, the drag falls off outside the contact patch (opt-in, a stiffer
         skin: `tactip.sim.sequence.schedule`'s ``min_area``); 0: the default rule (`tactip.sim._slide`).
+    texture_mm, texture_period_mm : float
+        A textured plate (opt-in; 0: a smooth one): under a slide, ridges ``texture_period_mm`` apart across
+        the slide catch and release the skin in the contact patch, moving each pin there back and forth
+        along the slide by up to ``texture_mm`` (mm of pad surface) by where it lies against the ridges
+        (`tactip.sim._slide.textured_points`).
     """
 
     indentation_mm: float = 0.0
@@ -47,16 +52,24 @@ class Contact:
     shear_x_mm: float = 0.0
     shear_y_mm: float = 0.0
     slide_decay_mm: float = 0.0
+    texture_mm: float = 0.0
+    texture_period_mm: float = 2.0
 
     def __post_init__(self):
         for name in ("indentation_mm", "gap_width_mm", "gap_offset_mm", "gap_angle_deg", "slide_x_mm", "slide_y_mm",
-                     "shear_x_mm", "shear_y_mm", "slide_decay_mm"):
+                     "shear_x_mm", "shear_y_mm", "slide_decay_mm", "texture_mm", "texture_period_mm"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"{name} must be finite, got {getattr(self, name)!r}")
         if self.slide_decay_mm < 0:
             raise ValueError(f"slide_decay_mm must be >= 0, got {self.slide_decay_mm}")
         if self.gap_width_mm < 0:
             raise ValueError(f"gap_width_mm must be >= 0, got {self.gap_width_mm}")
+        if self.texture_period_mm <= 0:
+            raise ValueError(f"texture_period_mm must be > 0, got {self.texture_period_mm}")
+        if not 0 <= self.texture_mm <= self.texture_period_mm / (4 * math.pi):
+            # the wobble's own strain along the slide stays within 50 %: the skin never folds over it
+            raise ValueError(f"texture_mm must be in [0, texture_period_mm / 4 pi = "
+                             f"{self.texture_period_mm / (4 * math.pi):.3g}], got {self.texture_mm}")
 
 
 @dataclass(frozen=True, eq=False)

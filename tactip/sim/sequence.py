@@ -38,12 +38,16 @@ class Stroke:
         How far the skin is dragged, mm of pad surface (>= 0; slides only).
     gap_width_mm : float
         Width of a gap in the plate, mm (0: flat).
+    texture_mm : float
+        A slide over a textured plate: how far its ridges (2 mm apart) move the pins in the contact
+        patch back and forth along the slide, mm (0: a smooth plate; `Contact.texture_mm`).
     """
 
     indentation_mm: float
     direction_deg: float | None = None
     distance_mm: float = 0.0
     gap_width_mm: float = 0.0
+    texture_mm: float = 0.0
 
     def __post_init__(self):
         if not (math.isfinite(self.indentation_mm) and self.indentation_mm > 0):
@@ -135,6 +139,9 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
     one): rest, then per stroke a raised-cosine press to full depth, a hold (press) or a raised-cosine
     slide (slide), a raised-cosine lift releasing depth and slide together (the pad springs back), and
     a rest (the last one ``final_rest_s`` long; None: ``rest_s``). Returns (contacts, events).
+    ``rest_s`` may instead be a sequence of ``len(strokes) + 1`` rests, s: before the first stroke,
+    between each two and after the last (uneven rests, as a hand leaves them; ``final_rest_s`` must
+    then be None).
 
     ``residual`` > 0 (opt-in; 0 renders as before) makes the skin viscoelastic: a slide's lift
     releases the drag only down to that share of it, and the skin's shear then creeps back to rest
@@ -145,7 +152,16 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
     """
     if not (math.isfinite(frame_rate) and frame_rate > 0):
         raise ValueError(f"frame_rate must be > 0, got {frame_rate!r}")
-    n_rest = _frames(rest_s, frame_rate, "rest_s", 1)
+    if np.ndim(rest_s) == 1:
+        if len(rest_s) != len(strokes) + 1 or final_rest_s is not None:
+            raise ValueError(f"rest_s: a sequence of rests needs one more than the {len(strokes)} strokes "
+                             f"(got {len(rest_s)}) and final_rest_s None")
+        rests = [_frames(float(r), frame_rate, "rest_s", 1) for r in rest_s]
+    else:
+        rests = [_frames(rest_s, frame_rate, "rest_s", 1)] * (len(strokes) + 1)
+        if final_rest_s is not None:
+            rests[-1] = _frames(final_rest_s, frame_rate, "final_rest_s", 1)
+    n_rest = rests[0]
     n_press, n_lift = _frames(press_s, frame_rate, "press_s", 1), _frames(lift_s, frame_rate, "lift_s", 1)
     n_hold, n_slide = _frames(hold_s, frame_rate, "hold_s", 1), _frames(slide_s, frame_rate, "slide_s", 1)
     if not (math.isfinite(residual) and 0.0 <= residual < 1.0):
@@ -154,7 +170,6 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
         raise ValueError(f"creep_s must be > 0, got {creep_s!r}")
     if min_area is not None and not (math.isfinite(min_area) and 0.0 < min_area < 1.0):
         raise ValueError(f"min_area must be None or in (0, 1), got {min_area!r}")
-    n_final = n_rest if final_rest_s is None else _frames(final_rest_s, frame_rate, "final_rest_s", 1)
     rest = Contact()
     contacts, events = [rest] * n_rest, []
     for number, stroke in enumerate(strokes):
@@ -171,15 +186,16 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
         depth = np.concatenate([down, middle, up])
         dragged = np.concatenate([np.zeros(n_press), along, residual + (1.0 - residual) * up])
         decay = 0.0 if min_area is None else _slide.decay_for_area_mm(stroke.distance_mm, min_area)
+        sliding = stroke.kind == "slide"
         for fraction, share in zip(depth, dragged):
             contacts.append(Contact(stroke.indentation_mm * float(fraction), stroke.gap_width_mm, 0.0, gap_angle_deg,
-                                    sx * float(share), sy * float(share), slide_decay_mm=decay))
+                                    sx * float(share), sy * float(share), slide_decay_mm=decay,
+                                    texture_mm=stroke.texture_mm if sliding else 0.0))
         stop = len(contacts)
-        sliding = stroke.kind == "slide"
         events.append(ContactEvent(stroke.kind, start, stop, start / frame_rate, stop / frame_rate,
                                    stroke.indentation_mm, float(stroke.direction_deg) if sliding else None,
                                    float(stroke.distance_mm) if sliding else 0.0))
-        contacts.extend([rest] * (n_final if number == len(strokes) - 1 else n_rest))
+        contacts.extend([rest] * rests[number + 1])
     if residual > 0:
         contacts = _creep(contacts, events, strokes, residual, math.exp(-1.0 / (creep_s * frame_rate)))
     return contacts, events
@@ -212,9 +228,10 @@ class ContactSequences:
         ----------
         strokes : sequence of Stroke
             The contacts, in order.
-        rest_s : float
+        rest_s : float or sequence of float
             Rest before the first stroke, between strokes and after the last, s (at least one frame:
-            a rest of 2-5 frames is a short rest).
+            a rest of 2-5 frames is a short rest); or one rest per place, ``len(strokes) + 1`` of them
+            (uneven rests; `schedule`).
         press_s, hold_s, slide_s, lift_s : float
             Durations of pressing down, holding (presses), dragging (slides) and lifting, s (each at
             least one frame).
