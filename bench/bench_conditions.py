@@ -199,8 +199,11 @@ def check_detect(camera: Camera, preset: str, name: str, seed: int, image, centr
         scale_off = float("nan")
     met = recall >= 0.97 and precision >= 0.97 and rmse <= 0.5 and abs(scale_off) <= 0.02
     polarity = "dark" if field.params.dark_pins else "bright"
+    # The warnings `tactip detect` prints: S a saturated pad, F faint (or small) tips.
+    warned = "".join("S" if w.startswith("the pad is saturated") else "F" for w in field.warnings)
     row("detect", preset, name, seed, f"{len(field.centres)}/{int(visible.sum())} rec {recall:.3f} prec {precision:.3f} "
-        f"rmse {rmse:.2f} d scale {scale_off:+.1%} {polarity}", met, time.process_time() - start)
+        f"rmse {rmse:.2f} d scale {scale_off:+.1%} {polarity}" + (f" warn {warned}" if warned else ""), met,
+        time.process_time() - start)
     return field
 
 

@@ -94,12 +94,14 @@ The candidate parameter sets of steps 1, 2, 5 and 6 are generated, run, voted on
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
+from ._exposure import exposure_warnings
 from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._tipprobe import flat_pins
@@ -169,6 +171,10 @@ class PinField:
         The pin count given, if any.
     count_error : int or None
         Pins kept minus `expected_pins` (None without a count).
+    warnings : tuple of str
+        What in the frame may have hidden pins, for a person (`pins._exposure`): a pad saturated off
+        the tips (lower the exposure), pins faint against the camera noise or too small (raise the
+        exposure, film the pad larger); empty when the frame shows its pins well.
     """
 
     centres: np.ndarray
@@ -179,6 +185,7 @@ class PinField:
     rejected_reason: np.ndarray
     expected_pins: int | None = None
     count_error: int | None = None
+    warnings: tuple[str, ...] = ()
 
     @property
     def count(self) -> int:
@@ -238,7 +245,8 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     Returns
     -------
     field : PinField
-        ``field.params.dark_pins`` is the polarity searched (or decided).
+        ``field.params.dark_pins`` is the polarity searched (or decided); ``field.warnings`` says what in
+        the frame may have hidden pins (a saturated pad, faint or small tips: `pins._exposure`).
 
     Raises
     ------
@@ -267,6 +275,13 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
                                       or expected_pins < 1):
         raise ValueError(f"expected_pins must be a positive integer, got {expected_pins!r}")
     grey = as_grey(frame)
+    field = _find(grey, expected_pins, params, disc, dark_pins)
+    return dataclasses.replace(field, warnings=exposure_warnings(grey, field))
+
+
+def _find(grey: np.ndarray, expected_pins: int | None, params: DetectionParams | None, disc: SensorDisc | None,
+          dark_pins: bool | None) -> PinField:
+    """`find_pin_field` on a grey frame, without its warnings."""
     start = params or DetectionParams()
     if dark_pins is None and params is None:
         return _decide_polarity(grey, start, disc, expected_pins)
