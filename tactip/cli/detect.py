@@ -19,10 +19,11 @@ With --json [FILE|-] (standard output with no value or -) the output is {"count"
 pins), plus "expected_pins" and "count_error" (found minus expected) with --expected-pins.
 
 A frame that may hide pins earns a warning (on standard error, and in the JSON's "warnings"): a pad
-saturated off the pins (more than 1 % of the pin field at grey level 253-255: glare or a veil there
-hides the tips; lower the exposure), or pins faint against the camera noise (the faintest tenth's
-contrast x sqrt(pi) x tip radius / noise below 8: a frame too dark, tips too small, filmed far off or
-at a low resolution, or a noisy camera; some pins may be missed or lost). `tactip replay` lists the
+saturated off the pins (more than 0.5 % of the pin field at grey level 253-255, or a pin on membrane
+too bright to stand out: glare or a veil there hides the tips; lower the exposure), or pins faint
+against the camera noise (the faintest tenth's contrast x sqrt(pi) x tip radius / noise below 8, or
+contrast below 10 grey levels: a frame too dark, tips too small, filmed far off or at a low
+resolution, or a noisy camera; some pins may be missed or lost). `tactip replay` lists the
 same warnings for its rest frame.
 
 The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided from the
