@@ -110,7 +110,7 @@ from ._candidates import (_MATCH, _SharedCache, _candidates, _consensus, _distin
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
-from ._flat import _cut_by_frame, _irregular, _median_contrast, _pin_radius_px, _spills_over
+from ._flat import _cut_by_frame, _irregular, _irregular_beyond, _median_contrast, _pin_radius_px, _spills_over
 from .errors import NoSensorError
 from .scale import central_spacing_px
 
@@ -355,10 +355,10 @@ def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc 
         # out more (pins x their contrast): the noise of a bright gel forms a fine, faint lattice
         # of its own.
         region = frame_region(grey.shape)
-        signal = {}
+        signal, in_disc = {}, max(fields, key=lambda f: f.count, default=None)
         for dark, name in ((False, _POLARITIES[False]), (True, _POLARITIES[True])):
             field = _search(grey, region, start.replace(dark_pins=dark), False, expected_pins)
-            if _irregular(field):
+            if _irregular(field) or (in_disc is not None and _irregular_beyond(field, in_disc)):
                 why.append(f"{name} over the whole frame: {field.count} blobs, but not on a regular lattice")
                 continue
             fields.append(field)
