@@ -18,7 +18,9 @@ Per row (``--checks``):
            and precision against the visible truth (matched within 0.3 true pitch, one to one), the
            position RMSE of the matched pins (px), and the scale (`sensor_scale` with the preset named)
            against the preset's scale at 640x480 times the warp (``d scale``); met when recall and
-           precision >= 0.97, RMSE <= 0.5 px and the scale within 2 %;
+           precision >= 0.97, RMSE <= 0.5 px and the scale within 2 %; ``warn S`` / ``warn F``: the field's
+           warnings (`PinField.warnings`, which `tactip detect` and replay's start print): a saturated pad,
+           faint (or small) tips;
 - still:   replay's start (`PinTracker` with the field's parameters and disc) then 20 still frames (fresh
            noise, shimmer, JPEG): most pins lost in a frame, retired at the end; met when both are 0;
 - slides:  8 slides of 3 pitches at the condition's frame rate with rests between and after: identity
@@ -55,6 +57,27 @@ Left (the tracker's, or the camera's limits):
   MJPG still video at noise 10 or JPEG 60: 1 pin lost in some frames;
 - low-contrast tips (pin level 95): brown-127 recall 0.76-0.91, precision 0.85-0.87; small-pad-100
   recall 0.92-0.94 (radial-led-120's pins then lie below its membrane level: dark, not a failure).
+
+Session 18 (detect12): the camera's limits are now told, not silent (`pins._exposure`, thresholds set on
+seeds 40-47, `bench` figures from the detect check): a saturated pad (over 0.5 % of the pin field off the
+tips at 253-255, or a pin on membrane too bright to stand out) and faint tips (the faintest tenth's SNR,
+contrast x sqrt(pi) x tip radius / noise, under 8, or contrast under 10 grey levels) each earn a warning
+with what to do. Seeds 40-47: radial-led-120 x1.5 (recall 0.86-0.90) warned 8/8; 320x240 (0.84-0.90) 8/8;
+x0.6 (0.97-1.00) 7/8; noise 10 (0.97-0.99) 8/8; brown-127 low-contrast (0.75-0.91) 8/8, small-pad-100
+low-contrast (0.91-0.95) 8/8; every preset under base: none. Warned with no pin lost: small-pad-100 at
+x0.6 and noise 10, brown-127 LED reflections (2/8), white-dark-331 and dark-331 glare or x1.5 (a
+saturated membrane). The size limit is the tips' SNR, not their size alone: radial-led-120 (tips 31 grey
+levels above its veil at 640x480) filmed 240/270/300/360/420 px high: recall 0.84-0.90/0.92-0.98/
+0.97-0.98/0.97-1.00/0.99-1.00, warned at all but 420 (tips 1.25-1.5 px radius at half height; 1.75 at
+420); radial-120 at 200 px (tips 1.0 px, pitch 3.5 px) 0.93-0.95 and at 160 px 0.63-0.69, warned;
+tactip-532 at 160 px (tips 1.5 px, pitch 4.9 px, 34 grey levels) 1.00, not warned. Held out (seeds 48-59,
+looked at once): base, every preset: no warning; radial-led-120 x1.5 warned 12/12, 320x240 12/12, x0.6
+9/12 (the 3 not warned lose 1 pin each), noise 10 12/12; brown-127 low-contrast 11/12, small-pad-100
+12/12; tactip-331, dense-1000, brown-127 at x1.5: no warning, all found. They showed radial-led-120 at
+320x240 (seeds 48, 54) searched as a flat gel: 64-82 noise blobs in the near-saturated surround beyond
+the pad made a whole-frame field of 155-161 (precision 0.49-0.58) -> the whole frame is refused when its
+pins beyond the disc's are no lattice (`pins._flat._irregular_beyond`): 102 and 111 pins, precision
+0.99/0.96; base, 320x240, cut-corner and noise 10 on every preset, seeds 40-47: 0 of 352 fields changed.
 
 Run: .venv/bin/python bench/bench_conditions.py [--presets tactip-331,dark-331] [--seeds 40-44]
      [--conditions base,320x240,...] [--checks detect,still,slides,cli]
@@ -199,8 +222,11 @@ def check_detect(camera: Camera, preset: str, name: str, seed: int, image, centr
         scale_off = float("nan")
     met = recall >= 0.97 and precision >= 0.97 and rmse <= 0.5 and abs(scale_off) <= 0.02
     polarity = "dark" if field.params.dark_pins else "bright"
+    # The warnings `tactip detect` prints: S a saturated pad, F faint (or small) tips.
+    warned = "".join("S" if w.startswith("the pad is saturated") else "F" for w in field.warnings)
     row("detect", preset, name, seed, f"{len(field.centres)}/{int(visible.sum())} rec {recall:.3f} prec {precision:.3f} "
-        f"rmse {rmse:.2f} d scale {scale_off:+.1%} {polarity}", met, time.process_time() - start)
+        f"rmse {rmse:.2f} d scale {scale_off:+.1%} {polarity}" + (f" warn {warned}" if warned else ""), met,
+        time.process_time() - start)
     return field
 
 

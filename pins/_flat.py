@@ -9,6 +9,8 @@ arguments are `pins.PinField` s (not imported: `pins.lattice` imports this modul
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import cv2
 import numpy as np
 from scipy.spatial import cKDTree
@@ -57,6 +59,18 @@ def _irregular(field) -> bool:
         return False
     distance = cKDTree(field.centres).query(field.centres, k=3)[0]
     return float(np.median(distance[:, 2] / np.maximum(distance[:, 1], 1e-9))) > _MAX_NEIGHBOUR_RATIO
+
+
+def _irregular_beyond(whole, field) -> bool:
+    """Whether the pins of a whole-frame field `whole` beyond a disc field's pins (its circle grown by a
+    pitch) are no lattice: blobs of camera noise in a near-saturated surround, not a flat gel's markers
+    going on past a false disc (radial-led-120 filmed at 320x240, seeds 48 and 54: 64-82 noise blobs
+    beyond the pad made a whole-frame field of 155-161 'pins' that won over the pad's 102-111)."""
+    if field.count < 2 or not np.isfinite(field.pitch_px):
+        return False
+    reach = field.field_disc.radius_px + field.pitch_px
+    beyond = whole.centres[np.hypot(whole.centres[:, 0] - field.disc.cx, whole.centres[:, 1] - field.disc.cy) > reach]
+    return len(beyond) >= 3 and _irregular(SimpleNamespace(count=len(beyond), centres=beyond))
 
 
 def _median_contrast(grey: np.ndarray, field) -> float:

@@ -94,12 +94,14 @@ The candidate parameter sets of steps 1, 2, 5 and 6 are generated, run, voted on
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
+from ._exposure import exposure_warnings
 from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._tipprobe import flat_pins
@@ -108,7 +110,7 @@ from ._candidates import (_MATCH, _SharedCache, _candidates, _consensus, _distin
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
-from ._flat import _cut_by_frame, _irregular, _median_contrast, _pin_radius_px, _spills_over
+from ._flat import _cut_by_frame, _irregular, _irregular_beyond, _median_contrast, _pin_radius_px, _spills_over
 from .errors import NoSensorError
 from .scale import central_spacing_px
 
@@ -169,6 +171,10 @@ class PinField:
         The pin count given, if any.
     count_error : int or None
         Pins kept minus `expected_pins` (None without a count).
+    warnings : tuple of str
+        What in the frame may have hidden pins, for a person (`pins._exposure`): a pad saturated off
+        the tips (lower the exposure), pins faint against the camera noise or too small (raise the
+        exposure, film the pad larger); empty when the frame shows its pins well.
     """
 
     centres: np.ndarray
@@ -179,6 +185,7 @@ class PinField:
     rejected_reason: np.ndarray
     expected_pins: int | None = None
     count_error: int | None = None
+    warnings: tuple[str, ...] = ()
 
     @property
     def count(self) -> int:
@@ -238,7 +245,8 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
     Returns
     -------
     field : PinField
-        ``field.params.dark_pins`` is the polarity searched (or decided).
+        ``field.params.dark_pins`` is the polarity searched (or decided); ``field.warnings`` says what in
+        the frame may have hidden pins (a saturated pad, faint or small tips: `pins._exposure`).
 
     Raises
     ------
@@ -267,6 +275,13 @@ def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, param
                                       or expected_pins < 1):
         raise ValueError(f"expected_pins must be a positive integer, got {expected_pins!r}")
     grey = as_grey(frame)
+    field = _find(grey, expected_pins, params, disc, dark_pins)
+    return dataclasses.replace(field, warnings=exposure_warnings(grey, field))
+
+
+def _find(grey: np.ndarray, expected_pins: int | None, params: DetectionParams | None, disc: SensorDisc | None,
+          dark_pins: bool | None) -> PinField:
+    """`find_pin_field` on a grey frame, without its warnings."""
     start = params or DetectionParams()
     if dark_pins is None and params is None:
         return _decide_polarity(grey, start, disc, expected_pins)
@@ -340,10 +355,10 @@ def _decide_polarity(grey: np.ndarray, start: DetectionParams, disc: SensorDisc 
         # out more (pins x their contrast): the noise of a bright gel forms a fine, faint lattice
         # of its own.
         region = frame_region(grey.shape)
-        signal = {}
+        signal, in_disc = {}, max(fields, key=lambda f: f.count, default=None)
         for dark, name in ((False, _POLARITIES[False]), (True, _POLARITIES[True])):
             field = _search(grey, region, start.replace(dark_pins=dark), False, expected_pins)
-            if _irregular(field):
+            if _irregular(field) or (in_disc is not None and _irregular_beyond(field, in_disc)):
                 why.append(f"{name} over the whole frame: {field.count} blobs, but not on a regular lattice")
                 continue
             fields.append(field)

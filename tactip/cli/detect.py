@@ -15,8 +15,16 @@ the field's centre; the one pitch printed). The summary says how it was derived.
 
 With --json [FILE|-] (standard output with no value or -) the output is {"count": n, "pins": [[x, y], ...], "pitch_px": p,
 "rejected": [[x, y, "reason"], ...], "dark_pins": bool, "scale": {"mm_per_px", "pitch_px", "pitch_mm",
-"source", "sensor"}} in px (x to the right, y down; "scale" is null with fewer than two pins), plus
-"expected_pins" and "count_error" (found minus expected) with --expected-pins.
+"source", "sensor"}, "warnings": [...]} in px (x to the right, y down; "scale" is null with fewer than two
+pins), plus "expected_pins" and "count_error" (found minus expected) with --expected-pins.
+
+A frame that may hide pins earns a warning (on standard error, and in the JSON's "warnings"): a pad
+saturated off the pins (more than 0.5 % of the pin field at grey level 253-255, or a pin on membrane
+too bright to stand out: glare or a veil there hides the tips; lower the exposure), or pins faint
+against the camera noise (the faintest tenth's contrast x sqrt(pi) x tip radius / noise below 8, or
+contrast below 10 grey levels: a frame too dark, tips too small, filmed far off or at a low
+resolution, or a noisy camera; some pins may be missed or lost). `tactip replay` lists the
+same warnings for its rest frame.
 
 The polarity (bright pins on a dark membrane, or dark markers on a light one) is decided from the
 image unless --dark-pins says so: the one whose pin lattice keeps more pins wins, and an image where
@@ -61,7 +69,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dark-pins", action="store_true",
                         help="dark markers on a light membrane (default: the polarity is decided from the image)")
     add_json_argument(parser, '{"count": n, "pins": [[x, y], ...], "pitch_px": p, "rejected": [[x, y, "reason"], '
-                              '...], "dark_pins": bool, "scale": {"mm_per_px": s, "source": "how", ...}} (px)')
+                              '...], "dark_pins": bool, "scale": {"mm_per_px": s, "source": "how", ...}, '
+                              '"warnings": [...]} (px)')
     parser.add_argument("--annotate", type=output_file, metavar="OUT.png",
                         help="also write a picture: kept pins green, rejected blobs coloured by reason, legend")
     add_scale_arguments(parser)  # --sensor, --pins-on-pad, --pad-diameter-mm, --mm-per-px (as tactip replay)
@@ -105,12 +114,14 @@ def run(args: argparse.Namespace) -> int:
                 "rejected": [[round(float(x), 3), round(float(y), 3), str(reason)]
                              for (x, y), reason in zip(field.rejected, field.rejected_reason)],
                 "dark_pins": bool(field.params.dark_pins),
-                "scale": None if scale is None else scale.to_dict()}
+                "scale": None if scale is None else scale.to_dict(), "warnings": list(field.warnings)}
         if args.expected_pins:
             data.update(expected_pins=field.expected_pins, count_error=field.count_error)
         write_json(args.json, data, inputs=[args.image], indent=None)
     if str(args.json) != "-":
         _print_summary(args, field, scale, reason)
+    for warning in field.warnings:  # a saturated pad, faint or small tips: what may have hidden pins
+        print(f"tactip detect: warning: {warning}", file=sys.stderr)
     if args.expected_pins and abs(field.count_error) > _COUNT_WARNING * args.expected_pins:
         why = ("pins hidden or out of focus, something touching the pad, or a wrong count?" if field.count_error < 0
                else "is the count right?")

@@ -477,5 +477,6 @@ def _start(image, *, params, expected_pins, calibration, warnings):
                            dark_pins=None if params is None else params.dark_pins)
     tracker = PinTracker(detection=field.params, disc=field.disc)
     rest = tracker.start(image, field.centres)
+    warnings.extend(f"rest frame: {w}" for w in field.warnings)  # as `tactip detect` warns
     line = field.summary(pitch=False) + ("; dark markers on a light membrane" if field.params.dark_pins else "")
     return tracker, rest, field.count, field.params, line, field.centres  # the pitch: on the scale's line

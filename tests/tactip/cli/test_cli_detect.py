@@ -29,7 +29,8 @@ def _rmse_against_truth(pins):
 def test_json_output(capsys):
     assert main(["detect", str(FRAME), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert set(data) == {"count", "pins", "pitch_px", "rejected", "dark_pins", "scale"} and data["dark_pins"] is False
+    assert set(data) == {"count", "pins", "pitch_px", "rejected", "dark_pins", "scale", "warnings"}
+    assert data["dark_pins"] is False and data["warnings"] == []  # a well exposed frame
     pins = np.array(data["pins"])
     assert data["count"] == len(pins) == 331 and pins.shape == (331, 2)
     assert _rmse_against_truth(pins) <= 0.1
