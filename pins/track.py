@@ -51,6 +51,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ._edge import FrameEdge
 from ._identity import kept_on_own_tips
 from ._pairfit import part_overlapping
 from ._recover import _as_points, match_to_blobs
@@ -210,6 +211,7 @@ class PinTracker:
         self._last_seen: np.ndarray | None = None
         self._refiner: Refiner | None = None
         self._surround = None                         # (flat indices, membrane level) in the crop
+        self._edge: FrameEdge | None = None           # which tips the frame's edge cuts (`pins._edge`)
 
     def __repr__(self) -> str:
         state = "not started" if self.positions is None else (
@@ -299,7 +301,10 @@ class PinTracker:
                 raise PinsError(f"the rest frame is blank: only {refiner.settled_share:.0%} of the pins show a tip "
                                 f"where they are given")
             self._refiner = refiner
-            pins = refiner.rest_positions
+            given, pins = pins, refiner.rest_positions
+        # Tips the frame's edge cuts are lost, by detection's rule with hysteresis (`pins._edge`).
+        self._edge = None if not (self.refine and any(self._borders)) else FrameEdge(
+            grey, given, pins, self.spacing_px, self.detection.dark_pins, self._refiner.tip_radius_px)
         self.rest_positions = pins.copy()
         self.positions = pins.copy()
         self._reference = pins.copy()
@@ -322,7 +327,7 @@ class PinTracker:
         """LK works on the part of the frame the pins can reach (the disc, else the pins' box), grown beyond the frame
         by up to a spacing of replicated border (`_borders`) where pins' windows reach (a flat gel's whole frame, a pad
         cut by the edge; plain LK, as `track_pins`, keeps to the frame): whole tips next to the edge are measured (their
-        windows clipped: tactip-127 cut lost 8 of 120 on its start frame), cut ones lost (`_off_frame`)."""
+        windows clipped: tactip-127 cut lost 8 of 120 on its start frame), cut ones lost (`pins._edge`)."""
         margin = self.lk.window_px * 2 ** self.lk.levels + 2
         reach = int(np.ceil(self.spacing_px)) + 2  # a window (half a spacing) and its search round a pin
         height, width = shape[:2]
@@ -340,23 +345,6 @@ class PinTracker:
         self._borders = (max(-y0, 0), max(y1 - height, 0), max(-x0, 0), max(x1 - width, 0))  # top, bottom, left, right
         self._crop = (slice(max(y0, 0), min(y1, height)), slice(max(x0, 0), min(x1, width)))
         self._origin = np.array([max(x0, 0) - self._borders[2], max(y0, 0) - self._borders[0]], dtype=np.float64)
-
-    def _off_frame(self, positions: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-        """Positions with those cut by the frame's edge lost (NaN): a marker whose tip (its rest
-        radius) reaches beyond the frame leans on the replicated border, and is not measured."""
-        radius = self._refiner.tip_radius_px
-        if not np.isfinite(radius):
-            return positions
-        height, width = shape[:2]
-        x, y = positions[:, 0], positions[:, 1]
-        with np.errstate(invalid="ignore"):
-            room = np.minimum(np.minimum(x + 0.5, width - 0.5 - x), np.minimum(y + 0.5, height - 0.5 - y))
-            cut = room < radius
-        if not cut.any():
-            return positions
-        positions = positions.copy()
-        positions[cut] = np.nan
-        return positions
 
     def _cropped(self, grey: np.ndarray) -> np.ndarray:
         """The crop of a grey frame that tracking works on (a copy)."""
@@ -393,8 +381,8 @@ class PinTracker:
             moved, _ = _track(self._previous, current, self._reference - origin, self.lk, guess=guess - origin)
             positions = moved + origin
             blank = self._too_few(positions)
-        if self.refine and any(self._borders):
-            positions = self._off_frame(positions, grey.shape)
+        if self._edge is not None:
+            positions = self._edge.cut(positions)
         self.frames += 1
         self.blank = blank
         if blank:
