@@ -1,4 +1,5 @@
-"""Which tips the frame's edge cuts, for `pins.track.PinTracker`: detection's rule, with hysteresis (issue 20, outcome 1).
+"""The frame's edge for `pins.track.PinTracker`: the crop it tracks on (`tracking_crop`), and which tips the edge cuts:
+detection's rule, with hysteresis (`FrameEdge`; issue 20, outcome 1).
 
 Detection leaves out a pin whose disc (the pins' radius from their mean radial profile, plus half a px of
 edge) reaches more than half a px beyond the frame (`pins._flat._cut_by_frame`, ``outside field``): its
@@ -22,7 +23,7 @@ So each pin is *in* or *out* of the frame and changes state only across a band `
   at its rest place.
 
 A lost pin (NaN) keeps its state. Out pins are reported lost, never placed on the replicated border
-beyond the frame (`PinTracker._set_crop`). A tip the tracker keeps is cut no deeper than detection allows, but
+beyond the frame (`tracking_crop`). A tip the tracker keeps is cut no deeper than detection allows, but
 for a pin resting at the threshold: by one band more, as the tracker measures it.
 """
 
@@ -105,3 +106,34 @@ class FrameEdge:
         positions = positions.copy()
         positions[out] = np.nan
         return positions
+
+
+def tracking_crop(shape: tuple[int, ...], pins: np.ndarray, spacing_px: float, lk, disc, refine: bool):
+    """The part of a frame of `shape` that LK works on: (borders, crop, origin).
+
+    The part the (N, 2) `pins`, px, can reach (the `disc`, else the pins' box, with LK's margin: `lk`, an
+    `pins.lk.LKParams`), grown beyond the frame by up to a spacing of replicated border where pins' windows reach,
+    with refinement (a flat gel's whole frame, a pad cut by the edge; plain LK, as `track_pins`, keeps to the
+    frame): whole tips next to the edge are measured (their windows clipped: tactip-127 cut lost 8 of 120 on its
+    start frame), cut ones lost (`FrameEdge`). ``borders``: px of replicated border beyond the frame (top,
+    bottom, left, right); ``crop``: (rows, columns) slices of the frame; ``origin``: the crop's (x, y) in the
+    frame, px (negative by the border).
+    """
+    margin = lk.window_px * 2 ** lk.levels + 2
+    reach = int(np.ceil(spacing_px)) + 2  # a window (half a spacing) and its search round a pin
+    height, width = shape[:2]
+    if disc is not None and disc.whole_frame:
+        x0, y0, x1, y1 = -reach, -reach, width + reach, height + reach
+    else:
+        reach *= refine
+        low, high = pins.min(axis=0), pins.max(axis=0)
+        if disc is not None:
+            low, high = np.array([disc.cx, disc.cy]) + [[-disc.radius_px], [disc.radius_px]]
+        x0, y0 = np.maximum(np.floor(low).astype(int) - margin, np.minimum(np.floor(pins.min(axis=0)) - reach, 0))
+        x1, y1 = np.minimum(np.ceil(high).astype(int) + margin + 1,
+                            np.maximum(np.ceil(pins.max(axis=0)) + reach + 1, (width, height)))
+        x0, y0, x1, y1 = int(x0), int(y0), int(x1), int(y1)
+    borders = (max(-y0, 0), max(y1 - height, 0), max(-x0, 0), max(x1 - width, 0))  # top, bottom, left, right
+    crop = (slice(max(y0, 0), min(y1, height)), slice(max(x0, 0), min(x1, width)))
+    origin = np.array([max(x0, 0) - borders[2], max(y0, 0) - borders[0]], dtype=np.float64)
+    return borders, crop, origin

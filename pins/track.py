@@ -51,10 +51,11 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ._edge import FrameEdge
+from ._edge import FrameEdge, tracking_crop
 from ._identity import kept_on_own_tips
 from ._pairfit import part_overlapping
 from ._recover import _as_points, match_to_blobs
+from ._return import RestMatch, motion_warning
 from ._refine import Refiner
 from ._surround import surround_pixels
 from ._window import _squared_norm
@@ -212,6 +213,8 @@ class PinTracker:
         self._refiner: Refiner | None = None
         self._surround = None                         # (flat indices, membrane level) in the crop
         self._edge: FrameEdge | None = None           # which tips the frame's edge cuts (`pins._edge`)
+        self._rest_match: RestMatch | None = None     # the rest frame seen again (`pins._return`)
+        self._restored = (0, 0, 0)                    # pins it took off others' tips: pin-frames, frames, first
 
     def __repr__(self) -> str:
         state = "not started" if self.positions is None else (
@@ -238,6 +241,12 @@ class PinTracker:
         if getattr(self, "_refiner", None) is None:
             raise ValueError("the tracker has no windows to replace: start it first (with refinement)")
         self._refiner.windows = windows
+
+    @property
+    def motion_warning(self) -> str:
+        """Since `start`: a warning when pins came back to rest on other pins' tips (the motion between frames went
+        beyond what the tracker follows: slides filmed at 15-20 frames/s), naming how often; else "" (`pins._return`)."""
+        return motion_warning(*self._restored, self.spacing_px)
 
     @property
     def gate_px(self) -> float:
@@ -287,7 +296,9 @@ class PinTracker:
         if self._auto_lk:
             # A window a little wider than a pin and narrower than the spacing sees one pin.
             self.lk = LKParams(window_px=int(np.clip(2 * round(0.3 * self.spacing_px) + 1, 7, 31)))
-        self._set_crop(grey.shape, pins)
+        # The part of the frame LK works on, grown by replicated border beyond it where pins' windows reach.
+        self._borders, self._crop, self._origin = tracking_crop(grey.shape, pins, self.spacing_px, self.lk, self.disc,
+                                                                self.refine)
         self._previous = self._cropped(grey)
         self._surround = None
         if self.refine and self.disc is not None:
@@ -302,6 +313,7 @@ class PinTracker:
                                 f"where they are given")
             self._refiner = refiner
             given, pins = pins, refiner.rest_positions
+            self._rest_match = RestMatch(self._bright(self._previous.copy()), pins, self._origin, self.spacing_px)
         # Tips the frame's edge cuts are lost, by detection's rule with hysteresis (`pins._edge`).
         self._edge = None if not (self.refine and any(self._borders)) else FrameEdge(
             grey, given, pins, self.spacing_px, self.detection.dark_pins, self._refiner.tip_radius_px)
@@ -321,30 +333,8 @@ class PinTracker:
         self.blank_frames = 0
         self._since_good = 1
         self._since_detection = self.detect_every
+        self._restored = (0, 0, 0)
         return self.positions.copy()
-
-    def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:
-        """LK works on the part of the frame the pins can reach (the disc, else the pins' box), grown beyond the frame
-        by up to a spacing of replicated border (`_borders`) where pins' windows reach (a flat gel's whole frame, a pad
-        cut by the edge; plain LK, as `track_pins`, keeps to the frame): whole tips next to the edge are measured (their
-        windows clipped: tactip-127 cut lost 8 of 120 on its start frame), cut ones lost (`pins._edge`)."""
-        margin = self.lk.window_px * 2 ** self.lk.levels + 2
-        reach = int(np.ceil(self.spacing_px)) + 2  # a window (half a spacing) and its search round a pin
-        height, width = shape[:2]
-        if self.disc is not None and self.disc.whole_frame:
-            x0, y0, x1, y1 = -reach, -reach, width + reach, height + reach
-        else:
-            reach *= self.refine
-            low, high = pins.min(axis=0), pins.max(axis=0)
-            if self.disc is not None:
-                low, high = np.array([self.disc.cx, self.disc.cy]) + [[-self.disc.radius_px], [self.disc.radius_px]]
-            x0, y0 = np.maximum(np.floor(low).astype(int) - margin, np.minimum(np.floor(pins.min(axis=0)) - reach, 0))
-            x1, y1 = np.minimum(np.ceil(high).astype(int) + margin + 1,
-                                np.maximum(np.ceil(pins.max(axis=0)) + reach + 1, (width, height)))
-            x0, y0, x1, y1 = int(x0), int(y0), int(x1), int(y1)
-        self._borders = (max(-y0, 0), max(y1 - height, 0), max(-x0, 0), max(x1 - width, 0))  # top, bottom, left, right
-        self._crop = (slice(max(y0, 0), min(y1, height)), slice(max(x0, 0), min(x1, width)))
-        self._origin = np.array([max(x0, 0) - self._borders[2], max(y0, 0) - self._borders[0]], dtype=np.float64)
 
     def _cropped(self, grey: np.ndarray) -> np.ndarray:
         """The crop of a grey frame that tracking works on (a copy)."""
@@ -408,6 +398,8 @@ class PinTracker:
             self._refiner.still = _squared_norm(velocity) <= self._refiner._guess_px ** 2
             velocity = self._refiner.carried_velocity(velocity, self._refiner.observe_still(velocity))
             self._refiner.remember(positions)  # (where lost pins' neighbours were: `pins._predict`)
+            if self._rest_match.matched is not None:  # (the frame shows the rest frame there: no motion)
+                velocity[self._rest_match.matched] = 0.0
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
@@ -444,6 +436,11 @@ class PinTracker:
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
         positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, self._everyone),
                                      refiner.rest_positions, guess, refiner._identity_index)
+        # Pins where the frame shows the rest frame again, whatever the frames between did (`pins._return`).
+        positions = self._rest_match.restore(refiner, crop, positions)
+        if self._rest_match.restored:
+            self._restored = (self._restored[0] + self._rest_match.restored, self._restored[1] + 1,
+                              self._restored[2] or self.frames)
         if self.part_overlaps:
             # Placed pins whose tips overlap a neighbour's (squeezed skin ahead of a slide): a fit of both tips.
             positions = part_overlapping(refiner, crop, positions, filled)
