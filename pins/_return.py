@@ -104,7 +104,8 @@ class RestMatch:
         return np.count_nonzero(differences <= MATCH_LEVELS * self.level) >= REST_SHARE * len(differences) - 1
 
     def differences(self, crop: np.ndarray) -> np.ndarray:
-        """Each pin's mean absolute difference between `crop` and the rest crop over its window at rest, grey levels (N,)."""
+        """Each pin's mean absolute difference between `crop` and the rest crop over its window at rest,
+        grey levels (N,)."""
         mean = cv2.boxFilter(cv2.absdiff(crop, self._rest), cv2.CV_32F, (self._side, self._side),
                              borderType=cv2.BORDER_REPLICATE)
         return mean[self._y, self._x].astype(np.float64)

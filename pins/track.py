@@ -38,7 +38,9 @@ A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; n
 Limit: frame-to-frame motion must stay below about half the pin spacing (8 px at 331 pins in a
 640x480 frame; a 250 ms tap rise at 20 frames/s moves pins at most ~7 px per frame). Beyond it
 the lattice of identical pins aliases: LK and the windows agree on the neighbouring pin. Record
-faster taps at a higher frame rate.
+faster taps at a higher frame rate. Where a frame shows the rest frame again, pins are put back on their
+own tips whatever the frames between did (`pins._return`: slides filmed at 15-20 frames/s step pins by
+1-2 spacings), and `motion_warning` says how often a pin had to be taken off another's (replay lists it).
 
 Speed: everything runs on the disc's crop (LK's pyramids are not reused between frames: `pins.lk`).
 `bench/bench_tracking.py` measures one update against a plain 11x11 one-level LK step over the
@@ -244,8 +246,9 @@ class PinTracker:
 
     @property
     def motion_warning(self) -> str:
-        """Since `start`: a warning when pins came back to rest on other pins' tips (the motion between frames went
-        beyond what the tracker follows: slides filmed at 15-20 frames/s), naming how often; else "" (`pins._return`)."""
+        """Since `start`: a warning when pins came back to rest on other pins' tips (the motion between frames
+        went beyond what the tracker follows: slides filmed at 15-20 frames/s), naming how often; else ""
+        (`pins._return`)."""
         return motion_warning(*self._restored, self.spacing_px)
 
     @property

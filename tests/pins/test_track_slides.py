@@ -1,6 +1,9 @@
 """pins.track through slides (issue 20): pins dragged up to 3 pitches sideways at 120 frames/s, the
 pad springing back as it lifts, with short rests; after the return every pin is back on its own tip."""
 
+import dataclasses
+
+import cv2
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -50,10 +53,12 @@ def test_after_slides_every_pin_is_back_on_its_own_tip(name, seed, directions, l
     assert tracker.motion_warning == ""  # at 120 frames/s the tracker follows: nothing to warn of
 
 
-@pytest.mark.parametrize("name, seed, fps", [
-    ("tactip-127", 40, 20.0), ("tactip-127", 3, 15.0), ("radial-led-120", 2, 15.0), ("tactip-331", 1, 20.0),
+@pytest.mark.parametrize("name, seed, fps, jpeg", [
+    ("tactip-127", 40, 20.0, None), ("tactip-127", 3, 15.0, None), ("radial-led-120", 2, 15.0, None),
+    ("tactip-331", 1, 20.0, None),
+    ("tactip-127", 41, 20.0, 60),   # an MJPG webcam: the codec hides the noise from the rest frame's estimate
 ])
-def test_slides_filmed_slowly_leave_every_pin_on_its_own_tip_at_each_rest(name, seed, fps):
+def test_slides_filmed_slowly_leave_every_pin_on_its_own_tip_at_each_rest(name, seed, fps, jpeg):
     """A cheap webcam (15-20 frames/s) films slides of 3 pitches: pins step by 1-2 spacings a frame, beyond what
     the tracker follows (half a spacing), and come out of each slide swapped or lost. Where the frame shows the
     rest frame again, each pin is back on its own tip (`pins._return`): in every frame at rest between and after
@@ -64,6 +69,9 @@ def test_slides_filmed_slowly_leave_every_pin_on_its_own_tip_at_each_rest(name, 
     s.reseed_noise(seed)
     run = list(s.slides([0, 135, 270], distance_mm=3 * s.pin_spacing_mm, indentation_mm=2.0, rest_s=3 / fps,
                         press_s=0.05, slide_s=0.15, lift_s=0.05, frame_rate=fps))
+    if jpeg is not None:
+        encoded = [cv2.imencode(".jpg", f.image, [cv2.IMWRITE_JPEG_QUALITY, jpeg])[1] for f in run]
+        run = [dataclasses.replace(f, image=cv2.imdecode(e, cv2.IMREAD_GRAYSCALE)) for f, e in zip(run, encoded)]
     rest = run[0]
     drawn = np.flatnonzero(rest.visible | rest.partial)
     tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
