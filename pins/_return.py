@@ -73,9 +73,6 @@ class RestMatch:
         Mean absolute difference, grey levels, between a still frame and the rest frame over a pin's window.
     matched : (N,) ndarray of bool or None
         After `restore`: the pins matching the rest frame when the frame showed the pad at rest, else None.
-    restored : int
-        After `restore`: the pins it took off other pins' tips (placed farther than the gate from rest where the
-        frame shows their tips at rest: the motion between frames went beyond what the tracker follows).
     """
 
     def __init__(self, rest_crop: np.ndarray, rest_positions: np.ndarray, origin: np.ndarray, spacing_px: float):
@@ -95,7 +92,6 @@ class RestMatch:
         self.level = self._noise_level
         self._learnt = False
         self.matched: np.ndarray | None = None
-        self.restored = 0
 
     def _probe_matches(self, crop: np.ndarray) -> bool:
         """Whether enough of the probe pins' windows match the rest frame for the frame to be a rest frame."""
@@ -117,7 +113,7 @@ class RestMatch:
         rest); `crop` the frame's crop as the tracker sees it. Returns `positions` itself when nothing changed,
         else a copy; sets `matched`.
         """
-        self.matched, self.restored = None, 0
+        self.matched = None
         rest = refiner.rest_positions
         distance = _squared_norm(positions - rest)
         far = ~(distance <= refiner.gate_px ** 2)  # (missing too: NaN)
@@ -142,14 +138,26 @@ class RestMatch:
         centres, measures = refiner.windows.measure(crop, rest[look] - refiner.origin, refiner._rest_radius[look])
         centres += refiner.origin - refiner._rest_offset[look]
         ok = (_squared_norm(centres - rest[look]) <= refiner._settled_px ** 2) & refiner._like_at_rest(measures, look)
-        self.restored = int(np.count_nonzero(np.isfinite(positions[look, 0])))
         positions = positions.copy()
         positions[look] = np.where(ok[:, None], centres, np.nan)
         return positions
 
 
+def taken_off(before: np.ndarray, after: np.ndarray, rest_positions: np.ndarray, gate_px: float) -> int:
+    """How many pins a frame's rest steps (`snap_to_rest`, `RestMatch.restore`) took off other pins' tips: placed
+    in `before` (N, 2), px, farther than `gate_px` from their `rest_positions`, and within it in `after`.
+
+    >>> taken_off(np.array([[30.0, 0.0], [0.0, 0.0]]), np.zeros((2, 2)), np.zeros((2, 2)), 5.0)
+    1
+    """
+    with np.errstate(invalid="ignore"):
+        far = _squared_norm(before - rest_positions) > gate_px ** 2
+        back = _squared_norm(after - rest_positions) <= gate_px ** 2
+    return int(np.count_nonzero(far & back))
+
+
 def motion_warning(restored: int, frames: int, first: int, spacing_px: float) -> str:
-    """What a user reads when pins came back to rest on other pins' tips (`RestMatch.restored`, summed over a
+    """What a user reads when pins came back to rest on other pins' tips (`taken_off`, summed over a
     video: `restored` pin-frames in `frames` frames, the first `first` frames after the rest frame), else "".
 
     >>> motion_warning(0, 0, 0, 20.0)

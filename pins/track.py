@@ -57,7 +57,7 @@ from ._edge import FrameEdge, tracking_crop
 from ._identity import kept_on_own_tips
 from ._pairfit import part_overlapping
 from ._recover import _as_points, match_to_blobs
-from ._return import RestMatch, motion_warning
+from ._return import RestMatch, motion_warning, taken_off
 from ._refine import Refiner
 from ._surround import surround_pixels
 from ._window import _squared_norm
@@ -437,13 +437,15 @@ class PinTracker:
         # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
         # missing ones, retired too (a slide's return: 3-9 left lost 3 frames after it), at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
+        before = positions
         positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, self._everyone),
                                      refiner.rest_positions, guess, refiner._identity_index)
         # Pins where the frame shows the rest frame again, whatever the frames between did (`pins._return`).
         positions = self._rest_match.restore(refiner, crop, positions)
-        if self._rest_match.restored:
-            self._restored = (self._restored[0] + self._rest_match.restored, self._restored[1] + 1,
-                              self._restored[2] or self.frames)
+        if positions is not before:  # (pins taken off others' tips, by either: `motion_warning`)
+            restored = taken_off(before, positions, refiner.rest_positions, self.gate_px)
+            if restored:
+                self._restored = (self._restored[0] + restored, self._restored[1] + 1, self._restored[2] or self.frames)
         if self.part_overlaps:
             # Placed pins whose tips overlap a neighbour's (squeezed skin ahead of a slide): a fit of both tips.
             positions = part_overlapping(refiner, crop, positions, filled)

@@ -50,7 +50,10 @@ def test_after_slides_every_pin_is_back_on_its_own_tip(name, seed, directions, l
     # One pin per tip.
     placed = positions[np.isfinite(positions[:, 0])]
     assert cKDTree(placed).query(placed, k=2)[0][:, 1].min() > 0.5 * tracker.spacing_px
-    assert tracker.motion_warning == ""  # at 120 frames/s the tracker follows: nothing to warn of
+    if lift_s >= 0.1:  # the pad springing back within the tracker's reach: nothing to warn of
+        assert tracker.motion_warning == ""
+    else:              # 1.5 pitches a frame: pins were on others' tips when it came back to rest
+        assert "higher frame rate" in tracker.motion_warning
 
 
 @pytest.mark.parametrize("name, seed, fps, jpeg", [
