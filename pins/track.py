@@ -38,7 +38,9 @@ A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; n
 Limit: frame-to-frame motion must stay below about half the pin spacing (8 px at 331 pins in a
 640x480 frame; a 250 ms tap rise at 20 frames/s moves pins at most ~7 px per frame). Beyond it
 the lattice of identical pins aliases: LK and the windows agree on the neighbouring pin. Record
-faster taps at a higher frame rate.
+faster taps at a higher frame rate. Where a frame shows the rest frame again, pins are put back on their
+own tips whatever the frames between did (`pins._return`: slides filmed at 15-20 frames/s step pins by
+1-2 spacings), and `motion_warning` says how often a pin had to be taken off another's (replay lists it).
 
 Speed: everything runs on the disc's crop (LK's pyramids are not reused between frames: `pins.lk`).
 `bench/bench_tracking.py` measures one update against a plain 11x11 one-level LK step over the
@@ -51,9 +53,11 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ._edge import FrameEdge, tracking_crop
 from ._identity import kept_on_own_tips
 from ._pairfit import part_overlapping
 from ._recover import _as_points, match_to_blobs
+from ._return import RestMatch, motion_warning, taken_off
 from ._refine import Refiner
 from ._surround import surround_pixels
 from ._window import _squared_norm
@@ -210,6 +214,9 @@ class PinTracker:
         self._last_seen: np.ndarray | None = None
         self._refiner: Refiner | None = None
         self._surround = None                         # (flat indices, membrane level) in the crop
+        self._edge: FrameEdge | None = None           # which tips the frame's edge cuts (`pins._edge`)
+        self._rest_match: RestMatch | None = None     # the rest frame seen again (`pins._return`)
+        self._restored = (0, 0, 0)                    # pins it took off others' tips: pin-frames, frames, first
 
     def __repr__(self) -> str:
         state = "not started" if self.positions is None else (
@@ -236,6 +243,13 @@ class PinTracker:
         if getattr(self, "_refiner", None) is None:
             raise ValueError("the tracker has no windows to replace: start it first (with refinement)")
         self._refiner.windows = windows
+
+    @property
+    def motion_warning(self) -> str:
+        """Since `start`: a warning when pins came back to rest on other pins' tips (the motion between frames
+        went beyond what the tracker follows: slides filmed at 15-20 frames/s), naming how often; else ""
+        (`pins._return`)."""
+        return motion_warning(*self._restored, self.spacing_px)
 
     @property
     def gate_px(self) -> float:
@@ -285,7 +299,9 @@ class PinTracker:
         if self._auto_lk:
             # A window a little wider than a pin and narrower than the spacing sees one pin.
             self.lk = LKParams(window_px=int(np.clip(2 * round(0.3 * self.spacing_px) + 1, 7, 31)))
-        self._set_crop(grey.shape, pins)
+        # The part of the frame LK works on, grown by replicated border beyond it where pins' windows reach.
+        self._borders, self._crop, self._origin = tracking_crop(grey.shape, pins, self.spacing_px, self.lk, self.disc,
+                                                                self.refine)
         self._previous = self._cropped(grey)
         self._surround = None
         if self.refine and self.disc is not None:
@@ -299,7 +315,11 @@ class PinTracker:
                 raise PinsError(f"the rest frame is blank: only {refiner.settled_share:.0%} of the pins show a tip "
                                 f"where they are given")
             self._refiner = refiner
-            pins = refiner.rest_positions
+            given, pins = pins, refiner.rest_positions
+            self._rest_match = RestMatch(self._bright(self._previous.copy()), pins, self._origin, self.spacing_px)
+        # Tips the frame's edge cuts are lost, by detection's rule with hysteresis (`pins._edge`).
+        self._edge = None if not (self.refine and any(self._borders)) else FrameEdge(
+            grey, given, pins, self.spacing_px, self.detection.dark_pins, self._refiner.tip_radius_px)
         self.rest_positions = pins.copy()
         self.positions = pins.copy()
         self._reference = pins.copy()
@@ -316,47 +336,8 @@ class PinTracker:
         self.blank_frames = 0
         self._since_good = 1
         self._since_detection = self.detect_every
+        self._restored = (0, 0, 0)
         return self.positions.copy()
-
-    def _set_crop(self, shape: tuple[int, int], pins: np.ndarray) -> None:
-        """LK works on the part of the frame the pins can reach (the disc, else the pins' box), grown beyond the frame
-        by up to a spacing of replicated border (`_borders`) where pins' windows reach (a flat gel's whole frame, a pad
-        cut by the edge; plain LK, as `track_pins`, keeps to the frame): whole tips next to the edge are measured (their
-        windows clipped: tactip-127 cut lost 8 of 120 on its start frame), cut ones lost (`_off_frame`)."""
-        margin = self.lk.window_px * 2 ** self.lk.levels + 2
-        reach = int(np.ceil(self.spacing_px)) + 2  # a window (half a spacing) and its search round a pin
-        height, width = shape[:2]
-        if self.disc is not None and self.disc.whole_frame:
-            x0, y0, x1, y1 = -reach, -reach, width + reach, height + reach
-        else:
-            reach *= self.refine
-            low, high = pins.min(axis=0), pins.max(axis=0)
-            if self.disc is not None:
-                low, high = np.array([self.disc.cx, self.disc.cy]) + [[-self.disc.radius_px], [self.disc.radius_px]]
-            x0, y0 = np.maximum(np.floor(low).astype(int) - margin, np.minimum(np.floor(pins.min(axis=0)) - reach, 0))
-            x1, y1 = np.minimum(np.ceil(high).astype(int) + margin + 1,
-                                np.maximum(np.ceil(pins.max(axis=0)) + reach + 1, (width, height)))
-            x0, y0, x1, y1 = int(x0), int(y0), int(x1), int(y1)
-        self._borders = (max(-y0, 0), max(y1 - height, 0), max(-x0, 0), max(x1 - width, 0))  # top, bottom, left, right
-        self._crop = (slice(max(y0, 0), min(y1, height)), slice(max(x0, 0), min(x1, width)))
-        self._origin = np.array([max(x0, 0) - self._borders[2], max(y0, 0) - self._borders[0]], dtype=np.float64)
-
-    def _off_frame(self, positions: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-        """Positions with those cut by the frame's edge lost (NaN): a marker whose tip (its rest
-        radius) reaches beyond the frame leans on the replicated border, and is not measured."""
-        radius = self._refiner.tip_radius_px
-        if not np.isfinite(radius):
-            return positions
-        height, width = shape[:2]
-        x, y = positions[:, 0], positions[:, 1]
-        with np.errstate(invalid="ignore"):
-            room = np.minimum(np.minimum(x + 0.5, width - 0.5 - x), np.minimum(y + 0.5, height - 0.5 - y))
-            cut = room < radius
-        if not cut.any():
-            return positions
-        positions = positions.copy()
-        positions[cut] = np.nan
-        return positions
 
     def _cropped(self, grey: np.ndarray) -> np.ndarray:
         """The crop of a grey frame that tracking works on (a copy)."""
@@ -393,8 +374,8 @@ class PinTracker:
             moved, _ = _track(self._previous, current, self._reference - origin, self.lk, guess=guess - origin)
             positions = moved + origin
             blank = self._too_few(positions)
-        if self.refine and any(self._borders):
-            positions = self._off_frame(positions, grey.shape)
+        if self._edge is not None:
+            positions = self._edge.cut(positions)
         self.frames += 1
         self.blank = blank
         if blank:
@@ -420,6 +401,8 @@ class PinTracker:
             self._refiner.still = _squared_norm(velocity) <= self._refiner._guess_px ** 2
             velocity = self._refiner.carried_velocity(velocity, self._refiner.observe_still(velocity))
             self._refiner.remember(positions)  # (where lost pins' neighbours were: `pins._predict`)
+            if self._rest_match.matched is not None:  # (the frame shows the rest frame there: no motion)
+                velocity[self._rest_match.matched] = 0.0
         self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
@@ -454,8 +437,15 @@ class PinTracker:
         # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
         # missing ones, retired too (a slide's return: 3-9 left lost 3 frames after it), at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
+        before = positions
         positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, self._everyone),
                                      refiner.rest_positions, guess, refiner._identity_index)
+        # Pins where the frame shows the rest frame again, whatever the frames between did (`pins._return`).
+        positions = self._rest_match.restore(refiner, crop, positions)
+        if positions is not before:  # (pins taken off others' tips, by either: `motion_warning`)
+            restored = taken_off(before, positions, refiner.rest_positions, self.gate_px)
+            if restored:
+                self._restored = (self._restored[0] + restored, self._restored[1] + 1, self._restored[2] or self.frames)
         if self.part_overlaps:
             # Placed pins whose tips overlap a neighbour's (squeezed skin ahead of a slide): a fit of both tips.
             positions = part_overlapping(refiner, crop, positions, filled)

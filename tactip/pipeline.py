@@ -216,6 +216,8 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
     if failed:
         warnings.append(f"tracking failed in {len(failed)} frame(s), every pin lost there (first: frame "
                         f"{failed[0][0]}, {failed[0][1]})")
+    if getattr(tracker, "motion_warning", ""):  # (pins back at rest on others' tips: too fast for the frame rate)
+        warnings.append(tracker.motion_warning)
     pins = len(rest)
     stacked = np.concatenate([np.full((before, pins, 2), np.nan), np.stack(positions)])
     return PinTrack(positions=stacked,
