@@ -143,6 +143,7 @@ class _AtRest:
         self._learnt_least = self._at_least[:, self._faint].copy()
         self._learnt_most = self._area_at_most_rest[self._faint].copy()
         self._steady = np.zeros(len(self._faint), dtype=bool)
+        self._at_rest_here = np.zeros(len(self._faint), dtype=bool)  # (`_learn_levels`: the pad at rest round it)
 
     def _learn_levels(self, crop: np.ndarray, positions: np.ndarray) -> None:
         """Each faint tip placed near its rest position (within `_STILL_FRACTION` of the spacing; or lost, one
@@ -166,14 +167,15 @@ class _AtRest:
         faint = self._faint
         if not faint.size:
             return
-        away = _squared_norm(positions[faint] - self.rest_positions[faint])
-        # (A lost tip compares False to both: it reads only if judged by its contrast alone.)
-        near = (away <= (_STILL_FRACTION * self.spacing_px) ** 2) | (np.isnan(away) & ~self._judged[faint])
+        self._at_rest_here[:] = False
         distance = _squared_norm(positions - self.rest_positions)
         if np.count_nonzero(distance <= (_STILL_FRACTION * self.spacing_px) ** 2) < _PAIR_STILL_SHARE * len(distance):
             return  # not a pad at rest
-        which = np.flatnonzero(near)
-        which = which[_squared_norm(self.displacement_median(positions, faint[which])) <= self._guess_px ** 2]
+        self._at_rest_here[:] = _squared_norm(self.displacement_median(positions, faint)) <= self._guess_px ** 2
+        away = distance[faint]
+        # (A lost tip compares False to both: it reads only if judged by its contrast alone.)
+        near = (away <= (_STILL_FRACTION * self.spacing_px) ** 2) | (np.isnan(away) & ~self._judged[faint])
+        which = np.flatnonzero(near & self._at_rest_here)
         if not which.size:
             return
         pins = faint[which]
@@ -246,18 +248,21 @@ class _AtRest:
 
     def _draw_bounds(self) -> None:
         """The bounds the passes read (`_at_least`, `_area_at_most`) for the pins still in the last frame
-        (`pins._refine.Refiner.still`) and the faint tips steady in it (`observe_still`), from the bounds at rest:
-        a tip judged by its contrast alone has an area bound only while still (its window places it only then:
-        steady, its centroid would walk off the tip); a judged tip still or steady may lose `_PAIR_REACH` reaches
-        once a codec's still pair widened the bounds (`heed_camera_noise`); a faint tip still or steady has the
-        bounds of its level (`_learn_levels`)."""
+        (`pins._refine.Refiner.still`) and the faint tips steady in it (`observe_still`) on a pad at rest round
+        them (`_learn_levels`), from the bounds at rest: a tip judged by its contrast alone has an area bound only
+        while still (its window places it only then: steady, its centroid would walk off the tip); a judged tip
+        still or steady may lose `_PAIR_REACH` reaches once a codec's still pair widened the bounds
+        (`heed_camera_noise`); a faint tip still or steady on a pad at rest round it has the bounds of its level.
+        (Not on a pad in contact, however still the tip: radial-led-120's realistic slides, seed 4, kept a faint
+        tip 5.5-6.7 px off its centre for 20 frames of a slide's end by its level's wider area bound.)"""
         still = self._still
         self._area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
         faint = self._faint
         held = still
-        if faint.size and np.count_nonzero(self._steady):
+        steady = self._steady & self._at_rest_here if faint.size else self._steady
+        if np.count_nonzero(steady):
             held = still.copy()
-            held[faint] |= self._steady
+            held[faint] |= steady
         if self._contrast_still is not None:
             self._at_least[1] = np.where(held, self._contrast_still, self._contrast_moving)
         if not faint.size:
@@ -265,7 +270,7 @@ class _AtRest:
         least = self._rest_least[:, faint]
         if self._contrast_still is not None:
             least[1] = self._at_least[1, faint]
-        mine = held[faint]
+        mine = held[faint] & self._at_rest_here
         self._at_least[:, faint] = np.where(mine, np.fmin(least, self._learnt_least), least)
         area = self._area_at_most[faint]  # (-inf for a tip judged by its contrast alone that is not still)
         self._area_at_most[faint] = np.where(mine & self._judged[faint], np.fmax(area, self._learnt_most), area)
