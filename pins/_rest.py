@@ -112,6 +112,9 @@ class _AtRest:
     # `pins._refine.Refiner.still`'s setter puts them in `_at_least`.
     _contrast_still = None
     _contrast_moving = None
+    # The faint tips (`_await_levels`; none till a rest frame is seen), their steadiness and the pad at rest round them.
+    _faint = np.empty(0, dtype=np.intp)
+    _steady = _at_rest_here = np.empty(0, dtype=bool)
 
     def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, noisy: tuple, positions: np.ndarray) -> np.ndarray:
         """Each rest window's mean square displacement, px^2 (N,), in the `noisy` copies of the rest crop
