@@ -71,6 +71,8 @@ _PAIR_REACH = 2.0 ** 0.5
 # far as from its rest frame's (`_AtRest._learn_levels`): bounds only ever widened, the contrast's by at most one
 # more reach below the rest frame's bound, the area's and compactness's by at most this factor.
 _LEVEL_CAP = 2.0
+# ... from at most this many readings (its level's scatter a sixth of one frame's; then no window more a frame).
+_LEVEL_READINGS = 36
 
 
 @lru_cache(maxsize=1)
@@ -147,6 +149,7 @@ class _AtRest:
         self._learnt_most = self._area_at_most_rest[self._faint].copy()
         self._steady = np.zeros(len(self._faint), dtype=bool)
         self._at_rest_here = np.zeros(len(self._faint), dtype=bool)  # (`_learn_levels`: the pad at rest round it)
+        self._faint_judged = self._judged[self._faint]
 
     def _learn_levels(self, crop: np.ndarray, positions: np.ndarray) -> None:
         """Each faint tip placed near its rest position (within `_STILL_FRACTION` of the spacing; or lost, one
@@ -170,15 +173,18 @@ class _AtRest:
         faint = self._faint
         if not faint.size:
             return
-        self._at_rest_here[:] = False
         distance = _squared_norm(positions - self.rest_positions)
-        if np.count_nonzero(distance <= (_STILL_FRACTION * self.spacing_px) ** 2) < _PAIR_STILL_SHARE * len(distance):
+        near_sq = (_STILL_FRACTION * self.spacing_px) ** 2
+        if np.count_nonzero(distance <= near_sq) < _PAIR_STILL_SHARE * len(distance):
+            self._at_rest_here[:] = False
             return  # not a pad at rest
-        self._at_rest_here[:] = _squared_norm(self.displacement_median(positions, faint)) <= self._guess_px ** 2
+        self._at_rest_here = _squared_norm(self.displacement_median(positions, faint)) <= self._guess_px ** 2
         away = distance[faint]
         # (A lost tip compares False to both: it reads only if judged by its contrast alone.)
-        near = (away <= (_STILL_FRACTION * self.spacing_px) ** 2) | (np.isnan(away) & ~self._judged[faint])
-        which = np.flatnonzero(near & self._at_rest_here)
+        near = (away <= near_sq) | (np.isnan(away) & ~self._faint_judged)
+        near &= self._at_rest_here
+        near &= self._level_seen[1] < _LEVEL_READINGS
+        which = np.flatnonzero(near)
         if not which.size:
             return
         pins = faint[which]
@@ -189,7 +195,7 @@ class _AtRest:
         seen = self._level_seen[:, which]
         with np.errstate(invalid="ignore", divide="ignore"):
             level = self._level_sum[:, which] / seen  # (NaN where none was finite)
-        judged = self._judged[pins]
+        judged = self._faint_judged[which]
         least, most = bounds_from_level(level, seen, judged, self.contrast_noise)
         rest_least, rest_most = self._rest_least[:, pins], self._area_at_most_rest[pins]
         # Only ever wider, and within the caps (NaN, a measure never read, leaves the rest frame's bound) ...
@@ -261,22 +267,24 @@ class _AtRest:
         still = self._still
         self._area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
         faint = self._faint
-        held = still
-        steady = self._steady & self._at_rest_here if faint.size else self._steady
-        if np.count_nonzero(steady):
-            held = still.copy()
-            held[faint] |= steady
         if self._contrast_still is not None:
+            held = still
+            if faint.size:
+                held = still.copy()
+                held[faint] |= self._steady & self._at_rest_here
             self._at_least[1] = np.where(held, self._contrast_still, self._contrast_moving)
         if not faint.size:
             return
+        mine = still[faint] | self._steady
+        mine &= self._at_rest_here
         least = self._rest_least[:, faint]
+        learnt = self._learnt_least  # (within the rest frame's bounds already)
         if self._contrast_still is not None:
             least[1] = self._at_least[1, faint]
-        mine = held[faint] & self._at_rest_here
-        self._at_least[:, faint] = np.where(mine, np.fmin(least, self._learnt_least), least)
-        area = self._area_at_most[faint]  # (-inf for a tip judged by its contrast alone that is not still)
-        self._area_at_most[faint] = np.where(mine & self._judged[faint], np.fmax(area, self._learnt_most), area)
+            learnt = np.fmin(least, learnt)
+        self._at_least[:, faint] = np.where(mine, learnt, least)
+        mine &= self._faint_judged  # (-inf for a tip judged by its contrast alone that is not still: kept)
+        self._area_at_most[faint] = np.where(mine, self._learnt_most, self._area_at_most[faint])
 
     def still(self, steps: np.ndarray) -> np.ndarray:
         """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
@@ -309,7 +317,7 @@ class _AtRest:
             if np.count_nonzero(steady):
                 around = self.neighbour_median(steps, faint[steady])
                 steady[steady] = _squared_norm(around) <= self._guess_px ** 2
-            if np.count_nonzero(steady) or np.count_nonzero(self._steady):
+            if not np.array_equal(steady, self._steady):  # (else the still setter drew them as they are)
                 self._steady = steady
                 self._draw_bounds()
         seen, jitter = self._jitter_seen, self._jitter_sq
