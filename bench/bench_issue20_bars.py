@@ -65,6 +65,19 @@ radial-led-120, seeds 0-5, pin-frames > 3 px off their centres 18 -> 87 on the r
 the model skin): faint tips placed off their centres where they were lost before (swaps 1 -> 1 and
 277 -> 269; lost per frame 2.91 -> 2.77 and 3.41 -> 3.24; see `pins._like`).
 
+Session 18's faint12 (main 8510ee8 -> a faint tip learns its level on a pad at rest, `pins._rest._AtRest._learn_levels`):
+on main ``--bars phenomena --presets radial-led-120`` lost pins on still frames of seeds 37 (2 pin-frames; and 1
+pin after the return) and 46 (14 pin-frames: a tip judged by its contrast alone, read 9.6 at rest and 4.2 +- 2.8
+later, lost on frame 20 and not found again for 14 frames), both faint tips whose rest frame read them well above
+their level. Now, seeds 0-47 (developed on): every bar met on every seed but seed 1's return (pin 118, 1.79 px:
+its rest position from the pin field, before and after); slides 8/8 and taps 6/6 on every seed, count 120/120 but
+seed 17 (119). Held out, seeds 48-59 (`bench_phenomena.py`, raw): still 0 -> 0 lost, the return > 1 px on seeds
+48 and 50 before and after. radial-120, tactip-331, white-dark-331 (seeds 0-5): no faint tip; every bar met.
+bench/bench_slides.py, radial-led-120 seeds 0-5 (main -> now): realistic skin identical but lost per frame on seed 5
+(2.90 -> 2.91): > 3 px 87 -> 87, apart 1 -> 1; model skin > 3 px 80 -> 79, apart 34 -> 35, swaps 269 -> 256, > 1 px
+1306 -> 1284, lost per frame 3.14 -> 3.17 (seed 5 2.95 -> 3.08: tracks diverge by hundredths of a px from the
+faint tips' first frames and three non-faint pins are lost 25-35 frames more in one slide); tactip-331 unchanged.
+
 Run: .venv/bin/python bench/bench_issue20_bars.py [--bars same,phenomena,missing,scale,agree] [--seeds 6-15]
      [--presets a,b] [--phenomena-presets radial-led-120,white-dark-331,radial-120,tactip-331]
      [--missing-seeds 6-9] [--models histogram,gaussian,torch]

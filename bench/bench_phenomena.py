@@ -59,6 +59,20 @@ after the return > 1 px mp4v 4, MJPG 5 / 0, 0 (unchanged). What is left are sing
 window whose area reads 240 against a bound of 131 (mp4v seed 3, the first still frame), and faint tips on
 reflections below even the wider bound (held out 38, 39, 47: one frame each).
 
+Session 18's faint12 (main 8510ee8 -> a faint tip learns its level on a pad at rest: `pins._rest._AtRest._learn_levels`).
+Raw renders on main lost faint tips on still frames of radial-led-120 seeds 37 (pin 119: 22.6 grey levels at rest,
+14.0 +- 2.3 over the 40 still frames, its bound 9.96 from the rest frame: frames 4 and 17, and after the return) and
+46 (pin 119, judged by its contrast alone: 9.6 at rest, 4.2 +- 2.8 later; lost from frame 20 for 14 frames: a lost
+pin never counted as still). Now a faint tip (contrast at rest below twice the noise's reach) has the bounds of the
+mean of its readings at rest while it is still, or lost or jittering among still neighbours, on a pad at rest.
+radial-led-120, lost pin-frames over the 40 still frames, seeds 0-47 (developed on) / 48-59 (held out), main -> now:
+raw 16 (seeds 37, 46) -> 0 / 0 -> 0, lost after the return 1 (seed 37) -> 0; mp4v 4 (seeds 3, 38, 39, 47) -> 1
+(seed 3's first still frame: an area of 240 against 131 before any level is learnt) / 0 -> 0; MJPG 0 -> 0 / 1 -> 1
+(seed 57). After the return > 1 px: raw 1 -> 1 (seed 1) / 2 -> 2 (48, 50), mp4v 4 -> 4 / 1 -> 1, MJPG 5 -> 5 / 3 -> 2,
+lost after it MJPG 1 -> 1 (seed 46); swaps 0 everywhere. tactip-331, white-dark-331, radial-120, small-pad-100,
+brown-127 and dark-331 have no faint tip on raw renders (seeds 0-11) nor through either codec (radial-120,
+tactip-331, white-dark-331, seeds 0-5): their figures are unchanged bit for bit.
+
 Run: .venv/bin/python bench/bench_phenomena.py [--presets radial-led-120,white-dark-331] [--seeds 0,1,2]
 [--codec MJPG]
 """

@@ -15,7 +15,9 @@ noise, `contrast_noise`; through a video codec, which hides most of that noise f
 the first still frame shows instead, and sqrt 2 times that reach for a still tip judged by all three
 measures: `pins._rest._AtRest.heed_camera_noise`), and a tip whose contrast at rest lies within that reach of nothing shows no area
 or compactness to be judged by: its contrast alone bounds it (`bounds_at_rest`). Crisp tips keep the
-bounds of their own measures.
+bounds of their own measures. A faint tip's rest frame may have caught it well above its level (radial-led-120
+seed 37: 22.6 grey levels at rest, 14.0 +- 2.3 over 40 still frames): over the still frames it learns that
+level and has its bounds (`bounds_from_level`, `pins._rest._AtRest._learn_levels`).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 
 from ._window import WindowCentroids
 
-__all__ = ["bounds_at_rest", "contrast_noise"]
+__all__ = ["bounds_at_rest", "bounds_from_level", "contrast_noise"]
 
 _AREA_RATIO = (0.5, 2.0)
 _MIN_CONTRAST_RATIO = 0.5
@@ -94,3 +96,23 @@ def bounds_at_rest(area: np.ndarray, contrast: np.ndarray, compactness: np.ndarr
                          np.where(judged, _MIN_COMPACTNESS_RATIO * compactness, -np.inf)])
     area_at_most = np.where(judged, _AREA_RATIO[1] * area, np.inf)
     return at_least, area_at_most
+
+
+def bounds_from_level(level: np.ndarray, readings: np.ndarray, judged: np.ndarray,
+                      noise: float) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on faint tips from their level: the mean (area, contrast, compactness), (3, F), of `readings`
+    (3, F) frames of each (its rest frame's and its still frames', `pins._rest._AtRest`), for tips `judged`
+    (F,) by all three measures at rest or by their contrast alone; (3, F) from below and (F,) area above.
+
+    `bounds_at_rest` of that level, but that the contrast's reach is that of a new frame's difference from
+    a mean of n frames, sqrt((1 + 1/n) / 2) times `_NOISE_REACH` scatters of `noise` (the rest frame's reach
+    at n = 1: one frame against another; 0.71 of it for a level learnt from many), and that a tip keeps how
+    it was judged at rest (its level decides no more of that than its bounds).
+    """
+    reach = _NOISE_REACH * noise * np.sqrt(0.5 * (1.0 + 1.0 / np.maximum(readings[1], 1.0)))
+    area, contrast, compactness = level
+    at_least = np.stack([np.where(judged, _AREA_RATIO[0] * area, -np.inf),
+                         np.where(judged, np.minimum(_MIN_CONTRAST_RATIO * contrast, contrast - reach),
+                                  contrast - reach),
+                         np.where(judged, _MIN_COMPACTNESS_RATIO * compactness, -np.inf)])
+    return at_least, np.where(judged, _AREA_RATIO[1] * area, np.inf)

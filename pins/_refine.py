@@ -492,7 +492,6 @@ class Refiner(_Following, _AtRest, _Recovery, _Prediction):
     def still(self, still: np.ndarray) -> None:
         """Set the pins that did not move in the last frame, (N,) bool, and with them the area bound."""
         self._still = still
-        # A tip judged by its contrast alone (`pins._like`) is placed only while still: above, its area bound.
-        self._area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
-        if self._contrast_still is not None:
-            self._at_least[1] = np.where(still, self._contrast_still, self._contrast_moving)
+        # A tip judged by its contrast alone (`pins._like`) is placed only while still: above, its area bound;
+        # a faint tip still or steady has the bounds of its level (`pins._rest._AtRest._draw_bounds`).
+        self._draw_bounds()

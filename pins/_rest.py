@@ -17,6 +17,12 @@ codec, which smooths the noise within a frame but not from frame to frame, that 
 first still frame after the rest frame widens the tips' bounds to the scatter of the contrast it shows
 (`_AtRest.heed_camera_noise`).
 
+Levels. The rest frame is one noisy frame, and a faint tip's measures there (its bounds the noise's,
+`pins._like`) may lie several of its scatters from its own level: each faint tip learns that level, the mean
+of its window's readings at rest over the frames of a pad at rest, and has the bounds of it (only ever wider)
+while it is still or steady: lost or jittering by its window's noise among still neighbours
+(`_AtRest._learn_levels`, `_AtRest._draw_bounds`).
+
 `_AtRest` holds these steps; `pins._refine.Refiner` inherits them and sets the state they read
 (`rest_positions`, `_rest_offset`, `_rest_radius`, the learnt scatters, `_settled_px`, `_guess_px`).
 """
@@ -28,7 +34,7 @@ from functools import lru_cache
 import numpy as np
 
 from ._kernels import compiled
-from ._like import bounds_at_rest
+from ._like import _NOISE_REACH, bounds_at_rest, bounds_from_level
 from ._noise import _JITTER_BOUND, _JITTER_FIRST, _JITTER_RATE, _learn_mean_square, noise_sigma
 from ._window import _squared_norm
 
@@ -60,6 +66,13 @@ _WIDER_NOISE = 1.25
 # 24: 18.7 and 23.2 at rest, 15.3 over 40 still frames, scatter 2.6). sqrt 2: the scatter of a difference of two
 # frames. A moving pin keeps the bound of 1 reach (identity through slides unchanged).
 _PAIR_REACH = 2.0 ** 0.5
+# A faint tip (its contrast at rest below twice the reach of the noise, `pins._like`: its bound on contrast the
+# noise's) learns its level, the mean of its measures over the frames it was seen still, and may fall from that as
+# far as from its rest frame's (`_AtRest._learn_levels`): bounds only ever widened, the contrast's by at most one
+# more reach below the rest frame's bound, the area's and compactness's by at most this factor.
+_LEVEL_CAP = 2.0
+# ... from at most this many readings (its level's scatter a sixth of one frame's; then no window more a frame).
+_LEVEL_READINGS = 36
 
 
 @lru_cache(maxsize=1)
@@ -101,6 +114,9 @@ class _AtRest:
     # `pins._refine.Refiner.still`'s setter puts them in `_at_least`.
     _contrast_still = None
     _contrast_moving = None
+    # The faint tips (`_await_levels`; none till a rest frame is seen), their steadiness and the pad at rest round them.
+    _faint = np.empty(0, dtype=np.intp)
+    _steady = _at_rest_here = np.empty(0, dtype=bool)
 
     def _noise_scatter_sq_px2(self, rest_crop: np.ndarray, noisy: tuple, positions: np.ndarray) -> np.ndarray:
         """Each rest window's mean square displacement, px^2 (N,), in the `noisy` copies of the rest crop
@@ -118,6 +134,80 @@ class _AtRest:
     def _await_still_pair(self, rest_crop: np.ndarray, measures: tuple) -> None:
         """Keep the rest crop and its tips' (area, contrast, compactness) at rest, (N,) each, for `heed_camera_noise`."""
         self._rest_for_noise = (rest_crop, measures)
+        self._await_levels(measures)
+
+    def _await_levels(self, measures: tuple) -> None:
+        """Start each faint tip's level (`_learn_levels`) from its (area, contrast, compactness) at rest, (N,)
+        each: the tips whose contrast at rest lies below twice the noise's reach, one reading each."""
+        self._rest_least = self._at_least.copy()  # (the bounds from below the rest frame draws)
+        contrast = measures[1]
+        self._faint = np.flatnonzero(contrast < 2.0 * _NOISE_REACH * self.contrast_noise)  # (NaN compares False)
+        level = np.stack(measures)[:, self._faint]
+        self._level_seen = np.isfinite(level).astype(np.float64)
+        self._level_sum = np.where(self._level_seen > 0, level, 0.0)
+        self._learnt_least = self._at_least[:, self._faint].copy()
+        self._learnt_most = self._area_at_most_rest[self._faint].copy()
+        self._steady = np.zeros(len(self._faint), dtype=bool)
+        self._at_rest_here = np.zeros(len(self._faint), dtype=bool)  # (`_learn_levels`: the pad at rest round it)
+        self._faint_judged = self._judged[self._faint]
+
+    def _learn_levels(self, crop: np.ndarray, positions: np.ndarray) -> None:
+        """Each faint tip placed near its rest position (within `_STILL_FRACTION` of the spacing; or lost, one
+        judged by its contrast alone) on a pad at rest (`_PAIR_STILL_SHARE` of the pins there) among neighbours
+        that lie within the guess bound of rest reads its window at rest (the rest frame's) in `crop`: its level
+        is the mean of these readings and its rest frame's, its bounds those of that level
+        (`pins._like.bounds_from_level`), which `_draw_bounds` gives it while it is still or steady.
+
+        The rest frame is one noisy frame: a faint tip's contrast there may lie several of its scatters above
+        its level (radial-led-120 seed 37: 22.6 at rest, 14.0 +- 2.3 over 40 still frames; its area 7.9 at
+        rest, 13.2 +- 3.0), and its bounds from that frame then lose it on a still pad. A tip judged by all
+        three measures reads only while placed (one that vanished is lost and teaches nothing); one judged by
+        its contrast alone, which no frame tells from nothing, reads while lost too (its readings while placed
+        would be those its bound let through: seed 46's tip of contrast 9.6 at rest, 4.2 +- 2.8 over the still
+        frames, 7.9 over those it was placed in). The bounds only ever widen, the contrast's by at most one
+        reach more than the rest frame's (a tip fading under glare walks them no farther), the area's and
+        compactness's by at most `_LEVEL_CAP` times; and a judged tip whose level sank within the reach of
+        nothing keeps its rest frame's bounds (a tip that vanished on a still pad, the windows that placed it
+        by their contrast alone, `snap_to_rest`'s calm pins, reading the membrane: its bounds would follow).
+        """
+        faint = self._faint
+        if not faint.size:
+            return
+        distance = _squared_norm(positions - self.rest_positions)
+        near_sq = (_STILL_FRACTION * self.spacing_px) ** 2
+        if np.count_nonzero(distance <= near_sq) < _PAIR_STILL_SHARE * len(distance):
+            self._at_rest_here[:] = False
+            return  # not a pad at rest
+        self._at_rest_here = _squared_norm(self.displacement_median(positions, faint)) <= self._guess_px ** 2
+        away = distance[faint]
+        # (A lost tip compares False to both: it reads only if judged by its contrast alone.)
+        near = (away <= near_sq) | (np.isnan(away) & ~self._faint_judged)
+        near &= self._at_rest_here
+        near &= self._level_seen[1] < _LEVEL_READINGS
+        which = np.flatnonzero(near)
+        if not which.size:
+            return
+        pins = faint[which]
+        readings = np.stack(self.windows.measure(crop, self.rest_positions[pins] - self.origin, self._rest_radius[pins])[1])
+        finite = np.isfinite(readings)
+        self._level_sum[:, which] += np.where(finite, readings, 0.0)
+        self._level_seen[:, which] += finite
+        seen = self._level_seen[:, which]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            level = self._level_sum[:, which] / seen  # (NaN where none was finite)
+        judged = self._faint_judged[which]
+        least, most = bounds_from_level(level, seen, judged, self.contrast_noise)
+        rest_least, rest_most = self._rest_least[:, pins], self._area_at_most_rest[pins]
+        # Only ever wider, and within the caps (NaN, a measure never read, leaves the rest frame's bound) ...
+        reach = _NOISE_REACH * self.contrast_noise
+        least[1] = np.maximum(least[1], rest_least[1] - reach)
+        least[2] = np.fmax(least[2], rest_least[2] / _LEVEL_CAP)
+        least, most = np.fmin(rest_least, least), np.fmax(rest_most, np.fmin(most, _LEVEL_CAP * rest_most))
+        # ... and not for a tip judged by all three measures whose level sank within the reach of nothing: it
+        # vanished (the windows that placed it read the membrane) or was never there; its rest frame's bounds stand.
+        sunk = judged & ~(level[1] > reach)
+        self._learnt_least[:, which] = np.where(sunk, rest_least, least)
+        self._learnt_most[which] = np.where(sunk, rest_most, most)
 
     def heed_camera_noise(self, crop: np.ndarray, positions: np.ndarray) -> bool:
         """Widen the bounds that the camera's noise sets to the noise the first still frame after the rest
@@ -161,8 +251,40 @@ class _AtRest:
         self._contrast_moving = self._at_least[1].copy()
         self._contrast_still = bounds_at_rest(area, contrast, compactness, scatter, _PAIR_REACH)[0][1]
         self._judged = np.isfinite(self._area_at_most_rest)
+        self._await_levels((area, contrast, compactness))  # (faint at this noise: from their rest frame again)
         self.still = self.still  # (its setter redraws the area bound the passes read)
         return True
+
+    def _draw_bounds(self) -> None:
+        """The bounds the passes read (`_at_least`, `_area_at_most`) for the pins still in the last frame
+        (`pins._refine.Refiner.still`) and the faint tips steady in it (`observe_still`) on a pad at rest round
+        them (`_learn_levels`), from the bounds at rest: a tip judged by its contrast alone has an area bound only
+        while still (its window places it only then: steady, its centroid would walk off the tip); a judged tip
+        still or steady may lose `_PAIR_REACH` reaches once a codec's still pair widened the bounds
+        (`heed_camera_noise`); a faint tip still or steady on a pad at rest round it has the bounds of its level.
+        (Not on a pad in contact, however still the tip: radial-led-120's realistic slides, seed 4, kept a faint
+        tip 5.5-6.7 px off its centre for 20 frames of a slide's end by its level's wider area bound.)"""
+        still = self._still
+        self._area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
+        faint = self._faint
+        if self._contrast_still is not None:
+            held = still
+            if faint.size:
+                held = still.copy()
+                held[faint] |= self._steady & self._at_rest_here
+            self._at_least[1] = np.where(held, self._contrast_still, self._contrast_moving)
+        if not faint.size:
+            return
+        mine = still[faint] | self._steady
+        mine &= self._at_rest_here
+        least = self._rest_least[:, faint]
+        learnt = self._learnt_least  # (within the rest frame's bounds already)
+        if self._contrast_still is not None:
+            least[1] = self._at_least[1, faint]
+            learnt = np.fmin(least, learnt)
+        self._at_least[:, faint] = np.where(mine, learnt, least)
+        mine &= self._faint_judged  # (-inf for a tip judged by its contrast alone that is not still: kept)
+        self._area_at_most[faint] = np.where(mine, self._learnt_most, self._area_at_most[faint])
 
     def still(self, steps: np.ndarray) -> np.ndarray:
         """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
@@ -185,6 +307,19 @@ class _AtRest:
             half *= 0.5
             # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
             _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
+        if self._faint.size:
+            # A faint tip whose window stepped within the settling bound, or that was lost, among neighbours that
+            # stepped within the guess bound is steady: the membrane there is still (its window's jitter in
+            # noise, tenths of a px, is no motion), and it is judged as a still tip (`_draw_bounds`).
+            faint = self._faint
+            own = _squared_norm(steps[faint])
+            steady = ~(own <= self._guess_px ** 2) & ~(own > self._settled_px ** 2)  # (NaN, lost: a candidate)
+            if np.count_nonzero(steady):
+                around = self.neighbour_median(steps, faint[steady])
+                steady[steady] = _squared_norm(around) <= self._guess_px ** 2
+            if not np.array_equal(steady, self._steady):  # (else the still setter drew them as they are)
+                self._steady = steady
+                self._draw_bounds()
         seen, jitter = self._jitter_seen, self._jitter_sq
         self._observed += 1
         if self._observed % _FLOOR_EVERY == 1:
@@ -229,6 +364,13 @@ class _AtRest:
         """
         if self._rest_for_noise is not None:
             self.heed_camera_noise(crop, positions)
+        positions = self._snap_to_rest(crop, positions, search)
+        if self._faint.size and self._rest_for_noise is None:  # (after the first still pair: not the rest frame again)
+            self._learn_levels(crop, positions)
+        return positions
+
+    def _snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
+        """`snap_to_rest`'s placing: the positions, or a copy with pins found at their rest positions."""
         kernels = compiled()
         if kernels is not None:
             return self._snap_to_rest_compiled(kernels, crop, positions, search)
