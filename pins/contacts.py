@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ShapeError
-from .segment import tap_signal
+from .segment import nanmedian_rows, tap_signal
 
 __all__ = ["ContactKind", "contact_kinds"]
 
@@ -105,8 +105,8 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
         # (the signal low, those pins far) must not outweigh the drag
         frames = np.flatnonzero(moved.any(axis=1) & (level >= 0.5 * np.nanmax(level)))
         chosen = np.where(moved[frames, :, None], part[frames], np.nan)
-        drag = np.nanmedian(chosen, axis=1)                          # (F', 2) px: the moved pins' median motion
-        spread = np.nanmedian(np.where(moved[frames], magnitude[frames], np.nan), axis=1)
+        drag = nanmedian_rows(np.moveaxis(chosen, 1, -1))           # (F', 2) px: the moved pins' median motion
+        spread = nanmedian_rows(np.where(moved[frames], magnitude[frames], np.nan))
         length = np.hypot(drag[:, 0], drag[:, 1])
         peak = int(np.argmax(length))
         ratio = float(min(length[peak] / spread[peak], 1.0)) if spread[peak] > 0 else 0.0

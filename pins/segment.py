@@ -20,6 +20,22 @@ from .errors import ShapeError
 __all__ = ["tap_signal", "segment_taps", "converging_frames", "jitter_floor_px"]
 
 
+def nanmedian_rows(values: np.ndarray) -> np.ndarray:
+    """The median of each row's values but NaN over the last axis (NaN where a row has none): `np.nanmedian`'s
+    values (the mean of the two middle ones where even), by one sort. `np.nanmedian` on rows shorter than
+    600 goes through masked arrays, 3-10x slower on replay's (frames, pins) tables (its tail, issue 20's
+    outcome 9)."""
+    ordered = np.sort(np.asarray(values, dtype=np.float64), axis=-1)  # NaN last (after +inf, which counts)
+    count = np.count_nonzero(~np.isnan(ordered), axis=-1)
+    low = np.maximum(count - 1, 0)[..., None] // 2
+    high = (count // 2)[..., None]
+    if ordered.shape[-1] == 0:
+        return np.full(ordered.shape[:-1], np.nan)
+    with np.errstate(invalid="ignore"):  # -inf and +inf in the middle: NaN, as np.nanmedian gives
+        middle = (np.take_along_axis(ordered, low, -1) + np.take_along_axis(ordered, high, -1))[..., 0] / 2
+    return np.where(count > 0, middle, np.nan)
+
+
 def tap_signal(displacements: np.ndarray, *, percentile: float = 90.0) -> np.ndarray:
     """Per-frame tap signal: a percentile of the pins' displacement magnitudes.
 
@@ -224,5 +240,5 @@ def jitter_floor_px(displacements: np.ndarray, *, usable: np.ndarray | None = No
     rows = finite.any(axis=1)
     if not rows.any():
         return float("inf")
-    medians = np.nanmedian(np.where(finite[rows], jitter[rows], np.nan), axis=1)
+    medians = nanmedian_rows(np.where(finite[rows], jitter[rows], np.nan))
     return 1.05 * float(np.percentile(medians, 25))

@@ -101,3 +101,26 @@ def test_converging_frames_tell_a_pressed_reference():
     assert converging_frames(displacement_from_rest(frames, rest), rest).size == 0
     # From the pressed frame, the frames at rest show the pins drawn together.
     assert converging_frames(displacement_from_rest(frames, pressed), pressed).tolist() == [0, 2, 4]
+
+
+def test_nanmedian_rows_gives_numpys_nanmedian_exactly():
+    """Replay's contact kinds and jitter floor take row medians by one sort (`nanmedian_rows`): the same
+    values as `np.nanmedian`, with NaN rows, infinities and even counts."""
+    import warnings
+
+    from pins.segment import nanmedian_rows
+
+    rng = np.random.default_rng(7)
+    for trial in range(400):
+        shape = (int(rng.integers(1, 20)), int(rng.integers(1, 12)))
+        values = rng.normal(size=shape) * 10.0 ** rng.integers(-3, 3)
+        values[rng.random(shape) < rng.random()] = np.nan
+        values[rng.random(shape) < (0.1 if trial % 5 == 0 else 0.0)] = np.inf
+        values[rng.random(shape) < (0.1 if trial % 7 == 0 else 0.0)] = -np.inf
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            expected = np.nanmedian(values, axis=1)
+        assert np.array_equal(nanmedian_rows(values), expected, equal_nan=True)
+    cube = rng.normal(size=(6, 40, 2))
+    cube[rng.random(cube.shape) < 0.3] = np.nan
+    assert np.array_equal(nanmedian_rows(np.moveaxis(cube, 1, -1)), np.nanmedian(cube, axis=1), equal_nan=True)
