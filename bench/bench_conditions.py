@@ -25,9 +25,12 @@ Per row (``--checks``):
 - still:   replay's start (`PinTracker` with the field's parameters and disc) then 20 still frames (fresh
            noise, shimmer, JPEG): most pins lost in a frame, retired at the end; met when both are 0;
 - slides:  8 slides of 3 pitches at the condition's frame rate with rests between and after: identity
-           swaps, pins > 1 px from their true rest place after the return, lost then, and pin-frames placed
+           swaps after the return, and during the slides (``during``: pin-frames, every frame, a placed pin
+           nearer another pin's true centre than its own; ``apart``: those two centres at least half a pitch
+           apart, not one blob of squeezed tips), pins > 1 px from their true rest place after the return,
+           lost then, and pin-frames placed
            on the replicated border beyond the frame (``on border``: within half a tip radius of the frame's
-           edge, or beyond: tracked on what the frame cut); met when all 0;
+           edge, or beyond: tracked on what the frame cut); met when all 0 (``during`` but ``apart`` apart);
 - cli:     `tactip detect FRAME --sensor NAME --json` and `tactip replay` (an MJPG .avi of the still frames)
            as a user runs them: exit status, pins, and replay's lost pins per frame (median/max).
 
@@ -72,6 +75,10 @@ every condition; slides and cli on tactip-331, dark-331, radial-led-120, seed 42
   0.4 / 39 % (and 4 / 20 / 22 / 56 % lost): the tracker follows about a quarter of a spacing a frame
   (radial-led-120 0.4); replay warns when pins came back to rest on others' tips (`PinTracker.motion_warning`:
   film faster).
+- (session 18, slide13) the slides check counts swaps in every frame (``during``, ``apart``), not only after the
+  return: seeds 0-1, main 6705663, 120 / 30 frames/s, apart (during): radial-led-120 4+2 (11+19) / 236+262
+  (252+279), tactip-127 110+118 (129+150) / 865+801 (923+866), tactip-331 167+158 (338+370) / 1486+1467
+  (1593+1569) pin-frames; no row is met any more, every one met after the return (0 swaps, 0 > 1 px, 0 lost).
 Met after (detect, still): every size 320x240-1920x1080 (but radial-led-120 at 320x240), off-centre,
 cut, exposure x0.6 (but radial-led-120: recall 0.97, 1-2 lost at rest), glare gradient 60, reflections,
 noise 2-10, JPEG 60; slides at 30 and 120 frames/s: 0 swaps, 0 > 1 px, 0 lost.
@@ -284,12 +291,14 @@ def check_slides(camera: Camera, preset: str, name: str, seed: int, image, centr
     slides = sensor.slides(range(0, 360, 45), distance_mm=3 * sensor.pin_spacing_mm, indentation_mm=2.0,
                            rest_s=max(3 / fps, 0.025), press_s=0.05, slide_s=0.15, lift_s=0.05)
     frames = on_cut = 0
+    during = np.zeros(2, int)
     half = 0.5 * camera.zoom * sensor.pin_radius_px
     height, width = camera.size[1], camera.size[0]
     for frame in slides:
         filmed, truth, _, _ = camera.film(frame)
         positions = tracker.update(filmed)
         frames += 1
+        during += swapped(positions, truth, identity, real, camera.pitch_px)
         # Pins placed within half a tip radius of the frame's edge, or beyond it: on the replicated border.
         room = np.minimum(np.minimum(positions[:, 0] + 0.5, width - 0.5 - positions[:, 0]),
                           np.minimum(positions[:, 1] + 0.5, height - 0.5 - positions[:, 1]))
@@ -300,9 +309,24 @@ def check_slides(camera: Camera, preset: str, name: str, seed: int, image, centr
     swaps = int((nearest != identity[seen]).sum())
     over = int((error > 1.0 * camera.zoom).sum())
     lost = int(np.isnan(error).sum())
-    row("slides", preset, name, seed, f"{frames} frames at {fps:g}/s: swaps {swaps}, >1px {over}, lost {lost} "
-        f"of {int(real.sum())}, on border {on_cut}", swaps == 0 and over == 0 and lost == 0 and on_cut == 0,
-        time.process_time() - start)
+    row("slides", preset, name, seed, f"{frames} frames at {fps:g}/s: swaps {swaps} (during {during[0]}, apart {during[1]}), >1px {over}, "
+        f"lost {lost} of {int(real.sum())}, on border {on_cut}",
+        swaps == 0 and during[1] == 0 and over == 0 and lost == 0 and on_cut == 0, time.process_time() - start)
+
+
+def swapped(positions: np.ndarray, truth: np.ndarray, identity: np.ndarray, real: np.ndarray,
+            pitch_px: float) -> np.ndarray:
+    """Swapped pin-frames in one frame, (all, apart): pins placed (finite `positions`, px) among the `real` ones
+    whose nearest true centre (`truth`, px, every pin's, hidden or not) is another pin's than their own
+    (`identity`); apart: those two centres at least half a pitch (`pitch_px`) apart (nearer, a slide squeezed
+    the two tips into one blob that no image parts: `bench_slides`' ``apart``)."""
+    placed = np.flatnonzero(real & np.isfinite(positions[:, 0]))
+    if not placed.size:
+        return np.zeros(2, int)
+    nearest = cKDTree(truth).query(positions[placed])[1]
+    other = nearest != identity[placed]
+    gap = np.linalg.norm(truth[nearest[other]] - truth[identity[placed[other]]], axis=1)
+    return np.array([np.count_nonzero(other), np.count_nonzero(gap >= 0.5 * pitch_px)])
 
 
 def _cli(argv: list[str]) -> tuple[int, str, str]:
