@@ -17,7 +17,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._judge import _KEPT, _MIN_PINS, _judge_lattice, _sharpness
-from ._noise import noise_sigma
+from ._noise import binned_noise_sigma, noise_sigma
 from .detect import Blobs, DetectionParams, _blur_size_px, _detect
 from .disc import SensorDisc
 
@@ -166,7 +166,7 @@ def _noise_floored(candidates, grey: np.ndarray) -> list:
     more candidate sets than the pins are, won the vote (radial-led-120, sigma 10: 126-141 pins found
     of 120, 74-78 of them true).
     """
-    sigma = noise_sigma(grey)
+    sigma = max(noise_sigma(grey), binned_noise_sigma(grey))
     floored = []
     for params in candidates:
         blurred = sigma * _blur_gain(params.blur_sigma_px)
