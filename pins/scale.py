@@ -405,6 +405,11 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
     if description.name:
         what = f"{description.name}: {what}"
     source = f"pin pitch {pitch_mm:.3f} mm ({what}) / central pin pitch {pitch_px:.2f} px measured"
+    measured = int(np.isfinite(np.asarray(rest_positions, dtype=np.float64)).all(axis=1).sum())
+    if not counted and not description.flat and measured > (1.0 + _OVERCOUNT) * description.pins:
+        # More pins than the pad has: some are not pins (noise blobs, specks), and may have made the pitch short.
+        source += (f"; {measured} pins measured, more than the {description.pins} the sensor has: some are not pins, "
+                   f"check the pin field (tactip detect --annotate OUT.png)")
     info = {"pins": description.pins, "pad_diameter_mm": description.pad_diameter_mm,
             "field_polar_deg": description.field_polar_deg, "pins_counted": counted}
     if description.spokes:

@@ -145,3 +145,15 @@ def test_a_share_of_spurious_points_does_not_shorten_the_pitch(name, seed):
     noisy = np.vstack([rest, spurious])
     assert central_spacing_px(noisy) == pytest.approx(clean, rel=0.04)
     assert central_spacing_px(rest) == central_spacing_px(rest[::-1])  # clean: no point left out, in any order
+
+
+def test_more_pins_than_the_sensor_has_are_said_to_be_suspect():
+    """A field with more pins than the named sensor's pad holds (noise blobs kept: 136 of radial-led-120's 120)
+    says so in the scale's source; the sensor's own count, or one 3 % over it, does not."""
+    rest = SyntheticTacTip.from_preset("radial-led-120", seed=0).rest_centres
+    rng = np.random.default_rng(0)
+    extra = rest[rng.choice(len(rest), 16, replace=False)] + rng.uniform(2.5, 3.5, (16, 2))
+    assert "not pins" in sensor_scale(np.vstack([rest, extra]), sensor="radial-led-120").source
+    assert "not pins" not in sensor_scale(np.vstack([rest, extra[:3]]), sensor="radial-led-120").source
+    assert "not pins" not in sensor_scale(rest, sensor="radial-led-120").source
+    assert "not pins" not in sensor_scale(np.vstack([rest, extra])).source  # counted: no sensor to compare with
