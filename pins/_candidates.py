@@ -17,7 +17,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._judge import _KEPT, _MIN_PINS, _judge_lattice, _sharpness
-from ._noise import noise_sigma
+from ._noise import binned_noise_sigma, noise_sigma
 from .detect import Blobs, DetectionParams, _blur_size_px, _detect
 from .disc import SensorDisc
 
@@ -164,9 +164,11 @@ def _noise_floored(candidates, grey: np.ndarray) -> list:
     10: a cheap webcam in dim light) at offset 5 thresholds a pixel of bare membrane above its
     neighbourhood's mean one time in six: a lattice of noise blobs at about the pins' pitch, kept by
     more candidate sets than the pins are, won the vote (radial-led-120, sigma 10: 126-141 pins found
-    of 120, 74-78 of them true).
+    of 120, 74-78 of them true). The noise is the larger of `noise_sigma` and `pins._noise.binned_noise_sigma`:
+    through JPEG (a webcam's MJPG) the first reads 2-10 x low while the noise a blur of 0.6-2.5 px leaves
+    survives (radial-led-120, sigma 8, JPEG 75: offset 5 kept 122-149 pins of 120, scale up to +67 %).
     """
-    sigma = noise_sigma(grey)
+    sigma = max(noise_sigma(grey), binned_noise_sigma(grey))
     floored = []
     for params in candidates:
         blurred = sigma * _blur_gain(params.blur_sigma_px)

@@ -20,7 +20,8 @@ finds that lattice without being told the pin count:
    nearest-neighbour distance of its blobs;
 2. candidates: a dozen parameter sets at that pitch (neighbourhood blocks of 1-2.2 pitches,
    offsets of 5-25 grey levels, each at least two standard deviations of the camera's noise after
-   the candidate's blur: a noisy camera's low offsets make a lattice of noise blobs);
+   the candidate's blur, the noise read also on 2 x 2 block means, which JPEG leaves: a noisy camera's
+   low offsets make a lattice of noise blobs);
 3. lattice consistency, per candidate set, iterated until nothing changes (removing an impostor
    changes its neighbours' statistics), each blob against the medians of its six nearest
    neighbours: ``size`` when its area is below 0.4 or above 2.2 of theirs (or its box poorly

@@ -224,6 +224,7 @@ def central_spacing_px(rest_positions: np.ndarray, *, centre: tuple[float, float
     rest = rest[np.isfinite(rest).all(axis=1)]
     if len(rest) < 2:
         return float("nan")
+    rest = _without_crowders(rest)
     middle = rest.mean(axis=0) if centre is None else np.asarray(centre, dtype=np.float64)
     distance = np.hypot(*(rest - middle).T)
     inner = distance <= fraction * distance.max()
@@ -239,6 +240,23 @@ def central_spacing_px(rest_positions: np.ndarray, *, centre: tuple[float, float
     return nearest
 
 
+def _without_crowders(rest: np.ndarray) -> np.ndarray:
+    """`rest` (N, 2) px without the points whose nearest neighbour is closer than `_CROWDED` x the median
+    nearest spacing (both of each such pair), when at least 7 are left.
+
+    A spurious point (a noise blob between radial spokes, a speck) sits between pins, closer to one than
+    any pin is to another; a few of them near the centre made the central pitch 28 % short (radial-led-120
+    through a noisy webcam, 18 of 136 points spurious: 5.97 px for 8.32 -> 8.08) and broke the spokes'
+    periodicity. On a clean field no pin is so crowded (nearest spacings scatter by 2-3 %; rim pins
+    foreshortened across a ring still have neighbours along it), so it is unchanged."""
+    nearest = cKDTree(rest).query(rest, k=2)[0][:, 1]
+    kept = nearest >= _CROWDED * np.median(nearest)
+    return rest[kept] if kept.sum() >= 7 else rest
+
+
+# Points whose nearest neighbour is closer than this fraction of the median nearest spacing are not pins
+# of the lattice, or sit next to one that is not (`_without_crowders`).
+_CROWDED = 0.7
 # First shell: neighbours within this factor of the median nearest spacing (a hexagonal lattice's second
 # shell is at sqrt(3), a square grid's at sqrt(2); the synthetic scatter spreads the first by ~3 % a side).
 _SHELL = 1.2
@@ -387,6 +405,11 @@ def pad_scale(rest_positions: np.ndarray, *, sensor: str | SensorDescription | N
     if description.name:
         what = f"{description.name}: {what}"
     source = f"pin pitch {pitch_mm:.3f} mm ({what}) / central pin pitch {pitch_px:.2f} px measured"
+    measured = int(np.isfinite(np.asarray(rest_positions, dtype=np.float64)).all(axis=1).sum())
+    if not counted and not description.flat and measured > (1.0 + _OVERCOUNT) * description.pins:
+        # More pins than the pad has: some are not pins (noise blobs, specks), and may have made the pitch short.
+        source += (f"; {measured} pins measured, more than the {description.pins} the sensor has: some are not pins, "
+                   f"check the pin field (tactip detect --annotate OUT.png)")
     info = {"pins": description.pins, "pad_diameter_mm": description.pad_diameter_mm,
             "field_polar_deg": description.field_polar_deg, "pins_counted": counted}
     if description.spokes:
