@@ -383,11 +383,12 @@ def check_cli(camera: Camera, preset: str, name: str, seed: int, image, folder: 
 
 
 def seed_range(text: str) -> list[int]:
-    """'40-44' or '40,42' to a list of seeds."""
-    if "-" in text:
-        first, last = text.split("-")
-        return list(range(int(first), int(last) + 1))
-    return [int(s) for s in text.split(",")]
+    """'40-44', '40,42' or '0-2,48-50' to a list of seeds."""
+    seeds = []
+    for part in text.split(","):
+        first, _, last = part.partition("-")
+        seeds += list(range(int(first), int(last or first) + 1))
+    return seeds
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -76,7 +76,7 @@ import numpy as np
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
-from bench_conditions import Camera, match  # noqa: E402
+from bench_conditions import Camera, match, seed_range  # noqa: E402
 from tactip.sim.sequence import ContactSequence, Stroke, schedule  # noqa: E402
 
 DIRECTIONS = tuple(range(0, 360, 45))
@@ -343,14 +343,6 @@ def chain(preset: str, seed: int, folder: pathlib.Path) -> None:
     row("6 agree", preset, seed, f"detect {len(pins)} pins ({len(truth_found)}/{int(visible.sum())} true), replay "
         f"{len(rest_positions)}, {len(found_i)} within 0.5 px; polarity {'same' if polarity else 'DIFFERS'}; pitch "
         f"{detect['pitch_px']:.2f} / {replay_pitch:.2f} px", same and polarity and pitch_same, record_s)
-
-
-def seed_range(text: str) -> list[int]:
-    """'0-2' or '0,2' to a list of seeds."""
-    if "-" in text:
-        first, last = text.split("-")
-        return list(range(int(first), int(last) + 1))
-    return [int(s) for s in text.split(",")]
 
 
 def main(argv: list[str] | None = None) -> int:
