@@ -53,6 +53,12 @@ CPU per preset and seed, half of it rendering the recordings):
   4 spurious), while `tactip calibrate --frames` (10 frames averaged) and the dataset's calibration give
   0.3865 and 0.3888 (truth 0.3810).
 
+After the session's other merges (faint12, track12, detect12, detect13: faint levels, the rest match, the candidate
+offsets floored at the noise read on 2x2 block means), radial-led-120, residual 0: seeds 0-2 contacts 10/11, 11/11,
+10/11 right (seed 0 now keeps 3 false pins, 122 of which 119 true; seeds 0 and 2 each leave one slide matching no
+contact), outcomes 4, 5, 6 met on all three; held out 48-50: every outcome met on all three (seed 50: 119 pins, all
+true, scale 0.3842 against 0.3810, 11/11 right).
+
 Run: .venv/bin/python bench/bench_user_chain.py [--presets radial-led-120,white-dark-331] [--seeds 0-2]
      [--keep DIR] [--residual 0.2 --creep-s 0.1]
 """
