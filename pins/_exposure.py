@@ -32,7 +32,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ._flat import _pin_radius_px
+from ._flat import _pin_radius_px, _tip_contrasts
 from ._noise import noise_sigma
 
 __all__ = ["exposure_warnings", "pad_exposure"]
@@ -136,17 +136,6 @@ def exposure_warnings(grey: np.ndarray, field) -> tuple[str, ...]:
                         f"{measure['snr']:.1f}; under {FAINT_SNR:g}, or under {FAINT_CONTRAST:g} grey levels, pins "
                         f"are missed or lost); {advice}")
     return tuple(warnings)
-
-
-def _tip_contrasts(grey: np.ndarray, field) -> np.ndarray:
-    """Each pin's contrast, grey levels: the lightly blurred frame at its centre less the mean over a
-    square of 1.5 pitches round it (the polarity's sign: dark markers below the membrane count positive)."""
-    smooth = cv2.GaussianBlur(grey, (0, 0), 1.0).astype(np.float32)
-    size = max(2 * int(round(0.75 * field.pitch_px)) + 1, 3)
-    mean = cv2.boxFilter(smooth, cv2.CV_32F, (size, size), borderType=cv2.BORDER_REFLECT)
-    x, y = (np.clip(np.rint(field.centres[:, k]).astype(int), 0, grey.shape[1 - k] - 1) for k in (0, 1))
-    contrast = smooth[y, x] - mean[y, x]
-    return -contrast if field.params.dark_pins else contrast
 
 
 def _washed_out(grey: np.ndarray, field, typical_contrast: float) -> int:

@@ -73,17 +73,22 @@ def _irregular_beyond(whole, field) -> bool:
     return len(beyond) >= 3 and _irregular(SimpleNamespace(count=len(beyond), centres=beyond))
 
 
-def _median_contrast(grey: np.ndarray, field) -> float:
-    """Median contrast of a field's pins, grey levels: the lightly blurred frame at each pin less its
-    mean over a square of 1.5 pitches (the polarity's sign: bright pins above, dark below); 0 without pins."""
-    if field.count < 2 or not np.isfinite(field.pitch_px):
-        return 0.0
+def _tip_contrasts(grey: np.ndarray, field) -> np.ndarray:
+    """Each pin's contrast, grey levels: the lightly blurred frame at its centre less the mean over a
+    square of 1.5 pitches round it (the polarity's sign: dark markers below the membrane count positive)."""
     smooth = cv2.GaussianBlur(grey, (0, 0), 1.0).astype(np.float32)
     size = max(2 * int(round(0.75 * field.pitch_px)) + 1, 3)
     mean = cv2.boxFilter(smooth, cv2.CV_32F, (size, size), borderType=cv2.BORDER_REFLECT)
     x, y = (np.clip(np.rint(field.centres[:, k]).astype(int), 0, grey.shape[1 - k] - 1) for k in (0, 1))
     contrast = smooth[y, x] - mean[y, x]
-    return float(max(np.median(-contrast if field.params.dark_pins else contrast), 0.0))
+    return -contrast if field.params.dark_pins else contrast
+
+
+def _median_contrast(grey: np.ndarray, field) -> float:
+    """Median contrast of a field's pins, grey levels (`_tip_contrasts`); 0 without pins."""
+    if field.count < 2 or not np.isfinite(field.pitch_px):
+        return 0.0
+    return float(max(np.median(_tip_contrasts(grey, field)), 0.0))
 
 
 # A marker whose disc reaches this far (px) beyond the frame's edge is still measured: its centroid

@@ -167,5 +167,6 @@ def motion_warning(restored: int, frames: int, first: int, spacing_px: float) ->
         return ""
     return (f"{restored} times a pin was on another pin's tip when the pad came back to rest ({frames} frames, the "
             f"first {first} frames after the rest frame): the pins moved farther between frames than the tracker "
-            f"follows (about half a pin spacing, {0.5 * spacing_px:.0f} px, a frame). Identities were restored at "
+            f"follows (about a quarter of a pin spacing, {0.25 * spacing_px:.0f} px, a frame; beyond half a spacing "
+            f"it cannot). Identities were restored at "
             f"rest, but within contacts pins may be swapped: record at a higher frame rate or move more slowly")
