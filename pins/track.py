@@ -55,6 +55,7 @@ from scipy.spatial import cKDTree
 
 from ._edge import FrameEdge, tracking_crop
 from ._identity import kept_on_own_tips
+from ._motion import settled_at_rest, spring_steps
 from ._pairfit import part_overlapping
 from ._recover import _as_points, match_to_blobs
 from ._return import RestMatch, motion_warning, taken_off
@@ -71,6 +72,11 @@ __all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
 
 # A frame in which fewer than this fraction of the expected (not retired) pins are found is blank.
 _BLANK_FRACTION = 0.1
+# Where the frame's motion field holds (`pins._motion`), a pin placed farther than this fraction of the spacing from
+# where it puts the pin is on another's tip (its nearest neighbours lie a spacing away): LK looks for it from there.
+_DISAGREE_FRACTION = 0.5
+# ... and guesses from the field only for the pins it steps by at most this many spacings.
+_FIELD_REACH = 1.0
 
 
 class PinTracker:
@@ -205,6 +211,7 @@ class PinTracker:
         self._previous: np.ndarray | None = None      # crop of the last good frame (the LK reference)
         self._reference: np.ndarray | None = None     # pin positions in it, px (NaN where lost there)
         self._velocity: np.ndarray | None = None
+        self._step: np.ndarray | None = None          # the last frame's steps as measured, px (NaN where unknown)
         self._since_good = 1                          # frames from the reference to the next frame
         self._since_detection = 0
         self._lost_run: np.ndarray | None = None
@@ -325,6 +332,7 @@ class PinTracker:
         self._reference = pins.copy()
         self._last_seen = pins.copy()
         self._velocity = np.zeros_like(pins)
+        self._step = np.zeros_like(pins)
         self.lost = np.zeros(len(pins), dtype=bool)
         self.retired = np.zeros(len(pins), dtype=bool)
         self._lost_run = np.zeros(len(pins), dtype=np.int64)
@@ -393,6 +401,7 @@ class PinTracker:
             fresh = (np.isnan(velocity[:, 0]) & np.isfinite(positions[:, 0])).nonzero()[0]
             if fresh.size:
                 velocity[fresh] = self._refiner.neighbour_median(velocity, fresh)
+            self._step = velocity.copy()  # (the steps as measured: the motion field's regressor, `pins._motion`)
         # A step within the search's settling bound is no motion to carry on (a faint tip's centroid
         # jitters by a few tenths of a px in noise; extrapolated, the jitter would walk the guesses
         # off a still pad), unless the pin's neighbourhood moves beyond its noise (`carried_velocity`).
@@ -429,6 +438,9 @@ class PinTracker:
         # are not (a sudden change of motion), LK looks for them from the last good frame, each
         # answer checked by its windowed centroid.
         if np.count_nonzero(need) > _RETRY_FRACTION * len(need):
+            if self._since_good == 1:
+                # From where the frame's motion field, fitted to the pins just placed, puts them (`pins._motion`).
+                guess, positions, need = self._field_guess(guess, positions, need)
             start = np.where(need[:, None], self._reference, np.nan)
             moved, _ = _track(self._previous, current, start - origin, self.lk, guess=guess - origin, backward=False)
             tracked = np.where(need[:, None], moved + origin, positions)
@@ -442,6 +454,8 @@ class PinTracker:
                                      refiner.rest_positions, guess, refiner._identity_index)
         # Pins where the frame shows the rest frame again, whatever the frames between did (`pins._return`).
         positions = self._rest_match.restore(refiner, crop, positions)
+        if self._rest_match.matched is not None:  # (and those placed near rest there, at rest: `pins._motion`)
+            positions = settled_at_rest(refiner, crop, positions, self._rest_match.matched)
         if positions is not before:  # (pins taken off others' tips, by either: `motion_warning`)
             restored = taken_off(before, positions, refiner.rest_positions, self.gate_px)
             if restored:
@@ -471,6 +485,31 @@ class PinTracker:
         if fit.size:
             positions = refiner.fit_tips(crop, positions, self._last_seen, fit)
         return positions, False, detected
+
+    def _field_guess(self, guess: np.ndarray, positions: np.ndarray,
+                     need: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Guesses from the frame's motion field fitted to the pins placed (`pins._motion.spring_steps`): (guess,
+        positions, need), the pins not placed guessed there, and placed pins farther than `_DISAGREE_FRACTION` of the
+        spacing from it unplaced and needing LK from it too, for the pins it steps by at most `_FIELD_REACH` spacings
+        (new arrays; the given ones where no field holds)."""
+        which = np.isfinite(self._reference[:, 0]).nonzero()[0]
+        steps = spring_steps(self._refiner.rest_positions, self._reference, self._step, positions, ~need, which,
+                             self.spacing_px)
+        if steps is None:
+            return guess, positions, need
+        # A pin the field steps beyond a spacing (slides filmed at 15-30 frames/s) is beyond what a guess keeps
+        # apart from a neighbour's tip: its constant-velocity guess stands (and `pins._return` at rest).
+        near = _squared_norm(steps) <= (_FIELD_REACH * self.spacing_px) ** 2
+        which, field = which[near], self._reference[which[near]] + steps[near]
+        off = _squared_norm(positions[which] - field) > (_DISAGREE_FRACTION * self.spacing_px) ** 2  # (NaN: False)
+        if np.count_nonzero(off):
+            positions, need = positions.copy(), need.copy()
+            positions[which[off]] = np.nan
+            need[which[off]] = True
+        guess = guess.copy()
+        moved = which[need[which]]
+        guess[moved] = field[need[which]]
+        return guess, positions, need
 
     def _too_few(self, positions: np.ndarray) -> bool:
         """Whether fewer than a tenth of the pins expected (not retired) were found: a blank frame."""

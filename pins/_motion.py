@@ -1,0 +1,120 @@
+"""The frame's motion field from the pins placed first: guesses for the others (issue 20: slides).
+
+Each frame the tracker's windows start at the pins' constant-velocity guesses. Where the pad
+accelerates (a slide's lift: the skin springs back to rest, its pins speeding from nothing to most of a
+spacing a frame within a few frames), the guesses of the fastest pins lie a third of a spacing or more
+off, and LK from them, or a window, lands on a neighbour's tip. Session 19 (slide14) measured where the
+swaps of `bench_conditions`' slides (120 frames/s, seeds 0-5) begin: tactip-127 465 of 486 onsets in
+lifts, 376 of them placed by LK from guesses 0.25-0.6 spacings off; tactip-331 269 of 603 in lifts
+(the others in the drag, in skin squeezed until tips merge, placed by the follow passes).
+
+A skin's motion is smooth and, through a stroke, keeps its shape: the field of displacements from rest
+grows as the plate drags and shrinks back as it lifts (a slide's skin moves as ``D(q, t) = S(t) f(q)``
+and a press's as its own shape: two modes, each with its own time course). So a pin's step is, across
+the pad, about an affine function of its displacement from rest at the last frame and of its last step
+(on the renders, fitted to every pin, within 0.3 spacings in the fastest lift frames, where the
+constant-velocity guess is up to 0.8 off). `spring_steps` fits that function (5 x 2 coefficients, least
+squares, once more without the pins far from the first fit) to the pins placed from their guesses in
+this frame (the slow ones, far from the contact) and predicts the others: the fast pins' steps scale
+with their large displacements. `pins.track.PinTracker` runs it only on frames where many pins were not
+placed from their guesses (those LK looks for: a still pad costs nothing), starts LK there from the
+field, and takes off the pins placed more than half a spacing from it (on another pin's tip).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._window import _squared_norm
+
+# The fit is used when at least this many pins were placed from their guesses (10 coefficients), ...
+_LEAST_PINS = 12
+# ... and, after one refit without the pins farther than `_OUTLIER_FRACTION` of the spacing from the first
+# fit, at least `_HOLD_SHARE` of them lie within `_HOLD_FRACTION` of the spacing of it.
+_OUTLIER_FRACTION = 0.15
+_HOLD_FRACTION = 0.1
+_HOLD_SHARE = 0.5
+
+
+def spring_steps(rest: np.ndarray, reference: np.ndarray, last_step: np.ndarray, positions: np.ndarray,
+                 settled: np.ndarray, which: np.ndarray, spacing_px: float) -> np.ndarray | None:
+    """Steps of pins `which` from the frame's motion field, px (L, 2), or None where no field holds.
+
+    Parameters
+    ----------
+    rest : (N, 2) ndarray
+        Pins at rest, px.
+    reference : (N, 2) ndarray
+        Pins in the last good frame, px (NaN where lost there).
+    last_step : (N, 2) ndarray
+        Their steps into it, px (NaN where unknown).
+    positions : (N, 2) ndarray
+        Pins placed in this frame so far, px (NaN where not).
+    settled : (N,) ndarray of bool
+        Pins whose placements the fit may use (placed from their guesses).
+    which : (L,) ndarray of int
+        Pins to predict (finite `reference`).
+    spacing_px : float
+        Pin spacing at rest, px.
+
+    Returns
+    -------
+    steps : (L, 2) ndarray of float64 or None
+        ``reference[which] + steps`` is where the field puts them; None when fewer than `_LEAST_PINS`
+        pins settled or the field does not hold on them.
+
+    Examples
+    --------
+    >>> rest = np.array([[x, y] for x in range(0, 70, 10) for y in range(0, 70, 10)], float)
+    >>> reference = rest + 0.3 * (rest - 30.0)        # the skin spread from (30, 30) ...
+    >>> now = rest + 0.15 * (rest - 30.0)             # ... and half way back
+    >>> settled = np.abs(rest - 30.0).max(axis=1) <= 20   # the slow pins near the centre were placed
+    >>> still = np.zeros_like(rest)                  # (the pad had stopped: no last step)
+    >>> steps = spring_steps(rest, reference, still, np.where(settled[:, None], now, np.nan), settled,
+    ...                      np.array([0, 48]), 10.0)
+    >>> np.round(reference[[0, 48]] + steps, 6) + 0.0  # the corners, farthest out: half way back too
+    array([[-4.5, -4.5],
+           [64.5, 64.5]])
+    """
+    fit = settled & np.isfinite(positions[:, 0]) & np.isfinite(reference[:, 0]) & np.isfinite(last_step[:, 0])
+    if np.count_nonzero(fit) < _LEAST_PINS:
+        return None
+    design = np.ones((len(rest), 5))
+    design[:, :2] = reference - rest
+    design[:, 2:4] = np.where(np.isfinite(last_step), last_step, 0.0)
+    step = positions[fit] - reference[fit]
+    x = design[fit]
+    coefficients = np.linalg.lstsq(x, step, rcond=None)[0]
+    error = np.sum((x @ coefficients - step) ** 2, axis=1)
+    kept = error <= (_OUTLIER_FRACTION * spacing_px) ** 2
+    if np.count_nonzero(kept) < _LEAST_PINS:
+        return None
+    coefficients = np.linalg.lstsq(x[kept], step[kept], rcond=None)[0]
+    error = np.sum((x @ coefficients - step) ** 2, axis=1)
+    if np.count_nonzero(error <= (_HOLD_FRACTION * spacing_px) ** 2) < _HOLD_SHARE * len(step):
+        return None
+    return design[which] @ coefficients
+
+
+def settled_at_rest(refiner, crop: np.ndarray, positions: np.ndarray, matched: np.ndarray) -> np.ndarray:
+    """`positions` (N, 2), px, with the pins placed where the frame shows the rest frame again (`matched`, (N,)
+    bool: `pins._return.RestMatch`) but off their rest positions by more than the guess bound moved onto their
+    windows at rest, where those settle there on a tip like at rest (a copy; `positions` itself when none is).
+
+    `RestMatch.restore` puts back the pins farther than the gate; a pin placed nearer, by a window that a
+    neighbour's stale guess cut (its radius is half the distance to the nearest), may sit a px off its tip:
+    a slide filmed at 20 frames/s left tactip-127's pin 41 (seed 40) 1.28 px off at rest, on a path where a
+    field guess had placed its neighbours (`refiner`: `pins._refine.Refiner`; `crop` as the tracker sees it).
+    """
+    rest = refiner.rest_positions
+    off = np.flatnonzero(matched & (_squared_norm(positions - rest) > refiner._guess_px ** 2))  # (NaN: False)
+    if not off.size:
+        return positions
+    centres, measures = refiner.windows.measure(crop, rest[off] - refiner.origin, refiner._rest_radius[off])
+    centres += refiner.origin - refiner._rest_offset[off]
+    ok = (_squared_norm(centres - rest[off]) <= refiner._settled_px ** 2) & refiner._like_at_rest(measures, off)
+    if not np.count_nonzero(ok):
+        return positions
+    positions = positions.copy()
+    positions[off[ok]] = centres[ok]
+    return positions

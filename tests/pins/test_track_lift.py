@@ -1,0 +1,101 @@
+"""pins.track through a slide's lift (issue 20, outcome 2): the skin springs back to rest within a few frames,
+its pins speeding from nothing to a spacing a frame; guesses from the frame's motion field (`pins._motion`), fitted
+to the pins placed first, keep the fast ones on their own tips. Ground truth from the synthetic TacTip."""
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from pins import DetectionParams, PinTracker, SensorDisc
+from pins._motion import settled_at_rest, spring_steps
+from tests.pins.conftest import preset_sensor
+
+
+def _apart_swaps_through_fast_lifts(name, seed):
+    """Two slides of 3 pitches (0 and 135 degrees) lifted in 50 ms at 120 frames/s, as `bench_conditions`' slides:
+    pin-frames placed nearer another visible pin's true centre than their own, the two at least half a spacing
+    apart; and the largest step of a pin in a frame, spacings."""
+    s = preset_sensor(name, seed)
+    s.reseed_noise(seed)
+    run = iter(s.slides([0, 135], distance_mm=3 * s.pin_spacing_mm, indentation_mm=2.0, rest_s=3 / 120,
+                        press_s=0.05, slide_s=0.15, lift_s=0.05, frame_rate=120.0))
+    rest = previous = next(run)
+    drawn = np.flatnonzero(rest.visible | rest.partial)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
+    tracker.start(rest.image, pins=rest.centres[drawn])
+    apart, step = 0, 0.0
+    for f in run:
+        positions = tracker.update(f.image)
+        step = max(step, np.max(np.linalg.norm(f.centres - previous.centres, axis=1)[f.visible & previous.visible]))
+        previous = f
+        placed = np.flatnonzero(f.visible[drawn] & np.isfinite(positions[:, 0]))
+        nearest = cKDTree(f.centres).query(positions[placed])[1]
+        gap = np.linalg.norm(f.centres[nearest] - f.centres[drawn[placed]], axis=1)
+        apart += int(np.count_nonzero((nearest != drawn[placed]) & (gap >= 0.5 * tracker.spacing_px)))
+    return apart, step / tracker.spacing_px
+
+
+def test_pins_keep_their_tips_through_a_lift_a_spacing_a_frame():
+    # Pin-frames on another pin's tip (two slides, tactip-127), seeds 0/1/2/3: 32/33/35/39 with constant-velocity
+    # guesses for LK (main 09118d1), 0/35/7/10 with the motion field's. (Seed 1's first lift still swaps.)
+    counts = []
+    for seed in (0, 1, 2, 3):
+        apart, step = _apart_swaps_through_fast_lifts("tactip-127", seed)
+        assert step > 1.0  # the case: pins stepped beyond a spacing in a frame
+        counts.append(apart)
+    assert sum(counts) <= 60
+    assert sorted(counts)[1] <= 10  # most seeds nearly clean
+
+
+def test_the_motion_field_of_a_lift_puts_the_fast_pins_nearer_where_they_go():
+    """Fitted to the steps of the pins whose constant-velocity guesses hold (within 0.3 spacings: their windows
+    reach them), the field predicts the others' (true centres, tactip-127 seeds 0-2): nearer than those guesses in
+    the median in every frame of the lift, and in most frames most of them within 0.3 spacings, where no
+    constant-velocity guess lies. (Medians field / guess, spacings, in the lift's frames: 0.13/0.39, 0.14/0.38,
+    0.43/0.53, 0.28/0.52, 0.01/0.63: the third frame's field is still poor.)"""
+    for seed in (0, 1, 2):
+        s = preset_sensor("tactip-127", seed)
+        run = s.slides([45], distance_mm=3 * s.pin_spacing_mm, indentation_mm=2.0, rest_s=3 / 120, press_s=0.05,
+                       slide_s=0.15, lift_s=0.05, frame_rate=120.0)
+        event = run.events[0]
+        centres = [s.render(c).centres for c in run.contacts]
+        rest = centres[0]
+        spacing = float(np.median(cKDTree(rest).query(rest, k=2)[0][:, 1]))
+        checked = within = 0
+        for k in range(event.stop_frame - 5, event.stop_frame + 1):  # the lift's frames and the first at rest
+            last_step, step = centres[k - 1] - centres[k - 2], centres[k] - centres[k - 1]
+            guess_error = np.linalg.norm(step - last_step, axis=1) / spacing
+            held = guess_error < 0.3
+            if held.all():
+                continue
+            fast = np.flatnonzero(~held)
+            predicted = spring_steps(rest, centres[k - 1], last_step, np.where(held[:, None], centres[k], np.nan),
+                                     held, fast, spacing)
+            assert predicted is not None
+            error = np.linalg.norm(predicted - step[fast], axis=1) / spacing
+            assert np.median(error) < np.median(guess_error[fast])
+            checked += 1
+            within += np.mean(error < 0.3) > 0.5
+        assert checked >= 5 and within >= 4
+
+
+def test_a_pin_placed_a_px_off_where_the_frame_shows_rest_is_put_on_its_tip():
+    s = preset_sensor("tactip-127", 0)
+    rest = s.render()
+    drawn = np.flatnonzero(rest.visible)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
+    tracker.start(rest.image, pins=rest.centres[drawn])
+    crop = tracker._bright(tracker._cropped(rest.image))
+    positions = tracker.rest_positions.copy()
+    positions[10] += [1.3, 0.0]   # a window cut by a neighbour's stale guess settled 1.3 px off
+    positions[20] = np.nan        # (missing: `RestMatch.restore`'s, not this step's)
+    matched = np.ones(len(positions), dtype=bool)
+    matched[30] = False           # not shown as at rest: kept where it is
+    positions[30] += [1.3, 0.0]
+    fixed = settled_at_rest(tracker._refiner, crop, positions, matched)
+    assert np.linalg.norm(fixed[10] - rest.centres[drawn][10]) < 0.1
+    assert np.isnan(fixed[20]).all()
+    np.testing.assert_array_equal(fixed[30], positions[30])
+    others = np.setdiff1d(np.arange(len(positions)), [10, 20, 30])
+    np.testing.assert_array_equal(fixed[others], positions[others])
+    # Nothing off: the positions themselves.
+    assert settled_at_rest(tracker._refiner, crop, tracker.rest_positions, matched) is tracker.rest_positions
