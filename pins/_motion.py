@@ -34,6 +34,11 @@ _LEAST_PINS = 12
 _OUTLIER_FRACTION = 0.15
 _HOLD_FRACTION = 0.1
 _HOLD_SHARE = 0.5
+# Where the field holds, a pin placed farther than this fraction of the spacing from where it puts the pin is on
+# another's tip (its nearest neighbours lie a spacing away): LK looks for it from there; ...
+_DISAGREE_FRACTION = 0.5
+# ... and guesses come from the field only for the pins it steps by at most this many spacings.
+_FIELD_REACH = 1.0
 
 
 def spring_steps(rest: np.ndarray, reference: np.ndarray, last_step: np.ndarray, positions: np.ndarray,
@@ -94,6 +99,33 @@ def spring_steps(rest: np.ndarray, reference: np.ndarray, last_step: np.ndarray,
     if np.count_nonzero(error <= (_HOLD_FRACTION * spacing_px) ** 2) < _HOLD_SHARE * len(step):
         return None
     return design[which] @ coefficients
+
+
+def field_guesses(rest: np.ndarray, reference: np.ndarray, last_step: np.ndarray, guess: np.ndarray,
+                  positions: np.ndarray, need: np.ndarray,
+                  spacing_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A frame's guesses, positions and pins needing LK, (N, 2) px, (N, 2) px, (N,) bool, with the field's say.
+
+    The field (`spring_steps`, fitted to the pins placed, ``~need``; `rest`, `reference`, `last_step` as there)
+    guesses the pins that need LK, and takes off (NaN in `positions`, True in `need`) the placed pins farther than
+    `_DISAGREE_FRACTION` of the spacing from it, for the pins it steps by at most `_FIELD_REACH` spacings (a pin
+    stepped farther, by slides filmed at 15-30 frames/s, is beyond what a guess keeps from a neighbour's tip: its
+    constant-velocity `guess` stands, and `pins._return` at rest). New arrays; the given ones where no field holds.
+    """
+    which = np.isfinite(reference[:, 0]).nonzero()[0]
+    steps = spring_steps(rest, reference, last_step, positions, ~need, which, spacing_px)
+    if steps is None:
+        return guess, positions, need
+    near = _squared_norm(steps) <= (_FIELD_REACH * spacing_px) ** 2
+    which, field = which[near], reference[which[near]] + steps[near]
+    off = _squared_norm(positions[which] - field) > (_DISAGREE_FRACTION * spacing_px) ** 2  # (NaN: False)
+    if np.count_nonzero(off):
+        positions, need = positions.copy(), need.copy()
+        positions[which[off]] = np.nan
+        need[which[off]] = True
+    guess = guess.copy()
+    guess[which[need[which]]] = field[need[which]]
+    return guess, positions, need
 
 
 def settled_at_rest(refiner, crop: np.ndarray, positions: np.ndarray, matched: np.ndarray) -> np.ndarray:

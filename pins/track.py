@@ -10,8 +10,8 @@ A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; n
   measured in a small window that stays inside the pin's own Voronoi cell, for all pins at once.
   Each frame the windows start at the pins' constant-velocity guesses and are re-centred once
   (`Refiner.follow`); a pin whose window settles within a few tenths of a px near its guess
-  needs nothing else. The others are moved by LK forward from the guess (full image; the pyramid
-  only when many fail), and LK's answer is checked by its windowed centroid instead of a backward
+  needs nothing else. The others are moved by LK forward from the guess (the frame's motion field, `pins._motion`,
+  where many fail; the pyramid only then), and LK's answer is checked by its windowed centroid instead of a backward
   LK pass (`Refiner.refine`: near the LK estimate; tip area, contrast and compactness like at
   rest). Displacements come from one estimator at rest and after, so they carry none of its bias,
   and LK errors never add up: after a tap the pins are back at rest to a few hundredths of a px;
@@ -55,7 +55,7 @@ from scipy.spatial import cKDTree
 
 from ._edge import FrameEdge, tracking_crop
 from ._identity import kept_on_own_tips
-from ._motion import settled_at_rest, spring_steps
+from ._motion import field_guesses, settled_at_rest
 from ._pairfit import part_overlapping
 from ._recover import _as_points, match_to_blobs
 from ._return import RestMatch, motion_warning, taken_off
@@ -72,11 +72,6 @@ __all__ = ["LKParams", "track_pins", "match_to_blobs", "PinTracker"]
 
 # A frame in which fewer than this fraction of the expected (not retired) pins are found is blank.
 _BLANK_FRACTION = 0.1
-# Where the frame's motion field holds (`pins._motion`), a pin placed farther than this fraction of the spacing from
-# where it puts the pin is on another's tip (its nearest neighbours lie a spacing away): LK looks for it from there.
-_DISAGREE_FRACTION = 0.5
-# ... and guesses from the field only for the pins it steps by at most this many spacings.
-_FIELD_REACH = 1.0
 
 
 class PinTracker:
@@ -91,9 +86,10 @@ class PinTracker:
        guess near a contact), are searched for around their predictions (rest position moved by
        the median displacement of their placed neighbours) and found inside a gate below half the
        pin spacing, one pin per tip: identities are kept without blob detection;
-    2. only when more than a tenth of the pins are not placed (a sudden change of motion): LK
-       forward from the last good frame for them (`_track`, no backward pass: each answer is
-       checked by its windowed centroid, `Refiner.refine`), and a search for those that fail;
+    2. only when more than a tenth of the pins are not placed (a sudden change of motion: a slide's
+       lift): LK forward from the last good frame for them (`_track`, no backward pass: each answer is
+       checked by its windowed centroid, `Refiner.refine`), from where the frame's motion field fitted
+       to the pins placed puts them (`pins._motion`), and a search for those that fail;
     3. retirement: a pin lost for more than `retire_after` frames (a rim pin out of view) is
        *retired*: searched for only once in `check_every` frames (pins take turns, so a frame
        searches about 1/`check_every` of the retired pins) until it comes back with its identity;
@@ -440,7 +436,8 @@ class PinTracker:
         if np.count_nonzero(need) > _RETRY_FRACTION * len(need):
             if self._since_good == 1:
                 # From where the frame's motion field, fitted to the pins just placed, puts them (`pins._motion`).
-                guess, positions, need = self._field_guess(guess, positions, need)
+                guess, positions, need = field_guesses(refiner.rest_positions, self._reference, self._step, guess,
+                                                       positions, need, self.spacing_px)
             start = np.where(need[:, None], self._reference, np.nan)
             moved, _ = _track(self._previous, current, start - origin, self.lk, guess=guess - origin, backward=False)
             tracked = np.where(need[:, None], moved + origin, positions)
@@ -485,31 +482,6 @@ class PinTracker:
         if fit.size:
             positions = refiner.fit_tips(crop, positions, self._last_seen, fit)
         return positions, False, detected
-
-    def _field_guess(self, guess: np.ndarray, positions: np.ndarray,
-                     need: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Guesses from the frame's motion field fitted to the pins placed (`pins._motion.spring_steps`): (guess,
-        positions, need), the pins not placed guessed there, and placed pins farther than `_DISAGREE_FRACTION` of the
-        spacing from it unplaced and needing LK from it too, for the pins it steps by at most `_FIELD_REACH` spacings
-        (new arrays; the given ones where no field holds)."""
-        which = np.isfinite(self._reference[:, 0]).nonzero()[0]
-        steps = spring_steps(self._refiner.rest_positions, self._reference, self._step, positions, ~need, which,
-                             self.spacing_px)
-        if steps is None:
-            return guess, positions, need
-        # A pin the field steps beyond a spacing (slides filmed at 15-30 frames/s) is beyond what a guess keeps
-        # apart from a neighbour's tip: its constant-velocity guess stands (and `pins._return` at rest).
-        near = _squared_norm(steps) <= (_FIELD_REACH * self.spacing_px) ** 2
-        which, field = which[near], self._reference[which[near]] + steps[near]
-        off = _squared_norm(positions[which] - field) > (_DISAGREE_FRACTION * self.spacing_px) ** 2  # (NaN: False)
-        if np.count_nonzero(off):
-            positions, need = positions.copy(), need.copy()
-            positions[which[off]] = np.nan
-            need[which[off]] = True
-        guess = guess.copy()
-        moved = which[need[which]]
-        guess[moved] = field[need[which]]
-        return guess, positions, need
 
     def _too_few(self, positions: np.ndarray) -> bool:
         """Whether fewer than a tenth of the pins expected (not retired) were found: a blank frame."""

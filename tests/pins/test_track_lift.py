@@ -99,3 +99,12 @@ def test_a_pin_placed_a_px_off_where_the_frame_shows_rest_is_put_on_its_tip():
     np.testing.assert_array_equal(fixed[others], positions[others])
     # Nothing off: the positions themselves.
     assert settled_at_rest(tracker._refiner, crop, tracker.rest_positions, matched) is tracker.rest_positions
+
+
+def test_the_motion_fields_docstring_example_holds():
+    import doctest
+
+    import pins._motion
+
+    result = doctest.testmod(pins._motion, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0 and result.failed == 0
