@@ -79,6 +79,16 @@ every condition; slides and cli on tactip-331, dark-331, radial-led-120, seed 42
   return: seeds 0-1, main 6705663, 120 / 30 frames/s, apart (during): radial-led-120 4+2 (11+19) / 236+262
   (252+279), tactip-127 110+118 (129+150) / 865+801 (923+866), tactip-331 167+158 (338+370) / 1486+1467
   (1593+1569) pin-frames; no row is met any more, every one met after the return (0 swaps, 0 > 1 px, 0 lost).
+- (session 19, slide14) where the apart swaps of the slides begin (120 frames/s, seeds 0-5, main 09118d1, by the
+  stage that placed each swap's first frame): tactip-127 465 of 486 onsets in the lifts (50 ms: pins speed to about
+  a spacing a frame), 376 placed by LK from constant-velocity guesses 0.25-0.6 spacings off; tactip-331 269 of 603 in
+  the lifts, 334 in the drag (the follow passes in skin squeezed until tips merge), 184 by the pair fit. LK now starts
+  from the frame's motion field fitted to the pins placed first (`pins._motion`), and placed pins half a spacing off
+  it are looked for from it too. Seeds 0-1, apart, main -> now: 120 frames/s tactip-127 110+118 -> 8+16,
+  tactip-331 167+158 -> 150+155, radial-led-120 4+2 -> 0+0 (both rows met); 30 frames/s 865+801 -> 956+992 (worse:
+  pins step 1.5 spacings there), 1486+1467 -> 1215+1106, 236+262 -> 274+254. Held out (seeds 48-53, 120 frames/s):
+  tactip-127 107/122/112/104/102/122 -> 56/19/24/18/18/26, tactip-331 871 -> 815 in all, radial-led-120
+  1/3/2/1/7/1 -> 1/1/1/1/2/0. After the return every row as before: 0 swaps, 0 > 1 px, 0 lost.
 - (session 18, detect13) a noisy webcam through JPEG (grad+noise8+jpeg75; bench_user_chain's camera): JPEG smooths
   the finest scale, where `noise_sigma` reads (1.5 for 8 grey levels), so the candidate offsets stayed at 5 and a
   lattice of noise blobs between radial-led-120's spokes won the vote; their short spacing made the pitch short

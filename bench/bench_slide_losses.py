@@ -44,6 +44,12 @@ unplaced by `pins._identity` (7 %). Searching those again from the frame's own p
 gate x1 / x0.25) cut the lost pin-frames by 16 % / 9 % but raised swaps (tour: 132 -> 162 / 135; bench_slides'
 two slides, seeds 0-5: any swap 38 -> 96, apart 0 -> 15 at gate x0.25): dropped.
 
+Session 19 (slide14; main 09118d1 -> LK in frames where many pins are not placed starts from the frame's motion
+field fitted to the pins placed, `pins._motion`), webcam-like, seeds 0-5: lost visible pin-frames 9192 -> 8475
+(1631/1507/1387/1729/1566/1372 -> 1520/1351/1235/1654/1473/1242; max a frame 29-44 -> 20-27): merged 4611 -> 4554,
+touching 750 -> 651, pulled 1094 -> 1066 (+judged 162 -> 146), judged 60 -> 54, searched 607 -> 471, untrusted 1196
+-> 1064, far 712 -> 469 (the tracker's own share 2515 -> 2004); swaps 100 -> 85 (apart 62 -> 45).
+
 Run: .venv/bin/python bench/bench_slide_losses.py [--presets radial-led-120] [--seeds 0-5] [--clean]
 """
 

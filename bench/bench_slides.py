@@ -205,6 +205,12 @@ frame (mean) 4.11 -> 4.20, 13.56 -> 14.06, 5.37 -> 5.50 (model), 3.05 -> 3.04, 1
 (lost 13.05 -> 14.34), realistic 0 -> 0 (1.87 both); dense-1000 model 532 -> 488 (lost 9.17 -> 9.79),
 realistic 149 -> 149 (1.12 both).
 
+Session 19's "slide14" (2-core VM, loaded; old = main 09118d1, new = LK in frames where many pins are not placed
+starts from the frame's motion field fitted to the pins placed, `pins._motion`): this video's lifts take 0.2 s (pins
+step at most about half a spacing a frame), where constant-velocity guesses hold: seeds 0-5, both skins, every
+preset, apart, swaps, lost per frame, rest>1 and end>1 identical; pin-frames > 1 px 1-2 fewer on five rows. The
+fast lifts (50 ms, pins a spacing a frame) are `bench_conditions`' slides check and `tests/pins/test_track_lift.py`.
+
 Run: .venv/bin/python bench/bench_slides.py [--presets radial-led-120 tactip-331 small-pad-100]
      [--seeds 0 1 2 3 4 5] [--slides 8] [--pitches 3] [--residual R --creep-s S --final-rest-s S]
      [--min-area model 0.5] [--part-overlaps | --no-part-overlaps]  (one report per skin: the model's squeeze and a realistic one, both by default)
