@@ -114,6 +114,8 @@ import time
 import numpy as np
 
 import pins._refine
+import pins._rest
+import pins._return
 import pins._window
 import pins.track
 import tactip.pipeline
@@ -131,6 +133,11 @@ _PARTS = [
     (pins._refine.Refiner, "refine", "  LK retry and refinement"),
     (pins._refine.Refiner, "recover", "  recovery by blobs"),
     (pins._refine.Refiner, "fit_tips", "  tip fits on slopes (fit_tips)"),
+    (pins._rest._AtRest, "observe_still", "  still steps (observe_still)"),
+    (pins._rest._AtRest, "_learn_levels", "  faint levels (_learn_levels)"),
+    (pins._return.RestMatch, "restore", "  rest frame again (RestMatch)"),
+    (pins.track, "part_overlapping", "  overlapping pairs"),
+    (pins.track, "kept_on_own_tips", "  own tips (kept_on_own_tips)"),
     (tactip.replay.video, "analyse", "contacts, scale, feature pins"),
     (tactip.pipeline, "contact_features", "contact features"),
     (tactip.replay.video, "write_hdf5", "HDF5 file"),
@@ -140,7 +147,9 @@ _PARTS = [
 def timed(seconds: collections.Counter, windows: list) -> None:
     """Wrap each part so that its main-thread CPU time adds up in `seconds` (s); window counts go to `windows`."""
     for owner, name, label in _PARTS:
-        function = getattr(owner, name)
+        function = getattr(owner, name, None)
+        if function is None:
+            continue
 
         def wrapper(*args, _function=function, _label=label, **kwargs):
             start = time.thread_time()
@@ -179,7 +188,9 @@ class _Counted:
         self._count = calls
         self._restore = []
         for owner, name, label in _TRACKER:
-            function = getattr(owner, name)
+            function = getattr(owner, name, None)
+            if function is None:  # (a part another tree does not have)
+                continue
             self._restore.append((owner, name, function))
             setattr(owner, name, self._wrap(function, label))
 
@@ -239,7 +250,7 @@ class _Counted:
 def _frames(args, folder: str) -> tuple[list, pathlib.Path]:
     """The slide video's decoded frames (cached as .npy in `folder` for the workers) and that file."""
     video = pathlib.Path(folder) / ("slides.avi" if args.codec == "MJPG" else "slides.mp4")
-    write_slides(video, "radial-led-120", args.slides, codec=args.codec)
+    write_slides(video, args.preset, args.slides, codec=args.codec)
     images = decode(video)
     stored = pathlib.Path(folder) / "frames.npy"
     np.save(stored, np.array(images))
@@ -254,7 +265,7 @@ def count_calls(args) -> None:
     counted.run(images)
     frames = len(images) - 1
     sizes = np.array(counted.windows)
-    print(f"radial-led-120, {args.slides} slides, {args.codec}: tracker updates over {frames} frames; per frame, "
+    print(f"{args.preset}, {args.slides} slides, {args.codec}: tracker updates over {frames} frames; per frame, "
           f"by part: Python-level calls (functions, NumPy's C functions included) and operations (calls, "
           f"operators, comparisons, subscripts: a NumPy ufunc or array operator is one)")
     print(f"{'':40s}{'calls/frame':>12s}{'%':>7s}{'ops/frame':>11s}{'%':>7s}")
@@ -321,6 +332,7 @@ def main() -> None:
     """Write the video, replay it `--repeats` times, print the main thread's CPU by part (best run)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--slides", type=int, default=8)
+    parser.add_argument("--preset", default="radial-led-120", help="the synthetic TacTip that slides (tactip-331 ...)")
     parser.add_argument("--codec", choices=("mp4v", "MJPG"), default="MJPG")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--calls", action="store_true", help="the tracker's Python-level calls per frame by part")
@@ -340,7 +352,7 @@ def main() -> None:
     best: dict | None = None
     with tempfile.TemporaryDirectory() as folder:
         video = pathlib.Path(folder) / ("slides.avi" if args.codec == "MJPG" else "slides.mp4")
-        frames = write_slides(video, "radial-led-120", args.slides, codec=args.codec)
+        frames = write_slides(video, args.preset, args.slides, codec=args.codec)
         for repeat in range(args.repeats):
             seconds.clear()
             windows.clear()
@@ -351,7 +363,7 @@ def main() -> None:
                 best = dict(total=total, parts=dict(seconds), windows=np.array(windows))
     total, parts, sizes = best["total"], best["parts"], best["windows"]
     parts["rest (frame loop, queue, stacking)"] = total - sum(v for k, v in parts.items() if not k.startswith(" "))
-    print(f"radial-led-120, {args.slides} slides: {frames} frames {args.codec}; main thread {total:.3f} s CPU, "
+    print(f"{args.preset}, {args.slides} slides: {frames} frames {args.codec}; main thread {total:.3f} s CPU, "
           f"{total / frames * 1e3:.2f} ms/frame; best of {args.repeats}")
     print(f"{'':40s}{'s':>8s}{'ms/frame':>10s}{'%':>7s}")
     for label, value in sorted(parts.items(), key=lambda item: -item[1]):

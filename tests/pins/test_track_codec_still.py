@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 import pytest
 
+import pins._kernels
 from pins import DetectionParams, PinTracker, SensorDisc, find_pin_field
 from tactip.sim import SyntheticTacTip
 
@@ -104,7 +105,7 @@ def test_a_still_pad_through_a_codec_loses_no_pin(codec, kernels, tmp_path, monk
     # lost faint tips on reflections within these frames before (MJPG: frames 7 and 3; mp4v: 1-8 and 1, 3);
     # over 40 still frames and seeds 0-11, lost pin-frames were MJPG 8, mp4v 32 (raw 0).
     if kernels == "numpy":
-        monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+        monkeypatch.setattr(pins._kernels, "_NUMPY", True)
     for seed in (9, 10):
         sensor, images = _still_pad("radial-led-120", seed, 9, codec, tmp_path)
         field = find_pin_field(images[0])
