@@ -15,13 +15,18 @@ Noise. The bounds the camera's noise sets (each window's scatter in it, its cont
 it the tips' bounds at rest, `pins._like`) are drawn from the rest frame's own noise; through a video
 codec, which smooths the noise within a frame but not from frame to frame, that is too little, and the
 first still frame after the rest frame widens the tips' bounds to the scatter of the contrast it shows
-(`_AtRest.heed_camera_noise`).
+(`_AtRest.heed_camera_noise`). In that frame no window's own scatter is learnt yet, and the one the rest frame's
+noise predicts is too small by as much: `snap_to_rest`'s calm test there reads it grown by the ratio of the two
+noises (radial-led-120 mp4v seed 3: a tip's area read 66 px^2 at rest, 240 in the first still frame: lost).
 
 Levels. The rest frame is one noisy frame, and a faint tip's measures there (its bounds the noise's,
 `pins._like`) may lie several of its scatters from its own level: each faint tip learns that level, the mean
 of its window's readings at rest over the frames of a pad at rest, and has the bounds of it (only ever wider)
 while it is still or steady: lost or jittering by its window's noise among still neighbours
 (`_AtRest._learn_levels`, `_AtRest._draw_bounds`).
+
+Each pin has a level, learnt bounds and steadiness in (3, N) and (N,) arrays (only faint tips' change); each
+frame's bounds are picked from them by compiled calls (`pins._jit_rest`: 0.07 ms a frame less than NumPy).
 
 `_AtRest` holds these steps; `pins._refine.Refiner` inherits them and sets the state they read
 (`rest_positions`, `_rest_offset`, `_rest_radius`, the learnt scatters, `_settled_px`, `_guess_px`).
@@ -158,9 +163,8 @@ class _AtRest:
         self._at_rest_here = np.zeros(len(contrast), dtype=bool)  # (`_learn_levels`: the pad at rest round it)
 
     def _still_least(self, least: np.ndarray, pins: np.ndarray | slice = slice(None)) -> np.ndarray:
-        """Bounds from below (3, L) of pins `pins` held still (a faint tip's learnt bounds, which it has only while
-        still or steady, `_draw_bounds`): no higher than the rest frame's bounds of a still tip (its contrast's
-        `_contrast_still` once a codec's still pair widened them, `heed_camera_noise`)."""
+        """Bounds from below (3, L) of `pins` held still (faint tips' learnt bounds, `_draw_bounds`): no higher than
+        a still tip's from the rest frame (its contrast's `_contrast_still` after a codec's still pair)."""
         if self._contrast_still is None:
             return least.copy()
         still = self._rest_least[:, pins]  # (a copy)
@@ -311,8 +315,7 @@ class _AtRest:
         mine &= self._at_rest_here  # (N,): faint tips still or steady on a pad at rest round them
         at_least = np.where(mine, self._learnt_least, self._rest_least)
         if self._contrast_still is not None:
-            at_least[1] = np.where(mine, self._learnt_least[1], np.where(still, self._contrast_still,
-                                                                         self._contrast_moving))
+            at_least[1] = np.where(mine, at_least[1], np.where(still, self._contrast_still, self._contrast_moving))
         self._at_least = at_least
         mine &= self._judged  # (-inf for a tip judged by its contrast alone that is not still: kept)
         np.copyto(area_at_most, self._learnt_most, where=mine)
@@ -400,7 +403,13 @@ class _AtRest:
         """
         noise_scatter_sq = self._noise_scatter_sq
         if self._rest_for_noise is not None:
-            self.heed_camera_noise(crop, positions)
+            contrast_noise = self.contrast_noise
+            if self.heed_camera_noise(crop, positions) and contrast_noise > 0:  # (0: a noiseless rest frame)
+                # The still pair itself: no window's scatter is learnt yet (a pin its follow passes lost here
+                # has no step), and the rest frame's noise, which a codec hid, predicts each window's 1.4-8 x
+                # too small (`bench/bench_noise_codecs.py`): its calm test reads it grown by the pair's own
+                # ratio of noises, this frame only (grown for good it swapped identities through slides).
+                noise_scatter_sq = noise_scatter_sq * (self.contrast_noise / contrast_noise) ** 2
         positions = self._snap_to_rest(crop, positions, search, noise_scatter_sq)
         if self._faint.size and self._rest_for_noise is None:  # (after the first still pair: not the rest frame again)
             self._learn_levels(crop, positions)
@@ -469,7 +478,6 @@ class _AtRest:
         positions = positions.copy()
         positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
-
 
     def _snap_to_rest_compiled(self, kernels, crop: np.ndarray, positions: np.ndarray, search: np.ndarray,
                                noise_scatter_sq: np.ndarray) -> np.ndarray:

@@ -26,6 +26,8 @@ contact's frames stop there), then on all: a blur of one frame difference over t
 frames/s (`tests.pins.conftest.slide_run`, two slides, seed 0, CPU time, 3 interleaved rounds) an update
 costs 0.84 -> 0.88 ms on tactip-331 and 0.47 -> 0.51 ms on radial-led-120 (0.85 -> 1.03, 0.47 -> 0.54
 without the probe).
+The probe is one compiled call (`pins._jit_rest.probe_matches`) that stops once the answer is known (a few
+windows in a contact's frames): 2 us a frame against 21 us (radial-led-120's 8 slides, mp4v).
 """
 
 from __future__ import annotations
