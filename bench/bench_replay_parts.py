@@ -82,6 +82,19 @@ as several), operations 1218 -> 819 (561 -> 258, 121 -> 82, 211 -> 201). What is
 own work (their kernels, ~0.1), the tip fits (~0.12-0.16, `pins._recover`, `pins._tipfit`), the update's
 own code in `pins.track` (~0.07), recovery by blobs (0.05).
 
+Session 19's "rest14" (2026-11-30; load average 3-15 from other sessions; main 09118d1 against this session's
+code): the still pad's bookkeeping session 18 added (faint tips' levels, bounds and steadiness; the rest frame's
+probe) cheaper, with the same results: per-pin arrays and compiled kernels (`pins._jit_rest` draw_bounds,
+faint_steady, faint_here, probe_matches with an early exit), and ``TACTIP_KERNELS`` read once (`pins._kernels`).
+``--against`` main, tracker updates ms/frame CPU (median of the paired ratios), the speed commit alone, 3 rounds
+(positions, lost and retired pins identical on all six videos): radial-led-120 mp4v 0.653 -> 0.576 (0.86), MJPG
+0.714 -> 0.656 (0.88; still steps 0.44-0.50 with the bounds they redraw, faint levels 0.69-0.72, RestMatch
+0.62-0.66); ``--preset tactip-331`` and ``rim-ring-331`` (no faint tip: nothing to save) 0.96-1.03. The final code,
+5 rounds at load 15: mp4v 0.781 -> 0.717 (0.92), MJPG 0.793 -> 0.672 (0.86); still steps 0.064 -> 0.031, faint
+levels 0.026 -> 0.018, RestMatch 0.029 -> 0.017 (its probe alone 21 -> 2 us a frame); lost and retired pins
+identical, positions but in frames 1-4 (the still pair's calm test, `pins._rest`: 43 / 7 pin-frames, <= 0.59 px).
+Parts added here: ``--preset``, and the still steps, faint levels, RestMatch, overlapping pairs and own tips timed.
+
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C
@@ -93,7 +106,7 @@ the tracker's CPU by part (``time.thread_time``), this tree against TREE in inte
 (``--rounds``, each in a fresh process per tree, the order alternating), with the median of the
 paired ratios per part, and whether the two trees' positions, lost and retired pins are identical.
 
-Run: .venv/bin/python bench/bench_replay_parts.py [--slides N] [--codec mp4v|MJPG] [--repeats N]
+Run: .venv/bin/python bench/bench_replay_parts.py [--slides N] [--codec mp4v|MJPG] [--preset NAME] [--repeats N]
      .venv/bin/python bench/bench_replay_parts.py --calls [--slides N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay_parts.py --against TREE [--rounds N] [--slides N] [--codec mp4v|MJPG]
 """
