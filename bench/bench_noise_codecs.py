@@ -68,6 +68,16 @@ raw renders' own prediction reads 1.3-1.4 x): `pins._rest._AtRest.heed_camera_no
 ratio was tried again: radial-led-120 slides through MJPG, seeds 0-5, swaps 213 -> 259 (apart 8 -> 22) against
 210 (8) without; mp4v 280 -> 210 (24 -> 11) against 283 (24). Left as the rest frame draws it.
 
+Session 19 (rest14): the first still frame. The rest frame is the video's first frame, decoded like the
+others (through mp4v an I-frame before P-frames: it differs from the still frames by 3.1 grey levels on
+average against 2.9 between them; MJPG 3.2 both; raw 4.2 both; radial-led-120 seeds 0-2). What lost mp4v seed
+3's pin 119 on that frame was the calm test of `snap_to_rest`: its area read 66 at rest, 240 / 562 / inf / 98
+in still frames 1-4 (the bound 131), and from frame 2 on its window's learnt scatter makes it calm; in frame 1
+no scatter is learnt and the one the rest frame's noise predicts is 1.4-8 x too small (above). The still pair's
+own frame now reads it grown by the pair's ratio of noises (`pins._rest._AtRest.snap_to_rest`). Lost
+pin-frames over 40 still frames, radial-led-120 seeds 0-47: mp4v 1 -> 0, MJPG 0 -> 0; every other preset
+through both codecs 0 -> 0.
+
 Run: .venv/bin/python bench/bench_noise_codecs.py [--frames 24] [--presets radial-led-120 ...]
 """
 

@@ -209,6 +209,17 @@ faults 1.8 against 3.2 a frame (7 interleaved rounds): no gain where the bar is 
 decoders on alternate chunks (OpenCV's seek decodes ~27 frames, 10-16 ms, per chunk; at best the busier
 thread would go from ~0.76 to the two threads' mean, ~0.7 ms/frame, before the seeks).
 
+Session 19's "rest14" (2026-11-30; load average 14-16 from other sessions; main 09118d1 against this session's
+code, ``--slides 8``, 2 rounds interleaved, best of 3 repeats each): the still pad's bookkeeping of session 18
+cheaper (`bench_replay_parts.py`). CPU, ms/frame, mp4v, main -> this, per round: the tracker alone 0.60 / 0.62 ->
+0.49 / 0.49; replay's main thread 0.87 / 0.84 -> 0.77 / 0.75, its decode thread 0.80 / 0.76 -> 0.78 / 0.76: the
+main thread, above the decode thread before, is now at or below it. MJPG, one round: the tracker 0.58 -> 0.44, main
+thread 0.89 -> 0.74, decode thread 0.86 -> 0.79. The clock at that load says nothing (replay /
+decode 2.8-10.7 per repeat on either side). On a quiet machine replay's clock is then its decode thread's
+(speed12's estimate above: start + 795 x ~0.76 ms + tail, ~1.5 x decoding alone): expected mp4v ~1.45-1.52,
+MJPG ~1.1-1.2 as before; what is left for mp4v is decoding in replay as fast as alone (0.76 against ~0.56
+ms/frame of clock), not the tracker.
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
 """

@@ -82,6 +82,19 @@ as several), operations 1218 -> 819 (561 -> 258, 121 -> 82, 211 -> 201). What is
 own work (their kernels, ~0.1), the tip fits (~0.12-0.16, `pins._recover`, `pins._tipfit`), the update's
 own code in `pins.track` (~0.07), recovery by blobs (0.05).
 
+Session 19's "rest14" (2026-11-30; load average 3-15 from other sessions; main 09118d1 against this session's
+code): the still pad's bookkeeping session 18 added (faint tips' levels, bounds and steadiness; the rest frame's
+probe) cheaper, with the same results: per-pin arrays and compiled kernels (`pins._jit_rest` draw_bounds,
+faint_steady, faint_here, probe_matches with an early exit), and ``TACTIP_KERNELS`` read once (`pins._kernels`).
+``--against`` main, tracker updates ms/frame CPU (median of the paired ratios), the speed commit alone, 3 rounds
+(positions, lost and retired pins identical on all six videos): radial-led-120 mp4v 0.653 -> 0.576 (0.86), MJPG
+0.714 -> 0.656 (0.88; still steps 0.44-0.50 with the bounds they redraw, faint levels 0.69-0.72, RestMatch
+0.62-0.66); ``--preset tactip-331`` and ``rim-ring-331`` (no faint tip: nothing to save) 0.96-1.03. The final code,
+5 rounds at load 15: mp4v 0.781 -> 0.717 (0.92), MJPG 0.793 -> 0.672 (0.86); still steps 0.064 -> 0.031, faint
+levels 0.026 -> 0.018, RestMatch 0.029 -> 0.017 (its probe alone 21 -> 2 us a frame); lost and retired pins
+identical, positions but in frames 1-4 (the still pair's calm test, `pins._rest`: 43 / 7 pin-frames, <= 0.59 px).
+Parts added here: ``--preset``, and the still steps, faint levels, RestMatch, overlapping pairs and own tips timed.
+
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C
@@ -93,7 +106,7 @@ the tracker's CPU by part (``time.thread_time``), this tree against TREE in inte
 (``--rounds``, each in a fresh process per tree, the order alternating), with the median of the
 paired ratios per part, and whether the two trees' positions, lost and retired pins are identical.
 
-Run: .venv/bin/python bench/bench_replay_parts.py [--slides N] [--codec mp4v|MJPG] [--repeats N]
+Run: .venv/bin/python bench/bench_replay_parts.py [--slides N] [--codec mp4v|MJPG] [--preset NAME] [--repeats N]
      .venv/bin/python bench/bench_replay_parts.py --calls [--slides N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay_parts.py --against TREE [--rounds N] [--slides N] [--codec mp4v|MJPG]
 """
@@ -114,6 +127,8 @@ import time
 import numpy as np
 
 import pins._refine
+import pins._rest
+import pins._return
 import pins._window
 import pins.track
 import tactip.pipeline
@@ -131,6 +146,11 @@ _PARTS = [
     (pins._refine.Refiner, "refine", "  LK retry and refinement"),
     (pins._refine.Refiner, "recover", "  recovery by blobs"),
     (pins._refine.Refiner, "fit_tips", "  tip fits on slopes (fit_tips)"),
+    (pins._rest._AtRest, "observe_still", "  still steps (observe_still)"),
+    (pins._rest._AtRest, "_learn_levels", "  faint levels (_learn_levels)"),
+    (pins._return.RestMatch, "restore", "  rest frame again (RestMatch)"),
+    (pins.track, "part_overlapping", "  overlapping pairs"),
+    (pins.track, "kept_on_own_tips", "  own tips (kept_on_own_tips)"),
     (tactip.replay.video, "analyse", "contacts, scale, feature pins"),
     (tactip.pipeline, "contact_features", "contact features"),
     (tactip.replay.video, "write_hdf5", "HDF5 file"),
@@ -140,7 +160,9 @@ _PARTS = [
 def timed(seconds: collections.Counter, windows: list) -> None:
     """Wrap each part so that its main-thread CPU time adds up in `seconds` (s); window counts go to `windows`."""
     for owner, name, label in _PARTS:
-        function = getattr(owner, name)
+        function = getattr(owner, name, None)
+        if function is None:
+            continue
 
         def wrapper(*args, _function=function, _label=label, **kwargs):
             start = time.thread_time()
@@ -179,7 +201,9 @@ class _Counted:
         self._count = calls
         self._restore = []
         for owner, name, label in _TRACKER:
-            function = getattr(owner, name)
+            function = getattr(owner, name, None)
+            if function is None:  # (a part another tree does not have)
+                continue
             self._restore.append((owner, name, function))
             setattr(owner, name, self._wrap(function, label))
 
@@ -239,7 +263,7 @@ class _Counted:
 def _frames(args, folder: str) -> tuple[list, pathlib.Path]:
     """The slide video's decoded frames (cached as .npy in `folder` for the workers) and that file."""
     video = pathlib.Path(folder) / ("slides.avi" if args.codec == "MJPG" else "slides.mp4")
-    write_slides(video, "radial-led-120", args.slides, codec=args.codec)
+    write_slides(video, args.preset, args.slides, codec=args.codec)
     images = decode(video)
     stored = pathlib.Path(folder) / "frames.npy"
     np.save(stored, np.array(images))
@@ -254,7 +278,7 @@ def count_calls(args) -> None:
     counted.run(images)
     frames = len(images) - 1
     sizes = np.array(counted.windows)
-    print(f"radial-led-120, {args.slides} slides, {args.codec}: tracker updates over {frames} frames; per frame, "
+    print(f"{args.preset}, {args.slides} slides, {args.codec}: tracker updates over {frames} frames; per frame, "
           f"by part: Python-level calls (functions, NumPy's C functions included) and operations (calls, "
           f"operators, comparisons, subscripts: a NumPy ufunc or array operator is one)")
     print(f"{'':40s}{'calls/frame':>12s}{'%':>7s}{'ops/frame':>11s}{'%':>7s}")
@@ -321,6 +345,7 @@ def main() -> None:
     """Write the video, replay it `--repeats` times, print the main thread's CPU by part (best run)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--slides", type=int, default=8)
+    parser.add_argument("--preset", default="radial-led-120", help="the synthetic TacTip that slides (tactip-331 ...)")
     parser.add_argument("--codec", choices=("mp4v", "MJPG"), default="MJPG")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--calls", action="store_true", help="the tracker's Python-level calls per frame by part")
@@ -340,7 +365,7 @@ def main() -> None:
     best: dict | None = None
     with tempfile.TemporaryDirectory() as folder:
         video = pathlib.Path(folder) / ("slides.avi" if args.codec == "MJPG" else "slides.mp4")
-        frames = write_slides(video, "radial-led-120", args.slides, codec=args.codec)
+        frames = write_slides(video, args.preset, args.slides, codec=args.codec)
         for repeat in range(args.repeats):
             seconds.clear()
             windows.clear()
@@ -351,7 +376,7 @@ def main() -> None:
                 best = dict(total=total, parts=dict(seconds), windows=np.array(windows))
     total, parts, sizes = best["total"], best["parts"], best["windows"]
     parts["rest (frame loop, queue, stacking)"] = total - sum(v for k, v in parts.items() if not k.startswith(" "))
-    print(f"radial-led-120, {args.slides} slides: {frames} frames {args.codec}; main thread {total:.3f} s CPU, "
+    print(f"{args.preset}, {args.slides} slides: {frames} frames {args.codec}; main thread {total:.3f} s CPU, "
           f"{total / frames * 1e3:.2f} ms/frame; best of {args.repeats}")
     print(f"{'':40s}{'s':>8s}{'ms/frame':>10s}{'%':>7s}")
     for label, value in sorted(parts.items(), key=lambda item: -item[1]):

@@ -160,3 +160,121 @@ def observe_still(steps, settled_sq, mean_sq, seen, first_count, bound_sq, rate)
         else:
             mean_sq[i] = so_far + 0.0
     return still
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def probe_matches(crop, probe_index, probe_rest, bound, need):
+    """`pins._return.RestMatch._probe_matches`: whether at least `need` of the probe pins' windows match the rest
+    frame, their mean absolute difference within `bound` grey levels. `crop` the frame's crop flattened (uint8),
+    `probe_index` (P, m) its windows' pixels, `probe_rest` (P, m) the rest frame's there (int16). Stops as soon as
+    the answer is known (most frames of a contact: after a few windows)."""
+    probes, m = probe_index.shape
+    matches = 0
+    for p in range(probes):
+        total = 0
+        for j in range(m):
+            total += abs(np.int64(crop[probe_index[p, j]]) - np.int64(probe_rest[p, j]))
+        if total / m <= bound:
+            matches += 1
+            if matches >= need:
+                return True
+        elif matches + probes - 1 - p < need:
+            return False
+    return matches >= need
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def draw_bounds(still, steady, here, judged, rest_least, learnt_least, learnt_most, area_rest, contrast_still,
+                contrast_moving, pair):
+    """`pins._rest._AtRest._draw_bounds`: each pin's bounds from below (3, N) and on its area from above (N,) for
+    pins `still` (N,) bool in the last frame, faint tips `steady` there and on a pad at rest round them (`here`):
+    a faint tip still or steady there has its learnt bounds (`learnt_least`, `learnt_most` where `judged`), any
+    other its rest frame's (`rest_least`; with `pair`, a codec's still pair seen, the contrast's bound of a still
+    or a moving pin: `contrast_still`, `contrast_moving`), and a tip judged by its contrast alone (not `judged`)
+    an area bound only while still (else -inf)."""
+    n = still.shape[0]
+    at_least = np.empty((3, n))
+    area = np.empty(n)
+    for i in range(n):
+        mine = (still[i] or steady[i]) and here[i]
+        if mine:
+            at_least[0, i], at_least[1, i], at_least[2, i] = learnt_least[0, i], learnt_least[1, i], learnt_least[2, i]
+        else:
+            at_least[0, i], at_least[2, i] = rest_least[0, i], rest_least[2, i]
+            if pair:
+                at_least[1, i] = contrast_still[i] if still[i] else contrast_moving[i]
+            else:
+                at_least[1, i] = rest_least[1, i]
+        if mine and judged[i]:
+            area[i] = learnt_most[i]
+        elif judged[i] or still[i]:
+            area[i] = area_rest[i]
+        else:
+            area[i] = -np.inf
+    return at_least, area
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def faint_steady(steps, faint, index, guess_sq, settled_sq, steady):
+    """`pins._rest._AtRest.observe_still`'s faint tips: each faint tip (`faint` (F,) pins) whose (N, 2) step, px,
+    lies within `settled_sq` but not `guess_sq` (px^2), or is NaN (lost), among neighbours (`index` (N, k)) whose
+    median step lies within `guess_sq` is steady; written into `steady` (N,) bool; returns whether any changed."""
+    k = index.shape[1]
+    xs, ys = np.empty(k), np.empty(k)
+    median = np.empty((1, 2))
+    changed = False
+    for f in range(faint.shape[0]):
+        pin = faint[f]
+        x, y = steps[pin, 0], steps[pin, 1]
+        own = x * x + y * y
+        now = not (own <= guess_sq) and not (own > settled_sq)
+        if now:
+            for j in range(k):
+                xs[j] = steps[index[pin, j], 0]
+                ys[j] = steps[index[pin, j], 1]
+            _median_into(xs, ys, k, median, 0)
+            now = median[0, 0] * median[0, 0] + median[0, 1] * median[0, 1] <= guess_sq
+        if now != steady[pin]:
+            steady[pin] = now
+            changed = True
+    return changed
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def faint_here(positions, rest_positions, faint, index, near_sq, share, guess_sq, judged, seen, readings, here):
+    """`pins._rest._AtRest._learn_levels`' checks: on a pad at rest (at least `share` of the (N, 2) `positions`,
+    px, within `near_sq` of rest, px^2), each faint tip (`faint` (F,)) whose neighbours' (`index` (N, k)) median
+    displacement lies within `guess_sq` is at rest there (`here` (N,) bool, written; all False off a pad at
+    rest); returns the faint tips that read their windows: at rest there, placed within `near_sq` of rest (or
+    lost and not `judged` by all three measures), with fewer than `readings` readings of their contrast (`seen`)."""
+    n, k = index.shape
+    near = 0
+    for i in range(n):
+        dx = positions[i, 0] - rest_positions[i, 0]
+        dy = positions[i, 1] - rest_positions[i, 1]
+        if dx * dx + dy * dy <= near_sq:
+            near += 1
+    read = np.empty(faint.shape[0], np.int64)
+    count = 0
+    if near < share * n:
+        for f in range(faint.shape[0]):
+            here[faint[f]] = False
+        return read[:0]
+    xs, ys = np.empty(k), np.empty(k)
+    median = np.empty((1, 2))
+    for f in range(faint.shape[0]):
+        pin = faint[f]
+        for j in range(k):
+            other = index[pin, j]
+            xs[j] = positions[other, 0] - rest_positions[other, 0]
+            ys[j] = positions[other, 1] - rest_positions[other, 1]
+        _median_into(xs, ys, k, median, 0)
+        at_rest = median[0, 0] * median[0, 0] + median[0, 1] * median[0, 1] <= guess_sq
+        here[pin] = at_rest
+        dx = positions[pin, 0] - rest_positions[pin, 0]
+        dy = positions[pin, 1] - rest_positions[pin, 1]
+        away = dx * dx + dy * dy
+        if at_rest and (away <= near_sq or (away != away and not judged[pin])) and seen[pin] < readings:
+            read[count] = pin
+            count += 1
+    return read[:count]

@@ -6,7 +6,9 @@ frame (issue 20, outcome 9). The compiled kernels do each pass in one call, a lo
 the bookkeeping round them too (`pins._jit_track`: the follow passes' judgements, neighbours' medians,
 predictions, carried steps, identities, snap to rest), bit for bit their references.
 The NumPy code stays the reference: it runs when the environment variable ``TACTIP_KERNELS`` is
-``numpy`` or when Numba cannot be imported, and the tests hold the kernels to it.
+``numpy`` (read once, when `pins._kernels` is imported: `compiled` runs ~17 times a frame, and reading the
+environment each time cost ~4 % of an update) or after ``choose("numpy")``, or when Numba cannot be imported;
+the tests hold the kernels to it (switching with `choose`).
 
 Numba is imported, and the kernels loaded (compiled once per machine, then read from their cache
 next to `pins._jit`), on the first call that needs them, not on ``import pins``: a command that
@@ -26,16 +28,30 @@ import importlib
 import os
 import pathlib
 
-__all__ = ["compiled"]
+__all__ = ["choose", "compiled"]
 
 _LOADED: dict = {}  # kernel module name -> the module, or None when Numba cannot be imported; once tried
+# Whether `compiled` gives the NumPy reference: ``TACTIP_KERNELS=numpy`` at import, then `choose`.
+_NUMPY = os.environ.get("TACTIP_KERNELS") == "numpy"
+
+
+def choose(kernels: str | None = None) -> str:
+    """Which code the tracker runs from now on: ``"numpy"`` (the NumPy reference) or ``"compiled"`` (the
+    kernels, where Numba imports); None reads ``TACTIP_KERNELS`` again, as at import. Returns the choice it
+    replaced, so that a test can put it back (``choose(choose("numpy"))``)."""
+    global _NUMPY
+    before = "numpy" if _NUMPY else "compiled"
+    if kernels is None:
+        kernels = os.environ.get("TACTIP_KERNELS", "compiled")
+    _NUMPY = kernels == "numpy"
+    return before
 
 
 def compiled(module: str = "_jit"):
     """The compiled kernels (the module `pins._jit`, or ``pins.<module>``: ``"_jit_pairs"`` for the pair fit),
-    or None: ``TACTIP_KERNELS=numpy`` in the environment (read at every call, so a test may switch it), or
+    or None: the NumPy reference chosen (``TACTIP_KERNELS=numpy`` when `pins` was imported, or `choose`), or
     Numba missing. Loaded on the first call that needs them."""
-    if os.environ.get("TACTIP_KERNELS") == "numpy":
+    if _NUMPY:
         return None
     if module not in _LOADED:
         try:

@@ -15,13 +15,18 @@ Noise. The bounds the camera's noise sets (each window's scatter in it, its cont
 it the tips' bounds at rest, `pins._like`) are drawn from the rest frame's own noise; through a video
 codec, which smooths the noise within a frame but not from frame to frame, that is too little, and the
 first still frame after the rest frame widens the tips' bounds to the scatter of the contrast it shows
-(`_AtRest.heed_camera_noise`).
+(`_AtRest.heed_camera_noise`). In that frame no window's own scatter is learnt yet, and the one the rest frame's
+noise predicts is too small by as much: `snap_to_rest`'s calm test there reads it grown by the ratio of the two
+noises (radial-led-120 mp4v seed 3: a tip's area read 66 px^2 at rest, 240 in the first still frame: lost).
 
 Levels. The rest frame is one noisy frame, and a faint tip's measures there (its bounds the noise's,
 `pins._like`) may lie several of its scatters from its own level: each faint tip learns that level, the mean
 of its window's readings at rest over the frames of a pad at rest, and has the bounds of it (only ever wider)
 while it is still or steady: lost or jittering by its window's noise among still neighbours
 (`_AtRest._learn_levels`, `_AtRest._draw_bounds`).
+
+Each pin has a level, learnt bounds and steadiness in (3, N) and (N,) arrays (only faint tips' change); each
+frame's bounds are picked from them by compiled calls (`pins._jit_rest`: 0.07 ms a frame less than NumPy).
 
 `_AtRest` holds these steps; `pins._refine.Refiner` inherits them and sets the state they read
 (`rest_positions`, `_rest_offset`, `_rest_radius`, the learnt scatters, `_settled_px`, `_guess_px`).
@@ -114,7 +119,8 @@ class _AtRest:
     # `pins._refine.Refiner.still`'s setter puts them in `_at_least`.
     _contrast_still = None
     _contrast_moving = None
-    # The faint tips (`_await_levels`; none till a rest frame is seen), their steadiness and the pad at rest round them.
+    # The faint tips (`_await_levels`; none till a rest frame is seen); per pin (N,), False but for faint tips: steady
+    # in the last frame (`observe_still`), and on a pad at rest round it (`_learn_levels`).
     _faint = np.empty(0, dtype=np.intp)
     _steady = _at_rest_here = np.empty(0, dtype=bool)
 
@@ -138,18 +144,32 @@ class _AtRest:
 
     def _await_levels(self, measures: tuple) -> None:
         """Start each faint tip's level (`_learn_levels`) from its (area, contrast, compactness) at rest, (N,)
-        each: the tips whose contrast at rest lies below twice the noise's reach, one reading each."""
+        each: the tips whose contrast at rest lies below twice the noise's reach, one reading each.
+
+        Every pin has a level, its bounds and its steadiness, in (3, N) and (N,) arrays (`_draw_bounds` picks
+        each pin's bounds in a few whole-array steps); only the faint tips' are ever read or changed."""
         self._rest_least = self._at_least.copy()  # (the bounds from below the rest frame draws)
         contrast = measures[1]
         self._faint = np.flatnonzero(contrast < 2.0 * _NOISE_REACH * self.contrast_noise)  # (NaN compares False)
-        level = np.stack(measures)[:, self._faint]
-        self._level_seen = np.isfinite(level).astype(np.float64)
-        self._level_sum = np.where(self._level_seen > 0, level, 0.0)
-        self._learnt_least = self._at_least[:, self._faint].copy()
-        self._learnt_most = self._area_at_most_rest[self._faint].copy()
-        self._steady = np.zeros(len(self._faint), dtype=bool)
-        self._at_rest_here = np.zeros(len(self._faint), dtype=bool)  # (`_learn_levels`: the pad at rest round it)
-        self._faint_judged = self._judged[self._faint]
+        faint = np.zeros(len(contrast), dtype=bool)
+        faint[self._faint] = True
+        level = np.stack(measures)
+        seen = np.isfinite(level) & faint
+        self._level_seen = seen.astype(np.float64)
+        self._level_sum = np.where(seen, level, 0.0)
+        self._learnt_least = self._still_least(self._rest_least)
+        self._learnt_most = self._area_at_most_rest.copy()
+        self._steady = np.zeros(len(contrast), dtype=bool)
+        self._at_rest_here = np.zeros(len(contrast), dtype=bool)  # (`_learn_levels`: the pad at rest round it)
+
+    def _still_least(self, least: np.ndarray, pins: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """Bounds from below (3, L) of `pins` held still (faint tips' learnt bounds, `_draw_bounds`): no higher than
+        a still tip's from the rest frame (its contrast's `_contrast_still` after a codec's still pair)."""
+        if self._contrast_still is None:
+            return least.copy()
+        still = self._rest_least[:, pins]  # (a copy)
+        still[1] = self._contrast_still[pins]
+        return np.fmin(still, least)
 
     def _learn_levels(self, crop: np.ndarray, positions: np.ndarray) -> None:
         """Each faint tip placed near its rest position (within `_STILL_FRACTION` of the spacing; or lost, one
@@ -173,29 +193,24 @@ class _AtRest:
         faint = self._faint
         if not faint.size:
             return
-        distance = _squared_norm(positions - self.rest_positions)
         near_sq = (_STILL_FRACTION * self.spacing_px) ** 2
-        if np.count_nonzero(distance <= near_sq) < _PAIR_STILL_SHARE * len(distance):
-            self._at_rest_here[:] = False
-            return  # not a pad at rest
-        self._at_rest_here = _squared_norm(self.displacement_median(positions, faint)) <= self._guess_px ** 2
-        away = distance[faint]
-        # (A lost tip compares False to both: it reads only if judged by its contrast alone.)
-        near = (away <= near_sq) | (np.isnan(away) & ~self._faint_judged)
-        near &= self._at_rest_here
-        near &= self._level_seen[1] < _LEVEL_READINGS
-        which = np.flatnonzero(near)
-        if not which.size:
+        kernels = compiled("_jit_rest")
+        if kernels is not None:  # (one compiled call, the same pins)
+            pins = kernels.faint_here(positions, self.rest_positions, faint, self._neighbour_index, near_sq,
+                                      _PAIR_STILL_SHARE, self._guess_px ** 2, self._judged, self._level_seen[1],
+                                      _LEVEL_READINGS, self._at_rest_here)
+        else:
+            pins = self._faint_here(positions, near_sq)
+        if not pins.size:
             return
-        pins = faint[which]
         readings = np.stack(self.windows.measure(crop, self.rest_positions[pins] - self.origin, self._rest_radius[pins])[1])
         finite = np.isfinite(readings)
-        self._level_sum[:, which] += np.where(finite, readings, 0.0)
-        self._level_seen[:, which] += finite
-        seen = self._level_seen[:, which]
+        self._level_sum[:, pins] += np.where(finite, readings, 0.0)
+        self._level_seen[:, pins] += finite
+        seen = self._level_seen[:, pins]
         with np.errstate(invalid="ignore", divide="ignore"):
-            level = self._level_sum[:, which] / seen  # (NaN where none was finite)
-        judged = self._faint_judged[which]
+            level = self._level_sum[:, pins] / seen  # (NaN where none was finite)
+        judged = self._judged[pins]
         least, most = bounds_from_level(level, seen, judged, self.contrast_noise)
         rest_least, rest_most = self._rest_least[:, pins], self._area_at_most_rest[pins]
         # Only ever wider, and within the caps (NaN, a measure never read, leaves the rest frame's bound) ...
@@ -206,8 +221,25 @@ class _AtRest:
         # ... and not for a tip judged by all three measures whose level sank within the reach of nothing: it
         # vanished (the windows that placed it read the membrane) or was never there; its rest frame's bounds stand.
         sunk = judged & ~(level[1] > reach)
-        self._learnt_least[:, which] = np.where(sunk, rest_least, least)
-        self._learnt_most[which] = np.where(sunk, rest_most, most)
+        self._learnt_least[:, pins] = self._still_least(np.where(sunk, rest_least, least), pins)
+        self._learnt_most[pins] = np.where(sunk, rest_most, most)
+
+    def _faint_here(self, positions: np.ndarray, near_sq: float) -> np.ndarray:
+        """`_learn_levels`' checks (the NumPy reference of `pins._jit_rest.faint_here`): on a pad at rest, which
+        faint tips are at rest there (`_at_rest_here`, set) and which read their windows at rest (returned)."""
+        faint = self._faint
+        distance = _squared_norm(positions - self.rest_positions)
+        if np.count_nonzero(distance <= near_sq) < _PAIR_STILL_SHARE * len(distance):
+            self._at_rest_here[faint] = False
+            return faint[:0]  # not a pad at rest
+        here = _squared_norm(self.displacement_median(positions, faint)) <= self._guess_px ** 2
+        self._at_rest_here[faint] = here
+        away = distance[faint]
+        # (A lost tip compares False to both: it reads only if judged by its contrast alone.)
+        near = (away <= near_sq) | (np.isnan(away) & ~self._judged[faint])
+        near &= here
+        near &= self._level_seen[1, faint] < _LEVEL_READINGS
+        return faint[near]
 
     def heed_camera_noise(self, crop: np.ndarray, positions: np.ndarray) -> bool:
         """Widen the bounds that the camera's noise sets to the noise the first still frame after the rest
@@ -265,26 +297,29 @@ class _AtRest:
         (Not on a pad in contact, however still the tip: radial-led-120's realistic slides, seed 4, kept a faint
         tip 5.5-6.7 px off its centre for 20 frames of a slide's end by its level's wider area bound.)"""
         still = self._still
-        self._area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
-        faint = self._faint
-        if self._contrast_still is not None:
-            held = still
-            if faint.size:
-                held = still.copy()
-                held[faint] |= self._steady & self._at_rest_here
-            self._at_least[1] = np.where(held, self._contrast_still, self._contrast_moving)
-        if not faint.size:
+        kernels = compiled("_jit_rest") if self._faint.size else None  # (without faint tips two NumPy calls do)
+        if kernels is not None:  # (one compiled call, the same bounds)
+            pair = self._contrast_still is not None
+            self._at_least, self._area_at_most = kernels.draw_bounds(
+                still, self._steady, self._at_rest_here, self._judged, self._rest_least, self._learnt_least,
+                self._learnt_most, self._area_at_most_rest, self._contrast_still if pair else self._area_at_most_rest,
+                self._contrast_moving if pair else self._area_at_most_rest, pair)
             return
-        mine = still[faint] | self._steady
-        mine &= self._at_rest_here
-        least = self._rest_least[:, faint]
-        learnt = self._learnt_least  # (within the rest frame's bounds already)
+        area_at_most = np.where(self._judged | still, self._area_at_most_rest, -np.inf)
+        if not self._faint.size:
+            if self._contrast_still is not None:
+                self._at_least[1] = np.where(still, self._contrast_still, self._contrast_moving)
+            self._area_at_most = area_at_most
+            return
+        mine = still | self._steady
+        mine &= self._at_rest_here  # (N,): faint tips still or steady on a pad at rest round them
+        at_least = np.where(mine, self._learnt_least, self._rest_least)
         if self._contrast_still is not None:
-            least[1] = self._at_least[1, faint]
-            learnt = np.fmin(least, learnt)
-        self._at_least[:, faint] = np.where(mine, learnt, least)
-        mine &= self._faint_judged  # (-inf for a tip judged by its contrast alone that is not still: kept)
-        self._area_at_most[faint] = np.where(mine, self._learnt_most, self._area_at_most[faint])
+            at_least[1] = np.where(mine, at_least[1], np.where(still, self._contrast_still, self._contrast_moving))
+        self._at_least = at_least
+        mine &= self._judged  # (-inf for a tip judged by its contrast alone that is not still: kept)
+        np.copyto(area_at_most, self._learnt_most, where=mine)
+        self._area_at_most = area_at_most
 
     def still(self, steps: np.ndarray) -> np.ndarray:
         """Whether each (N, 2) step, px, lies within the search's settling bound (camera noise, not motion): (N,) bool."""
@@ -307,7 +342,11 @@ class _AtRest:
             half *= 0.5
             # Slow motion (a tap's onset) is no noise: `_learn_mean_square`'s bound leaves it out.
             _learn_mean_square(self._jitter_sq, self._jitter_seen, slice(None), half, still)
-        if self._faint.size:
+        if self._faint.size and kernels is not None:
+            if compiled("_jit_rest").faint_steady(steps, self._faint, self._neighbour_index, self._guess_px ** 2,
+                                                  self._settled_px ** 2, self._steady):
+                self._draw_bounds()  # (else the still setter drew them as they are)
+        elif self._faint.size:
             # A faint tip whose window stepped within the settling bound, or that was lost, among neighbours that
             # stepped within the guess bound is steady: the membrane there is still (its window's jitter in
             # noise, tenths of a px, is no motion), and it is judged as a still tip (`_draw_bounds`).
@@ -317,8 +356,8 @@ class _AtRest:
             if np.count_nonzero(steady):
                 around = self.neighbour_median(steps, faint[steady])
                 steady[steady] = _squared_norm(around) <= self._guess_px ** 2
-            if not np.array_equal(steady, self._steady):  # (else the still setter drew them as they are)
-                self._steady = steady
+            if not np.array_equal(steady, self._steady[faint]):  # (else the still setter drew them as they are)
+                self._steady[faint] = steady
                 self._draw_bounds()
         seen, jitter = self._jitter_seen, self._jitter_sq
         self._observed += 1
@@ -362,18 +401,27 @@ class _AtRest:
         positions : (N, 2) ndarray of float64
             `positions`, or a copy with the pins found at their rest positions, px.
         """
+        noise_scatter_sq = self._noise_scatter_sq
         if self._rest_for_noise is not None:
-            self.heed_camera_noise(crop, positions)
-        positions = self._snap_to_rest(crop, positions, search)
+            contrast_noise = self.contrast_noise
+            if self.heed_camera_noise(crop, positions) and contrast_noise > 0:  # (0: a noiseless rest frame)
+                # The still pair itself: no window's scatter is learnt yet (a pin its follow passes lost here
+                # has no step), and the rest frame's noise, which a codec hid, predicts each window's 1.4-8 x
+                # too small (`bench/bench_noise_codecs.py`): its calm test reads it grown by the pair's own
+                # ratio of noises, this frame only (grown for good it swapped identities through slides).
+                noise_scatter_sq = noise_scatter_sq * (self.contrast_noise / contrast_noise) ** 2
+        positions = self._snap_to_rest(crop, positions, search, noise_scatter_sq)
         if self._faint.size and self._rest_for_noise is None:  # (after the first still pair: not the rest frame again)
             self._learn_levels(crop, positions)
         return positions
 
-    def _snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
-        """`snap_to_rest`'s placing: the positions, or a copy with pins found at their rest positions."""
+    def _snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray,
+                      noise_scatter_sq: np.ndarray) -> np.ndarray:
+        """`snap_to_rest`'s placing: the positions, or a copy with pins found at their rest positions (each window's
+        scatter in the camera's noise `noise_scatter_sq`, px^2 (N,), for the calm test)."""
         kernels = compiled()
         if kernels is not None:
-            return self._snap_to_rest_compiled(kernels, crop, positions, search)
+            return self._snap_to_rest_compiled(kernels, crop, positions, search, noise_scatter_sq)
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
         # Pins that drifted from rest by more than a window's settling in noise are looked at again.
         # (count_nonzero: `ndarray.any` costs several times more on a hundred pins.)
@@ -411,7 +459,7 @@ class _AtRest:
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
         residual = _squared_norm(centres - rest - shift)
         scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
-                             np.maximum(self._noise_scatter_sq[look], self._jitter_floor))
+                             np.maximum(noise_scatter_sq[look], self._jitter_floor))
         calm = quiet & (residual <= _CALM_BOUND ** 2 * scatter)
         bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
         # A calm pin's window need only show a tip (its contrast): its area and compactness near the
@@ -431,8 +479,8 @@ class _AtRest:
         positions[look[found]] = np.where(calm[found, None], rest[found] + shift[found], centres[found])
         return positions
 
-
-    def _snap_to_rest_compiled(self, kernels, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
+    def _snap_to_rest_compiled(self, kernels, crop: np.ndarray, positions: np.ndarray, search: np.ndarray,
+                               noise_scatter_sq: np.ndarray) -> np.ndarray:
         """`snap_to_rest` by two compiled kernels (`pins._jit_track.rest_look`, `rest_judge`; `kernels`: `pins._jit`)
         round its window measurement: the same positions and learnt scatters, bit for bit."""
         spacing = self.spacing_px
@@ -447,6 +495,6 @@ class _AtRest:
         return kernels.rest_judge(
             centres, measures, look, positions, distance, self.rest_positions, self._rest_offset, self.origin,
             self._neighbour_index, self._guess_px ** 2, _CALM_BOUND ** 2, self._settled_px, self.gate_px ** 2,
-            self._jitter_sq, self._rest_scatter_sq, self._rest_scatter_seen, self._noise_scatter_sq,
+            self._jitter_sq, self._rest_scatter_sq, self._rest_scatter_seen, noise_scatter_sq,
             float(self._jitter_floor), self._at_least, self._area_at_most, _JITTER_FIRST, _JITTER_BOUND ** 2,
             _JITTER_RATE)[0]

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+import pins._kernels
 from pins import DetectionParams, PinTracker, SensorDisc
 from pins._kernels import compiled
 from pins._tipfit import _Windows, _centre_step, _centre_step_numpy
@@ -116,10 +117,23 @@ def test_centre_step_kernel_agrees_with_the_reference(seed):
 
 
 def test_the_environment_selects_the_numpy_reference(monkeypatch):
-    monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+    monkeypatch.setattr(pins._kernels, "_NUMPY", True)
     assert compiled() is None
-    monkeypatch.delenv("TACTIP_KERNELS")
+    monkeypatch.setattr(pins._kernels, "_NUMPY", False)
     assert compiled() is kernels
+
+
+def test_the_environment_is_read_once_and_choose_switches(monkeypatch):
+    # `compiled` runs ~17 times a frame: the environment is read at import (and by `choose()`), not per call.
+    monkeypatch.setattr(pins._kernels, "_NUMPY", False)
+    monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+    assert compiled() is kernels  # (read at every call before: None)
+    assert pins._kernels.choose() == "compiled"  # (None: read the environment again)
+    assert compiled() is None and compiled("_jit_pairs") is None
+    assert pins._kernels.choose("compiled") == "numpy"
+    assert compiled() is kernels
+    monkeypatch.delenv("TACTIP_KERNELS")
+    assert pins._kernels.choose(pins._kernels.choose("numpy")) == "numpy" and compiled() is kernels
 
 
 @pytest.mark.parametrize("name, seed", [("radial-led-120", 1), ("tactip-331", 0)])
@@ -130,7 +144,7 @@ def test_tracking_through_slides_agrees_with_the_reference(name, seed, monkeypat
                               press_s=0.1, slide_s=0.25, lift_s=0.05)
     tracks = []
     for choice in ("numba", "numpy"):
-        monkeypatch.setenv("TACTIP_KERNELS", choice)
+        monkeypatch.setattr(pins._kernels, "_NUMPY", choice == "numpy")
         tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
         tracker.start(run[0].image, pins=run[0].centres[drawn])
         tracks.append([(tracker.update(f.image), tracker.lost.copy(), tracker.retired.copy()) for f in run[1:]])

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+import pins._kernels
 from pins import PinTracker
 from pins._kernels import compiled
 from pins._pairfit import fit_tip_pairs, part_overlapping
@@ -129,10 +130,10 @@ def _lattice_scene(seed):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_part_overlapping_compiled_as_the_reference(seed, monkeypatch):
     crop, positions, expected, refiner, truth = _lattice_scene(seed)
-    monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+    monkeypatch.setattr(pins._kernels, "_NUMPY", True)
     assert compiled("_jit_pairs") is None
     reference = part_overlapping(refiner, crop, positions, expected)
-    monkeypatch.delenv("TACTIP_KERNELS")
+    monkeypatch.setattr(pins._kernels, "_NUMPY", False)
     assert compiled("_jit_pairs") is not None
     kernel = part_overlapping(refiner, crop, positions, expected)
     assert np.array_equal(np.isnan(reference), np.isnan(kernel))
@@ -151,9 +152,9 @@ def test_no_overlap_leaves_positions_as_they_were(monkeypatch):
     refiner._overlap_px = np.full(len(positions), 2.0)  # (no neighbour within 2 px)
     for numpy in (True, False):
         if numpy:
-            monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+            monkeypatch.setattr(pins._kernels, "_NUMPY", True)
         else:
-            monkeypatch.delenv("TACTIP_KERNELS")
+            monkeypatch.setattr(pins._kernels, "_NUMPY", False)
         out = part_overlapping(refiner, crop, positions, expected)
         assert np.array_equal(out, positions, equal_nan=True)
 

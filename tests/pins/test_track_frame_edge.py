@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+import pins._kernels
 from pins import DetectionParams, PinTracker, SensorDisc
 from pins._flat import _pin_radius_px
 from tactip.sim import SyntheticTacTip
@@ -99,7 +100,7 @@ def test_the_numpy_path_keeps_them_as_the_compiled_kernels_do(monkeypatch):
     runs = []
     for kernels in ("compiled", "numpy"):
         if kernels == "numpy":
-            monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+            monkeypatch.setattr(pins._kernels, "_NUMPY", True)
         tracker = PinTracker(detection=DetectionParams(dark_pins=sensor.dark_pins), disc=disc)
         tracker.start(f.image, pins=given)
         runs.append(tracker.update(f.image))

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+import pins._kernels
 from pins import DetectionParams, PinTracker, SensorDisc
 from pins._identity import IDENTITY_NEIGHBOURS, MISSING_MARGIN, _keep_own_tips_numpy, keep_own_tips
 from pins._kernels import compiled
@@ -89,9 +90,9 @@ def test_predictions_are_the_references(seed, monkeypatch):
         if n > 2:
             positions[state._neighbour_index[0]] = np.nan  # pin 0: no neighbour placed (where last seen)
         got = _Prediction._predict(state, positions, which, last_seen)
-        monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+        monkeypatch.setattr(pins._kernels, "_NUMPY", True)
         want = _Prediction._predict(state, positions, which, last_seen)
-        monkeypatch.delenv("TACTIP_KERNELS")
+        monkeypatch.setattr(pins._kernels, "_NUMPY", False)
         _same(got, want)
         if n > 2:
             _same(got[0], last_seen[0])
@@ -99,17 +100,17 @@ def test_predictions_are_the_references(seed, monkeypatch):
         state.still, state.gate_px = rng.random(n) < 0.7, 3.0
         predicted = last_seen[which] + rng.normal(0.0, 3.0, (len(which), 2))
         got = _Prediction._trusted(state, positions, which, last_seen, predicted)
-        monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+        monkeypatch.setattr(pins._kernels, "_NUMPY", True)
         want = _Prediction._trusted(state, positions, which, last_seen, predicted)
-        monkeypatch.delenv("TACTIP_KERNELS")
+        monkeypatch.setattr(pins._kernels, "_NUMPY", False)
         _same(got, want)
         state._then[:] = 0.0  # `remember` against its reference
         _Prediction.remember(state, positions)
         got = state._then.copy()
-        monkeypatch.setenv("TACTIP_KERNELS", "numpy")
+        monkeypatch.setattr(pins._kernels, "_NUMPY", True)
         state._then[:] = 0.0
         _Prediction.remember(state, positions)
-        monkeypatch.delenv("TACTIP_KERNELS")
+        monkeypatch.setattr(pins._kernels, "_NUMPY", False)
         _same(got, state._then)
 
 
@@ -197,13 +198,13 @@ def test_carried_steps_and_still_steps_are_the_references(seed, monkeypatch):
                 velocity[2] = [np.inf, 0.0]
             results = []
             for choice in ("numba", "numpy"):
-                monkeypatch.setenv("TACTIP_KERNELS", choice)
+                monkeypatch.setattr(pins._kernels, "_NUMPY", choice == "numpy")
                 copy = _Steps(**{key: (value.copy() if isinstance(value, np.ndarray) else value)
                                  for key, value in vars(state).items()})
                 still = copy.observe_still(velocity)
                 carried = copy.carried_velocity(velocity.copy(), still)
                 results.append((still, carried, copy._jitter_sq, copy._jitter_seen))
-            monkeypatch.delenv("TACTIP_KERNELS")
+            monkeypatch.setattr(pins._kernels, "_NUMPY", False)
             for got, want in zip(*results):
                 _same(got, want)
 
@@ -243,7 +244,7 @@ def test_follow_and_snap_to_rest_agree_with_the_reference(name, seed, monkeypatc
             monkeypatch.setattr(Refiner, "_follow_compiled", None)
             monkeypatch.setattr(Refiner, "_snap_to_rest_compiled", None)
             monkeypatch.setattr("pins._follow.compiled", lambda: None)
-            monkeypatch.setattr("pins._rest.compiled", lambda: None)
+            monkeypatch.setattr("pins._rest.compiled", lambda *module: None)
         tracks.append([(tracker.update(f.image), tracker.lost.copy()) for f in run[1:]])
     for (positions, lost), (want, want_lost) in zip(*tracks):
         _same(positions, want)
@@ -329,7 +330,7 @@ def test_snap_to_rest_is_the_reference_on_awkward_positions(name, seed, monkeypa
         got = refiner.snap_to_rest(crops[0], positions, search)
         learnt = (refiner._rest_scatter_sq.copy(), refiner._rest_scatter_seen.copy())
         refiner._rest_scatter_sq, refiner._rest_scatter_seen = state
-        monkeypatch.setattr("pins._rest.compiled", lambda: None)
+        monkeypatch.setattr("pins._rest.compiled", lambda *module: None)
         want = refiner.snap_to_rest(crops[0], positions, search)
         monkeypatch.undo()
         _same(got, want)
