@@ -280,7 +280,8 @@ def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins
     A pin whose membrane cannot be fitted (too little of it round the pin) is not judged. Beyond the
     sensor disc (`disc`) lies no membrane: the bright surround round a small pad, taken for membrane, fitted
     a slope under the outermost pins' cores (small-pad-100 under noise 8: a true tip 1.6 standard errors and
-    0.18 of its neighbours' contrast above the fit).
+    0.18 of its neighbours' contrast above the fit). A blob whose tip the disc's edge cuts (its centre
+    within a tip radius of the edge) is no pin either: glare on the casing.
 
     Parameters
     ----------
@@ -313,4 +314,11 @@ def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins
         # A pin whose neighbours' membranes none could be fitted (all by the rim) has no typical contrast.
         warnings.simplefilter("ignore", RuntimeWarning)
         typical = np.nanmedian(contrast[near[:, 1:]], axis=1)
-        return (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)
+        flat = (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)
+    if disc is not None:
+        # A tip the disc's edge cuts is the casing's glare, not a pin: the lattice's pins lie 2.3-6.8 tip
+        # radii inside it on every preset, their blobs' centres (leaning to a bright rim) at least 1.7
+        # (brown-127 seed 5 tapped: a glare blob 0.9 radii inside).
+        cx, cy, reach = disc
+        flat |= np.hypot(pins[:, 0] - cx, pins[:, 1] - cy) > reach - radius_px
+    return flat

@@ -180,7 +180,8 @@ def test_a_lone_voter_is_no_consensus_with_itself():
     the most pins kept, it was the only voter and agreed with itself, noise and all (bench_user_chain
     radial-led-120 seed 0: 122 pins, 3 of them noise). The sets keeping the next most pins vote with it: a
     blob one set alone keeps is no agreement, and the set without them wins (the holes it leaves are
-    filled from the others, `pins._rescue`)."""
+    filled from the others, `pins._rescue`). A set keeping over a tenth more than any other still votes
+    alone: its extras are pins only it finds."""
     from pins.detect import Blobs
     from pins._judge import _KEPT, _OFF
     from pins._candidates import _Run, _consensus
@@ -201,6 +202,9 @@ def test_a_lone_voter_is_no_consensus_with_itself():
     membership, _ = _consensus(runs, pitch)
     assert np.isfinite(membership[:3]).all() and not np.isfinite(membership[3])
     assert np.argmax(membership) in (1, 2), membership
+    # A set keeping a tenth more pins than any other keeps pins only it finds (faint tips): it votes alone.
+    membership, _ = _consensus([run(grid, 0), run(grid, 15)], pitch)
+    assert np.isfinite(membership[0]) and not np.isfinite(membership[1])
 
 
 def test_consensus_matches_every_centre_with_each_voters_nearest_even_among_crowded_blobs():
