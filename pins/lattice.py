@@ -462,7 +462,7 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         radius_px = _pin_radius_px(grey, centres, run.pitch, start.dark_pins)
         # A reflection's flat top at a lattice site: no tip stands above the membrane round it.
         flat = flat_pins(grey, centres, radius_px, dark_pins=start.dark_pins,
-                         disc=(search.cx, search.cy, search.radius_px))
+                         disc=(disc.cx, disc.cy, disc.radius_px))
         if flat.any():
             rejected = np.vstack([rejected, centres[flat]])
             reason = np.concatenate([reason, np.full(int(flat.sum()), REJECTION_REASONS.index("contrast"))])
