@@ -30,6 +30,8 @@ higher above a quadratic fit of the membrane round it than the membrane does (`_
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy.spatial import cKDTree
 from scipy.special import erf
@@ -57,6 +59,10 @@ _FOOT_PINS = 7
 # figures at a 5.7 px tip, tactip-331 at 640x480).
 _RING_PX = (1.5, 3.5)
 _RING_FRACTION = (0.26, 0.6)
+# The membrane ring round a tip leaves out pixels this close to the sensor disc's edge, px (its blur), and
+# a tip with no more than this share of its ring on the pad is not judged.
+_RIM_PX = 1.0
+_RING_ON_PAD = 0.7
 # `tip_evidence` fits at most this many window pixels at once (points x pixels; its arrays of 8 basis
 # functions then take about 8 x 8 bytes x this = 16 MB, all of its arrays about 80 MB).
 _BATCH_PIXELS = 1 << 18
@@ -204,11 +210,14 @@ def _ring_px(radius_px: float) -> tuple[float, float]:
 
 
 def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float,
-                         pins: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                         pins: np.ndarray, disc: tuple[float, float, float] | None = None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """How far the core of a tip at each point stands above a quadratic fit of the membrane round it.
 
     The membrane is the ring `_ring_px` beyond the tip radius (pixels at the foot of another pin of
-    `pins` left out); the core is the disc of the tip radius less half a pixel (at least 1 px).
+    `pins` left out, and those beyond `disc`, (cx, cy, radius) px, when given, or within `_RIM_PX` of its
+    edge: the casing or the surround; with no more than `_RING_ON_PAD` of the ring on the pad, nan);
+    the core is the disc of the tip radius less half a pixel (at least 1 px).
 
     Returns
     -------
@@ -238,6 +247,14 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
     # Saturated pixels (the surround's veil near the rim) show no membrane level.
     weight = np.zeros(values.shape)
     weight[:, ring] = inside[:, ring] & (other > inner) & (values[:, ring] < _SATURATED)
+    judged = np.ones(len(points), bool)
+    if disc is not None:
+        cx, cy, reach = disc
+        on_pad = np.hypot(xs - cx, ys - cy) <= reach - _RIM_PX
+        weight[:, ring] *= on_pad
+        # A ring the disc cuts: a quadratic through one side of a tip (the veil rising to the rim) is no
+        # membrane under it (radial-led-120 at 320x240: outer tips 2.1-2.4 px inside the edge, flat by it).
+        judged = on_pad.mean(axis=1) > _RING_ON_PAD
     scale = outer
     u, v = dx / scale, dy / scale
     basis = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)  # (K, 6)
@@ -247,7 +264,7 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
     residual = values - beta @ basis.T
     dof = weight.sum(axis=1) - 6.0
     with np.errstate(invalid="ignore", divide="ignore"):
-        variance = np.where(dof >= 6.0, np.sum(weight * residual ** 2, axis=1) / dof, np.nan)
+        variance = np.where((dof >= 6.0) & judged, np.sum(weight * residual ** 2, axis=1) / dof, np.nan)
         # The core mean's standard error, its pixels scattering about the fit as the membrane's do.
         error = np.sqrt(variance / core.sum())
         contrast = np.where(np.isfinite(variance), residual[:, core].mean(axis=1), np.nan)
@@ -258,7 +275,8 @@ def _core_above_membrane(image: np.ndarray, points: np.ndarray, radius_px: float
     return contrast, error, position
 
 
-def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
+def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins: bool = False,
+              disc: tuple[float, float, float] | None = None) -> np.ndarray:
     """Which pins (N,) bool show no tip: a core that stands neither `_FLAT_SIGNIFICANCE` standard errors
     above a quadratic fit of the membrane round it nor `_FLAT_CONTRAST` of its neighbours' contrast.
 
@@ -266,7 +284,11 @@ def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins
     bright above the threshold's neighbourhood mean as a pin, but round it the membrane rises to the
     same level: above the fit it stands 0.7-1.8 standard errors and 0.03-0.08 of its neighbours'
     contrast, where the faintest pins under the veil stand 3.3 and 0.14 (radial-led-120, seeds 0-11).
-    A pin whose membrane cannot be fitted (too little of it round the pin) is not judged.
+    A pin whose membrane cannot be fitted (too little of it round the pin) is not judged. Beyond the
+    sensor disc (`disc`) lies no membrane: the bright surround round a small pad, taken for membrane, fitted
+    a slope under the outermost pins' cores (small-pad-100 under noise 8: a true tip 1.6 standard errors and
+    0.18 of its neighbours' contrast above the fit). A blob whose tip the disc's edge cuts (its centre
+    within a tip radius of the edge) is no pin either: glare on the casing.
 
     Parameters
     ----------
@@ -278,6 +300,9 @@ def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins
         Pin tip radius, px.
     dark_pins : bool
         Dark markers on a light membrane (the image is inverted).
+    disc : (cx, cy, radius) px, optional
+        The sensor disc: ring pixels beyond it, or within `_RIM_PX` of its edge (the edge's blur), are not
+        membrane.
 
     Returns
     -------
@@ -290,8 +315,17 @@ def flat_pins(grey: np.ndarray, pins: np.ndarray, radius_px: float, *, dark_pins
     image = grey.astype(np.float32)
     if dark_pins:
         image = 255.0 - image
-    contrast, error, _ = _core_above_membrane(image, pins, radius_px, pins)
+    contrast, error, _ = _core_above_membrane(image, pins, radius_px, pins, disc)
     _, near = cKDTree(pins).query(pins, min(_FLAT_NEIGHBOURS + 1, len(pins)))
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        # A pin whose neighbours' membranes none could be fitted (all by the rim) has no typical contrast.
+        warnings.simplefilter("ignore", RuntimeWarning)
         typical = np.nanmedian(contrast[near[:, 1:]], axis=1)
-        return (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)
+        flat = (contrast < _FLAT_SIGNIFICANCE * error) & (contrast < _FLAT_CONTRAST * typical)
+    if disc is not None:
+        # A tip the disc's edge cuts is the casing's glare, not a pin: the lattice's pins lie 3.1-8.0 tip
+        # radii inside it on every preset with a disc (seeds 0-2), their blobs' centres (leaning towards a
+        # bright rim, radius as measured) at least 1.7 (brown-127 seed 5 tapped: a glare blob 0.9 radii inside).
+        cx, cy, reach = disc
+        flat |= np.hypot(pins[:, 0] - cx, pins[:, 1] - cy) > reach - radius_px
+    return flat

@@ -45,15 +45,17 @@ finds that lattice without being told the pin count:
    an isolated blob inside it (the centre pin of a radial layout) stays; fewer than 10 pins make
    no field;
 5. the winner: the candidate set that keeps the most pins that at least half of the good sets
-   (those keeping 97 % of the most pins; both when there are two) also keep, and the fewest
-   others, its centres nearest their consensus;
+   (those keeping 97 % of the most pins, or else the two keeping the most: one set's own blobs, such
+   as the noise blobs only the lowest offset lets through, are no agreement; both when there are two)
+   also keep, and the fewest others, its centres nearest their consensus;
 5b. holes: a lattice site the winner's pins predict (a mirror image through a neighbour) from both
    sides, or once outward at the end of a lone row such as a radial spoke, that no pin occupies is
    filled with a pin-like blob another candidate set found there (`pins._rescue`): one threshold
    cannot suit every pin of a pad whose light varies, and a pin on an LED reflection inside the pad
    (a brighter background, less contrast) or a faint spoke end under the veil is lost by the
    winner's and found by another's; a kept pin whose core stands no higher than a quadratic fit of
-   the membrane round it (an LED reflection's flat top) is rejected (``contrast``), and at the holes
+   the membrane round it (an LED reflection's flat top; the surround beyond the disc is no membrane) is
+   rejected (``contrast``), and at the holes
    still left (not on a flat gel) the image itself is probed for a faint tip;
 5c. centres: each kept pin is placed by fitting its tip as an opaque ellipse over a quadratic
    background (`pins._tipfit`): the blobs' centroids lean towards the bright side of a sloped
@@ -459,7 +461,8 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
     if not disc.whole_frame and len(centres):
         radius_px = _pin_radius_px(grey, centres, run.pitch, start.dark_pins)
         # A reflection's flat top at a lattice site: no tip stands above the membrane round it.
-        flat = flat_pins(grey, centres, radius_px, dark_pins=start.dark_pins)
+        flat = flat_pins(grey, centres, radius_px, dark_pins=start.dark_pins,
+                         disc=(disc.cx, disc.cy, disc.radius_px))
         if flat.any():
             rejected = np.vstack([rejected, centres[flat]])
             reason = np.concatenate([reason, np.full(int(flat.sum()), REJECTION_REASONS.index("contrast"))])

@@ -175,6 +175,38 @@ def test_consensus_agrees_on_pins_half_the_voters_keep_and_never_on_one_sets_own
     assert np.isfinite(membership).all() and np.argmax(membership) == 1
 
 
+def test_a_lone_voter_is_no_consensus_with_itself():
+    """The lowest offset keeps a few noise blobs more than any other set (a noisy webcam): alone over 97 % of
+    the most pins kept, it was the only voter and agreed with itself, noise and all (bench_user_chain
+    radial-led-120 seed 0: 122 pins, 3 of them noise). The sets keeping the next most pins vote with it: a
+    blob one set alone keeps is no agreement, and the set without them wins (the holes it leaves are
+    filled from the others, `pins._rescue`). A set keeping over a tenth more than any other still votes
+    alone: its extras are pins only it finds."""
+    from pins.detect import Blobs
+    from pins._judge import _KEPT, _OFF
+    from pins._candidates import _Run, _consensus
+
+    pitch = 10.0
+    grid = pitch * np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), axis=-1).reshape(-1, 2)
+
+    def run(centres, lost):
+        reason = np.full(len(centres), _KEPT)
+        reason[:lost] = _OFF
+        n = len(centres)
+        blobs = Blobs(centres=centres, areas=np.full(n, 20), fills=np.full(n, 0.8), candidates=n,
+                      contrasts=np.full(n, 40.0))
+        return _Run(DetectionParams(), blobs, reason, pitch)
+
+    noisy = np.vstack([grid, grid[:4] + pitch / 2])               # 104 kept, 4 of them noise
+    runs = [run(noisy, 0), run(grid, 5), run(grid, 5), run(grid, 30)]  # 95 < 0.97 x 104
+    membership, _ = _consensus(runs, pitch)
+    assert np.isfinite(membership[:3]).all() and not np.isfinite(membership[3])
+    assert np.argmax(membership) in (1, 2), membership
+    # A set keeping a tenth more pins than any other keeps pins only it finds (faint tips): it votes alone.
+    membership, _ = _consensus([run(grid, 0), run(grid, 15)], pitch)
+    assert np.isfinite(membership[0]) and not np.isfinite(membership[1])
+
+
 def test_consensus_matches_every_centre_with_each_voters_nearest_even_among_crowded_blobs():
     """The one-tree consensus equals asking each voter's own tree for each centre's nearest within the
     gate, also where a centre has more blobs inside the gate than its k nearest (split blobs)."""
