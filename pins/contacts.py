@@ -59,7 +59,7 @@ class ContactKind:
 
 def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], *, slide_ratio: float = 0.6,
                   min_drag_px: float = 1.0, signal: np.ndarray | None = None,
-                  rest_positions: np.ndarray | None = None, shift_over_spread: float = 2.0) -> list[ContactKind]:
+                  rest_positions: np.ndarray | None = None, shift_over_spread: float = 1.0) -> list[ContactKind]:
     """Press or slide, and a slide's direction, for each contact of a recording.
 
     Parameters
@@ -158,4 +158,4 @@ def _shift_over_spread(part: np.ndarray, moved: np.ndarray, drag: np.ndarray, re
     length = np.hypot(drag[:, 0], drag[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(spread > 0, length / spread, np.inf)
-    return float(np.median(ratio))
+    return float(np.median(ratio[len(ratio) // 2:]))

@@ -136,13 +136,16 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
                   ) -> tuple[list[tuple[int, int]], list]:
     """The contacts of a replay and their kinds: ([start, stop) frames, a `pins.ContactKind` each).
 
-    Contacts are found (`pins.segment_taps`, no quiet frame bridged, then `split_at_dips`) on the tap
-    signal of the pins' neighbourhood medians (`pins.segment.neighbour_median`, given the rest positions):
-    a contact moves patches of neighbouring pins together, while the pins a tracker loses and misplaces
-    for a few frames after a slide's lift, or a few pins jumping in noise, move alone; on the pins'
-    own tap signal they held it up at 0.6-3 px after the lift (a contact stopping 4-7 frames late, two
-    slides merged) or made short contacts of their own. Kinds are `pins.contact_kinds` with the rest
-    positions (a press's field spreads out, a slide's shifts one way).
+    Contacts are found (`pins.segment_taps`, no quiet frame bridged, then `split_at_dips`) on a tap
+    signal where, given the rest positions, a pin whose displacement differs from its neighbourhood's
+    median (`pins.segment.neighbour_median`) by more than the low threshold counts as that median: a
+    contact moves patches of neighbouring pins together, while the pins a tracker loses and misplaces
+    for a few frames after a slide's lift, or a few pins jumping in noise, move alone (on the pins' own
+    tap signal they held it up at 0.6-3 px after a lift, a contact stopping 4 frames late or a slide
+    2 frames after another starting 5 frames early, or made short contacts of their own). A pin that
+    agrees with its neighbours within the noise keeps its own displacement, so a clean tap's onset
+    and end are where they were. Kinds are `pins.contact_kinds` with the rest positions (a press's
+    field spreads out, a slide's shifts one way).
 
     Parameters
     ----------
@@ -159,7 +162,11 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
         drag alone.
     """
     high_px, low_px = thresholds_px
-    coherent = signal if rest_positions is None else tap_signal(neighbour_median(displacements, rest_positions))
+    coherent = signal
+    if rest_positions is not None:  # a pin that disagrees with its neighbourhood by more than the noise is outvoted
+        local = neighbour_median(displacements, rest_positions)
+        alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
+        coherent = tap_signal(np.where(alone[..., None], local, displacements))
     bridged = _bridge_blank(coherent, blank)
     bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
     bounds = split_at_dips(bridged, bounds, min_drop_px=high_px)
