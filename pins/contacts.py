@@ -16,11 +16,13 @@ Given the pins' rest positions, the field's shape must say slide too. A skin tha
 last slide's shear (a real elastomer creeps back over tens of frames) shows it again in the patch a
 press right after puts down, so the press's moved pins share one direction (drag ratio 0.66-0.89 on
 issue 20's webcam-like tours with a residual of 0.2) though the plate never moved. A press spreads
-its pins outward about the patch's centre; a slide shifts the whole patch one way. In each of those
-frames (at half the peak signal or more) the *outward spread* is the median, over the moved pins, of their displacement less the median
-one, along the direction away from the moved pins' centre at rest; a slide's median displacement is
-at least `shift_over_spread` times that spread (median over the frames). On those tours presses gave
-0.3-0.6 and slides of 3 pitches 11.5-39.
+its pins outward about the patch's centre; a slide shifts the whole patch one way. In each frame at
+half the peak signal or more, the *outward spread* is the median over the moved pins of their
+displacement less the median one, along the direction away from the moved pins' centre at rest; a
+slide's median displacement is at least `shift_over_spread` times that spread (the median over the
+later half of those frames: a slide's shift grows against its spread while it drags, a shear the skin
+kept relaxes under a press). On those tours presses gave 0.2-0.7 and slides of 3 pitches 12 or more; a
+press 2 frames after a slide on small-pad-100 0.7, a slide of half a pitch on tactip-331 1.9.
 """
 
 from __future__ import annotations

@@ -12,12 +12,12 @@ from scipy import ndimage
 
 from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, contact_kinds, jitter_floor_px,
                   segment_taps, select_feature_pins, sensor_scale, tap_signal)
-
 from pins.segment import neighbour_median
+
 from tactip.pipeline import PinTrack
 
-__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "find_contacts", "split_at_dips",
-           "tap_thresholds_px"]
+__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "find_contacts",
+           "split_at_dips", "tap_thresholds_px"]
 # Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
 REFERENCE_PITCH_PX = 17.5
 
@@ -163,7 +163,7 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     """
     high_px, low_px = thresholds_px
     coherent = signal
-    if rest_positions is not None:  # a pin that disagrees with its neighbourhood by more than the noise is outvoted
+    if rest_positions is not None:  # a pin differing from its neighbourhood by more than the noise is outvoted
         local = neighbour_median(displacements, rest_positions)
         alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
         coherent = tap_signal(np.where(alone[..., None], local, displacements))
@@ -271,9 +271,10 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
 
 
 def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float, rest_positions=None) -> list:
-    """`pins.contact_kinds` of each contact (with ``rest_positions``, (N, 2) px, when given), measured from its first frame where the pad was not back at rest
-    there (the signal above ``low_px``: what the last slide left in the skin, creeping back, would otherwise
-    turn this contact's drag towards that slide's direction); from the rest frame elsewhere."""
+    """`pins.contact_kinds` of each contact (with ``rest_positions``, (N, 2) px, when given), measured from its
+    first frame where the pad was not back at rest there (the signal above ``low_px``: what the last slide left
+    in the skin, creeping back, would otherwise turn this contact's drag towards that slide's direction); from
+    the rest frame elsewhere."""
     kinds = []
     for start, stop in bounds:
         if signal[start] > low_px:

@@ -37,7 +37,8 @@ def test_a_press_right_after_a_slide_on_a_creeping_skin_is_a_press(preset, seed)
     pitch = sensor.pin_spacing_mm
     strokes = []
     for angle in rng.uniform(0, 360, 3):
-        strokes += [Stroke(2.0, float(angle), float(rng.uniform(2.0, 3.0)) * pitch), Stroke(float(rng.uniform(2.0, 3.0)))]
+        strokes += [Stroke(2.0, float(angle), float(rng.uniform(2.0, 3.0)) * pitch),
+                    Stroke(float(rng.uniform(2.0, 3.0)))]
     rests = [0.05, *(int(rng.integers(1, 4)) / 120 for _ in strokes[1:]), 0.1]
     run = sensor.sequence(strokes, rest_s=rests, press_s=0.05, hold_s=0.05, slide_s=0.15, lift_s=0.05,
                           frame_rate=120.0, residual=0.2, creep_s=0.1)
