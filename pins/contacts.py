@@ -18,11 +18,14 @@ press right after puts down, so the press's moved pins share one direction (drag
 issue 20's webcam-like tours with a residual of 0.2) though the plate never moved. A press spreads
 its pins outward about the patch's centre; a slide shifts the whole patch one way. In each frame at
 half the peak signal or more, the *outward spread* is the median over the moved pins of their
-displacement less the median one, along the direction away from the moved pins' centre at rest; a
-slide's median displacement is at least `shift_over_spread` times that spread (the median over the
-later half of those frames: a slide's shift grows against its spread while it drags, a shear the skin
-kept relaxes under a press). On those tours presses gave 0.2-0.7 and slides of 3 pitches 12 or more; a
-press 2 frames after a slide on small-pad-100 0.7, a slide of half a pitch on tactip-331 1.9.
+displacement less the median one, along the direction away from the moved pins' centre at rest. A
+slide's median displacement over that spread (the *shift*), the median over the later half of those
+frames, is at least `shift_over_spread` and has grown since the earlier half (a slide's shift grows
+against its spread while it drags; a shear the skin kept relaxes under a press), unless it is
+`CLEAR_SHIFT` times that or more (a long drag, whose earlier frames may not spread at all). On those
+tours presses gave 0.2-0.7 and slides of 3 pitches 12 or more; a press 2 frames after a slide fell
+from 2.4 to 1.2 on tactip-127 and from 2.8 to 0.7 on small-pad-100, a slide of half a pitch on
+tactip-331 rose from 0.35 to 1.9.
 """
 
 from __future__ import annotations
@@ -35,7 +38,10 @@ import numpy as np
 from .errors import ShapeError
 from .segment import nanmedian_rows, tap_signal
 
-__all__ = ["ContactKind", "contact_kinds"]
+__all__ = ["ContactKind", "contact_kinds", "CLEAR_SHIFT"]
+
+#: A shift this many times `contact_kinds`' ``shift_over_spread`` is a slide whatever its trend.
+CLEAR_SHIFT = 4.0
 
 
 @dataclass(frozen=True)
@@ -81,7 +87,8 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
         The pins' rest positions, px: a slide's field must then shift more than it spreads (the module
         docstring); without them, the drag ratio and length alone decide.
     shift_over_spread : float
-        Least median displacement over outward spread of a slide (> 0), with ``rest_positions``.
+        Least shift (median displacement over outward spread, the module docstring) of a slide (> 0),
+        with ``rest_positions``.
 
     Returns
     -------
@@ -134,8 +141,8 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
         ratio = float(min(length[peak] / spread[peak], 1.0)) if spread[peak] > 0 else 0.0
         dragged = ratio >= slide_ratio and length[peak] > min_drag_px
         if dragged and rest_positions is not None:
-            shift = _shift_over_spread(part[frames], moved[frames], drag, np.asarray(rest_positions, np.float64))
-            dragged = shift >= shift_over_spread
+            early, late = _shift_over_spread(part[frames], moved[frames], drag, np.asarray(rest_positions, np.float64))
+            dragged = late >= shift_over_spread and (late > early or late >= CLEAR_SHIFT * shift_over_spread)
         if dragged:
             direction = float(np.degrees(np.arctan2(drag[peak, 1], drag[peak, 0])) % 360.0)
             kinds.append(ContactKind("slide", round(direction, 6) % 360.0, ratio, float(length[peak])))
@@ -144,8 +151,9 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
     return kinds
 
 
-def _shift_over_spread(part: np.ndarray, moved: np.ndarray, drag: np.ndarray, rest: np.ndarray) -> float:
-    """The median over frames of the moved pins' median displacement over their outward spread about it.
+def _shift_over_spread(part: np.ndarray, moved: np.ndarray, drag: np.ndarray, rest: np.ndarray) -> tuple[float, float]:
+    """The moved pins' median displacement over their outward spread about it: the medians over the earlier
+    and the later half of the frames.
 
     ``part`` (F, N, 2) px displacements, ``moved`` (F, N) bool, ``drag`` (F, 2) px their median, ``rest``
     (N, 2) px. A frame's spread is the median of the moved pins' displacement components, less the drag,
@@ -160,4 +168,5 @@ def _shift_over_spread(part: np.ndarray, moved: np.ndarray, drag: np.ndarray, re
     length = np.hypot(drag[:, 0], drag[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(spread > 0, length / spread, np.inf)
-    return float(np.median(ratio[len(ratio) // 2:]))
+    half = len(ratio) // 2
+    return float(np.median(ratio[:half])) if half else float("nan"), float(np.median(ratio[half:]))

@@ -29,7 +29,8 @@ def _angle_error(a, b):
 # A skin that creeps back (residual 0.2, 0.1 s) shows what the last slide left in the patch a press puts down
 # 1-3 frames after its lift: the press's pins share the slide's direction (drag ratio 0.7-0.9), and without
 # the field's shape the press read as a slide.
-@pytest.mark.parametrize("preset", ["radial-led-120", "tactip-331", "white-dark-331", "small-pad-100", "dense-1000"])
+@pytest.mark.parametrize("preset", ["radial-led-120", "tactip-127", "tactip-331", "white-dark-331", "small-pad-100",
+                                    "dense-1000"])
 @pytest.mark.parametrize("seed", [0, 1])
 def test_a_press_right_after_a_slide_on_a_creeping_skin_is_a_press(preset, seed):
     sensor = SyntheticTacTip.from_preset(preset, seed=seed)
