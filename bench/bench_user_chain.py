@@ -65,9 +65,13 @@ met (contacts right = rendered = found) and contacts right, main 09118d1 -> tour
 - development seeds 0-11: residual 0: radial-led-120 10/12 (130/132) -> 12/12 (132/132), white-dark-331 12/12
   -> 12/12; residual 0.2: radial-led-120 1/12 (115/132) -> 12/12 (132/132), white-dark-331 2/12 (119/132) ->
   12/12 (132/132); seeds 0-2: tactip-127, tactip-331 and dense-1000 residual 0: 33/33 each, before and after;
-  residual 0.2: tactip-127 0/3 (27/33) -> 3/3 (33/33), tactip-331 0/3 (29/33) -> 3/3 (33/33);
+  residual 0.2: tactip-127 0/3 (27/33) -> 3/3 (33/33), tactip-331 0/3 (29/33) -> 3/3 (33/33), dense-1000 3/3
+  before and after;
 - held out, seeds 48-53: residual 0: 6/6 -> 6/6 on both presets (132/132); residual 0.2: radial-led-120 1/6
   (58/66) -> 6/6 (66/66), white-dark-331 3/6 (61/66) -> 6/6 (66/66).
+The whole chain (this bench, tour14's code): --residual 0.2 seeds 0-1, both presets: outcome 3 met on 4 of 4
+(tours 11/11 right, class videos 32/32; main: on none), 4, 5 and 6 on 4 of 4; residual 0, radial-led-120 seeds
+0-2: every outcome met on 3 of 3 (main: outcome 3 on 1 of 3).
 Two changes, each needed: (1) the tap signal where a pin that differs from its 6 nearest neighbours' median
 by more than the low threshold counts as that median (`pins.segment.neighbour_median`): the pins a tracker
 misplaces alone after a lift held the signal at 0.6-0.9 px (a slide stopping 4 frames late, the next
