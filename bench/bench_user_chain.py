@@ -71,7 +71,8 @@ met (contacts right = rendered = found) and contacts right, main 09118d1 -> tour
   (58/66) -> 6/6 (66/66), white-dark-331 3/6 (61/66) -> 6/6 (66/66).
 The whole chain (this bench, tour14's code): --residual 0.2 seeds 0-1, both presets: outcome 3 met on 4 of 4
 (tours 11/11 right, class videos 32/32; main: on none), 4, 5 and 6 on 4 of 4; residual 0, radial-led-120 seeds
-0-2: every outcome met on 3 of 3 (main: outcome 3 on 1 of 3).
+0-2: every outcome met on 3 of 3 (main: outcome 3 on 1 of 3); held out, --residual 0.2 seeds 48-50, both presets:
+every outcome met on 6 of 6 (tours 11/11, class videos 32/32).
 Two changes, each needed: (1) the tap signal where a pin that differs from its 6 nearest neighbours' median
 by more than the low threshold counts as that median (`pins.segment.neighbour_median`): the pins a tracker
 misplaces alone after a lift held the signal at 0.6-0.9 px (a slide stopping 4 frames late, the next
