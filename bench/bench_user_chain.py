@@ -59,6 +59,32 @@ offsets floored at the noise read on 2x2 block means), radial-led-120, residual 
 contact), outcomes 4, 5, 6 met on all three; held out 48-50: every outcome met on all three (seed 50: 119 pins, all
 true, scale 0.3842 against 0.3810, 11/11 right).
 
+Session 19's tour14 (contacts, `tactip.replay.contacts.find_contacts`, `pins.contact_kinds`): on the tours' replay
+HDF5 (contacts scored as above, offline: the same recordings and tracking, old and new contact finding), tours
+met (contacts right = rendered = found) and contacts right, main 09118d1 -> tour14:
+- development seeds 0-11: residual 0: radial-led-120 10/12 (130/132) -> 12/12 (132/132), white-dark-331 12/12
+  -> 12/12; residual 0.2: radial-led-120 1/12 (115/132) -> 12/12 (132/132), white-dark-331 2/12 (119/132) ->
+  12/12 (132/132); seeds 0-2: tactip-127, tactip-331 and dense-1000 residual 0: 33/33 each, before and after;
+  residual 0.2: tactip-127 0/3 (27/33) -> 3/3 (33/33), tactip-331 0/3 (29/33) -> 3/3 (33/33), dense-1000 3/3
+  before and after;
+- held out, seeds 48-53: residual 0: 6/6 -> 6/6 on both presets (132/132); residual 0.2: radial-led-120 1/6
+  (58/66) -> 6/6 (66/66), white-dark-331 3/6 (61/66) -> 6/6 (66/66).
+The whole chain (this bench, tour14's code): --residual 0.2 seeds 0-1, both presets: outcome 3 met on 4 of 4
+(tours 11/11 right, class videos 32/32; main: on none), 4, 5 and 6 on 4 of 4; residual 0, radial-led-120 seeds
+0-2: every outcome met on 3 of 3 (main: outcome 3 on 1 of 3); held out, --residual 0.2 seeds 48-50, both presets:
+every outcome met on 6 of 6 (tours 11/11, class videos 32/32).
+Two changes, each needed: (1) the tap signal where a pin that differs from its 6 nearest neighbours' median
+by more than the low threshold counts as that median (`pins.segment.neighbour_median`): the pins a tracker
+misplaces alone after a lift held the signal at 0.6-0.9 px (a slide stopping 4 frames late, the next
+slide starting 5 frames early) or made 4-6 frame contacts of their own; (2) a press right after a slide on a
+creeping skin shows the skin's leftover shear in its patch (drag ratio 0.66-0.89: read as a slide): a slide's
+shift must also be at least its outward spread about the patch's centre (the median over the later half of
+its strong frames: presses 0.2-0.7, slides of 3 pitches 12 or more, seeds 0-11 and 48-53 alike) and have grown
+since the earlier half, unless 4 times that (tactip-127 seed 2: a press's shift fell from 2.4 to 1.2 as the
+skin relaxed under it). Seeds 0-11,
+the first alone: residual 0 all met, residual 0.2 no better (1/12 and 2/12 tours, 114 and 119 of 132 contacts);
+the second alone: white-dark-331 all met, radial-led-120 residual 0 as main (10/12), residual 0.2 10/12.
+
 Run: .venv/bin/python bench/bench_user_chain.py [--presets radial-led-120,white-dark-331] [--seeds 0-2]
      [--keep DIR] [--residual 0.2 --creep-s 0.1]
 """

@@ -11,6 +11,21 @@ frame where that median displacement is longest (among the frames where the tap 
 half its peak in the contact: after a lift, a few pins the tracker misplaced are not the contact),
 the ratio reaches `slide_ratio` and the median is longer than `min_drag_px`; the slide's direction
 is the median's, in degrees from image x towards image y (image y points down).
+
+Given the pins' rest positions, the field's shape must say slide too. A skin that kept part of the
+last slide's shear (a real elastomer creeps back over tens of frames) shows it again in the patch a
+press right after puts down, so the press's moved pins share one direction (drag ratio 0.66-0.89 on
+issue 20's webcam-like tours with a residual of 0.2) though the plate never moved. A press spreads
+its pins outward about the patch's centre; a slide shifts the whole patch one way. In each frame at
+half the peak signal or more, the *outward spread* is the median over the moved pins of their
+displacement less the median one, along the direction away from the moved pins' centre at rest. A
+slide's median displacement over that spread (the *shift*), the median over the later half of those
+frames, is at least `shift_over_spread` and has grown since the earlier half (a slide's shift grows
+against its spread while it drags; a shear the skin kept relaxes under a press), unless it is
+`CLEAR_SHIFT` times that or more (a long drag, whose earlier frames may not spread at all). On those
+tours presses gave 0.2-0.7 and slides of 3 pitches 12 or more; a press 2 frames after a slide fell
+from 2.4 to 1.2 on tactip-127 and from 2.8 to 0.7 on small-pad-100, a slide of half a pitch on
+tactip-331 rose from 0.35 to 1.9.
 """
 
 from __future__ import annotations
@@ -23,7 +38,10 @@ import numpy as np
 from .errors import ShapeError
 from .segment import nanmedian_rows, tap_signal
 
-__all__ = ["ContactKind", "contact_kinds"]
+__all__ = ["ContactKind", "contact_kinds", "CLEAR_SHIFT"]
+
+#: A shift this many times `contact_kinds`' ``shift_over_spread`` is a slide whatever its trend.
+CLEAR_SHIFT = 4.0
 
 
 @dataclass(frozen=True)
@@ -48,7 +66,8 @@ class ContactKind:
 
 
 def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], *, slide_ratio: float = 0.6,
-                  min_drag_px: float = 1.0, signal: np.ndarray | None = None) -> list[ContactKind]:
+                  min_drag_px: float = 1.0, signal: np.ndarray | None = None,
+                  rest_positions: np.ndarray | None = None, shift_over_spread: float = 1.0) -> list[ContactKind]:
     """Press or slide, and a slide's direction, for each contact of a recording.
 
     Parameters
@@ -64,6 +83,12 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
         a press.
     signal : (T,) ndarray, optional
         The recording's tap signal (`pins.tap_signal`, 90th percentile) when already computed, px.
+    rest_positions : (N, 2) ndarray, optional
+        The pins' rest positions, px: a slide's field must then shift more than it spreads (the module
+        docstring); without them, the drag ratio and length alone decide.
+    shift_over_spread : float
+        Least shift (median displacement over outward spread, the module docstring) of a slide (> 0),
+        with ``rest_positions``.
 
     Returns
     -------
@@ -89,6 +114,10 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
         signal = tap_signal(data)
     elif np.shape(signal) != (len(data),):
         raise ShapeError(f"signal must have shape ({len(data)},), got {np.shape(signal)}")
+    if not shift_over_spread > 0.0:
+        raise ValueError(f"shift_over_spread must be > 0, got {shift_over_spread}")
+    if rest_positions is not None and np.shape(rest_positions) != data.shape[1:]:
+        raise ShapeError(f"rest_positions must have shape {data.shape[1:]}, got {np.shape(rest_positions)}")
     kinds = []
     for start, stop in bounds:
         if not 0 <= start < stop <= len(data):
@@ -110,9 +139,34 @@ def contact_kinds(displacements: np.ndarray, bounds: Sequence[tuple[int, int]], 
         length = np.hypot(drag[:, 0], drag[:, 1])
         peak = int(np.argmax(length))
         ratio = float(min(length[peak] / spread[peak], 1.0)) if spread[peak] > 0 else 0.0
-        if ratio >= slide_ratio and length[peak] > min_drag_px:
+        dragged = ratio >= slide_ratio and length[peak] > min_drag_px
+        if dragged and rest_positions is not None:
+            early, late = _shift_over_spread(part[frames], moved[frames], drag, np.asarray(rest_positions, np.float64))
+            dragged = late >= shift_over_spread and (late > early or late >= CLEAR_SHIFT * shift_over_spread)
+        if dragged:
             direction = float(np.degrees(np.arctan2(drag[peak, 1], drag[peak, 0])) % 360.0)
             kinds.append(ContactKind("slide", round(direction, 6) % 360.0, ratio, float(length[peak])))
         else:
             kinds.append(ContactKind("press", float("nan"), ratio, float(length[peak])))
     return kinds
+
+
+def _shift_over_spread(part: np.ndarray, moved: np.ndarray, drag: np.ndarray, rest: np.ndarray) -> tuple[float, float]:
+    """The moved pins' median displacement over their outward spread about it: the medians over the earlier
+    and the later half of the frames.
+
+    ``part`` (F, N, 2) px displacements, ``moved`` (F, N) bool, ``drag`` (F, 2) px their median, ``rest``
+    (N, 2) px. A frame's spread is the median of the moved pins' displacement components, less the drag,
+    away from their centre at rest; a frame that does not spread outward counts as infinite shift.
+    """
+    count = moved.sum(axis=1)
+    centre = np.where(moved[..., None], rest[None], 0.0).sum(axis=1) / np.maximum(count, 1)[:, None]  # (F, 2)
+    away = rest[None] - centre[:, None]                                          # (F, N, 2)
+    away /= np.maximum(np.hypot(away[..., 0], away[..., 1]), 1e-9)[..., None]
+    outward = np.einsum("fnk,fnk->fn", part - drag[:, None], away)
+    spread = nanmedian_rows(np.where(moved, outward, np.nan))                   # (F,) px
+    length = np.hypot(drag[:, 0], drag[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(spread > 0, length / spread, np.inf)
+    half = len(ratio) // 2
+    return float(np.median(ratio[:half])) if half else float("nan"), float(np.median(ratio[half:]))

@@ -17,7 +17,7 @@ from scipy import ndimage
 from .displacement import displacement_magnitude
 from .errors import ShapeError
 
-__all__ = ["tap_signal", "segment_taps", "converging_frames", "jitter_floor_px"]
+__all__ = ["tap_signal", "neighbour_median", "segment_taps", "converging_frames", "jitter_floor_px"]
 
 
 def nanmedian_rows(values: np.ndarray) -> np.ndarray:
@@ -68,6 +68,59 @@ def tap_signal(displacements: np.ndarray, *, percentile: float = 90.0) -> np.nda
         return np.zeros(len(ordered))
     value = ordered[rows, low] + (ordered[rows, high] - ordered[rows, low]) * (rank - low)
     return np.where(count > 0, value, 0.0)
+
+
+def neighbour_median(displacements: np.ndarray, rest_positions: np.ndarray, *, neighbours: int = 6,
+                     chunk_frames: int = 256) -> np.ndarray:
+    """Each pin's displacement replaced by the median (per axis) over it and its nearest neighbours at rest.
+
+    A contact moves a patch of neighbouring pins together (a press spreads them smoothly, a slide drags
+    them one way), so a neighbourhood's median keeps its motion; a pin the tracker misplaced alone
+    (recovering from a loss after a lift, a jump in noise) is outvoted by its neighbours, which stayed.
+    Pins lost (NaN) are left out of the median: it holds while up to half of a neighbourhood is lost or
+    misplaced; a pin whose whole neighbourhood is lost stays NaN.
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from rest, px; NaN where lost.
+    rest_positions : (N, 2) ndarray
+        The pins' rest positions, px (who neighbours whom).
+    neighbours : int
+        Neighbours per pin (besides itself), >= 0 (6: a hexagonal lattice's ring).
+    chunk_frames : int
+        Frames per step (memory: ``chunk_frames * N * (neighbours + 1) * 2`` floats).
+
+    Returns
+    -------
+    smoothed : (T, N, 2) ndarray of float64
+        px.
+
+    Examples
+    --------
+    >>> rest = np.stack(np.meshgrid(np.arange(5), np.arange(5)), -1).reshape(-1, 2) * 10.0
+    >>> displacements = np.zeros((1, 25, 2)); displacements[0, 12] = (6.0, 0.0)   # one pin jumps alone
+    >>> float(np.abs(neighbour_median(displacements, rest)).max())
+    0.0
+    """
+    from scipy.spatial import cKDTree
+
+    data = np.asarray(displacements, dtype=np.float64)
+    rest = np.asarray(rest_positions, dtype=np.float64)
+    if data.ndim != 3 or data.shape[2] != 2 or rest.shape != data.shape[1:]:
+        raise ShapeError(f"displacements must have shape (T, N, 2) and rest_positions (N, 2), got {data.shape} "
+                         f"and {rest.shape}")
+    if int(neighbours) != neighbours or neighbours < 0:
+        raise ValueError(f"neighbours must be a non-negative integer, got {neighbours}")
+    count = min(int(neighbours) + 1, len(rest))
+    if count <= 1:
+        return data.copy()
+    index = cKDTree(rest).query(rest, k=count)[1]                      # (N, k+1): the pin first
+    smoothed = np.empty_like(data)
+    for first in range(0, len(data), chunk_frames):
+        part = data[first:first + chunk_frames][:, index]             # (F, N, k+1, 2)
+        smoothed[first:first + chunk_frames] = nanmedian_rows(np.moveaxis(part, 2, -1))
+    return smoothed
 
 
 def segment_taps(displacements: np.ndarray, *, high_px: float = 1.5, low_px: float = 0.5,

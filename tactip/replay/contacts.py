@@ -12,11 +12,12 @@ from scipy import ndimage
 
 from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, contact_kinds, jitter_floor_px,
                   segment_taps, select_feature_pins, sensor_scale, tap_signal)
+from pins.segment import neighbour_median
 
 from tactip.pipeline import PinTrack
 
-__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "split_at_dips",
-           "tap_thresholds_px"]
+__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "find_contacts",
+           "split_at_dips", "tap_thresholds_px"]
 # Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
 REFERENCE_PITCH_PX = 17.5
 
@@ -119,10 +120,8 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px,
                                         usable=track.tracked & ~track.blank, signal=signal)
     try:
-        bridged = _bridge_blank(signal, track.blank)
-        bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
-        bounds = split_at_dips(bridged, bounds, min_drop_px=high_px)
-        kinds = _kinds(displacements, bounds, signal, low_px)
+        bounds, kinds = find_contacts(displacements, signal=signal, blank=track.blank, thresholds_px=(high_px, low_px),
+                                      rest_positions=rest)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")
@@ -130,6 +129,48 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
         warnings.append(f"no tap features ({exc})")
     return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
                 bounds=bounds, kinds=kinds, warnings=warnings, tap_thresholds_px=(high_px, low_px))
+
+
+def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.ndarray,
+                  thresholds_px: tuple[float, float], rest_positions: np.ndarray | None = None
+                  ) -> tuple[list[tuple[int, int]], list]:
+    """The contacts of a replay and their kinds: ([start, stop) frames, a `pins.ContactKind` each).
+
+    Contacts are found (`pins.segment_taps`, no quiet frame bridged, then `split_at_dips`) on a tap
+    signal where, given the rest positions, a pin whose displacement differs from its neighbourhood's
+    median (`pins.segment.neighbour_median`) by more than the low threshold counts as that median: a
+    contact moves patches of neighbouring pins together, while the pins a tracker loses and misplaces
+    for a few frames after a slide's lift, or a few pins jumping in noise, move alone (on the pins' own
+    tap signal they held it up at 0.6-3 px after a lift, a contact stopping 4 frames late or a slide
+    2 frames after another starting 5 frames early, or made short contacts of their own). A pin that
+    agrees with its neighbours within the noise keeps its own displacement, so a clean tap's onset
+    and end are where they were. Kinds are `pins.contact_kinds` with the rest positions (a press's
+    field spreads out, a slide's shifts one way).
+
+    Parameters
+    ----------
+    displacements : (T, N, 2) ndarray
+        Displacements from the rest frame, px (NaN where lost or not tracked).
+    signal : (T,) ndarray
+        The pins' tap signal (`pins.tap_signal`), px.
+    blank : (T,) ndarray of bool
+        Frames where nothing was seen.
+    thresholds_px : (float, float)
+        `tap_thresholds_px`' (high, low), px.
+    rest_positions : (N, 2) ndarray, optional
+        The pins' rest positions, px; without them, contacts are found on ``signal`` and kinds by the
+        drag alone.
+    """
+    high_px, low_px = thresholds_px
+    coherent = signal
+    if rest_positions is not None:  # a pin differing from its neighbourhood by more than the noise is outvoted
+        local = neighbour_median(displacements, rest_positions)
+        alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
+        coherent = tap_signal(np.where(alone[..., None], local, displacements))
+    bridged = _bridge_blank(coherent, blank)
+    bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
+    bounds = split_at_dips(bridged, bounds, min_drop_px=high_px)
+    return bounds, _kinds(displacements, bounds, signal, low_px, rest_positions)
 
 
 def split_at_dips(signal: np.ndarray, bounds, *, min_drop_px: float, share: float = 0.5) -> list[tuple[int, int]]:
@@ -229,17 +270,18 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
     return max(1.5 * factor, 2.0 * low), low
 
 
-def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float) -> list:
-    """`pins.contact_kinds` of each contact, measured from its first frame where the pad was not back at rest
-    there (the signal above ``low_px``: what the last slide left in the skin, creeping back, would otherwise
-    turn this contact's drag towards that slide's direction); from the rest frame elsewhere."""
+def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float, rest_positions=None) -> list:
+    """`pins.contact_kinds` of each contact (with ``rest_positions``, (N, 2) px, when given), measured from its
+    first frame where the pad was not back at rest there (the signal above ``low_px``: what the last slide left
+    in the skin, creeping back, would otherwise turn this contact's drag towards that slide's direction); from
+    the rest frame elsewhere."""
     kinds = []
     for start, stop in bounds:
         if signal[start] > low_px:
             moved = displacements[start:stop] - displacements[start]  # NaN where lost at the start: left out
-            kinds += contact_kinds(moved, [(0, stop - start)])
+            kinds += contact_kinds(moved, [(0, stop - start)], rest_positions=rest_positions)
         else:
-            kinds += contact_kinds(displacements, [(start, stop)], signal=signal)
+            kinds += contact_kinds(displacements, [(start, stop)], signal=signal, rest_positions=rest_positions)
     return kinds
 
 
