@@ -123,6 +123,16 @@ class ContactSequence:
         """(T,) bool: frames with the plate pressed in."""
         return np.array([c.indentation_mm > 0 for c in self.contacts])
 
+    def displacements_px(self) -> np.ndarray:
+        """(T, N, 2) float64, px: every pin's true displacement from its rest place in each frame (the
+        renderer's ground truth), NaN where the pin is not visible."""
+        rest, _ = self._sensor.pin_centres()
+        frames = np.empty((len(self.contacts), len(rest), 2))
+        for k, contact in enumerate(self.contacts):
+            centres, visible = self._sensor.pin_centres(contact)
+            frames[k] = np.where(visible[:, None], centres - rest, np.nan)
+        return frames
+
 
 def _frames(duration_s: float, frame_rate: float, name: str, minimum: int) -> int:
     if not (math.isfinite(duration_s) and duration_s >= 0):

@@ -8,18 +8,6 @@ from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
 
 
-def _true_displacements(sensor, run):
-    """(T, N, 2) px: the rendered pins' displacements from rest, NaN where not visible."""
-    rest, _ = sensor.pin_centres()
-    frames = []
-    for contact in run.contacts:
-        centres, visible = sensor.pin_centres(contact)
-        d = centres - rest
-        d[~visible] = np.nan
-        frames.append(d)
-    return np.array(frames)
-
-
 @pytest.mark.parametrize("preset", ["radial-led-120", "tactip-331", "small-pad-100", "dark-331", "tactip-127"])
 @pytest.mark.parametrize("seed", [0, 1])
 def test_kinds_and_directions_match_the_rendered_strokes(preset, seed):
@@ -31,7 +19,7 @@ def test_kinds_and_directions_match_the_rendered_strokes(preset, seed):
     presses = [Stroke(float(rng.uniform(1.0, 5.0)), gap_width_mm=float(rng.uniform(0.0, 4.0))) for _ in range(4)]
     strokes = [s for pair in zip(slides, presses) for s in pair]
     run = sensor.sequence(strokes, rest_s=0.1, frame_rate=20.0)
-    kinds = contact_kinds(_true_displacements(sensor, run), [(e.start_frame, e.stop_frame) for e in run.events])
+    kinds = contact_kinds(run.displacements_px(), [(e.start_frame, e.stop_frame) for e in run.events])
     assert [k.kind for k in kinds] == [e.kind for e in run.events]
     for kind, event in zip(kinds, run.events):
         if event.kind == "slide":
@@ -93,7 +81,7 @@ def test_one_quiet_frame_separates_two_contacts():
 def test_a_given_tap_signal_gives_the_same_kinds_and_is_checked():
     sensor = SyntheticTacTip.from_preset("tactip-127", seed=4)
     run = sensor.sequence([Stroke(3.0), Stroke(2.0, 120.0, 2.0 * sensor.pin_spacing_mm)], rest_s=0.1, frame_rate=20.0)
-    displacements = _true_displacements(sensor, run)
+    displacements = run.displacements_px()
     bounds = [(e.start_frame, e.stop_frame) for e in run.events]
     given = contact_kinds(displacements, bounds, signal=tap_signal(displacements))
     computed = contact_kinds(displacements, bounds)
@@ -112,7 +100,7 @@ def test_a_few_pins_misplaced_after_the_lift_do_not_turn_a_slide(seed):
     sensor = SyntheticTacTip.from_preset("radial-led-120", seed=seed)
     run = sensor.sequence([Stroke(2.0, 135.0, 3 * sensor.pin_spacing_mm)], rest_s=0.05, press_s=0.05, slide_s=0.15,
                           lift_s=0.05, frame_rate=120.0, final_rest_s=0.1)
-    displacements = _true_displacements(sensor, run)
+    displacements = run.displacements_px()
     event = run.events[0]
     rng = np.random.default_rng(seed)
     displacements += rng.normal(0.0, 0.3, displacements.shape)  # tracking noise, px

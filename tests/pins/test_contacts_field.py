@@ -10,18 +10,6 @@ from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
 
 
-def _true_displacements(sensor, run):
-    """(T, N, 2) px: the rendered pins' displacements from rest, NaN where not visible; and the rest (N, 2)."""
-    rest, _ = sensor.pin_centres()
-    frames = []
-    for contact in run.contacts:
-        centres, visible = sensor.pin_centres(contact)
-        d = centres - rest
-        d[~visible] = np.nan
-        frames.append(d)
-    return np.array(frames), rest
-
-
 def _angle_error(a, b):
     return abs((a - b + 180.0) % 360.0 - 180.0)
 
@@ -43,7 +31,7 @@ def test_a_press_right_after_a_slide_on_a_creeping_skin_is_a_press(preset, seed)
     rests = [0.05, *(int(rng.integers(1, 4)) / 120 for _ in strokes[1:]), 0.1]
     run = sensor.sequence(strokes, rest_s=rests, press_s=0.05, hold_s=0.05, slide_s=0.15, lift_s=0.05,
                           frame_rate=120.0, residual=0.2, creep_s=0.1)
-    displacements, rest = _true_displacements(sensor, run)
+    displacements, (rest, _) = run.displacements_px(), sensor.pin_centres()
     bounds = [(e.start_frame, e.stop_frame) for e in run.events]
     kinds = contact_kinds(displacements, bounds, rest_positions=rest)
     assert [k.kind for k in kinds] == [e.kind for e in run.events], kinds
@@ -64,7 +52,7 @@ def test_the_field_shape_keeps_slides_and_presses_the_drag_tells(preset, seed):
               for angle in rng.uniform(0, 360, 4)]
     presses = [Stroke(float(rng.uniform(1.0, 5.0)), gap_width_mm=float(rng.uniform(0.0, 4.0))) for _ in range(4)]
     run = sensor.sequence([s for pair in zip(slides, presses) for s in pair], rest_s=0.1, frame_rate=20.0)
-    displacements, rest = _true_displacements(sensor, run)
+    displacements, (rest, _) = run.displacements_px(), sensor.pin_centres()
     bounds = [(e.start_frame, e.stop_frame) for e in run.events]
     assert ([k.kind for k in contact_kinds(displacements, bounds, rest_positions=rest)]
             == [k.kind for k in contact_kinds(displacements, bounds)] == [e.kind for e in run.events])
@@ -86,7 +74,7 @@ def test_neighbour_median_outvotes_a_pin_alone_and_keeps_a_patch_moving_together
     sensor = SyntheticTacTip.from_preset("tactip-331", seed=0)
     rest, _ = sensor.pin_centres()
     run = sensor.sequence([Stroke(3.0), Stroke(2.0, 60.0, 2.0 * sensor.pin_spacing_mm)], rest_s=0.1, frame_rate=20.0)
-    truth, _ = _true_displacements(sensor, run)
+    truth = run.displacements_px()
     rng = np.random.default_rng(0)
     noisy = truth.copy()
     lonely = rng.choice(len(rest), 50, replace=False)                          # 15 % of the pins, 3 px off

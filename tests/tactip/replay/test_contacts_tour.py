@@ -17,18 +17,6 @@ def _angle_error(a, b):
     return abs((a - b + 180.0) % 360.0 - 180.0)
 
 
-def _true_displacements(sensor, run):
-    """(T, N, 2) px: the rendered pins' displacements from rest, NaN where not visible; and the rest (N, 2)."""
-    rest, _ = sensor.pin_centres()
-    frames = []
-    for contact in run.contacts:
-        centres, visible = sensor.pin_centres(contact)
-        d = centres - rest
-        d[~visible] = np.nan
-        frames.append(d)
-    return np.array(frames), rest
-
-
 # A real elastomer keeps part of a slide's drag and creeps back over tens of frames: the patch a press puts
 # down 2 frames after the lift shows that shear (its pins share the slide's direction, drag ratio 0.7-0.9).
 # Before the field's shape was asked (a press spreads out, a slide shifts), the press read as a slide.
@@ -62,7 +50,7 @@ def test_pins_misplaced_alone_after_a_lift_neither_hold_a_contact_up_nor_make_on
     strokes = [Stroke(2.0, float(a), 3.0 * sensor.pin_spacing_mm) for a in angles]
     run = sensor.sequence(strokes, rest_s=[0.05, 2 / 120, 0.2], press_s=0.05, slide_s=0.15, lift_s=0.05,
                           frame_rate=120.0)
-    displacements, rest = _true_displacements(sensor, run)
+    displacements, (rest, _) = run.displacements_px(), sensor.pin_centres()
     displacements += rng.normal(0.0, 0.1, displacements.shape)                  # tracking noise, px
     first, second = run.events
     pins = len(rest)
