@@ -149,24 +149,35 @@ def test_brown_radial_pins_first_judged_among_skin_texture_rejoin(pins, seed, co
     assert recall >= 0.99 and precision >= 0.99 and rmse <= 0.1, (recall, precision, rmse)
 
 
+def _voter_grid():
+    """A 10 x 10 lattice of pitch `_VOTER_PITCH` px: (100, 2) px."""
+    return _VOTER_PITCH * np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), axis=-1).reshape(-1, 2)
+
+
+def _voter(centres, lost):
+    """One candidate set for `_consensus`: blobs at `centres`, the first `lost` of them off the lattice."""
+    from pins.detect import Blobs
+    from pins._judge import _KEPT, _OFF
+    from pins._candidates import _Run
+
+    reason = np.full(len(centres), _KEPT)
+    reason[:lost] = _OFF
+    n = len(centres)
+    blobs = Blobs(centres=centres, areas=np.full(n, 20), fills=np.full(n, 0.8), candidates=n,
+                  contrasts=np.full(n, 40.0))
+    return _Run(DetectionParams(), blobs, reason, _VOTER_PITCH)
+
+
+_VOTER_PITCH = 10.0
+
+
 def test_consensus_agrees_on_pins_half_the_voters_keep_and_never_on_one_sets_own():
     """Of four voting candidate sets, the two least complete do not veto the pins only the two most
     complete keep (a most complete one wins); of two voters, a set keeping a few extra blobs does
     not agree with itself (the other wins)."""
-    from pins.detect import Blobs
-    from pins._judge import _KEPT, _OFF
-    from pins._candidates import _Run, _consensus
+    from pins._candidates import _consensus
 
-    pitch = 10.0
-    grid = pitch * np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), axis=-1).reshape(-1, 2)
-
-    def run(centres, lost):
-        reason = np.full(len(centres), _KEPT)
-        reason[:lost] = _OFF
-        n = len(centres)
-        blobs = Blobs(centres=centres, areas=np.full(n, 20), fills=np.full(n, 0.8), candidates=n,
-                      contrasts=np.full(n, 40.0))
-        return _Run(DetectionParams(), blobs, reason, pitch)
+    pitch, grid, run = _VOTER_PITCH, _voter_grid(), _voter
 
     membership, _ = _consensus([run(grid, 3), run(grid, 3), run(grid, 0), run(grid, 0)], pitch)
     assert np.isfinite(membership).all() and np.argmax(membership) in (2, 3)
@@ -182,20 +193,9 @@ def test_a_lone_voter_is_no_consensus_with_itself():
     blob one set alone keeps is no agreement, and the set without them wins (the holes it leaves are
     filled from the others, `pins._rescue`). A set keeping over a tenth more than any other still votes
     alone: its extras are pins only it finds."""
-    from pins.detect import Blobs
-    from pins._judge import _KEPT, _OFF
-    from pins._candidates import _Run, _consensus
+    from pins._candidates import _consensus
 
-    pitch = 10.0
-    grid = pitch * np.stack(np.meshgrid(np.arange(10.0), np.arange(10.0)), axis=-1).reshape(-1, 2)
-
-    def run(centres, lost):
-        reason = np.full(len(centres), _KEPT)
-        reason[:lost] = _OFF
-        n = len(centres)
-        blobs = Blobs(centres=centres, areas=np.full(n, 20), fills=np.full(n, 0.8), candidates=n,
-                      contrasts=np.full(n, 40.0))
-        return _Run(DetectionParams(), blobs, reason, pitch)
+    pitch, grid, run = _VOTER_PITCH, _voter_grid(), _voter
 
     noisy = np.vstack([grid, grid[:4] + pitch / 2])               # 104 kept, 4 of them noise
     runs = [run(noisy, 0), run(grid, 5), run(grid, 5), run(grid, 30)]  # 95 < 0.97 x 104
