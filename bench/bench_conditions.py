@@ -97,6 +97,9 @@ every condition; slides and cli on tactip-331, dark-331, radial-led-120, seed 42
   2953 / 2321 / 2349, 120 frames/s 325 / 305 / 305. Held out (seeds 48-53): 30 frames/s tactip-127 4829 / 5500 /
   5028 (still 4 % above constant velocity), radial-led-120 1418 / 1453 / 1418; 120 frames/s tactip-127
   669 / 161 / 154; tactip-331 at 30 frames/s (seeds 48-49) 2985 / 2389 / 2400.
+  Given back: bench_slide_losses (radial-led-120, webcam at 120 frames/s, viscoelastic skin, seeds 0-5) lost
+  9192 / 8475 / 8854, swaps (apart) 100 (62) / 85 (45) / 91 (53); a 0.2 gate keeps it (8495 lost) but leaves
+  tactip-127 at 30 frames/s at 5393 (seeds 0-5).
 - (session 18, detect13) a noisy webcam through JPEG (grad+noise8+jpeg75; bench_user_chain's camera): JPEG smooths
   the finest scale, where `noise_sigma` reads (1.5 for 8 grey levels), so the candidate offsets stayed at 5 and a
   lattice of noise blobs between radial-led-120's spokes won the vote; their short spacing made the pitch short
