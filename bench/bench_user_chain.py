@@ -85,6 +85,14 @@ skin relaxed under it). Seeds 0-11,
 the first alone: residual 0 all met, residual 0.2 no better (1/12 and 2/12 tours, 114 and 119 of 132 contacts);
 the second alone: white-dark-331 all met, radial-led-120 residual 0 as main (10/12), residual 0.2 10/12.
 
+After session 19's merges (rest14, slide14, detect14, tour14; the lead's, a busy 2-core VM): residual 0.2 seeds 0-2,
+radial-led-120 and white-dark-331: outcomes 3, 4 and 6 met on 6 of 6 sets, 5 on 5 of 6; residual 0, radial-led-120
+seeds 0-2 and held out 48-50: 3, 4 and 6 on 6 of 6, 5 on 5 of 6. The one miss, radial-led-120 seed 0 (both
+residuals): the dataset's scale 0.3967 (+4.1 %): slide_000.avi's rest frame lost 4 faint pins on one side, the
+pins' mean moved ~2 px and the spokes went unrecognised (the pitch the nearest spacing, 3 % short). With the
+spokes judged about their best centre near the mean (`pins.scale._spokes`), seed 0 residual 0: every outcome met
+(dataset 0.3845, spread 0.7 %).
+
 Run: .venv/bin/python bench/bench_user_chain.py [--presets radial-led-120,white-dark-331] [--seeds 0-2]
      [--keep DIR] [--residual 0.2 --creep-s 0.1]
 """
