@@ -11,8 +11,7 @@ import numpy as np
 from scipy import ndimage
 
 from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, contact_kinds, jitter_floor_px,
-                  segment_taps, select_feature_pins, sensor_scale, tap_signal)
-from pins.segment import neighbour_median
+                  neighbour_median, segment_taps, select_feature_pins, sensor_scale, tap_signal)
 
 from tactip.pipeline import PinTrack
 

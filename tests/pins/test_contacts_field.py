@@ -4,8 +4,7 @@ against the synthetic TacTip's ground truth (issue 20, outcome 3)."""
 import numpy as np
 import pytest
 
-from pins import ShapeError, contact_kinds, tap_signal
-from pins.segment import neighbour_median
+from pins import ShapeError, contact_kinds, neighbour_median, tap_signal
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
 
