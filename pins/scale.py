@@ -285,8 +285,8 @@ def _hexagonal(offset: np.ndarray, shell: np.ndarray) -> bool:
 def _spokes(radial: np.ndarray, pitch_px: float) -> bool:
     """Whether the pins lie on spokes: from the centre (`radial` (N, 2) px from it to each pin; those
     beyond a tenth of the furthest), their azimuths repeat every ``2 pi / S`` for some S in
-    `_SPOKE_COUNTS` (``|mean exp(i S azimuth)|`` above `_SPOKE_ORDER`), about the given centre or one
-    moved by up to `_SPOKE_SHIFT` pitches (`pitch_px`, px) either way.
+    `_SPOKE_COUNTS` (``|mean exp(i S azimuth)|`` above `_SPOKE_ORDER`), about the given centre or else
+    one moved by up to `_SPOKE_SHIFT` pitches (`pitch_px`, px) either way (a 9 x 9 grid, at most 256 pins).
 
     The centre is the pins' mean, which pins missing on one side move: 3-4 of 120 missing (faint pins
     through a webcam) move it by ~2 px, which turns an inner pin 10 px out by 0.2 rad and its phase by S
@@ -294,21 +294,33 @@ def _spokes(radial: np.ndarray, pitch_px: float) -> bool:
     frames, seeds 0-35), and at 0.79 the pitch fell back to the nearest spacing, 3 % short. Moving the
     centre lines up no pins that lie on no spokes (rings of unequal counts; a hexagonal lattice's pitch
     is the same either way, `central_spacing_px`)."""
-    if len(radial) < 2 or not np.isfinite(pitch_px):
+    if _spoke_order(radial[None]) > _SPOKE_ORDER:
+        return True
+    if len(radial) < 2 * _SPOKE_COUNTS[0] or not np.isfinite(pitch_px):
         return False
-    step = _SPOKE_SHIFT * pitch_px / 4
-    shifts = step * np.stack(np.meshgrid(np.arange(-4, 5), np.arange(-4, 5)), axis=-1).reshape(-1, 1, 2)
-    moved = radial[None] - shifts  # (C, N, 2): from each candidate centre to each pin
-    ray = np.hypot(moved[..., 0], moved[..., 1])
+    sample = radial[::max(1, len(radial) // 256)]
+    offsets = _SPOKE_SHIFT * pitch_px * np.linspace(-1.0, 1.0, 9)
+    for dy in offsets:  # (a row of centres at a time: 9 x 59 x 256 complex at most)
+        shifts = np.column_stack([offsets, np.full(9, dy)])
+        if _spoke_order(sample[None] - shifts[:, None]) > _SPOKE_ORDER:
+            return True
+    return False
+
+
+def _spoke_order(radial: np.ndarray) -> float:
+    """The largest ``|mean exp(i S azimuth)|`` over S in `_SPOKE_COUNTS` and over the centres of `radial`
+    (C, N, 2) px (from each of C centres to each pin), over the pins beyond a tenth of the furthest; 0 with
+    fewer than twice the least S of them."""
+    ray = np.hypot(radial[..., 0], radial[..., 1])
     outer = ray > 0.1 * ray.max(axis=1, keepdims=True)
     counts = outer.sum(axis=1)
     if counts.min() < 2 * _SPOKE_COUNTS[0]:
-        return False
-    turn = np.where(outer, (moved[..., 0] + 1j * moved[..., 1]) / np.where(outer, ray, 1.0), 0.0)  # exp(i azimuth)
+        return 0.0
+    turn = np.where(outer, (radial[..., 0] + 1j * radial[..., 1]) / np.where(outer, ray, 1.0), 0.0)  # exp(i azimuth)
     # exp(i S azimuth) for S = 6, 7, ...: running products, cheaper than exponentials
     steps = np.broadcast_to(turn[:, None], (len(turn), len(_SPOKE_COUNTS) - 1, turn.shape[1]))
     powers = np.cumprod(np.concatenate([turn[:, None] ** _SPOKE_COUNTS[0], steps], axis=1), axis=1)
-    return bool((np.abs(powers.sum(axis=2)) / counts[:, None]).max() > _SPOKE_ORDER)
+    return float((np.abs(powers.sum(axis=2)) / counts[:, None]).max())
 
 
 # The spokes' centre is looked for up to this many pitches either way of the pins' mean (`_spokes`).
