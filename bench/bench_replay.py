@@ -220,6 +220,19 @@ decode 2.8-10.7 per repeat on either side). On a quiet machine replay's clock is
 MJPG ~1.1-1.2 as before; what is left for mp4v is decoding in replay as fast as alone (0.76 against ~0.56
 ms/frame of clock), not the tracker.
 
+The lead, session 19's end (quiet 2-core VM, load 0.0-0.9, nothing else running; `--slides 8 --repeats 5`): mp4v
+replay / decode best of 5 1.55 (median 1.55; replay 0.694 s, decoding alone 0.447 s) and, a second run, 1.73
+(median 1.73; replay 0.678 s, decoding alone 0.391 s: decoding alone, on both cores, moves the ratio more than
+replay does); MJPG 1.13 (median 1.14). Replay's threads, CPU: main 0.70-0.73, decode 0.71-0.73 ms/frame (795 x
+0.71 = 0.565 s: the decode thread on one core is already 1.27-1.45 x decoding alone on two, before the start and
+the tail). The tail's analysis (`tactip.replay.contacts.analyse`, profiled): 55-59 ms CPU, of which tour14's
+neighbourhood medians (`pins.segment.neighbour_median`) 27 ms and the spokes' test 8 ms (the lead's centre
+search; now 0.4 ms, the search only when the mean fails). Tried for the medians: frames or pins skipped by a bound
+on their neighbourhood's spread (84 % of pin-frames of a slide video need the median: no gain); the tracker's
+float32 median kernel on float64 rows (21 -> 14 ms, a new signature to compile: not kept). Left: the medians
+computed while frames are tracked (the main thread has ~0.2 ms/frame to spare waiting on the decoder), which
+takes ~0.06 off the ratio; on a machine with more cores replay's decoder gets them all but the tracker's.
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG
 """
