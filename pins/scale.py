@@ -268,6 +268,7 @@ _HEXATIC = 0.8
 # order above _SPOKE_ORDER (synthetic 17 spokes 1.00; hexagonal 0.35-0.62, circles 0.08-0.47, seeds 0-39).
 _SPOKE_COUNTS = np.arange(6, 65)
 _SPOKE_ORDER = 0.8
+_SPOKE_SHIFT = 0.5  # the spokes' centre is looked for up to this many pitches either way of the pins' mean
 
 
 def _hexagonal(offset: np.ndarray, shell: np.ndarray) -> bool:
@@ -288,12 +289,10 @@ def _spokes(radial: np.ndarray, pitch_px: float) -> bool:
     `_SPOKE_COUNTS` (``|mean exp(i S azimuth)|`` above `_SPOKE_ORDER`), about the given centre or else
     one moved by up to `_SPOKE_SHIFT` pitches (`pitch_px`, px) either way (a 9 x 9 grid, at most 256 pins).
 
-    The centre is the pins' mean, which pins missing on one side move: 3-4 of 120 missing (faint pins
-    through a webcam) move it by ~2 px, which turns an inner pin 10 px out by 0.2 rad and its phase by S
-    times that; the order of a radial pad fell from 0.99-1.00 to 0.79-0.90 (bench_user_chain's rest
-    frames, seeds 0-35), and at 0.79 the pitch fell back to the nearest spacing, 3 % short. Moving the
-    centre lines up no pins that lie on no spokes (rings of unequal counts; a hexagonal lattice's pitch
-    is the same either way, `central_spacing_px`)."""
+    Pins missing on one side move the pins' mean: 3-4 of 120 (faint, through a webcam) by ~2 px, which turns
+    an inner pin's phase by S x 0.2 rad; a radial pad's order fell from 0.99-1.00 to 0.79-0.90 (bench_user_chain,
+    seeds 0-35) and at 0.79 the pitch fell back to the nearest spacing, 3 % short. No centre lines up pins on
+    no spokes (rings of unequal counts; a hexagonal lattice's pitch is the same either way)."""
     if _spoke_order(radial[None]) > _SPOKE_ORDER:
         return True
     if len(radial) < 2 * _SPOKE_COUNTS[0] or not np.isfinite(pitch_px):
@@ -308,9 +307,8 @@ def _spokes(radial: np.ndarray, pitch_px: float) -> bool:
 
 
 def _spoke_order(radial: np.ndarray) -> float:
-    """The largest ``|mean exp(i S azimuth)|`` over S in `_SPOKE_COUNTS` and over the centres of `radial`
-    (C, N, 2) px (from each of C centres to each pin), over the pins beyond a tenth of the furthest; 0 with
-    fewer than twice the least S of them."""
+    """The largest ``|mean exp(i S azimuth)|`` over S in `_SPOKE_COUNTS` and the C centres of `radial` (C, N, 2)
+    px (to each pin), over the pins beyond a tenth of the furthest; 0 with fewer than twice the least S."""
     ray = np.hypot(radial[..., 0], radial[..., 1])
     outer = ray > 0.1 * ray.max(axis=1, keepdims=True)
     counts = outer.sum(axis=1)
@@ -321,10 +319,6 @@ def _spoke_order(radial: np.ndarray) -> float:
     steps = np.broadcast_to(turn[:, None], (len(turn), len(_SPOKE_COUNTS) - 1, turn.shape[1]))
     powers = np.cumprod(np.concatenate([turn[:, None] ** _SPOKE_COUNTS[0], steps], axis=1), axis=1)
     return float((np.abs(powers.sum(axis=2)) / counts[:, None]).max())
-
-
-# The spokes' centre is looked for up to this many pitches either way of the pins' mean (`_spokes`).
-_SPOKE_SHIFT = 0.5
 
 
 @dataclass(frozen=True)
