@@ -143,26 +143,3 @@ def field_guesses(rest: np.ndarray, reference: np.ndarray, last_step: np.ndarray
     guess[which[need[which]]] = field[need[which]]
     return guess, positions, need
 
-
-def settled_at_rest(refiner, crop: np.ndarray, positions: np.ndarray, matched: np.ndarray) -> np.ndarray:
-    """`positions` (N, 2), px, with the pins placed where the frame shows the rest frame again (`matched`, (N,)
-    bool: `pins._return.RestMatch`) but off their rest positions by more than the guess bound moved onto their
-    windows at rest, where those settle there on a tip like at rest (a copy; `positions` itself when none is).
-
-    `RestMatch.restore` puts back the pins farther than the gate; a pin placed nearer, by a window that a
-    neighbour's stale guess cut (its radius is half the distance to the nearest), may sit a px off its tip:
-    a slide filmed at 20 frames/s left tactip-127's pin 41 (seed 40) 1.28 px off at rest, on a path where a
-    field guess had placed its neighbours (`refiner`: `pins._refine.Refiner`; `crop` as the tracker sees it).
-    """
-    rest = refiner.rest_positions
-    off = np.flatnonzero(matched & (_squared_norm(positions - rest) > refiner._guess_px ** 2))  # (NaN: False)
-    if not off.size:
-        return positions
-    centres, measures = refiner.windows.measure(crop, rest[off] - refiner.origin, refiner._rest_radius[off])
-    centres += refiner.origin - refiner._rest_offset[off]
-    ok = (_squared_norm(centres - rest[off]) <= refiner._settled_px ** 2) & refiner._like_at_rest(measures, off)
-    if not np.count_nonzero(ok):
-        return positions
-    positions = positions.copy()
-    positions[off[ok]] = centres[ok]
-    return positions

@@ -55,7 +55,7 @@ from scipy.spatial import cKDTree
 
 from ._edge import FrameEdge, tracking_crop
 from ._identity import kept_on_own_tips
-from ._motion import field_guesses, settled_at_rest
+from ._motion import field_guesses
 from ._pairfit import part_overlapping
 from ._recover import _as_points, match_to_blobs
 from ._return import RestMatch, motion_warning, taken_off
@@ -451,8 +451,6 @@ class PinTracker:
                                      refiner.rest_positions, guess, refiner._identity_index)
         # Pins where the frame shows the rest frame again, whatever the frames between did (`pins._return`).
         positions = self._rest_match.restore(refiner, crop, positions)
-        if self._rest_match.matched is not None:  # (and those placed near rest there, at rest: `pins._motion`)
-            positions = settled_at_rest(refiner, crop, positions, self._rest_match.matched)
         if positions is not before:  # (pins taken off others' tips, by either: `motion_warning`)
             restored = taken_off(before, positions, refiner.rest_positions, self.gate_px)
             if restored:

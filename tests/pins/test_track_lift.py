@@ -6,7 +6,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from pins import DetectionParams, PinTracker, SensorDisc
-from pins._motion import settled_at_rest, spring_steps
+from pins._motion import spring_steps
 from tests.pins.conftest import preset_sensor
 
 
@@ -79,26 +79,32 @@ def test_the_motion_field_of_a_lift_puts_the_fast_pins_nearer_where_they_go():
 
 
 def test_a_pin_placed_a_px_off_where_the_frame_shows_rest_is_put_on_its_tip():
+    """`RestMatch.restore` also measures at rest the matching pins placed within the gate but off rest by more than
+    the guess bound (and puts back the missing ones, as always); a pin whose window does not match stays."""
     s = preset_sensor("tactip-127", 0)
     rest = s.render()
     drawn = np.flatnonzero(rest.visible)
     tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
     tracker.start(rest.image, pins=rest.centres[drawn])
     crop = tracker._bright(tracker._cropped(rest.image))
+    match = tracker._rest_match
+    half = match._side // 2
+    x, y = int(match._x[30]), int(match._y[30])
+    unlike = crop.copy()
+    unlike[y - half:y + half + 1, x - half:x + half + 1] = 255 - unlike[y - half:y + half + 1, x - half:x + half + 1]
     positions = tracker.rest_positions.copy()
     positions[10] += [1.3, 0.0]   # a window cut by a neighbour's stale guess settled 1.3 px off
-    positions[20] = np.nan        # (missing: `RestMatch.restore`'s, not this step's)
-    matched = np.ones(len(positions), dtype=bool)
-    matched[30] = False           # not shown as at rest: kept where it is
-    positions[30] += [1.3, 0.0]
-    fixed = settled_at_rest(tracker._refiner, crop, positions, matched)
+    positions[20] = np.nan        # missing: put back at rest too
+    positions[30] += [1.3, 0.0]   # its window unlike the rest frame's: kept where it is
+    fixed = match.restore(tracker._refiner, unlike, positions)
+    assert match.matched[10] and match.matched[20] and not match.matched[30]
     assert np.linalg.norm(fixed[10] - rest.centres[drawn][10]) < 0.1
-    assert np.isnan(fixed[20]).all()
+    assert np.linalg.norm(fixed[20] - rest.centres[drawn][20]) < 0.1
     np.testing.assert_array_equal(fixed[30], positions[30])
     others = np.setdiff1d(np.arange(len(positions)), [10, 20, 30])
     np.testing.assert_array_equal(fixed[others], positions[others])
     # Nothing off: the positions themselves.
-    assert settled_at_rest(tracker._refiner, crop, tracker.rest_positions, matched) is tracker.rest_positions
+    assert match.restore(tracker._refiner, crop, tracker.rest_positions) is tracker.rest_positions
 
 
 def test_the_motion_fields_docstring_example_holds():
