@@ -8,6 +8,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
 from tactip.sim import Contact, SyntheticTacTip
+from tactip.sim.sequence import Stroke
 
 TAP = Contact(indentation_mm=5.0, gap_width_mm=2.0)
 
@@ -54,6 +55,48 @@ def slide_run(name: str, seed: int, directions, **slides):
     s.reseed_noise(seed)
     run = list(s.slides(directions, frame_rate=120.0, **slides))
     return s, run, np.flatnonzero(run[0].visible | run[0].partial)
+
+
+def slides_and_presses(preset: str, seed: int):
+    """The preset's sensor (`seed`) and a `ContactSequence` of 4 slides of 0.5-3 pitches in random directions,
+    1-3 mm deep, each followed by a press 1-5 mm deep (rests 0.1 s, 20 frames/s), drawn from `seed`."""
+    sensor = SyntheticTacTip.from_preset(preset, seed=seed)
+    rng = np.random.default_rng(seed)
+    pitch = sensor.pin_spacing_mm
+    slides = [Stroke(float(rng.uniform(1.0, 3.0)), float(angle), float(rng.uniform(0.5, 3.0)) * pitch)
+              for angle in rng.uniform(0, 360, 4)]
+    presses = [Stroke(float(rng.uniform(1.0, 5.0)), gap_width_mm=float(rng.uniform(0.0, 4.0))) for _ in range(4)]
+    return sensor, sensor.sequence([s for pair in zip(slides, presses) for s in pair], rest_s=0.1, frame_rate=20.0)
+
+
+def apart_swaps_through_slides(name: str, seed: int, directions, frame_rate: float) -> tuple[int, float]:
+    """Slides of 3 pitches in `directions` (degrees), 2 mm deep, pressed and lifted in 50 ms, at `frame_rate`
+    (as `bench_conditions`' slides), tracked from the drawn pins' true rest centres: pin-frames placed nearer
+    another visible pin's true centre than their own, the two at least half a spacing apart; and the largest
+    step of a visible pin in a frame, spacings."""
+    from scipy.spatial import cKDTree
+
+    from pins import DetectionParams, PinTracker, SensorDisc
+
+    s = preset_sensor(name, seed)
+    s.reseed_noise(seed)
+    run = iter(s.slides(directions, distance_mm=3 * s.pin_spacing_mm, indentation_mm=2.0,
+                        rest_s=max(3 / frame_rate, 0.025), press_s=0.05, slide_s=0.15, lift_s=0.05,
+                        frame_rate=frame_rate))
+    rest = previous = next(run)
+    drawn = np.flatnonzero(rest.visible | rest.partial)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
+    tracker.start(rest.image, pins=rest.centres[drawn])
+    apart, step = 0, 0.0
+    for f in run:
+        positions = tracker.update(f.image)
+        step = max(step, np.max(np.linalg.norm(f.centres - previous.centres, axis=1)[f.visible & previous.visible]))
+        previous = f
+        placed = np.flatnonzero(f.visible[drawn] & np.isfinite(positions[:, 0]))
+        nearest = cKDTree(f.centres).query(positions[placed])[1]
+        gap = np.linalg.norm(f.centres[nearest] - f.centres[drawn[placed]], axis=1)
+        apart += int(np.count_nonzero((nearest != drawn[placed]) & (gap >= 0.5 * tracker.spacing_px)))
+    return apart, step / tracker.spacing_px
 
 
 @functools.lru_cache(maxsize=None)

@@ -6,19 +6,13 @@ import pytest
 from pins import ShapeError, contact_kinds, jitter_floor_px, segment_taps, tap_signal
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
+from tests.pins.conftest import slides_and_presses
 
 
 @pytest.mark.parametrize("preset", ["radial-led-120", "tactip-331", "small-pad-100", "dark-331", "tactip-127"])
 @pytest.mark.parametrize("seed", [0, 1])
 def test_kinds_and_directions_match_the_rendered_strokes(preset, seed):
-    sensor = SyntheticTacTip.from_preset(preset, seed=seed)
-    rng = np.random.default_rng(seed)
-    pitch = sensor.pin_spacing_mm
-    slides = [Stroke(float(rng.uniform(1.0, 3.0)), float(angle), float(rng.uniform(0.5, 3.0)) * pitch)
-              for angle in rng.uniform(0, 360, 4)]
-    presses = [Stroke(float(rng.uniform(1.0, 5.0)), gap_width_mm=float(rng.uniform(0.0, 4.0))) for _ in range(4)]
-    strokes = [s for pair in zip(slides, presses) for s in pair]
-    run = sensor.sequence(strokes, rest_s=0.1, frame_rate=20.0)
+    _, run = slides_and_presses(preset, seed)
     kinds = contact_kinds(run.displacements_px(), [(e.start_frame, e.stop_frame) for e in run.events])
     assert [k.kind for k in kinds] == [e.kind for e in run.events]
     for kind, event in zip(kinds, run.events):

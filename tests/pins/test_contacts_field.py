@@ -7,6 +7,7 @@ import pytest
 from pins import ShapeError, contact_kinds, neighbour_median, tap_signal
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
+from tests.pins.conftest import slides_and_presses
 
 
 def _angle_error(a, b):
@@ -44,13 +45,7 @@ def test_a_press_right_after_a_slide_on_a_creeping_skin_is_a_press(preset, seed)
 @pytest.mark.parametrize("preset", ["radial-led-120", "tactip-331", "small-pad-100", "dark-331", "tactip-127"])
 @pytest.mark.parametrize("seed", [0, 1])
 def test_the_field_shape_keeps_slides_and_presses_the_drag_tells(preset, seed):
-    sensor = SyntheticTacTip.from_preset(preset, seed=seed)
-    rng = np.random.default_rng(seed)
-    pitch = sensor.pin_spacing_mm
-    slides = [Stroke(float(rng.uniform(1.0, 3.0)), float(angle), float(rng.uniform(0.5, 3.0)) * pitch)
-              for angle in rng.uniform(0, 360, 4)]
-    presses = [Stroke(float(rng.uniform(1.0, 5.0)), gap_width_mm=float(rng.uniform(0.0, 4.0))) for _ in range(4)]
-    run = sensor.sequence([s for pair in zip(slides, presses) for s in pair], rest_s=0.1, frame_rate=20.0)
+    sensor, run = slides_and_presses(preset, seed)
     displacements, (rest, _) = run.displacements_px(), sensor.pin_centres()
     bounds = [(e.start_frame, e.stop_frame) for e in run.events]
     assert ([k.kind for k in contact_kinds(displacements, bounds, rest_positions=rest)]

@@ -7,31 +7,7 @@ from scipy.spatial import cKDTree
 
 from pins import DetectionParams, PinTracker, SensorDisc
 from pins._motion import spring_steps
-from tests.pins.conftest import preset_sensor
-
-
-def _apart_swaps_through_fast_lifts(name, seed):
-    """Two slides of 3 pitches (0 and 135 degrees) lifted in 50 ms at 120 frames/s, as `bench_conditions`' slides:
-    pin-frames placed nearer another visible pin's true centre than their own, the two at least half a spacing
-    apart; and the largest step of a pin in a frame, spacings."""
-    s = preset_sensor(name, seed)
-    s.reseed_noise(seed)
-    run = iter(s.slides([0, 135], distance_mm=3 * s.pin_spacing_mm, indentation_mm=2.0, rest_s=3 / 120,
-                        press_s=0.05, slide_s=0.15, lift_s=0.05, frame_rate=120.0))
-    rest = previous = next(run)
-    drawn = np.flatnonzero(rest.visible | rest.partial)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
-    tracker.start(rest.image, pins=rest.centres[drawn])
-    apart, step = 0, 0.0
-    for f in run:
-        positions = tracker.update(f.image)
-        step = max(step, np.max(np.linalg.norm(f.centres - previous.centres, axis=1)[f.visible & previous.visible]))
-        previous = f
-        placed = np.flatnonzero(f.visible[drawn] & np.isfinite(positions[:, 0]))
-        nearest = cKDTree(f.centres).query(positions[placed])[1]
-        gap = np.linalg.norm(f.centres[nearest] - f.centres[drawn[placed]], axis=1)
-        apart += int(np.count_nonzero((nearest != drawn[placed]) & (gap >= 0.5 * tracker.spacing_px)))
-    return apart, step / tracker.spacing_px
+from tests.pins.conftest import apart_swaps_through_slides, preset_sensor
 
 
 def test_pins_keep_their_tips_through_a_lift_a_spacing_a_frame():
@@ -39,7 +15,7 @@ def test_pins_keep_their_tips_through_a_lift_a_spacing_a_frame():
     # guesses for LK (main 09118d1), 0/35/7/10 with the motion field's. (Seed 1's first lift still swaps.)
     counts = []
     for seed in (0, 1, 2, 3):
-        apart, step = _apart_swaps_through_fast_lifts("tactip-127", seed)
+        apart, step = apart_swaps_through_slides("tactip-127", seed, [0, 135], 120.0)
         assert step > 1.0  # the case: pins stepped beyond a spacing in a frame
         counts.append(apart)
     assert sum(counts) <= 60
