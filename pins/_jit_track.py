@@ -188,6 +188,31 @@ def displacement_median(positions, rest_positions, index):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def displacement_nanmedian(positions, rest_positions, index):
+    """`pins.segment.nanmedian_rows` of the displacements ``positions - rest_positions`` (N, 2), px, gathered at
+    each row of the (L, k) `index`, per axis: (L, 2), px, the mean of the middle one or two values that are not
+    NaN (infinities count, as there), NaN where every one is; `pins.segment.NeighbourMedians`' one frame."""
+    rows, k = index.shape
+    out = np.empty((rows, 2))
+    values = np.empty(k)
+    for i in range(rows):
+        for axis in range(2):
+            count = 0
+            for j in range(k):
+                pin = index[i, j]
+                value = positions[pin, axis] - rest_positions[pin, axis]
+                values[j] = value
+                if value == value:
+                    count += 1
+            if count == 0:
+                out[i, axis] = np.nan
+                continue
+            _sort_nan_last(values, k)
+            out[i, axis] = (values[(count - 1) // 2] + values[count // 2]) / 2
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def predict(positions, rest_positions, then, index, which, last_seen):
     """`pins._predict._Prediction._predict`: where lost pins `which` (L,) should be, px (L, 2), from their
     neighbours at (L, k) `index` placed in `positions` (N, 2), px, and `then` (N, k, 2), px (their

@@ -17,7 +17,7 @@ from scipy import ndimage
 from .displacement import displacement_magnitude
 from .errors import ShapeError
 
-__all__ = ["tap_signal", "neighbour_median", "segment_taps", "converging_frames", "jitter_floor_px"]
+__all__ = ["tap_signal", "neighbour_median", "NeighbourMedians", "segment_taps", "converging_frames", "jitter_floor_px"]
 
 
 def nanmedian_rows(values: np.ndarray) -> np.ndarray:
@@ -103,24 +103,94 @@ def neighbour_median(displacements: np.ndarray, rest_positions: np.ndarray, *, n
     >>> float(np.abs(neighbour_median(displacements, rest)).max())
     0.0
     """
-    from scipy.spatial import cKDTree
-
     data = np.asarray(displacements, dtype=np.float64)
     rest = np.asarray(rest_positions, dtype=np.float64)
     if data.ndim != 3 or data.shape[2] != 2 or rest.shape != data.shape[1:]:
         raise ShapeError(f"displacements must have shape (T, N, 2) and rest_positions (N, 2), got {data.shape} "
                          f"and {rest.shape}")
-    if int(neighbours) != neighbours or neighbours < 0:
-        raise ValueError(f"neighbours must be a non-negative integer, got {neighbours}")
-    count = min(int(neighbours) + 1, len(rest))
-    if count <= 1:
+    index = _neighbourhoods(rest, neighbours)                          # (N, k+1): the pin first
+    if index.shape[1] <= 1:
         return data.copy()
-    index = cKDTree(rest).query(rest, k=count)[1]                      # (N, k+1): the pin first
     smoothed = np.empty_like(data)
     for first in range(0, len(data), chunk_frames):
         part = data[first:first + chunk_frames][:, index]             # (F, N, k+1, 2)
         smoothed[first:first + chunk_frames] = nanmedian_rows(np.moveaxis(part, 2, -1))
     return smoothed
+
+
+def _neighbourhoods(rest: np.ndarray, neighbours: int) -> np.ndarray:
+    """(N, k+1) indices of each pin and its `neighbours` nearest pins at rest (the pin first; k <= N - 1)."""
+    from scipy.spatial import cKDTree
+
+    if int(neighbours) != neighbours or neighbours < 0:
+        raise ValueError(f"neighbours must be a non-negative integer, got {neighbours}")
+    count = min(int(neighbours) + 1, len(rest))
+    if count <= 1:
+        return np.arange(len(rest))[:, None]
+    return cKDTree(rest).query(rest, k=count)[1]
+
+
+class NeighbourMedians:
+    """`neighbour_median` one frame at a time, as a tracker places the pins: the same numbers, bit for bit.
+
+    Replay computes its contacts' neighbourhood medians while it tracks (its tracking thread waits on the
+    decoder; issue 20, outcome 9) instead of over the whole recording after the last frame. Each frame's
+    medians are computed by one compiled call (`pins._jit_track.displacement_nanmedian`), or by
+    `neighbour_median`'s NumPy code on that frame (``TACTIP_KERNELS=numpy``, or Numba missing).
+
+    Parameters
+    ----------
+    rest_positions : (N, 2) ndarray
+        The pins' rest positions, px (who neighbours whom, and where displacements start).
+    neighbours : int
+        As `neighbour_median`.
+
+    Examples
+    --------
+    >>> rest = np.stack(np.meshgrid(np.arange(5), np.arange(5)), -1).reshape(-1, 2) * 10.0
+    >>> medians = NeighbourMedians(rest)
+    >>> moved = rest.copy(); moved[12] += (6.0, 0.0)                           # one pin jumps alone
+    >>> medians.add(rest); medians.add(moved)
+    >>> table = medians.table()
+    >>> table.shape, float(np.abs(table).max())
+    ((2, 25, 2), 0.0)
+    """
+
+    def __init__(self, rest_positions: np.ndarray, *, neighbours: int = 6):
+        self.rest_positions = np.array(rest_positions, dtype=np.float64)
+        if self.rest_positions.ndim != 2 or self.rest_positions.shape[1] != 2:
+            raise ShapeError(f"rest_positions must have shape (N, 2), got {self.rest_positions.shape}")
+        self._index = _neighbourhoods(self.rest_positions, neighbours)
+        self._rows: list[np.ndarray] = []
+
+    def __len__(self) -> int:
+        return len(self._rows)
+
+    def add(self, positions: np.ndarray | None) -> None:
+        """Append one frame's medians, of the (N, 2) `positions`, px (NaN where lost; None: every pin lost)."""
+        rest = self.rest_positions
+        if positions is None:
+            self._rows.append(np.full(rest.shape, np.nan))
+            return
+        positions = np.asarray(positions, dtype=np.float64)
+        if positions.shape != rest.shape:
+            raise ShapeError(f"positions must have shape {rest.shape}, got {positions.shape}")
+        if self._index.shape[1] <= 1:
+            self._rows.append(positions - rest)
+            return
+        from ._kernels import compiled
+
+        kernels = compiled("_jit_track")
+        if kernels is not None:
+            self._rows.append(kernels.displacement_nanmedian(positions, rest, self._index))
+        else:
+            self._rows.append(nanmedian_rows(np.moveaxis((positions - rest)[self._index], 1, -1)))
+
+    def table(self) -> np.ndarray:
+        """(F, N, 2) float64 medians of the frames added, px: `neighbour_median` of their displacements."""
+        if not self._rows:
+            return np.zeros((0, *self.rest_positions.shape))
+        return np.stack(self._rows)
 
 
 def segment_taps(displacements: np.ndarray, *, high_px: float = 1.5, low_px: float = 0.5,

@@ -16,7 +16,7 @@ from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, co
 from tactip.pipeline import PinTrack
 
 __all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "find_contacts",
-           "split_at_dips", "tap_thresholds_px"]
+           "neighbour_medians_of", "split_at_dips", "tap_thresholds_px"]
 # Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
 REFERENCE_PITCH_PX = 17.5
 
@@ -66,7 +66,8 @@ def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, r
 
 
 def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: float, sensor, pins_on_pad,
-             pad_diameter_mm, mm_per_px, expected_pins, rest_frame: int, pitch_positions=None) -> dict:
+             pad_diameter_mm, mm_per_px, expected_pins, rest_frame: int, pitch_positions=None,
+             neighbour_medians=None) -> dict:
     """Scale, feature pins, rest-frame check and contacts of a replay; every problem becomes a warning.
 
     Returns a dict: ``scale`` (`pins.PadScale` or None with a calibration), ``mm_per_px``,
@@ -77,6 +78,8 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     Contacts separated by any rest are separate, however short the rest: no quiet frame is bridged.
     The pin pitch of the scale is measured on ``pitch_positions`` ((M, 2) px: the rest frame's pin field,
     as `tactip detect` and `tactip calibrate` measure it), else on the tracked rest positions.
+    ``neighbour_medians`` (`pins.segment.NeighbourMedians`, optional) holds `find_contacts`' neighbourhood
+    medians of the frames from the rest frame on, computed while they were tracked (`neighbour_medians_of`).
     """
     warnings = list(track.warnings)
     rest, disc, displacements = track.rest_positions, track.disc, track.displacements
@@ -120,7 +123,7 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
                                         usable=track.tracked & ~track.blank, signal=signal)
     try:
         bounds, kinds = find_contacts(displacements, signal=signal, blank=track.blank, thresholds_px=(high_px, low_px),
-                                      rest_positions=rest)
+                                      rest_positions=rest, medians=neighbour_medians_of(track, neighbour_medians))
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")
@@ -131,8 +134,8 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
 
 
 def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.ndarray,
-                  thresholds_px: tuple[float, float], rest_positions: np.ndarray | None = None
-                  ) -> tuple[list[tuple[int, int]], list]:
+                  thresholds_px: tuple[float, float], rest_positions: np.ndarray | None = None,
+                  medians: np.ndarray | None = None) -> tuple[list[tuple[int, int]], list]:
     """The contacts of a replay and their kinds: ([start, stop) frames, a `pins.ContactKind` each).
 
     Contacts are found (`pins.segment_taps`, no quiet frame bridged, then `split_at_dips`) on a tap
@@ -159,17 +162,35 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     rest_positions : (N, 2) ndarray, optional
         The pins' rest positions, px; without them, contacts are found on ``signal`` and kinds by the
         drag alone.
+    medians : (T, N, 2) ndarray, optional
+        ``neighbour_median(displacements, rest_positions)`` when already computed, px (replay computes
+        them as it tracks: `neighbour_medians_of`).
     """
     high_px, low_px = thresholds_px
     coherent = signal
     if rest_positions is not None:  # a pin differing from its neighbourhood by more than the noise is outvoted
-        local = neighbour_median(displacements, rest_positions)
+        local = neighbour_median(displacements, rest_positions) if medians is None else medians
         alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
         coherent = tap_signal(np.where(alone[..., None], local, displacements))
     bridged = _bridge_blank(coherent, blank)
     bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
     bounds = split_at_dips(bridged, bounds, min_drop_px=high_px)
     return bounds, _kinds(displacements, bounds, signal, low_px, rest_positions)
+
+
+def neighbour_medians_of(track: PinTrack, medians=None) -> np.ndarray | None:
+    """`pins.neighbour_median` of the track's displacements from `medians` (`pins.segment.NeighbourMedians`
+    fed, from the rest frame on, every frame's positions as the tracker placed them): (T, N, 2) px, NaN
+    before the rest frame; None when `medians` does not cover exactly the tracked frames from the
+    track's rest positions (`find_contacts` then computes them)."""
+    if medians is None:
+        return None
+    before = int(track.rest_frame)
+    rest = np.asarray(track.rest_positions, dtype=np.float64)
+    if len(medians) != len(track.timestamps_s) - before or not np.array_equal(medians.rest_positions, rest):
+        return None
+    table = medians.table()
+    return table if before == 0 else np.concatenate([np.full((before, *rest.shape), np.nan), table])
 
 
 def split_at_dips(signal: np.ndarray, bounds, *, min_drop_px: float, share: float = 0.5) -> list[tuple[int, int]]:

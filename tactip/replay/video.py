@@ -76,6 +76,7 @@ import pathlib
 import numpy as np
 
 from pins import DetectionParams, PinsError, PinTracker, find_pin_field
+from pins.segment import NeighbourMedians
 
 from tactip._output import (check_video_written, claim_output, discard_temporary, publish, refuse_overwriting_inputs,
                             write_error)
@@ -394,7 +395,9 @@ class _Plan:
     def selected(self, track) -> np.ndarray:
         """The feature pins (the analysis is made here, once the pins are tracked)."""
         centres = getattr(self.start, "centres", None)
-        self.analysis = analyse(track, pitch_positions=centres, **self.options)
+        medians = getattr(self.start, "medians", None)
+        vars(track.tracker).pop("update", None)  # (the tracker as it was: `_Start.follow` no longer wraps it)
+        self.analysis = analyse(track, pitch_positions=centres, neighbour_medians=medians, **self.options)
         return self.analysis["selected"]
 
     def contacts(self, track) -> list:
@@ -442,6 +445,9 @@ class _Start:
         #: pins `tactip detect` reports, whose pitch gives the scale (the tracker's rest positions are its
         #: windows' fixed points, up to 0.4 px off them on a reflection's flank).
         self.centres = None
+        #: The contacts' neighbourhood medians (`pins.segment.NeighbourMedians`), frame by frame as the pins are
+        #: tracked (None before the start): computed while this thread waits on the decoder, not after the last frame.
+        self.medians = None
 
     def __call__(self, image):
         """(tracker, rest positions, pins found, detection params, field line, warnings) of the rest frame."""
@@ -452,7 +458,26 @@ class _Start:
         started = started[:5]
         if self.wrap is not None and tracker.windows is not None:  # e.g. measured with other videos' windows
             tracker.windows = self.wrap(tracker.windows)
+        self.medians = NeighbourMedians(tracker.rest_positions)
+        self.medians.add(started[1])  # the rest frame's row, as `tactip.pipeline.track_pins` stores it
+        tracker.update = self.follow(tracker.update)
         return (*started, warnings)
+
+    def follow(self, update):
+        """`update` (a `pins.PinTracker`'s) that also adds each frame's positions to `medians` (every pin lost
+        in a frame it fails on, as `tactip.pipeline.track_pins` records that frame)."""
+        medians = self.medians
+
+        def followed(image):
+            try:
+                moved = update(image)
+            except BaseException:
+                medians.add(None)
+                raise
+            medians.add(moved)
+            return moved
+
+        return followed
 
 
 def _start(image, *, params, expected_pins, calibration, warnings):
