@@ -249,6 +249,7 @@ import cv2
 import numpy as np
 
 from pins import PinTracker, find_pin_field
+import tactip.replay.video
 from tactip.replay.luma import LumaVideoSource
 from tactip.replay.video import replay_video
 from tactip.sources import open_source
@@ -341,6 +342,18 @@ def field_and_track(images: list) -> tuple[float, float, float, float, int]:
     return found, found_cpu, time.perf_counter() - start, time.process_time() - cpu, calls[0]
 
 
+def mark_tail(marks: dict) -> None:
+    """Record in `marks` the clock (``perf_counter``) and the main thread's CPU when replay starts its tail, after
+    the last frame is tracked (`tactip.replay.video.analyse`: contacts, then features, the HDF5 file, fsync)."""
+    analyse = tactip.replay.video.analyse
+
+    def marked(*args, **kwargs):
+        marks["clock"], marks["cpu"] = time.perf_counter(), time.thread_time()
+        return analyse(*args, **kwargs)
+
+    tactip.replay.video.analyse = marked
+
+
 def main() -> None:
     """Write the video, time decode / replay / tracker side by side, print the figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -361,6 +374,9 @@ def main() -> None:
         times: dict[str, list[float]] = {"decode": [], "decode luma": [], "replay": [], "field": [], "tracker": []}
         cpu: dict[str, list[float]] = {"decode": [], "decode luma": [], "replay main": [], "replay decode": [],
                                        "field": [], "tracker": []}
+        tails: list[tuple[float, float]] = []  # replay's tail: (clock, main thread CPU), s
+        marks: dict = {}
+        mark_tail(marks)
         for repeat in range(args.repeats):
             start, process = time.perf_counter(), time.process_time()
             images = decode(video)
@@ -374,6 +390,7 @@ def main() -> None:
             sensor = None if args.slides else args.preset  # a home-built pad: no named sensor
             result = replay_video(video, pathlib.Path(folder) / f"replay{repeat}.h5", sensor=sensor)
             times["replay"].append(time.perf_counter() - start)
+            tails.append((time.perf_counter() - marks["clock"], time.thread_time() - marks["cpu"]))
             main = time.thread_time() - main
             cpu["replay main"].append(main)
             cpu["replay decode"].append(time.process_time() - process - main)
@@ -404,6 +421,9 @@ def main() -> None:
     print(f"CPU, best of {args.repeats}: {'ms/frame':>10s}{'/ decode':>10s}")
     for name, value in least.items():
         print(f"{name:16s}{value / frames * 1e3:18.2f}{value / least['decode']:10.2f}")
+    tail = np.array(tails[1:] or tails) * 1e3
+    print(f"replay's tail, after the last frame is tracked (contacts, features, the HDF5 file and its fsync), median "
+          f"of the repeats after the first: {np.median(tail[:, 0]):.1f} ms clock, {np.median(tail[:, 1]):.1f} ms CPU")
     print(f"the first repeat's replay (the process's first tracking: Numba imported and the kernels loaded, "
           f"`pins._kernels`): {times['replay'][0]:.3f} s clock, main thread {cpu['replay main'][0]:.3f} s CPU")
     two_cores = max(least["replay main"], least["replay decode"]) / least["decode"]

@@ -130,8 +130,10 @@ import pins._refine
 import pins._rest
 import pins._return
 import pins._window
+import pins.segment
 import pins.track
 import tactip.pipeline
+import tactip.replay.luma
 import tactip.replay.video
 from bench_replay import decode, write_slides
 
@@ -151,6 +153,8 @@ _PARTS = [
     (pins._return.RestMatch, "restore", "  rest frame again (RestMatch)"),
     (pins.track, "part_overlapping", "  overlapping pairs"),
     (pins.track, "kept_on_own_tips", "  own tips (kept_on_own_tips)"),
+    (pins.segment.NeighbourMedians, "add", "contacts' medians, per frame (NeighbourMedians)"),
+    (tactip.replay.luma, "look_up", "luma to grey (look_up)"),
     (tactip.replay.video, "analyse", "contacts, scale, feature pins"),
     (tactip.pipeline, "contact_features", "contact features"),
     (tactip.replay.video, "write_hdf5", "HDF5 file"),
