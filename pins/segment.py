@@ -186,6 +186,21 @@ class NeighbourMedians:
         else:
             self._rows.append(nanmedian_rows(np.moveaxis((positions - rest)[self._index], 1, -1)))
 
+    def follow(self, update):
+        """`update` (a `pins.PinTracker`'s) that also adds the positions it returns; a frame it raises on adds every
+        pin lost (as `tactip.pipeline.track_pins` records that frame), and the error propagates."""
+
+        def followed(image):
+            try:
+                moved = update(image)
+            except BaseException:
+                self.add(None)
+                raise
+            self.add(moved)
+            return moved
+
+        return followed
+
     def table(self) -> np.ndarray:
         """(F, N, 2) float64 medians of the frames added, px: `neighbour_median` of their displacements."""
         if not self._rows:

@@ -7,7 +7,7 @@ on mp4v is replay's critical path. With ``cv2.CAP_PROP_CONVERT_RGB`` off (a docu
 given when the capture is opened) the backend returns the frame "in its original format": for planar
 YUV (yuv420p, yuvj420p, yuv422p ...) a (H, W) uint8 image that is the luma plane Y. That grey differs
 from grey-of-BGR by the colour range alone (mp4v stores limited-range Y, 16-235: grey ~ (Y - 16)
-255 / 219), so a 256-entry table (`cv2.LUT`) maps one to the other.
+255 / 219), so a 256-entry table (`cv2.LUT`; `look_up`, the same pixels two at a time) maps one to the other.
 
 OpenCV says of this mode, when the capture opens, that multiplanar formats "have not been tested"
 (and warns on every frame that it treats the format as 8UC1), so the path proves itself on each
@@ -161,6 +161,7 @@ class LumaVideoSource(VideoSource):
 
     def _take_luma(self, decode_threads) -> None:
         self._table = None
+        self._pairs = None  # `pair_table` of the table, made on the first frame this source maps
         self._quieted = False
         self._deferred = False
         try:
@@ -198,14 +199,17 @@ class LumaVideoSource(VideoSource):
 
     def defer_table(self) -> np.ndarray | None:
         """Stop mapping luma to grey here and return the table (None on the BGR path): the caller maps every frame
-        read from now on (``cv2.LUT(image, table, dst=image)``), e.g. on another thread than the decoder's."""
+        read from now on (`mapped`, `look_up`: ``cv2.LUT(image, table)`` in place), e.g. on another thread than the
+        decoder's."""
         table, self._deferred = self._table, self._table is not None
         return table
 
     def _read(self):
         item = super()._read()
         if item is not None and self._table is not None and not self._deferred:
-            self._cv2.LUT(item[0], self._table, dst=item[0])
+            if self._pairs is None:
+                self._pairs = pair_table(self._table)
+            look_up(item[0], self._table, self._pairs)
         return item
 
     def _close(self) -> None:

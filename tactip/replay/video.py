@@ -60,7 +60,10 @@ the cores (one on a 2-core machine): its extra threads would only contend with t
 file's grey frames are read from the decoder's luma plane, without converting each to BGR and back
 (`tactip.replay.luma`), where its first frame shows that this gives the same frames (grey content: a
 monochrome pad, the synthetic videos); a colour recording is read as before. The table from luma to
-grey is looked up on the tracking thread when the decoder has one thread (it is then the busier).
+grey is looked up on the tracking thread when the decoder has one thread (it is then the busier), two pixels
+a lookup (`tactip.replay.luma.look_up`). The contacts' neighbourhood medians (`find_contacts`) are computed
+frame by frame as the pins are tracked (`pins.segment.NeighbourMedians`), not after the last frame: what
+follows the last frame decoded (contacts, features, the HDF5 file) is on the critical path whole.
 
 The file is written to a temporary name next to the target and renamed at the end, so a failure
 never leaves a half-written result; the output paths are checked before any processing.
@@ -396,7 +399,7 @@ class _Plan:
         """The feature pins (the analysis is made here, once the pins are tracked)."""
         centres = getattr(self.start, "centres", None)
         medians = getattr(self.start, "medians", None)
-        vars(track.tracker).pop("update", None)  # (the tracker as it was: `_Start.follow` no longer wraps it)
+        vars(track.tracker).pop("update", None)  # (the tracker's own update again: `NeighbourMedians.follow`'s no more)
         self.analysis = analyse(track, pitch_positions=centres, neighbour_medians=medians, **self.options)
         return self.analysis["selected"]
 
@@ -445,8 +448,7 @@ class _Start:
         #: pins `tactip detect` reports, whose pitch gives the scale (the tracker's rest positions are its
         #: windows' fixed points, up to 0.4 px off them on a reflection's flank).
         self.centres = None
-        #: The contacts' neighbourhood medians (`pins.segment.NeighbourMedians`), frame by frame as the pins are
-        #: tracked (None before the start): computed while this thread waits on the decoder, not after the last frame.
+        #: The contacts' neighbourhood medians, frame by frame as the pins are tracked (None before the start).
         self.medians = None
 
     def __call__(self, image):
@@ -460,24 +462,8 @@ class _Start:
             tracker.windows = self.wrap(tracker.windows)
         self.medians = NeighbourMedians(tracker.rest_positions)
         self.medians.add(started[1])  # the rest frame's row, as `tactip.pipeline.track_pins` stores it
-        tracker.update = self.follow(tracker.update)
+        tracker.update = self.medians.follow(tracker.update)
         return (*started, warnings)
-
-    def follow(self, update):
-        """`update` (a `pins.PinTracker`'s) that also adds each frame's positions to `medians` (every pin lost
-        in a frame it fails on, as `tactip.pipeline.track_pins` records that frame)."""
-        medians = self.medians
-
-        def followed(image):
-            try:
-                moved = update(image)
-            except BaseException:
-                medians.add(None)
-                raise
-            medians.add(moved)
-            return moved
-
-        return followed
 
 
 def _start(image, *, params, expected_pins, calibration, warnings):
