@@ -249,21 +249,27 @@ side, the load). The tail's clock (this bench's new line: from the last frame tr
 included) 119-136 -> 68-77 ms at that load. The clock of the whole replay says nothing at load 10-15 (2.2-2.6 s for
 0.6 s of work on either side).
 
-What the bar is judged by, from these figures: replay's CPU on the slide bench is ~1.2 s (decode thread ~0.55-0.64
-ms/frame, main thread ~0.72-0.76, the field search's candidate threads ~0.13 s besides, `pins._candidates._WORKERS`),
-so on two cores replay cannot take less than about half of it, ~0.6 s, against decoding alone's 0.39-0.45 s: the bar
-(1.5) needs the two threads balanced and the tail short, and is judged by the clock on a quiet machine (nothing else
-running, load < 1), not here. On the lead's quiet figures above (mp4v 1.55-1.73, decode thread the critical path at
-0.71 ms/frame), this session takes ~25 ms of CPU off the tail (which follows the last frame decoded, so all of it is on
-the critical path: ~0.06 of the ratio) and ~30 ms off the main thread (which counts where the main thread is the busier,
-or the two share a core's resources). Measured and not changed: the decoder's threads (two on a 2-core machine, in
-replay, 5 interleaved rounds each at load 10: total CPU mp4v 1223 -> 1378 ms, MJPG 1248 -> 1312 ms: more work for two
-busy cores; the lead's quiet figures said the same, 1.42 -> 1.47); the GIL (a thread waking every 0.5 ms waits ~1 ms
-more for it while the tracker runs than while it sleeps, at the default 5 ms switch interval, ~0 at 0.2 ms; but
-replay's decode thread waits for it on no more frames at 0.1 ms than at 5 ms (p50 0, 20-22 % of frames > 1 ms, the
-load): it decodes while the main thread waits on the queue; ``--switch-interval`` tries it on a quiet machine); the
-queue's 64 MB (the field search takes 63 ms of the main thread's CPU here: the decoder never waited on a full queue
-after the first repeat). ``--decode-threads N`` sets replay's decoder threads.
+What the bar is judged by, from these figures: replay's CPU on the slide bench is ~1.2 s: the decode thread's own
+0.54-0.64 ms/frame (this bench's "replay decode" now; the figures above counted in it the field search's candidate
+threads, ~0.13 ms/frame, `pins._candidates._WORKERS`, now "replay other"), the main thread's 0.74-0.80 (at load
+10-15; the field search's own part 63 ms, the tracking, the lookup, the tail): the main thread, not the decoder, is the
+busier. On two cores replay cannot take less than about half of its CPU, ~0.6 s, against decoding alone's 0.39-0.45
+s: the bar (1.5) needs the threads balanced and the tail short, and is judged by the clock on a quiet machine (nothing
+else running, load < 1), not here. This session takes ~25 ms of CPU off the tail (after the last frame: all of it on
+the critical path, ~0.06 of the ratio) and ~20-30 ms off the main thread. Tried and dropped: luma mapped by whichever
+thread is less busy (the decode thread while the tracking lags 3 frames: 5 interleaved rounds at load 14, mp4v, main
+thread 633 -> 619 ms, decode thread 536 -> 615 ms, the reader mapping 660 of 795 frames): a lookup on the tracking
+thread also brings the frame into that core's cache for the tracking, so it saves there less than it costs the
+decoder. Measured and not changed: the decoder's threads (two on a 2-core machine, in replay, 5 interleaved rounds
+each at load 10: total CPU mp4v 1223 -> 1378 ms, MJPG 1248 -> 1312 ms: more work for two busy cores; the lead's quiet
+figures said the same, 1.42 -> 1.47); the GIL (a thread waking every 0.5 ms waits ~1 ms more for it while the tracker
+runs than while it sleeps, at the default 5 ms switch interval, ~0 at 0.2 ms; but replay's decode thread waits in its
+reads on no more frames at 0.1 ms than at 5 ms: p50 0, 20-22 % of frames > 1 ms, the load's preemption;
+``--switch-interval`` tries it on a quiet machine); the queue's 64 MB (the decoder waited on a full queue in no repeat
+but a process's first). ``--decode-threads N`` sets replay's decoder threads. A process's first replay also pays
+one-off imports the best of the repeats leaves out: Numba and the kernels' cache (above), and SciPy's signal module
+(`scipy.signal.find_peaks`, in `tactip.replay.contacts.split_at_dips`): 0.32 s of CPU after replay's own imports, half
+the whole replay of this video, on the tail's critical path of a ``tactip replay`` command.
 
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG [--decode-threads N] [--switch-interval S]

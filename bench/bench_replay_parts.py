@@ -95,6 +95,12 @@ levels 0.026 -> 0.018, RestMatch 0.029 -> 0.017 (its probe alone 21 -> 2 us a fr
 identical, positions but in frames 1-4 (the still pair's calm test, `pins._rest`: 43 / 7 pin-frames, <= 0.59 px).
 Parts added here: ``--preset``, and the still steps, faint levels, RestMatch, overlapping pairs and own tips timed.
 
+Session 20's "speed16" (load average 12-13): the contacts' medians, now computed per frame while tracking
+(`pins.segment.NeighbourMedians.add`), and the luma lookup (`tactip.replay.luma.look_up`) are parts of their own:
+mp4v, best of 2, main thread 0.79 ms/frame, of which tracker updates 0.534, the field search 0.076, the lookup 0.064,
+the medians 0.030 (these wrappers' own cost included; ~9 us a frame unwrapped), contacts, scale and feature pins 0.026,
+the HDF5 file 0.008, contact features 0.004.
+
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C
