@@ -60,10 +60,12 @@ the cores (one on a 2-core machine): its extra threads would only contend with t
 file's grey frames are read from the decoder's luma plane, without converting each to BGR and back
 (`tactip.replay.luma`), where its first frame shows that this gives the same frames (grey content: a
 monochrome pad, the synthetic videos); a colour recording is read as before. The table from luma to
-grey is looked up on the tracking thread when the decoder has one thread (it is then the busier), two pixels
-a lookup (`tactip.replay.luma.look_up`). The contacts' neighbourhood medians (`find_contacts`) are computed
-frame by frame as the pins are tracked (`pins.segment.NeighbourMedians`), not after the last frame: what
-follows the last frame decoded (contacts, features, the HDF5 file) is on the critical path whole.
+grey is looked up on the tracking thread when the decoder has one thread, two pixels a lookup
+(`tactip.replay.luma.look_up`): there it also brings the frame into the tracking core's cache (on the decode
+thread it cost the decoder more than it saved the tracking, `bench/bench_replay.py`). The contacts'
+neighbourhood medians (`find_contacts`) are computed frame by frame as the pins are tracked
+(`pins.segment.NeighbourMedians`), not after the last frame: what follows the last frame (contacts,
+features, the HDF5 file) is on the critical path whole.
 
 The file is written to a temporary name next to the target and renamed at the end, so a failure
 never leaves a half-written result; the output paths are checked before any processing.
