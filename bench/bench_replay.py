@@ -241,12 +241,13 @@ and attribute, on both codecs and on held-out slide videos of seeds 48-59: radia
 MJPG). Taken off replay's main thread and tail: the contacts' neighbourhood medians (`pins.neighbour_median`, the tail's
 largest part) are computed frame by frame as the pins are tracked (`pins.segment.NeighbourMedians`, one compiled call,
 ~9 us a frame), and luma is looked up two pixels at a time (`tactip.replay.luma.look_up`, 89 -> 52 us a frame).
-Interleaved in fresh processes, 4 rounds of 4 repeats each (the first left out), medians, ms of CPU for the 795
-frames, main -> this: the tail (after the last frame is tracked: contacts, features, the HDF5 file) mp4v 57-58 -> 33-34,
-MJPG 60 -> 36; replay's main thread mp4v 608-630 -> 590-618 (4 of 4 rounds lower in the run after the lookup: 595 /
-612 / 632 / 631 -> 575 / 551 / 611 / 605), MJPG 643 -> 633; its decode thread unchanged (mp4v 581-635 on either
-side, the load). The tail's clock (this bench's new line: from the last frame tracked to the file published, fsync
-included) 119-136 -> 68-77 ms at that load. The clock of the whole replay says nothing at load 10-15 (2.2-2.6 s for
+Interleaved in fresh processes, 4 rounds of 4 repeats each (the first left out), medians of the rounds, ms of CPU
+for the 795 frames, main -> this, over 3 runs (mp4v) and 2 (MJPG): the tail (after the last frame is tracked:
+contacts, features, the HDF5 file) mp4v 57-63 -> 33-37, MJPG 60-61 -> 36-37; replay's main thread mp4v 608-660 ->
+590-641 (the run after the lookup, 4 of 4 rounds lower: 595 / 612 / 632 / 631 -> 575 / 551 / 611 / 605; the final
+code 656 / 664 / 666 / 655 -> 615 / 633 / 648 / 679), MJPG 643-659 -> 633-643; the decode side unchanged (the load).
+The tail's clock (this bench's new line: from the last frame tracked to the file published, fsync included) 119-136
+-> 68-79 ms at that load. The clock of the whole replay says nothing at load 10-15 (2.2-2.6 s for
 0.6 s of work on either side).
 
 What the bar is judged by, from these figures: replay's CPU on the slide bench is ~1.2 s: the decode thread's own
