@@ -305,8 +305,8 @@ def onsets(preset: str, seed: int, fps: float) -> tuple[int, collections.Counter
                 guess = stages.log.get("field", stages.log["guess"])[pin]
                 error = np.linalg.norm(guess - truth[identity[pin]]) / tracker.spacing_px
                 state = "lost" if before[2, pin] else "merged" if before[1, pin] else "ok"
-                counted[(stages.placed_by(pin, positions[pin]), where, state,
-                         "<0.25" if error < 0.25 else "<0.5" if error < 0.5 else "<0.75" if error < 0.75 else ">=0.75")] += 1
+                band = next((f"<{b:g}" for b in (0.25, 0.5, 0.75) if error < b), ">=0.75")
+                counted[(stages.placed_by(pin, positions[pin]), where, state, band)] += 1
             before = now
     finally:
         stages.close()
