@@ -85,7 +85,11 @@ Tried and dropped (session 20, apart pin-frames, 120 frames/s, seeds 0-5 unless 
 - in frames that retry LK, a second look: the field refitted to every pin placed after LK, the pins placed more than
   half a spacing off it looked for again by LK from it: tactip-331 941 -> 944, dark-331 1148 -> 1152, tactip-127 106
   -> 94, radial-led-120 6 -> 7, tactip-127 at 30 frames/s 4988 -> 5082 (offline on tactip-331 seed 0's lifts the
-  refit would take off 48 of 137 pins placed more than half a spacing off, and 14 placed right).
+  refit would take off 48 of 137 pins placed more than half a spacing off, and 14 placed right);
+- follow windows no wider than 1.2 tip radii + 1 px for pins whose window neighbours are missing: tactip-331 941 ->
+  1113, dark-331 1148 -> 1168, tactip-127 106 -> 176.
+Not tried, for want of cases: a rule against folds (two neighbours at rest in inverted order): on tactip-331 seed 0,
+2 of 150 apart pin-frames have a placed neighbour in inverted order; the pin whose tip is taken is mostly missing.
 
 Run: .venv/bin/python bench/bench_slide_losses.py [--presets radial-led-120] [--seeds 0-5] [--clean]
      .venv/bin/python bench/bench_slide_losses.py --onsets [--presets tactip-331,tactip-127] [--fps 120]
