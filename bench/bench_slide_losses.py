@@ -50,7 +50,49 @@ field fitted to the pins placed, `pins._motion`), webcam-like, seeds 0-5: lost v
 touching 750 -> 651, pulled 1094 -> 1066 (+judged 162 -> 146), judged 60 -> 54, searched 607 -> 471, untrusted 1196
 -> 1064, far 712 -> 469 (the tracker's own share 2515 -> 2004); swaps 100 -> 85 (apart 62 -> 45).
 
+Where identity swaps begin (``--onsets``, issue 20 outcome 2): `bench_conditions`' slides (8 slides of 3 pitches,
+2 mm deep, at ``--fps``), tracked as its slides check tracks them; each onset of an apart swap (a visible pin placed
+nearer another pin's true centre than its own, the two at least half a pitch apart, and not so in the frame before)
+is split by the step of `pins.track.PinTracker` that placed the pin there (the last to move it: ``follow`` passes,
+``LK`` from constant-velocity guesses or ``LK(field)`` from the motion field's, ``snap`` to rest, ``restore`` of
+`pins._return`, ``pairfit``, ``recover`` from blobs, ``fit`` of sloped tips), by the slide's phase (press, drag,
+lift, rest), by the pin's state in the frame before (``ok``, ``lost``, or ``merged``: nearer another's centre less
+than half a pitch away, the two tips one blob) and by its guess's error (spacings from its true centre).
+Session 20 (slide16; main 854fe70), 120 frames/s, seeds 0-5, apart pin-frames and onsets:
+- tactip-331: 941 pin-frames (drag 550, lift 391), 528 onsets: follow 396 (drag 267, lift 129), pairfit 127
+  (lift 81, drag 46), LK(field) 4, snap 1; by the state before: follow in the drag after ``merged`` 155, ``ok`` 66,
+  ``lost`` 46; follow in the lift after ``lost`` 59, ``ok`` 57; pairfit in the lift after ``ok`` 51. The pair fit's
+  onsets looked at (seed 0) are pins already lagging about 0.7 spacings, moved by about 1 px across the midpoint.
+- tactip-127: 106 pin-frames (drag 21, lift 85), 76 onsets: follow 56 (lift 40, drag 16), LK 11 and LK(field) 5
+  (lift), pairfit 3, recover 1.
+So on the 331-pin pad the swaps begin in the follow passes, where a window in the skin squeezed ahead of the plate
+settles on the merged blob of its tip and one approaching from behind (its missing neighbour expected where it
+lagged, the window is wide enough to take that tip's side), and the constant-velocity guess carries that pull on
+frame by frame (tactip-331 seed 0: a pin's window stepping 2.4-2.6 px a frame backwards for four frames while its tip
+moved 0.1-3 px forwards); and in the lifts' first frames, where the skin springs back 0.65 spacings in one frame
+and the motion field, fitted to the pins the follow passes placed (some on the tips that moved into their places),
+steps the fast pins by a fifth of that.
+Tried and dropped (session 20, apart pin-frames, 120 frames/s, seeds 0-5 unless said, main -> tried):
+- a moving pin's step carried as its neighbours' median step where it runs against or across it (dot product <= 0)
+  and lies farther from it than half of it plus 0.1 spacings, on frames the follow passes placed (no LK retry):
+  tactip-331 941 -> 760, tactip-127 106 -> 69, dense-1000 (seeds 0-1) 303 -> 273, but dark-331 1148 -> 1219,
+  radial-led-120 6 -> 8, and this bench's lost visible pin-frames (radial-led-120 webcam) 8994 -> 9325 (apart 53 ->
+  51); at 30 frames/s unchanged (every such frame retries LK), without that gate tactip-127 4988 -> 5423. On the
+  331-pin pads the median was the better guess (against the truth of the next frame) for 42 % (tactip-331) and 38 %
+  (dark-331) of the pins changed, both about 0.25 spacings off (pins already lagging); 68 % on tactip-127. Variants
+  (tactip-331 / tactip-127 / dark-331): no direction condition 808 / 57 / 1390, 0.2 spacings 935 / 89 / 1158, only
+  pins still the frame before 745 / 73 / 1194;
+- in frames that retry LK, a second look: the field refitted to every pin placed after LK, the pins placed more than
+  half a spacing off it looked for again by LK from it: tactip-331 941 -> 944, dark-331 1148 -> 1152, tactip-127 106
+  -> 94, radial-led-120 6 -> 7, tactip-127 at 30 frames/s 4988 -> 5082 (offline on tactip-331 seed 0's lifts the
+  refit would take off 48 of 137 pins placed more than half a spacing off, and 14 placed right);
+- follow windows no wider than 1.2 tip radii + 1 px for pins whose window neighbours are missing: tactip-331 941 ->
+  1113, dark-331 1148 -> 1168, tactip-127 106 -> 176.
+Not tried, for want of cases: a rule against folds (two neighbours at rest in inverted order): on tactip-331 seed 0,
+2 of 150 apart pin-frames have a placed neighbour in inverted order; the pin whose tip is taken is mostly missing.
+
 Run: .venv/bin/python bench/bench_slide_losses.py [--presets radial-led-120] [--seeds 0-5] [--clean]
+     .venv/bin/python bench/bench_slide_losses.py --onsets [--presets tactip-331,tactip-127] [--fps 120]
 """
 
 from __future__ import annotations
@@ -69,6 +111,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 import bench_user_chain as chain  # noqa: E402
+import pins.track  # noqa: E402
 from bench_conditions import Camera  # noqa: E402
 from pins import PinTracker, find_pin_field  # noqa: E402
 from pins.disc import as_grey  # noqa: E402
@@ -174,13 +217,136 @@ def one(preset: str, seed: int, clean: bool) -> collections.Counter:
     return counted
 
 
+STAGES = ("follow", "LK", "snap", "restore", "pairfit", "recover", "fit")
+
+
+class StageLog:
+    """The positions each step of `PinTracker._refine` leaves in one frame (wrapping the steps of one tracker and,
+    while in use, the module functions `pins.track` calls): ``log[stage]`` (N, 2) px, ``log["guess"]`` the
+    constant-velocity guesses and ``log["field"]`` the guesses after `pins._motion.field_guesses`."""
+
+    def __init__(self, tracker: PinTracker):
+        self.log: dict = {}
+        refiner, log = tracker._refiner, self.log
+
+        def wrap(owner, name, stage, take=lambda out: out, before=None):
+            inner = getattr(owner, name)
+
+            def step(*args, **kwargs):
+                out = inner(*args, **kwargs)
+                if before is not None:
+                    before(args)
+                log[stage(log) if callable(stage) else stage] = np.array(take(out), copy=True)
+                return out
+            setattr(owner, name, step)
+
+        wrap(refiner, "follow", "follow", lambda out: out[0], lambda args: log.__setitem__("guess", args[1].copy()))
+        wrap(refiner, "refine", "LK")
+        wrap(refiner, "fit_tips", "fit")
+        wrap(tracker._rest_match, "restore", "restore")
+        self._module = {name: getattr(pins.track, name) for name in ("field_guesses", "kept_on_own_tips",
+                                                                     "part_overlapping")}
+        wrap(pins.track, "field_guesses", "field", lambda out: out[0])
+        wrap(pins.track, "kept_on_own_tips", lambda log: "recover" if "snap" in log else "snap")
+        wrap(pins.track, "part_overlapping", "pairfit")
+
+    def close(self) -> None:
+        """Put `pins.track`'s functions back."""
+        for name, function in self._module.items():
+            setattr(pins.track, name, function)
+
+    def placed_by(self, pin: int, position: np.ndarray) -> str:
+        """The first step whose output holds the pin where it ended (the last step to move it)."""
+        for stage in STAGES:
+            if stage in self.log and np.array_equal(self.log[stage][pin], position):
+                if stage == "LK" and "field" in self.log and not np.array_equal(self.log["field"][pin],
+                                                                                self.log["guess"][pin]):
+                    return "LK(field)"
+                return stage
+        return "?"
+
+
+def phase(frame: int, events, fps: float) -> str:
+    """The slide's phase of a frame (`bench_conditions`' timing: 50 ms press, 150 ms drag, 50 ms lift)."""
+    for event in events:
+        if event.start_frame <= frame < event.stop_frame:
+            into, press = frame - event.start_frame, max(1, round(0.05 * fps))
+            return "press" if into < press else "drag" if into < press + max(1, round(0.15 * fps)) else "lift"
+    return "rest"
+
+
+def onsets(preset: str, seed: int, fps: float) -> tuple[int, collections.Counter]:
+    """Apart swapped pin-frames through `bench_conditions`' slides and their onsets' split (module docstring)."""
+    camera = Camera(preset, seed, {"fps": fps})
+    image, centres, visible, _ = camera.film(camera.sensor.render())
+    field = find_pin_field(image)
+    tracker = PinTracker(detection=field.params, disc=field.disc)
+    rest = tracker.start(image, field.centres)
+    stages = StageLog(tracker)
+    distance, identity = cKDTree(centres).query(rest)
+    real = (distance < 2.0 * camera.zoom) & visible[identity]
+    sensor = camera.sensor
+    run = sensor.slides(range(0, 360, 45), distance_mm=3 * sensor.pin_spacing_mm, indentation_mm=2.0,
+                        rest_s=max(3 / fps, 0.025), press_s=0.05, slide_s=0.15, lift_s=0.05)
+    counted, apart = collections.Counter(), 0
+    before = np.zeros((3, len(rest)), bool)  # apart, merged (any other) swap, lost in the frame before
+    try:
+        for k, frame in enumerate(run, start=1):
+            stages.log.clear()
+            filmed, truth, _, _ = camera.film(frame)
+            positions = tracker.update(filmed)
+            now = np.zeros_like(before)
+            placed = np.flatnonzero(real & np.isfinite(positions[:, 0]))
+            nearest = cKDTree(truth).query(positions[placed])[1]
+            other = nearest != identity[placed]
+            gap = np.linalg.norm(truth[nearest] - truth[identity[placed]], axis=1)
+            now[0, placed[other & (gap >= 0.5 * camera.pitch_px)]] = True
+            now[1, placed[other]] = True
+            now[2] = real & np.isnan(positions[:, 0])
+            apart += int(np.count_nonzero(now[0]))
+            where = phase(k, run.events, fps)
+            for pin in np.flatnonzero(now[0] & ~before[0]):
+                guess = stages.log.get("field", stages.log["guess"])[pin]
+                error = np.linalg.norm(guess - truth[identity[pin]]) / tracker.spacing_px
+                state = "lost" if before[2, pin] else "merged" if before[1, pin] else "ok"
+                band = next((f"<{b:g}" for b in (0.25, 0.5, 0.75) if error < b), ">=0.75")
+                counted[(stages.placed_by(pin, positions[pin]), where, state, band)] += 1
+            before = now
+    finally:
+        stages.close()
+    return apart, counted
+
+
+def print_onsets(presets: list[str], seeds: list[int], fps: float) -> None:
+    """One block per preset: apart pin-frames per seed and the onsets' split by step, phase, state, guess error."""
+    for preset in presets:
+        start, total, counts = time.process_time(), collections.Counter(), {}
+        for seed in seeds:
+            counts[seed], split = onsets(preset, seed, fps)
+            total += split
+        print(f"{preset} {fps:g} frames/s: apart pin-frames {sum(counts.values())} "
+              f"({' '.join(f'{s}:{n}' for s, n in counts.items())}), {sum(total.values())} onsets, "
+              f"{time.process_time() - start:.0f} s", flush=True)
+        for depth, name in ((1, "step"), (2, "step, phase"), (3, "step, phase, state before"), (4, "and guess error")):
+            merged = collections.Counter()
+            for key, n in total.items():
+                merged[key[:depth]] += n
+            print(f"  by {name}: " + ", ".join(f"{'/'.join(key)} {n}" for key, n in merged.most_common(12)))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Print one row per preset and seed, and the split over all of them."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--presets", default="radial-led-120")
+    parser.add_argument("--presets", help="presets (default radial-led-120; --onsets: tactip-331,tactip-127)")
     parser.add_argument("--seeds", default="0-5")
     parser.add_argument("--clean", action="store_true", help="no noise, glare, JPEG loss or hidden pins")
+    parser.add_argument("--onsets", action="store_true", help="where apart swaps begin in bench_conditions' slides")
+    parser.add_argument("--fps", type=float, default=120.0, help="frame rate of the slides (--onsets)")
     args = parser.parse_args(argv)
+    if args.onsets:
+        print_onsets((args.presets or "tactip-331,tactip-127").split(","), chain.seed_range(args.seeds), args.fps)
+        return 0
+    args.presets = args.presets or "radial-led-120"
     print("preset          seed video  lost median/max/sum  swaps (apart)  causes (module docstring)  cpu")
     total = collections.Counter()
     for preset in args.presets.split(","):
