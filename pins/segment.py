@@ -309,17 +309,18 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     at the latest *rest frame*: a still frame that is
 
     - a lift: since the last rest frame the signal from it (`tap_signal` of the displacements less the
-      rest's) rose to ``high_px`` or more (a contact), has fallen to at most ``share`` of that peak and has
+      rest's) rose to ``high_px`` or more (a contact), has fallen to at most ``share`` of that peak, has
       not risen again by ``high_px`` or more since its lowest after the peak (a press right after a slide
-      holds still above what the slide left: no rest); what is left in the skin after the plate lifted is
-      the next contact's rest; or
+      holds still above what the slide left: no rest) and no longer falls (by half ``low_px`` or more from
+      the frame before: a press whose skin relaxes under the plate falls to half its peak while held); what
+      is left in the skin after the plate lifted is the next contact's rest; or
     - a rest that creeps back: the skin at the last rest frame was off its first rest (`tap_signal` of the
       displacements ``low_px`` or more), the signal from it has stayed below ``high_px`` since (no contact),
-      and the pins displaced there (by ``low_px`` or more) have moved since mostly back towards the first
-      rest (their motion against their displacement at least half its length, summed over them): a skin
-      creeping back moves towards its first rest; a press spreads the pins across that, however slowly it
-      presses in. A skin at its first rest (one that springs back) has no such rest frames: there the
-      rest moves at lifts only.
+      the next two frames are still too (a contact's slow onset is not), and the pins displaced there (by
+      ``low_px`` or more) have moved since mostly back towards the first rest (their motion against their
+      displacement at least half its length, summed over them): a skin creeping back moves towards its first
+      rest; a press spreads the pins across that, however slowly it presses in. A skin at its first rest
+      (one that springs back) has no such rest frames: there the rest moves at lifts only.
 
     A press's hold is still too, but its signal is at its peak: it is no rest frame. A rest too short to be
     still (a lift followed at once by the next contact) leaves the rest where it was: `split_at_dips` splits
@@ -379,9 +380,10 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
                             else (peak, min(trough, float(values.min()))))
         if stop >= len(data):
             break
-        now, before = float(values[-1]), float(values[-2]) if values.size > 1 else 0.0   # the still frame's, and
-        lift = (peak >= high_px and now <= share * peak and now < trough + high_px      # the frame's before it
-                and before - now < 0.5 * low_px)  # fallen, not risen again, no longer falling
+        now = float(values[-1])                                           # the still frame's signal
+        before = float(values[-2]) if values.size > 1 else 0.0            # the frame's before it
+        lift = (peak >= high_px and now <= share * peak and now < trough + high_px   # fallen, not risen again,
+                and before - now < 0.5 * low_px)                                    # no longer falling
         creep = (peak < high_px and displaced[anchor] >= low_px and still[stop + 1:stop + 3].all()
                  and _back(data[stop], data[anchor], low_px) >= 0.5)
         if lift or creep:
@@ -397,7 +399,6 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     rest = np.where((frames >= 0)[..., None], data[np.maximum(frames, 0), pins[None]], np.nan)
     rest[:first] = 0.0
     return rest
-
 
 
 def _back(now: np.ndarray, then: np.ndarray, level_px: float) -> float:
