@@ -318,9 +318,9 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
       displacements ``low_px`` or more), the signal from it has stayed below ``high_px`` since (no contact),
       the next two frames are still too (a contact's slow onset is not), and the pins displaced there (by
       ``low_px`` or more) have moved since mostly back towards the first rest (their motion against their
-      displacement at least half its length, summed over them): a skin creeping back moves towards its first
-      rest; a press spreads the pins across that, however slowly it presses in. A skin at its first rest
-      (one that springs back) has no such rest frames: there the rest moves at lifts only.
+      displacement at least three quarters of its length, summed over them): a skin creeping back moves
+      towards its first rest; a press spreads the pins across that, however slowly it presses in. A skin at
+      its first rest (one that springs back) has no such rest frames: there the rest moves at lifts only.
 
     A press's hold is still too, but its signal is at its peak: it is no rest frame. A rest too short to be
     still (a lift followed at once by the next contact) leaves the rest where it was: `split_at_dips` splits
@@ -385,7 +385,7 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         lift = (peak >= high_px and now <= share * peak and now < trough + high_px   # fallen, not risen again,
                 and before - now < 0.5 * low_px)                                    # no longer falling
         creep = (peak < high_px and displaced[anchor] >= low_px and still[stop + 1:stop + 3].all()
-                 and _back(data[stop], data[anchor], low_px) >= 0.5)
+                 and _back(data[stop], data[anchor], low_px) >= 0.75)
         if lift or creep:
             rests.append(int(stop))
             anchor, peak, trough = int(stop), 0.0, 0.0

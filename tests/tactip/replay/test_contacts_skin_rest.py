@@ -36,8 +36,8 @@ def test_the_rest_follows_a_lift_and_a_creep_but_not_a_hold():
 # Slides and presses with rests of 0.3-0.6 s on a skin that keeps a tenth of each drag, creeping back with a
 # time constant of 1 s, and a set of 2 % (the renderer's true displacements, tracking noise 0.1 px). Measured
 # from the first frame, contacts merged or were misread on every case (0 of 24 all right: 3 presets x 2 frame
-# rates x 4 seeds); from the skin's own rest 22 of 24 (tactip-127 at 30 frames/s, seeds 0 and 2: a press's end
-# runs into the next rest, where the skin crept 1.4 px during the press and no frame after it reads as a lift).
+# rates x 4 seeds); from the skin's own rest 21 of 24 (tactip-127 at 30 frames/s, seeds 0-2: a press's end runs
+# into the next rest, where the skin crept 1.4 px during the press and no frame after it reads as a lift).
 @pytest.mark.parametrize("preset, frame_rate, seed", [("radial-led-120", 120.0, 0), ("radial-led-120", 30.0, 1),
                                                       ("white-dark-331", 120.0, 2), ("white-dark-331", 30.0, 3),
                                                       ("tactip-127", 120.0, 1)])
