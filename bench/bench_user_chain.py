@@ -93,8 +93,12 @@ pins' mean moved ~2 px and the spokes went unrecognised (the pitch the nearest s
 spokes judged about their best centre near the mean (`pins.scale._spokes`), seed 0 residual 0: every outcome met
 (dataset 0.3845, spread 0.7 %).
 
+Session 20's tour15: ``--set-share S`` adds a slower term to the skin's relaxation (`schedule`'s ``set_share``,
+``set_s``: a share S of each slide's drag also left, relaxing with ``--set-s``, default never: a set); the
+tours alone, scored offline, and their figures: `bench_tour_contacts.py`.
+
 Run: .venv/bin/python bench/bench_user_chain.py [--presets radial-led-120,white-dark-331] [--seeds 0-2]
-     [--keep DIR] [--residual 0.2 --creep-s 0.1]
+     [--keep DIR] [--residual 0.2 --creep-s 0.1] [--set-share 0.02 --set-s inf]
 """
 
 from __future__ import annotations
@@ -393,8 +397,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--residual", type=float, default=0.0,
                         help="share of each slide's drag left in the skin, creeping back (default 0)")
     parser.add_argument("--creep-s", type=float, default=0.1, help="its time constant, s (default 0.1)")
+    parser.add_argument("--set-share", type=float, default=0.0,
+                        help="share of each slide's drag also left, relaxing with --set-s (default 0)")
+    parser.add_argument("--set-s", type=float, default=float("inf"), help="its time constant, s (default inf)")
     args = parser.parse_args(argv)
     SKIN.update(residual=args.residual, creep_s=args.creep_s)
+    if args.set_share:
+        SKIN.update(set_share=args.set_share, set_s=args.set_s)
     os.environ.setdefault("TACTIP_SIM_WORKERS", "1")
     print(f"{'outcome':10s} {'preset':15s} {'sd':>3s}  {'figure':90s} {'met':>3s} {'cpu s':>6s}")
     with tempfile.TemporaryDirectory() as tmp:

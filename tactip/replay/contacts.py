@@ -11,7 +11,7 @@ import numpy as np
 from scipy import ndimage
 
 from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, contact_kinds, jitter_floor_px,
-                  neighbour_median, segment_taps, select_feature_pins, sensor_scale, tap_signal)
+                  neighbour_median, segment_taps, select_feature_pins, sensor_scale, skin_rest, tap_signal)
 
 from tactip.pipeline import PinTrack
 
@@ -146,8 +146,13 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     tap signal they held it up at 0.6-3 px after a lift, a contact stopping 4 frames late or a slide
     2 frames after another starting 5 frames early, or made short contacts of their own). A pin that
     agrees with its neighbours within the noise keeps its own displacement, so a clean tap's onset
-    and end are where they were. Kinds are `pins.contact_kinds` with the rest positions (a press's
-    field spreads out, a slide's shifts one way).
+    and end are where they were. Given the rest positions, the displacements are also measured from
+    the skin's own rest before each frame (`pins.skin_rest`: the last still frame after a lift, or of
+    a rest creeping back towards the first frame's), not the first frame's: a real elastomer creeps
+    back over a second or more after a slide and may keep a set, and measured from the first frame it
+    never looks at rest between contacts (they merged, and a slide's direction and a press's field
+    carried what the last slides left). Kinds are `pins.contact_kinds` with the rest positions (a
+    press's field spreads out, a slide's shifts one way).
 
     Parameters
     ----------
@@ -167,14 +172,19 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
         them as it tracks: `neighbour_medians_of`).
     """
     high_px, low_px = thresholds_px
-    coherent = signal
+    coherent, relative = signal, None
     if rest_positions is not None:  # a pin differing from its neighbourhood by more than the noise is outvoted
         local = neighbour_median(displacements, rest_positions) if medians is None else medians
         alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
-        coherent = tap_signal(np.where(alone[..., None], local, displacements))
+        field = np.where(alone[..., None], local, displacements)
+        rest = skin_rest(field, low_px=low_px, high_px=high_px)  # the skin's own rest before each frame
+        relative = field - rest
+        coherent = tap_signal(relative)
+        displacements = displacements - rest
+        signal = tap_signal(displacements)
     bridged = _bridge_blank(coherent, blank)
     bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
-    bounds = split_at_dips(bridged, bounds, min_drop_px=high_px)
+    bounds = split_at_dips(bridged, bounds, min_drop_px=high_px, field=relative)
     return bounds, _kinds(displacements, bounds, signal, low_px, rest_positions)
 
 
@@ -193,7 +203,8 @@ def neighbour_medians_of(track: PinTrack, medians=None) -> np.ndarray | None:
     return table if before == 0 else np.concatenate([np.full((before, *rest.shape), np.nan), table])
 
 
-def split_at_dips(signal: np.ndarray, bounds, *, min_drop_px: float, share: float = 0.5) -> list[tuple[int, int]]:
+def split_at_dips(signal: np.ndarray, bounds, *, min_drop_px: float, share: float = 0.5,
+                  field: np.ndarray | None = None) -> list[tuple[int, int]]:
     """Contacts split where the tap signal falls deep between two peaks: the plate lifted and came back
     before the skin had crept back to rest.
 
@@ -204,8 +215,11 @@ def split_at_dips(signal: np.ndarray, bounds, *, min_drop_px: float, share: floa
     two contacts when the signal between them falls to at most ``share`` of the lower peak and by at
     least ``min_drop_px`` below it; the contact is cut where the lift brought it a quarter of the way
     from the dip to the lower peak (the first contact's end, +- a frame). A press's plateau or
-    a slide's drag never falls so far while the plate is down. A press too weak to rise above what
-    the last slide left stays merged with it.
+    a slide's drag never falls so far while the plate is down. Without ``field``, a press too weak to
+    rise above what the last slide left stays merged with it; with it, a dip is also a lift where the
+    signal fell to at most ``share`` of the earlier peak and the pins moved by ``min_drop_px`` or more
+    (`pins.tap_signal` of the change) from the dip to the later peak: a press right after a slide, on
+    the shear the slide left.
 
     Parameters
     ----------
@@ -217,6 +231,8 @@ def split_at_dips(signal: np.ndarray, bounds, *, min_drop_px: float, share: floa
         Least fall from the lower peak to the dip, px (the tap threshold: above the tracking noise).
     share : float
         Highest dip, as a share of the lower peak, in (0, 1).
+    field : (T, N, 2) ndarray, optional
+        The displacements the signal was measured on, px.
 
     Returns
     -------
@@ -244,7 +260,10 @@ def split_at_dips(signal: np.ndarray, bounds, *, min_drop_px: float, share: floa
                 continue
             dip = held + int(np.argmin(part[held:peak]))
             lower = min(part[held], part[peak])
-            if part[dip] <= share * lower and lower - part[dip] >= min_drop_px:
+            apart = part[dip] <= share * lower and lower - part[dip] >= min_drop_px
+            if not apart and field is not None and part[dip] <= share * part[held]:   # a press on what was left
+                apart = tap_signal(field[start + peak][None] - field[start + dip][None])[0] >= min_drop_px
+            if apart:
                 # the lift: the first frame down to a quarter of the way from the dip to the lower peak (the
                 # dip itself may lie in the next contact, whose drag can cancel what the last one left)
                 cuts.append(held + int(np.argmax(part[held:dip + 1] <= part[dip] + 0.25 * (lower - part[dip]))))

@@ -16,6 +16,10 @@ at once when the plate lifts; what a slide leaves in the skin creeps back to res
 (paper 000 waits 1 s between contacts "to ensure transients decayed"). It is laid out as a slide is,
 from the apex when nothing touches, and adds to the plate's drag under contact.
 
+With ``Contact.shear_decay_mm`` > 0 (the schedule's slower relaxation, ``set_share``) the residual shear keeps
+the shape the slide that left it had (falling off over that length from the apex), laid out apart from any
+plate pressing on it now: a press on a sheared skin does not drag it further.
+
 Stiffer skin (opt-in, ``Contact.slide_decay_mm``): by default the skin ahead of a slide may be squeezed
 to ``1 - pi / 4`` (21 %) of its area along the slide, or to `MIN_JACOBIAN` where the base cuts the
 fall-off short: neighbouring tips then merge. A skin of 1-2 mm of elastomer over gel wrinkles long
@@ -24,6 +28,8 @@ before a surface strain of -80 %; a fixed fall-off per stroke (`decay_for_area_m
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -70,11 +76,22 @@ def max_slide_mm(indentation_mm: float, radius_mm: float) -> float:
     return float(max(2 * room * (1 - MIN_JACOBIAN) / np.pi, 0.0))
 
 
-def _drag_mm(contact) -> tuple[float, float]:
-    """How far the skin at the apex is shifted, (x, y) mm: the plate's slide under contact plus the residual shear."""
+def _drag_mm(contact, radius_mm: float) -> tuple[float, float]:
+    """How far the skin at the apex is shifted, (x, y) mm: the plate's slide under contact plus the residual shear.
+
+    Where the two together would fold the skin (`max_slide_mm`), the residual shear is cut to what still fits
+    (the skin slips under the plate rather than fold); a slide alone past it is refused (`slide_fraction`)."""
     touching = contact.indentation_mm > 0
-    return ((contact.slide_x_mm if touching else 0.0) + contact.shear_x_mm,
-            (contact.slide_y_mm if touching else 0.0) + contact.shear_y_mm)
+    px, py = (contact.slide_x_mm, contact.slide_y_mm) if touching else (0.0, 0.0)
+    sx, sy = px + contact.shear_x_mm, py + contact.shear_y_mm
+    most = max_slide_mm(max(contact.indentation_mm, 0.0), radius_mm)
+    if (contact.shear_x_mm or contact.shear_y_mm) and np.hypot(sx, sy) > most and np.hypot(px, py) < most:
+        # the largest share k of the shear s with |p + k s| = most:
+        # k = (-p.s + sqrt((p.s)^2 - |s|^2 (|p|^2 - most^2))) / |s|^2
+        ps, ss = px * contact.shear_x_mm + py * contact.shear_y_mm, contact.shear_x_mm ** 2 + contact.shear_y_mm ** 2
+        k = (-ps + np.sqrt(ps * ps - ss * (px * px + py * py - most * most))) / ss * (1.0 - 1e-9)
+        sx, sy = px + k * contact.shear_x_mm, py + k * contact.shear_y_mm
+    return sx, sy
 
 
 def slide_fraction(arc_mm, contact, radius_mm: float):
@@ -93,7 +110,7 @@ def slide_fraction(arc_mm, contact, radius_mm: float):
     ndarray shaped like ``arc_mm``, in [0, 1] (zeros when nothing shifts the skin: no slide under
     contact, no residual shear ``shear_x_mm``, ``shear_y_mm``).
     """
-    d, slide = contact.indentation_mm, np.hypot(*_drag_mm(contact))
+    d, slide = contact.indentation_mm, np.hypot(*_drag_mm(contact, radius_mm))
     if slide == 0:
         return np.zeros(np.shape(arc_mm))
     d = max(d, 0.0)  # a residual shear alone falls off from the apex
@@ -152,14 +169,23 @@ def slid_points(x, y, contact, radius_mm: float):
     x, y : ndarray
         The same points shifted along the pad surface (the inputs themselves when nothing slides).
     """
-    sx, sy = _drag_mm(contact)
+    sx, sy = _drag_mm(contact, radius_mm)
     if sx == 0 and sy == 0:
         return x, y
     r = np.hypot(x, y)
     arc = radius_mm * np.arcsin(np.clip(r / radius_mm, 0.0, 1.0))
     scale = np.divide(arc, r, out=np.ones_like(r), where=r > 0)
-    share = slide_fraction(arc, contact, radius_mm)
-    qx, qy = x * scale + sx * share, y * scale + sy * share
+    if contact.shear_decay_mm > 0 and (contact.shear_x_mm or contact.shear_y_mm):
+        # the shear keeps the shape its slide left (falling off over shear_decay_mm from the apex), whatever
+        # presses on it now; the plate's slide, if any, is laid out on its own
+        plate = replace(contact, shear_x_mm=0.0, shear_y_mm=0.0, shear_decay_mm=0.0)
+        px, py = _drag_mm(plate, radius_mm)
+        share = slide_fraction(arc, plate, radius_mm)
+        kept = 0.5 * (1.0 + np.cos(np.pi * np.clip(arc / contact.shear_decay_mm, 0.0, 1.0)))
+        qx, qy = x * scale + px * share + (sx - px) * kept, y * scale + py * share + (sy - py) * kept
+    else:
+        share = slide_fraction(arc, contact, radius_mm)
+        qx, qy = x * scale + sx * share, y * scale + sy * share
     if contact.texture_mm > 0:
         qx, qy = textured_points(qx, qy, share, contact)
     arc = np.hypot(qx, qy)

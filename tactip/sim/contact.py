@@ -33,6 +33,10 @@ class Contact:
         rest (opt-in, `tactip.sim.sequence.schedule`'s ``residual``; 0 by default). It shifts the apex
         by all of it and the skin round it less (`tactip.sim._slide`), with or without contact; under
         a slide it adds to the drag.
+    shear_decay_mm : float
+        How far, mm of pad surface, the residual shear falls off from the apex, laid out apart from the plate's
+        slide (opt-in, `tactip.sim.sequence.schedule`'s ``set_share``: the shape its slide left); 0: the shear
+        adds to the plate's drag and falls off with it (`tactip.sim._slide`).
     slide_decay_mm : float
         How far, mm of pad surface, the drag falls off outside the contact patch (opt-in, a stiffer
         skin: `tactip.sim.sequence.schedule`'s ``min_area``); 0: the default rule (`tactip.sim._slide`).
@@ -52,16 +56,19 @@ class Contact:
     shear_x_mm: float = 0.0
     shear_y_mm: float = 0.0
     slide_decay_mm: float = 0.0
+    shear_decay_mm: float = 0.0
     texture_mm: float = 0.0
     texture_period_mm: float = 2.0
 
     def __post_init__(self):
         for name in ("indentation_mm", "gap_width_mm", "gap_offset_mm", "gap_angle_deg", "slide_x_mm", "slide_y_mm",
-                     "shear_x_mm", "shear_y_mm", "slide_decay_mm", "texture_mm", "texture_period_mm"):
+                     "shear_x_mm", "shear_y_mm", "slide_decay_mm", "shear_decay_mm", "texture_mm",
+                     "texture_period_mm"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"{name} must be finite, got {getattr(self, name)!r}")
-        if self.slide_decay_mm < 0:
-            raise ValueError(f"slide_decay_mm must be >= 0, got {self.slide_decay_mm}")
+        if self.slide_decay_mm < 0 or self.shear_decay_mm < 0:
+            raise ValueError(f"slide_decay_mm and shear_decay_mm must be >= 0, got {self.slide_decay_mm}, "
+                             f"{self.shear_decay_mm}")
         if self.gap_width_mm < 0:
             raise ValueError(f"gap_width_mm must be >= 0, got {self.gap_width_mm}")
         if self.texture_period_mm <= 0:

@@ -142,7 +142,8 @@ def _frames(duration_s: float, frame_rate: float, name: str, minimum: int) -> in
 
 def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, press_s: float, hold_s: float,
              slide_s: float, lift_s: float, gap_angle_deg: float = 0.0, residual: float = 0.0,
-             creep_s: float = 0.1, final_rest_s: float | None = None, min_area: float | None = None):
+             creep_s: float = 0.1, final_rest_s: float | None = None, min_area: float | None = None,
+             set_share: float = 0.0, set_s: float = math.inf):
     """The contact state of every frame of a sequence, and its events.
 
     Each phase lasts a whole number of frames (at least one; ``rest_s`` and ``hold_s`` may round to
@@ -157,6 +158,10 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
     releases the drag only down to that share of it, and the skin's shear then creeps back to rest
     exponentially with time constant ``creep_s`` s, through the rests and the strokes after (their
     drags add to what is left of it): a real elastomer relaxes over tens of frames, not at once.
+    ``set_share`` > 0 (opt-in; 0 as before) is a second, slower term of that relaxation (a two-term Prony
+    series, as a viscoelastic solid's is written): that share of each drag is also left at the lift and
+    relaxes with time constant ``set_s`` s (infinite, the default: a set the skin keeps), so the skin is
+    not back at its first frame's rest between contacts, nor at the end.
     ``min_area`` in (0, 1) (opt-in; None as before) squeezes the skin ahead of a slide to no less than
     that share of its area (where the pad's base leaves room: `tactip.sim._slide.decay_for_area_mm`).
     """
@@ -180,6 +185,11 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
         raise ValueError(f"creep_s must be > 0, got {creep_s!r}")
     if min_area is not None and not (math.isfinite(min_area) and 0.0 < min_area < 1.0):
         raise ValueError(f"min_area must be None or in (0, 1), got {min_area!r}")
+    if not (math.isfinite(set_share) and 0.0 <= set_share < 1.0 - residual):
+        raise ValueError(f"set_share must be in [0, 1 - residual), got {set_share!r}")
+    if not set_s > 0:
+        raise ValueError(f"set_s must be > 0 (inf: a set kept), got {set_s!r}")
+    left = residual + set_share  # the share of a slide's drag the lift leaves in the skin
     rest = Contact()
     contacts, events = [rest] * n_rest, []
     for number, stroke in enumerate(strokes):
@@ -194,8 +204,10 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
                  else 0.5 * (1 - np.cos(np.pi * np.arange(1, n_slide + 1) / n_slide)))
         up = 0.5 * (1 + np.cos(np.pi * np.arange(1, n_lift + 1) / (n_lift + 1)))  # (1, 0): still touching
         depth = np.concatenate([down, middle, up])
-        dragged = np.concatenate([np.zeros(n_press), along, residual + (1.0 - residual) * up])
+        dragged = np.concatenate([np.zeros(n_press), along, left + (1.0 - left) * up])
         decay = 0.0 if min_area is None else _slide.decay_for_area_mm(stroke.distance_mm, min_area)
+        if set_share > 0 and stroke.kind == "slide":  # the drag and what it leaves keep the whole slide's fall-off
+            decay = max(decay, _slide.SLIDE_DECAY_MM, _slide.DECAY_PER_SLIDE * stroke.distance_mm)
         sliding = stroke.kind == "slide"
         for fraction, share in zip(depth, dragged):
             contacts.append(Contact(stroke.indentation_mm * float(fraction), stroke.gap_width_mm, 0.0, gap_angle_deg,
@@ -206,21 +218,34 @@ def schedule(strokes: Sequence[Stroke], *, frame_rate: float, rest_s: float, pre
                                    stroke.indentation_mm, float(stroke.direction_deg) if sliding else None,
                                    float(stroke.distance_mm) if sliding else 0.0))
         contacts.extend([rest] * rests[number + 1])
-    if residual > 0:
-        contacts = _creep(contacts, events, strokes, residual, math.exp(-1.0 / (creep_s * frame_rate)))
+    if left > 0:
+        terms = [(residual, math.exp(-1.0 / (creep_s * frame_rate)))] if residual > 0 else []
+        if set_share > 0:
+            terms.append((set_share, math.exp(-1.0 / (set_s * frame_rate))))
+        contacts = _creep(contacts, events, strokes, terms, laid_out=set_share > 0)
     return contacts, events
 
 
-def _creep(contacts, events, strokes, residual: float, decay: float) -> list:
+def _creep(contacts, events, strokes, terms, laid_out: bool = False) -> list:
     """``contacts`` with what each slide's drag leaves in the skin after it (``Contact.shear_x_mm``,
-    ``shear_y_mm``): ``residual`` of it at its last frame, shrinking by the factor ``decay`` per frame after."""
+    ``shear_y_mm``): for each (share, decay) of ``terms``, that share of it at its last frame, shrinking by
+    the factor ``decay`` per frame after. ``laid_out``: the frames after a slide keep its fall-off as the
+    shear's (``Contact.shear_decay_mm``, until the next slide ends): what is left relaxes in the shape the
+    drag had, whatever presses on it."""
+    if laid_out:
+        falloff = np.zeros(len(contacts))
+        for event in events:
+            if event.kind == "slide":
+                falloff[event.stop_frame:] = contacts[event.stop_frame - 1].slide_decay_mm
+        contacts = [replace(c, shear_decay_mm=float(f)) if f else c for c, f in zip(contacts, falloff)]
     left = np.zeros((len(contacts), 2))
     for event, stroke in zip(events, strokes):
         if stroke.kind == "slide":
             angle = math.radians(stroke.direction_deg)
             frames = np.arange(1, len(contacts) - event.stop_frame + 1)
-            left[event.stop_frame:] += (residual * stroke.distance_mm * np.array([math.cos(angle), math.sin(angle)])
-                                        * decay ** frames[:, None])
+            for share, decay in terms:
+                left[event.stop_frame:] += (share * stroke.distance_mm * np.array([math.cos(angle), math.sin(angle)])
+                                            * decay ** frames[:, None])
     return [replace(c, shear_x_mm=float(dx), shear_y_mm=float(dy)) if dx or dy else c
             for c, (dx, dy) in zip(contacts, left)]
 
@@ -231,7 +256,8 @@ class ContactSequences:
     def sequence(self, strokes: Sequence[Stroke], *, rest_s: float = 0.25, press_s: float = 0.2,
                  hold_s: float = 0.1, slide_s: float = 0.4, lift_s: float = 0.2,
                  frame_rate: float | None = None, residual: float = 0.0, creep_s: float = 0.1,
-                 final_rest_s: float | None = None, min_area: float | None = None) -> ContactSequence:
+                 final_rest_s: float | None = None, min_area: float | None = None, set_share: float = 0.0,
+                 set_s: float = math.inf) -> ContactSequence:
         """Frames of presses and slides separated by rests, with the contacts' ground truth.
 
         Parameters
@@ -251,6 +277,9 @@ class ContactSequences:
             Opt-in viscoelastic skin (`schedule`): the share of each slide's drag left when the plate
             lifts (0: none, the default), its creep back to rest's time constant, s, and the last
             rest's length, s (None: ``rest_s``).
+        set_share, set_s : float
+            Opt-in slower relaxation (`schedule`): the share of each slide's drag also left when the plate
+            lifts (0: none, the default), relaxing with time constant ``set_s``, s (inf: a set the skin keeps).
         min_area : float or None
             Opt-in stiffer skin (`schedule`): the least share of its area the skin ahead of a slide
             is squeezed to (None: the default model, down to 21 %).
@@ -271,7 +300,8 @@ class ContactSequences:
         frame_rate = self.frame_rate if frame_rate is None else frame_rate
         contacts, events = schedule(list(strokes), frame_rate=frame_rate, rest_s=rest_s, press_s=press_s,
                                     hold_s=hold_s, slide_s=slide_s, lift_s=lift_s, residual=residual,
-                                    creep_s=creep_s, final_rest_s=final_rest_s, min_area=min_area)
+                                    creep_s=creep_s, final_rest_s=final_rest_s, min_area=min_area,
+                                    set_share=set_share, set_s=set_s)
         return ContactSequence(self, contacts, events, frame_rate)
 
     def slides(self, directions_deg, *, distance_mm: float = 3.0, indentation_mm: float = 2.0,
@@ -288,7 +318,8 @@ class ContactSequences:
             Depth of each press, mm.
         **timing
             ``rest_s``, ``press_s``, ``slide_s``, ``lift_s``, ``frame_rate`` and the opt-in residual
-            shear (``residual``, ``creep_s``, ``final_rest_s``) and stiffer skin (``min_area``) as in `sequence`.
+            shear (``residual``, ``creep_s``, ``set_share``, ``set_s``, ``final_rest_s``) and stiffer skin
+            (``min_area``) as in `sequence`.
 
         Returns
         -------
