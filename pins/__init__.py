@@ -11,7 +11,8 @@ from .lattice import MIN_SENSOR_PINS, REJECTION_REASONS, PinField, draw_pin_fiel
 from .contacts import ContactKind, contact_kinds
 from .features import (LostPinError, TapRecorder, feature_dim_names, fill_lost, resample_tap, seen_pins,
                        tap_features)
-from .segment import converging_frames, jitter_floor_px, neighbour_median, segment_taps, skin_rest, tap_signal
+from .segment import converging_frames, jitter_floor_px, neighbour_median, segment_taps, tap_signal
+from .skin import skin_rest
 from .scale import (DEFAULT_PAD_DIAMETER_MM, SENSOR_PRESETS, PadScale, SensorDescription, central_spacing_px,
                     pad_scale, pin_pitch_mm, sensor_preset, sensor_scale)
 from .select import PinSelection, median_spacing_px, select_feature_pins, select_pins

@@ -1,0 +1,136 @@
+"""The skin's own rest between contacts (`skin_rest`): where a real elastomer rests after a slide.
+
+Contacts are found on the displacements from the skin's rest before each frame rather than from the first
+frame (`tactip.replay.contacts.find_contacts`): a skin that creeps back over a second or more, or keeps a
+set, never looks at its first frame's rest between contacts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import ShapeError
+from .segment import tap_signal
+
+__all__ = ["skin_rest"]
+
+
+def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float = 0.4) -> np.ndarray:
+    """The skin's own rest before each frame: the displacements at the last frame where it was at rest, px.
+
+    A real elastomer does not return to its first frame's rest between contacts: what a slide leaves in
+    the skin creeps back over a second or more, and some of it may stay (a set). Measured from the first
+    frame, the pad then never looks at rest between contacts: contacts merge, and a slide's direction and a
+    press's field carry what the last slides left. This follows the skin where it rests instead. A frame
+    is *still* when the pins moved since the frame before by no more than ``low_px`` (the tap signal of the
+    frame-to-frame change, `tap_signal`). From the first frame with pins on, the rest is the displacements
+    at the latest *rest frame*: a still frame that is
+
+    - a lift: since the last rest frame the signal from it (`tap_signal` of the displacements less the
+      rest's) rose to ``high_px`` or more (a contact), has fallen to at most ``share`` of that peak, has
+      not risen again by ``high_px`` or more since its lowest after the peak (a press right after a slide
+      holds still above what the slide left: no rest) and no longer falls (by half ``low_px`` or more from
+      the frame before: a press whose skin relaxes under the plate falls to half its peak while held); what
+      is left in the skin after the plate lifted is the next contact's rest; or
+    - a rest that creeps back: the skin at the last rest frame was off its first rest (`tap_signal` of the
+      displacements ``low_px`` or more), the signal from it has stayed below ``high_px`` since (no contact),
+      the next two frames are still too (a contact's slow onset is not), and the pins displaced there (by
+      ``low_px`` or more) have moved since mostly back towards the first rest (their motion against their
+      displacement at least three quarters of its length, summed over them): a skin creeping back moves
+      towards its first rest; a press spreads the pins across that, however slowly it presses in. A skin at
+      its first rest (one that springs back) has no such rest frames: there the rest moves at lifts only.
+
+    A press's hold is still too, but its signal is at its peak: it is no rest frame. A rest too short to be
+    still (a lift followed at once by the next contact) leaves the rest where it was: `split_at_dips` splits
+    those contacts. Each pin's rest is its displacement at the latest rest frame where it was seen.
+
+    Parameters
+    ----------
+    field : (T, N, 2) ndarray
+        Displacements from the first frame's rest, px (NaN where lost: a frame with no pin is never still).
+    low_px, high_px : float
+        `segment_taps`' thresholds, px (0 < low < high).
+    share : float
+        Highest share of a contact's peak signal left at a lift's rest frame, in (0, 1).
+
+    Returns
+    -------
+    rest : (T, N, 2) ndarray of float64
+        Each frame's rest, px: zeros up to the first frame with pins; NaN for a pin not yet seen at a rest
+        frame. ``field - rest`` are the displacements from the skin's own rest.
+
+    Examples
+    --------
+    >>> field = np.zeros((12, 20, 2)); field[2:5, :, 0] = [[2.0], [8.0], [3.0]]   # a slide that leaves 3 px
+    >>> field[5:, :, 0] = 3.0; field[8:10, :, 1] = 2.0                     # at rest, then a press
+    >>> rest = skin_rest(field, low_px=0.5, high_px=1.5)
+    >>> from pins import segment_taps
+    >>> rest[[1, 5, 9, 11], 0].tolist(), segment_taps(tap_signal(field - rest), pad_frames=0, min_frames=1)
+    ([[0.0, 0.0], [3.0, 0.0], [3.0, 0.0], [3.0, 0.0]], [(2, 5), (8, 10)])
+    """
+    data = np.asarray(field, dtype=np.float64)
+    if data.ndim != 3 or data.shape[2] != 2:
+        raise ShapeError(f"field must have shape (T, N, 2), got {data.shape}")
+    if not 0.0 < low_px < high_px:
+        raise ValueError(f"need 0 < low_px < high_px, got low_px={low_px}, high_px={high_px}")
+    if not 0.0 < share < 1.0:
+        raise ValueError(f"share must be in (0, 1), got {share}")
+    seen = np.isfinite(data[..., 0])
+    rest = np.zeros_like(data)
+    if not seen.any():
+        return rest
+    first = int(np.argmax(seen.any(axis=1)))
+    motion = np.full(len(data), np.inf)
+    motion[first + 1:] = tap_signal(data[first + 1:] - data[first:-1])
+    motion[~seen.any(axis=1)] = np.inf
+    still = motion <= low_px
+    displaced = tap_signal(data)  # from the first frame's rest
+    rests = [first]
+    anchor = first  # the last rest frame
+    peak = trough = 0.0  # the highest signal from the rest since it, and the lowest after that peak
+    # Between still frames the rest cannot change: the signal from it is measured a run at a time.
+    breaks = np.flatnonzero(still[first + 1:]) + first + 1
+    edges = np.concatenate([[first + 1], np.repeat(breaks, 2), [len(data)]]).reshape(-1, 2)
+    for start, stop in edges:
+        values = tap_signal(data[start:stop + 1] - data[anchor])        # the run, and the still frame after it
+        if values.size:
+            top = int(np.argmax(values))
+            peak, trough = ((float(values[top]), float(values[top:].min())) if values[top] > peak
+                            else (peak, min(trough, float(values.min()))))
+        if stop >= len(data):
+            break
+        now = float(values[-1])                                           # the still frame's signal
+        before = float(values[-2]) if values.size > 1 else 0.0            # the frame's before it
+        lift = (peak >= high_px and now <= share * peak and now < trough + high_px   # fallen, not risen again,
+                and before - now < 0.5 * low_px)                                    # no longer falling
+        creep = (peak < high_px and displaced[anchor] >= low_px and still[stop + 1:stop + 3].all()
+                 and _back(data[stop], data[anchor], low_px) >= 0.75)
+        if lift or creep:
+            rests.append(int(stop))
+            anchor, peak, trough = int(stop), 0.0, 0.0
+    rests = np.asarray(rests)
+    # each pin's rest: its displacement at the latest rest frame where it was seen
+    at = np.where(seen[rests], rests[:, None], -1)                       # (R, N): frame or -1
+    at = np.maximum.accumulate(at, axis=0)
+    which = np.searchsorted(rests, np.arange(len(data)), side="right") - 1   # (T,): latest rest frame index
+    frames = np.where(which[:, None] >= 0, at[np.maximum(which, 0)], -1)    # (T, N)
+    pins = np.arange(data.shape[1])
+    rest = np.where((frames >= 0)[..., None], data[np.maximum(frames, 0), pins[None]], np.nan)
+    rest[:first] = 0.0
+    return rest
+
+
+def _back(now: np.ndarray, then: np.ndarray, level_px: float) -> float:
+    """How much of the pins' motion from ``then`` to ``now`` ((N, 2) px each, displacements from the first rest)
+    points back towards the first rest, in [-1, 1]: the sum over the pins displaced by ``level_px`` or more in
+    ``then`` (seen in both) of their motion against their displacement, over the sum of their motion's length
+    (1: all straight back, 0: across or noise; 0 without any such pin)."""
+    both = np.isfinite(now[:, 0]) & np.isfinite(then[:, 0])
+    length = np.hypot(then[:, 0], then[:, 1])
+    pins = both & (length >= level_px)
+    if not pins.any():
+        return 0.0
+    motion = now[pins] - then[pins]
+    total = np.hypot(motion[:, 0], motion[:, 1]).sum()
+    against = -np.einsum("nk,nk->n", motion, then[pins] / length[pins, None]).sum()
+    return float(against / total) if total > 0 else 0.0
