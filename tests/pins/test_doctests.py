@@ -9,7 +9,7 @@ import importlib
 import pytest
 
 MODULES = ["pins.detect", "pins.disc", "pins.lattice", "pins.track", "pins.lk", "pins.displacement", "pins.select",
-           "pins.scale", "pins.features", "pins.segment", "pins.accel_detect", "pins._tipfit", "pins._rescue",
+           "pins.scale", "pins.features", "pins.segment", "pins.skin", "pins.accel_detect", "pins._tipfit", "pins._rescue",
            "pins._tipprobe", "pins._noise"]
 
 
