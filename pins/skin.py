@@ -14,6 +14,8 @@ from .segment import tap_signal
 
 __all__ = ["skin_rest"]
 
+_AHEAD = 128  # frames whose signal from a rest is measured at once (a rest frame moves it: the rest re-measured)
+
 
 def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float = 0.4) -> np.ndarray:
     """The skin's own rest before each frame: the displacements at the last frame where it was at rest, px.
@@ -88,11 +90,17 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     rests = [first]
     anchor = first  # the last rest frame
     peak = trough = 0.0  # the highest signal from the rest since it, and the lowest after that peak
-    # Between still frames the rest cannot change: the signal from it is measured a run at a time.
+    # Between still frames the rest cannot change: the signal from it is judged a run at a time, and measured
+    # (`tap_signal`, row by row) for up to `_AHEAD` frames at once until the rest moves.
     breaks = np.flatnonzero(still[first + 1:]) + first + 1
     edges = np.concatenate([[first + 1], np.repeat(breaks, 2), [len(data)]]).reshape(-1, 2)
+    signal, known = np.empty(len(data)), anchor                          # signal[anchor:known]: from the rest
     for start, stop in edges:
-        values = tap_signal(data[start:stop + 1] - data[anchor])        # the run, and the still frame after it
+        end = min(int(stop) + 1, len(data))
+        if end > known:
+            known, last = max(end, min(known + _AHEAD, len(data))), known
+            signal[last:known] = tap_signal(data[last:known] - data[anchor])
+        values = signal[start:end]                                        # the run, and the still frame after it
         if values.size:
             top = int(np.argmax(values))
             peak, trough = ((float(values[top]), float(values[top:].min())) if values[top] > peak
@@ -107,7 +115,7 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
                  and _back(data[stop], data[anchor], low_px) >= 0.75)
         if lift or creep:
             rests.append(int(stop))
-            anchor, peak, trough = int(stop), 0.0, 0.0
+            anchor, peak, trough, known = int(stop), 0.0, 0.0, int(stop)
     rests = np.asarray(rests)
     # each pin's rest: its displacement at the latest rest frame where it was seen
     at = np.where(seen[rests], rests[:, None], -1)                       # (R, N): frame or -1
