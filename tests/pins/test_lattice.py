@@ -207,6 +207,30 @@ def test_a_lone_voter_is_no_consensus_with_itself():
     assert np.isfinite(membership[0]) and not np.isfinite(membership[1])
 
 
+def test_a_lone_voter_stricter_than_the_sets_that_would_join_it_votes_alone():
+    """A lone voter's extras are noise only when it thresholds lower than the sets that would join it: a set
+    at a higher offset than each of them that keeps more pins keeps faint pins the lower offsets merge with
+    the membrane round them (bench_user_chain radial-led-120 seed 28: offset 15 kept 110, offset 5 kept 102;
+    both voted, the lower won and a pin was lost). It votes alone and wins; at a lower offset than theirs it
+    is still joined and the set without its extras wins."""
+    from pins._candidates import _consensus
+
+    pitch, grid = _VOTER_PITCH, _voter_grid()
+
+    def run(centres, lost, offset):
+        one = _voter(centres, lost)
+        return type(one)(one.params.replace(offset=offset), one.blobs, one.reason, one.pitch)
+
+    more = np.vstack([grid, grid[:4] + pitch / 2])               # 104 kept
+    runs = [run(more, 0, 15.0), run(grid, 5, 5.0), run(grid, 5, 9.0), run(grid, 30, 25.0)]  # 95 >= 0.9 x 104
+    membership, _ = _consensus(runs, pitch)
+    assert np.isfinite(membership[0]) and not np.isfinite(membership[1:]).any(), membership
+    # The same extras kept by the lowest offset: noise it lets through; the sets keeping the next most vote.
+    runs = [run(more, 0, 5.0), run(grid, 5, 9.0), run(grid, 5, 15.0), run(grid, 30, 25.0)]
+    membership, _ = _consensus(runs, pitch)
+    assert np.isfinite(membership[:3]).all() and np.argmax(membership) in (1, 2), membership
+
+
 def test_consensus_matches_every_centre_with_each_voters_nearest_even_among_crowded_blobs():
     """The one-tree consensus equals asking each voter's own tree for each centre's nearest within the
     gate, also where a centre has more blobs inside the gate than its k nearest (split blobs)."""
