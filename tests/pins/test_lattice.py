@@ -575,6 +575,28 @@ def test_lattice_holes_are_filled_only_at_lattice_sites_inside_the_field():
     assert fill_lattice_holes(radial, areas, contrasts, [(*inner, 15.0)], (0.0, 0.0)) == []
 
 
+def test_a_holes_blob_of_a_few_pixels_is_not_judged_by_its_fill():
+    """A blob of a few pixels fills its box by the grid's cut, not by its shape (the judge asks the fill only of
+    blobs of `_FILL_AREA` px or more): a 1-2 px tip's blob at a hole fills 0.44-0.56 and was refused
+    (bench_user_chain radial-led-120 seed 18: area 7-10 px beside pins of 9.5 px, lost though six candidate
+    sets found it). Such a blob is taken back; a blob as poorly filled beside large pins (a crescent of a
+    reflection's edge) is not."""
+    from pins._rescue import fill_lattice_holes
+
+    pitch = 10.0
+    rows = [(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) for y in range(-5, 6) for x in range(-5, 6)
+            if np.hypot(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) <= 4.6]
+    lattice = pitch * np.array(rows)
+    hole = int(np.argmin(np.hypot(*(lattice - [20.0, 0.0]).T)))
+    kept = np.delete(lattice, hole, axis=0)
+    contrasts = np.full(len(kept), 40.0)
+    site = (lattice[hole] + 0.3).reshape(1, 2)
+    for area, expected in ((9.0, True), (30.0, False)):
+        blob = (site, np.array([area]), np.array([0.5]), np.array([38.0]), 15.0)
+        taken = fill_lattice_holes(kept, np.full(len(kept), area), contrasts, [blob], (0.0, 0.0))
+        assert (taken == [(0, 0)]) == expected, area
+
+
 def test_probing_the_holes_finds_a_faint_pin_and_nothing_else():
     """probe_lattice_holes takes a faint pin (20 grey, its neighbours 45, noise 3) at a lattice hole, and nothing at a hole
     under a smooth bright hump (an LED reflection without its pin), nor past the outermost ring."""
