@@ -103,7 +103,11 @@ def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
     than 97 % of any other set's pins, and its noise blobs were pins (bench_user_chain radial-led-120 seed
     0: 122 pins, 3 of them noise blobs on the LED reflections: the next kept 0.95 of its pins; brown-127
     seed 9: 0.97). Where the next keeps less than `_JOIN` of them the extras are pins only the best set
-    finds (radial-led-120 filmed at 320x240, 1 px tips: 0.85-0.89), and it votes alone as before.
+    finds (radial-led-120 filmed at 320x240, 1 px tips: 0.85-0.89), and it votes alone as before. It votes
+    alone too when its offset is higher than that of every set that would join it: its extras passed a
+    stricter threshold, so they are no noise blobs of a low one, but faint pins that the lower offsets
+    merge with the membrane round them (bench_user_chain radial-led-120 seed 28: offset 15 keeps 110 pins,
+    offset 5 keeps 102, and with both voting the lower won and one pin was lost for good).
 
     A kept pin is matched in another run by its nearest kept pin within `_MATCH` pitches; the
     consensus position of a pin is the mean of its matches.
@@ -115,9 +119,14 @@ def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
     voters = counts >= _VOTER * counts.max()
     if voters.sum() < _MIN_VOTERS and np.count_nonzero(counts) >= _MIN_VOTERS:
         # One set's own blobs are no agreement: those keeping the next most pins vote with it, unless they
-        # keep a tenth fewer (then its extra blobs are the faint pins only it finds: 1 px tips at 320x240).
+        # keep a tenth fewer (then its extra blobs are the faint pins only it finds: 1 px tips at 320x240),
+        # or unless every one of them thresholds lower than it (then its extras passed a stricter
+        # threshold than theirs: no noise a low offset lets through).
         runner_up = np.sort(counts)[-_MIN_VOTERS]
-        if runner_up >= _JOIN * counts.max():
+        joining = np.flatnonzero((counts >= runner_up) & ~voters)
+        lone_offset = runs[int(np.argmax(counts))].params.offset
+        stricter = all(lone_offset > runs[r].params.offset for r in joining)
+        if runner_up >= _JOIN * counts.max() and not stricter:
             voters = counts >= runner_up
     gate = _MATCH * pitch if np.isfinite(pitch) else 1.0
     membership = np.full(len(runs), -np.inf)

@@ -14,7 +14,8 @@ row, such as a radial spoke: not the next row of a hexagonal lattice, predicted 
 nor the inner end of a spoke, which points into the empty zone round the lone centre pin). A blob of any candidate set at a
 hole (within the same tolerance) fills it when it looks like a pin beside the kept pins around the
 hole: an area within `_AREA_RANGE` of theirs (not a reflection merged with its pins, nor a
-speck), at least `_MIN_CONTRAST` of their contrast and a box filled like a disc's; of several, the one of the highest offset
+speck), at least `_MIN_CONTRAST` of their contrast and a box filled like a disc's (beside pins large enough
+for a fill to tell a shape); of several, the one of the highest offset
 (the most confident), then the nearest. Sites are predicted by the judged pins, and then by the pins
 taken back (several pins missing in a row along a spoke that crosses a reflection), through links of
 about one pitch, never farther from the disc centre than the outermost judged pin plus `_BEYOND`
@@ -40,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import Delaunay, cKDTree
 
-from ._judge import _MIRROR, _Neighbourhood, _row_median
+from ._judge import _FILL_AREA, _MIRROR, _Neighbourhood, _row_median
 from ._noise import noise_sigma
 from ._tipfit import tip_shapes
 from ._tipprobe import threshold, tip_evidence
@@ -50,7 +51,9 @@ from ._tipprobe import threshold, tip_evidence
 _AREA_RANGE = (0.35, 2.2)
 _AREA_SLACK = 3.0
 _MIN_CONTRAST = 0.35
-# ... and fill its bounding box like a disc (0.785), not like a crescent of a reflection's edge.
+# ... and fill its bounding box like a disc (0.785), not like a crescent of a reflection's edge: asked, as the
+# judge asks it, only beside pins of `pins._judge._FILL_AREA` px or more (with the slack); a blob of a few
+# pixels fills its box by where the grid cuts it (a 1-2 px tip: 0.44-0.56, bench_user_chain radial-led-120).
 _MIN_FILL = 0.6
 # No blob closer than this many local pitches to a kept pin fills a hole (a split pin, a speck).
 _APART = 0.6
@@ -157,7 +160,8 @@ def fill_lattice_holes(kept: np.ndarray, kept_areas: np.ndarray, kept_contrasts:
             ref_area, ref_contrast = area_ref[near_pin] + _AREA_SLACK, contrast_ref[near_pin]
             ratio = (areas[found] + _AREA_SLACK) / ref_area
             good = found[(ratio >= _AREA_RANGE[0]) & (ratio <= _AREA_RANGE[1])
-                         & (contrasts[found] >= _MIN_CONTRAST * ref_contrast) & (fills[found] >= _MIN_FILL)]
+                         & (contrasts[found] >= _MIN_CONTRAST * ref_contrast)
+                         & ((fills[found] >= _MIN_FILL) | (ref_area < _FILL_AREA))]
             if not len(good):
                 continue
             # Apart from every pin (a split pin or a speck beside one is no hole's pin).

@@ -207,6 +207,30 @@ def test_a_lone_voter_is_no_consensus_with_itself():
     assert np.isfinite(membership[0]) and not np.isfinite(membership[1])
 
 
+def test_a_lone_voter_stricter_than_the_sets_that_would_join_it_votes_alone():
+    """A lone voter's extras are noise only when it thresholds lower than the sets that would join it: a set
+    at a higher offset than each of them that keeps more pins keeps faint pins the lower offsets merge with
+    the membrane round them (bench_user_chain radial-led-120 seed 28: offset 15 kept 110, offset 5 kept 102;
+    both voted, the lower won and a pin was lost). It votes alone and wins; at a lower offset than theirs it
+    is still joined and the set without its extras wins."""
+    from pins._candidates import _consensus
+
+    pitch, grid = _VOTER_PITCH, _voter_grid()
+
+    def run(centres, lost, offset):
+        one = _voter(centres, lost)
+        return type(one)(one.params.replace(offset=offset), one.blobs, one.reason, one.pitch)
+
+    more = np.vstack([grid, grid[:4] + pitch / 2])               # 104 kept
+    runs = [run(more, 0, 15.0), run(grid, 5, 5.0), run(grid, 5, 9.0), run(grid, 30, 25.0)]  # 95 >= 0.9 x 104
+    membership, _ = _consensus(runs, pitch)
+    assert np.isfinite(membership[0]) and not np.isfinite(membership[1:]).any(), membership
+    # The same extras kept by the lowest offset: noise it lets through; the sets keeping the next most vote.
+    runs = [run(more, 0, 5.0), run(grid, 5, 9.0), run(grid, 5, 15.0), run(grid, 30, 25.0)]
+    membership, _ = _consensus(runs, pitch)
+    assert np.isfinite(membership[:3]).all() and np.argmax(membership) in (1, 2), membership
+
+
 def test_consensus_matches_every_centre_with_each_voters_nearest_even_among_crowded_blobs():
     """The one-tree consensus equals asking each voter's own tree for each centre's nearest within the
     gate, also where a centre has more blobs inside the gate than its k nearest (split blobs)."""
@@ -549,6 +573,28 @@ def test_lattice_holes_are_filled_only_at_lattice_sites_inside_the_field():
     inner = blobs([pitch * 1.7 * np.cos(angles[0]), pitch * 1.7 * np.sin(angles[0])])
     assert fill_lattice_holes(radial, areas, contrasts, [(*outer, 15.0)], (0.0, 0.0)) == [(0, 0)]
     assert fill_lattice_holes(radial, areas, contrasts, [(*inner, 15.0)], (0.0, 0.0)) == []
+
+
+def test_a_holes_blob_of_a_few_pixels_is_not_judged_by_its_fill():
+    """A blob of a few pixels fills its box by the grid's cut, not by its shape (the judge asks the fill only of
+    blobs of `_FILL_AREA` px or more): a 1-2 px tip's blob at a hole fills 0.44-0.56 and was refused
+    (bench_user_chain radial-led-120 seed 18: area 7-10 px beside pins of 9.5 px, lost though six candidate
+    sets found it). Such a blob is taken back; a blob as poorly filled beside large pins (a crescent of a
+    reflection's edge) is not."""
+    from pins._rescue import fill_lattice_holes
+
+    pitch = 10.0
+    rows = [(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) for y in range(-5, 6) for x in range(-5, 6)
+            if np.hypot(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) <= 4.6]
+    lattice = pitch * np.array(rows)
+    hole = int(np.argmin(np.hypot(*(lattice - [20.0, 0.0]).T)))
+    kept = np.delete(lattice, hole, axis=0)
+    contrasts = np.full(len(kept), 40.0)
+    site = (lattice[hole] + 0.3).reshape(1, 2)
+    for area, expected in ((9.0, True), (30.0, False)):
+        blob = (site, np.array([area]), np.array([0.5]), np.array([38.0]), 15.0)
+        taken = fill_lattice_holes(kept, np.full(len(kept), area), contrasts, [blob], (0.0, 0.0))
+        assert (taken == [(0, 0)]) == expected, area
 
 
 def test_probing_the_holes_finds_a_faint_pin_and_nothing_else():
