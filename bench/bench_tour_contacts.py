@@ -61,7 +61,8 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 from bench_conditions import Camera, seed_range  # noqa: E402
-from bench_user_chain import SKIN, condition, record, row, score_contacts, tour_strokes  # noqa: E402
+from bench_user_chain import (condition, record, row, score_contacts, skin_arguments, tour_strokes,  # noqa: E402
+                              use_skin)
 
 
 def tour_replay(preset: str, seed: int, folder: pathlib.Path) -> dict:
@@ -132,15 +133,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--presets", default="radial-led-120,white-dark-331,tactip-127")
     parser.add_argument("--seeds", default="0-11")
     parser.add_argument("--keep", type=pathlib.Path, help="keep the tracking here (and score it again when there)")
-    parser.add_argument("--residual", type=float, default=0.1, help="share of each slide's drag left (default 0.1)")
-    parser.add_argument("--creep-s", type=float, default=1.0, help="its time constant, s (default 1.0)")
-    parser.add_argument("--set-share", type=float, default=0.02,
-                        help="share of each slide's drag also left, relaxing with --set-s (default 0.02)")
-    parser.add_argument("--set-s", type=float, default=float("inf"), help="its time constant, s (default inf)")
+    skin_arguments(parser, residual=0.1, creep_s=1.0, set_share=0.02)
     args = parser.parse_args(argv)
-    SKIN.update(residual=args.residual, creep_s=args.creep_s)
-    if args.set_share:
-        SKIN.update(set_share=args.set_share, set_s=args.set_s)
+    use_skin(args)
     os.environ.setdefault("TACTIP_SIM_WORKERS", "1")
     with tempfile.TemporaryDirectory() as tmp:
         tours(args.presets.split(","), seed_range(args.seeds), args.keep or pathlib.Path(tmp))

@@ -389,21 +389,31 @@ def chain(preset: str, seed: int, folder: pathlib.Path) -> None:
         f"{detect['pitch_px']:.2f} / {replay_pitch:.2f} px", same and polarity and pitch_same, record_s)
 
 
+
+def skin_arguments(parser: argparse.ArgumentParser, *, residual: float, creep_s: float, set_share: float) -> None:
+    """The rendered skin's options (`SKIN`, `tactip.sim.sequence.schedule`'s), with these defaults."""
+    parser.add_argument("--residual", type=float, default=residual,
+                        help=f"share of each slide's drag left in the skin, creeping back (default {residual:g})")
+    parser.add_argument("--creep-s", type=float, default=creep_s, help=f"its time constant, s (default {creep_s:g})")
+    parser.add_argument("--set-share", type=float, default=set_share,
+                        help=f"share of each slide's drag also left, relaxing with --set-s (default {set_share:g})")
+    parser.add_argument("--set-s", type=float, default=float("inf"), help="its time constant, s (default inf)")
+
+
+def use_skin(args: argparse.Namespace) -> None:
+    """`SKIN` set from `skin_arguments`' parsed options."""
+    SKIN.update(residual=args.residual, creep_s=args.creep_s)
+    if args.set_share:
+        SKIN.update(set_share=args.set_share, set_s=args.set_s)
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--presets", default="radial-led-120,white-dark-331")
     parser.add_argument("--seeds", default="0-2")
     parser.add_argument("--keep", type=pathlib.Path, help="keep the recordings and outputs in this folder")
-    parser.add_argument("--residual", type=float, default=0.0,
-                        help="share of each slide's drag left in the skin, creeping back (default 0)")
-    parser.add_argument("--creep-s", type=float, default=0.1, help="its time constant, s (default 0.1)")
-    parser.add_argument("--set-share", type=float, default=0.0,
-                        help="share of each slide's drag also left, relaxing with --set-s (default 0)")
-    parser.add_argument("--set-s", type=float, default=float("inf"), help="its time constant, s (default inf)")
+    skin_arguments(parser, residual=0.0, creep_s=0.1, set_share=0.0)
     args = parser.parse_args(argv)
-    SKIN.update(residual=args.residual, creep_s=args.creep_s)
-    if args.set_share:
-        SKIN.update(set_share=args.set_share, set_s=args.set_s)
+    use_skin(args)
     os.environ.setdefault("TACTIP_SIM_WORKERS", "1")
     print(f"{'outcome':10s} {'preset':15s} {'sd':>3s}  {'figure':90s} {'met':>3s} {'cpu s':>6s}")
     with tempfile.TemporaryDirectory() as tmp:

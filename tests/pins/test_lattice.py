@@ -533,6 +533,16 @@ def test_radial_layout_with_led_reflections_keeps_the_pins_on_them(seed):
     assert on_reflection >= 10 and found_on_reflection >= on_reflection - 1, (found_on_reflection, on_reflection)
 
 
+def _hexagon_with_a_hole(pitch: float):
+    """A hexagonal lattice (``pitch`` px, radius 4.6 pitches about the origin), the index of its site at (2, 0)
+    pitches, and the lattice without it: (lattice, hole, kept)."""
+    rows = [(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) for y in range(-5, 6) for x in range(-5, 6)
+            if np.hypot(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) <= 4.6]
+    lattice = pitch * np.array(rows)
+    hole = int(np.argmin(np.hypot(*(lattice - [2.0 * pitch, 0.0]).T)))
+    return lattice, hole, np.delete(lattice, hole, axis=0)
+
+
 def test_lattice_holes_are_filled_only_at_lattice_sites_inside_the_field():
     """fill_lattice_holes takes back a pin-like blob at a hole of the lattice (inside, and at the outer
     end of a lone row), and nothing else: not a blob off the sites, one too large (a reflection with its
@@ -541,11 +551,7 @@ def test_lattice_holes_are_filled_only_at_lattice_sites_inside_the_field():
     from pins._rescue import fill_lattice_holes
 
     pitch = 10.0
-    rows = [(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) for y in range(-5, 6) for x in range(-5, 6)
-            if np.hypot(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) <= 4.6]
-    lattice = pitch * np.array(rows)
-    hole = int(np.argmin(np.hypot(*(lattice - [20.0, 0.0]).T)))
-    kept = np.delete(lattice, hole, axis=0)
+    lattice, hole, kept = _hexagon_with_a_hole(pitch)
     edge = lattice[np.argmax(lattice[:, 1])]  # a pin of the top edge: the next row is beyond the field
 
     def blobs(points, area=12.0):
@@ -584,11 +590,7 @@ def test_a_holes_blob_of_a_few_pixels_is_not_judged_by_its_fill():
     from pins._rescue import fill_lattice_holes
 
     pitch = 10.0
-    rows = [(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) for y in range(-5, 6) for x in range(-5, 6)
-            if np.hypot(x + 0.5 * (y % 2), y * np.sqrt(3) / 2) <= 4.6]
-    lattice = pitch * np.array(rows)
-    hole = int(np.argmin(np.hypot(*(lattice - [20.0, 0.0]).T)))
-    kept = np.delete(lattice, hole, axis=0)
+    lattice, hole, kept = _hexagon_with_a_hole(pitch)
     contrasts = np.full(len(kept), 40.0)
     site = (lattice[hole] + 0.3).reshape(1, 2)
     for area, expected in ((9.0, True), (30.0, False)):
