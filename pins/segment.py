@@ -133,8 +133,9 @@ def _neighbourhoods(rest: np.ndarray, neighbours: int) -> np.ndarray:
 class NeighbourMedians:
     """`neighbour_median` one frame at a time, as a tracker places the pins: the same numbers, bit for bit.
 
-    Replay computes its contacts' neighbourhood medians while it tracks (its tracking thread waits on the
-    decoder; issue 20, outcome 9) instead of over the whole recording after the last frame. Each frame's
+    Replay computes its contacts' neighbourhood medians while it tracks (`tactip.pipeline.track_pins`'
+    ``each_row``) instead of over the whole recording after the last frame, whose work is on its critical path
+    whole (issue 20, outcome 9). Each frame's
     medians are computed by one compiled call (`pins._jit_track.displacement_nanmedian`), or by
     `neighbour_median`'s NumPy code on that frame (``TACTIP_KERNELS=numpy``, or Numba missing).
 
@@ -166,12 +167,9 @@ class NeighbourMedians:
     def __len__(self) -> int:
         return len(self._rows)
 
-    def add(self, positions: np.ndarray | None) -> None:
-        """Append one frame's medians, of the (N, 2) `positions`, px (NaN where lost; None: every pin lost)."""
+    def add(self, positions: np.ndarray) -> None:
+        """Append one frame's medians, of the (N, 2) `positions`, px (NaN where lost)."""
         rest = self.rest_positions
-        if positions is None:
-            self._rows.append(np.full(rest.shape, np.nan))
-            return
         positions = np.asarray(positions, dtype=np.float64)
         if positions.shape != rest.shape:
             raise ShapeError(f"positions must have shape {rest.shape}, got {positions.shape}")
@@ -185,21 +183,6 @@ class NeighbourMedians:
             self._rows.append(kernels.displacement_nanmedian(positions, rest, self._index))
         else:
             self._rows.append(nanmedian_rows(np.moveaxis((positions - rest)[self._index], 1, -1)))
-
-    def follow(self, update):
-        """`update` (a `pins.PinTracker`'s) that also adds the positions it returns; a frame it raises on adds every
-        pin lost (as `tactip.pipeline.track_pins` records that frame), and the error propagates."""
-
-        def followed(image):
-            try:
-                moved = update(image)
-            except BaseException:
-                self.add(None)
-                raise
-            self.add(moved)
-            return moved
-
-        return followed
 
     def table(self) -> np.ndarray:
         """(F, N, 2) float64 medians of the frames added, px: `neighbour_median` of their displacements."""

@@ -117,7 +117,8 @@ class PinTrack:
 
 
 def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
-               progress: bool | Callable[[int], None] = False, total: int | None = None) -> PinTrack:
+               progress: bool | Callable[[int], None] = False, total: int | None = None,
+               each_row: Callable[[np.ndarray], None] | None = None) -> PinTrack:
     """Follow the pins through ``frames`` from their rest frame.
 
     Parameters
@@ -136,6 +137,10 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
         since its last call, every `_TICK_FRAMES` frames and at the end (a batch's workers report so).
     total : int, optional
         Frames expected, for the bar.
+    each_row : callable, optional
+        Called with each tracked frame's (N, 2) positions, px, as they are stored, from the rest frame on
+        (its rest positions first; every pin NaN in a frame the tracker failed on): work that can follow the
+        track frame by frame (replay's contacts' neighbourhood medians) is done while it is tracked.
 
     Returns
     -------
@@ -185,6 +190,8 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
                     away = np.array(tracker.retired, dtype=bool) & gone
                     dark = bool(tracker.blank)
                 positions.append(moved)
+                if each_row is not None:
+                    each_row(moved)
                 lost.append(gone)
                 retired.append(away)
                 blank.append(dark)
@@ -204,6 +211,8 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
             else:
                 rest = np.asarray(rest, dtype=np.float64)
                 positions.append(rest)
+                if each_row is not None:
+                    each_row(rest)
                 lost.append(np.zeros(len(rest), dtype=bool))
                 retired.append(np.zeros(len(rest), dtype=bool))
                 blank.append(False)
@@ -312,12 +321,13 @@ def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selec
 def frames_to_features(frames: Iterable, *, start: Start, selected: np.ndarray | Callable[[PinTrack], np.ndarray],
                        contacts: Sequence[tuple[int, int]] | Callable[[PinTrack], Sequence[tuple[int, int]]] | None = None,
                        n_samples: int = 40, rest_frame: int | None = None,
-                       progress: bool | Callable[[int], None] = False, total: int | None = None) -> PinTrack:
+                       progress: bool | Callable[[int], None] = False, total: int | None = None,
+                       each_row: Callable[[np.ndarray], None] | None = None) -> PinTrack:
     """Frames in, pins tracked, contacts and their features out: the station's and replay's one path.
 
     Parameters
     ----------
-    frames, start, rest_frame, progress, total
+    frames, start, rest_frame, progress, total, each_row
         As `track_pins`.
     selected : (P,) ndarray of int, or callable
         The feature pins, or ``selected(track) -> indices`` to choose them among the tracked pins
@@ -332,7 +342,7 @@ def frames_to_features(frames: Iterable, *, start: Start, selected: np.ndarray |
     -------
     PinTrack
     """
-    track = track_pins(frames, start=start, rest_frame=rest_frame, progress=progress, total=total)
+    track = track_pins(frames, start=start, rest_frame=rest_frame, progress=progress, total=total, each_row=each_row)
     if callable(selected):
         selected = selected(track)
     if contacts is None:

@@ -22,7 +22,7 @@ content at 320x240 to 1920x1080 px takes the luma path in mp4v at every size tri
 640x480 and 1280x720 only (at 328x246, 800x600 or 1920x1080 swscale's full-range conversion rounds by
 pixel position, one level apart, and no table reproduces it: the BGR path).
 OpenCV's warnings are silenced (log level ERROR) while such a capture is open. Replay maps luma to grey
-on its tracking thread (`LumaVideoSource.defer_table`), which has time to spare, not on the decoder's.
+on its tracking thread (`LumaVideoSource.defer_table`), where it costs less than on the decoder's (`mapped`).
 Opening costs ~1 ms of decoding and 0.4 ms for the table (its joint histogram, `cv2.calcHist`), on replay's
 serial start: `open_grey` takes over the capture `open_source` opened instead of opening it again.
 
@@ -221,10 +221,9 @@ class LumaVideoSource(VideoSource):
 
 def mapped(frames, table):
     """`frames`, their luma mapped to grey in place by `table` (`tactip.replay.luma.LumaVideoSource.defer_table`) on
-    the thread that iterates: replay's decode thread is its critical path on mp4v, the tracking thread has ~0.1
-    ms/frame to spare for the lookup (slide bench: decode thread ~0.9 ms/frame of CPU against the tracking's ~0.6
-    with both on the decode thread). None: the frames as they are. Each frame is looked up two pixels at a time
-    (`look_up`)."""
+    the thread that iterates (replay's tracking thread: there the lookup also brings the frame into that core's
+    cache; on the decode thread it cost the decoder more than it saved the tracking, `bench/bench_replay.py`).
+    None: the frames as they are. Each frame is looked up two pixels at a time (`look_up`)."""
     if table is None:
         yield from frames
         return

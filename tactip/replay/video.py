@@ -64,7 +64,7 @@ grey is looked up on the tracking thread when the decoder has one thread, two pi
 (`tactip.replay.luma.look_up`): there it also brings the frame into the tracking core's cache (on the decode
 thread it cost the decoder more than it saved the tracking, `bench/bench_replay.py`). The contacts'
 neighbourhood medians (`find_contacts`) are computed frame by frame as the pins are tracked
-(`pins.segment.NeighbourMedians`), not after the last frame: what follows the last frame (contacts,
+(`pins.segment.NeighbourMedians`, fed by `tactip.pipeline.track_pins`' ``each_row``), not after the last frame: what follows the last frame (contacts,
 features, the HDF5 file) is on the critical path whole.
 
 The file is written to a temporary name next to the target and renamed at the end, so a failure
@@ -368,7 +368,7 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
         # Decode on a thread while this one tracks; blocking, so that no frame is dropped. OpenCV's
         # own worker pool stays at one thread meanwhile: the two threads already fill a 2-core
         # machine, and the pool's workers only contend with them. With a one-thread decoder (2 cores)
-        # luma is mapped to grey on this thread, which has the time to spare (`tactip.replay.luma.mapped`);
+        # luma is mapped to grey on this thread, where it costs least (`tactip.replay.luma.mapped`);
         # with more, the decoder's own threads decode and this one is the busier: the reader maps.
         table = source.defer_table() if threads == 1 and hasattr(source, "defer_table") else None
         with _opencv_threads(1), ThreadedReader(source, maxsize=_queue_frames(source.frame_size), when_full="block",
@@ -381,7 +381,8 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
             try:
                 track = frames_to_features(mapped(reader, table), start=start, rest_frame=int(rest_frame),
                                            selected=plan.selected, contacts=plan.contacts, n_samples=int(n_samples),
-                                           progress=progress, total=getattr(source, "frame_count", None))
+                                           progress=progress, total=getattr(source, "frame_count", None),
+                                           each_row=lambda row: start.medians.add(row))
             except PinsError as exc:  # say which frame, and how to choose another (a black first frame)
                 raise type(exc)(f"rest frame {rest_frame}: {exc}; give --rest-frame of a frame off contact "
                                 f"with the pad lit and in view") from None
@@ -401,7 +402,6 @@ class _Plan:
         """The feature pins (the analysis is made here, once the pins are tracked)."""
         centres = getattr(self.start, "centres", None)
         medians = getattr(self.start, "medians", None)
-        vars(track.tracker).pop("update", None)  # (the tracker's own update again: `NeighbourMedians.follow`'s no more)
         self.analysis = analyse(track, pitch_positions=centres, neighbour_medians=medians, **self.options)
         return self.analysis["selected"]
 
@@ -450,7 +450,8 @@ class _Start:
         #: pins `tactip detect` reports, whose pitch gives the scale (the tracker's rest positions are its
         #: windows' fixed points, up to 0.4 px off them on a reflection's flank).
         self.centres = None
-        #: The contacts' neighbourhood medians, frame by frame as the pins are tracked (None before the start).
+        #: The contacts' neighbourhood medians, frame by frame as the pins are tracked (`track_pins`' ``each_row``;
+        #: None before the start).
         self.medians = None
 
     def __call__(self, image):
@@ -462,9 +463,7 @@ class _Start:
         started = started[:5]
         if self.wrap is not None and tracker.windows is not None:  # e.g. measured with other videos' windows
             tracker.windows = self.wrap(tracker.windows)
-        self.medians = NeighbourMedians(tracker.rest_positions)
-        self.medians.add(started[1])  # the rest frame's row, as `tactip.pipeline.track_pins` stores it
-        tracker.update = self.medians.follow(tracker.update)
+        self.medians = NeighbourMedians(tracker.rest_positions)  # fed each row as `track_pins` stores it
         return (*started, warnings)
 
 
