@@ -57,6 +57,17 @@ def slide_run(name: str, seed: int, directions, **slides):
     return s, run, np.flatnonzero(run[0].visible | run[0].partial)
 
 
+def tracker_on_rest(s: SyntheticTacTip, rest, *, partial: bool = True, **options):
+    """A `pins.PinTracker` (``options``) started on the render ``rest`` of sensor ``s`` from its drawn pins' true
+    centres (the visible ones, and the partly cut ones unless ``partial`` is False): (tracker, drawn indices)."""
+    from pins import DetectionParams, PinTracker, SensorDisc
+
+    drawn = np.flatnonzero(rest.visible | rest.partial if partial else rest.visible)
+    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc), **options)
+    tracker.start(rest.image, pins=rest.centres[drawn])
+    return tracker, drawn
+
+
 def slides_and_presses(preset: str, seed: int):
     """The preset's sensor (`seed`) and a `ContactSequence` of 4 slides of 0.5-3 pitches in random directions,
     1-3 mm deep, each followed by a press 1-5 mm deep (rests 0.1 s, 20 frames/s), drawn from `seed`."""
@@ -76,7 +87,6 @@ def apart_swaps_through_slides(name: str, seed: int, directions, frame_rate: flo
     step of a visible pin in a frame, spacings."""
     from scipy.spatial import cKDTree
 
-    from pins import DetectionParams, PinTracker, SensorDisc
 
     s = preset_sensor(name, seed)
     s.reseed_noise(seed)
@@ -84,9 +94,7 @@ def apart_swaps_through_slides(name: str, seed: int, directions, frame_rate: flo
                         rest_s=max(3 / frame_rate, 0.025), press_s=0.05, slide_s=0.15, lift_s=0.05,
                         frame_rate=frame_rate))
     rest = previous = next(run)
-    drawn = np.flatnonzero(rest.visible | rest.partial)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
-    tracker.start(rest.image, pins=rest.centres[drawn])
+    tracker, drawn = tracker_on_rest(s, rest)
     apart, step = 0, 0.0
     for f in run:
         positions = tracker.update(f.image)

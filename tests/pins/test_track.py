@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from pins import (DetectionParams, LKParams, PinsError, PinTracker, SensorDisc, ShapeError, detect_pins,
-                  find_sensor_disc, match_to_blobs, track_pins)
+from pins import (DetectionParams, LKParams, PinsError, PinTracker, ShapeError, detect_pins, find_sensor_disc,
+                  match_to_blobs, track_pins)
 from pins._refine import Refiner
 from tactip.sim import Contact
-from tests.pins.conftest import TAP, frame, preset_sensor, sensor
+from tests.pins.conftest import TAP, frame, preset_sensor, sensor, tracker_on_rest
 
 
 def _shift(image, dx, dy):
@@ -261,9 +261,7 @@ def _preset_tap(name):
 def _preset_tracker(name):
     s, frames = _preset_tap(name)
     rest = frames[0]
-    drawn = np.flatnonzero(rest.visible | rest.partial)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
-    tracker.start(rest.image, pins=rest.centres[drawn])
+    tracker, drawn = tracker_on_rest(s, rest)
     return tracker, drawn, frames
 
 

@@ -10,7 +10,7 @@ from pins import DetectionParams, PinTracker, SensorDisc
 from pins._identity import keep_own_tips
 from pins._predict import _Prediction
 from pins._window import _squared_norm
-from tests.pins.conftest import preset_sensor
+from tests.pins.conftest import preset_sensor, tracker_on_rest
 
 
 def _swaps(positions, truth, shown, spacing_px):
@@ -32,9 +32,7 @@ def _track_slides(name, seed, **skin):
     run = s.slides([0.0, 180.0], distance_mm=3.0 * s.pin_spacing_mm, rest_s=3 / 120, frame_rate=120.0, **skin)
     frames = iter(run)
     rest = next(frames)
-    drawn = np.flatnonzero(rest.visible | rest.partial)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
-    tracker.start(rest.image, pins=rest.centres[drawn])
+    tracker, drawn = tracker_on_rest(s, rest)
     swapped, moved = 0, 0.0
     for f in frames:
         positions = tracker.update(f.image)
@@ -236,9 +234,7 @@ def test_windows_lagging_between_overlapping_tips_are_parted_by_a_fit_of_both():
     run = s.slides([0.0, 180.0], distance_mm=3.0 * s.pin_spacing_mm, rest_s=3 / 120, frame_rate=120.0, min_area=0.5)
     frames = iter(run)
     rest = next(frames)
-    drawn = np.flatnonzero(rest.visible | rest.partial)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc), part_overlaps=True)
-    tracker.start(rest.image, pins=rest.centres[drawn])
+    tracker, drawn = tracker_on_rest(s, rest, part_overlaps=True)
     off, lost, swapped = 0, 0, 0
     for f in frames:
         positions = tracker.update(f.image)

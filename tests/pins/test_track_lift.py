@@ -5,9 +5,8 @@ to the pins placed first, keep the fast ones on their own tips. Ground truth fro
 import numpy as np
 from scipy.spatial import cKDTree
 
-from pins import DetectionParams, PinTracker, SensorDisc
 from pins._motion import spring_steps
-from tests.pins.conftest import apart_swaps_through_slides, preset_sensor
+from tests.pins.conftest import apart_swaps_through_slides, preset_sensor, tracker_on_rest
 
 
 def test_pins_keep_their_tips_through_a_lift_a_spacing_a_frame():
@@ -59,9 +58,7 @@ def test_a_pin_placed_a_px_off_where_the_frame_shows_rest_is_put_on_its_tip():
     the guess bound (and puts back the missing ones, as always); a pin whose window does not match stays."""
     s = preset_sensor("tactip-127", 0)
     rest = s.render()
-    drawn = np.flatnonzero(rest.visible)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
-    tracker.start(rest.image, pins=rest.centres[drawn])
+    tracker, drawn = tracker_on_rest(s, rest, partial=False)
     crop = tracker._bright(tracker._cropped(rest.image))
     match = tracker._rest_match
     half = match._side // 2

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from pins import DetectionParams, PinTracker, SensorDisc
-from tests.pins.conftest import preset_sensor
+from tests.pins.conftest import preset_sensor, tracker_on_rest
 
 
 def _track_slides(name, seed, directions, *, lift_s):
@@ -21,9 +20,7 @@ def _track_slides(name, seed, directions, *, lift_s):
                    frame_rate=120.0)
     frames = iter(run)
     rest = next(frames)
-    drawn = np.flatnonzero(rest.visible | rest.partial)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
-    tracker.start(rest.image, pins=rest.centres[drawn])
+    tracker, drawn = tracker_on_rest(s, rest)
     moved = 0.0
     for f in frames:
         positions = tracker.update(f.image)
@@ -76,9 +73,7 @@ def test_slides_filmed_slowly_leave_every_pin_on_its_own_tip_at_each_rest(name, 
         encoded = [cv2.imencode(".jpg", f.image, [cv2.IMWRITE_JPEG_QUALITY, jpeg])[1] for f in run]
         run = [dataclasses.replace(f, image=cv2.imdecode(e, cv2.IMREAD_GRAYSCALE)) for f, e in zip(run, encoded)]
     rest = run[0]
-    drawn = np.flatnonzero(rest.visible | rest.partial)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
-    tracker.start(rest.image, pins=rest.centres[drawn])
+    tracker, drawn = tracker_on_rest(s, rest)
     step, checked = 0.0, 0
     previous = rest
     for f in run[1:]:

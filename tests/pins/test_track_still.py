@@ -6,10 +6,9 @@ import functools
 import numpy as np
 import pytest
 
-from pins import DetectionParams, PinTracker, SensorDisc
 from pins._window import WindowCentroids
 from tactip.sim import SyntheticTacTip
-from tests.pins.conftest import preset_sensor
+from tests.pins.conftest import preset_sensor, tracker_on_rest
 
 
 def _tip_on_a_slope(slope, *, contrast=40.0, centre=(30.3, 29.6), radius=3.0, size=60, membrane=110.0):
@@ -34,9 +33,7 @@ def _started(name, seed=0):
     s = preset_sensor(name, seed)
     s.reseed_noise(seed)
     rest = s.render()
-    drawn = np.flatnonzero(rest.visible | rest.partial)
-    tracker = PinTracker(detection=DetectionParams(dark_pins=s.dark_pins), disc=SensorDisc(*s.disc))
-    tracker.start(rest.image, pins=rest.centres[drawn])
+    tracker, drawn = tracker_on_rest(s, rest)
     return s, rest, drawn, tracker
 
 
