@@ -17,7 +17,8 @@ __all__ = ["skin_rest"]
 _AHEAD = 128  # frames whose signal from a rest is measured at once (a rest frame moves it: the rest re-measured)
 
 
-def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float = 0.4) -> np.ndarray:
+def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float = 0.4,
+              return_frames: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """The skin's own rest before each frame: the displacements at the last frame where it was at rest, px.
 
     A real elastomer does not return to its first frame's rest between contacts: what a slide leaves in
@@ -54,12 +55,18 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         `segment_taps`' thresholds, px (0 < low < high).
     share : float
         Highest share of a contact's peak signal left at a lift's rest frame, in (0, 1).
+    return_frames : bool
+        Also return the rest frames.
 
     Returns
     -------
     rest : (T, N, 2) ndarray of float64
         Each frame's rest, px: zeros up to the first frame with pins; NaN for a pin not yet seen at a rest
         frame. ``field - rest`` are the displacements from the skin's own rest.
+    frames : (R,) ndarray of int, with ``return_frames``
+        The rest frames, increasing: the first frame with pins (none: empty), then each lift's and creeping
+        rest's. Frame t's rest is taken at the latest of them <= t (a pin unseen there: at the latest
+        where it was seen).
 
     Examples
     --------
@@ -80,7 +87,7 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     seen = np.isfinite(data[..., 0])
     rest = np.zeros_like(data)
     if not seen.any():
-        return rest
+        return (rest, np.zeros(0, dtype=np.intp)) if return_frames else rest
     first = int(np.argmax(seen.any(axis=1)))
     motion = np.full(len(data), np.inf)
     motion[first + 1:] = tap_signal(data[first + 1:] - data[first:-1])
@@ -116,7 +123,7 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         if lift or creep:
             rests.append(int(stop))
             anchor, peak, trough, known = int(stop), 0.0, 0.0, int(stop)
-    rests = np.asarray(rests)
+    rests = np.asarray(rests, dtype=np.intp)
     # each pin's rest: its displacement at the latest rest frame where it was seen
     at = np.where(seen[rests], rests[:, None], -1)                       # (R, N): frame or -1
     at = np.maximum.accumulate(at, axis=0)
@@ -125,7 +132,7 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     pins = np.arange(data.shape[1])
     rest = np.where((frames >= 0)[..., None], data[np.maximum(frames, 0), pins[None]], np.nan)
     rest[:first] = 0.0
-    return rest
+    return (rest, rests) if return_frames else rest
 
 
 def _back(now: np.ndarray, then: np.ndarray, level_px: float) -> float:

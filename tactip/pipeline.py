@@ -265,7 +265,7 @@ class _Ticks:
 
 
 def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selected: np.ndarray, *,
-                     n_samples: int = 40) -> PinTrack:
+                     n_samples: int = 40, rests: Sequence[np.ndarray | None] | None = None) -> PinTrack:
     """``track`` with the features of each contact's feature pins (`pins.tap_features`).
 
     A contact's frames are resampled on their time stamps, or frame by frame when the stamps are
@@ -282,6 +282,9 @@ def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selec
         Indices of the feature pins into the track's pins.
     n_samples : int
         Samples per contact (paper: 40).
+    rests : sequence of ((N, 2) ndarray or None), optional
+        Per contact, the rest its displacements are measured from, px from the rest frame (the skin's own rest
+        before it: `tactip.replay.contacts.feature_rests_of`); None (each, or all): the rest frame.
 
     Returns
     -------
@@ -301,6 +304,8 @@ def contact_features(track: PinTrack, contacts: Sequence[tuple[int, int]], selec
         if not np.all(np.diff(times) > 0):
             times = None
         window = displacements[begin:end, selected]
+        if rests is not None and rests[k] is not None:
+            window = window - np.asarray(rests[k], dtype=np.float64)[selected]
         # Seen = found in a frame of the contact other than the rest frame, whose displacement is 0 by
         # construction: a pin lost in every other frame has no displacement to report, not a still one.
         moving = np.arange(begin, begin + len(window)) != track.rest_frame
@@ -322,7 +327,8 @@ def frames_to_features(frames: Iterable, *, start: Start, selected: np.ndarray |
                        contacts: Sequence[tuple[int, int]] | Callable[[PinTrack], Sequence[tuple[int, int]]] | None = None,
                        n_samples: int = 40, rest_frame: int | None = None,
                        progress: bool | Callable[[int], None] = False, total: int | None = None,
-                       each_row: Callable[[np.ndarray], None] | None = None) -> PinTrack:
+                       each_row: Callable[[np.ndarray], None] | None = None,
+                       rests: Callable[[PinTrack], Sequence[np.ndarray | None]] | None = None) -> PinTrack:
     """Frames in, pins tracked, contacts and their features out: the station's and replay's one path.
 
     Parameters
@@ -337,6 +343,8 @@ def frames_to_features(frames: Iterable, *, start: Start, selected: np.ndarray |
         frames are one contact (a station's tap).
     n_samples : int
         Samples per contact.
+    rests : callable, optional
+        ``rests(track)`` (asked after ``contacts``): `contact_features`' rests, one per contact.
 
     Returns
     -------
@@ -349,4 +357,5 @@ def frames_to_features(frames: Iterable, *, start: Start, selected: np.ndarray |
         contacts = [(0, len(track.timestamps_s))]
     elif callable(contacts):
         contacts = contacts(track)
-    return contact_features(track, contacts, selected, n_samples=n_samples)
+    return contact_features(track, contacts, selected, n_samples=n_samples,
+                            rests=None if rests is None else rests(track))

@@ -15,8 +15,8 @@ from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, co
 
 from tactip.pipeline import PinTrack
 
-__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "find_contacts",
-           "local_maxima", "neighbour_medians_of", "split_at_dips", "tap_thresholds_px"]
+__all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "feature_rests_of",
+           "find_contacts", "local_maxima", "neighbour_medians_of", "split_at_dips", "tap_thresholds_px"]
 # Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
 REFERENCE_PITCH_PX = 17.5
 
@@ -73,7 +73,9 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     Returns a dict: ``scale`` (`pins.PadScale` or None with a calibration), ``mm_per_px``,
     ``selection`` (`pins.PinSelection` or None), ``selected`` (P,) pin indices, ``bounds`` (the
     contacts, [start, stop) frames), ``kinds`` (a `pins.ContactKind` per contact: press or slide and
-    its direction), ``warnings`` and ``tap_thresholds_px`` (high, low).
+    its direction), ``warnings``, ``tap_thresholds_px`` (high, low), and per contact where its features are
+    measured from (`feature_rests_of`): ``rest_frames`` (a frame each) and ``rests`` ((N, 2) px or None: the
+    rest frame).
 
     Contacts separated by any rest are separate, however short the rest: no quiet frame is bridged.
     The pin pitch of the scale is measured on ``pitch_positions`` ((M, 2) px: the rest frame's pin field,
@@ -118,25 +120,49 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
             warnings.append(check)
     except (PinsError, ValueError) as exc:
         warnings.append(f"the rest frame could not be checked ({exc})")
-    bounds, kinds = [], []
+    bounds, kinds, rests = [], [], []
     high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px,
                                         usable=track.tracked & ~track.blank, signal=signal)
     try:
-        bounds, kinds = find_contacts(displacements, signal=signal, blank=track.blank, thresholds_px=(high_px, low_px),
-                                      rest_positions=rest, medians=neighbour_medians_of(track, neighbour_medians))
+        bounds, kinds, rests = find_contacts(displacements, signal=signal, blank=track.blank,
+                                             thresholds_px=(high_px, low_px), rest_positions=rest,
+                                             medians=neighbour_medians_of(track, neighbour_medians), with_rests=True)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")
     except (PinsError, ValueError) as exc:
         warnings.append(f"no tap features ({exc})")
+    rest_frames, feature_rests = feature_rests_of(rests, np.asarray(selected, np.intp), low_px=low_px,
+                                                  rest_frame=int(track.rest_frame))
     return dict(scale=scale, mm_per_px=scale_mm_per_px, selection=selection, selected=np.asarray(selected, np.intp),
-                bounds=bounds, kinds=kinds, warnings=warnings, tap_thresholds_px=(high_px, low_px))
+                bounds=bounds, kinds=kinds, warnings=warnings, tap_thresholds_px=(high_px, low_px),
+                rest_frames=rest_frames, rests=feature_rests)
+
+
+def feature_rests_of(rests, selected: np.ndarray, *, low_px: float, rest_frame: int) -> tuple[list[int], list]:
+    """Where each contact's features are measured from: ([its rest frame], [its rest, (N, 2) px, or None]).
+
+    A contact's features are its feature pins' displacements from the skin's own rest before it (`find_contacts`'
+    ``with_rests``) when that rest is off the rest frame's by ``low_px`` or more (`pins.tap_signal` of the feature
+    pins' rest: what a slide left in a skin that creeps back or keeps a set, so a press right after a slide is
+    measured as a press on a rested skin is, as a calibration's taps after a 1 s pause are, paper 000); else from
+    the rest frame (None; ``rest_frame``), so a skin back at its first rest gives the features it always gave.
+    A rest with a feature pin unseen (NaN) counts that pin as unmoved.
+    """
+    frames, chosen = [], []
+    for frame, rest in rests:
+        part = np.asarray(rest, dtype=np.float64)[selected]
+        off = selected.size and tap_signal(part[None])[0] >= low_px
+        frames.append(int(frame) if off else int(rest_frame))
+        chosen.append(np.nan_to_num(np.asarray(rest, dtype=np.float64)) if off else None)
+    return frames, chosen
 
 
 def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.ndarray,
                   thresholds_px: tuple[float, float], rest_positions: np.ndarray | None = None,
-                  medians: np.ndarray | None = None) -> tuple[list[tuple[int, int]], list]:
-    """The contacts of a replay and their kinds: ([start, stop) frames, a `pins.ContactKind` each).
+                  medians: np.ndarray | None = None, with_rests: bool = False) -> tuple:
+    """The contacts of a replay and their kinds: ([start, stop) frames, a `pins.ContactKind` each), and with
+    ``with_rests`` the skin's rest before each.
 
     Contacts are found (`pins.segment_taps`, no quiet frame bridged, then `split_at_dips`) on a tap
     signal where, given the rest positions, a pin whose displacement differs from its neighbourhood's
@@ -170,14 +196,20 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     medians : (T, N, 2) ndarray, optional
         ``neighbour_median(displacements, rest_positions)`` when already computed, px (replay computes
         them as it tracks: `neighbour_medians_of`).
+    with_rests : bool
+        Also return, per contact, the skin's rest before it: a pair (frame, rest), the latest rest frame
+        (`pins.skin_rest`) at or before the contact's start and the pins' displacements there ((N, 2) px, from
+        the frames' own rest: a pin unseen there at the latest rest frame where it was seen, its neighbourhood's
+        median where it disagreed with it); without ``rest_positions``, the first frame with pins and zeros.
     """
     high_px, low_px = thresholds_px
-    coherent, relative = signal, None
+    coherent, relative, rest, frames = signal, None, None, None
     if rest_positions is not None:  # a pin differing from its neighbourhood by more than the noise is outvoted
         local = neighbour_median(displacements, rest_positions) if medians is None else medians
         alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
         field = np.where(alone[..., None], local, displacements)
-        rest = skin_rest(field, low_px=low_px, high_px=high_px)  # the skin's own rest before each frame
+        # the skin's own rest before each frame
+        rest, frames = skin_rest(field, low_px=low_px, high_px=high_px, return_frames=True)
         relative = field - rest
         coherent = tap_signal(relative)
         displacements = displacements - rest
@@ -185,7 +217,16 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     bridged = _bridge_blank(coherent, blank)
     bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
     bounds = split_at_dips(bridged, bounds, min_drop_px=high_px, field=relative)
-    return bounds, _kinds(displacements, bounds, signal, low_px, rest_positions)
+    kinds = _kinds(displacements, bounds, signal, low_px, rest_positions)
+    if not with_rests:
+        return bounds, kinds
+    if rest is None:
+        seen = np.isfinite(displacements[..., 0]).any(axis=1)
+        first = int(np.argmax(seen)) if seen.any() else 0
+        return bounds, kinds, [(first, np.zeros(displacements.shape[1:])) for _ in bounds]
+    at = np.searchsorted(frames, [start for start, _ in bounds], side="right") - 1
+    return bounds, kinds, [(int(frames[max(k, 0)]) if len(frames) else 0, rest[start])
+                           for k, (start, _) in zip(at, bounds)]
 
 
 def neighbour_medians_of(track: PinTrack, medians=None) -> np.ndarray | None:

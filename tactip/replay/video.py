@@ -34,7 +34,8 @@ The HDF5 file (format ``tactip-replay/2``) holds:
   ``requested``, ``min_separation_mm`` asked, ``separation_mm`` reached);
 - ``tap_bounds`` int (taps, 2): [start, stop) frame indices of the contacts (any rest separates two);
   ``tap_kinds`` bytes (taps,): ``press`` or ``slide``; ``tap_directions_deg`` (taps,): a slide's direction
-  (degrees from image x towards image y), NaN for a press (`pins.contact_kinds`);
+  (degrees from image x towards image y), NaN for a press (`pins.contact_kinds`); ``tap_rest_frames`` int
+  (taps,): the frame each tap's features are measured from (`tactip.replay.contacts.feature_rests_of`);
 - ``taps`` float32 (taps, samples, 2 P) when taps were found: columns 0..P-1 dx, P..2P-1 dy of the
   selected pins (``feature_names`` attribute), NaN in the columns of a pin unseen for the whole tap;
   ``tap_pins_seen`` int (taps,), of P (``of``); ``tap_valid`` bool (taps,): False below P / 2 seen (NaN);
@@ -380,7 +381,8 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
             plan.start = start
             try:
                 track = frames_to_features(mapped(reader, table), start=start, rest_frame=int(rest_frame),
-                                           selected=plan.selected, contacts=plan.contacts, n_samples=int(n_samples),
+                                           selected=plan.selected, contacts=plan.contacts,
+                                           rests=lambda _: plan.analysis["rests"], n_samples=int(n_samples),
                                            progress=progress, total=getattr(source, "frame_count", None),
                                            each_row=lambda row: start.medians.add(row))
             except PinsError as exc:  # say which frame, and how to choose another (a black first frame)

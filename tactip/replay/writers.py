@@ -60,6 +60,10 @@ def write_hdf5(path, track: PinTrack, analysis: dict, settings: dict, decisions=
         h5.create_dataset("tap_kinds", data=np.array([k.kind for k in kinds], dtype="S5"))
         directions = h5.create_dataset("tap_directions_deg", data=np.array([k.direction_deg for k in kinds], float))
         directions.attrs["units"] = "degrees from image x towards image y; NaN for a press"
+        rests = h5.create_dataset("tap_rest_frames", data=np.asarray(
+            analysis.get("rest_frames", [settings["rest_frame"]] * len(bounds)), dtype=np.int64).reshape(-1))
+        rests.attrs["meaning"] = ("the frame each tap's features are measured from: the rest frame, or the skin's "
+                                  "own rest before the tap when the feature pins rest off the rest frame's")
         if track.features is not None and len(track.contacts):
             dataset = h5.create_dataset("taps", data=track.features.astype(np.float32))
             dataset.attrs["feature_names"] = json.dumps(feature_dim_names(len(analysis["selected"])))
