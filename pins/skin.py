@@ -18,7 +18,7 @@ _AHEAD = 128  # frames whose signal from a rest is measured at once (a rest fram
 
 
 def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float = 0.4,
-              return_frames: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+              fill: np.ndarray | None = None, return_frames: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """The skin's own rest before each frame: the displacements at the last frame where it was at rest, px.
 
     A real elastomer does not return to its first frame's rest between contacts: what a slide leaves in
@@ -55,6 +55,11 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         `segment_taps`' thresholds, px (0 < low < high).
     share : float
         Highest share of a contact's peak signal left at a lift's rest frame, in (0, 1).
+    fill : (T, N, 2) ndarray, optional
+        A pin's rest where it is unseen at a rest frame, px (NaN: none), e.g. its neighbourhood's median
+        (`pins.neighbour_median`): a pin lost at a lift and found again a frame later is at the skin's rest
+        there, not at the rest where it was last seen (which, before a slide, is off by what the slide left).
+        Without it (or where NaN), such a pin keeps its displacement at the latest rest frame where it was seen.
     return_frames : bool
         Also return the rest frames.
 
@@ -124,13 +129,19 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
             rests.append(int(stop))
             anchor, peak, trough, known = int(stop), 0.0, 0.0, int(stop)
     rests = np.asarray(rests, dtype=np.intp)
-    # each pin's rest: its displacement at the latest rest frame where it was seen
-    at = np.where(seen[rests], rests[:, None], -1)                       # (R, N): frame or -1
+    # each pin's rest: its displacement at the latest rest frame where it was seen (or filled)
+    source = data[rests]                                                  # (R, N, 2)
+    known = seen[rests]
+    if fill is not None:
+        filled = np.asarray(fill, dtype=np.float64)[rests]
+        source = np.where(known[..., None], source, filled)
+        known = known | np.isfinite(filled[..., 0])
+    at = np.where(known, np.arange(len(rests))[:, None], -1)             # (R, N): rest frame index or -1
     at = np.maximum.accumulate(at, axis=0)
     which = np.searchsorted(rests, np.arange(len(data)), side="right") - 1   # (T,): latest rest frame index
-    frames = np.where(which[:, None] >= 0, at[np.maximum(which, 0)], -1)    # (T, N)
+    index = np.where(which[:, None] >= 0, at[np.maximum(which, 0)], -1)     # (T, N)
     pins = np.arange(data.shape[1])
-    rest = np.where((frames >= 0)[..., None], data[np.maximum(frames, 0), pins[None]], np.nan)
+    rest = np.where((index >= 0)[..., None], source[np.maximum(index, 0), pins[None]], np.nan)
     rest[:first] = 0.0
     return (rest, rests) if return_frames else rest
 

@@ -209,7 +209,7 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
         alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
         field = np.where(alone[..., None], local, displacements)
         # the skin's own rest before each frame
-        rest, frames = skin_rest(field, low_px=low_px, high_px=high_px, return_frames=True)
+        rest, frames = skin_rest(field, low_px=low_px, high_px=high_px, fill=local, return_frames=True)
         relative = field - rest
         coherent = tap_signal(relative)
         displacements = displacements - rest
@@ -217,7 +217,8 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     bridged = _bridge_blank(coherent, blank)
     bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
     bounds = split_at_dips(bridged, bounds, min_drop_px=high_px, field=relative)
-    kinds = _kinds(displacements, bounds, signal, low_px, rest_positions)
+    kinds = _kinds(displacements, bounds, signal, low_px, rest_positions,
+                   field=None if rest_positions is None else field)
     if not with_rests:
         return bounds, kinds
     if rest is None:
@@ -371,19 +372,49 @@ def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: n
     return max(1.5 * factor, 2.0 * low), low
 
 
-def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float, rest_positions=None) -> list:
+def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float, rest_positions=None,
+           field: np.ndarray | None = None) -> list:
     """`pins.contact_kinds` of each contact (with ``rest_positions``, (N, 2) px, when given), measured from its
     first frame where the pad was not back at rest there (the signal above ``low_px``: what the last slide left
     in the skin, creeping back, would otherwise turn this contact's drag towards that slide's direction); from
-    the rest frame elsewhere."""
+    the rest frame elsewhere. Given ``field`` ((T, N, 2) px, from the first frame's rest), a slide that only
+    gives back what the skin kept (`_gives_back`) is a press."""
     kinds = []
     for start, stop in bounds:
         if signal[start] > low_px:
             moved = displacements[start:stop] - displacements[start]  # NaN where lost at the start: left out
-            kinds += contact_kinds(moved, [(0, stop - start)], rest_positions=rest_positions)
+            kind, = contact_kinds(moved, [(0, stop - start)], rest_positions=rest_positions)
         else:
-            kinds += contact_kinds(displacements, [(start, stop)], signal=signal, rest_positions=rest_positions)
+            kind, = contact_kinds(displacements, [(start, stop)], signal=signal, rest_positions=rest_positions)
+        if kind.kind == "slide" and field is not None and _gives_back(field[start:stop], low_px):
+            kind = dataclasses.replace(kind, kind="press", direction_deg=float("nan"))
+        kinds.append(kind)
     return kinds
+
+
+def _gives_back(part: np.ndarray, low_px: float) -> bool:
+    """Whether a contact's pins only went back towards the first frame's rest: ``part`` (F, N, 2) px, its frames'
+    displacements from there.
+
+    A press put down right after a slide, on the shear the slide left in the skin (creeping back, or kept as a
+    set), holds the patch under the plate and lets it go part of the way back: its pins share one direction,
+    back towards their first rest, and read as a slide. A slide drags its patch on, away from where the skin
+    rested before it, by its length. So when the pins the contact moves most (at its peak tap signal from its
+    first frame, at least half of it) rested off the first frame's rest at its start (their median displacement
+    ``low_px`` or more) and at that peak their median displacement from the first rest is no longer than at the
+    start, the contact only gave back what the skin kept. On the tours (issue 20's, residual 0.1, creep 1 s, set
+    2 %), such presses ended at 0.49-0.97 of their start's leftover; slides at 5.9 or more. A slide shorter than
+    twice the leftover and against it (a tenth of the slide before it, on those tours) reads so too.
+    """
+    moved_by = part - part[0]
+    signal = tap_signal(moved_by)
+    peak = int(np.argmax(signal))
+    moved = np.hypot(moved_by[peak, :, 0], moved_by[peak, :, 1]) >= 0.5 * signal[peak]
+    moved &= np.isfinite(part[0, :, 0]) & np.isfinite(part[peak, :, 0])
+    if signal[peak] <= 0 or not moved.any():
+        return False
+    before, after = (np.hypot(*np.median(part[frame][moved], axis=0)) for frame in (0, peak))
+    return bool(before >= low_px and after <= before)
 
 
 def _bridge_blank(signal: np.ndarray, blank: np.ndarray) -> np.ndarray:

@@ -1,0 +1,41 @@
+"""`pins.skin_rest`'s rest of a pin unseen at a rest frame (``fill``) and its rest frames (``return_frames``)."""
+
+import numpy as np
+
+from pins import neighbour_median, segment_taps, skin_rest, tap_signal
+
+
+def test_a_pin_found_again_after_a_lift_rests_where_its_neighbours_do():
+    """A tracker loses a third of the pins through a slide and finds them again a few frames after the lift
+    (tactip-127's tours: 45-53 of 127 lost, found again 1-30 frames later). Their last rest was before the slide;
+    what the slide left in the skin is then read as a contact starting where they reappear, unless their rest
+    is their neighbourhood's at the lift's rest frame."""
+    rng = np.random.default_rng(3)
+    grid = np.stack(np.meshgrid(np.arange(12), np.arange(12)), -1).reshape(-1, 2) * 20.0
+    frames = 60
+    field = np.zeros((frames, len(grid), 2))
+    field[5:15, :, 0] = np.linspace(2.0, 40.0, 10)[:, None]                 # a slide along x
+    field[15:20, :, 0] = np.linspace(30.0, 6.0, 5)[:, None]                # its lift: 6 px left in the skin
+    field[20:, :, 0] = 6.0
+    field += rng.normal(0.0, 0.05, field.shape)
+    lost = rng.random(len(grid)) < 0.35
+    field[8:26, lost] = np.nan                                             # lost through the slide, found at 26
+    local = neighbour_median(field, grid)
+    filled = skin_rest(field, low_px=0.5, high_px=1.5, fill=local)
+    stale = skin_rest(field, low_px=0.5, high_px=1.5)
+    assert segment_taps(tap_signal(field - filled), high_px=1.5, low_px=0.5, pad_frames=0) == [(5, 20)]
+    assert np.abs(filled[40, lost, 0] - 6.0).max() < 0.3                   # the neighbours' rest, not the first
+    # without it the pins found again rest at the first frame's rest: a "contact" from frame 26 to the end
+    assert segment_taps(tap_signal(field - stale), high_px=1.5, low_px=0.5, pad_frames=0)[-1] == (26, frames)
+
+
+def test_rest_frames_are_where_the_rest_is_taken():
+    field = np.zeros((12, 20, 2))
+    field[2:5, :, 0] = [[2.0], [8.0], [3.0]]
+    field[5:, :, 0] = 3.0
+    field[8:10, :, 1] = 2.0
+    rest, frames = skin_rest(field, low_px=0.5, high_px=1.5, return_frames=True)
+    assert np.array_equal(rest, skin_rest(field, low_px=0.5, high_px=1.5))
+    assert frames[0] == 0 and all(np.array_equal(rest[t], field[frames[frames <= t][-1]]) for t in range(12))
+    empty, none = skin_rest(np.full((4, 3, 2), np.nan), low_px=0.5, high_px=1.5, return_frames=True)
+    assert none.size == 0 and not empty.any()
