@@ -18,7 +18,8 @@ _AHEAD = 128  # frames whose signal from a rest is measured at once (a rest fram
 
 
 def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float = 0.4,
-              fill: np.ndarray | None = None, return_frames: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+              fill: np.ndarray | None = None, steady: np.ndarray | None = None,
+              return_frames: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """The skin's own rest before each frame: the displacements at the last frame where it was at rest, px.
 
     A real elastomer does not return to its first frame's rest between contacts: what a slide leaves in
@@ -60,6 +61,11 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         (`pins.neighbour_median`): a pin lost at a lift and found again a frame later is at the skin's rest
         there, not at the rest where it was last seen (which, before a slide, is off by what the slide left).
         Without it (or where NaN), such a pin keeps its displacement at the latest rest frame where it was seen.
+    steady : (T, N) ndarray of bool, optional
+        The pins a creeping rest is judged by (default: all): e.g. those that agree with their neighbourhood
+        (`tactip.replay.contacts.find_contacts` outvotes the others, replacing their displacement by their
+        neighbours' median, which jumps when lost neighbours are found again: a step away from the first rest
+        that outweighed a creep back for tens of frames on tactip-127's and white-dark-331's tours).
     return_frames : bool
         Also return the rest frames.
 
@@ -124,7 +130,8 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         lift = (peak >= high_px and now <= share * peak and now < trough + high_px   # fallen, not risen again,
                 and before - now < 0.5 * low_px)                                    # no longer falling
         creep = (peak < high_px and displaced[anchor] >= low_px and still[stop + 1:stop + 3].all()
-                 and _back(data[stop], data[anchor], low_px) >= 0.75)
+                 and _back(data[stop], data[anchor], low_px, None if steady is None else steady[stop] & steady[anchor])
+                 >= 0.75)
         if lift or creep:
             rests.append(int(stop))
             anchor, peak, trough, known = int(stop), 0.0, 0.0, int(stop)
@@ -146,12 +153,14 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     return (rest, rests) if return_frames else rest
 
 
-def _back(now: np.ndarray, then: np.ndarray, level_px: float) -> float:
+def _back(now: np.ndarray, then: np.ndarray, level_px: float, pins: np.ndarray | None = None) -> float:
     """How much of the pins' motion from ``then`` to ``now`` ((N, 2) px each, displacements from the first rest)
     points back towards the first rest, in [-1, 1]: the sum over the pins displaced by ``level_px`` or more in
     ``then`` (seen in both) of their motion against their displacement, over the sum of their motion's length
     (1: all straight back, 0: across or noise; 0 without any such pin)."""
     both = np.isfinite(now[:, 0]) & np.isfinite(then[:, 0])
+    if pins is not None:  # only these pins ((N,) bool)
+        both &= pins
     length = np.hypot(then[:, 0], then[:, 1])
     pins = both & (length >= level_px)
     if not pins.any():

@@ -209,7 +209,7 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
         alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
         field = np.where(alone[..., None], local, displacements)
         # the skin's own rest before each frame
-        rest, frames = skin_rest(field, low_px=low_px, high_px=high_px, fill=local, return_frames=True)
+        rest, frames = skin_rest(field, low_px=low_px, high_px=high_px, fill=local, steady=~alone, return_frames=True)
         relative = field - rest
         coherent = tap_signal(relative)
         displacements = displacements - rest
@@ -217,6 +217,9 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     bridged = _bridge_blank(coherent, blank)
     bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
     bounds = split_at_dips(bridged, bounds, min_drop_px=high_px, field=relative)
+    if relative is not None:
+        bounds = _trim_still(bounds, np.where(alone[..., None], np.nan, field), bridged, low_px=low_px,
+                             high_px=high_px)
     kinds = _kinds(displacements, bounds, signal, low_px, rest_positions,
                    field=None if rest_positions is None else field)
     if not with_rests:
@@ -390,6 +393,28 @@ def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float,
             kind = dataclasses.replace(kind, kind="press", direction_deg=float("nan"))
         kinds.append(kind)
     return kinds
+
+
+def _trim_still(bounds, field: np.ndarray, signal: np.ndarray, *, low_px: float, high_px: float) -> list:
+    """Contacts without their still frames at either end: a frame whose pins moved since the frame before by at
+    most half ``low_px`` (`pins.tap_signal` of the change of ``field``, (T, N, 2) px) and whose ``signal`` is below
+    ``high_px``. A contact begins when the plate moves the pins and ends when they stop; measured from a rest the
+    skin has crept away from since (a slow creep, a few tenths of a px in all), the signal can sit at the low
+    threshold for tens of frames before a contact and after it (tactip-127's tours: slides starting 4-70 frames
+    early). Only ends with a still frame at the low threshold or above are trimmed (a clean tap's ends, `segment_taps`'
+    ``pad_frames`` included, stay where they were); a contact with no moving frame is kept whole."""
+    motion = np.full(len(field), np.inf)
+    motion[1:] = tap_signal(field[1:] - field[:-1])
+    still = (motion <= 0.5 * low_px) & (signal < high_px)
+    trimmed = []
+    for start, stop in bounds:
+        moving = np.flatnonzero(~still[start:stop])
+        if moving.size:  # only still frames the signal held at the low threshold or above (not segment_taps' pad)
+            first, last = start + int(moving[0]), start + int(moving[-1]) + 1
+            start = first if (signal[start:first] >= low_px).any() else start
+            stop = last if (signal[last:stop] >= low_px).any() else stop
+        trimmed.append((start, stop))
+    return trimmed
 
 
 def _gives_back(part: np.ndarray, low_px: float) -> bool:
