@@ -383,12 +383,14 @@ def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float,
     the rest frame elsewhere. Given ``field`` ((T, N, 2) px, from the first frame's rest), a slide that only
     gives back what the skin kept (`_gives_back`) is a press."""
     kinds = []
+    min_drag_px = max(1.0, MIN_DRAG_PITCH * _pitch_px(rest_positions)) if rest_positions is not None else 1.0
     for start, stop in bounds:
         if signal[start] > low_px:
             moved = displacements[start:stop] - displacements[start]  # NaN where lost at the start: left out
-            kind, = contact_kinds(moved, [(0, stop - start)], rest_positions=rest_positions)
+            kind, = contact_kinds(moved, [(0, stop - start)], rest_positions=rest_positions, min_drag_px=min_drag_px)
         else:
-            kind, = contact_kinds(displacements, [(start, stop)], signal=signal, rest_positions=rest_positions)
+            kind, = contact_kinds(displacements, [(start, stop)], signal=signal, rest_positions=rest_positions,
+                                  min_drag_px=min_drag_px)
         if kind.kind == "slide" and field is not None and _gives_back(field[start:stop], low_px):
             kind = dataclasses.replace(kind, kind="press", direction_deg=float("nan"))
         kinds.append(kind)
@@ -415,6 +417,18 @@ def _trim_still(bounds, field: np.ndarray, signal: np.ndarray, *, low_px: float,
             stop = last if (signal[last:stop] >= low_px).any() else stop
         trimmed.append((start, stop))
     return trimmed
+
+
+MIN_DRAG_PITCH = 0.1
+
+
+def _pitch_px(rest_positions: np.ndarray) -> float:
+    """The pins' median nearest-neighbour distance at rest, px (0 with fewer than two pins)."""
+    from scipy.spatial import cKDTree
+
+    rest = np.asarray(rest_positions, dtype=np.float64)
+    rest = rest[np.isfinite(rest).all(axis=1)]
+    return float(np.median(cKDTree(rest).query(rest, k=2)[0][:, 1])) if len(rest) > 1 else 0.0
 
 
 def _gives_back(part: np.ndarray, low_px: float) -> bool:

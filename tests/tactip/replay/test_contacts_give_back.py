@@ -63,3 +63,27 @@ def test_a_press_that_lets_the_leftover_go_back_is_a_press(pins_across, pitch_px
         assert kind.kind == what, (bounds, kinds)
     off = abs((kinds[0].direction_deg - direction_deg + 180) % 360 - 180)
     assert off < 10 and abs((kinds[2].direction_deg - second_deg + 180) % 360 - 180) < 10   # against the leftover too
+
+
+@pytest.mark.parametrize("pitch_px, drag_px, seed", [(29.5, 1.6, 3), (17.5, 1.5, 4)])
+def test_a_drag_of_less_than_a_tenth_of_a_pitch_is_no_slide(pitch_px, drag_px, seed):
+    """tactip-127's presses after a slide moved their patch 1.3-2.0 px one way (a twentieth of its 29.5 px pitch):
+    a slide drags it a tenth of a pitch or more (the tours' slides 3 pitches; half a pitch is a slide)."""
+    rng = np.random.default_rng(seed)
+    rest = _pad(15, pitch_px)
+    centre = rest.mean(axis=0)
+    fall = np.exp(-np.sum((rest - centre) ** 2, axis=1) / (2 * (0.3 * np.ptp(rest[:, 0])) ** 2))[:, None]
+    unit = np.array([np.cos(np.radians(290.0)), np.sin(np.radians(290.0))])
+    kinds = {}
+    for length in (drag_px, 0.5 * pitch_px):
+        ramp = np.concatenate([np.zeros(8), _ramp(10), np.ones(6), 1 - _ramp(6), np.zeros(10)])
+        field = ramp[:, None, None] * (length * unit * fall)[None]
+        field = field + rng.normal(0.0, 0.05, field.shape)
+        signal = tap_signal(field)
+        bounds, found = find_contacts(field, signal=signal, blank=np.zeros(len(field), bool),
+                                      thresholds_px=(1.0, 0.3), rest_positions=rest)
+        assert len(bounds) == 1, bounds
+        kinds[length] = found[0]
+    assert kinds[drag_px].kind == "press" and kinds[drag_px].drag_px > 1.0     # more than a px, yet no slide
+    slide = kinds[0.5 * pitch_px]
+    assert slide.kind == "slide" and abs((slide.direction_deg - 290.0 + 180) % 360 - 180) < 5
