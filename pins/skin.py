@@ -14,7 +14,8 @@ from .segment import tap_signal
 
 __all__ = ["skin_rest"]
 
-_AHEAD = 128  # frames whose signal from a rest is measured at once (a rest frame moves it: the rest re-measured)
+_AHEAD = 128  # most frames whose signal from a rest is measured at once (a rest frame moves it: the rest re-measured)
+_FIRST = 8  # the fewest: after a rest frame the next often comes within a few frames (a rest creeping back)
 
 
 def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float = 0.4,
@@ -109,14 +110,15 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     anchor = first  # the last rest frame
     peak = trough = 0.0  # the highest signal from the rest since it, and the lowest after that peak
     # Between still frames the rest cannot change: the signal from it is judged a run at a time, and measured
-    # (`tap_signal`, row by row) for up to `_AHEAD` frames at once until the rest moves.
+    # (`tap_signal`, row by row) for `_FIRST` frames at once after a rest frame, twice as many each time after
+    # that up to `_AHEAD`, until the rest moves.
     breaks = np.flatnonzero(still[first + 1:]) + first + 1
     edges = np.concatenate([[first + 1], np.repeat(breaks, 2), [len(data)]]).reshape(-1, 2)
-    signal, known = np.empty(len(data)), anchor                          # signal[anchor:known]: from the rest
+    signal, known, ahead = np.empty(len(data)), anchor, _FIRST          # signal[anchor:known]: from the rest
     for start, stop in edges:
         end = min(int(stop) + 1, len(data))
         if end > known:
-            known, last = max(end, min(known + _AHEAD, len(data))), known
+            known, last, ahead = max(end, min(known + ahead, len(data))), known, min(2 * ahead, _AHEAD)
             signal[last:known] = tap_signal(data[last:known] - data[anchor])
         values = signal[start:end]                                        # the run, and the still frame after it
         if values.size:
@@ -134,7 +136,7 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
                  >= 0.75)
         if lift or creep:
             rests.append(int(stop))
-            anchor, peak, trough, known = int(stop), 0.0, 0.0, int(stop)
+            anchor, peak, trough, known, ahead = int(stop), 0.0, 0.0, int(stop), _FIRST
     rests = np.asarray(rests, dtype=np.intp)
     # each pin's rest: its displacement at the latest rest frame where it was seen (or filled)
     source = data[rests]                                                  # (R, N, 2)

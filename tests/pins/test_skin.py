@@ -39,3 +39,27 @@ def test_rest_frames_are_where_the_rest_is_taken():
     assert frames[0] == 0 and all(np.array_equal(rest[t], field[frames[frames <= t][-1]]) for t in range(12))
     empty, none = skin_rest(np.full((4, 3, 2), np.nan), low_px=0.5, high_px=1.5, return_frames=True)
     assert none.size == 0 and not empty.any()
+
+
+def test_the_rest_is_the_same_whatever_the_frames_measured_at_once(monkeypatch):
+    """`skin_rest` measures the signal from a rest a run of frames at a time (8 after a rest frame, doubling up to
+    128): the same rests as one frame at a time, on creeping fields with lifts, lost pins and a blank start."""
+    import pins.skin as skin
+
+    rng = np.random.default_rng(7)
+    fields = []
+    for _ in range(25):
+        frames, pins = int(rng.integers(20, 200)), int(rng.integers(1, 60))
+        field = np.cumsum(rng.normal(0.0, 0.15, (frames, pins, 2)), axis=0)        # drift and creep
+        for start in rng.integers(0, frames, 3):                                      # contacts, lifted
+            field[start:start + 10] += rng.normal(0.0, 4.0, (1, pins, 2))
+        field[rng.random((frames, pins)) < 0.1] = np.nan
+        field[: int(rng.integers(0, 3))] = np.nan
+        fields.append(field)
+    default = [skin_rest(f, low_px=0.5, high_px=1.5, return_frames=True) for f in fields]
+    monkeypatch.setattr(skin, "_FIRST", 1)
+    monkeypatch.setattr(skin, "_AHEAD", 1)
+    for field, (rest, frames) in zip(fields, default):
+        one, at = skin_rest(field, low_px=0.5, high_px=1.5, return_frames=True)
+        assert np.array_equal(rest, one, equal_nan=True) and np.array_equal(frames, at)
+    assert sum(len(frames) for _, frames in default) > 2 * len(fields)              # rests do move
