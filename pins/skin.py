@@ -61,7 +61,9 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         A pin's rest where it is unseen at a rest frame, px (NaN: none), e.g. its neighbourhood's median
         (`pins.neighbour_median`): a pin lost at a lift and found again a frame later is at the skin's rest
         there, not at the rest where it was last seen (which, before a slide, is off by what the slide left).
-        Without it (or where NaN), such a pin keeps its displacement at the latest rest frame where it was seen.
+        Used where it is off the first frame's rest by ``low_px`` or more (a skin back at its first rest keeps
+        its rests as without it); without it (or where NaN or less), such a pin keeps its displacement at the
+        latest rest frame where it was seen.
     steady : (T, N) ndarray of bool, optional
         The pins a creeping rest is judged by (default: all): e.g. those that agree with their neighbourhood
         (`tactip.replay.contacts.find_contacts` outvotes the others, replacing their displacement by their
@@ -143,6 +145,7 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     known = seen[rests]
     if fill is not None:
         filled = np.asarray(fill, dtype=np.float64)[rests]
+        filled[np.hypot(filled[..., 0], filled[..., 1]) < low_px] = np.nan      # only what a contact left
         source = np.where(known[..., None], source, filled)
         known = known | np.isfinite(filled[..., 0])
     at = np.where(known, np.arange(len(rests))[:, None], -1)             # (R, N): rest frame index or -1
