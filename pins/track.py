@@ -53,7 +53,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ._edge import FrameEdge, tracking_crop
+from ._edge import FrameEdge, read_region, tracking_crop
 from ._identity import kept_on_own_tips
 from ._motion import field_guesses
 from ._pairfit import part_overlapping
@@ -160,6 +160,8 @@ class PinTracker:
         Updates whose frame was blank.
     spacing_px : float
         Median nearest-neighbour pin spacing at `start`, px.
+    frame_region : (slice, slice) or None
+        The (rows, columns) of a frame that `update` reads (the crop, the disc's box), None before `start`.
 
     Examples
     --------
@@ -201,9 +203,9 @@ class PinTracker:
         self.retired: np.ndarray | None = None
         self.blank = False
         self.frames = 0
-        self.detection_frames = 0
-        self.blank_frames = 0
+        self.detection_frames = self.blank_frames = 0
         self.spacing_px = float("nan")
+        self.frame_region: tuple[slice, slice] | None = None
         self._previous: np.ndarray | None = None      # crop of the last good frame (the LK reference)
         self._reference: np.ndarray | None = None     # pin positions in it, px (NaN where lost there)
         self._velocity: np.ndarray | None = None
@@ -305,6 +307,7 @@ class PinTracker:
         # The part of the frame LK works on, grown by replicated border beyond it where pins' windows reach.
         self._borders, self._crop, self._origin = tracking_crop(grey.shape, pins, self.spacing_px, self.lk, self.disc,
                                                                 self.refine)
+        self.frame_region = read_region(grey.shape, self._crop, self.disc)  # (replay maps luma there alone)
         self._previous = self._cropped(grey)
         self._surround = None
         if self.refine and self.disc is not None:
@@ -336,8 +339,7 @@ class PinTracker:
         self._everyone = np.ones(len(pins), dtype=bool)  # (every missing pin looked for at rest: `_refine`)
         self.blank = False
         self.frames = 1
-        self.detection_frames = 0
-        self.blank_frames = 0
+        self.detection_frames = self.blank_frames = 0
         self._since_good = 1
         self._since_detection = self.detect_every
         self._restored = (0, 0, 0)
