@@ -161,6 +161,7 @@ _PARTS = [
     (pins.track, "kept_on_own_tips", "  own tips (kept_on_own_tips)"),
     (pins.segment.NeighbourMedians, "add", "contacts' medians, per frame (NeighbourMedians)"),
     (tactip.replay.luma, "look_up", "luma to grey (look_up)"),
+    (tactip.replay.luma, "look_up_part", "luma to grey, the tracker's region (look_up_part)"),
     (tactip.replay.video, "analyse", "contacts, scale, feature pins"),
     (tactip.pipeline, "contact_features", "contact features"),
     (tactip.replay.video, "write_hdf5", "HDF5 file"),

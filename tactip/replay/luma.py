@@ -227,8 +227,6 @@ def mapped(frames, table, region=None):
     `region` gives: a callable asked before each frame for the (rows, columns) slices that will be read of it, or
     None for all (replay's: the tracker's `pins.PinTracker.frame_region` once it has started; its slide bench's
     pad fills 12 % of the frame, the lookup 52 -> 14 us a frame). The rest of such a frame stays luma."""
-    import cv2
-
     if table is None:
         yield from frames
         return
@@ -238,10 +236,19 @@ def mapped(frames, table, region=None):
         if part is None:
             look_up(frame.image, table, pairs)
         else:
-            view = frame.image[part]
-            if cv2.LUT(view, table, dst=view) is not view:  # (in place on a view whose rows are contiguous)
-                view[...] = cv2.LUT(view, table)
+            look_up_part(frame.image, part, table)
         yield frame
+
+
+def look_up_part(image: np.ndarray, part: tuple[slice, slice], table: np.ndarray) -> np.ndarray:
+    """``cv2.LUT`` in place on the (rows, columns) `part` of a (H, W) uint8 `image` alone (`mapped`'s region; the
+    rest of the image unchanged). Returns `image`."""
+    import cv2
+
+    view = image[part]
+    if cv2.LUT(view, table, dst=view) is not view:  # (in place on a view whose rows are contiguous)
+        view[...] = cv2.LUT(view, table)
+    return image
 
 
 def pair_table(table: np.ndarray) -> np.ndarray:
