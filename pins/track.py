@@ -57,6 +57,7 @@ from ._edge import FrameEdge, read_region, tracking_crop
 from ._identity import kept_on_own_tips
 from ._motion import field_guesses
 from ._pairfit import part_overlapping
+from ._predict import settle
 from ._recover import _as_points, match_to_blobs
 from ._return import RestMatch, motion_warning, taken_off
 from ._refine import Refiner
@@ -410,17 +411,13 @@ class PinTracker:
             self._refiner.remember(positions)  # (where lost pins' neighbours were: `pins._predict`)
             if self._rest_match.matched is not None:  # (the frame shows the rest frame there: no motion)
                 velocity[self._rest_match.matched] = 0.0
-        self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
         self._reference = positions
         self.positions = positions
-        # Per column: a reduction over (N, 2) rows costs more than the four calls.
-        found = np.isfinite(positions[:, 0]) & np.isfinite(positions[:, 1])
-        self.lost = ~found
-        self._lost_run = np.where(found, 0, self._lost_run + 1)
-        self.retired = self._lost_run > self.retire_after
-        np.copyto(self._last_seen, positions, where=found[:, None])
+        # Steps carried (NaN: none), pins lost and retired, where each was last seen (one call: `pins._predict`).
+        self._velocity, self.lost, self._lost_run, self.retired = settle(positions, velocity, self._lost_run,
+                                                                         self.retire_after, self._last_seen)
         return positions.copy()
 
     def _refine(self, grey: np.ndarray, current: np.ndarray, guess: np.ndarray) -> tuple[np.ndarray, bool, bool]:
