@@ -272,6 +272,26 @@ one-off imports the best of the repeats leaves out: Numba and the kernels' cache
 (`scipy.signal.find_peaks`, in `tactip.replay.contacts.split_at_dips`): 0.32 s of CPU after replay's own imports, half
 the whole replay of this video, on the tail's critical path of a ``tactip replay`` command.
 
+Session 21's "speed21" (2026-11-30; 2-core VM shared with four other sessions, load average 8-12; main c368916 against
+this session's code, ``--slides 8 --repeats 5``, 3 rounds interleaved per codec, order alternating; replay's HDF5 files
+identical to main's, every dataset and attribute, on both codecs, five other slide videos and seven held out (seeds
+48-54: radial-led-120, tactip-331, small-pad-100, rim-ring-331; mp4v and MJPG); the tracker's positions, lost and retired
+pins bit for bit on 24 slide renders of those presets, seeds 0-3, 48-49). The tracker's fits of tips on slopes in one
+compiled call (`pins._jit_fit`), its closing bookkeeping in another (`pins._predict.settle`), and luma mapped to grey
+only where the tracker reads (`pins.PinTracker.frame_region`: 188 x 188 of 640 x 480 here, 52-70 -> ~14 us a frame).
+CPU, ms/frame, main -> this, per round: replay's main thread mp4v 0.81 / 0.80 / 0.81 -> 0.59 / 0.62 / 0.63, MJPG 0.78 /
+0.76 / 0.82 -> 0.64 / 0.62 / 0.60; its decode thread mp4v 0.67-0.68 -> 0.62-0.64, MJPG 0.68-0.70 -> 0.67-0.70; the
+field search's candidate threads 0.11-0.13 on both sides; the tracker alone mp4v 0.50 / 0.51 / 0.50 -> 0.38 / 0.35 /
+0.36, MJPG 0.45 / 0.46 / 0.45 -> 0.36 / 0.35 / 0.34; the first repeat (Numba loaded) main thread mp4v 0.81-0.86 ->
+0.68-0.69 s, MJPG 0.98-1.07 -> 0.84-0.92 s. The clock at that load says little (mp4v replay, best of 5, 2.76-4.30 ->
+1.65-2.07 s; decoding alone 0.67-0.99 s on either side). Replay's main thread is now below its decode thread: on a
+quiet machine (the lead's figures: main thread 0.62, decode thread 0.71-0.73 ms/frame) replay's clock becomes the
+decode thread's, start + 795 x ~0.7 ms + tail ~0.6 s, ~1.35-1.55 x decoding alone (0.39-0.45 s). What is left: decoding
+in replay as fast as alone (FFmpeg's one thread beside the tracking), and the field search's CPU (~0.2 s over both
+cores; its first 0.16 s of clock slow the decoder); to try on a quiet machine: `pins._candidates._WORKERS` = 1 inside
+replay (the process's CPU 1.152 -> 1.130 s, medians of 6 interleaved replays at load 9: within the noise) and
+``--decode-threads 2`` (the main thread now has ~0.3 ms/frame to spare).
+
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG [--decode-threads N] [--switch-interval S]
 """

@@ -101,6 +101,17 @@ mp4v, best of 2, main thread 0.79 ms/frame, of which tracker updates 0.534, the 
 the medians 0.030 (these wrappers' own cost included; ~9 us a frame unwrapped), contacts, scale and feature pins 0.026,
 the HDF5 file 0.008, contact features 0.004.
 
+Session 21's "speed21" (load average 10-11): the tip fits on slopes in one compiled call (`pins._jit_fit`). ``--against``
+main (c368916), 5 rounds, tracker updates ms/frame CPU (median of the paired ratios): mp4v 0.648 -> 0.563 (0.87; tip fits
+0.137 -> 0.063, 0.46), MJPG 0.646 -> 0.544 (0.85; 0.139 -> 0.066, 0.47); the other parts 0.90-1.05 (not changed:
+the load); positions, lost and retired pins bit for bit. With the closing bookkeeping in one call too
+(`pins._predict.settle`) and the surround stored through the crop's flat view: mp4v 0.623 -> 0.528 (0.85), MJPG 0.583 ->
+0.496 (0.85, 3 rounds). Replay's luma lookup is now a part of its own once the tracker
+has started (`tactip.replay.luma.look_up_part`, the tracker's region alone). What is left of the updates (mp4v, one
+process, ms/frame): the follow passes 0.14 (`pins._follow`), recovery by blobs 0.04 (24 blob detections, 1.3 ms each),
+the fits' own kernel 0.04 (the tip fit's arithmetic), snap to rest 0.03, carried steps 0.02, still steps 0.014, and
+the update's own NumPy calls ~0.06 (`pins.track`: ~40 calls a frame on 120 rows).
+
 Load-independent figures (``--calls``): the tracker alone (`pins.PinTracker` started on the decoded
 video's first frame from `pins.find_pin_field`, as replay starts it, then `update` on every frame)
 with every Python-level call counted by part (``sys.setprofile``: Python functions and the C
@@ -161,6 +172,7 @@ _PARTS = [
     (pins.track, "kept_on_own_tips", "  own tips (kept_on_own_tips)"),
     (pins.segment.NeighbourMedians, "add", "contacts' medians, per frame (NeighbourMedians)"),
     (tactip.replay.luma, "look_up", "luma to grey (look_up)"),
+    (tactip.replay.luma, "look_up_part", "luma to grey, the tracker's region (look_up_part)"),
     (tactip.replay.video, "analyse", "contacts, scale, feature pins"),
     (tactip.pipeline, "contact_features", "contact features"),
     (tactip.replay.video, "write_hdf5", "HDF5 file"),

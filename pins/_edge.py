@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._flat import _CUT_TOLERANCE_PX, _pin_radius_px
+from .detect import _roi
 
 # Width of the band, px, a pin's room to the frame's edge crosses before its state (in or out) changes:
 # several times a still tip's centroid scatter in camera noise.
@@ -137,3 +138,13 @@ def tracking_crop(shape: tuple[int, ...], pins: np.ndarray, spacing_px: float, l
     crop = (slice(max(y0, 0), min(y1, height)), slice(max(x0, 0), min(x1, width)))
     origin = np.array([max(x0, 0) - borders[2], max(y0, 0) - borders[0]], dtype=np.float64)
     return borders, crop, origin
+
+
+def read_region(shape: tuple[int, ...], crop: tuple[slice, slice], disc) -> tuple[slice, slice]:
+    """The (rows, columns) slices of a frame of `shape` that a tracker on `crop` (`tracking_crop`'s) reads: the
+    crop, and the `disc`'s box (recovery's blob detection, `pins.detect`, reads no pixel beyond the disc)."""
+    if disc is None:
+        return crop
+    (rows, columns), (x0, y0, mask) = crop, _roi(disc, shape[:2])
+    return (slice(min(rows.start, y0), max(rows.stop, y0 + mask.shape[0])),
+            slice(min(columns.start, x0), max(columns.stop, x0 + mask.shape[1])))

@@ -328,11 +328,11 @@ def centre_step(image, start, reach, neighbours, nearest, theta, gx, gy):
 # `pins._rest`), and the follow passes with their window measurements (`follow_passes`, below).
 from ._jit_rest import observe_still, rest_judge, rest_look  # noqa: E402
 from ._jit_track import (carried_velocity, displacement_median, follow_first, follow_pass,  # noqa: E402
-                         keep_own_tips, neighbour_median, one_pin_per_tip, predict, remember, trusted)
+                         keep_own_tips, neighbour_median, one_pin_per_tip, predict, remember, settle, trusted)
 
 # (Named here: the kernels `pins._kernels` hands out with this module.)
 _TRACK_KERNELS = (carried_velocity, displacement_median, follow_first, follow_pass, keep_own_tips, neighbour_median,
-                  observe_still, one_pin_per_tip, predict, remember, rest_judge, rest_look, trusted)
+                  observe_still, one_pin_per_tip, predict, remember, rest_judge, rest_look, settle, trusted)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

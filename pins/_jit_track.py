@@ -410,3 +410,27 @@ def trusted(positions, index, which, still, predicted, last_seen, least, gate_sq
             dy = predicted[r, 1] - last_seen[pin, 1]
             out[r] = dx * dx + dy * dy <= gate_sq
     return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def settle(positions, velocity, lost_run, retire_after, last_seen):
+    """`pins._predict.settle`: the steps to carry (N, 2), px (`velocity`'s, NaN as 0), lost pins (N,) (`positions`
+    (N, 2), px, not finite), their runs of frames lost (N,) int64 and the retired ones (runs beyond `retire_after`);
+    `last_seen` (N, 2), px, takes the found pins' positions, in place."""
+    n = positions.shape[0]
+    carried = np.empty((n, 2))
+    lost = np.empty(n, np.bool_)
+    run = np.empty(n, np.int64)
+    retired = np.empty(n, np.bool_)
+    for i in range(n):
+        for c in range(2):
+            step = velocity[i, c]
+            carried[i, c] = 0.0 if step != step else step
+        x, y = positions[i, 0], positions[i, 1]
+        found = np.isfinite(x) and np.isfinite(y)
+        lost[i] = not found
+        run[i] = 0 if found else lost_run[i] + 1
+        retired[i] = run[i] > retire_after
+        if found:
+            last_seen[i, 0], last_seen[i, 1] = x, y
+    return carried, lost, run, retired

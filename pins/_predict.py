@@ -58,6 +58,25 @@ _DRIFT_SIGMAS = 3.0
 _AGREE_SHARE = 0.5
 
 
+def settle(positions: np.ndarray, velocity: np.ndarray, lost_run: np.ndarray, retire_after: int,
+           last_seen: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A frame's bookkeeping for the next (`pins.track.PinTracker.update`): the steps to carry (N, 2), px (`velocity`,
+    NaN as 0), the pins lost (N,) bool (`positions` (N, 2), px, not finite), their runs of frames lost (N,) int
+    (`lost_run`, the last frame's, plus one; 0 when found) and the retired ones (runs beyond `retire_after`); the
+    found pins' positions into `last_seen` (N, 2), px, in place. By the compiled kernel (`pins._jit_track.settle`,
+    one call for ten NumPy calls) unless ``TACTIP_KERNELS=numpy`` or Numba is missing."""
+    kernels = compiled()
+    if kernels is not None and positions.dtype == velocity.dtype == last_seen.dtype == np.float64 and (
+            lost_run.dtype == np.int64):
+        return kernels.settle(positions, velocity, lost_run, retire_after, last_seen)
+    carried = np.where(np.isnan(velocity), 0.0, velocity)  # (np.nan_to_num costs 5x more)
+    # Per column: a reduction over (N, 2) rows costs more than the four calls.
+    found = np.isfinite(positions[:, 0]) & np.isfinite(positions[:, 1])
+    run = np.where(found, 0, lost_run + 1)
+    np.copyto(last_seen, positions, where=found[:, None])
+    return carried, ~found, run, run > retire_after
+
+
 def _median(values: np.ndarray) -> np.ndarray:
     """Median over axis 1 of (L, k, 2) `values`, of its finite rows: (L, 2), NaN where none. Sorts `values` in place.
 

@@ -26,9 +26,11 @@ from scipy.spatial import cKDTree
 
 from .detect import _detect
 from .disc import SensorDisc
-from ._identity import keep_own_tips
+from ._follow import _SAME_TIP_FRACTION
+from ._identity import MISSING_MARGIN, keep_own_tips
+from ._kernels import compiled
 from ._tipfit import _MARGIN_PX, _Windows, _centre_step
-from ._window import _squared_norm
+from ._window import WindowCentroids, _squared_norm
 from .errors import ShapeError
 
 __all__ = ["match_to_blobs"]
@@ -164,6 +166,8 @@ class _Recovery:
         failed fit keeps its start) and the window there shows its least contrast too, unless a
         neighbour sits on the same tip (`_one_pin_per_tip`) or is expected (placed, or missing where its
         neighbours put it) within two of the pin's tip radii at rest: their tips overlap in one blob.
+        By one compiled call (`pins._jit_fit.fit_tips`, bit for bit these steps, `_fit_tips_steps`) unless
+        ``TACTIP_KERNELS=numpy``, Numba is missing, or the windows are a stand-in (`pins.accel`).
 
         Parameters
         ----------
@@ -181,6 +185,22 @@ class _Recovery:
         positions : (N, 2) ndarray of float64
             `positions`, or a copy with the pins found, px.
         """
+        kernels = compiled("_jit_fit")
+        if kernels is not None and type(self.windows) is WindowCentroids and crop.dtype == np.uint8:
+            # (The steps below in one compiled call, bit for bit: `pins._jit_fit`.)
+            crop, _ = self.windows._kernel_arguments(crop, positions[:0])
+            tip = self.tip_fit_radius_px
+            changed, fitted = kernels.fit_tips(
+                crop, positions, last_seen, np.asarray(which, dtype=np.int64), self._fittable, self.rest_positions,
+                self._neighbour_index, self.origin, self.windows.half_px, self._at_least, self._window_neighbours,
+                tip, 1.5 * tip + 1.0 + _MARGIN_PX, self._tip_ellipses, self._overlap_px, self._identity_index,
+                (_SAME_TIP_FRACTION * self.spacing_px) ** 2, MISSING_MARGIN ** 2)
+            return fitted if changed else positions
+        return self._fit_tips_steps(crop, positions, last_seen, which)
+
+    def _fit_tips_steps(self, crop: np.ndarray, positions: np.ndarray, last_seen: np.ndarray,
+                        which: np.ndarray) -> np.ndarray:
+        """`fit_tips` step by step (NumPy round the kernels `pins._kernels` picks): the reference of `pins._jit_fit`."""
         which = which[self._fittable[which]]  # (the others' fits never move them)
         if not which.size:
             return positions

@@ -53,10 +53,11 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ._edge import FrameEdge, tracking_crop
+from ._edge import FrameEdge, read_region, tracking_crop
 from ._identity import kept_on_own_tips
 from ._motion import field_guesses
 from ._pairfit import part_overlapping
+from ._predict import settle
 from ._recover import _as_points, match_to_blobs
 from ._return import RestMatch, motion_warning, taken_off
 from ._refine import Refiner
@@ -160,6 +161,8 @@ class PinTracker:
         Updates whose frame was blank.
     spacing_px : float
         Median nearest-neighbour pin spacing at `start`, px.
+    frame_region : (slice, slice) or None
+        The (rows, columns) of a frame that `update` reads (the crop, the disc's box), None before `start`.
 
     Examples
     --------
@@ -201,9 +204,9 @@ class PinTracker:
         self.retired: np.ndarray | None = None
         self.blank = False
         self.frames = 0
-        self.detection_frames = 0
-        self.blank_frames = 0
+        self.detection_frames = self.blank_frames = 0
         self.spacing_px = float("nan")
+        self.frame_region: tuple[slice, slice] | None = None
         self._previous: np.ndarray | None = None      # crop of the last good frame (the LK reference)
         self._reference: np.ndarray | None = None     # pin positions in it, px (NaN where lost there)
         self._velocity: np.ndarray | None = None
@@ -305,6 +308,7 @@ class PinTracker:
         # The part of the frame LK works on, grown by replicated border beyond it where pins' windows reach.
         self._borders, self._crop, self._origin = tracking_crop(grey.shape, pins, self.spacing_px, self.lk, self.disc,
                                                                 self.refine)
+        self.frame_region = read_region(grey.shape, self._crop, self.disc)  # (replay maps luma there alone)
         self._previous = self._cropped(grey)
         self._surround = None
         if self.refine and self.disc is not None:
@@ -336,8 +340,7 @@ class PinTracker:
         self._everyone = np.ones(len(pins), dtype=bool)  # (every missing pin looked for at rest: `_refine`)
         self.blank = False
         self.frames = 1
-        self.detection_frames = 0
-        self.blank_frames = 0
+        self.detection_frames = self.blank_frames = 0
         self._since_good = 1
         self._since_detection = self.detect_every
         self._restored = (0, 0, 0)
@@ -408,17 +411,13 @@ class PinTracker:
             self._refiner.remember(positions)  # (where lost pins' neighbours were: `pins._predict`)
             if self._rest_match.matched is not None:  # (the frame shows the rest frame there: no motion)
                 velocity[self._rest_match.matched] = 0.0
-        self._velocity = np.where(np.isnan(velocity), 0.0, velocity)  # np.nan_to_num costs 5x more
         self._since_good = 1
         self._previous = current
         self._reference = positions
         self.positions = positions
-        # Per column: a reduction over (N, 2) rows costs more than the four calls.
-        found = np.isfinite(positions[:, 0]) & np.isfinite(positions[:, 1])
-        self.lost = ~found
-        self._lost_run = np.where(found, 0, self._lost_run + 1)
-        self.retired = self._lost_run > self.retire_after
-        np.copyto(self._last_seen, positions, where=found[:, None])
+        # Steps carried (NaN: none), pins lost and retired, where each was last seen (one call: `pins._predict`).
+        self._velocity, self.lost, self._lost_run, self.retired = settle(positions, velocity, self._lost_run,
+                                                                         self.retire_after, self._last_seen)
         return positions.copy()
 
     def _refine(self, grey: np.ndarray, current: np.ndarray, guess: np.ndarray) -> tuple[np.ndarray, bool, bool]:
@@ -494,5 +493,8 @@ class PinTracker:
         """
         bright = cv2.bitwise_not(crop) if self.detection.dark_pins else crop
         if self._surround is not None:
-            bright.put(*self._surround)
+            if bright.flags.c_contiguous:  # (a store into the flat view: `ndarray.put` costs 2.4x more)
+                bright.reshape(-1)[self._surround[0]] = self._surround[1]
+            else:
+                bright.put(*self._surround)
         return bright

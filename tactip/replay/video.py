@@ -380,8 +380,9 @@ def track_video(video, *, calibration=None, params: DetectionParams | None = Non
             start = _Start(params=params, expected_pins=expected_pins, calibration=calibration, wrap=wrap_windows)
             plan.start = start
             try:
-                track = frames_to_features(mapped(reader, table), start=start, rest_frame=int(rest_frame),
-                                           selected=plan.selected, contacts=plan.contacts,
+                # (Luma mapped to grey where the tracker reads, once it has started: `PinTracker.frame_region`.)
+                track = frames_to_features(mapped(reader, table, region=lambda: start.region), start=start,
+                                           rest_frame=int(rest_frame), selected=plan.selected, contacts=plan.contacts,
                                            rests=lambda _: plan.analysis["rests"], n_samples=int(n_samples),
                                            progress=progress, total=getattr(source, "frame_count", None),
                                            each_row=lambda row: start.medians.add(row))
@@ -455,6 +456,8 @@ class _Start:
         #: The contacts' neighbourhood medians, frame by frame as the pins are tracked (`track_pins`' ``each_row``;
         #: None before the start).
         self.medians = None
+        #: The (rows, columns) of later frames the tracker reads (`pins.PinTracker.frame_region`; None before the start).
+        self.region = None
 
     def __call__(self, image):
         """(tracker, rest positions, pins found, detection params, field line, warnings) of the rest frame."""
@@ -462,6 +465,7 @@ class _Start:
         started = _start(image, params=self.params, expected_pins=self.expected_pins, calibration=self.calibration,
                          warnings=warnings)
         tracker, self.centres = started[0], started[5]
+        self.region = tracker.frame_region
         started = started[:5]
         if self.wrap is not None and tracker.windows is not None:  # e.g. measured with other videos' windows
             tracker.windows = self.wrap(tracker.windows)
