@@ -82,7 +82,8 @@ def threshold(false_alarm: float, cells: np.ndarray | float) -> np.ndarray:
 
 
 def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins: np.ndarray,
-                 noise_sigma: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 noise_sigma: float, *, disc: tuple[float, float, float] | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The evidence for an opaque tip at each point (the module docstring), its level and contrast.
 
     Parameters
@@ -100,6 +101,11 @@ def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins
         is that point's own and is not left out.
     noise_sigma : float
         The camera's pixel noise, grey levels: the least variance the test assumes.
+    disc : (cx, cy, radius) px, optional
+        The sensor disc: pixels beyond it or within `_RIM_PX` of its edge (its blur) are no membrane (as in
+        `flat_pins`). A tip of the outermost ring lies 4-7 px inside the edge, within a window's reach:
+        fitted as membrane, the bright surround's rise raised the scatter (the bar) and passed for a tip's
+        edge at an empty site. (2 px left out the tips' own pixels where the disc is tight: small-pad-100.)
 
     Returns
     -------
@@ -122,14 +128,15 @@ def tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins
     pixels = len(_disc_offsets(float(1.5 * major.max() + 2.0) + np.sqrt(0.5))[0])
     batch = max(1, _BATCH_PIXELS // pixels)
     if len(points) > batch:
-        parts = [_tip_evidence(image, points[k:k + batch], shapes[k:k + batch], pins, noise_sigma)
+        parts = [_tip_evidence(image, points[k:k + batch], shapes[k:k + batch], pins, noise_sigma, disc)
                  for k in range(0, len(points), batch)]
         return tuple(np.concatenate(column) for column in zip(*parts))
-    return _tip_evidence(image, points, shapes, pins, noise_sigma)
+    return _tip_evidence(image, points, shapes, pins, noise_sigma, disc)
 
 
 def _tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pins: np.ndarray,
-                  noise_sigma: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                  noise_sigma: float, disc: tuple[float, float, float] | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """`tip_evidence` on one batch of points (float64 (P, 2) and (P, 2, 2), P >= 1)."""
     inverse = np.linalg.inv(shapes)
     major = np.sqrt(np.linalg.eigvalsh(shapes)[:, 1])
@@ -144,6 +151,8 @@ def _tip_evidence(image: np.ndarray, points: np.ndarray, shapes: np.ndarray, pin
     ex, ey = x - points[:, 0, None], y - points[:, 1, None]
     length = np.hypot(ex, ey)
     weight = inside & (length <= radius[:, None]) & (values < _SATURATED)
+    if disc is not None:  # beyond the sensor disc (and its edge's blur) lies no membrane
+        weight &= np.hypot(x - disc[0], y - disc[1]) <= disc[2] - _RIM_PX
     # Other pins' tips and feet are no membrane.
     if len(pins):
         gap, near = cKDTree(pins).query(points, min(7, len(pins)))
