@@ -62,6 +62,25 @@ is missed or merged on 7 of 12 tours: its tap signal stays at or below the high 
 867-frame tour, CPU (interleaved with main): tactip-127 44 -> 46 ms, white-dark-331 111 -> 98, radial-led-120
 50 -> 51.
 
+Session 21's tour22 (main 64af759 -> tour22, tour21's tracking): a slide ends where the signal settles after the
+lift (`tactip.replay._trim.trim_settled`: 3 or more frames at a contact's end, before `segment_taps`' pad, whose
+signal stays within half the low threshold plus a tenth of its level, at most 0.4 of the contact's peak), not
+where the tracked pins stop catching up. New skin, development seeds 0-11: tactip-127 6/12 (123/132) -> 9/12
+(129/132), its slides' stops all within -1..+3 frames of the truth (were 6 at +4..+7); white-dark-331 11/12
+(127/132) and radial-led-120 2/12 (110/132) unchanged (radial's bounds identical on every tour); held out 48-53
+(once, at the end): tactip-127 1/6 (55/66) -> 3/6 (60/66), radial-led-120 2/6 (53/66), white-dark-331 6/6 (66/66)
+unchanged. Old skin (seeds 0-11, 48-53) and residual 0 (seeds 0-5): every contact identical to main's. Tried and
+dropped: a flat head (the same rule at a contact's start): moves one contact (tactip-127 seed 0's creep-merged
+slide, 733 -> 742, truth 777), no tour met; trim_still's still frames up to 0.4 of the contact's peak rather than
+below the high threshold: no contact more right, 21 bounds moved (19 by 1-2 frames, two old-skin contacts' starts
+by 7).
+What is left: tactip-127 seed 0 (the signal from an old rest steps up 0.9 -> 1.5 px with the pins still, as the
+set of seen pins changes: a slide from 44 frames early), seed 6 (a spurious press), seed 11 (a press merged into
+the creep before it); radial-led-120 unchanged: its slides' press-down is inside the noise (tap signal 0.5-0.8 px
+at the truth's start against a floor of 0.5-0.6), and the neighbourhood's median does not lower that floor
+(0.49-0.59 px against the pins' own 0.48-0.56 off contact, seeds 0-3 and 5: the noise is shared by neighbours),
+so the missed presses (peaks 1.1-1.6 px against high thresholds of 1.2-1.7) stay missed.
+
 Run: .venv/bin/python bench/bench_tour_contacts.py [--presets radial-led-120,white-dark-331,tactip-127]
      [--seeds 0-11] [--residual 0.1 --creep-s 1.0 --set-share 0.02 --set-s inf] [--keep DIR]
 """

@@ -14,6 +14,7 @@ from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, co
                   neighbour_median, segment_taps, select_feature_pins, sensor_scale, skin_rest, tap_signal)
 
 from tactip.pipeline import PinTrack
+from tactip.replay._trim import trim_settled, trim_still
 
 __all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "feature_rests_of",
            "find_contacts", "local_maxima", "neighbour_medians_of", "split_at_dips", "tap_thresholds_px"]
@@ -177,7 +178,9 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     a rest creeping back towards the first frame's), not the first frame's: a real elastomer creeps
     back over a second or more after a slide and may keep a set, and measured from the first frame it
     never looks at rest between contacts (they merged, and a slide's direction and a press's field
-    carried what the last slides left). Kinds are `pins.contact_kinds` with the rest positions (a
+    carried what the last slides left). A contact's still ends are trimmed (`trim_still`: the pins did not
+    move) and so is a settled tail after a lift (`trim_settled`: the signal flat at what the skin kept, while the
+    tracked pins catch up). Kinds are `pins.contact_kinds` with the rest positions (a
     press's field spreads out, a slide's shifts one way).
 
     Parameters
@@ -218,8 +221,9 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     bounds = segment_taps(bridged, high_px=high_px, low_px=low_px, merge_gap_frames=0)
     bounds = split_at_dips(bridged, bounds, min_drop_px=high_px, field=relative)
     if relative is not None:
-        bounds = _trim_still(bounds, np.where(alone[..., None], np.nan, field), bridged, low_px=low_px,
-                             high_px=high_px)
+        bounds = trim_still(bounds, np.where(alone[..., None], np.nan, field), bridged, low_px=low_px,
+                            high_px=high_px)
+        bounds = trim_settled(bounds, bridged, low_px=low_px)
     kinds = _kinds(displacements, bounds, signal, low_px, rest_positions,
                    field=None if rest_positions is None else field)
     if not with_rests:
@@ -395,28 +399,6 @@ def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float,
             kind = dataclasses.replace(kind, kind="press", direction_deg=float("nan"))
         kinds.append(kind)
     return kinds
-
-
-def _trim_still(bounds, field: np.ndarray, signal: np.ndarray, *, low_px: float, high_px: float) -> list:
-    """Contacts without their still frames at either end: a frame whose pins moved since the frame before by at
-    most half ``low_px`` (`pins.tap_signal` of the change of ``field``, (T, N, 2) px) and whose ``signal`` is below
-    ``high_px``. A contact begins when the plate moves the pins and ends when they stop; measured from a rest the
-    skin has crept away from since (a slow creep, a few tenths of a px in all), the signal can sit at the low
-    threshold for tens of frames before a contact and after it (tactip-127's tours: slides starting 4-70 frames
-    early). Only ends with a still frame at the low threshold or above are trimmed (a clean tap's ends, `segment_taps`'
-    ``pad_frames`` included, stay where they were); a contact with no moving frame is kept whole."""
-    motion = np.full(len(field), np.inf)
-    motion[1:] = tap_signal(field[1:] - field[:-1])
-    still = (motion <= 0.5 * low_px) & (signal < high_px)
-    trimmed = []
-    for start, stop in bounds:
-        moving = np.flatnonzero(~still[start:stop])
-        if moving.size:  # only still frames the signal held at the low threshold or above (not segment_taps' pad)
-            first, last = start + int(moving[0]), start + int(moving[-1]) + 1
-            start = first if (signal[start:first] >= low_px).any() else start
-            stop = last if (signal[last:stop] >= low_px).any() else stop
-        trimmed.append((start, stop))
-    return trimmed
 
 
 MIN_DRAG_PITCH = 0.1
