@@ -241,7 +241,7 @@ class _Following:
 
     def _part_tips(self, crop: np.ndarray, positions: np.ndarray, pins: np.ndarray, start: np.ndarray,
                    filled: np.ndarray) -> None:
-        """Pins placed by re-centred windows that hold two or more tips: re-placed on tips assigned one-to-one (in place).
+        """Pins placed by re-centred windows holding two or more tips: re-placed on tips assigned one-to-one, in place.
 
         In the skin squeezed ahead of a slide a pin's window may hold its own tip and one approaching from behind
         (that pin often missing, expected where it lagged): the window settles between the two, and the
@@ -257,10 +257,11 @@ class _Following:
 
         Measured (session 20, slide17; `bench/bench_slide_losses.py` ``--onsets``, 120 frames/s, seeds 0-5,
         apart pin-frames, main 1414123 -> this): tactip-331 941 -> 683, dark-331 1148 -> 985, tactip-127 106 ->
-        79, dense-1000 (seeds 0-2) 426 -> 336, radial-led-120 6 -> 7; at 30 frames/s 7309 -> 7324, 7174 ->
-        7046, 4988 -> 5071, 292 -> 272, 1509 -> 1542; lost visible pin-frames (webcam-like radial-led-120)
-        8994 -> 8883. Cost: about a third of `PinTracker.update`'s CPU in the slides' frames (a blur and
-        three morphological filters over the pins' part of the crop; tactip-331 seed 0, 8 slides, 0.22 of 0.63 s).
+        79, dense-1000 (seeds 0-2) 426 -> 336, radial-led-120 6 -> 7; held out (48-53) tactip-331 815 -> 723,
+        dark-331 1068 -> 910; at 30 frames/s 7309 -> 7324, 7174 -> 7046, 4988 -> 5071, 292 -> 272, 1509 -> 1542;
+        lost visible pin-frames (webcam-like radial-led-120) 8994 -> 8883 (held out 48-50: 4616 -> 4674). Cost:
+        about a third of `PinTracker.update`'s CPU in the slides' frames (a blur and three morphological filters
+        over the pins' part of the crop; tactip-331 seed 0, 8 slides, 0.22 of 0.63 s).
         """
         tips = positions[pins]
         ok = np.isfinite(tips[:, 0])
