@@ -15,7 +15,6 @@ from __future__ import annotations
 import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.spatial import cKDTree
 
 from ._identity import keep_own_tips
 from ._kernels import compiled
@@ -261,7 +260,14 @@ class _Following:
         dark-331 1068 -> 910; at 30 frames/s 7309 -> 7324, 7174 -> 7046, 4988 -> 5071, 292 -> 272, 1509 -> 1542;
         lost visible pin-frames (webcam-like radial-led-120) 8994 -> 8883 (held out 48-50: 4616 -> 4674). Cost:
         about a third of `PinTracker.update`'s CPU in the slides' frames (a blur and three morphological filters
-        over the pins' part of the crop; tactip-331 seed 0, 8 slides, 0.22 of 0.63 s).
+        over the pins' part of the crop; tactip-331 seed 0, 8 slides, 0.22 of 0.63 s). Session 20, slide18: only
+        the peaks inside a window are kept (that part's blurred noise held ~840 local maxima a frame on
+        `bench_replay.py --slides 8`, a cKDTree over them), the same placements: the tracker alone there 1.03-1.07
+        -> 0.90-0.93 ms/frame CPU (main a29b5c3: 0.43-0.44; 3 rounds interleaved, quiet machine). Searching only
+        windows with a neighbour squeezed nearer than 0.55-0.9 of its rest distance (tip or guess) was dropped:
+        0.59-0.76 ms/frame, but tactip-331 / dark-331 (seeds 0-2, apart pin-frames; main 464 / 588, all windows
+        318 / 496) 345-439 / 502-573, and lost visible pin-frames (seeds 0-5) 9304 (0.9), 9419 (0.85) against
+        8883 here and 8877 on main.
         """
         tips = positions[pins]
         ok = np.isfinite(tips[:, 0])
@@ -281,26 +287,29 @@ class _Following:
         box = np.ones((2 * half + 1, 2 * half + 1), np.uint8)
         low, high = cv2.erode(part, box), cv2.dilate(part, box)
         top = (part == cv2.dilate(part, np.ones((size, size), np.uint8))) & (part >= 0.5 * (low + high)) & (high > low)
+        # Only peaks inside a window count (the blurred membrane's noise holds hundreds more in the part).
+        windows = np.zeros(part.shape, np.uint8)
+        windows[local[:, 1] - y0, local[:, 0] - x0] = 1
+        offsets = np.arange(-half, half + 1)
+        disc = (offsets[:, None] ** 2 + offsets[None, :] ** 2 <= half * half).astype(np.uint8)
+        top &= cv2.dilate(windows, disc) > 0
         ys, xs = np.nonzero(top)
         if xs.size < 2:
             return
         peaks_all = np.stack([xs + x0, ys + y0], axis=1).astype(np.float64)
         values = part[ys, xs]
-        tree = cKDTree(peaks_all)
         at = np.where(np.isfinite(positions), positions, filled)
         at[pins] = start
         reach = (_FOLLOW_FRACTION * self.spacing_px) ** 2
-        near = tree.query_ball_point(local, half)
+        # The peaks in each window (within `half` of its centre) that reach half-way from its darkest to its
+        # brightest: (F, P), few of each.
+        cx, cy = local[:, 0] - x0, local[:, 1] - y0
+        floor = 0.5 * (low[cy, cx] + high[cy, cx])
+        inside = _squared_norm(local[:, None, :] - peaks_all[None, :, :]) <= half * half
+        inside &= values[None, :] >= floor[:, None]
         moved, aims, radii = [], [], []
-        for i, found in enumerate(near):
-            if len(found) < 2:
-                continue
-            cx, cy = local[i] - (x0, y0)
-            floor = 0.5 * (low[cy, cx] + high[cy, cx])
-            found = np.asarray(found)
-            found = found[values[found] >= floor]
-            if found.size < 2:
-                continue
+        for i in np.nonzero(np.count_nonzero(inside, axis=1) >= 2)[0]:
+            found = np.nonzero(inside[i])[0]
             # One peak per tip: the brightest of peaks within a tip radius of each other.
             found = found[np.argsort(-values[found])]
             kept = [found[0]]
@@ -321,7 +330,9 @@ class _Following:
                 positions[pin] = np.nan
                 continue
             peak = peaks[mine[0]]
-            gap = np.sqrt(np.delete(_squared_norm(peaks - peak), mine[0]).min())
+            gaps = _squared_norm(peaks - peak)
+            gaps[mine[0]] = np.inf
+            gap = np.sqrt(gaps.min())
             moved.append(i)
             aims.append(peak)
             radii.append(max(min(0.5 * gap, 0.55 * self.spacing_px), 1.5))
