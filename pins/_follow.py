@@ -286,18 +286,20 @@ class _Following:
         size = 2 * int(np.ceil(0.8 * tip_px)) + 1
         box = np.ones((2 * half + 1, 2 * half + 1), np.uint8)
         low, high = cv2.erode(part, box), cv2.dilate(part, box)
-        top = (part == cv2.dilate(part, np.ones((size, size), np.uint8))) & (part >= 0.5 * (low + high)) & (high > low)
-        # Only peaks inside a window count (the blurred membrane's noise holds hundreds more in the part).
+        # Only the local maxima inside a window count (the blurred membrane's noise holds hundreds more in the
+        # part), those that reach half-way from their surround's darkest to its brightest.
         windows = np.zeros(part.shape, np.uint8)
         windows[local[:, 1] - y0, local[:, 0] - x0] = 1
         offsets = np.arange(-half, half + 1)
         disc = (offsets[:, None] ** 2 + offsets[None, :] ** 2 <= half * half).astype(np.uint8)
-        top &= cv2.dilate(windows, disc) > 0
+        top = (part == cv2.dilate(part, np.ones((size, size), np.uint8))) & (cv2.dilate(windows, disc) > 0)
         ys, xs = np.nonzero(top)
+        values, lows, highs = part[ys, xs], low[ys, xs], high[ys, xs]
+        rise = (values >= 0.5 * (lows + highs)) & (highs > lows)
+        ys, xs, values = ys[rise], xs[rise], values[rise]
         if xs.size < 2:
             return
         peaks_all = np.stack([xs + x0, ys + y0], axis=1).astype(np.float64)
-        values = part[ys, xs]
         at = np.where(np.isfinite(positions), positions, filled)
         at[pins] = start
         reach = (_FOLLOW_FRACTION * self.spacing_px) ** 2
