@@ -3,14 +3,18 @@
 
 Following: windows at the constant-velocity guesses, re-centred once; a pin whose window moved by
 at most 0.03 spacings (`_GUESS_FRACTION`; 0.1 px at least) and ended within 0.4 spacings of its guess
-(`_FOLLOW_FRACTION`) needs no LK.
+(`_FOLLOW_FRACTION`) needs no LK. A re-centred window that holds two or more tips (the skin squeezed ahead
+of a slide) does not settle between them: its tips are assigned one-to-one to the pins expected there
+(`_Following._part_tips`, issue 20).
 
 `_Following` holds that pass; `pins._refine.Refiner` inherits it and sets the state it reads.
 """
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from ._identity import keep_own_tips
 from ._kernels import compiled
@@ -160,6 +164,7 @@ class _Following:
         placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]
         if placed.size:
             pins, start = which[placed], start[placed]
+            self._part_tips(crop, positions, pins, start, filled)
             self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
             keep_own_tips(positions, pins, start, filled, self._identity_index)
         return positions, filled
@@ -228,6 +233,116 @@ class _Following:
         placed = np.concatenate(placed) if placed else again[:0]
         if placed.size:
             pins, start = which[placed], start[placed]
+            self._part_tips(crop, positions, pins, start, filled)
             self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
             keep_own_tips(positions, pins, start, filled, self._identity_index)
         return positions
+
+    def _part_tips(self, crop: np.ndarray, positions: np.ndarray, pins: np.ndarray, start: np.ndarray,
+                   filled: np.ndarray) -> None:
+        """Pins placed by re-centred windows holding two or more tips: re-placed on tips assigned one-to-one, in place.
+
+        In the skin squeezed ahead of a slide a pin's window may hold its own tip and one approaching from behind
+        (that pin often missing, expected where it lagged): the window settles between the two, and the
+        constant-velocity guess carries the pull on frame by frame until the pin sits on the other's tip. Here
+        the tips in each window of `pins` (placed by a re-centred window at finite `positions`, (N, 2) px;
+        `start` (F, 2) px their guesses) are the local maxima of the crop blurred to a tip's scale (half a tip
+        radius) that reach half-way from the window's darkest to its brightest, one per tip radius. Where a
+        window holds two or more, they are assigned to the pin's guess and to every other pin's expected
+        place near it (a placed pin's position, a missing one's `filled` guess or prediction) one-to-one
+        (Hungarian method, squared distances: `scipy.optimize.linear_sum_assignment`); the pin is re-measured
+        by a window at its tip, of half the distance to the next tip, and kept within `_FOLLOW_FRACTION` of
+        its guess. A pin assigned no tip, or re-measured beyond that, is unplaced (NaN: LK decides).
+
+        Measured (session 20, slide17; `bench/bench_slide_losses.py` ``--onsets``, 120 frames/s, seeds 0-5,
+        apart pin-frames, main 1414123 -> this): tactip-331 941 -> 683, dark-331 1148 -> 985, tactip-127 106 ->
+        79, dense-1000 (seeds 0-2) 426 -> 336, radial-led-120 6 -> 7; held out (48-53) tactip-331 815 -> 723,
+        dark-331 1068 -> 910; at 30 frames/s 7309 -> 7324, 7174 -> 7046, 4988 -> 5071, 292 -> 272, 1509 -> 1542;
+        lost visible pin-frames (webcam-like radial-led-120) 8994 -> 8883 (held out 48-50: 4616 -> 4674). Cost:
+        about a third of `PinTracker.update`'s CPU in the slides' frames (a blur and three morphological filters
+        over the pins' part of the crop; tactip-331 seed 0, 8 slides, 0.22 of 0.63 s). Session 20, slide18: only
+        the peaks inside a window are kept (that part's blurred noise held ~840 local maxima a frame on
+        `bench_replay.py --slides 8`, a cKDTree over them), the same placements (held out 48-53 too): the tracker alone
+        there 1.03-1.07 -> 0.89-0.93 ms/frame CPU (main a29b5c3: 0.43-0.45; rounds interleaved, quiet machine);
+        `bench_replay.py --slides 8 --repeats 5` (mp4v, 3-4 rounds interleaved): tracker CPU 0.93 against main's
+        0.45 ms/frame, replay / decode 2.53-2.61 against 1.56-1.70: the bar (tracker within +5 % of main's) not met. Searching only
+        windows with a neighbour squeezed nearer than 0.55-0.9 of its rest distance (tip or guess) was dropped:
+        0.59-0.76 ms/frame, but tactip-331 / dark-331 (seeds 0-2, apart pin-frames; main 464 / 588, all windows
+        318 / 496) 345-439 / 502-573, and lost visible pin-frames (seeds 0-5) 9304 (0.9), 9419 (0.85) against
+        8883 here and 8877 on main.
+        """
+        tips = positions[pins]
+        ok = np.isfinite(tips[:, 0])
+        if not ok.any():
+            return
+        pins, start, tips = pins[ok], start[ok], tips[ok]
+        tip_px = self.tip_radius_px if np.isfinite(self.tip_radius_px) else 0.15 * self.spacing_px
+        tip_px = max(tip_px, 1.0)
+        half = int(np.ceil(0.55 * self.spacing_px))
+        height, width = crop.shape
+        local = np.rint(tips - self.origin).astype(np.intp)
+        # The crop's part around the pins concerned, blurred to a tip's scale: its local maxima are tips.
+        x0, y0 = np.maximum(local.min(axis=0) - 2 * half, 0)
+        x1, y1 = np.minimum(local.max(axis=0) + 2 * half + 1, (width, height))
+        part = cv2.GaussianBlur(crop[y0:y1, x0:x1].astype(np.float32), (0, 0), 0.5 * tip_px)
+        size = 2 * int(np.ceil(0.8 * tip_px)) + 1
+        box = np.ones((2 * half + 1, 2 * half + 1), np.uint8)
+        low, high = cv2.erode(part, box), cv2.dilate(part, box)
+        # Only the local maxima inside a window count (the blurred membrane's noise holds hundreds more in the
+        # part), those that reach half-way from their surround's darkest to its brightest.
+        windows = np.zeros(part.shape, np.uint8)
+        windows[local[:, 1] - y0, local[:, 0] - x0] = 1
+        offsets = np.arange(-half, half + 1)
+        disc = (offsets[:, None] ** 2 + offsets[None, :] ** 2 <= half * half).astype(np.uint8)
+        top = (part == cv2.dilate(part, np.ones((size, size), np.uint8))) & (cv2.dilate(windows, disc) > 0)
+        ys, xs = np.nonzero(top)
+        values, lows, highs = part[ys, xs], low[ys, xs], high[ys, xs]
+        rise = (values >= 0.5 * (lows + highs)) & (highs > lows)
+        ys, xs, values = ys[rise], xs[rise], values[rise]
+        if xs.size < 2:
+            return
+        peaks_all = np.stack([xs + x0, ys + y0], axis=1).astype(np.float64)
+        at = np.where(np.isfinite(positions), positions, filled)
+        at[pins] = start
+        reach = (_FOLLOW_FRACTION * self.spacing_px) ** 2
+        # The peaks in each window (within `half` of its centre) that reach half-way from its darkest to its
+        # brightest: (F, P), few of each.
+        cx, cy = local[:, 0] - x0, local[:, 1] - y0
+        floor = 0.5 * (low[cy, cx] + high[cy, cx])
+        inside = _squared_norm(local[:, None, :] - peaks_all[None, :, :]) <= half * half
+        inside &= values[None, :] >= floor[:, None]
+        moved, aims, radii = [], [], []
+        for i in np.nonzero(np.count_nonzero(inside, axis=1) >= 2)[0]:
+            found = np.nonzero(inside[i])[0]
+            # One peak per tip: the brightest of peaks within a tip radius of each other.
+            found = found[np.argsort(-values[found])]
+            kept = [found[0]]
+            for j in found[1:]:
+                if _squared_norm(peaks_all[kept] - peaks_all[j]).min() > tip_px ** 2:
+                    kept.append(j)
+            if len(kept) < 2:
+                continue
+            peaks = peaks_all[kept] + self.origin
+            pin, tip = pins[i], tips[i]
+            others = np.nonzero(_squared_norm(at - tip) <= (1.5 * half) ** 2)[0]
+            others = others[others != pin]
+            expected = np.concatenate([start[i][None], at[others]])
+            cost = _squared_norm(expected[:, None, :] - peaks[None, :, :])
+            r, c = linear_sum_assignment(cost)
+            mine = c[r == 0]
+            if mine.size == 0:
+                positions[pin] = np.nan
+                continue
+            peak = peaks[mine[0]]
+            gaps = _squared_norm(peaks - peak)
+            gaps[mine[0]] = np.inf
+            gap = np.sqrt(gaps.min())
+            moved.append(i)
+            aims.append(peak)
+            radii.append(max(min(0.5 * gap, 0.55 * self.spacing_px), 1.5))
+        if moved:
+            moved = np.asarray(moved)
+            centres, _ = self.windows.measure(crop, np.asarray(aims) - self.origin, np.asarray(radii))
+            centres += self.origin
+            keep = np.isfinite(centres[:, 0]) & (_squared_norm(centres - start[moved]) <= reach)
+            positions[pins[moved]] = np.where(keep[:, None], centres, np.nan)
