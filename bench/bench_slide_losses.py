@@ -100,6 +100,9 @@ tactip-127 106 -> 79, dense-1000 426 -> 336 (0-5: 857 -> 638), radial-led-120 6 
 radial-led-120) 8994 -> 8883, held out 48-50 4616 -> 4674 (merged 2190 -> 2237). Variants: every window with two
 tips re-measured (as kept) against only those whose centroid lay more than 0.5 / 0.25 tip radii from the tip assigned
 to it: tactip-331 683 against 779 / 699, dark-331 985 against 1045 / 1000, lost 8883 against 9029 / 9130.
+Session 21 (part21): the same test compiled (`pins._jit_follow`: each window's own pixels, a first look over its
+square, then the reference's test where two tips may be), the same figures: tactip-331 683 (onsets 380), dark-331 985
+(497), tactip-127 (seeds 0-2) 43, radial-led-120 (0-2) 3, lost visible pin-frames 8849 (slide17 reported 8883 on its main).
 
 Run: .venv/bin/python bench/bench_slide_losses.py [--presets radial-led-120] [--seeds 0-5] [--clean]
      .venv/bin/python bench/bench_slide_losses.py --onsets [--presets tactip-331,tactip-127] [--fps 120]

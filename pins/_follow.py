@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from . import _kernels
 from ._identity import keep_own_tips
 from ._kernels import compiled
 from ._window import WindowCentroids, _squared_norm
@@ -247,38 +248,58 @@ class _Following:
         constant-velocity guess carries the pull on frame by frame until the pin sits on the other's tip. Here
         the tips in each window of `pins` (placed by a re-centred window at finite `positions`, (N, 2) px;
         `start` (F, 2) px their guesses) are the local maxima of the crop blurred to a tip's scale (half a tip
-        radius) that reach half-way from the window's darkest to its brightest, one per tip radius. Where a
-        window holds two or more, they are assigned to the pin's guess and to every other pin's expected
-        place near it (a placed pin's position, a missing one's `filled` guess or prediction) one-to-one
-        (Hungarian method, squared distances: `scipy.optimize.linear_sum_assignment`); the pin is re-measured
-        by a window at its tip, of half the distance to the next tip, and kept within `_FOLLOW_FRACTION` of
-        its guess. A pin assigned no tip, or re-measured beyond that, is unplaced (NaN: LK decides).
+        radius) within `half` (0.55 spacings) of its centre that reach half-way from the darkest to the brightest of
+        the window's square and of their own, one per tip radius. Where a window holds two or more, they are
+        assigned to the pin's guess and to every other pin's expected place near it (a placed pin's position, a
+        missing one's `filled` guess or prediction) one-to-one (least summed squared distances); the pin is
+        re-measured by a window at its tip, of half the distance to the next tip, and kept within
+        `_FOLLOW_FRACTION` of its guess. A pin assigned no tip, or re-measured beyond that, is unplaced (NaN: LK
+        decides). One compiled call (`pins._jit_follow.part_tips_measured`: each window's own pixels only), else
+        the NumPy reference (`_part_tips_numpy`: OpenCV over the windows' part of the crop).
 
-        Measured (session 20, slide17; `bench/bench_slide_losses.py` ``--onsets``, 120 frames/s, seeds 0-5,
-        apart pin-frames, main 1414123 -> this): tactip-331 941 -> 683, dark-331 1148 -> 985, tactip-127 106 ->
-        79, dense-1000 (seeds 0-2) 426 -> 336, radial-led-120 6 -> 7; held out (48-53) tactip-331 815 -> 723,
-        dark-331 1068 -> 910; at 30 frames/s 7309 -> 7324, 7174 -> 7046, 4988 -> 5071, 292 -> 272, 1509 -> 1542;
-        lost visible pin-frames (webcam-like radial-led-120) 8994 -> 8883 (held out 48-50: 4616 -> 4674). Cost:
-        about a third of `PinTracker.update`'s CPU in the slides' frames (a blur and three morphological filters
-        over the pins' part of the crop; tactip-331 seed 0, 8 slides, 0.22 of 0.63 s). Session 20, slide18: only
-        the peaks inside a window are kept (that part's blurred noise held ~840 local maxima a frame on
-        `bench_replay.py --slides 8`, a cKDTree over them), the same placements (held out 48-53 too): the tracker alone
-        there 1.03-1.07 -> 0.89-0.93 ms/frame CPU (main a29b5c3: 0.43-0.45; rounds interleaved, quiet machine);
-        `bench_replay.py --slides 8 --repeats 5` (mp4v, 3-4 rounds interleaved): tracker CPU 0.93 against main's
-        0.45 ms/frame, replay / decode 2.53-2.61 against 1.56-1.70: the bar (tracker within +5 % of main's) not met. Searching only
-        windows with a neighbour squeezed nearer than 0.55-0.9 of its rest distance (tip or guess) was dropped:
-        0.59-0.76 ms/frame, but tactip-331 / dark-331 (seeds 0-2, apart pin-frames; main 464 / 588, all windows
-        318 / 496) 345-439 / 502-573, and lost visible pin-frames (seeds 0-5) 9304 (0.9), 9419 (0.85) against
-        8883 here and 8877 on main.
+        Apart pin-frames (`bench/bench_slide_losses.py --onsets`, 120 frames/s, seeds 0-5; session 20, slide17,
+        main -> this): tactip-331 941 -> 683, dark-331 1148 -> 985, tactip-127 106 -> 79, dense-1000 (seeds 0-2)
+        426 -> 336, radial-led-120 6 -> 7; held out (48-53) tactip-331 815 -> 723, dark-331 1068 -> 910; lost
+        visible pin-frames (webcam-like radial-led-120) 8994 -> 8883. Compiled (session 21, part21; main c368916):
+        the same apart pin-frames (tactip-331 683, dark-331 985; tactip-127 and radial-led-120 seeds 0-2 43 and 3),
+        lost visible pin-frames 8849. Cost, `bench_replay.py --slides 8 --repeats 5`, tracker CPU ms/frame (best of
+        5), 6 rounds interleaved with main: 0.53-0.62 against 0.45-0.52 (median of the paired ratios 1.15; the
+        reference: 0.93 against 0.45): the bar, within +10 % of main's, not met.
         """
-        tips = positions[pins]
-        ok = np.isfinite(tips[:, 0])
-        if not ok.any():
-            return
-        pins, start, tips = pins[ok], start[ok], tips[ok]
         tip_px = self.tip_radius_px if np.isfinite(self.tip_radius_px) else 0.15 * self.spacing_px
         tip_px = max(tip_px, 1.0)
         half = int(np.ceil(0.55 * self.spacing_px))
+        reach = (_FOLLOW_FRACTION * self.spacing_px) ** 2
+        kernels = _part_kernels()
+        if kernels is not None and crop.dtype == np.uint8 and crop.flags.c_contiguous:
+            settings = (pins, start, half, tip_px, int(np.ceil(0.8 * tip_px)), _gaussian(0.5 * tip_px), self.spacing_px)
+            windows = self.windows
+            if type(windows) is WindowCentroids:
+                kernels.part_tips_measured(crop, self.origin, positions, filled, *settings, reach, windows.half_px,
+                                           windows.threshold_fraction, windows.above_mean,
+                                           float(windows.least_contrast))
+                return
+            moved, aims, radii, unplaced = kernels.part_tips(crop, self.origin, positions, filled, *settings)
+            positions[pins[unplaced]] = np.nan
+        else:
+            tips = positions[pins]
+            ok = np.isfinite(tips[:, 0])
+            if not ok.any():
+                return
+            pins, start, tips = pins[ok], start[ok], tips[ok]
+            moved, aims, radii = self._part_tips_numpy(crop, positions, pins, start, filled, tips, tip_px, half)
+        if moved.size:
+            centres, _ = self.windows.measure(crop, aims - self.origin, radii)
+            centres += self.origin
+            keep = np.isfinite(centres[:, 0]) & (_squared_norm(centres - start[moved]) <= reach)
+            positions[pins[moved]] = np.where(keep[:, None], centres, np.nan)
+
+    def _part_tips_numpy(self, crop: np.ndarray, positions: np.ndarray, pins: np.ndarray, start: np.ndarray,
+                         filled: np.ndarray, tips: np.ndarray, tip_px: float, half: int):
+        """`_part_tips`' NumPy reference up to the re-measurement (`pins._jit_follow.part_tips` compiled): the rows
+        of `pins` to re-measure, at which tips (px) with which window radii (px); pins assigned no tip unplaced in
+        `positions`, in place."""
+        none = (np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros(0))
         height, width = crop.shape
         local = np.rint(tips - self.origin).astype(np.intp)
         # The crop's part around the pins concerned, blurred to a tip's scale: its local maxima are tips.
@@ -300,11 +321,10 @@ class _Following:
         rise = (values >= 0.5 * (lows + highs)) & (highs > lows)
         ys, xs, values = ys[rise], xs[rise], values[rise]
         if xs.size < 2:
-            return
+            return none
         peaks_all = np.stack([xs + x0, ys + y0], axis=1).astype(np.float64)
         at = np.where(np.isfinite(positions), positions, filled)
         at[pins] = start
-        reach = (_FOLLOW_FRACTION * self.spacing_px) ** 2
         # The peaks in each window (within `half` of its centre) that reach half-way from its darkest to its
         # brightest: (F, P), few of each.
         cx, cy = local[:, 0] - x0, local[:, 1] - y0
@@ -340,9 +360,25 @@ class _Following:
             moved.append(i)
             aims.append(peak)
             radii.append(max(min(0.5 * gap, 0.55 * self.spacing_px), 1.5))
-        if moved:
-            moved = np.asarray(moved)
-            centres, _ = self.windows.measure(crop, np.asarray(aims) - self.origin, np.asarray(radii))
-            centres += self.origin
-            keep = np.isfinite(centres[:, 0]) & (_squared_norm(centres - start[moved]) <= reach)
-            positions[pins[moved]] = np.where(keep[:, None], centres, np.nan)
+        if not moved:
+            return none
+        return np.asarray(moved), np.asarray(aims), np.asarray(radii)
+
+
+def _part_kernels():
+    """`_part_tips`' compiled kernels (`pins._jit_follow`), or None: the NumPy reference (`pins._kernels.compiled`)."""
+    return _kernels.compiled("_jit_follow")
+
+
+_GAUSSIANS: dict = {}  # sigma, px -> OpenCV's Gaussian weights for float32 images
+
+
+def _gaussian(sigma: float) -> np.ndarray:
+    """The weights `cv2.GaussianBlur` blurs a float32 image with at `sigma` px (its kernel size, 8 sigma + 1, odd)."""
+    weights = _GAUSSIANS.get(sigma)
+    if weights is None:
+        size = int(round(sigma * 8 + 1)) | 1
+        weights = _GAUSSIANS[sigma] = cv2.getGaussianKernel(size, sigma, cv2.CV_32F).ravel()
+        if len(_GAUSSIANS) > 64:
+            _GAUSSIANS.clear()
+    return weights
