@@ -9,12 +9,12 @@ for two local maxima within the square, more than a tip radius apart, at or abov
 reference's test (a peak's neighbours beyond the square unseen). Only those windows are blurred again over squares
 twice as wide, and judged as the reference judges them (full neighbourhoods, the peaks' own rise). The squares are
 laid side by side so that each blur pass is one loop over rows as long as all of them (vectorised: a square alone
-has too few columns), those within the blur's reach of the crop's edge blurred one by one (reflected there as
-OpenCV reflects). The blur is OpenCV's Gaussian (its kernel size and float32 weights) summed in float32 in another
-order, and it reads the crop's own pixels where the reference reflects them at its part's edge (2 half beyond the
-outermost window): a peak at a threshold or there may fall the other way (radial-led-120 through two slides, seed 1:
-1 pin-frame of 8160 placed 0.016 px apart). The assignment is the least sum of squared distances over every
-one-to-one pairing (a depth-first search, few rows and columns) where the reference calls
+has too few columns; `pins._jit_squares`), those within the blur's reach of the crop's edge blurred one by one
+(reflected there as OpenCV reflects). The blur is OpenCV's Gaussian (its kernel size and float32 weights) summed in
+float32 in another order, and it reads the crop's own pixels where the reference reflects them at its part's edge
+(2 half beyond the outermost window): a peak at a threshold or there may fall the other way (radial-led-120 through
+two slides, seed 1: 1 pin-frame of 8160 placed 0.016 px apart). The assignment is the least sum of squared
+distances over every one-to-one pairing (a depth-first search, few rows and columns) where the reference calls
 `scipy.optimize.linear_sum_assignment`: the same unless two pairings tie.
 
 ``cache=True``: compiled once per machine, then loaded from ``__pycache__``.
@@ -26,192 +26,7 @@ import numpy as np
 from numba import njit
 
 from ._jit import window_measure
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _reflect(i, n):
-    """Index `i` reflected into [0, n) as OpenCV's BORDER_REFLECT_101 reflects it (n > 1)."""
-    while i < 0 or i >= n:
-        if i < 0:
-            i = -i
-        else:
-            i = 2 * n - 2 - i
-    return i
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _blur(crop, weights, cx, cy, reach, rows, out):
-    """The crop blurred by the separable `weights` over the square of `reach` px round (cx, cy), into `out`
-    ((2 reach + 1)^2 used), NaN outside the crop; `rows`: scratch of (2 reach + 1 + taps - 1) x (2 reach + 1)."""
-    height, width = crop.shape
-    taps = weights.size
-    k = taps // 2
-    side = 2 * reach + 1
-    # Horizontal pass on the rows the vertical one reads (reflected at the crop's edges).
-    for r in range(side + taps - 1):
-        y = _reflect(cy - reach - k + r, height)
-        for c in range(side):
-            x = cx - reach + c
-            if x < 0 or x >= width:
-                continue
-            total = 0.0
-            if x - k >= 0 and x + k < width:
-                for t in range(taps):
-                    total += weights[t] * crop[y, x - k + t]
-            else:
-                for t in range(taps):
-                    total += weights[t] * crop[y, _reflect(x - k + t, width)]
-            rows[r, c] = total
-    for r in range(side):
-        y = cy - reach + r
-        for c in range(side):
-            x = cx - reach + c
-            if y < 0 or y >= height or x < 0 or x >= width:
-                out[r, c] = np.nan
-                continue
-            total = 0.0
-            for t in range(taps):
-                total += weights[t] * rows[r + t, c]
-            out[r, c] = total
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _extremes(values, side, r0, c0, reach):
-    """The least and greatest finite value of `values`' first `side` x `side` in the square of `reach` round
-    (r0, c0)."""
-    low, high = np.inf, -np.inf
-    for r in range(max(r0 - reach, 0), min(r0 + reach + 1, side)):
-        for c in range(max(c0 - reach, 0), min(c0 + reach + 1, side)):
-            v = values[r, c]
-            if v == v:
-                low = min(low, v)
-                high = max(high, v)
-    return low, high
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _top(values, side, r, c, reach, v):
-    """Whether no value of `values`' first `side` x `side` within the square of `reach` round (r, c) exceeds `v`
-    (its eight neighbours first: on a slope one of them does)."""
-    r0, r1 = max(r - reach, 0), min(r + reach + 1, side)
-    c0, c1 = max(c - reach, 0), min(c + reach + 1, side)
-    for rr in range(max(r - 1, r0), min(r + 2, r1)):
-        for cc in range(max(c - 1, c0), min(c + 2, c1)):
-            if values[rr, cc] > v:
-                return False
-    for rr in range(r0, r1):
-        for cc in range(c0, c1):
-            if values[rr, cc] > v:
-                return False
-    return True
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _two_tops(values, centre, half, square, reach, tip_sq):
-    """Whether the window of `half` px round (`centre`, `centre`) in `values` may hold two tips: two local maxima
-    within `half` of its centre, more than a tip radius (`tip_sq`, px^2) apart, at or above the middle of the
-    darkest and brightest of its square (`square` px round the centre), judged within that square alone (a
-    peak's neighbours beyond it unseen: every tip the full test finds, and some more)."""
-    side = 2 * square + 1
-    low, high = _extremes(values, side, centre, centre, square)
-    floor = np.float32(0.5) * (np.float32(low) + np.float32(high))
-    tops = np.empty((4 * half * half + 4 * half + 1, 2), np.int64)
-    found = 0
-    half_sq = half * half
-    for dy in range(-half, half + 1):
-        for dx in range(-half, half + 1):
-            if dx * dx + dy * dy > half_sq:
-                continue
-            r, c = centre + dy, centre + dx
-            v = values[r, c]
-            if not (v >= floor and _top(values, side, r, c, reach, v)):
-                continue
-            for q in range(found):
-                if (r - tops[q, 0]) ** 2 + (c - tops[q, 1]) ** 2 > tip_sq:
-                    return True
-            tops[found, 0], tops[found, 1] = r, c
-            found += 1
-    return False
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _horizontal(source, out, weights, columns):
-    """The horizontal pass of a separable blur over whole rows: ``out[r, j]`` = sum over t of ``weights[t] *
-    source[r, j + t]``, j < `columns` (one long loop a row, which the compiler vectorises)."""
-    taps = weights.size
-    for r in range(out.shape[0]):
-        line = source[r]
-        target = out[r, :columns]
-        w = weights[0]
-        for j in range(columns):
-            target[j] = w * line[j]
-        for t in range(1, taps):
-            w = weights[t]
-            shifted = line[t:t + columns]
-            for j in range(columns):
-                target[j] += w * shifted[j]
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _vertical(source, out, weights, columns):
-    """The vertical pass: ``out[r, j]`` = sum over t of ``weights[t] * source[r + t, j]``, j < `columns`."""
-    taps = weights.size
-    for r in range(out.shape[0]):
-        target = out[r, :columns]
-        line = source[r, :columns]
-        w = weights[0]
-        for j in range(columns):
-            target[j] = w * line[j]
-        for t in range(1, taps):
-            w = weights[t]
-            line = source[r + t, :columns]
-            for j in range(columns):
-                target[j] += w * line[j]
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _squares(crop, xs, ys, reach, weights, pad):
-    """The crop blurred by `weights` over the squares of `reach` px round (xs[q], ys[q]) (each inside the crop
-    with its blur's reach), side by side: returns the blurred rows ((2 reach + 1, span), float32) and the columns
-    a square takes (`block`); square q's first column is ``pad + q * block``, and the `pad` columns before the
-    first and those between squares hold -inf. One pair of passes over rows as long as all the squares
-    (`_horizontal`, `_vertical`), which the compiler vectorises, where a square alone has too few columns."""
-    width = crop.shape[1]
-    taps = weights.size
-    k = taps // 2
-    side = 2 * reach + 1
-    extent = side + taps - 1  # a square's pixels with its blur's reach, each way
-    block = max(extent, side + pad)
-    count = xs.shape[0]
-    span = pad + count * block
-    # (Columns outside the squares' pixels are left as they are: only the columns between squares read them.)
-    pixels = np.empty((extent, span + taps), np.float32)
-    flat = crop.ravel()
-    into = pixels.ravel()
-    stride = np.uint64(span + taps)
-    for q in range(count):
-        # (Unsigned indices: no test for negative ones in the inner loop.)
-        base = np.uint64((ys[q] - reach - k) * width + xs[q] - reach - k)
-        j0 = np.uint64(pad + q * block)
-        for r in range(extent):
-            source = base + np.uint64(r * width)
-            target = j0 + np.uint64(r) * stride
-            for c in range(extent):
-                into[target + np.uint64(c)] = flat[source + np.uint64(c)]
-    # Down the columns first (every column of a square's pixels is needed across), then across.
-    down = np.empty((side, span + taps), np.float32)
-    _vertical(pixels, down, weights, span + taps)
-    blurred = np.empty((side, span), np.float32)
-    _horizontal(down, blurred, weights, span)
-    for r in range(side):
-        line = blurred[r]
-        for j in range(pad):
-            line[j] = -np.inf
-        for q in range(count):
-            j0 = pad + q * block
-            for j in range(j0 + side, j0 + block):
-                line[j] = -np.inf
-    return blurred, block
+from ._jit_squares import blur_square, blurred_squares, extremes, is_top, may_hold_two
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -220,8 +35,8 @@ def _first_look(crop, origin, positions, pins, half, maximum_reach, weights, tip
     over each window's square of `half` px: two local maxima within `half` of its centre, more than a tip radius
     (`tip_sq`, px^2) apart, at or above the middle of the darkest and brightest of its square, judged within that
     square alone (a peak's neighbours beyond it unseen: every pair of tips the full test finds, and some more).
-    The squares inside the crop with their blur's reach are blurred side by side (`_squares`), the others one by
-    one (`_blur`, with the scratch `rows` and `values`)."""
+    The squares inside the crop with their blur's reach are blurred side by side (`blurred_squares`), the others
+    one by one (`blur_square`, with the scratch `rows` and `values`)."""
     height, width = crop.shape
     count = pins.shape[0]
     k = weights.size // 2
@@ -244,11 +59,11 @@ def _first_look(crop, origin, positions, pins, half, maximum_reach, weights, tip
             slot[i] = inside
             inside += 1
         else:
-            _blur(crop, weights, cx, cy, half, rows, values)
-            look[i] = _two_tops(values, half, half, half, reach, tip_sq)
+            blur_square(crop, weights, cx, cy, half, rows, values)
+            look[i] = may_hold_two(values, half, half, half, reach, tip_sq)
     if inside == 0:
         return look
-    blurred, block = _squares(crop, xs[:inside], ys[:inside], half, weights, reach)
+    blurred, block = blurred_squares(crop, xs[:inside], ys[:inside], half, weights, reach)
     span = blurred.shape[1]
     # The greatest value within `reach` of each pixel, inside its square: along the rows, then down the columns.
     along = np.empty((side, span), np.float32)
@@ -431,7 +246,7 @@ def part_tips(crop, origin, positions, filled, pins, start, half, tip_px, maximu
                 slot[i] = inside
                 inside += 1
     if inside:
-        squares, block = _squares(crop, xs[:inside], ys[:inside], most, weights, 0)
+        squares, block = blurred_squares(crop, xs[:inside], ys[:inside], most, weights, 0)
     else:
         squares, block = np.empty((2 * most + 1, 0), np.float32), 0
     for i in range(count):
@@ -443,9 +258,9 @@ def part_tips(crop, origin, positions, filled, pins, start, half, tip_px, maximu
         if slot[i] >= 0:
             wide_values = squares[:, slot[i] * block:slot[i] * block + 2 * most + 1]
         else:
-            _blur(crop, weights, cx, cy, most, rows, wide_values_edge)
+            blur_square(crop, weights, cx, cy, most, rows, wide_values_edge)
             wide_values = wide_values_edge[:, :2 * most + 1]
-        low, high = _extremes(wide_values, 2 * most + 1, most, most, half)
+        low, high = extremes(wide_values, 2 * most + 1, most, most, half)
         floor = np.float32(0.5) * (np.float32(low) + np.float32(high))  # (float32, as the reference's)
         # Local maxima within `half` of the centre at or above the window's floor, each rising half-way from the
         # darkest to the brightest of its own square.
@@ -456,9 +271,9 @@ def part_tips(crop, origin, positions, filled, pins, start, half, tip_px, maximu
                     continue
                 r, c = most + dy, most + dx
                 v = wide_values[r, c]
-                if not (v >= floor and _top(wide_values, 2 * most + 1, r, c, maximum_reach, v)):
+                if not (v >= floor and is_top(wide_values, 2 * most + 1, r, c, maximum_reach, v)):
                     continue  # (NaN outside the crop)
-                p_low, p_high = _extremes(wide_values, 2 * most + 1, r, c, half)
+                p_low, p_high = extremes(wide_values, 2 * most + 1, r, c, half)
                 if v >= np.float32(0.5) * (np.float32(p_low) + np.float32(p_high)) and p_high > p_low:
                     peak_r[m], peak_c[m], peak_v[m] = dy, dx, v
                     m += 1
