@@ -263,7 +263,7 @@ class _Following:
         visible pin-frames (webcam-like radial-led-120) 8994 -> 8883. Compiled (session 21, part21; main c368916):
         the same apart pin-frames (tactip-331 683, dark-331 985; tactip-127 and radial-led-120 seeds 0-2 43 and 3),
         lost visible pin-frames 8849. Cost, `bench_replay.py --slides 8 --repeats 5`, tracker CPU ms/frame (best of
-        5), 6 rounds interleaved with main: 0.53-0.62 against 0.45-0.52 (median of the paired ratios 1.15; the
+        5), 9 rounds interleaved with main: 0.51-0.62 against 0.36-0.52 (paired ratios 1.04-1.53, median 1.18; the
         reference: 0.93 against 0.45): the bar, within +10 % of main's, not met.
         """
         tip_px = self.tip_radius_px if np.isfinite(self.tip_radius_px) else 0.15 * self.spacing_px
