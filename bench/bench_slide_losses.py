@@ -90,6 +90,19 @@ Tried and dropped (session 20, apart pin-frames, 120 frames/s, seeds 0-5 unless 
   1113, dark-331 1148 -> 1168, tactip-127 106 -> 176.
 Not tried, for want of cases: a rule against folds (two neighbours at rest in inverted order): on tactip-331 seed 0,
 2 of 150 apart pin-frames have a placed neighbour in inverted order; the pin whose tip is taken is mostly missing.
+Kept (session 20, slide17): a re-centred follow window that holds two or more tips (local maxima of the crop blurred to
+half a tip radius) has them assigned one-to-one to the pin's guess and its neighbours' expected places (missing ones at
+their predictions), `pins._follow._Following._part_tips`. Apart pin-frames, seeds 0-5 (dense-1000 0-2 here, 0-5 in
+`bench_conditions` --checks slides), 120 frames/s: tactip-331 941 -> 683 (onsets 528 -> 380), dark-331 1148 -> 985,
+tactip-127 106 -> 79, dense-1000 426 -> 336 (0-5: 857 -> 638), radial-led-120 6 -> 7; 30 frames/s: 7309 -> 7324,
+7174 -> 7046, 4988 -> 5071, 292 -> 272, 1509 -> 1542; held out 48-53 at 120: tactip-331 815 -> 723, dark-331 1068 ->
+910. After the return, every row as before (0 swaps, 0 > 1 px, 0 lost). Lost visible pin-frames (webcam-like
+radial-led-120) 8994 -> 8883, held out 48-50 4616 -> 4674 (merged 2190 -> 2237). Variants: every window with two
+tips re-measured (as kept) against only those whose centroid lay more than 0.5 / 0.25 tip radii from the tip assigned
+to it: tactip-331 683 against 779 / 699, dark-331 985 against 1045 / 1000, lost 8883 against 9029 / 9130.
+Session 21 (part21): the same test compiled (`pins._jit_follow`: each window's own pixels, a first look over its
+square, then the reference's test where two tips may be), the same figures: tactip-331 683 (onsets 380), dark-331 985
+(497), tactip-127 (seeds 0-2) 43, radial-led-120 (0-2) 3, lost visible pin-frames 8849 (slide17 reported 8883 on its main).
 
 Run: .venv/bin/python bench/bench_slide_losses.py [--presets radial-led-120] [--seeds 0-5] [--clean]
      .venv/bin/python bench/bench_slide_losses.py --onsets [--presets tactip-331,tactip-127] [--fps 120]

@@ -3,15 +3,20 @@
 
 Following: windows at the constant-velocity guesses, re-centred once; a pin whose window moved by
 at most 0.03 spacings (`_GUESS_FRACTION`; 0.1 px at least) and ended within 0.4 spacings of its guess
-(`_FOLLOW_FRACTION`) needs no LK.
+(`_FOLLOW_FRACTION`) needs no LK. A re-centred window that holds two or more tips (the skin squeezed ahead
+of a slide) does not settle between them: its tips are assigned one-to-one to the pins expected there
+(`_Following._part_tips`, issue 20).
 
 `_Following` holds that pass; `pins._refine.Refiner` inherits it and sets the state it reads.
 """
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
+from . import _kernels
 from ._identity import keep_own_tips
 from ._kernels import compiled
 from ._window import WindowCentroids, _squared_norm
@@ -160,6 +165,7 @@ class _Following:
         placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]
         if placed.size:
             pins, start = which[placed], start[placed]
+            self._part_tips(crop, positions, pins, start, filled)
             self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
             keep_own_tips(positions, pins, start, filled, self._identity_index)
         return positions, filled
@@ -228,6 +234,151 @@ class _Following:
         placed = np.concatenate(placed) if placed else again[:0]
         if placed.size:
             pins, start = which[placed], start[placed]
+            self._part_tips(crop, positions, pins, start, filled)
             self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
             keep_own_tips(positions, pins, start, filled, self._identity_index)
         return positions
+
+    def _part_tips(self, crop: np.ndarray, positions: np.ndarray, pins: np.ndarray, start: np.ndarray,
+                   filled: np.ndarray) -> None:
+        """Pins placed by re-centred windows holding two or more tips: re-placed on tips assigned one-to-one, in place.
+
+        In the skin squeezed ahead of a slide a pin's window may hold its own tip and one approaching from behind
+        (that pin often missing, expected where it lagged): the window settles between the two, and the
+        constant-velocity guess carries the pull on frame by frame until the pin sits on the other's tip. Here
+        the tips in each window of `pins` (placed by a re-centred window at finite `positions`, (N, 2) px;
+        `start` (F, 2) px their guesses) are the local maxima of the crop blurred to a tip's scale (half a tip
+        radius) within `half` (0.55 spacings) of its centre that reach half-way from the darkest to the brightest of
+        the window's square and of their own, one per tip radius. Where a window holds two or more, they are
+        assigned to the pin's guess and to every other pin's expected place near it (a placed pin's position, a
+        missing one's `filled` guess or prediction) one-to-one (least summed squared distances); the pin is
+        re-measured by a window at its tip, of half the distance to the next tip, and kept within
+        `_FOLLOW_FRACTION` of its guess. A pin assigned no tip, or re-measured beyond that, is unplaced (NaN: LK
+        decides). One compiled call (`pins._jit_follow.part_tips_measured`: each window's own pixels only), else
+        the NumPy reference (`_part_tips_numpy`: OpenCV over the windows' part of the crop).
+
+        Apart pin-frames (`bench/bench_slide_losses.py --onsets`, 120 frames/s, seeds 0-5; session 20, slide17,
+        main -> this): tactip-331 941 -> 683, dark-331 1148 -> 985, tactip-127 106 -> 79, dense-1000 (seeds 0-2)
+        426 -> 336, radial-led-120 6 -> 7; held out (48-53) tactip-331 815 -> 723, dark-331 1068 -> 910; lost
+        visible pin-frames (webcam-like radial-led-120) 8994 -> 8883. Compiled (session 21, part21; main c368916):
+        the same apart pin-frames (tactip-331 683, dark-331 985; tactip-127 and radial-led-120 seeds 0-2 43 and 3),
+        lost visible pin-frames 8849. Cost, `bench_replay.py --slides 8 --repeats 5`, tracker CPU ms/frame (best of
+        5), 9 rounds interleaved with main: 0.51-0.62 against 0.36-0.52 (paired ratios 1.04-1.53, median 1.18; the
+        reference: 0.93 against 0.45): the bar, within +10 % of main's, not met.
+        """
+        tip_px = self.tip_radius_px if np.isfinite(self.tip_radius_px) else 0.15 * self.spacing_px
+        tip_px = max(tip_px, 1.0)
+        half = int(np.ceil(0.55 * self.spacing_px))
+        reach = (_FOLLOW_FRACTION * self.spacing_px) ** 2
+        kernels = _part_kernels()
+        if kernels is not None and crop.dtype == np.uint8 and crop.flags.c_contiguous:
+            settings = (pins, start, half, tip_px, int(np.ceil(0.8 * tip_px)), _gaussian(0.5 * tip_px), self.spacing_px)
+            windows = self.windows
+            if type(windows) is WindowCentroids:
+                kernels.part_tips_measured(crop, self.origin, positions, filled, *settings, reach, windows.half_px,
+                                           windows.threshold_fraction, windows.above_mean,
+                                           float(windows.least_contrast))
+                return
+            moved, aims, radii, unplaced = kernels.part_tips(crop, self.origin, positions, filled, *settings)
+            positions[pins[unplaced]] = np.nan
+        else:
+            tips = positions[pins]
+            ok = np.isfinite(tips[:, 0])
+            if not ok.any():
+                return
+            pins, start, tips = pins[ok], start[ok], tips[ok]
+            moved, aims, radii = self._part_tips_numpy(crop, positions, pins, start, filled, tips, tip_px, half)
+        if moved.size:
+            centres, _ = self.windows.measure(crop, aims - self.origin, radii)
+            centres += self.origin
+            keep = np.isfinite(centres[:, 0]) & (_squared_norm(centres - start[moved]) <= reach)
+            positions[pins[moved]] = np.where(keep[:, None], centres, np.nan)
+
+    def _part_tips_numpy(self, crop: np.ndarray, positions: np.ndarray, pins: np.ndarray, start: np.ndarray,
+                         filled: np.ndarray, tips: np.ndarray, tip_px: float, half: int):
+        """`_part_tips`' NumPy reference up to the re-measurement (`pins._jit_follow.part_tips` compiled): the rows
+        of `pins` to re-measure, at which tips (px) with which window radii (px); pins assigned no tip unplaced in
+        `positions`, in place."""
+        none = (np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros(0))
+        height, width = crop.shape
+        local = np.rint(tips - self.origin).astype(np.intp)
+        # The crop's part around the pins concerned, blurred to a tip's scale: its local maxima are tips.
+        x0, y0 = np.maximum(local.min(axis=0) - 2 * half, 0)
+        x1, y1 = np.minimum(local.max(axis=0) + 2 * half + 1, (width, height))
+        part = cv2.GaussianBlur(crop[y0:y1, x0:x1].astype(np.float32), (0, 0), 0.5 * tip_px)
+        size = 2 * int(np.ceil(0.8 * tip_px)) + 1
+        box = np.ones((2 * half + 1, 2 * half + 1), np.uint8)
+        low, high = cv2.erode(part, box), cv2.dilate(part, box)
+        # Only the local maxima inside a window count (the blurred membrane's noise holds hundreds more in the
+        # part), those that reach half-way from their surround's darkest to its brightest.
+        windows = np.zeros(part.shape, np.uint8)
+        windows[local[:, 1] - y0, local[:, 0] - x0] = 1
+        offsets = np.arange(-half, half + 1)
+        disc = (offsets[:, None] ** 2 + offsets[None, :] ** 2 <= half * half).astype(np.uint8)
+        top = (part == cv2.dilate(part, np.ones((size, size), np.uint8))) & (cv2.dilate(windows, disc) > 0)
+        ys, xs = np.nonzero(top)
+        values, lows, highs = part[ys, xs], low[ys, xs], high[ys, xs]
+        rise = (values >= 0.5 * (lows + highs)) & (highs > lows)
+        ys, xs, values = ys[rise], xs[rise], values[rise]
+        if xs.size < 2:
+            return none
+        peaks_all = np.stack([xs + x0, ys + y0], axis=1).astype(np.float64)
+        at = np.where(np.isfinite(positions), positions, filled)
+        at[pins] = start
+        # The peaks in each window (within `half` of its centre) that reach half-way from its darkest to its
+        # brightest: (F, P), few of each.
+        cx, cy = local[:, 0] - x0, local[:, 1] - y0
+        floor = 0.5 * (low[cy, cx] + high[cy, cx])
+        inside = _squared_norm(local[:, None, :] - peaks_all[None, :, :]) <= half * half
+        inside &= values[None, :] >= floor[:, None]
+        moved, aims, radii = [], [], []
+        for i in np.nonzero(np.count_nonzero(inside, axis=1) >= 2)[0]:
+            found = np.nonzero(inside[i])[0]
+            # One peak per tip: the brightest of peaks within a tip radius of each other.
+            found = found[np.argsort(-values[found])]
+            kept = [found[0]]
+            for j in found[1:]:
+                if _squared_norm(peaks_all[kept] - peaks_all[j]).min() > tip_px ** 2:
+                    kept.append(j)
+            if len(kept) < 2:
+                continue
+            peaks = peaks_all[kept] + self.origin
+            pin, tip = pins[i], tips[i]
+            others = np.nonzero(_squared_norm(at - tip) <= (1.5 * half) ** 2)[0]
+            others = others[others != pin]
+            expected = np.concatenate([start[i][None], at[others]])
+            cost = _squared_norm(expected[:, None, :] - peaks[None, :, :])
+            r, c = linear_sum_assignment(cost)
+            mine = c[r == 0]
+            if mine.size == 0:
+                positions[pin] = np.nan
+                continue
+            peak = peaks[mine[0]]
+            gaps = _squared_norm(peaks - peak)
+            gaps[mine[0]] = np.inf
+            gap = np.sqrt(gaps.min())
+            moved.append(i)
+            aims.append(peak)
+            radii.append(max(min(0.5 * gap, 0.55 * self.spacing_px), 1.5))
+        if not moved:
+            return none
+        return np.asarray(moved), np.asarray(aims), np.asarray(radii)
+
+
+def _part_kernels():
+    """`_part_tips`' compiled kernels (`pins._jit_follow`), or None: the NumPy reference (`pins._kernels.compiled`)."""
+    return _kernels.compiled("_jit_follow")
+
+
+_GAUSSIANS: dict = {}  # sigma, px -> OpenCV's Gaussian weights for float32 images
+
+
+def _gaussian(sigma: float) -> np.ndarray:
+    """The weights `cv2.GaussianBlur` blurs a float32 image with at `sigma` px (its kernel size, 8 sigma + 1, odd)."""
+    weights = _GAUSSIANS.get(sigma)
+    if weights is None:
+        size = int(round(sigma * 8 + 1)) | 1
+        weights = _GAUSSIANS[sigma] = cv2.getGaussianKernel(size, sigma, cv2.CV_32F).ravel()
+        if len(_GAUSSIANS) > 64:
+            _GAUSSIANS.clear()
+    return weights
