@@ -290,7 +290,8 @@ decode thread's, start + 795 x ~0.7 ms + tail ~0.6 s, ~1.35-1.55 x decoding alon
 in replay as fast as alone (FFmpeg's one thread beside the tracking), and the field search's CPU (~0.2 s over both
 cores; its first 0.16 s of clock slow the decoder); to try on a quiet machine: `pins._candidates._WORKERS` = 1 inside
 replay (the process's CPU 1.152 -> 1.130 s, medians of 6 interleaved replays at load 9: within the noise) and
-``--decode-threads 2`` (the main thread now has ~0.3 ms/frame to spare).
+``--decode-threads 2`` (the main thread now has ~0.3 ms/frame to spare). "speed22": the field search imported
+scipy.stats (~0.25 s CPU, main thread; repeats hid it); fresh replays, MJPG: main thread 1.22-1.32 -> 1.02-1.03 s.
 
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG [--decode-threads N] [--switch-interval S]

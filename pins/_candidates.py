@@ -92,6 +92,21 @@ def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache
     return _Run(params, blobs, reason, pitch)
 
 
+def _keeps_more(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict, count: int) -> bool:
+    """Whether `params` keeps more than `count` lattice pins in `disc`: ``_evaluate(...).kept.sum() > count``,
+    judged only when it detects more than `count` blobs (the lattice keeps some of its blobs, never more).
+
+    `pins.lattice`'s polarity probes: the other polarity's second probe (at sqrt(3) of the pitch) detects a
+    fraction of the field's count on every preset (radial-led-120: 31-34 blobs for 120 pins), and the
+    judgement costs ten times the detection.
+    """
+    blobs = _detect(grey, disc, params, cache)
+    if len(blobs.centres) <= count:
+        return False
+    reason, _ = _judge_lattice(blobs, _sharpness(grey, blobs, params, cache, disc))
+    return int(np.count_nonzero(reason == _KEPT)) > count
+
+
 def _consensus(runs: list, pitch: float) -> tuple[np.ndarray, np.ndarray]:
     """Per run: kept pins the voters agree on minus the others; median distance to the consensus, px.
 

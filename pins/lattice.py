@@ -108,8 +108,8 @@ from ._exposure import exposure_warnings
 from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._tipprobe import flat_pins
-from ._candidates import (_MATCH, _SharedCache, _candidates, _consensus, _distinct, _evaluate, _evaluate_all,
-                          _final_params, _noise_floored)
+from ._candidates import (_MATCH, _SharedCache, _candidates, _consensus, _distinct, _evaluate_all, _final_params,
+                          _keeps_more, _noise_floored)
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
@@ -399,7 +399,7 @@ def _other_keeps_more(grey: np.ndarray, field: PinField, start: DetectionParams)
         # Touching blobs are not split: the other polarity's pins stand apart, and splitting the
         # network of a membrane seen the wrong way round costs more than the rest of the probe.
         probe = probe.replace(split_radius_px=0.0)
-        if int(_evaluate(grey, field.disc, probe, cache).kept.sum()) > field.count:
+        if _keeps_more(grey, field.disc, probe, cache, field.count):
             return True
     return False
 
