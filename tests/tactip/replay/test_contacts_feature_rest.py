@@ -9,13 +9,12 @@ import h5py
 import numpy as np
 import pytest
 
-from pins import select_feature_pins, tap_features, tap_signal
-from tactip.replay.contacts import feature_rests_of, find_contacts, tap_thresholds_px
+from pins import select_feature_pins, tap_features
+from tactip.replay.contacts import feature_rests_of
 from tactip.replay.video import replay_video
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
-
-SKIN = dict(residual=0.1, creep_s=1.0, set_share=0.02)  # the tours' creeping skin (bench_tour_contacts.py)
+from tests.tactip.replay.conftest import CREEPING_SKIN as SKIN, contacts_of
 TIMING = dict(press_s=0.05, hold_s=0.05, slide_s=0.15, lift_s=0.05)
 
 
@@ -23,13 +22,9 @@ def _press_features(sensor, run, rng):
     """The last contact's features (40 feature pins) from the skin's rest found before it and from the first
     frame, its rest frame, and every contact's rest frame, on the renderer's displacements + 0.1 px noise."""
     rest, _ = sensor.pin_centres()
-    spacing = float(np.median(np.sort(np.linalg.norm(rest[:, None] - rest[None], axis=2), axis=1)[:, 1]))
     selected = select_feature_pins(rest, n_pins=40, min_separation_mm=4.0, mm_per_px=0.1).indices
     displacements = run.displacements_px() + rng.normal(0.0, 0.1, (len(run), len(rest), 2))
-    signal = tap_signal(displacements)
-    high, low = tap_thresholds_px(displacements, spacing, signal=signal)
-    bounds, _, rests = find_contacts(displacements, signal=signal, blank=np.zeros(len(signal), bool),
-                                     thresholds_px=(high, low), rest_positions=rest, with_rests=True)
+    (bounds, _, rests), (_, _, low) = contacts_of(displacements, rest, with_rests=True)
     assert len(bounds) == len(run.events), (bounds, run.events)
     frames, chosen = feature_rests_of(rests, selected, low_px=low, rest_frame=0)
     start, stop = bounds[-1]

@@ -8,14 +8,9 @@ pins lost from each contact's third frame until 1-20 frames (at 120 frames/s) af
 import numpy as np
 import pytest
 
-from pins import tap_signal
-from tactip.replay.contacts import find_contacts, tap_thresholds_px
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
-
-
-def _angle_error(a, b):
-    return abs((a - b + 180.0) % 360.0 - 180.0)
+from tests.tactip.replay.conftest import CREEPING_SKIN, assert_contacts_are_events, contacts_of
 
 
 # Slides and a press after rests of 0.7-0.9 s (tactip-127, white-dark-331, radial-led-120 x 30, 120 frames/s x
@@ -32,7 +27,7 @@ def test_contacts_after_long_rests_with_pins_lost_through_the_slides(preset, fra
     strokes = [Stroke(2.0, float(angles[0]), 3 * pitch), Stroke(2.0, float(angles[1]), 3 * pitch), Stroke(2.5),
                Stroke(2.0, float(angles[2]), 3 * pitch)]
     run = sensor.sequence(strokes, rest_s=[0.1, 0.9, 0.8, 0.7, 0.3], press_s=0.05, hold_s=0.05, slide_s=0.15,
-                          lift_s=0.05, frame_rate=frame_rate, residual=0.1, creep_s=1.0, set_share=0.02)
+                          lift_s=0.05, frame_rate=frame_rate, **CREEPING_SKIN)
     rest = sensor.pin_centres()[0]
     displacements = run.displacements_px() + rng.normal(0.0, 0.1, (len(run), len(rest), 2))
     for event in run.events:  # lost through the contact, found again 1-20 frames (at 120/s) after its lift
@@ -40,14 +35,5 @@ def test_contacts_after_long_rests_with_pins_lost_through_the_slides(preset, fra
         found = event.stop_frame + rng.integers(1, int(20 * frame_rate / 120) + 2, len(rest))
         for pin in np.flatnonzero(gone):
             displacements[event.start_frame + 3:found[pin], pin] = np.nan
-    spacing = float(np.median(np.sort(np.linalg.norm(rest[:, None] - rest[None], axis=2), axis=1)[:, 1]))
-    signal = tap_signal(displacements)
-    high, low = tap_thresholds_px(displacements, spacing, signal=signal)
-    bounds, kinds = find_contacts(displacements, signal=signal, blank=np.zeros(len(signal), bool),
-                                  thresholds_px=(high, low), rest_positions=rest)
-    assert len(bounds) == len(run.events), (bounds, run.events)
-    for (start, stop), kind, event in zip(bounds, kinds, run.events):
-        assert abs(start - event.start_frame) <= 3 and abs(stop - event.stop_frame) <= 3, (bounds, run.events)
-        assert kind.kind == event.kind, (bounds, kinds)
-        if event.kind == "slide":
-            assert _angle_error(kind.direction_deg, event.direction_deg) <= 15.0
+    (bounds, kinds), _ = contacts_of(displacements, rest)
+    assert_contacts_are_events(bounds, kinds, run.events)

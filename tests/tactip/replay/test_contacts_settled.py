@@ -9,11 +9,10 @@ ending 4-6 frames late), this 24 of 24; without the jitter both 24 of 24."""
 import numpy as np
 import pytest
 
-from pins import tap_signal
 from tactip.replay._trim import trim_settled
-from tactip.replay.contacts import find_contacts, tap_thresholds_px
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
+from tests.tactip.replay.conftest import CREEPING_SKIN, assert_contacts_are_events, contacts_of
 
 
 # The cases main failed (a slide's stop 4-6 frames after the truth's).
@@ -28,7 +27,7 @@ def test_slides_end_at_the_lift_while_the_tracked_pins_catch_up(preset, frame_ra
     strokes = [Stroke(2.0, float(angles[0]), 3 * pitch), Stroke(2.0, float(angles[1]), 3 * pitch), Stroke(2.5),
                Stroke(2.0, float(angles[2]), 3 * pitch)]
     run = sensor.sequence(strokes, rest_s=[0.1, 0.9, 0.8, 0.7, 0.3], press_s=0.05, hold_s=0.05, slide_s=0.15,
-                          lift_s=0.05, frame_rate=frame_rate, residual=0.1, creep_s=1.0, set_share=0.02)
+                          lift_s=0.05, frame_rate=frame_rate, **CREEPING_SKIN)
     rest = sensor.pin_centres()[0]
     displacements = run.displacements_px() + rng.normal(0.0, 0.1, (len(run), len(rest), 2))
     for event in run.events:
@@ -38,15 +37,8 @@ def test_slides_end_at_the_lift_while_the_tracked_pins_catch_up(preset, frame_ra
             pins = rng.random(len(rest)) < 0.3
             angle = rng.uniform(0.0, 2.0 * np.pi, pins.sum())
             displacements[frame, pins] += 0.45 * np.stack([np.cos(angle), np.sin(angle)], axis=1)
-    spacing = float(np.median(np.sort(np.linalg.norm(rest[:, None] - rest[None], axis=2), axis=1)[:, 1]))
-    signal = tap_signal(displacements)
-    high, low = tap_thresholds_px(displacements, spacing, signal=signal)
-    bounds, kinds = find_contacts(displacements, signal=signal, blank=np.zeros(len(signal), bool),
-                                  thresholds_px=(high, low), rest_positions=rest)
-    assert len(bounds) == len(run.events), (bounds, run.events)
-    for (start, stop), kind, event in zip(bounds, kinds, run.events):
-        assert abs(start - event.start_frame) <= 3 and abs(stop - event.stop_frame) <= 3, (bounds, run.events)
-        assert kind.kind == event.kind, (bounds, kinds)
+    (bounds, kinds), _ = contacts_of(displacements, rest)
+    assert_contacts_are_events(bounds, kinds, run.events, angle_deg=None)
 
 
 def test_trim_settled_keeps_a_press_release_and_a_clean_end():

@@ -7,13 +7,9 @@ import numpy as np
 import pytest
 
 from pins import segment_taps, skin_rest, tap_signal
-from tactip.replay.contacts import find_contacts, tap_thresholds_px
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
-
-
-def _angle_error(a, b):
-    return abs((a - b + 180.0) % 360.0 - 180.0)
+from tests.tactip.replay.conftest import CREEPING_SKIN, assert_contacts_are_events, contacts_of
 
 
 def test_the_rest_follows_a_lift_and_a_creep_but_not_a_hold():
@@ -49,18 +45,9 @@ def test_contacts_on_a_skin_that_creeps_back_slowly_and_keeps_a_set(preset, fram
     strokes = [Stroke(2.0, float(angles[0]), 3 * pitch), Stroke(2.5), Stroke(2.0, float(angles[1]), 3 * pitch),
                Stroke(2.0, float(angles[2]), 2 * pitch), Stroke(2.5)]
     run = sensor.sequence(strokes, rest_s=[0.1, 0.4, 0.6, 0.3, 0.5, 0.5], press_s=0.05, hold_s=0.05, slide_s=0.15,
-                          lift_s=0.05, frame_rate=frame_rate, residual=0.1, creep_s=1.0, set_share=0.02)
+                          lift_s=0.05, frame_rate=frame_rate, **CREEPING_SKIN)
     displacements, (rest, _) = run.displacements_px(), sensor.pin_centres()
     displacements += rng.normal(0.0, 0.1, displacements.shape)               # tracking noise, px
-    spacing = float(np.median(np.sort(np.linalg.norm(rest[:, None] - rest[None], axis=2), axis=1)[:, 1]))
-    signal = tap_signal(displacements)
-    high, low = tap_thresholds_px(displacements, spacing, signal=signal)
+    (bounds, kinds), (signal, _, low) = contacts_of(displacements, rest)
     assert signal[run.events[0].stop_frame + 2:run.events[1].start_frame].min() > low  # not back at the first rest
-    bounds, kinds = find_contacts(displacements, signal=signal, blank=np.zeros(len(signal), bool),
-                                  thresholds_px=(high, low), rest_positions=rest)
-    assert len(bounds) == len(run.events), (bounds, run.events)
-    for (start, stop), kind, event in zip(bounds, kinds, run.events):
-        assert abs(start - event.start_frame) <= 3 and abs(stop - event.stop_frame) <= 3, (bounds, run.events)
-        assert kind.kind == event.kind, (bounds, kinds)
-        if event.kind == "slide":
-            assert _angle_error(kind.direction_deg, event.direction_deg) <= 15.0
+    assert_contacts_are_events(bounds, kinds, run.events)

@@ -6,15 +6,10 @@ import cv2
 import numpy as np
 import pytest
 
-from pins import tap_signal
-from tactip.replay.contacts import find_contacts, tap_thresholds_px
 from tactip.replay.video import replay_video
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
-
-
-def _angle_error(a, b):
-    return abs((a - b + 180.0) % 360.0 - 180.0)
+from tests.tactip.replay.conftest import angle_error, assert_contacts_are_events, contacts_of
 
 
 # A real elastomer keeps part of a slide's drag and creeps back over tens of frames: the patch a press puts
@@ -34,7 +29,7 @@ def test_a_press_two_frames_after_a_slide_on_a_creeping_skin_is_a_press(tmp_path
         cv2.imwrite(str(folder / f"frame{k:05d}.png"), frame.image)
     result = replay_video(folder, tmp_path / "r.h5")
     assert [k.kind for k in result.contact_kinds] == ["slide", "press"], (result.tap_bounds, result.contact_kinds)
-    assert _angle_error(result.contact_kinds[0].direction_deg, angle) <= 15.0
+    assert angle_error(result.contact_kinds[0].direction_deg, angle) <= 15.0
     for (start, stop), event in zip(result.tap_bounds, run.events):
         assert abs(start - event.start_frame) <= 3 and abs(stop - event.stop_frame) <= 3, (result.tap_bounds, event)
 
@@ -62,15 +57,9 @@ def test_pins_misplaced_alone_after_a_lift_neither_hold_a_contact_up_nor_make_on
             off = order[int(0.35 * pins):int(0.47 * pins)]                    # misplaced alone, 1-3 px
             angle = rng.uniform(0, 2 * np.pi, len(off))
             displacements[frame, off] += rng.uniform(1.0, 3.0, len(off))[:, None] * np.c_[np.cos(angle), np.sin(angle)]
-    spacing = float(np.median(np.sort(np.linalg.norm(rest[:, None] - rest[None], axis=2), axis=1)[:, 1]))
-    signal = tap_signal(displacements)
-    high, low = tap_thresholds_px(displacements, spacing, signal=signal)
+    (bounds, kinds), (signal, high, low) = contacts_of(displacements, rest)
     # the pins' own signal is held up where the pad is at rest
     assert signal[first.stop_frame:first.stop_frame + 6].min() > low
     assert signal[second.stop_frame + 10:second.stop_frame + 15].max() > high
-    bounds, kinds = find_contacts(displacements, signal=signal, blank=np.zeros(len(signal), bool),
-                                  thresholds_px=(high, low), rest_positions=rest)
-    assert len(bounds) == 2, bounds
-    for (start, stop), kind, event in zip(bounds, kinds, run.events):
-        assert abs(start - event.start_frame) <= 3 and abs(stop - event.stop_frame) <= 3, (bounds, run.events)
-        assert kind.kind == "slide" and _angle_error(kind.direction_deg, event.direction_deg) <= 10.0
+    assert [event.kind for event in run.events] == ["slide", "slide"]
+    assert_contacts_are_events(bounds, kinds, run.events, angle_deg=10.0)
