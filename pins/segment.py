@@ -58,16 +58,65 @@ def tap_signal(displacements: np.ndarray, *, percentile: float = 90.0) -> np.nda
         raise ValueError(f"percentile must be in [0, 100], got {percentile}")
     # np.nanpercentile's linear rule, vectorised over frames (it loops over rows in Python when
     # some are NaN): sorting puts NaN last, so each row's valid values come first.
-    ordered = np.sort(displacement_magnitude(displacements), axis=1)
+    if displacements.shape[1] == 0:
+        return np.zeros(len(displacements))
+    squared = _squared_lengths(displacements)
+    ordered = np.sort(displacement_magnitude(displacements) if squared is None else squared, axis=1)
     count = np.count_nonzero(np.isfinite(ordered), axis=1)
     rank = percentile / 100.0 * np.maximum(count - 1, 0)
     low = np.floor(rank).astype(np.intp)
     high = np.minimum(low + 1, np.maximum(count - 1, 0))
     rows = np.arange(len(ordered))
-    if ordered.shape[1] == 0:
-        return np.zeros(len(ordered))
-    value = ordered[rows, low] + (ordered[rows, high] - ordered[rows, low]) * (rank - low)
+    if squared is None:
+        below, above = ordered[rows, low], ordered[rows, high]
+    else:
+        below = _ranked_length(displacements, squared, ordered[rows, low], low, count)
+        above = below if np.array_equal(high, low) else _ranked_length(displacements, squared, ordered[rows, high],
+                                                                       high, count)
+    value = below + (above - below) * (rank - low)
     return np.where(count > 0, value, 0.0)
+
+
+# `tap_signal` ranks the pins by their squared lengths, dx^2 + dy^2 (a third of `np.hypot`'s time), and takes
+# `np.hypot` of the one pin at each rank it needs where no other pin's squared length lies within `_TIE` of that pin's
+# (relative): each of the square and `np.hypot` is within two units in the last place of the true length, far inside
+# `_TIE`, so `np.hypot` ranks that pin there too. A row where another pin does (the rest frame's zeros, a tie): every
+# pin's `np.hypot`, sorted. Lengths that cannot be squared in float64 without overflow or underflow (components
+# beyond `_SQUARABLE`, or non-zero below its inverse), and infinities: `np.hypot` throughout.
+_TIE = 1e-9
+_SQUARABLE = 1e150
+
+
+def _squared_lengths(displacements: np.ndarray) -> np.ndarray | None:
+    """dx^2 + dy^2 of (T, N, 2) `displacements`, (T, N) px^2, NaN where lost; None where a component is infinite,
+    beyond `_SQUARABLE` px or non-zero below 1 / `_SQUARABLE` (squares that overflow or underflow)."""
+    dx, dy = displacements[..., 0], displacements[..., 1]
+    squared = np.multiply(dx, dx)
+    squared += np.square(dy)
+    largest = np.nanmax(squared, initial=0.0)
+    smallest = np.nanmin(squared, initial=np.inf, where=squared > 0.0)
+    if not (largest < _SQUARABLE ** 2 and smallest > _SQUARABLE ** -2) or np.isinf(displacements).any():
+        return None  # (np.hypot measures an infinite component beside a NaN as infinite, the square as NaN)
+    if np.count_nonzero(squared == 0.0) != np.count_nonzero((dx == 0.0) & (dy == 0.0)):
+        return None  # a tiny component squared to 0
+    return squared
+
+
+def _ranked_length(displacements: np.ndarray, squared: np.ndarray, at: np.ndarray, rank: np.ndarray,
+                   count: np.ndarray) -> np.ndarray:
+    """Per row, the `rank`-th smallest `np.hypot` length of its pins (0 where it has none): `squared` (T, N)
+    their squared lengths, `at` (T,) the squared length at that rank among them (each row's sorted)."""
+    near = (squared >= at[:, None] * (1.0 - _TIE)) & (squared <= at[:, None] * (1.0 + _TIE))  # (False where NaN)
+    alone = np.count_nonzero(near, axis=1) == 1
+    length = np.zeros(len(squared))
+    rows = np.flatnonzero(alone)  # (nearly every row) one pin at that rank: its own length
+    pin = np.argmax(near[rows], axis=1)
+    length[rows] = np.hypot(displacements[rows, pin, 0], displacements[rows, pin, 1])
+    rows = np.flatnonzero(~alone & (count > 0))
+    if rows.size:  # ties: every pin's length, sorted (NaN last), as np.hypot ranks them
+        part = displacements[rows]
+        length[rows] = np.sort(np.hypot(part[..., 0], part[..., 1]), axis=1)[np.arange(rows.size), rank[rows]]
+    return length
 
 
 def neighbour_median(displacements: np.ndarray, rest_positions: np.ndarray, *, neighbours: int = 6,

@@ -107,7 +107,8 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     motion[first + 1:] = tap_signal(data[first + 1:] - data[first:-1])
     motion[~seen.any(axis=1)] = np.inf
     still = motion <= low_px
-    displaced = tap_signal(data)  # from the first frame's rest
+    displaced: dict[int, float] = {}  # the signal from the first frame's rest, at the rest frames asked (a row of
+    # `tap_signal` alone has its value in the whole recording's: its rows are independent)
     rests = [first]
     anchor = first  # the last rest frame
     peak = trough = 0.0  # the highest signal from the rest since it, and the lowest after that peak
@@ -133,6 +134,8 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         before = float(values[-2]) if values.size > 1 else 0.0            # the frame's before it
         lift = (peak >= high_px and now <= share * peak and now < trough + high_px   # fallen, not risen again,
                 and before - now < 0.5 * low_px)                                    # no longer falling
+        if peak < high_px and anchor not in displaced:
+            displaced[anchor] = float(tap_signal(data[anchor:anchor + 1])[0])
         creep = (peak < high_px and displaced[anchor] >= low_px and still[stop + 1:stop + 3].all()
                  and _back(data[stop], data[anchor], low_px, None if steady is None else steady[stop] & steady[anchor])
                  >= 0.75)
