@@ -4,6 +4,7 @@
 import numpy as np
 import pytest
 
+import pins.segment
 from pins import skin_rest, tap_signal
 from pins.displacement import displacement_magnitude
 
@@ -52,8 +53,14 @@ def _fields(seed: int, count: int):
         yield field
 
 
+@pytest.fixture
+def ranked(monkeypatch):
+    """The ranking by squared lengths on fields of any size (on its own, from `_RANKED_FROM` pin-frames)."""
+    monkeypatch.setattr(pins.segment, "_RANKED_FROM", 0)
+
+
 @pytest.mark.parametrize("percentile", [90.0, 0.0, 50.0, 100.0, 37.5])
-def test_the_signal_is_every_length_sorted_bit_for_bit(percentile):
+def test_the_signal_is_every_length_sorted_bit_for_bit(percentile, ranked):
     for field in _fields(0, 160):
         with np.errstate(over="ignore", invalid="ignore"):
             assert tap_signal(field, percentile=percentile).tobytes() == _by_every_length(field, percentile).tobytes()
@@ -66,11 +73,12 @@ def test_a_replayed_slide_field_gives_the_same_bits():
     field[0] = 0.0
     field[100:140] += np.linspace(0.0, 30.0, 40)[:, None, None]
     field[rng.random((300, 120)) < 0.05] = np.nan
+    assert field[..., 0].size >= pins.segment._RANKED_FROM                      # ranked by squared lengths
     for data in (field, field.astype(np.float32), field[::-1] - field[7]):
         assert tap_signal(data).tobytes() == _by_every_length(data).tobytes()
 
 
-def test_each_frame_alone_has_its_value_in_the_whole_signal():
+def test_each_frame_alone_has_its_value_in_the_whole_signal(ranked):
     """`pins.skin_rest` measures the signal from the first rest at a rest frame alone: frames are independent."""
     for field in _fields(1, 40):
         with np.errstate(over="ignore", invalid="ignore"):
