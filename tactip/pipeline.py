@@ -20,6 +20,7 @@ annotated video from the `PinTrack` it gets back).
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable, Iterable, Sequence
@@ -154,8 +155,6 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
     PinsError
         ``start`` failed on the given rest frame, or on every frame when ``rest_frame`` is None.
     """
-    from _shared.progress import progress_bar as tqdm
-
     tracker = rest = None
     detected, params, summary = 0, None, ""
     before = 0  # frames before the rest frame: not tracked
@@ -165,7 +164,7 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
     start_error: PinsError | None = None
     iterator = iter(frames)
     bar_options = dict(total=total, unit="frame", desc="replay", mininterval=0.5)
-    with (_Ticks(progress) if callable(progress) else tqdm(disable=not progress, **bar_options)) as bar:
+    with _bar(progress, bar_options) as bar:
         while True:
             try:
                 frame = next(iterator)
@@ -237,6 +236,18 @@ def track_pins(frames: Iterable, *, start: Start, rest_frame: int | None = None,
                     timestamps_s=np.asarray(timestamps, dtype=np.float64),
                     rest_positions=np.asarray(tracker.rest_positions), rest_frame=before, tracker=tracker,
                     detection=params, pins_detected=int(detected), pin_field=summary, warnings=warnings)
+
+
+def _bar(progress, options: dict):
+    """`track_pins`' progress: `_Ticks` for a callable, a tqdm bar for True, none (tqdm not even imported: ~0.03 s of
+    a process's first replay) for False."""
+    if callable(progress):
+        return _Ticks(progress)
+    if not progress:
+        return contextlib.nullcontext()
+    from _shared.progress import progress_bar
+
+    return progress_bar(**options)
 
 
 # Frames between two calls of a callable progress (`track_pins`): few messages, a live count.
