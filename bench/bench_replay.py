@@ -48,29 +48,35 @@ with 3-frame rests between the slides (`tactip.sim.SyntheticTacTip.slides`).
 Where it stands (figures per session and what each tried are in `git log -- bench/bench_replay.py`):
 
 - The bar, by the clock on a quiet 2-core VM (load < 1, nothing else running), ``--slides 8 --repeats 5``: MJPG met
-  (1.13-1.31, sessions 16-19); mp4v not met: 1.54-1.77 over 12 runs at session 20's end (replay 0.665-0.706 s,
-  decoding alone 0.39-0.45 s; decoding alone on both cores moves the ratio more than replay does).
-- Where replay's clock went then (session 20): the start (open, rest frame, `pins.find_pin_field`: its candidate
-  sets on `pins._candidates._WORKERS` threads) 0.155-0.18 s for 0.06 s of main-thread CPU; then tracking, CPU-bound
-  on the main thread (0.62 ms/frame with the neighbourhood medians and the luma lookup); the tail (contacts,
-  features, the HDF5 file, fsync) 0.04 s. The main thread never waited for frames.
-- Session 21, CPU ms/frame at load 8-12 against c368916 (interleaved, every output bit for bit): "speed21" (tip
-  fits on slopes in one compiled call, `pins._jit_fit`; the update's closing bookkeeping, `pins._predict.settle`;
-  luma mapped only where the tracker reads, `PinTracker.frame_region`) replay's main thread mp4v 0.80-0.81 ->
-  0.59-0.63, MJPG 0.76-0.82 -> 0.60-0.64, the tracker alone 0.45-0.51 -> 0.34-0.38, the decode thread 0.62-0.70 on
-  both; "speed22": the field search no longer imports scipy.stats (~0.25 s of main-thread CPU in a process's first
-  replay that the best of the repeats hid: fresh MJPG replays' main thread 1.22-1.32 -> 1.02-1.03 s); "part21":
-  the follow pass's one-to-one tips (outcome 2) add ~0.07 ms/frame to the tracker (+18 % of c368916's).
-  On a quiet machine replay's clock is then about its decode thread's (start + 795 x ~0.7 ms + tail, ~0.6 s,
-  ~1.35-1.55 x decoding alone): to be measured.
-- Tried and dropped (each measured): two decoder threads in replay (more CPU for two busy cores: mp4v 1223 -> 1378
-  ms); the luma lookup on whichever thread is idler; grey-only decoding (OpenCV's FFmpeg backend passes no codec
-  options; its FFmpeg lacks ``--enable-gray``); decoding into recycled buffers (no gain once a process has
-  replayed); pausing the decoder during the field search; a shorter GIL switch interval (``--switch-interval``);
-  `_WORKERS` 1 instead of 2 inside replay (within the noise); a larger read-ahead queue.
-- Left: FFmpeg's one decode thread runs slower beside the tracking than alone (~0.7 against ~0.51 ms/frame); the
-  field search's ~0.2 s of CPU in replay's first 0.16 s. A process's first replay also pays one-off loads the best
-  of the repeats leaves out (Numba and the kernels' cache, ~0.4 s; compiling them once per machine, tens of s).
+  (1.06-1.31, sessions 16-21); mp4v at its edge: 1.51-1.56 at session 21's end (replay 0.633-0.639 s, decoding alone
+  0.409-0.420 s). On 2 cores the decoder fills one and the main thread (with the field search's candidate threads,
+  GIL-bound) the other, and the main thread never waits for frames: its CPU is replay's clock, start to tail.
+- Where the main thread's CPU goes (session 22, mp4v, main fb192f9, ms, medians at load 5-19): the start ~75 (open
+  5; `pins.find_pin_field` ~55 of its own: tip fits 14, the other polarity's probe 11 (its judgement 9), the noise
+  floor 7, the two discs 4, hole filling 4, exposure 4, spills 4; the tracker's start 12), beside ~70-90 of the
+  candidate threads (18 candidate sets: the lattice judgement `pins._judge` ~4 ms each, ~75 % of it; detection
+  ~1 ms each); tracking 0.63 ms/frame; the tail ~63 (contacts 35: `pins.skin_rest` 13, the kinds 10, `trim_still` 3;
+  `pins.tap_signal` 15 over 55 calls, most of it glibc's `np.hypot`; the rest-frame check, thresholds and scale 7;
+  features 3; the HDF5 file 8-10, h5py's cost per dataset and attribute; ~1900 page faults).
+- Session 22, "speed23" (every output bit for bit: the HDF5 of this bench, MJPG too, and held-out slide videos):
+  `pins.tap_signal` ranks pins by squared length and takes `np.hypot` at the ranks it needs (from 32768 pin-frames),
+  `pins.skin_rest` measures the signal from the first rest only where it judges creep: the tail's CPU, 3 interleaved
+  rounds at load 10-19, 63.6/63.4/62.4 -> 59.3/60.0/59.7 ms (this bench's tail line 54.1/52.9/54.6 ->
+  50.9/51.6/50.0); start and tracking unchanged. Without a progress bar, replay imports no tqdm (a process's first
+  replay: ~0.03-0.06 s).
+- Tried and dropped (each measured): a second decoder thread (sessions 20 and 22: at load 10-17, 3 interleaved rounds,
+  the main thread 0.73-0.75 -> 0.69-0.70 ms/frame, the luma lookup moving to the reader, for 1.54-1.56 -> 1.61-1.62
+  of the process's CPU; the clock to be judged quiet); the luma lookup on whichever thread is idler; grey-only
+  decoding (OpenCV's FFmpeg lacks ``--enable-gray``); recycled decoding buffers; pausing the decoder during the field
+  search; a shorter GIL switch interval (``--switch-interval``); `_WORKERS` 1 inside replay; a larger read-ahead
+  queue; the jitter floor's medians ranked by squared lengths (4.6 -> 4.9 ms: the extra passes cost more than hypot).
+- Left: the lattice judgement (~70 ms of the start's CPU; the coarse pass judges all 5 pitches for the strongest
+  lattice, though a run's kept strength is at most its blobs' total: judged in descending totals, stopping where a
+  total is below the best kept, 44 % of the coarse judgements remain on 10 presets x 3 seeds, 3 of 5 on this bench's
+  frame, ~8 ms); the tracker's start (12 ms: `pins._refine`'s tip shapes fit the tips again); the tail's contacts
+  (`tactip.replay.contacts`, `pins.contacts`); FFmpeg's one decode thread slower beside the tracking than alone (~0.7
+  against ~0.51 ms/frame). A process's first replay also pays one-off loads the best of the repeats leaves out (Numba
+  and the kernels' cache, ~0.4-0.6 s; h5py ~0.03 s; compiling the kernels once per machine, tens of s).
 
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG [--decode-threads N] [--switch-interval S]
