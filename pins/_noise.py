@@ -53,9 +53,22 @@ def binned_noise_sigma(image: np.ndarray, factor: int = 2) -> float:
     if height < 3 * factor or width < 3 * factor:
         return noise_sigma(image)
     crop = image[:height, :width].astype(np.float32)
-    binned = crop.reshape(height // factor, factor, width // factor, factor).mean(axis=(1, 3))
+    # A block's mean and whether any of its pixels is saturated or black, from its `factor` x `factor` strided views
+    # (NumPy's reduction over two axes of the blocks costs ten times as much: ~2.3 ms each at 640 x 480). A sum of
+    # integer grey levels is exact in any order, so the means are `mean(axis=(1, 3))`'s bit for bit.
+    views = [(row, column) for row in range(factor) for column in range(factor)]
+    if np.issubdtype(image.dtype, np.integer) and image.dtype.itemsize <= 2:
+        binned = crop[::factor, ::factor].copy()
+        for row, column in views[1:]:
+            binned += crop[row::factor, column::factor]
+        binned /= np.float32(factor * factor)
+    else:  # (non-integer levels: NumPy's order of summation)
+        binned = crop.reshape(height // factor, factor, width // factor, factor).mean(axis=(1, 3))
     # A block with any saturated or black pixel shows less noise: left out (with its fringe, as `noise_sigma`).
-    dead = ((crop <= 2) | (crop >= 253)).reshape(height // factor, factor, width // factor, factor).any(axis=(1, 3))
+    clipped_pixels = (crop <= 2) | (crop >= 253)
+    dead = clipped_pixels[::factor, ::factor].copy()
+    for row, column in views[1:]:
+        dead |= clipped_pixels[row::factor, column::factor]
     clipped = cv2.dilate(dead.astype(np.uint8), np.ones((3, 3), np.uint8))[1:-1, 1:-1]
     response = np.abs(cv2.filter2D(binned, -1, _LAPLACE_DIFFERENCE))[1:-1, 1:-1][clipped == 0]
     return float(factor * np.median(response) / (0.6745 * 6.0)) if response.size else 0.0
