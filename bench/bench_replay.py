@@ -53,17 +53,18 @@ Where it stands (figures per session and what each tried are in `git log -- benc
   GIL-bound) the other, and the main thread never waits for frames: its CPU is replay's clock, start to tail.
 - Where the main thread's CPU goes (session 22, mp4v, main fb192f9, ms, medians at load 5-19): the start ~75 (open
   5; `pins.find_pin_field` ~55 of its own: tip fits 14, the other polarity's probe 11 (its judgement 9), the noise
-  floor 7, the two discs 4, hole filling 4, exposure 4, spills 4; the tracker's start 12), beside ~70-90 of the
-  candidate threads (18 candidate sets: the lattice judgement `pins._judge` ~4 ms each, ~75 % of it; detection
+  floor 7 (now 2.6), the two discs 4, hole filling 4, exposure 4, spills 4; the tracker's start 12), beside ~70-90 of
+  the candidate threads (18 candidate sets: the lattice judgement `pins._judge` ~4 ms each, ~75 % of it; detection
   ~1 ms each); tracking 0.63 ms/frame; the tail ~63 (contacts 35: `pins.skin_rest` 13, the kinds 10, `trim_still` 3;
   `pins.tap_signal` 15 over 55 calls, most of it glibc's `np.hypot`; the rest-frame check, thresholds and scale 7;
   features 3; the HDF5 file 8-10, h5py's cost per dataset and attribute; ~1900 page faults).
 - Session 22, "speed23" (every output bit for bit: the HDF5 of this bench, MJPG too, and held-out slide videos):
   `pins.tap_signal` ranks pins by squared length and takes `np.hypot` at the ranks it needs (from 32768 pin-frames),
-  `pins.skin_rest` measures the signal from the first rest only where it judges creep: the tail's CPU, 3 interleaved
-  rounds at load 10-19, 63.6/63.4/62.4 -> 59.3/60.0/59.7 ms (this bench's tail line 54.1/52.9/54.6 ->
-  50.9/51.6/50.0); start and tracking unchanged. Without a progress bar, replay imports no tqdm (a process's first
-  replay: ~0.03-0.06 s).
+  `pins.skin_rest` measures the signal from the first rest only where it judges creep, and the noise floor's
+  `pins._noise.binned_noise_sigma` bins by strided views (6.7 -> 2.4 ms). Main-thread CPU, 3 interleaved rounds
+  against main at load 11-13: the start 70.0/72.9/72.4 -> 66.0/65.8/66.2 ms, the tail 58.5/61.9/62.3 ->
+  57.2/57.2/55.1 (at load 10-19: 63.6/63.4/62.4 -> 59.3/60.0/59.7; this bench's tail line 54.1/52.9/54.6 ->
+  50.9/51.6/50.0). Without a progress bar, replay imports no tqdm (a process's first replay: ~0.03-0.06 s).
 - Tried and dropped (each measured): a second decoder thread (sessions 20 and 22: at load 10-17, 3 interleaved rounds,
   the main thread 0.73-0.75 -> 0.69-0.70 ms/frame, the luma lookup moving to the reader, for 1.54-1.56 -> 1.61-1.62
   of the process's CPU; the clock to be judged quiet); the luma lookup on whichever thread is idler; grey-only

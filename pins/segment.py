@@ -80,9 +80,10 @@ def tap_signal(displacements: np.ndarray, *, percentile: float = 90.0) -> np.nda
 # `tap_signal` ranks the pins by their squared lengths, dx^2 + dy^2 (a third of `np.hypot`'s time), and takes
 # `np.hypot` of the one pin at each rank it needs where no other pin's squared length lies within `_TIE` of that pin's
 # (relative): each of the square and `np.hypot` is within two units in the last place of the true length, far inside
-# `_TIE`, so `np.hypot` ranks that pin there too. A row where another pin does (the rest frame's zeros, a tie): every
-# pin's `np.hypot`, sorted (2 % of the rows in replay's tail). Lengths that cannot be squared in float64 without overflow or underflow (components
-# beyond `_SQUARABLE`, or non-zero below its inverse), and infinities: `np.hypot` throughout.
+# `_TIE`, so `np.hypot` ranks that pin there too. A row where another pin does (the rest frame's zeros, a tie; 2 % of
+# the rows in replay's tail): every pin's `np.hypot`, sorted. Lengths that cannot be squared in float64 without
+# overflow or underflow (components beyond `_SQUARABLE`, or non-zero below its inverse), and infinities: `np.hypot`
+# throughout.
 _TIE = 1e-9
 _SQUARABLE = 1e150
 # Below this many pin-frames the few more NumPy calls cost more than np.hypot of every pin saves (795 x 120: 2.6 ->
