@@ -34,6 +34,15 @@ _CLOSE_PINS = 8
 # of one radius (`_empty_zone`).
 _HUB_RING = 5
 _HUB_SPREAD = 0.25
+# A site's prior (`site_prior`): from the `_PRIOR_PINS` pins nearest it predicted by links like its own
+# (turned from the radial direction by at most `_PRIOR_TURN` rad more or less); none from fewer than
+# `_PRIOR_LEAST`.
+_PRIOR_PINS = 6
+_PRIOR_TURN = np.deg2rad(20.0)
+_PRIOR_LEAST = 3
+# ... and no surer than this, px per axis (a drawn lattice with no scatter: the pins' own places are
+# measured no better than about a tenth of a px).
+_PRIOR_FLOOR_PX = 0.1
 
 
 def _holes(pins: np.ndarray, hood: _Neighbourhood, centre: tuple[float, float], field_reach: float, beyond: float,
@@ -157,3 +166,96 @@ def _empty_zone(pins: np.ndarray, centre: tuple[float, float]) -> tuple[float, n
         if gaps.max() <= 2.0 * np.pi / 3.0 and cKDTree(pins).query(site)[0] > 0.5 * inner:
             hub = np.array([site[0], site[1], _MIRROR * min(inner, pitch)])
     return max(inner - 0.5 * pitch, 0.0), hub
+
+
+def site_prior(pins: np.ndarray, sites: np.ndarray, through: np.ndarray, centre: tuple[float, float]
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Where the lattice puts each hole's pin, and how sure it is: the mirror site corrected by how the
+    same prediction misses the pins that are there.
+
+    A site is the mirror image ``2 t - s`` of a pin `s` through its neighbour `t` (`_holes`). On a dome
+    the pitch shrinks towards the rim (foreshortening) and rows curve, and pins sit a little off their
+    ideal places: the mirror site of a radial spoke's outer end lies 0.77 px (median) from its pin on
+    ``radial-led-120``. The pins that are there show how such a prediction misses: each pin `p` that is
+    the mirror of a neighbour's neighbour (``p ~ 2 t - s`` within `pins._judge._MIRROR` of the link) has
+    a residual ``p - (2 t - s)``, in its link's frame (along and across ``t - s``, in link lengths). The
+    `_PRIOR_PINS` such pins nearest a site whose links are like its own (about as far from `centre`,
+    within half a link; pointing the same way relative to the radial direction, within
+    `_PRIOR_TURN`; 0.7-1.4 times as long) give the correction (their median residual) and the
+    uncertainty (their scatter about it, plus the median's own, per axis).
+
+    Parameters
+    ----------
+    pins : (N, 2) ndarray
+        The pins (x, y), px.
+    sites : (S, 2) ndarray
+        Mirror sites ``2 pins[through] - pins[source]`` (x, y), px.
+    through : (S,) ndarray of int
+        The pin each site's link runs through.
+    centre : (float, float)
+        The sensor disc's centre (x, y), px.
+
+    Returns
+    -------
+    prior : (S, 2) ndarray of float64
+        The corrected sites (x, y), px.
+    sigma : (S,) ndarray of float64
+        Their uncertainty per axis, px (at least `_PRIOR_FLOOR_PX`); inf where fewer than `_PRIOR_LEAST`
+        pins are like it (no prior).
+    """
+    pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
+    sites = np.asarray(sites, dtype=np.float64).reshape(-1, 2)
+    prior, sigma = sites.copy(), np.full(len(sites), np.inf)
+    k = min(7, len(pins))
+    if not len(sites) or k < 3:
+        return prior, sigma
+    centre = np.asarray(centre, dtype=np.float64)
+    tree = cKDTree(pins)
+    # Every chain s -> t -> p among the pins: p's neighbour t, and s the pin nearest the mirror of p through t.
+    _, near = tree.query(pins, k)
+    p = np.repeat(np.arange(len(pins)), k - 1)
+    t = near[:, 1:].ravel()
+    mirror = 2.0 * pins[t] - pins[p]
+    gap, s = tree.query(mirror)
+    link = np.hypot(*(pins[t] - pins[p]).T)
+    chain = (gap <= _MIRROR * link) & (s != p) & (s != t)
+    p, t, s = p[chain], t[chain], s[chain]
+    residual = pins[s] - mirror[chain]  # p - (2 t - s)
+    chain_frame = _link_frame(pins[s], pins[t], centre)
+    chain_radius = np.hypot(*(pins[p] - centre).T)
+    # Each site's own link.
+    source = 2.0 * pins[through] - sites
+    step, turn, length = _link_frame(source, pins[through], centre)
+    radius = np.hypot(*(sites - centre).T)
+    c_step, c_turn, c_length = chain_frame
+    unit = c_step / c_length[:, None]
+    along = np.sum(residual * unit, axis=1) / c_length
+    across = (unit[:, 0] * residual[:, 1] - unit[:, 1] * residual[:, 0]) / c_length
+    like = ((np.abs(chain_radius[None] - radius[:, None]) <= 0.5 * length[:, None])
+            & (np.abs(np.angle(np.exp(1j * (c_turn[None] - turn[:, None])))) <= _PRIOR_TURN)
+            & (c_length[None] >= 0.7 * length[:, None]) & (c_length[None] <= 1.4 * length[:, None]))
+    distance = np.hypot(*(pins[p][None] - sites[:, None]).transpose(2, 0, 1))
+    distance = np.where(like, distance, np.inf)
+    order = np.argsort(distance, axis=1)[:, :_PRIOR_PINS]
+    counted = np.isfinite(np.take_along_axis(distance, order, axis=1))
+    for i in np.flatnonzero(counted.sum(axis=1) >= _PRIOR_LEAST):
+        chosen = order[i][counted[i]]
+        offsets = np.column_stack([along[chosen], across[chosen]]) * length[i]  # px, in the site's link frame
+        middle = np.median(offsets, axis=0)
+        u = step[i] / length[i]
+        prior[i] = sites[i] + middle[0] * u + middle[1] * np.array([-u[1], u[0]])
+        # Per axis: their scatter about their median (over n - 1: the median is fitted to them), and the
+        # median's own variance (pi / 2n of theirs).
+        spread = np.sum((offsets - middle) ** 2) / (2.0 * (len(chosen) - 1))
+        sigma[i] = max(np.sqrt(spread * (1.0 + np.pi / (2.0 * len(chosen)))), _PRIOR_FLOOR_PX)
+    return prior, sigma
+
+
+def _link_frame(source: np.ndarray, through: np.ndarray, centre: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Links ``through - source`` (L, 2) px, their turn from the radial direction at `through` (L,) rad,
+    and their lengths (L,) px."""
+    step = through - source
+    outward = through - centre
+    turn = np.arctan2(step[:, 1], step[:, 0]) - np.arctan2(outward[:, 1], outward[:, 0])
+    return step, turn, np.hypot(*step.T)

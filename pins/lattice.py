@@ -59,7 +59,8 @@ finds that lattice without being told the pin count:
    still left (not on a flat gel) the image itself is probed for a faint tip;
 5c. centres: each kept pin is placed by fitting its tip as an opaque ellipse over a quadratic
    background (`pins._tipfit`): the blobs' centroids lean towards the bright side of a sloped
-   membrane (a reflection's flank, the veil, shading) by up to 0.7 px on small tips;
+   membrane (a reflection's flank, the veil, shading) by up to 0.7 px on small tips; a faint tip
+   found by probing a hole also weighs where the lattice puts it (`pins._rescue`, `pins._sites.site_prior`);
 6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
    pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
    rim margin that leaves out the membrane half a pitch beyond the outermost pin and the rim
@@ -382,6 +383,7 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
         apart = cKDTree(extra).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
         rejected, reason = rejected[apart], reason[apart]
+    placed = None  # the probed tips' lattice prior (centres, px per axis), aligned with `centres`
     if not disc.whole_frame and len(centres):
         radius_px = _pin_radius_px(grey, centres, run.pitch, start.dark_pins)
         # A reflection's flat top at a lattice site: no tip stands above the membrane round it.
@@ -392,11 +394,16 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
             reason = np.concatenate([reason, np.full(int(flat.sum()), REJECTION_REASONS.index("contrast"))])
             centres = centres[~flat]
         # Holes no blob filled (a faint spoke end under the veil): the image itself, looked at there.
-        probed = probe_lattice_holes(grey, centres, (disc.cx, disc.cy), radius_px,
-                                     disc_radius_px=search.radius_px, dark_pins=start.dark_pins)
+        probed, prior, prior_sigma = probe_lattice_holes(grey, centres, (disc.cx, disc.cy), radius_px,
+                                                         disc_radius_px=search.radius_px, dark_pins=start.dark_pins,
+                                                         with_prior=True)
         if len(probed):
             centres = np.vstack([centres, probed])
-            centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
+            order = np.lexsort((centres[:, 0], centres[:, 1]))
+            centres = centres[order]
+            # Where the lattice puts each probed tip: its fit weighs it (`pins._tipfit.fit_tip_centres`).
+            placed = (np.vstack([np.zeros((len(centres) - len(probed), 2)), prior])[order],
+                      np.concatenate([np.full(len(centres) - len(probed), np.inf), prior_sigma])[order])
             apart = cKDTree(probed).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
             rejected, reason = rejected[apart], reason[apart]
     if len(centres):
@@ -408,11 +415,12 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         rejected = np.vstack([rejected, centres[cut]])
         reason = np.concatenate([reason, np.full(int(cut.sum()), REJECTION_REASONS.index("outside field"))])
         centres = centres[~cut]
+        placed = None if placed is None else (placed[0][~cut], placed[1][~cut])
     # The blobs' centroids lean towards the bright side of a sloped membrane (an LED reflection, a
     # veil, shading): each tip is placed by fitting it as an opaque ellipse over a curved background.
     if len(centres):
         centres = fit_tip_centres(grey, centres, _pin_radius_px(grey, centres, run.pitch, start.dark_pins),
-                                  dark_pins=start.dark_pins)
+                                  dark_pins=start.dark_pins, prior=placed)
     final = _final_params(runs[later], centres, disc, run.pitch, search.radius_px)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=disc,
