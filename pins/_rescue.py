@@ -291,10 +291,11 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
         # alone may peak a pixel off it.
         # Every link that predicts a found pin's hole (its site within the link's tolerance of the pin)
         # gives a prior (`pins._sites.site_prior`); together, their product.
-        each, each_spread = site_prior(pins, sites, through, centre)
-        each_spread[centre_pin] = np.inf  # the centre pin's site: no link predicts it
-        weight = np.where(np.hypot(*(sites[None] - position[found][:, None]).transpose(2, 0, 1)) <= tolerance[None],
-                          1.0 / np.square(each_spread)[None], 0.0)  # (F, S)
+        predicts = np.hypot(*(sites[None] - position[found][:, None]).transpose(2, 0, 1)) <= tolerance[None]  # (F, S)
+        each, each_spread = sites.copy(), np.full(len(sites), np.inf)
+        asked = predicts.any(axis=0) & ~centre_pin  # (the centre pin's site: no link predicts it)
+        each[asked], each_spread[asked] = site_prior(pins, sites[asked], through[asked], centre)
+        weight = np.where(predicts, 1.0 / np.square(each_spread)[None], 0.0)
         total = weight.sum(axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
             prior = np.where(total[:, None] > 0, (weight @ each) / total[:, None], sites[found])
