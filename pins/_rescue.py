@@ -288,9 +288,8 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
             break
         found = np.sort(found)
         # Placed where the image and the lattice agree best (`_placed_by_prior`): a faint tip's evidence
-        # alone may peak a pixel off it.
-        # Every link that predicts a found pin's hole (its site within the link's tolerance of the pin)
-        # gives a prior (`pins._sites.site_prior`); together, their product.
+        # alone may peak a pixel off it. Every link that predicts a found pin's hole (its site within the
+        # link's tolerance of the pin) gives a prior (`pins._sites.site_prior`); together, their product.
         predicts = np.hypot(*(sites[None] - position[found][:, None]).transpose(2, 0, 1)) <= tolerance[None]  # (F, S)
         each, each_spread = sites.copy(), np.full(len(sites), np.inf)
         asked = predicts.any(axis=0) & ~centre_pin  # (the centre pin's site: no link predicts it)
