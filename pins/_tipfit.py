@@ -39,6 +39,7 @@ from scipy.spatial import cKDTree
 from scipy.special import erf
 
 from ._kernels import compiled
+from ._noise import noise_sigma
 from ._window import _squared_norm
 
 __all__ = ["fit_tip_centres", "tip_shapes"]
@@ -55,7 +56,8 @@ _ERF_SLOPE = 1.0 / (np.sqrt(np.pi) * _EDGE_PX)  # d coverage / d beyond at the b
 _MARGIN_PX = 1.0  # the window reaches this far beyond 1.5 pin radii (the tip's foot and a ring of membrane)
 
 
-def fit_tip_centres(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, dark_pins: bool = False) -> np.ndarray:
+def fit_tip_centres(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, dark_pins: bool = False,
+                    prior: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Sub-pixel centres of pin tips, each fitted as an opaque ellipse over a quadratic background.
 
     Parameters
@@ -68,6 +70,12 @@ def fit_tip_centres(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, 
         Pin tip radius, px (half-height radius; the fit finds each tip's own ellipse).
     dark_pins : bool
         Dark markers on a light membrane (the image is inverted).
+    prior : ((N, 2) ndarray, (N,) ndarray), optional
+        Where the lattice puts each tip and how sure it is (a Gaussian of that many px per axis; inf:
+        no prior): the tips found by probing a lattice hole (`pins._rescue.probe_lattice_holes`), faint,
+        whose squared residual a pixel off the truth may be within a few noise variances of the truth's.
+        Their centres (the ellipse fixed) minimise the squared residual plus the noise variance
+        (`pins._noise.noise_sigma`) times ``|centre - prior|^2 / sigma^2``.
 
     Returns
     -------
@@ -96,7 +104,12 @@ def fit_tip_centres(grey: np.ndarray, centres: np.ndarray, radius_px: float, *, 
     fixed = theta.copy()
     fixed[:, :2] = start
     fixed[:, 2:] = np.median(theta[near, 2:], axis=1)
-    fixed = _gauss_newton(window, fixed, start, radius_px, free=2, passes=_CENTRE_PASSES)
+    pull = None
+    if prior is not None:
+        mean, sigma = (np.asarray(a, dtype=np.float64) for a in prior)
+        weight = np.where(np.isfinite(sigma), noise_sigma(grey) ** 2 / np.maximum(sigma, 1e-3) ** 2, 0.0)
+        pull = (np.where(weight[:, None] > 0, mean, 0.0), weight) if np.any(weight > 0) else None
+    fixed = _gauss_newton(window, fixed, start, radius_px, free=2, passes=_CENTRE_PASSES, prior=pull)
     return fixed[:, :2].copy()
 
 
@@ -213,8 +226,11 @@ def _disc_grid(half: int, width: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius_px: float, *, free: int,
-                  passes: int) -> np.ndarray:
-    """Refine the first `free` of (mu_x, mu_y, Q_xx, Q_xy, Q_yy) by damped Gauss-Newton (N, 5)."""
+                  passes: int, prior: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """Refine the first `free` of (mu_x, mu_y, Q_xx, Q_xy, Q_yy) by damped Gauss-Newton (N, 5).
+
+    `prior` (with ``free=2``): centres (N, 2) px and weights (N,) grey^2 / px^2 (0: none): each centre's
+    objective adds its weight times its squared distance from its prior centre."""
     damping = np.full(len(theta), 1e-3)
     lowest, highest = (1.0 / (_AXIS_RANGE[1] * radius_px) ** 2, 1.0 / (_AXIS_RANGE[0] * radius_px) ** 2)
     eye = _EYE[free]
@@ -269,9 +285,13 @@ def _gauss_newton(window: _Windows, theta: np.ndarray, start: np.ndarray, radius
                 np.multiply(by_q, dq, out=jacobian[:, row])
         jw = jacobian * weight[:, None, :]
         hessian = jw @ jacobian.transpose(0, 2, 1)
+        gradient = (jw @ residual[..., None])[..., 0]
+        if prior is not None:
+            hessian = hessian + prior[1][:, None, None] * eye
+            gradient = gradient + prior[1][:, None] * (prior[0] - theta[:, :2])
         hessian = hessian + damping[:, None, None] * np.diagonal(hessian, axis1=1, axis2=2)[:, :, None] * eye
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            step = np.linalg.solve(hessian + 1e-9 * eye, jw @ residual[..., None])[..., 0]
+            step = np.linalg.solve(hessian + 1e-9 * eye, gradient[..., None])[..., 0]
         step[:, :2] = np.clip(step[:, :2], -0.5, 0.5)
         new = theta.copy()
         new[:, :free] += step

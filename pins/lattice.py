@@ -59,7 +59,8 @@ finds that lattice without being told the pin count:
    still left (not on a flat gel) the image itself is probed for a faint tip;
 5c. centres: each kept pin is placed by fitting its tip as an opaque ellipse over a quadratic
    background (`pins._tipfit`): the blobs' centroids lean towards the bright side of a sloped
-   membrane (a reflection's flank, the veil, shading) by up to 0.7 px on small tips;
+   membrane (a reflection's flank, the veil, shading) by up to 0.7 px on small tips; a faint tip
+   found by probing a hole also weighs where the lattice puts it (`pins._rescue`, `pins._sites.site_prior`);
 6. later frames: `PinField.params` are those of the highest offset that keeps (nearly) the same
    pins (it keeps pins pushed together by a contact apart), with the kept pins' area range and a
    rim margin that leaves out the membrane half a pitch beyond the outermost pin and the rim
@@ -98,12 +99,12 @@ The candidate parameter sets of steps 1, 2, 5 and 6 are generated, run, voted on
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from ._draw import draw_pin_field
+from ._field import PinField
 from ._exposure import exposure_warnings
 from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
@@ -140,82 +141,6 @@ _COARSE_BLOCK = (2.2,)
 _COARSE_OFFSETS = (9.0,)
 # Candidate sets keep 'the same pins' within this fraction (a pin matches within `_MATCH` pitches).
 _SAME_PINS = 0.005
-
-
-@dataclass(frozen=True)
-class PinField:
-    """The pins of a frame that form the pin lattice, and the blobs rejected beside them.
-
-    Attributes
-    ----------
-    centres : (N, 2) ndarray of float64
-        Kept pins (x, y), px, sorted by y then x; (0, 2) when there are none.
-    params : DetectionParams
-        Detection parameters for later frames of this sensor (`pins.detect_pins` with
-        ``disc=field.disc``): the kept pins' blur, threshold and area range, and a rim margin that
-        leaves out the membrane beyond the pin field (a rim ring and its glare).
-    disc : SensorDisc
-        The sensor disc, px (the pins were searched inside it, or inside a black rim ring's inner
-        edge when there is one); ``disc.whole_frame`` when the sensing region is the whole frame.
-    pitch_px : float
-        The pin pitch, px, of the kept pins near the field's centre (their first shell's median distance
-        on a hexagonal lattice or spokes, else their nearest neighbours')
-        (`pins.central_spacing_px`, the pitch the scale `pins.pad_scale` divides by; nan with fewer
-        than two).
-    rejected : (M, 2) ndarray of float64
-        Centres of the candidate blobs rejected, px.
-    rejected_reason : (M,) ndarray of str
-        Why each was rejected: one of `REJECTION_REASONS` ("outside field": beyond the lattice, such
-        as glare round the rim or pins a rim ring cuts, or cut by the frame's edge too deeply to measure; "off lattice": too close to a stronger pin,
-        such as a speck or a light patch of skin between pins, or at no lattice site and unlike its
-        neighbours; "size": much smaller or larger than its neighbours; "contrast": much fainter
-        than its neighbours, or with a much softer edge).
-    expected_pins : int or None
-        The pin count given, if any.
-    count_error : int or None
-        Pins kept minus `expected_pins` (None without a count).
-    warnings : tuple of str
-        What in the frame may have hidden pins, for a person (`pins._exposure`): a pad saturated off
-        the tips (lower the exposure), pins faint against the camera noise or too small (raise the
-        exposure, film the pad larger); empty when the frame shows its pins well.
-    """
-
-    centres: np.ndarray
-    params: DetectionParams
-    disc: SensorDisc
-    pitch_px: float
-    rejected: np.ndarray
-    rejected_reason: np.ndarray
-    expected_pins: int | None = None
-    count_error: int | None = None
-    warnings: tuple[str, ...] = ()
-
-    @property
-    def count(self) -> int:
-        """Number of pins kept."""
-        return int(len(self.centres))
-
-    @property
-    def field_disc(self) -> SensorDisc:
-        """The pin field's circle: `disc` less the rim margin of `params`, px."""
-        return SensorDisc(self.disc.cx, self.disc.cy, max(self.disc.radius_px - self.params.rim_margin_px, 0.0))
-
-    def rejected_counts(self) -> dict[str, int]:
-        """How many blobs were rejected for each reason (every reason listed, zeros included)."""
-        return {reason: int(np.count_nonzero(self.rejected_reason == reason)) for reason in REJECTION_REASONS}
-
-    def summary(self, *, pitch: bool = True) -> str:
-        """One line for a person: pins kept, pitch (unless `pitch` is False: a summary that prints the
-        scale prints the pitch there), blobs rejected by reason, the count check."""
-        rejected = ", ".join(f"{n} {reason}" for reason, n in self.rejected_counts().items() if n)
-        pitch = f", pitch {self.pitch_px:.1f} px" if pitch and np.isfinite(self.pitch_px) else ""
-        line = f"{self.count} pins{pitch}; rejected {len(self.rejected)}"
-        line += f" ({rejected})" if rejected else ""
-        if self.expected_pins is not None:
-            error = self.count_error
-            off = "exact" if error == 0 else f"{error:+d} ({error / self.expected_pins:+.1%})"
-            line += f"; expected {self.expected_pins}: {off}"
-        return line
 
 
 def find_pin_field(frame: np.ndarray, *, expected_pins: int | None = None, params: DetectionParams | None = None,
@@ -458,6 +383,7 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
         apart = cKDTree(extra).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
         rejected, reason = rejected[apart], reason[apart]
+    placed = None  # the probed tips' lattice prior (centres, px per axis), aligned with `centres`
     if not disc.whole_frame and len(centres):
         radius_px = _pin_radius_px(grey, centres, run.pitch, start.dark_pins)
         # A reflection's flat top at a lattice site: no tip stands above the membrane round it.
@@ -468,11 +394,16 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
             reason = np.concatenate([reason, np.full(int(flat.sum()), REJECTION_REASONS.index("contrast"))])
             centres = centres[~flat]
         # Holes no blob filled (a faint spoke end under the veil): the image itself, looked at there.
-        probed = probe_lattice_holes(grey, centres, (disc.cx, disc.cy), radius_px,
-                                     disc_radius_px=search.radius_px, dark_pins=start.dark_pins)
+        probed, prior, prior_sigma = probe_lattice_holes(grey, centres, (disc.cx, disc.cy), radius_px,
+                                                         disc_radius_px=search.radius_px, dark_pins=start.dark_pins,
+                                                         with_prior=True)
         if len(probed):
             centres = np.vstack([centres, probed])
-            centres = centres[np.lexsort((centres[:, 0], centres[:, 1]))]
+            order = np.lexsort((centres[:, 0], centres[:, 1]))
+            centres = centres[order]
+            # Where the lattice puts each probed tip: its fit weighs it (`pins._tipfit.fit_tip_centres`).
+            placed = (np.vstack([np.zeros((len(centres) - len(probed), 2)), prior])[order],
+                      np.concatenate([np.full(len(centres) - len(probed), np.inf), prior_sigma])[order])
             apart = cKDTree(probed).query(rejected)[0] > _MATCH * pitch if len(rejected) else np.zeros(0, bool)
             rejected, reason = rejected[apart], reason[apart]
     if len(centres):
@@ -484,11 +415,12 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
         rejected = np.vstack([rejected, centres[cut]])
         reason = np.concatenate([reason, np.full(int(cut.sum()), REJECTION_REASONS.index("outside field"))])
         centres = centres[~cut]
+        placed = None if placed is None else (placed[0][~cut], placed[1][~cut])
     # The blobs' centroids lean towards the bright side of a sloped membrane (an LED reflection, a
     # veil, shading): each tip is placed by fitting it as an opaque ellipse over a curved background.
     if len(centres):
         centres = fit_tip_centres(grey, centres, _pin_radius_px(grey, centres, run.pitch, start.dark_pins),
-                                  dark_pins=start.dark_pins)
+                                  dark_pins=start.dark_pins, prior=placed)
     final = _final_params(runs[later], centres, disc, run.pitch, search.radius_px)
     count_error = None if expected_pins is None else len(centres) - int(expected_pins)
     return PinField(centres=centres, params=final, disc=disc,
