@@ -221,7 +221,7 @@ def _find(grey: np.ndarray, expected_pins: int | None, params: DetectionParams |
         disc = find_sensor_disc(grey, dark_pins=start.dark_pins)
     except NoSensorError as exc:
         # No disc of this polarity: a flat gel fills the frame when the other polarity shows none
-        # either (a pad of the other polarity means these markers are not there).
+        # either; a pad of the other polarity means these markers are not there, but for the case below.
         try:
             find_sensor_disc(grey, dark_pins=not start.dark_pins)
         except NoSensorError:
@@ -231,6 +231,13 @@ def _find(grey: np.ndarray, expected_pins: int | None, params: DetectionParams |
             raise NoSensorError(f"{exc}; nor a pin lattice filling the frame ({field.count} pins"
                                 + (", not on a regular lattice" if field.count >= MIN_SENSOR_PINS else
                                    f", need {MIN_SENSOR_PINS}") + ")") from None
+        if params is None:
+            # White pins on a dark membrane in a dark casing frame no disc of their own: the polarity
+            # decided as `_decide_polarity` decides it (in the other's disc, grown) is searched as
+            # asked when it is this one; a pad of the other polarity refuses these markers.
+            decided = _decide_polarity(grey, start, None, expected_pins)
+            if decided.params.dark_pins == start.dark_pins:
+                return decided
         raise
     return _search(grey, disc, start, params is not None, expected_pins)
 

@@ -418,6 +418,19 @@ def test_a_forced_polarity_is_kept():
         find_pin_field(f.image, dark_pins=True)
 
 
+def test_the_polarity_asked_for_on_white_pins_in_a_dark_casing():
+    """White pins on a dark membrane in a dark casing frame no bright-pin disc of their own: asked for
+    bright pins (dark_pins=False), the field is the one decided without asking (as bench_pins asks with
+    the renderer's polarity), not a refusal; the wrong polarity on a bright-pin pad is still refused."""
+    f = preset_frame("white-dark-331")
+    field = find_pin_field(f.image, dark_pins=False)
+    assert field.params.dark_pins is False
+    assert np.array_equal(field.centres, find_pin_field(f.image).centres)
+    assert field.count == int(f.visible.sum())
+    with pytest.raises(NoSensorError, match="no sensor disc"):
+        find_pin_field(preset_frame("tactip-331").image, dark_pins=True)
+
+
 @pytest.mark.parametrize("sides", ["left", "left+bottom"])
 @pytest.mark.parametrize("name", ["tactip-331", "dark-331", "brown-127", "radial-120", "rim-ring-331"])
 def test_pin_field_of_a_pad_cut_by_the_frame_edge_meets_the_bar(name, sides):
