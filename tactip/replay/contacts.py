@@ -249,7 +249,7 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
                             high_px=high_px)
         # a settled tail within the pins' own noise: the tracked pins catching up after a lift move the medians too
         bounds = trim_settled(bounds, bridged, low_px=max(low_px, 2.0 * jitter_px) if field is local else low_px)
-        bounds = drop_unmoved(bounds, field, high_px=high_px)
+        bounds = drop_unmoved(bounds, field, bridged, low_px=low_px, high_px=high_px)
     kinds = _kinds(displacements, bounds, signal, low_px, rest_positions,
                    field=None if rest_positions is None else field, spacing_px=spacing)
     if not with_rests:

@@ -65,6 +65,13 @@ def test_a_contact_whose_pins_did_not_move_is_dropped():
     field = rng.normal(0.0, 0.05, (40, 50, 2))
     field[10:18, :10, 0] += 2.0                     # a press: ten pins moved 2 px
     field[25:35, 10:20] = np.nan                    # ten pins unseen, found again at frame 35: no pin moved
-    bounds = [(9, 19), (33, 38)]                    # the second: a signal risen by a stale rest only
-    assert drop_unmoved(bounds, field, high_px=1.0) == [(9, 19)]
-    assert tap_signal(field[10:18] - field[8])[0] >= 1.0
+    signal = np.full(40, 0.1)
+    signal[10:18] = signal[35:38] = 2.0             # the second: a signal risen by a stale rest only
+    bounds = [(9, 19), (33, 38)]
+    assert drop_unmoved(bounds, field, signal, low_px=0.5, high_px=1.0) == [(9, 19)]
+    # a slow press whose first frames were trimmed: moved 1.65 px from the rest before it, 0.9 from its last frame before
+    slow = rng.normal(0.0, 0.05, (20, 50, 2))
+    slow[:, :10, 0] += np.clip(np.arange(20) - 5, 0, 15)[:, None] * 0.15
+    ramp = tap_signal(slow - slow[0])
+    assert drop_unmoved([(14, 20)], slow, ramp, low_px=0.5, high_px=1.0) == [(14, 20)]
+    assert tap_signal(slow[19:] - slow[13:14])[0] < 1.0
