@@ -89,7 +89,7 @@ presses 1.4-1.8 on both; tour22 compared the medians against the pins' own signa
 the pins' jitter floor sets the low threshold at twice its least for the pitch or more (`noise_limited`: radial
 2.2-3.8x, tactip-127 and white-dark-331 0.2-0.3x), `tap_thresholds_px` takes the medians' floor (radial high 1.2-1.7
 -> 0.66-1.0 px) and `find_contacts` finds contacts on the medians; a contact whose pins never moved by the high
-threshold from the frame before it is dropped (`drop_unmoved`: spurious ones 0.34-0.85x, found ones 1.39x or
+threshold from the skin at rest before it is dropped (`drop_unmoved`: spurious ones 0.34-0.85x, found ones 1.39x or
 more). New skin, development seeds 0-11: radial-led-120 2/12 (110/132) -> 9/12 (126/132), tactip-127 9/12
 (129/132) -> 10/12 (129/132: a spurious press dropped), white-dark-331 11/12 (127/132) unchanged contact for
 contact; held out 48-53 (once, at the end): radial-led-120 2/6 (53/66) -> 4/6 (64/66), tactip-127 3/6 (60/66) and

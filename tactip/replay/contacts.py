@@ -194,9 +194,9 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     never looks at rest between contacts (they merged, and a slide's direction and a press's field
     carried what the last slides left). A contact's still ends are trimmed (`trim_still`: the pins did not
     move) and so is a settled tail after a lift (`trim_settled`: the signal flat at what the skin kept, while the
-    tracked pins catch up); a contact whose pins never moved by the high threshold from the frame before it is
-    dropped (`drop_unmoved`: pins found again with a stale rest, a rest taken mid-release). Kinds are `pins.contact_kinds` with the rest positions (a
-    press's field spreads out, a slide's shifts one way).
+    tracked pins catch up); a contact whose pins never moved by the high threshold from the skin at rest before
+    it is dropped (`drop_unmoved`: pins found again with a stale rest, a rest taken mid-release). Kinds are
+    `pins.contact_kinds` with the rest positions (a press's field spreads out, a slide's shifts one way).
 
     Parameters
     ----------

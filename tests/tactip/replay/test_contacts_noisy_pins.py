@@ -69,7 +69,7 @@ def test_a_contact_whose_pins_did_not_move_is_dropped():
     signal[10:18] = signal[35:38] = 2.0             # the second: a signal risen by a stale rest only
     bounds = [(9, 19), (33, 38)]
     assert drop_unmoved(bounds, field, signal, low_px=0.5, high_px=1.0) == [(9, 19)]
-    # a slow press whose first frames were trimmed: moved 1.65 px from the rest before it, 0.9 from its last frame before
+    # a slow press whose first frames were trimmed: moved 1.65 px from the rest before it, 0.9 from the frame before
     slow = rng.normal(0.0, 0.05, (20, 50, 2))
     slow[:, :10, 0] += np.clip(np.arange(20) - 5, 0, 15)[:, None] * 0.15
     ramp = tap_signal(slow - slow[0])
