@@ -98,6 +98,11 @@ white-dark-331 6/6 (66/66) unchanged contact for contact. Old skin (seeds 0-11, 
 6/12 (126/132). Tried and dropped: pins jittering twice the median outvoted (108-111/132), the medians' thresholds
 on the pins' own field (108), the medians' field at the pins' thresholds (109), medians only for seen pins (123),
 skin_rest judged at the pins' own low threshold (122); the medians everywhere: tactip-127 129 -> 109/132.
+Rendered and replayed again end to end (main fb192f9's tracker, this branch's replay; main scored on the same
+tracking with its own thresholds): radial-led-120 dev seeds 0-11 3/12 (112/132) -> 7/12 (127/132); tactip-127 and
+white-dark-331 seeds 0-3 contact for contact the same (2/4, 38/44; 4/4, 44/44). Also tried: trim_still judging
+stillness within the pins' own noise, as trim_settled does (press-downs trimmed: 120/132); a rest frame only where
+three quarters of the first frame's pins are seen (115/132; 0.6: 127/132, 9/12, not kept for one contact).
 What is left on radial-led-120: seed 3's and 11's rests taken where the tracker had lost 40-60 % of the pins (47
 of 119 seen; a slide's signal collapsing 20 -> 2.5 px in one frame as the dragged pins' medians go NaN): the
 following slide measured from there merges through the next rest; seed 5 a slide 6 frames late.
