@@ -81,6 +81,32 @@ at the truth's start against a floor of 0.5-0.6), and the neighbourhood's median
 (0.49-0.59 px against the pins' own 0.48-0.56 off contact, seeds 0-3 and 5: the noise is shared by neighbours),
 so the missed presses (peaks 1.1-1.6 px against high thresholds of 1.2-1.7) stay missed.
 
+Session 22's tour23 (main fb192f9 -> tour23, tour21's tracking; this bench now sets the thresholds from the kept
+tracking as replay's analyse does). radial-led-120's noise is each pin's own, not shared: the frame's median motion
+0.01-0.07 px (a frame-wide similarity has nothing to remove), the pins' 0.08-0.14 px per axis median, 0.12-0.28 at
+the 90th percentile, up to 1.7; the neighbourhood's median halves it (a still pad's tap signal 0.55 -> 0.32 px,
+presses 1.4-1.8 on both; tour22 compared the medians against the pins' own signal at the pins' thresholds). Where
+the pins' jitter floor sets the low threshold at twice its least for the pitch or more (`noise_limited`: radial
+2.2-3.8x, tactip-127 and white-dark-331 0.2-0.3x), `tap_thresholds_px` takes the medians' floor (radial high 1.2-1.7
+-> 0.66-1.0 px) and `find_contacts` finds contacts on the medians; a contact whose pins never moved by the high
+threshold from the skin at rest before it is dropped (`drop_unmoved`: spurious ones 0.34-0.85x, found ones 1.39x or
+more). New skin, development seeds 0-11: radial-led-120 2/12 (110/132) -> 9/12 (126/132), tactip-127 9/12
+(129/132) -> 10/12 (129/132: a spurious press dropped), white-dark-331 11/12 (127/132) unchanged contact for
+contact; held out 48-53 (once, at the end): radial-led-120 2/6 (53/66) -> 4/6 (64/66), tactip-127 3/6 (60/66) and
+white-dark-331 6/6 (66/66) unchanged contact for contact. Old skin (seeds 0-11, 48-53) all right before and after
+(radial's bounds moved on 14 of 18 tours), residual 0 (seeds 0-5) 66/66 each. The medians alone (no drop): radial
+6/12 (126/132). Tried and dropped: pins jittering twice the median outvoted (108-111/132), the medians' thresholds
+on the pins' own field (108), the medians' field at the pins' thresholds (109), medians only for seen pins (123),
+skin_rest judged at the pins' own low threshold (122); the medians everywhere: tactip-127 129 -> 109/132.
+Rendered and replayed again end to end (main fb192f9's tracker, this branch's replay; main scored on the same
+tracking with its own thresholds): radial-led-120 dev seeds 0-11 3/12 (112/132) -> 7/12 (127/132); tactip-127 and
+white-dark-331 seeds 0-3 contact for contact the same (2/4, 38/44; 4/4, 44/44). Also tried: trim_still judging
+stillness within the pins' own noise, as trim_settled does (press-downs trimmed: 120/132); a rest frame only where
+three quarters of the first frame's pins are seen (115/132; 0.6: 127/132, 9/12, not kept for one contact).
+What is left on radial-led-120: seed 3's and 11's rests taken where the tracker had lost 40-60 % of the pins (47
+of 119 seen; a slide's signal collapsing 20 -> 2.5 px in one frame as the dragged pins' medians go NaN): the
+following slide measured from there merges through the next rest; seed 5 a slide 6 frames late.
+
 Run: .venv/bin/python bench/bench_tour_contacts.py [--presets radial-led-120,white-dark-331,tactip-127]
      [--seeds 0-11] [--residual 0.1 --creep-s 1.0 --set-share 0.02 --set-s inf] [--keep DIR]
 """
@@ -145,7 +171,8 @@ def tours(presets: list[str], seeds: list[int], root: pathlib.Path) -> None:
     rendered ones, per preset and seed; tours met (right = rendered = found) and contacts right in total."""
     import pickle
 
-    from tactip.replay.contacts import find_contacts
+    from pins import median_spacing_px, neighbour_median
+    from tactip.replay.contacts import find_contacts, tap_thresholds_px
 
     for preset in presets:
         met = right_all = rendered_all = 0
@@ -155,9 +182,13 @@ def tours(presets: list[str], seeds: list[int], root: pathlib.Path) -> None:
             start = time.process_time()
             given = tour_replay(preset, seed, folder)
             events = pickle.loads(given["events"].tobytes())
-            bounds, kinds = find_contacts(given["displacements"], signal=given["signal"], blank=given["blank"],
-                                          thresholds_px=tuple(given["thresholds_px"]),
-                                          rest_positions=given["rest_positions"])
+            # the thresholds as replay's analyse sets them now (a kept tracking holds those of the code that kept it)
+            displacements, rest, blank = given["displacements"], given["rest_positions"], given["blank"]
+            medians = neighbour_median(displacements, rest)
+            thresholds = tap_thresholds_px(displacements, median_spacing_px(rest[np.isfinite(rest).all(axis=1)]),
+                                           usable=~blank, signal=given["signal"], medians=medians)
+            bounds, kinds = find_contacts(displacements, signal=given["signal"], blank=blank, thresholds_px=thresholds,
+                                          rest_positions=rest, medians=medians)
             right, rendered, found, problems = score_contacts(
                 events, bounds, [k.kind for k in kinds], [k.direction_deg for k in kinds])
             met += right == rendered == found

@@ -10,7 +10,7 @@ import numpy as np
 
 from pins import tap_signal
 
-__all__ = ["SETTLED_CREEP", "SETTLED_FRAMES", "SETTLED_SHARE", "trim_settled", "trim_still"]
+__all__ = ["SETTLED_CREEP", "SETTLED_FRAMES", "SETTLED_SHARE", "drop_unmoved", "trim_settled", "trim_still"]
 # Fewest frames of a settled tail (`trim_settled`): a tracker's catch-up after a lift lasts 2-3 frames.
 SETTLED_FRAMES = 3
 # Highest share of a contact's peak signal a settled tail sits at (a press's hold sits at its peak).
@@ -72,3 +72,29 @@ def trim_settled(bounds, signal: np.ndarray, *, low_px: float, frames: int = SET
                 stop = start + last + 1 - run
         trimmed.append((start, stop))
     return trimmed
+
+
+def drop_unmoved(bounds, field: np.ndarray, signal: np.ndarray, *, low_px: float, high_px: float) -> list:
+    """Contacts whose pins moved: at some frame of the contact, `pins.tap_signal` of ``field`` ((T, N, 2) px, NaN
+    where unseen) less its last frame with pins before the contact where ``signal`` (px) was below ``low_px`` (the
+    skin at rest there; else its last frame with pins before the contact), over the pins seen in both, reaches
+    ``high_px``.
+
+    A contact moves the pins under it by as much as its signal rose. Measured from the skin's rest, the signal can
+    also rise with no pin moving: pins found again with their rest from an earlier rest frame (before a slide), or
+    a rest frame taken while a press's release went on slowly (radial-led-120's tours: such "presses" moved their
+    pins by 0.34-0.85 of the high threshold; every rendered contact by 1.4 or more). A slow press's first frames
+    trimmed (`trim_still`) moved the pins before the contact's start: measured from the rest before them.
+    """
+    seen = np.isfinite(field[..., 0]).any(axis=1)
+    quiet = seen & (np.asarray(signal) < low_px)
+    kept = []
+    for start, stop in bounds:
+        before = np.flatnonzero(quiet[:start])
+        before = before if before.size else np.flatnonzero(seen[:start])
+        if before.size:
+            moved = tap_signal(field[start:stop] - field[before[-1]])
+            if not (moved >= high_px).any():
+                continue
+        kept.append((start, stop))
+    return kept

@@ -15,12 +15,12 @@ from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, co
                   tap_signal)
 
 from tactip.pipeline import PinTrack
-from tactip.replay._trim import trim_settled, trim_still
+from tactip.replay._trim import drop_unmoved, trim_settled, trim_still
+from tactip.replay._thresholds import REFERENCE_PITCH_PX, noise_limited, tap_thresholds_px
 
 __all__ = ["DEFAULT_PAD_DIAMETER_MM", "REFERENCE_PITCH_PX", "analyse", "check_rest_frame", "feature_rests_of",
-           "find_contacts", "local_maxima", "neighbour_medians_of", "split_at_dips", "tap_thresholds_px"]
-# Pin spacing, px, at which the tap thresholds are segment_taps' defaults (331 pins, 640x480).
-REFERENCE_PITCH_PX = 17.5
+           "find_contacts", "local_maxima", "neighbour_medians_of", "noise_limited", "split_at_dips",
+           "tap_thresholds_px"]
 
 
 def check_rest_frame(displacements: np.ndarray, rest_positions: np.ndarray, *, rest_frame: int,
@@ -123,12 +123,19 @@ def analyse(track: PinTrack, *, calibration, n_pins: int, min_separation_mm: flo
     except (PinsError, ValueError) as exc:
         warnings.append(f"the rest frame could not be checked ({exc})")
     bounds, kinds, rests = [], [], []
-    high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px,
-                                        usable=track.tracked & ~track.blank, signal=signal)
+    try:  # the neighbourhood medians: the thresholds' noise floor and find_contacts' field
+        medians = neighbour_medians_of(track, neighbour_medians)
+        medians = neighbour_median(displacements, rest) if medians is None else medians
+    except (PinsError, ValueError):
+        medians = None
+    usable = track.tracked & ~track.blank
+    jitter = jitter_floor_px(displacements, usable=usable)
+    high_px, low_px = tap_thresholds_px(displacements, track.tracker.spacing_px, usable=usable, signal=signal,
+                                        medians=medians, jitter_px=jitter)
     try:
         bounds, kinds, rests = find_contacts(displacements, signal=signal, blank=track.blank,
                                              thresholds_px=(high_px, low_px), rest_positions=rest,
-                                             medians=neighbour_medians_of(track, neighbour_medians), with_rests=True)
+                                             medians=medians, with_rests=True, jitter_px=jitter)
         if not bounds:
             warnings.append(f"no taps found (no frame moved the pins by {high_px:.2g} px): only the tracking "
                             f"was written")
@@ -162,7 +169,8 @@ def feature_rests_of(rests, selected: np.ndarray, *, low_px: float, rest_frame: 
 
 def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.ndarray,
                   thresholds_px: tuple[float, float], rest_positions: np.ndarray | None = None,
-                  medians: np.ndarray | None = None, with_rests: bool = False) -> tuple:
+                  medians: np.ndarray | None = None, with_rests: bool = False,
+                  jitter_px: float | None = None) -> tuple:
     """The contacts of a replay and their kinds: ([start, stop) frames, a `pins.ContactKind` each), and with
     ``with_rests`` the skin's rest before each.
 
@@ -174,15 +182,21 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     tap signal they held it up at 0.6-3 px after a lift, a contact stopping 4 frames late or a slide
     2 frames after another starting 5 frames early, or made short contacts of their own). A pin that
     agrees with its neighbours within the noise keeps its own displacement, so a clean tap's onset
-    and end are where they were. Given the rest positions, the displacements are also measured from
+    and end are where they were. Where the pins' own noise reaches the low threshold (twice their jitter floor,
+    `pins.jitter_floor_px`, above it: `tap_thresholds_px` then set it from the medians' lower noise), every pin
+    counts as its neighbourhood's median: on radial-led-120's tours each pin jitters by its own 0.1-0.3 px
+    (up to 1.7), a still pad's tap signal 0.55 px on the pins and 0.3 on the medians, while a press moves its
+    patch together (1.0-1.8 px on both): the press-down before a slide's drag and a light press stood inside
+    the pins' noise. Given the rest positions, the displacements are also measured from
     the skin's own rest before each frame (`pins.skin_rest`: the last still frame after a lift, or of
     a rest creeping back towards the first frame's), not the first frame's: a real elastomer creeps
     back over a second or more after a slide and may keep a set, and measured from the first frame it
     never looks at rest between contacts (they merged, and a slide's direction and a press's field
     carried what the last slides left). A contact's still ends are trimmed (`trim_still`: the pins did not
     move) and so is a settled tail after a lift (`trim_settled`: the signal flat at what the skin kept, while the
-    tracked pins catch up). Kinds are `pins.contact_kinds` with the rest positions (a
-    press's field spreads out, a slide's shifts one way).
+    tracked pins catch up); a contact whose pins never moved by the high threshold from the skin at rest before
+    it is dropped (`drop_unmoved`: pins found again with a stale rest, a rest taken mid-release). Kinds are
+    `pins.contact_kinds` with the rest positions (a press's field spreads out, a slide's shifts one way).
 
     Parameters
     ----------
@@ -205,13 +219,22 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
         (`pins.skin_rest`) at or before the contact's start and the pins' displacements there ((N, 2) px, from
         the frames' own rest: a pin unseen there at the latest rest frame where it was seen, its neighbourhood's
         median where it disagreed with it); without ``rest_positions``, the first frame with pins and zeros.
+    jitter_px : float, optional
+        `pins.jitter_floor_px` of ``displacements`` when already computed, px.
     """
     high_px, low_px = thresholds_px
-    coherent, relative, rest, frames = signal, None, None, None
+    coherent, relative, rest, frames, spacing = signal, None, None, None, float("nan")
     if rest_positions is not None:  # a pin differing from its neighbourhood by more than the noise is outvoted
+        at_rest = np.asarray(rest_positions, dtype=np.float64)
+        spacing = median_spacing_px(at_rest[np.isfinite(at_rest).all(axis=1)])
         local = neighbour_median(displacements, rest_positions) if medians is None else medians
-        alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
-        field = np.where(alone[..., None], local, displacements)
+        if jitter_px is None:
+            jitter_px = jitter_floor_px(displacements, usable=~blank)
+        if noise_limited(jitter_px, spacing):   # each pin's own noise: the neighbourhood's medians
+            field, alone = local, np.zeros(displacements.shape[:2], dtype=bool)
+        else:
+            alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
+            field = np.where(alone[..., None], local, displacements)
         # the skin's own rest before each frame
         rest, frames = skin_rest(field, low_px=low_px, high_px=high_px, fill=local, steady=~alone, return_frames=True)
         relative = field - rest
@@ -224,9 +247,11 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     if relative is not None:
         bounds = trim_still(bounds, np.where(alone[..., None], np.nan, field), bridged, low_px=low_px,
                             high_px=high_px)
-        bounds = trim_settled(bounds, bridged, low_px=low_px)
+        # a settled tail within the pins' own noise: the tracked pins catching up after a lift move the medians too
+        bounds = trim_settled(bounds, bridged, low_px=max(low_px, 2.0 * jitter_px) if field is local else low_px)
+        bounds = drop_unmoved(bounds, field, bridged, low_px=low_px, high_px=high_px)
     kinds = _kinds(displacements, bounds, signal, low_px, rest_positions,
-                   field=None if rest_positions is None else field)
+                   field=None if rest_positions is None else field, spacing_px=spacing)
     if not with_rests:
         return bounds, kinds
     if rest is None:
@@ -346,53 +371,16 @@ def local_maxima(values: np.ndarray) -> np.ndarray:
     return ((starts[inner] + ends[inner]) // 2)[peak].astype(np.intp)
 
 
-def tap_thresholds_px(displacements: np.ndarray, spacing_px: float, *, usable: np.ndarray | None = None,
-                      signal: np.ndarray | None = None) -> tuple[float, float]:
-    """The hysteresis thresholds of `pins.segment_taps` for this sensor, px: (high, low).
-
-    The defaults (1.5 and 0.5 px) fit a pad whose pins are about `REFERENCE_PITCH_PX` apart in the
-    image; on a pad seen smaller (a small pad, a low resolution) the pins move proportionally less
-    and the thresholds shrink with the pitch (never grow), but stay above the tracking noise: the
-    low threshold at least twice the tap signal of a still pad (the lower of the frames' 10th
-    percentile and the signal the pins' frame-to-frame jitter gives, `pins.jitter_floor_px`).
-
-    Parameters
-    ----------
-    displacements : (T, N, 2) ndarray
-        px, NaN where lost.
-    spacing_px : float
-        Median nearest-neighbour pin spacing at rest, px.
-    usable : (T,) ndarray of bool, optional
-        Frames to measure the noise on (tracked, not blank); all by default.
-    signal : (T,) ndarray, optional
-        The tap signal of every frame (`pins.tap_signal`) when already computed, px.
-    """
-    factor = min(1.0, spacing_px / REFERENCE_PITCH_PX) if np.isfinite(spacing_px) and spacing_px > 0 else 1.0
-    if signal is None:
-        signal = tap_signal(displacements)
-    quiet = signal if usable is None else signal[usable]
-    floor = float(np.percentile(quiet, 10)) if quiet.size else 0.0
-    # A recording that is mostly contact (slides with short rests between them) has few quiet frames
-    # to measure the floor on: the noise is also measured from the frame-to-frame jitter of the pins
-    # (`pins.jitter_floor_px`), which contact does not raise, and the lower of the two is kept.
-    floor = min(floor, jitter_floor_px(displacements, usable=usable))
-    low = max(0.5 * factor, 2.0 * floor)
-    return max(1.5 * factor, 2.0 * low), low
-
-
 def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float, rest_positions=None,
-           field: np.ndarray | None = None) -> list:
+           field: np.ndarray | None = None, spacing_px: float = float("nan")) -> list:
     """`pins.contact_kinds` of each contact (with ``rest_positions``, (N, 2) px, when given), measured from its
     first frame where the pad was not back at rest there (the signal above ``low_px``: what the last slide left
     in the skin, creeping back, would otherwise turn this contact's drag towards that slide's direction); from
     the rest frame elsewhere. Given ``field`` ((T, N, 2) px, from the first frame's rest), a slide that only
-    gives back what the skin kept (`_gives_back`) is a press."""
+    gives back what the skin kept (`_gives_back`) is a press; a slide drags its patch `MIN_DRAG_PITCH` of the pins'
+    spacing (``spacing_px``, `pins.median_spacing_px` at rest) and 1 px or more."""
     kinds = []
-    min_drag_px = 1.0
-    if rest_positions is not None:
-        rest = np.asarray(rest_positions, dtype=np.float64)
-        spacing = median_spacing_px(rest[np.isfinite(rest).all(axis=1)])
-        min_drag_px = max(1.0, MIN_DRAG_PITCH * spacing) if np.isfinite(spacing) else 1.0
+    min_drag_px = max(1.0, MIN_DRAG_PITCH * spacing_px) if np.isfinite(spacing_px) else 1.0
     for start, stop in bounds:
         if signal[start] > low_px:
             moved = displacements[start:stop] - displacements[start]  # NaN where lost at the start: left out

@@ -3,7 +3,7 @@ they are the rendered events."""
 
 import numpy as np
 
-from pins import median_spacing_px, tap_signal
+from pins import jitter_floor_px, median_spacing_px, neighbour_median, tap_signal
 from tactip.replay.contacts import find_contacts, tap_thresholds_px
 from tactip.sim import SyntheticTacTip
 from tactip.sim.sequence import Stroke
@@ -35,13 +35,16 @@ def slides_and_a_press_after_long_rests(preset: str, frame_rate: float, seed: in
 
 
 def contacts_of(displacements, rest, **options):
-    """`find_contacts` as replay calls it (the tap signal, the thresholds from the pins' spacing, no blank frame).
+    """`find_contacts` as replay calls it (the tap signal, the neighbourhood medians, the thresholds from the pins'
+    spacing and noise, no blank frame).
 
     Returns its result and ``(signal, high_px, low_px)``; ``options`` go to `find_contacts` (``with_rests``)."""
     signal = tap_signal(displacements)
-    high, low = tap_thresholds_px(displacements, median_spacing_px(rest), signal=signal)
+    medians, jitter = neighbour_median(displacements, rest), jitter_floor_px(displacements)
+    high, low = tap_thresholds_px(displacements, median_spacing_px(rest), signal=signal, medians=medians,
+                                  jitter_px=jitter)
     found = find_contacts(displacements, signal=signal, blank=np.zeros(len(signal), bool), thresholds_px=(high, low),
-                          rest_positions=rest, **options)
+                          rest_positions=rest, medians=medians, jitter_px=jitter, **options)
     return found, (signal, high, low)
 
 
