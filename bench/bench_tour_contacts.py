@@ -107,6 +107,25 @@ What is left on radial-led-120: seed 3's and 11's rests taken where the tracker 
 of 119 seen; a slide's signal collapsing 20 -> 2.5 px in one frame as the dragged pins' medians go NaN): the
 following slide measured from there merges through the next rest; seed 5 a slide 6 frames late.
 
+Session 22's seen22 (main 04f1dc3, measured only; nothing changed): those rests are the tracker's. On tour21's kept
+tracking (the cache this bench scores), seeds 3 and 11 have 218 frames where under 60 % of the pins are placed (least
+37-40 %, from frame 238 on); against the renderer's truth (the tour rendered again), their 12910 lost pin-frames are
+11139 visible pins free of any other tip (86 %), 1194 hidden by the tour in contact (9 %), 361 merged and 216
+touching (4.5 %): outcome 1 allows 14 %. The neighbourhood's medians are NaN for 20-51 pins there, those with every
+neighbour lost: a consequence, not a cause. The tracker's split (`bench_slide_losses.causes`, its own tracking of the
+tour in memory, JPEG 75; frames under 60 % placed), dev seeds 0-11 (9 never under 0.69): 53309 of 55063 lost visible
+pin-frames are retired pins (97 %; over whole tours 198299 of 208154); the retired ones' causes: far 35999, untrusted
+9774, pulled 4284 (+judged 421), searched 1551, merged 543, touching 543, judged 194. Seeds 3 and 11: the pins placed
+there are right (1 of 9837 placed pin-frames off by half a pitch); the lost visible pins' predictions are 70 % beyond
+the 3.1 px gate, half of them a pitch (8.4 px) or more off. Seeds 0, 3, 8 and 11: 53 % of the retired lost pin-frames
+have no neighbour placed (their prediction is where they were last seen), and in 235 of 437 such frames every missing
+pin is retired, so blob recovery (`PinTracker`: only while a pin that is not retired is missing) never runs. Seed 11
+(the same tracking): retired pins grow through the slides from 39 (frame 225) to 64 (330), their last positions 12-19
+px (1.5-2 pitches) off their tips, and come back in bursts as the pad returns near rest (39 in frame 336, a lift's
+first rest frame; 13 in 377; which step places them not traced), 27 staying retired (last positions 22 px off). So
+the fix is the tracker's (recovery for retired pins, or a prediction for a patch with no neighbour placed), not
+`find_contacts`': not tried here (the tracker's files were swap22's and speed24's). Scripts: /tmp/seen22.
+
 Run: .venv/bin/python bench/bench_tour_contacts.py [--presets radial-led-120,white-dark-331,tactip-127]
      [--seeds 0-11] [--residual 0.1 --creep-s 1.0 --set-share 0.02 --set-s inf] [--keep DIR]
 """
