@@ -19,6 +19,7 @@ from scipy.optimize import linear_sum_assignment
 from . import _kernels
 from ._identity import keep_own_tips
 from ._kernels import compiled
+from ._pairfit import _SMALLEST_TIP_PX
 from ._window import WindowCentroids, _squared_norm
 
 # A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
@@ -163,11 +164,7 @@ class _Following:
         # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
         # the others can have reached a neighbour's tip.
         placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]
-        if placed.size:
-            pins, start = which[placed], start[placed]
-            self._part_tips(crop, positions, pins, start, filled)
-            self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
-            keep_own_tips(positions, pins, start, filled, self._identity_index)
+        self._part_placed(crop, positions, which, n, placed, start, filled)
         return positions, filled
 
     def _follow_compiled(self, kernels, crop: np.ndarray, guess: np.ndarray, last_seen: np.ndarray, filled: np.ndarray,
@@ -232,12 +229,49 @@ class _Following:
         # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
         # the others can have reached a neighbour's tip.
         placed = np.concatenate(placed) if placed else again[:0]
+        self._part_placed(crop, positions, which, n, placed, start, filled)
+        return positions
+
+    def _part_placed(self, crop: np.ndarray, positions: np.ndarray, which: np.ndarray, n: int, placed: np.ndarray,
+                     start: np.ndarray, filled: np.ndarray) -> None:
+        """The pins `follow` placed, rows `placed` of `which` re-centred (the first `n` rows: pins with guesses,
+        `start` the rows' window starts, px), and first-pass pins beside a missing one, held one-to-one to the tips
+        near them (`_part_tips`); re-centred ones one pin a tip, each keeping its tip only where no other pin is
+        expected nearer (`pins._identity.keep_own_tips`). In place in `positions`.
+
+        Pins placed in the first pass sat within a few tenths of a px of their own guesses: they reached a
+        neighbour's tip only if the guess lies on it. Through a drag two tips merged in the squeezed skin part
+        again; the pin that sat on the blob, its neighbour lost (one pin a tip), is guessed on the neighbour's side
+        and its window, not moving, takes that tip (`bench/bench_slide_losses.py --onsets`, tactip-331 and dark-331,
+        seeds 0-2, main 2bcbdb2: 92 of the drag's 203 follow onsets; in 195 of them the tip's own pin was lost the
+        frame before and after). So first-pass pins with a missing window neighbour (`_first_pass_parted`) have
+        their windows' tips assigned one-to-one too, against their guesses and the missing pins' predictions.
+        """
+        first = self._first_pass_parted(positions, which, n, placed)
+        if first.size or placed.size:
+            rows = np.concatenate([placed, first]) if first.size else placed
+            self._part_tips(crop, positions, which[rows], start[rows], filled)
         if placed.size:
             pins, start = which[placed], start[placed]
-            self._part_tips(crop, positions, pins, start, filled)
             self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
             keep_own_tips(positions, pins, start, filled, self._identity_index)
-        return positions
+
+    def _first_pass_parted(self, positions: np.ndarray, which: np.ndarray, n: int, placed: np.ndarray) -> np.ndarray:
+        """Rows of `which` (of its first `n`) placed in `follow`'s first pass (finite `positions`, not in `placed`)
+        with a window neighbour missing (NaN in `positions`), in frames where some windows were re-centred
+        (`placed`), for tips of at least `pins._pairfit._SMALLEST_TIP_PX` (smaller ones show no two tips in a
+        merged blob either; radial-led-120's 2 px: 3 -> 4 apart pin-frames, seeds 0-2, for +8 % of the tracker's
+        CPU on `bench_replay.py --slides 8`): those whose windows' tips `_part_placed` assigns."""
+        if not placed.size or not self.tip_fit_radius_px >= _SMALLEST_TIP_PX:
+            return placed[:0]
+        missing = np.isnan(positions[:, 0])
+        if not np.count_nonzero(missing):
+            return placed[:0]
+        rows = np.isfinite(positions[which[:n], 0])
+        rows[placed[placed < n]] = False
+        rows = rows.nonzero()[0]
+        beside = np.logical_or.reduce(missing[self._window_neighbours[:, which[rows]]], axis=0)
+        return rows[beside]
 
     def _part_tips(self, crop: np.ndarray, positions: np.ndarray, pins: np.ndarray, start: np.ndarray,
                    filled: np.ndarray) -> None:
