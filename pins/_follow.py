@@ -5,7 +5,8 @@ Following: windows at the constant-velocity guesses, re-centred once; a pin whos
 at most 0.03 spacings (`_GUESS_FRACTION`; 0.1 px at least) and ended within 0.4 spacings of its guess
 (`_FOLLOW_FRACTION`) needs no LK. A re-centred window that holds two or more tips (the skin squeezed ahead
 of a slide) does not settle between them: its tips are assigned one-to-one to the pins expected there
-(`_Following._part_tips`, issue 20).
+(`_Following._part_tips`, issue 20), as are those of first-pass pins beside a missing one (a merged blob parting
+again: `_Following._first_pass_parted`).
 
 `_Following` holds that pass; `pins._refine.Refiner` inherits it and sets the state it reads.
 """
