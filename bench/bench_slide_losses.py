@@ -112,8 +112,8 @@ is still 0.25-0.5 off for most: the field's form, not only the pins it is fitted
 beside a missing pin (window neighbours) join `pins._follow._Following._part_tips` (tips >= 3 px). Apart pin-frames,
 seeds 0-5: tactip-331 683 -> 540, dark-331 985 -> 844; held out 48-53: tactip-331 723 -> 557, dark-331 910 -> 816;
 tactip-127 79 -> 109 (worse: its lifts, LK(field) and pairfit onsets, seed 4 12 -> 33); radial-led-120 (2 px tips,
-not parted) unchanged. Tried: every tip size (radial-led-120 lost visible pin-frames 8849 -> 8634, but tracker CPU
-on `bench_replay.py --slides 8` +8-14 %); only pins whose missing neighbour is expected within 0.5 / 1.0 spacings
+not parted) unchanged. Tried: every tip size (radial-led-120 lost visible pin-frames 8555 -> 8634, main measured
+again here: 8555, not part21's 8849; tracker CPU on `bench_replay.py --slides 8` +8-14 %); only pins whose missing neighbour is expected within 0.5 / 1.0 spacings
 (0-2: 306 / 269 against 249 for any, dark-331 501 / 435 against 423); first-pass pins left where they were when
 assigned no tip (268, 433, tactip-127 67: unplacing them pays); only neighbours lost the frame before too (278, 415).
 
