@@ -187,7 +187,7 @@ def record(camera: Camera, strokes, rests_s, path: pathlib.Path, rng: np.random.
         image, centres, seen, _ = camera.film(frame)
         if first is None:
             first = (image, centres, seen)
-        writer.write(cv2.cvtColor(image, cv2.COLOR_GRAY2BGR))
+        writer.write(image if image.ndim == 3 else cv2.cvtColor(image, cv2.COLOR_GRAY2BGR))  # (brown-127: colour)
     writer.release()
     return run.events, first
 

@@ -11,7 +11,8 @@ import numpy as np
 from scipy import ndimage
 
 from pins import (DEFAULT_PAD_DIAMETER_MM, PadScale, PinSelection, PinsError, contact_kinds, jitter_floor_px,
-                  neighbour_median, segment_taps, select_feature_pins, sensor_scale, skin_rest, tap_signal)
+                  median_spacing_px, neighbour_median, segment_taps, select_feature_pins, sensor_scale, skin_rest,
+                  tap_signal)
 
 from tactip.pipeline import PinTrack
 from tactip.replay._trim import trim_settled, trim_still
@@ -387,7 +388,11 @@ def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float,
     the rest frame elsewhere. Given ``field`` ((T, N, 2) px, from the first frame's rest), a slide that only
     gives back what the skin kept (`_gives_back`) is a press."""
     kinds = []
-    min_drag_px = max(1.0, MIN_DRAG_PITCH * _pitch_px(rest_positions)) if rest_positions is not None else 1.0
+    min_drag_px = 1.0
+    if rest_positions is not None:
+        rest = np.asarray(rest_positions, dtype=np.float64)
+        spacing = median_spacing_px(rest[np.isfinite(rest).all(axis=1)])
+        min_drag_px = max(1.0, MIN_DRAG_PITCH * spacing) if np.isfinite(spacing) else 1.0
     for start, stop in bounds:
         if signal[start] > low_px:
             moved = displacements[start:stop] - displacements[start]  # NaN where lost at the start: left out
@@ -401,16 +406,8 @@ def _kinds(displacements: np.ndarray, bounds, signal: np.ndarray, low_px: float,
     return kinds
 
 
+#: A slide drags its patch at least this share of the pins' spacing (and 1 px): `_kinds`' ``min_drag_px``.
 MIN_DRAG_PITCH = 0.1
-
-
-def _pitch_px(rest_positions: np.ndarray) -> float:
-    """The pins' median nearest-neighbour distance at rest, px (0 with fewer than two pins)."""
-    from scipy.spatial import cKDTree
-
-    rest = np.asarray(rest_positions, dtype=np.float64)
-    rest = rest[np.isfinite(rest).all(axis=1)]
-    return float(np.median(cKDTree(rest).query(rest, k=2)[0][:, 1])) if len(rest) > 1 else 0.0
 
 
 def _gives_back(part: np.ndarray, low_px: float) -> bool:

@@ -8,9 +8,7 @@ pins lost from each contact's third frame until 1-20 frames (at 120 frames/s) af
 import numpy as np
 import pytest
 
-from tactip.sim import SyntheticTacTip
-from tactip.sim.sequence import Stroke
-from tests.tactip.replay.conftest import CREEPING_SKIN, assert_contacts_are_events, contacts_of
+from tests.tactip.replay.conftest import assert_contacts_are_events, contacts_of, slides_and_a_press_after_long_rests
 
 
 # Slides and a press after rests of 0.7-0.9 s (tactip-127, white-dark-331, radial-led-120 x 30, 120 frames/s x
@@ -20,16 +18,7 @@ from tests.tactip.replay.conftest import CREEPING_SKIN, assert_contacts_are_even
                                                       ("tactip-127", 30.0, 0), ("tactip-127", 30.0, 2),
                                                       ("white-dark-331", 120.0, 1), ("radial-led-120", 30.0, 2)])
 def test_contacts_after_long_rests_with_pins_lost_through_the_slides(preset, frame_rate, seed):
-    sensor = SyntheticTacTip.from_preset(preset, seed=seed)
-    rng = np.random.default_rng(seed)
-    angles = rng.choice(range(0, 360, 45), 3, replace=False)
-    pitch = sensor.pin_spacing_mm
-    strokes = [Stroke(2.0, float(angles[0]), 3 * pitch), Stroke(2.0, float(angles[1]), 3 * pitch), Stroke(2.5),
-               Stroke(2.0, float(angles[2]), 3 * pitch)]
-    run = sensor.sequence(strokes, rest_s=[0.1, 0.9, 0.8, 0.7, 0.3], press_s=0.05, hold_s=0.05, slide_s=0.15,
-                          lift_s=0.05, frame_rate=frame_rate, **CREEPING_SKIN)
-    rest = sensor.pin_centres()[0]
-    displacements = run.displacements_px() + rng.normal(0.0, 0.1, (len(run), len(rest), 2))
+    rng, run, rest, displacements = slides_and_a_press_after_long_rests(preset, frame_rate, seed)
     for event in run.events:  # lost through the contact, found again 1-20 frames (at 120/s) after its lift
         gone = rng.random(len(rest)) < 0.35
         found = event.stop_frame + rng.integers(1, int(20 * frame_rate / 120) + 2, len(rest))

@@ -10,9 +10,7 @@ import numpy as np
 import pytest
 
 from tactip.replay._trim import trim_settled
-from tactip.sim import SyntheticTacTip
-from tactip.sim.sequence import Stroke
-from tests.tactip.replay.conftest import CREEPING_SKIN, assert_contacts_are_events, contacts_of
+from tests.tactip.replay.conftest import assert_contacts_are_events, contacts_of, slides_and_a_press_after_long_rests
 
 
 # The cases main failed (a slide's stop 4-6 frames after the truth's).
@@ -20,16 +18,7 @@ from tests.tactip.replay.conftest import CREEPING_SKIN, assert_contacts_are_even
                                                       ("white-dark-331", 30.0, 1), ("white-dark-331", 120.0, 0),
                                                       ("radial-led-120", 30.0, 2), ("radial-led-120", 120.0, 0)])
 def test_slides_end_at_the_lift_while_the_tracked_pins_catch_up(preset, frame_rate, seed):
-    sensor = SyntheticTacTip.from_preset(preset, seed=seed)
-    rng = np.random.default_rng(seed)
-    angles = rng.choice(range(0, 360, 45), 3, replace=False)
-    pitch = sensor.pin_spacing_mm
-    strokes = [Stroke(2.0, float(angles[0]), 3 * pitch), Stroke(2.0, float(angles[1]), 3 * pitch), Stroke(2.5),
-               Stroke(2.0, float(angles[2]), 3 * pitch)]
-    run = sensor.sequence(strokes, rest_s=[0.1, 0.9, 0.8, 0.7, 0.3], press_s=0.05, hold_s=0.05, slide_s=0.15,
-                          lift_s=0.05, frame_rate=frame_rate, **CREEPING_SKIN)
-    rest = sensor.pin_centres()[0]
-    displacements = run.displacements_px() + rng.normal(0.0, 0.1, (len(run), len(rest), 2))
+    rng, run, rest, displacements = slides_and_a_press_after_long_rests(preset, frame_rate, seed)
     for event in run.events:
         if event.kind != "slide":
             continue
