@@ -119,6 +119,18 @@ expected within 0.5 / 1.0 spacings (seeds 0-2, tactip-331 306 / 269 against 249 
 423); first-pass pins left where they were when assigned no tip (268, 433, tactip-127 67 against 61: unplacing them
 pays); only neighbours lost the frame before too (278, 415).
 
+Session 22 (swap22; main fb192f9): swap21's rise on tactip-127 (seeds 0-5 79 -> 109) was no drift in the rule: the
+onsets it added (LK, LK(field), pairfit in lifts' first frames, seeds 0 and 4) begin where the motion field, fitted to
+the pins placed, flips on pins re-measured 0.2-0.5 px off two frames before (seed 0; `pins._motion`), and over seeds
+6-23 swap21 lowered tactip-127 from 345 to 222. Kept (swap22): a first-pass pin the assignment gives no tip stays where
+it is; one given another pin's tip (farther than a tip radius from where it is) is unplaced; one given its own is
+re-measured there (that is what gains). Apart pin-frames, main -> swap22: seeds 0-5 tactip-331 683 -> 509, dark-331 985
+-> 847, tactip-127 79 -> 107 (seeds 0 and 4: 15 -> 31, 12 -> 32; the others 52 -> 44), radial-led-120 7 -> 7 (2 px tips:
+not engaged); seeds 6-23 2058 -> 1704, 2920 -> 2559, 345 -> 192; held out 48-53 723 -> 597, 910 -> 799, 87 -> 70 (swap21
+there: 557, 816). Variants (seeds 0-5, tactip-127 / tactip-331 / dark-331, as separate calls): own tips not re-measured
+77 / 667 / 921 (tactip-127 seeds 6-23: 303), with those given no tip unplaced 84 / 635 / 909, those given another's
+unplaced 64 / 626 / 939; every first-pass pin kept placed (moved, never unplaced) 130 / 567 / 864.
+
 Run: .venv/bin/python bench/bench_slide_losses.py [--presets radial-led-120] [--seeds 0-5] [--clean]
      .venv/bin/python bench/bench_slide_losses.py --onsets [--presets tactip-331,tactip-127] [--fps 120]
 """
