@@ -5,7 +5,8 @@ Following: windows at the constant-velocity guesses, re-centred once; a pin whos
 at most 0.03 spacings (`_GUESS_FRACTION`; 0.1 px at least) and ended within 0.4 spacings of its guess
 (`_FOLLOW_FRACTION`) needs no LK. A re-centred window that holds two or more tips (the skin squeezed ahead
 of a slide) does not settle between them: its tips are assigned one-to-one to the pins expected there
-(`_Following._part_tips`, issue 20).
+(`_Following._part_tips`, issue 20), as are those of first-pass pins beside a missing one (a merged blob parting
+again: `_Following._first_pass_parted`; such a pin assigned no tip stays, one assigned another's is unplaced).
 
 `_Following` holds that pass; `pins._refine.Refiner` inherits it and sets the state it reads.
 """
@@ -19,6 +20,7 @@ from scipy.optimize import linear_sum_assignment
 from . import _kernels
 from ._identity import keep_own_tips
 from ._kernels import compiled
+from ._pairfit import _SMALLEST_TIP_PX
 from ._window import WindowCentroids, _squared_norm
 
 # A pin followed from its guess by windowed centroids needs no LK when a window moved by at most
@@ -163,11 +165,7 @@ class _Following:
         # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
         # the others can have reached a neighbour's tip.
         placed = np.concatenate(placed[1:]) if len(placed) > 1 else placed[0][:0]
-        if placed.size:
-            pins, start = which[placed], start[placed]
-            self._part_tips(crop, positions, pins, start, filled)
-            self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
-            keep_own_tips(positions, pins, start, filled, self._identity_index)
+        self._part_placed(crop, positions, which, n, placed, start, filled)
         return positions, filled
 
     def _follow_compiled(self, kernels, crop: np.ndarray, guess: np.ndarray, last_seen: np.ndarray, filled: np.ndarray,
@@ -232,15 +230,63 @@ class _Following:
         # Pins placed in the first pass sat within a few tenths of a px of their own guesses: only
         # the others can have reached a neighbour's tip.
         placed = np.concatenate(placed) if placed else again[:0]
-        if placed.size:
-            pins, start = which[placed], start[placed]
-            self._part_tips(crop, positions, pins, start, filled)
-            self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
-            keep_own_tips(positions, pins, start, filled, self._identity_index)
+        self._part_placed(crop, positions, which, n, placed, start, filled)
         return positions
 
+    def _part_placed(self, crop: np.ndarray, positions: np.ndarray, which: np.ndarray, n: int, placed: np.ndarray,
+                     start: np.ndarray, filled: np.ndarray) -> None:
+        """The pins `follow` placed, rows `placed` of `which` re-centred (the first `n` rows: pins with guesses,
+        `start` the rows' window starts, px), and first-pass pins beside a missing one, held one-to-one to the tips
+        near them (`_part_tips`); re-centred ones one pin a tip, each keeping its tip only where no other pin is
+        expected nearer (`pins._identity.keep_own_tips`). In place in `positions`.
+
+        Pins placed in the first pass sat within a few tenths of a px of their own guesses: they reached a
+        neighbour's tip only if the guess lies on it. Through a drag two tips merged in the squeezed skin part
+        again; the pin that sat on the blob, its neighbour lost (one pin a tip), is guessed on the neighbour's side
+        and its window, not moving, takes that tip (`bench/bench_slide_losses.py --onsets`, tactip-331 and dark-331,
+        seeds 0-2, main 2bcbdb2: 92 of the drag's 203 follow onsets; in 195 of them the tip's own pin was lost the
+        frame before and after). So first-pass pins with a missing window neighbour (`_first_pass_parted`) have
+        their windows' tips assigned one-to-one too, against their guesses and the missing pins' predictions
+        (`_part_tips`' rows from ``held_from``): one assigned its own tip (within a tip radius of where it is) is
+        re-measured there, one assigned another's is unplaced (LK decides), and one assigned none stays where it is.
+        Unplacing those assigned none too (session 21, swap21) lost pins that sat on their own tips (tactip-127,
+        seeds 0-5: 90 pins, 17 in lifts) and sent them to LK. The re-measurement on the own tip is what gains (its
+        window, half-way to the next tip, is not pulled by the neighbour's): without it tactip-331 seeds 0-5 626
+        apart pin-frames against 510, tactip-127 seeds 6-23 303 against 209 (`bench/bench_slide_losses.py`).
+        """
+        first = self._first_pass_parted(positions, which, n, placed)
+        if first.size or placed.size:
+            rows = np.concatenate([placed, first]) if first.size else placed
+            self._part_tips(crop, positions, which[rows], start[rows], filled, placed.size)
+        if placed.size:
+            pins, start = which[placed], start[placed]
+            self._one_pin_per_tip(positions, pins, _squared_norm(positions[pins] - start))
+            keep_own_tips(positions, pins, start, filled, self._identity_index)
+
+    def _first_pass_parted(self, positions: np.ndarray, which: np.ndarray, n: int, placed: np.ndarray) -> np.ndarray:
+        """Rows of `which` (of its first `n`) placed in `follow`'s first pass (finite `positions`, not in `placed`)
+        with a window neighbour missing (NaN in `positions`), in frames where some windows were re-centred
+        (`placed`), for tips of at least `pins._pairfit._SMALLEST_TIP_PX` (smaller ones show no two tips in a
+        merged blob either; radial-led-120's 2 px: 3 -> 4 apart pin-frames, seeds 0-2, for +8 % of the tracker's
+        CPU on `bench_replay.py --slides 8`): those whose windows' tips `_part_placed` assigns. Compiled
+        (`pins._jit_follow.first_pass_parted`) where the kernels are: the NumPy calls here cost 0.06 ms a frame on
+        tactip-331's slides."""
+        if not placed.size or not self.tip_fit_radius_px >= _SMALLEST_TIP_PX:
+            return placed[:0]
+        kernels = _part_kernels()
+        if kernels is not None:
+            return kernels.first_pass_parted(positions, which, n, placed, self._window_neighbours)
+        missing = np.isnan(positions[:, 0])
+        if not np.count_nonzero(missing):
+            return placed[:0]
+        rows = np.isfinite(positions[which[:n], 0])
+        rows[placed[placed < n]] = False
+        rows = rows.nonzero()[0]
+        beside = np.logical_or.reduce(missing[self._window_neighbours[:, which[rows]]], axis=0)
+        return rows[beside]
+
     def _part_tips(self, crop: np.ndarray, positions: np.ndarray, pins: np.ndarray, start: np.ndarray,
-                   filled: np.ndarray) -> None:
+                   filled: np.ndarray, held_from: int | None = None) -> None:
         """Pins placed by re-centred windows holding two or more tips: re-placed on tips assigned one-to-one, in place.
 
         In the skin squeezed ahead of a slide a pin's window may hold its own tip and one approaching from behind
@@ -254,7 +300,8 @@ class _Following:
         missing one's `filled` guess or prediction) one-to-one (least summed squared distances); the pin is
         re-measured by a window at its tip, of half the distance to the next tip, and kept within
         `_FOLLOW_FRACTION` of its guess. A pin assigned no tip, or re-measured beyond that, is unplaced (NaN: LK
-        decides). One compiled call (`pins._jit_follow.part_tips_measured`: each window's own pixels only), else
+        decides). Rows from `held_from` on (first-pass pins, `_part_placed`) assigned no tip stay where they are, and
+        those assigned a tip farther than a tip radius from where they are are unplaced. One compiled call (`pins._jit_follow.part_tips_measured`: each window's own pixels only), else
         the NumPy reference (`_part_tips_numpy`: OpenCV over the windows' part of the crop).
 
         Apart pin-frames (`bench/bench_slide_losses.py --onsets`, 120 frames/s, seeds 0-5; session 20, slide17,
@@ -270,6 +317,7 @@ class _Following:
         tip_px = max(tip_px, 1.0)
         half = int(np.ceil(0.55 * self.spacing_px))
         reach = (_FOLLOW_FRACTION * self.spacing_px) ** 2
+        held_from = len(pins) if held_from is None else int(held_from)
         kernels = _part_kernels()
         if kernels is not None and crop.dtype == np.uint8 and crop.flags.c_contiguous:
             settings = (pins, start, half, tip_px, int(np.ceil(0.8 * tip_px)), _gaussian(0.5 * tip_px), self.spacing_px)
@@ -277,17 +325,19 @@ class _Following:
             if type(windows) is WindowCentroids:
                 kernels.part_tips_measured(crop, self.origin, positions, filled, *settings, reach, windows.half_px,
                                            windows.threshold_fraction, windows.above_mean,
-                                           float(windows.least_contrast))
+                                           float(windows.least_contrast), held_from)
                 return
-            moved, aims, radii, unplaced = kernels.part_tips(crop, self.origin, positions, filled, *settings)
+            moved, aims, radii, unplaced = kernels.part_tips(crop, self.origin, positions, filled, *settings,
+                                                             held_from)
             positions[pins[unplaced]] = np.nan
         else:
             tips = positions[pins]
             ok = np.isfinite(tips[:, 0])
             if not ok.any():
                 return
-            pins, start, tips = pins[ok], start[ok], tips[ok]
-            moved, aims, radii = self._part_tips_numpy(crop, positions, pins, start, filled, tips, tip_px, half)
+            held = np.arange(len(pins)) >= held_from
+            pins, start, tips, held = pins[ok], start[ok], tips[ok], held[ok]
+            moved, aims, radii = self._part_tips_numpy(crop, positions, pins, start, filled, tips, tip_px, half, held)
         if moved.size:
             centres, _ = self.windows.measure(crop, aims - self.origin, radii)
             centres += self.origin
@@ -295,10 +345,11 @@ class _Following:
             positions[pins[moved]] = np.where(keep[:, None], centres, np.nan)
 
     def _part_tips_numpy(self, crop: np.ndarray, positions: np.ndarray, pins: np.ndarray, start: np.ndarray,
-                         filled: np.ndarray, tips: np.ndarray, tip_px: float, half: int):
+                         filled: np.ndarray, tips: np.ndarray, tip_px: float, half: int, held: np.ndarray):
         """`_part_tips`' NumPy reference up to the re-measurement (`pins._jit_follow.part_tips` compiled): the rows
         of `pins` to re-measure, at which tips (px) with which window radii (px); pins assigned no tip unplaced in
-        `positions`, in place."""
+        `positions`, in place, unless `held` (first-pass rows: left where they are; unplaced where assigned a tip
+        farther than `tip_px` from where they are)."""
         none = (np.zeros(0, np.intp), np.zeros((0, 2)), np.zeros(0))
         height, width = crop.shape
         local = np.rint(tips - self.origin).astype(np.intp)
@@ -351,9 +402,13 @@ class _Following:
             r, c = linear_sum_assignment(cost)
             mine = c[r == 0]
             if mine.size == 0:
-                positions[pin] = np.nan
+                if not held[i]:
+                    positions[pin] = np.nan
                 continue
             peak = peaks[mine[0]]
+            if held[i] and _squared_norm(peak - tip) > tip_px ** 2:
+                positions[pin] = np.nan  # (another pin's tip: LK decides)
+                continue
             gaps = _squared_norm(peaks - peak)
             gaps[mine[0]] = np.inf
             gap = np.sqrt(gaps.min())

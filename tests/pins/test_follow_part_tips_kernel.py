@@ -60,38 +60,39 @@ def test_kernel_reads_windows_cut_by_the_crop_edge_as_the_reference(monkeypatch)
     calls = []
     real = _Following._part_tips
 
-    def recorded(self, crop, positions, pins_, start, filled):
-        calls.append((self, crop.copy(), positions.copy(), pins_.copy(), start.copy(), filled.copy()))
-        return real(self, crop, positions, pins_, start, filled)
+    def recorded(self, crop, positions, pins_, start, filled, *held):
+        calls.append((self, crop.copy(), positions.copy(), pins_.copy(), start.copy(), filled.copy(), held))
+        return real(self, crop, positions, pins_, start, filled, *held)
 
     monkeypatch.setattr(_Following, "_part_tips", recorded)
     _tracked("tactip-331", 1)
     monkeypatch.setattr(_Following, "_part_tips", real)
     moved = _reference(monkeypatch)
     cases = []
-    for refiner, crop, positions, pins_, start, filled in calls:
+    for refiner, crop, positions, pins_, start, filled, held in calls:
         reference = positions.copy()
-        refiner._part_tips(crop, reference, pins_, start.copy(), filled)
+        refiner._part_tips(crop, reference, pins_, start.copy(), filled, *held)
         changed = pins_[np.any(reference[pins_] != positions[pins_], axis=1)]
         if changed.size:
-            cases.append((refiner, crop, positions, pins_, start, filled, changed[0]))
+            cases.append((refiner, crop, positions, pins_, start, filled, held, changed[0]))
         if len(cases) == 8:
             break
     assert len(cases) == 8 and sum(moved) >= 8
     origin = cases[0][0].origin
     replaced = 0
-    for refiner, crop, positions, pins_, start, filled, pin in cases:
+    for refiner, crop, positions, pins_, start, filled, held, pin in cases:
         corner = np.rint(positions[pin] - origin).astype(int) - 8
         cut = np.ascontiguousarray(crop[corner[1]:, corner[0]:])
         monkeypatch.setattr(refiner, "origin", origin + corner)
         local = np.rint(positions[pins_] - origin - corner)
         inside = np.all((local >= 0) & (local < cut.shape[::-1]), axis=1)  # (or nan: placed pins only)
         pins_, start = pins_[inside], start[inside]
+        held = tuple(int(np.count_nonzero(inside[:h])) for h in held)  # (first-pass rows from there on)
         answers = []
         for numpy in (True, False):
             monkeypatch.setattr(pins._follow, "_part_kernels", (lambda: None) if numpy else (lambda: kernels))
             answer = positions.copy()
-            refiner._part_tips(cut, answer, pins_, start.copy(), filled)
+            refiner._part_tips(cut, answer, pins_, start.copy(), filled, *held)
             answers.append(answer)
         assert np.array_equal(answers[0], answers[1], equal_nan=True)
         replaced += not np.array_equal(answers[1], positions, equal_nan=True)

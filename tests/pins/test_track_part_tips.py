@@ -10,7 +10,7 @@ from pins._follow import _Following
 from tests.pins.conftest import apart_swaps_through_slides
 
 
-def _no_parting(self, crop, positions, pins, start, filled):
+def _no_parting(self, crop, positions, pins, start, filled, held_from=None):
     return None
 
 
