@@ -3,6 +3,12 @@
 Each blob is judged against the medians of its nearest neighbours (size, contrast, sharpness) and
 against the lattice sites its neighbours make (mirror images), iterated until nothing changes, and
 then the linked groups of kept blobs make the field (see `pins.lattice`, steps 3 and 4).
+
+A blob beyond the field's outer ring, linked to it only from inside and from two directions
+(`_Neighbourhood.beyond_ring`), sits at a site of a ring that has no pins; it stays only with the contrast an
+unanchored blob needs (brown-127's skin highlights lit by the casing glare: 0.50-0.89 of their neighbours').
+One kind of glare blob is left: one beyond a corner of the outer ring, where a true corner pin's edges run at
+120 degrees too (brown-127 seed 11: contrast 0.80-0.86, as the pins').
 """
 
 from __future__ import annotations
