@@ -208,7 +208,8 @@ def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray,
               | (np.abs(np.log(area / area_ref)) > np.log(_WEAK_SIZE[0]) + strict * np.log(_WEAK_SIZE[1] / _WEAK_SIZE[0])))
     verdict[(anchors < _MIN_ANCHORS) & unlike & (verdict == _KEPT)] = _OFF
     # A lattice site beyond the outer ring, lit skin there (casing glare): anchored from inside alone.
-    verdict[hood.beyond_ring() & (ratio < _WEAK_CONTRAST[1]) & (verdict == _KEPT)] = _OFF
+    faint = np.flatnonzero((ratio < _WEAK_CONTRAST[1]) & (verdict == _KEPT))
+    verdict[faint[hood.beyond_ring(faint)]] = _OFF
     return verdict, hood
 
 
@@ -325,8 +326,9 @@ class _Neighbourhood:
         self._previous = None   # its answers are carried over: no chain of every pass's neighbourhood
         return np.sum(self.link & (through < tolerance), axis=1) + (between + 1) // 2
 
-    def beyond_ring(self) -> np.ndarray:
-        """Per point: whether it lies beyond the field's outer ring, linked to members only inward.
+    def beyond_ring(self, which: np.ndarray | None = None) -> np.ndarray:
+        """Per point (or per point of the index array `which`): whether it lies beyond the field's outer
+        ring, linked to members only inward.
 
         Each linked neighbour lies inward (its direction more than 120 degrees from the point's outward
         direction, away from the members' centroid: cos below `_INWARD`), and the links come from two
@@ -335,14 +337,15 @@ class _Neighbourhood:
         a lattice site beyond the ring (between two ring pins, at 150 degrees, cos -0.52 to -0.85 on
         brown-127's webcam frames) has none; a radial spoke's end is linked along its spoke alone.
         """
-        points, neighbours = self.points, self.near[:, 1:]
-        outward = points - points[self.members].mean(axis=0)
+        which = np.arange(len(self.points)) if which is None else which
+        points, neighbours, link = self.points[which], self.near[which, 1:], self.link[which]
+        outward = points - self.points[self.members].mean(axis=0)
         outward /= np.maximum(np.hypot(outward[:, 0], outward[:, 1]), 1e-9)[:, None]
-        towards = points[neighbours] - points[:, None, :]
+        towards = self.points[neighbours] - points[:, None, :]
         towards /= np.maximum(np.hypot(towards[..., 0], towards[..., 1]), 1e-9)[..., None]
-        inward = np.all(~self.link | (np.einsum("nkj,nj->nk", towards, outward) < _INWARD), axis=1)
+        inward = np.all(~link | (np.einsum("nkj,nj->nk", towards, outward) < _INWARD), axis=1)
         spread = np.einsum("nkj,nlj->nkl", towards, towards)
-        apart = np.any(self.link[:, :, None] & self.link[:, None, :] & (spread < _SPREAD), axis=(1, 2))
+        apart = np.any(link[:, :, None] & link[:, None, :] & (spread < _SPREAD), axis=(1, 2))
         return inward & apart
 
     def graph(self) -> coo_matrix:

@@ -87,3 +87,13 @@ def test_brown_skin_lit_by_the_casing_glare_is_no_pin(seed):
     recall, precision, _ = score(field.centres, frame)
     assert recall == 1.0
     assert precision == 1.0, f"{field.count} pins kept, {np.sum(frame.visible)} drawn"
+
+
+def test_beyond_ring_on_some_points_answers_as_on_all():
+    rng = np.random.default_rng(3)
+    pins = _foreshortened(np.vstack([_hexagonal(6), _ring_seven_site()]), rim_px=170.0) + rng.normal(0, 0.3, (128, 2))
+    hood = _Neighbourhood(pins)
+    which = np.sort(rng.choice(len(pins), 40, replace=False))
+    which[-1] = len(pins) - 1
+    np.testing.assert_array_equal(hood.beyond_ring(which), hood.beyond_ring()[which])
+    assert hood.beyond_ring(which)[-1]
