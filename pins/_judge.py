@@ -3,6 +3,12 @@
 Each blob is judged against the medians of its nearest neighbours (size, contrast, sharpness) and
 against the lattice sites its neighbours make (mirror images), iterated until nothing changes, and
 then the linked groups of kept blobs make the field (see `pins.lattice`, steps 3 and 4).
+
+A blob beyond the field's outer ring, linked to it only from inside and from two directions
+(`_Neighbourhood.beyond_ring`), sits at a site of a ring that has no pins; it stays only with the contrast an
+unanchored blob needs (brown-127's skin highlights lit by the casing glare: 0.50-0.89 of their neighbours').
+One kind of glare blob is left: one beyond a corner of the outer ring, where a true corner pin's edges run at
+120 degrees too (brown-127 seed 11: contrast 0.80-0.86, as the pins').
 """
 
 from __future__ import annotations
@@ -43,6 +49,12 @@ _MIRROR = 0.25
 _MIN_ANCHORS = 2
 _WEAK_CONTRAST = (0.5, 0.8)
 _WEAK_SIZE = (1.8, 1.4)
+# Beyond the outer ring: a blob whose linked neighbours all lie inward (each more than `_INWARD` from its
+# outward direction: cos below -0.5) and from two directions (at least `_SPREAD` apart: cos below 0.8; a
+# radial spoke's end is linked along its spoke alone) has no ring of its own; it must stand at least the
+# unanchored contrast ratio (`_WEAK_CONTRAST[1]`) to its neighbours' median.
+_INWARD = -0.5
+_SPREAD = 0.8
 _MIN_PINS = 4
 # Fewest pins that make a pin field (TacTips have 100-1000).
 _MIN_FIELD = 10
@@ -195,6 +207,9 @@ def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray,
     unlike = ((ratio < _WEAK_CONTRAST[0] + strict * (_WEAK_CONTRAST[1] - _WEAK_CONTRAST[0]))
               | (np.abs(np.log(area / area_ref)) > np.log(_WEAK_SIZE[0]) + strict * np.log(_WEAK_SIZE[1] / _WEAK_SIZE[0])))
     verdict[(anchors < _MIN_ANCHORS) & unlike & (verdict == _KEPT)] = _OFF
+    # A lattice site beyond the outer ring, lit skin there (casing glare): anchored from inside alone.
+    faint = np.flatnonzero((ratio < _WEAK_CONTRAST[1]) & (verdict == _KEPT))
+    verdict[faint[hood.beyond_ring(faint)]] = _OFF
     return verdict, hood
 
 
@@ -310,6 +325,28 @@ class _Neighbourhood:
         between = np.sum(self.link & (beyond < tolerance), axis=1)
         self._previous = None   # its answers are carried over: no chain of every pass's neighbourhood
         return np.sum(self.link & (through < tolerance), axis=1) + (between + 1) // 2
+
+    def beyond_ring(self, which: np.ndarray | None = None) -> np.ndarray:
+        """Per point (or per point of the index array `which`): whether it lies beyond the field's outer
+        ring, linked to members only inward.
+
+        Each linked neighbour lies inward (its direction more than 120 degrees from the point's outward
+        direction, away from the members' centroid: cos below `_INWARD`), and the links come from two
+        directions at least `_SPREAD` apart (cos below it). An outer-ring pin has ring neighbours beside it
+        (a hexagon's corner: its edges at 120 degrees, cos -0.5, foreshortened towards the rim to -0.45);
+        a lattice site beyond the ring (between two ring pins, at 150 degrees, cos -0.52 to -0.85 on
+        brown-127's webcam frames) has none; a radial spoke's end is linked along its spoke alone.
+        """
+        which = np.arange(len(self.points)) if which is None else which
+        points, neighbours, link = self.points[which], self.near[which, 1:], self.link[which]
+        outward = points - self.points[self.members].mean(axis=0)
+        outward /= np.maximum(np.hypot(outward[:, 0], outward[:, 1]), 1e-9)[:, None]
+        towards = self.points[neighbours] - points[:, None, :]
+        towards /= np.maximum(np.hypot(towards[..., 0], towards[..., 1]), 1e-9)[..., None]
+        inward = np.all(~link | (np.einsum("nkj,nj->nk", towards, outward) < _INWARD), axis=1)
+        spread = np.einsum("nkj,nlj->nkl", towards, towards)
+        apart = np.any(link[:, :, None] & link[:, None, :] & (spread < _SPREAD), axis=(1, 2))
+        return inward & apart
 
     def graph(self) -> coo_matrix:
         """Sparse adjacency of the lattice links."""
