@@ -29,7 +29,10 @@ finds that lattice without being told the pin count:
    patches of skin are smooth, pin tips are discs with a sharp edge; the casing's blurred edge
    next to a blob by the rim is not its edge); ``off lattice`` when within
    0.6 local pitches of a stronger blob (a speck, a light patch between pins), or when it sits at no
-   lattice site and does not look just like its neighbours. A lattice site is found by mirror
+   lattice site and does not look just like its neighbours, or when it lies beyond the outer ring,
+   linked to the field only from inside and from two directions, with less than 0.8 of its
+   neighbours' contrast (a skin highlight the casing's glare brightens on a ring with no pins;
+   `pins._judge`). A lattice site is found by mirror
    images: a pin is the mirror of a neighbour through another neighbour (six times for interior
    pins, at least once at the rim or at the end of a radial spoke), and a blob midway between two
    neighbours counts that line once (a reflection between two diverging radial spokes is not
