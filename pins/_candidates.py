@@ -105,7 +105,15 @@ def _strongest(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: _Sha
         raise TypeError("the candidate sets' threads share their filtered images only in a _SharedCache")
     with ThreadPoolExecutor(_WORKERS) as pool:
         detected = list(pool.map(lambda params: _detect(grey, disc, params, cache), candidates))
-    totals = [float(np.sum(np.maximum(b.contrasts * b.areas, 0.0))) for b in detected]
+        # The judgements on a candidate thread too, as `_evaluate_all` runs them (one after another: each
+        # decides whether the next is needed).
+        return pool.submit(_judge_strongest, grey, disc, candidates, detected, cache).result()
+
+
+def _judge_strongest(grey: np.ndarray, disc: SensorDisc, candidates: list, detected: list, cache: dict) -> _Run:
+    """`_strongest`'s judgements: the `detected` blobs of each candidate set judged in descending totals of
+    contrast x area, until the next total is below the strongest run's kept strength."""
+    totals = [float(np.sum(np.maximum(blobs.contrasts * blobs.areas, 0.0))) for blobs in detected]
     best: _Run | None = None
     best_at = -1
     for at in sorted(range(len(candidates)), key=lambda i: -totals[i]):
