@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
-from scipy.sparse import csr_matrix
+from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
@@ -317,6 +317,13 @@ class _Neighbourhood:
         self._previous = None   # its answers are carried over: no chain of every pass's neighbourhood
         return np.sum(self.link & (through < tolerance), axis=1) + (between + 1) // 2
 
+    def graph(self) -> coo_matrix:
+        """Sparse adjacency of the lattice links."""
+        n, k = self.near.shape
+        rows = np.repeat(np.arange(n), k - 1)[self.link.ravel()]
+        cols = self.near[:, 1:].ravel()[self.link.ravel()]
+        return coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+
     def among_members(self) -> _Neighbourhood:
         """The neighbourhood of the members alone, numbered among themselves (as `_Neighbourhood` of
         ``points[members]`` gives it: each member's nearest members are the same look-ups)."""
@@ -333,12 +340,6 @@ class _Neighbourhood:
         hood.dist, hood.near = hood.raw_dist, hood.raw_near
         hood.pitch, hood.link = self.pitch[index], self.link[index]
         return hood
-
-    def graph(self) -> csr_matrix:
-        """Sparse adjacency of the lattice links (built as CSR: `connected_components` takes no other)."""
-        n = len(self.near)
-        indptr = np.concatenate([[0], np.cumsum(np.count_nonzero(self.link, axis=1))])
-        return csr_matrix((np.ones(indptr[-1]), self.near[:, 1:][self.link], indptr), shape=(n, n))
 
 
 def _row_median(values: np.ndarray) -> np.ndarray:
