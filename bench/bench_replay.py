@@ -73,12 +73,13 @@ Where it stands (figures per session and what each tried are in `git log -- benc
   queue; the jitter floor's medians ranked by squared lengths (4.6 -> 4.9 ms: the extra passes cost more than hypot).
 - Session 22, "speed24" (every verdict bit for bit: 7377 recorded judgements of 11 presets' rest frames, seeds
   0-35, and their fields; this bench's HDF5): the lattice judgement builds its field graph and the kept pins' pitch
-  from its last pass's neighbourhood (no KD-tree built or queried again) and hands `connected_components` CSR;
-  the coarse pass judges its sets in descending blob totals (contrast x area), none whose total is below the
-  strongest kept so far (`pins._candidates._strongest`). CPU per judgement 3.56-3.66 -> 2.90-2.97 ms (3 interleaved
-  rounds at load 18-24, 819 judgements of seeds 0-3); judgements 819 -> 692 (the coarse ones 220 -> 93), but on this
-  bench's frame all 5 coarse sets must be judged (totals 60.1k/51.5k/47.1k/46.4k/46.2k, the strongest kept 45.9k).
-  The field search alone on this bench's rest frame: median CPU 170/161/160 -> 153/167/153 ms (3 rounds, load 21-24).
+  from its last pass's neighbourhood (no KD-tree built or queried again); the coarse pass judges its sets in
+  descending blob totals (contrast x area), none whose total is below the strongest kept so far
+  (`pins._candidates._strongest`). CPU per judgement 3.12-3.15 -> 2.55-2.61 ms (3 interleaved rounds at load
+  7-14, 819 judgements of seeds 0-3); judgements 7377 -> 6224 (seeds 0-35: all 1153 skipped coarse ones; held out
+  48-51: 821 -> 697, fields bit for bit), but on this bench's frame all 5 coarse sets must be judged (totals
+  60.1k/51.5k/47.1k/46.4k/46.2k, the strongest kept 45.9k): the field search alone there, median CPU
+  153/148/164 -> 148/148/153 ms (3 interleaved rounds against 73bb19b, load 4-9), within the noise.
 - Left: the lattice judgement (~50-60 ms of the start's CPU: on this bench's frame 5.2 verdict passes a judgement,
   a fifth of each the mirror images' KD-tree look-ups, the rest ~40 small NumPy calls: one compiled pass would cut
   most of it); the tracker's start (12 ms: `pins._refine`'s tip shapes fit the tips again); the tail's contacts
