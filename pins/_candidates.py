@@ -92,6 +92,41 @@ def _evaluate(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache
     return _Run(params, blobs, reason, pitch)
 
 
+def _strongest(grey: np.ndarray, disc: SensorDisc, candidates: list, cache: _SharedCache) -> _Run:
+    """The run of greatest `_Run.strength` among `candidates` (the first of equals), as
+    ``max(_evaluate_all(...), key=strength)`` gives it, judging only the runs that could be it.
+
+    A run's strength sums the contrast x area of the blobs it keeps, so it is at most its blobs' total:
+    detected on `_WORKERS` threads, the sets are judged in descending totals, and one whose total is
+    below the strongest run judged so far is not judged (`pins.lattice`'s coarse pass: 44 % of its
+    judgements left on 10 presets x 3 seeds). The margin covers the sums' rounding.
+    """
+    if not isinstance(cache, _SharedCache):
+        raise TypeError("the candidate sets' threads share their filtered images only in a _SharedCache")
+    with ThreadPoolExecutor(_WORKERS) as pool:
+        detected = list(pool.map(lambda params: _detect(grey, disc, params, cache), candidates))
+        # The judgements on a candidate thread too, as `_evaluate_all` runs them (one after another: each
+        # decides whether the next is needed).
+        return pool.submit(_judge_strongest, grey, disc, candidates, detected, cache).result()
+
+
+def _judge_strongest(grey: np.ndarray, disc: SensorDisc, candidates: list, detected: list, cache: dict) -> _Run:
+    """`_strongest`'s judgements: the `detected` blobs of each candidate set judged in descending totals of
+    contrast x area, until the next total is below the strongest run's kept strength."""
+    totals = [float(np.sum(np.maximum(blobs.contrasts * blobs.areas, 0.0))) for blobs in detected]
+    best: _Run | None = None
+    best_at = -1
+    for at in sorted(range(len(candidates)), key=lambda i: -totals[i]):
+        if best is not None and totals[at] < best.strength * (1.0 - 1e-9):
+            break
+        blobs = detected[at]
+        reason, pitch = _judge_lattice(blobs, _sharpness(grey, blobs, candidates[at], cache, disc))
+        run = _Run(candidates[at], blobs, reason, pitch)
+        if best is None or run.strength > best.strength or (run.strength == best.strength and at < best_at):
+            best, best_at = run, at
+    return best
+
+
 def _keeps_more(grey: np.ndarray, disc: SensorDisc, params: DetectionParams, cache: dict, count: int) -> bool:
     """Whether `params` keeps more than `count` lattice pins in `disc`: ``_evaluate(...).kept.sum() > count``,
     judged only when it detects more than `count` blobs (the lattice keeps some of its blobs, never more).

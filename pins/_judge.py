@@ -154,8 +154,10 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     if len(index) < _MIN_PINS:
         reason[index] = _OFF
         return reason, np.nan
-    # The field: groups of blobs joined by lattice links; blobs beyond their hull are outside.
-    hood = _Neighbourhood(centres[index])
+    # The field: groups of blobs joined by lattice links; blobs beyond their hull are outside. The last
+    # pass judged every blob among the active ones: its rows for them are the active blobs' own
+    # neighbourhood (the same tree, the same look-ups), no tree built again.
+    hood = hood.among_members()
     groups, label = connected_components(hood.graph(), directed=False)
     sizes = np.bincount(label, minlength=groups)
     core = (sizes >= max(_MIN_PINS, _MIN_GROUP * sizes.max()))[label]
@@ -171,7 +173,11 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     kept = reason == _KEPT
     rejected = np.flatnonzero(~kept)
     reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
-    return reason, float(_median_nn(centres[reason == _KEPT]))
+    kept = reason == _KEPT
+    if np.array_equal(np.flatnonzero(kept), index) and len(index) >= 2:
+        # None of the active blobs left as outside: their nearest-neighbour distances are looked up already.
+        return reason, float(np.median(hood.dist[:, 1]))
+    return reason, float(_median_nn(centres[kept]))
 
 
 def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray,
@@ -354,6 +360,23 @@ class _Neighbourhood:
         rows = np.repeat(np.arange(n), k - 1)[self.link.ravel()]
         cols = self.near[:, 1:].ravel()[self.link.ravel()]
         return coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+
+    def among_members(self) -> _Neighbourhood:
+        """The neighbourhood of the members alone, numbered among themselves (as `_Neighbourhood` of
+        ``points[members]`` gives it: each member's nearest members are the same look-ups)."""
+        index = self.index
+        number = np.full(len(self.points), -1)
+        number[index] = np.arange(len(index))
+        hood = object.__new__(_Neighbourhood)
+        hood.points = self.points[index]
+        hood.members = np.ones(len(index), bool)
+        hood.index = np.arange(len(index))
+        hood.tree = self.tree
+        hood.k, hood._previous, hood._mirrors = self.k, None, {}
+        hood.raw_dist, hood.raw_near = self.raw_dist[index], number[self.raw_near[index]]
+        hood.dist, hood.near = hood.raw_dist, hood.raw_near
+        hood.pitch, hood.link = self.pitch[index], self.link[index]
+        return hood
 
 
 def _row_median(values: np.ndarray) -> np.ndarray:

@@ -113,7 +113,7 @@ from ._rescue import fill_lattice_holes, probe_lattice_holes
 from ._tipfit import fit_tip_centres
 from ._tipprobe import flat_pins
 from ._candidates import (_MATCH, _SharedCache, _candidates, _consensus, _distinct, _evaluate_all, _final_params,
-                          _keeps_more, _noise_floored)
+                          _keeps_more, _noise_floored, _strongest)
 from ._judge import REJECTION_REASONS
 from .detect import DetectionParams
 from .disc import _RING_INSET_PX, SensorDisc, _rim_ring_inner_px, as_grey, find_sensor_disc, frame_region
@@ -363,8 +363,7 @@ def _search(grey: np.ndarray, disc: SensorDisc, start: DetectionParams, hinted: 
     start = start.replace(rim_margin_px=max(start.rim_margin_px - (disc.radius_px - search.radius_px), 0.0))
     cache = _SharedCache()
     # Coarse: one permissive candidate set per possible pitch; the strongest lattice gives the pitch.
-    coarse = _evaluate_all(grey, search, list(_candidates(pitches, start, _COARSE_BLOCK, _COARSE_OFFSETS)), cache)
-    first = max(coarse, key=lambda run: run.strength)
+    first = _strongest(grey, search, list(_candidates(pitches, start, _COARSE_BLOCK, _COARSE_OFFSETS)), cache)
     pitch = first.pitch if np.isfinite(first.pitch) else float(np.median(pitches))
     pitch = float(np.clip(pitch, 0.5 * pitches.min(), 1.5 * pitches.max()))
     # Fine: blocks and offsets at the measured pitch, no offset within the blurred noise's reach.

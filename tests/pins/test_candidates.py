@@ -10,16 +10,19 @@ from tests.pins.conftest import TAP, preset_frame
 
 
 def _searched(image):
-    """Every `_evaluate_all` call of one `find_pin_field` on `image`: (grey, disc, candidates) each."""
+    """Every `_evaluate_all` and `_strongest` (the coarse pass) call of one `find_pin_field` on `image`:
+    (grey, disc, candidates) each."""
     calls = []
-    real = lattice._evaluate_all
 
-    def spy(grey, disc, candidates, cache):
-        calls.append((grey, disc, list(candidates)))
-        return real(grey, disc, candidates, cache)
+    def spy(real):
+        def spied(grey, disc, candidates, cache):
+            calls.append((grey, disc, list(candidates)))
+            return real(grey, disc, candidates, cache)
+        return spied
 
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(lattice, "_evaluate_all", spy)
+        for name in ("_evaluate_all", "_strongest"):
+            patch.setattr(lattice, name, spy(getattr(lattice, name)))
         lattice.find_pin_field(image)
     return calls
 
