@@ -240,7 +240,7 @@ def probe_lattice_holes(grey: np.ndarray, pins: np.ndarray, centre: tuple[float,
     pins = np.asarray(pins, dtype=np.float64).reshape(-1, 2)
     none = np.zeros((0, 2))
     if len(pins) < 7 or not (np.isfinite(radius_px) and radius_px > 0):
-        return none
+        return (none, none.copy(), np.zeros(0)) if with_prior else none
     image = grey.astype(np.float32)
     if dark_pins:
         image = 255.0 - image

@@ -95,3 +95,13 @@ def test_without_the_prior_a_probed_tip_is_left_a_pixel_off(monkeypatch):
                                                                                     np.full(len(sites), np.inf)))
     errors, _, _ = _field_errors([1])
     assert errors.max() > 1.0
+
+
+def test_too_few_pins_to_probe_give_an_empty_prior_too():
+    """With fewer pins than a lattice needs (a dark frame's dozen blobs), the probe asked for its prior
+    returns three empty arrays, as when it finds nothing, not one: `find_pin_field` unpacks three."""
+    grey = np.full((60, 60), 40, np.uint8)
+    few = np.array([[10.0, 10.0], [20.0, 10.0], [15.0, 18.0]])
+    found, prior, sigma = rescue.probe_lattice_holes(grey, few, (30.0, 30.0), 2.0, with_prior=True)
+    assert found.shape == (0, 2) and prior.shape == (0, 2) and sigma.shape == (0,)
+    assert rescue.probe_lattice_holes(grey, few, (30.0, 30.0), 2.0).shape == (0, 2)
