@@ -230,7 +230,11 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
         local = neighbour_median(displacements, rest_positions) if medians is None else medians
         if jitter_px is None:
             jitter_px = jitter_floor_px(displacements, usable=~blank)
+        settled_px = low_px
         if noise_limited(jitter_px, spacing):   # each pin's own noise: the neighbourhood's medians
+            # (a settled tail within the pins' own noise: the tracked pins catching up after a lift move the
+            # medians too)
+            settled_px = max(low_px, 2.0 * jitter_px)
             field, alone = local, np.zeros(displacements.shape[:2], dtype=bool)
         else:
             alone = np.hypot(*np.moveaxis(displacements - local, -1, 0)) > low_px
@@ -247,8 +251,7 @@ def find_contacts(displacements: np.ndarray, *, signal: np.ndarray, blank: np.nd
     if relative is not None:
         bounds = trim_still(bounds, np.where(alone[..., None], np.nan, field), bridged, low_px=low_px,
                             high_px=high_px)
-        # a settled tail within the pins' own noise: the tracked pins catching up after a lift move the medians too
-        bounds = trim_settled(bounds, bridged, low_px=max(low_px, 2.0 * jitter_px) if field is local else low_px)
+        bounds = trim_settled(bounds, bridged, low_px=settled_px)
         bounds = drop_unmoved(bounds, field, bridged, low_px=low_px, high_px=high_px)
     kinds = _kinds(displacements, bounds, signal, low_px, rest_positions,
                    field=None if rest_positions is None else field, spacing_px=spacing)
