@@ -47,7 +47,10 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
 
     A press's hold is still too, but its signal is at its peak: it is no rest frame. A rest too short to be
     still (a lift followed at once by the next contact) leaves the rest where it was: `split_at_dips` splits
-    those contacts. Each pin's rest is its displacement at the latest rest frame where it was seen.
+    those contacts. Each pin's rest is its displacement at the latest rest frame where it was seen; a pin unseen
+    there and found again before the next contact (the pins with a rest there still within ``high_px`` of it)
+    rests where it is, frame by frame, until that contact: a tracker that lost pins through a slide may find them
+    only once the skin is at rest again, and their older rests are off by what the contacts since left.
 
     Parameters
     ----------
@@ -76,11 +79,11 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     -------
     rest : (T, N, 2) ndarray of float64
         Each frame's rest, px: zeros up to the first frame with pins; NaN for a pin not yet seen at a rest
-        frame. ``field - rest`` are the displacements from the skin's own rest.
+        frame nor found again after one. ``field - rest`` are the displacements from the skin's own rest.
     frames : (R,) ndarray of int, with ``return_frames``
         The rest frames, increasing: the first frame with pins (none: empty), then each lift's and creeping
-        rest's. Frame t's rest is taken at the latest of them <= t (a pin unseen there: at the latest
-        where it was seen).
+        rest's. Frame t's rest is taken at the latest of them <= t (a pin unseen there: where it is found
+        again before the next contact, else at the latest where it was seen).
 
     Examples
     --------
@@ -151,12 +154,29 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         filled[np.hypot(filled[..., 0], filled[..., 1]) < low_px] = np.nan      # only what a contact left
         source = np.where(known[..., None], source, filled)
         known = known | np.isfinite(filled[..., 0])
-    at = np.where(known, np.arange(len(rests))[:, None], -1)             # (R, N): rest frame index or -1
-    at = np.maximum.accumulate(at, axis=0)
-    which = np.searchsorted(rests, np.arange(len(data)), side="right") - 1   # (T,): latest rest frame index
-    index = np.where(which[:, None] >= 0, at[np.maximum(which, 0)], -1)     # (T, N)
+    # A pin unseen at a rest frame and found again before the next contact (while the pins with a rest there moved
+    # from it by less than ``high_px``) rests where it is, frame by frame, until that contact: the displacement it
+    # kept from an older rest frame is off by what the contacts since left in the skin (radial-led-120's creeping
+    # tours: retired pins back in a rest 1-3 px from their older rests held the signal at twice the high threshold
+    # until the next slide ended), and where it is when first found may be too (a neighbourhood's median, one
+    # neighbour found so far).
+    marked = np.zeros(seen.shape, dtype=bool)                            # (T, N): the frames each pin's rest is from
+    marked[rests] = known
+    value = data.copy()
+    value[rests] = source
+    ends = np.append(rests[1:], len(data))
+    for k, (at_rest, end) in enumerate(zip(rests, ends)):
+        window = seen[at_rest + 1:end]
+        back = window.any(axis=0) & ~known[k]
+        if not back.any() or not known[k].any():
+            continue
+        moved = tap_signal(data[at_rest + 1:end][:, known[k]] - source[k][known[k]])
+        before = int(np.argmax(moved >= high_px)) if (moved >= high_px).any() else len(moved)
+        marked[at_rest + 1:at_rest + 1 + before, back] = window[:before, back]
+    index = np.where(marked, np.arange(len(data))[:, None], -1)          # (T, N): latest frame its rest is from
+    index = np.maximum.accumulate(index, axis=0)
     pins = np.arange(data.shape[1])
-    rest = np.where((index >= 0)[..., None], source[np.maximum(index, 0), pins[None]], np.nan)
+    rest = np.where((index >= 0)[..., None], value[np.maximum(index, 0), pins[None]], np.nan)
     rest[:first] = 0.0
     return (rest, rests) if return_frames else rest
 

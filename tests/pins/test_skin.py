@@ -25,8 +25,42 @@ def test_a_pin_found_again_after_a_lift_rests_where_its_neighbours_do():
     stale = skin_rest(field, low_px=0.5, high_px=1.5)
     assert segment_taps(tap_signal(field - filled), high_px=1.5, low_px=0.5, pad_frames=0) == [(5, 20)]
     assert np.abs(filled[40, lost, 0] - 6.0).max() < 0.3                   # the neighbours' rest, not the first
-    # without it the pins found again rest at the first frame's rest: a "contact" from frame 26 to the end
-    assert segment_taps(tap_signal(field - stale), high_px=1.5, low_px=0.5, pad_frames=0)[-1] == (26, frames)
+    # without it the pins found again, still before the next contact, rest where they are found (until session 23
+    # at the first frame's rest: a "contact" from frame 26 to the end)
+    assert segment_taps(tap_signal(field - stale), high_px=1.5, low_px=0.5, pad_frames=0) == [(5, 20)]
+    assert np.abs(stale[40, lost, 0] - 6.0).max() < 0.3
+
+
+def test_pins_found_again_in_a_rest_rest_where_they_are_until_the_next_contact():
+    """A tracker that retired pins through a slide finds them again only once the skin is back at rest, after the
+    lift's rest frame, and its neighbourhood medians there come from whichever neighbours are back (radial-led-120's
+    creeping tours: 30-60 % of pins found again 1-40 frames after the rest frame, the signal held at twice the high
+    threshold by their older rests until the next slide ended). Found again in a rest, a pin rests where it is
+    frame by frame until the next contact; found again during it, it keeps its older rest."""
+    rng = np.random.default_rng(5)
+    pins, frames = 150, 90
+    field = np.zeros((frames, pins, 2))
+    field[5:15, :, 0] = np.linspace(2.0, 40.0, 10)[:, None]                 # a slide along x
+    field[15:20, :, 0] = np.linspace(30.0, 6.0, 5)[:, None]                # its lift: 6 px left in the skin
+    field[20:, :, 0] = 6.0
+    field[60:70, :, 1] = np.linspace(1.0, 10.0, 10)[:, None]               # a press across it, from frame 60
+    field[70:, :, 1] = 0.0
+    field += rng.normal(0.0, 0.05, field.shape)
+    lost = rng.random(pins) < 0.4
+    back = 22 + rng.integers(3, 30, pins)                                   # found again 25-51 frames in, at rest
+    late = lost & (rng.random(pins) < 0.25)
+    back[late] = 64                                                         # ... or during the press
+    for pin in np.flatnonzero(lost):
+        field[8:back[pin], pin] = np.nan
+        if not late[pin]:                                                   # its first frames back 1 px off or so
+            field[back[pin]:back[pin] + 4, pin] += rng.normal(0.0, 1.0, (4, 2))
+    rest, frames_at = skin_rest(field, low_px=0.5, high_px=1.5, return_frames=True)
+    assert 20 in frames_at or 19 in frames_at or 21 in frames_at                   # the lift's rest frame
+    found = segment_taps(tap_signal(field - rest), high_px=1.5, low_px=0.5, pad_frames=0)
+    assert len(found) == 2 and found[0] == (5, 20) and found[1][0] == 60 and found[1][1] - 70 in (0, 1), found
+    settled = lost & ~late
+    assert np.abs(rest[58, settled, 0] - field[58, settled, 0]).max() < 0.3    # where they were just before it
+    assert np.abs(rest[65, late, 0]).max() < 1.0                          # found in the press: their older rest
 
 
 def test_rest_frames_are_where_the_rest_is_taken():
