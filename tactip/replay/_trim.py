@@ -10,7 +10,8 @@ import numpy as np
 
 from pins import tap_signal
 
-__all__ = ["SETTLED_CREEP", "SETTLED_FRAMES", "SETTLED_SHARE", "drop_unmoved", "trim_settled", "trim_still"]
+__all__ = ["ONSET_STILL_FRAMES", "SETTLED_CREEP", "SETTLED_FRAMES", "SETTLED_SHARE", "drop_unmoved", "trim_settled",
+           "trim_still"]
 # Fewest frames of a settled tail (`trim_settled`): a tracker's catch-up after a lift lasts 2-3 frames.
 SETTLED_FRAMES = 3
 # Highest share of a contact's peak signal a settled tail sits at (a press's hold sits at its peak).
@@ -18,6 +19,9 @@ SETTLED_SHARE = 0.4
 # Share of a settled tail's level it may fall by besides the noise: a skin creeping back with a time constant of
 # 1 s (paper 000 waits 1 s between contacts) loses 3 % of what a slide left a frame at 30 frames/s.
 SETTLED_CREEP = 0.1
+# Fewest still frames in a row, before a contact's first frame at the high threshold, after which its onset is looked
+# for (`trim_still`): the pins' motion before them is not the contact's.
+ONSET_STILL_FRAMES = 5
 
 
 def trim_still(bounds, field: np.ndarray, signal: np.ndarray, *, low_px: float, high_px: float) -> list:
@@ -27,7 +31,11 @@ def trim_still(bounds, field: np.ndarray, signal: np.ndarray, *, low_px: float, 
     skin has crept away from since (a slow creep, a few tenths of a px in all), the signal can sit at the low
     threshold for tens of frames before a contact and after it (tactip-127's tours: slides starting 4-70 frames
     early). Only ends with a still frame at the low threshold or above are trimmed (a clean tap's ends, `segment_taps`'
-    ``pad_frames`` included, stay where they were); a contact with no moving frame is kept whole."""
+    ``pad_frames`` included, stay where they were); a contact with no moving frame is kept whole. Where
+    `ONSET_STILL_FRAMES` or more still frames in a row come between a moving frame and the contact's first frame at
+    ``high_px``, the contact begins at the first moving frame after them (tactip-127's tour, seed 0: the skin at rest
+    stepped 0.5 px in one frame, 44 frames before a slide, and the signal from its rest sat at 0.8-1.2 px, between
+    the thresholds, until the slide: the slide began there)."""
     motion = np.full(len(field), np.inf)
     motion[1:] = tap_signal(field[1:] - field[:-1])
     still = (motion <= 0.5 * low_px) & (signal < high_px)
@@ -36,6 +44,7 @@ def trim_still(bounds, field: np.ndarray, signal: np.ndarray, *, low_px: float, 
         moving = np.flatnonzero(~still[start:stop])
         if moving.size:  # only still frames the signal held at the low threshold or above (not segment_taps' pad)
             first, last = start + int(moving[0]), start + int(moving[-1]) + 1
+            first = _after_still_runs(still, first, start + _first_at(signal[start:stop], high_px))
             start = first if (signal[start:first] >= low_px).any() else start
             stop = last if (signal[last:stop] >= low_px).any() else stop
         trimmed.append((start, stop))
@@ -98,3 +107,23 @@ def drop_unmoved(bounds, field: np.ndarray, signal: np.ndarray, *, low_px: float
                 continue
         kept.append((start, stop))
     return kept
+
+
+def _first_at(values: np.ndarray, level: float) -> int:
+    """Index of the first of ``values`` at ``level`` or above (their length if none)."""
+    above = np.flatnonzero(np.asarray(values) >= level)
+    return int(above[0]) if above.size else len(values)
+
+
+def _after_still_runs(still: np.ndarray, first: int, peak: int) -> int:
+    """The first moving frame at or after ``first`` that follows the last run of `ONSET_STILL_FRAMES` or more still
+    frames before ``peak`` (``first`` when there is none)."""
+    part = still[first:peak]
+    if part.size < ONSET_STILL_FRAMES:
+        return first
+    edges = np.diff(np.concatenate([[0], part.astype(np.int8), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    long = np.flatnonzero(ends - starts >= ONSET_STILL_FRAMES)
+    if not long.size or ends[long[-1]] >= part.size:
+        return first
+    return first + int(ends[long[-1]])
