@@ -126,6 +126,19 @@ first rest frame; 13 in 377; which step places them not traced), 27 staying reti
 the fix is the tracker's (recovery for retired pins, or a prediction for a patch with no neighbour placed), not
 `find_contacts`': not tried here (the tracker's files were swap22's and speed24's). Scripts: /tmp/seen22.
 
+Session 23 (lead; main 43b3857, its tracking kept, scored again; rendered once per set): `pins.skin_rest` lets a
+pin unseen at a rest frame and found again before the next contact rest where it is, frame by frame, until that
+contact (radial-led-120 seeds 3, 5, 11: retired pins back 1-40 frames after the lift's rest frame, their older rests
+1-3 px off, the signal held at 1.2-2.2 px until the next slide ended; where first found they may be off too, one
+neighbour's median); `trim_still` looks for a contact's onset after the last run of 5 still frames before its first
+frame at the high threshold (tactip-127 seed 0's step 44 frames early; 1-20 frames give the same). New skin, dev 0-11:
+radial-led-120 7/12 (125/132) -> 10/12 (128/132) (the first alone), tactip-127 7/12 (125/132) -> 8/12 (126/132)
+(the second), white-dark-331 12/12 unchanged; held out 48-53 (rendered once, at the end): radial-led-120 3/6 (63/66)
+-> 5/6 (65/66), tactip-127 4/6 (64/66) and white-dark-331 6/6 unchanged. Old skin (residual 0.2, creep 0.1 s, seeds
+0-11) 12/12, 10/12, 12/12 and residual 0 (seeds 0-5) 6/6 each: unchanged. Left: radial seed 2 (a press merged into
+the slide after it), seed 10 (a slide 22 frames early: a creep the rest does not follow), tactip-127 seeds 1, 3, 5,
+11 (3: a press of 1.9 px on a pad where half the pins are lost, merged into the slide 2 frames later).
+
 Run: .venv/bin/python bench/bench_tour_contacts.py [--presets radial-led-120,white-dark-331,tactip-127]
      [--seeds 0-11] [--residual 0.1 --creep-s 1.0 --set-share 0.02 --set-s inf] [--keep DIR]
 """
