@@ -158,16 +158,25 @@ _NEAREST = 48
 _AGREE_FRACTION = 0.05
 
 
-def retired_guesses(rest: np.ndarray, reference: np.ndarray, retired: np.ndarray, spacing_px: float) -> np.ndarray:
+def retired_guesses(rest: np.ndarray, reference: np.ndarray, retired: np.ndarray, spacing_px: float,
+                    still: np.ndarray | None = None) -> np.ndarray:
     """Guesses for the `retired` (N,) bool pins, px (L, 2), L of them: each one's rest position moved by the median
     displacement of the `_AROUND_PINS` pins placed in `reference` (N, 2), px, nearest it at `rest` (N, 2), px (among its
     `_NEAREST`); NaN where those displacements do not agree (their median distance from their median beyond
-    `_AGREE_FRACTION` of `spacing_px`).
+    `_AGREE_FRACTION` of `spacing_px`), or where any of those pins moved in the last frame (`still` (N,) bool given
+    and False there: the pad is not at rest around it).
 
     A retired pin in a patch of lost pins has no neighbour placed (seen22: 53 % of radial-led-120's retired lost
     pin-frames on creeping-skin tours), so `pins._predict` leaves it where it was last seen, 1.5-2 spacings behind the
     skin, and its search is never trusted (`Refiner._trusted`): the patch came back only at rest. `PinTracker` follows
     these guesses as it follows the others' (`pins._identity` keeps each tip to the pin expected nearest).
+
+    Only around still pins (session 23, retire23): guessed mid-motion (a lift's spring-back, 12-16 px a frame on
+    tactip-127's creeping-skin tours), a burst of retired pins came back in the frame after the lift with what the slide
+    left in the skin, and the contacts' tap signal (a percentile over the pins seen) rose by 2-3 px as the pad stopped:
+    no rest taken there, slides merged (tactip-127 seed 6, frame 515: 95 -> 117 pins seen). Kept still, they come back
+    in the rest that follows. Against the renderer's truth the tracking barely changes: tactip-127 seeds 0-6, lost
+    visible pin-frames main 232836 -> 22862 without this, 29018 with it; apart pin-frames 131 -> 9 and 9.
     """
     which = np.flatnonzero(retired)
     guesses = np.full((len(which), 2), np.nan)
@@ -183,6 +192,8 @@ def retired_guesses(rest: np.ndarray, reference: np.ndarray, retired: np.ndarray
     shift = np.median(displacement, axis=1)
     spread = np.median(np.sqrt(_squared_norm(displacement - shift[:, None])), axis=1)
     agree = spread <= _AGREE_FRACTION * spacing_px
+    if still is not None:
+        agree &= still[index].all(axis=1)
     guesses[enough.nonzero()[0][agree]] = rest[which[agree]] + shift[agree]
     return guesses
 

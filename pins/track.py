@@ -23,7 +23,8 @@ A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; n
   and a pin found keeps its tip only when no other pin is expected nearer to it (`pins._identity`):
   through slides that squeeze the skin ahead of them, a pin is rather lost than on another's tip;
 - retirement: a pin lost for more than `retire_after` frames (a rim pin leaving view) is retired:
-  searched for once in `check_every` frames, and followed from where the placed pins around put it;
+  searched for once in `check_every` frames, and followed from where the placed pins around put it
+  while they are still;
 - recovery at a bounded rate: when a pin that is not retired is still missing, the frame's blobs
   are detected (`pins.detect`, a few ms), at most once in `detect_every` frames: implausible pins
   take the blob they landed on, and free blobs are assigned to lost pins one-to-one (Hungarian
@@ -375,7 +376,9 @@ class PinTracker:
         # Constant velocity over one frame; after blank frames, from where the pins were last seen.
         guess = self._reference + self._velocity if self._since_good == 1 else self._reference
         if self.refine and self._since_good == 1 and self.frames % self.check_every == 0 and self.retired.any():
-            guess[self.retired] = retired_guesses(self._refiner.rest_positions, self._reference, self.retired, self.spacing_px)
+            # (Where the placed pins around them agree and did not move: not mid-slide, `retired_guesses`.)
+            guess[self.retired] = retired_guesses(self._refiner.rest_positions, self._reference, self.retired,
+                                                  self.spacing_px, self._refiner.still)
         detected = False
         if self.refine:
             positions, blank, detected = self._refine(grey, current, guess)
