@@ -131,6 +131,18 @@ there: 557, 816). Variants (seeds 0-5, tactip-127 / tactip-331 / dark-331, as se
 77 / 667 / 921 (tactip-127 seeds 6-23: 303), with those given no tip unplaced 84 / 635 / 909, those given another's
 unplaced 64 / 626 / 939; every first-pass pin kept placed (moved, never unplaced) 130 / 567 / 864.
 
+Session 22 (retire22; main 4f5966d): retired pins are guessed every `check_every` frames at their rest positions moved
+by the median displacement of the 8 placed pins nearest at rest, where those agree within 0.05 spacings
+(`pins._motion.retired_guesses`), and followed from there. On the webcam-like tour (this bench's) 43 % of the lost
+visible pin-frames are retired pins (seeds 0-2: 1788 of 4135; 288 with no neighbour placed), most of them merged; on
+the same tour with `bench_tour_contacts`' creeping skin (residual 0.1, creep 1 s, set share 0.02) 91 % (seeds 3/11:
+17001 of 18456, 7540 with no neighbour placed; far 54 %, untrusted 23 %). Main -> retire22, lost visible pin-frames
+(apart pin-frames): webcam-like seeds 0-2 4135 (22) -> 4109 (22), held out 48-50 4669 (40) -> 4550 (40); creeping
+skin seeds 3/5/7/11 33510 (6) -> 9575 (15; seed 3: 0 -> 12), held out 48-51 32428 (8) -> 12644 (20): the swaps rise
+there. ``--onsets`` seeds 0-2 tactip-331 228 -> 231, dark-331 427 -> 384, tactip-127 63 -> 60; held out 48-50 331 ->
+315, 394 -> 386, 44 -> 34. Agreement 0.1 / 0.25: onsets tactip-331 254 / 266; any retired pin, no agreement: 271, 454,
+80; only pins with no neighbour placed: tours 5336 / 4050 (seeds 3 / 11), onsets 228, 437, 64.
+
 Run: .venv/bin/python bench/bench_slide_losses.py [--presets radial-led-120] [--seeds 0-5] [--clean]
      .venv/bin/python bench/bench_slide_losses.py --onsets [--presets tactip-331,tactip-127] [--fps 120]
 """

@@ -139,6 +139,25 @@ radial-led-120 7/12 (125/132) -> 10/12 (128/132) (the first alone), tactip-127 7
 the slide after it), seed 10 (a slide 22 frames early: a creep the rest does not follow), tactip-127 seeds 1, 3, 5,
 11 (3: a press of 1.9 px on a pad where half the pins are lost, merged into the slide 2 frames later).
 
+Session 23's retire23 (main 43b3857): retire22's retired-pin guesses (reverted in 8373e0c) lost tactip-127's tours not
+by misplacing pins (against the renderer's truth, seeds 0-6: lost visible pin-frames 232836 -> 22862, apart 131 -> 9,
+placed > 1 px off 10242 -> 1850) but through `pins.skin_rest`: with the dragged patch tracked, what a slide left (8 px
+on most pins) held the tap signal's percentile while a press right after it moved fewer pins (seeds 1, 3: a rest taken
+in the press's hold, the press merged into the slide, its release read as a contact), and a burst of retired pins
+found again as a lift stopped raised the signal with nothing moving (seed 6 frame 515, 95 -> 117 pins: no rest,
+slides merged). Mended by guessing retired pins only around still pins (`pins._motion.retired_guesses`) and, in
+`skin_rest`, a lift stopped at once by the next contact taken as a rest and "not risen again" judged on the pins'
+motion since the signal stopped falling. Dev 0-11, creeping skin, main -> retire23: tactip-127 7/12 (125/132) ->
+10/12 (129/132), radial-led-120 7/12 (125/132) -> 9/12 (127/132), white-dark-331 12/12 -> 12/12; retire22 with the
+skin_rest change 8/12 (125/132) on tactip-127, the still gate alone 4/12 (112/132). Held out 48-53 (once, at the end):
+tactip-127 4/6 (64/66) -> 5/6 (65/66), radial-led-120 3/6 (63/66) -> 4/6 (64/66), white-dark-331 6/6 (66/66) -> 4/6
+(64/66): seeds 49 and 52, a still rest where retired pins come back every `check_every` frames (49: 265 -> 325 pins
+seen, main 266-274; motion 0.05-0.07 px) and, measured from the rest before the slide (no rest frame where they were
+seen), read as displaced by what the slide left (the signal 1.0 -> 2.4 px, over the 1.5 px threshold): a slide
+starting 79 / 99 frames early. Not mended (a pin found again in a still rest might rest where it is found). The
+skin_rest change alone, on main's tracking: dev 7/12, 7/12, 12/12 (unchanged; old skin 10/12, 12/12, 12/12
+unchanged), held out tactip-127 4/6 -> 5/6 (65/66), radial-led-120 3/6 and white-dark-331 6/6 unchanged.
+
 Run: .venv/bin/python bench/bench_tour_contacts.py [--presets radial-led-120,white-dark-331,tactip-127]
      [--seeds 0-11] [--residual 0.1 --creep-s 1.0 --set-share 0.02 --set-s inf] [--keep DIR]
 """

@@ -30,6 +30,7 @@ third of a spacing or more (median; a lift's spring-back: `_LEAST_STEP`).
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ._window import _squared_norm
 
@@ -143,3 +144,65 @@ def field_guesses(rest: np.ndarray, reference: np.ndarray, last_step: np.ndarray
     guess[which[need[which]]] = field[need[which]]
     return guess, positions, need
 
+
+
+
+
+# Retired pins (issue 20, outcomes 1 and 2): guessed from this many placed pins nearest at rest, ...
+_AROUND_PINS = 8
+# ... among its this many nearest at rest (about 4 spacings around), ...
+_NEAREST = 48
+# ... where their displacements agree: their median distance from their median within this fraction of a spacing
+# (a patch moved as one; not the squeezed skin ahead of a slide, whose displacement changes by most of a spacing per
+# spacing: there, at 0.1-0.25, tactip-331's apart pin-frames rose, seeds 0-2, 228 -> 254-266).
+_AGREE_FRACTION = 0.05
+
+
+def retired_guesses(rest: np.ndarray, reference: np.ndarray, retired: np.ndarray, spacing_px: float,
+                    still: np.ndarray | None = None) -> np.ndarray:
+    """Guesses for the `retired` (N,) bool pins, px (L, 2), L of them: each one's rest position moved by the median
+    displacement of the `_AROUND_PINS` pins placed in `reference` (N, 2), px, nearest it at `rest` (N, 2), px (among its
+    `_NEAREST`); NaN where those displacements do not agree (their median distance from their median beyond
+    `_AGREE_FRACTION` of `spacing_px`), or where any of those pins moved in the last frame (`still` (N,) bool given
+    and False there: the pad is not at rest around it).
+
+    A retired pin in a patch of lost pins has no neighbour placed (seen22: 53 % of radial-led-120's retired lost
+    pin-frames on creeping-skin tours), so `pins._predict` leaves it where it was last seen, 1.5-2 spacings behind the
+    skin, and its search is never trusted (`Refiner._trusted`): the patch came back only at rest. `PinTracker` follows
+    these guesses as it follows the others' (`pins._identity` keeps each tip to the pin expected nearest).
+
+    Only around still pins (session 23, retire23): guessed mid-motion (a lift's spring-back, 12-16 px a frame on
+    tactip-127's creeping-skin tours), a burst of retired pins came back in the frame after the lift with what the slide
+    left in the skin, and the contacts' tap signal (a percentile over the pins seen) rose by 2-3 px as the pad stopped:
+    no rest taken there, slides merged (tactip-127 seed 6, frame 515: 95 -> 117 pins seen). Kept still, they come back
+    in the rest that follows. Against the renderer's truth the tracking barely changes: tactip-127 seeds 0-6, lost
+    visible pin-frames main 232836 -> 22862 without this, 29018 with it; apart pin-frames 131 -> 9 and 9.
+    """
+    which = np.flatnonzero(retired)
+    guesses = np.full((len(which), 2), np.nan)
+    nearest = _nearest_at_rest(rest)[which]
+    placed = np.isfinite(reference[nearest, 0])
+    enough = np.count_nonzero(placed, axis=1) >= _AROUND_PINS
+    which, nearest, placed = which[enough], nearest[enough], placed[enough]
+    if not len(which):
+        return guesses
+    # The first `_AROUND_PINS` placed ones, nearest first (a stable sort of not-placed: placed first, in order).
+    index = np.take_along_axis(nearest, np.argsort(~placed, axis=1, kind="stable")[:, :_AROUND_PINS], axis=1)
+    displacement = reference[index] - rest[index]
+    shift = np.median(displacement, axis=1)
+    spread = np.median(np.sqrt(_squared_norm(displacement - shift[:, None])), axis=1)
+    agree = spread <= _AGREE_FRACTION * spacing_px
+    if still is not None:
+        agree &= still[index].all(axis=1)
+    guesses[enough.nonzero()[0][agree]] = rest[which[agree]] + shift[agree]
+    return guesses
+
+
+def _nearest_at_rest(rest: np.ndarray) -> np.ndarray:
+    """Each pin's `_NEAREST` nearest others at `rest` (N, 2), px, nearest first: (N, K) int; kept while `rest` is."""
+    memo = _nearest_at_rest.__dict__.get("memo")
+    if memo is None or memo[0] is not rest:
+        k = min(_NEAREST, len(rest) - 1)
+        memo = (rest, cKDTree(rest).query(rest, k=k + 1)[1][:, 1:] if k > 0 else np.zeros((len(rest), 0), int))
+        _nearest_at_rest.memo = memo
+    return memo[1]

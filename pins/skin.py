@@ -36,7 +36,15 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
       not risen again by ``high_px`` or more since its lowest after the peak (a press right after a slide
       holds still above what the slide left: no rest) and no longer falls (by half ``low_px`` or more from
       the frame before: a press whose skin relaxes under the plate falls to half its peak while held); what
-      is left in the skin after the plate lifted is the next contact's rest; or
+      is left in the skin after the plate lifted is the next contact's rest. "Not risen again" is judged on the
+      pins' own motion since the signal stopped falling (`tap_signal` of the change from that frame below
+      ``high_px``), not on the signal: the signal is a percentile over the pins seen, and where what a slide left
+      moves more pins than a press right after it, the press does not raise it (tactip-127's tours, retire23: a
+      rest taken in the press's hold, the press merged into the slide), while pins found again after a lift raise
+      it with nothing moving (a rest missed, slides merged); or
+    - a lift stopped at once by the next contact (a rest of a frame, no still frame): the first frame where the
+      signal, having fallen by ``high_px`` or more in the frame before, stops falling (by less than half
+      ``low_px``) at ``share`` of the peak or less and not risen again: the next contact is measured from there; or
     - a rest that creeps back: the skin at the last rest frame was off its first rest (`tap_signal` of the
       displacements ``low_px`` or more), the signal from it has stayed below ``high_px`` since (no contact),
       the next two frames are still too (a contact's slow onset is not), and the pins displaced there (by
@@ -115,6 +123,7 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     rests = [first]
     anchor = first  # the last rest frame
     peak = trough = 0.0  # the highest signal from the rest since it, and the lowest after that peak
+    peak_at = first  # the peak's frame
     # Between still frames the rest cannot change: the signal from it is judged a run at a time, and measured
     # (`tap_signal`, row by row) for `_FIRST` frames at once after a rest frame, twice as many each time after
     # that up to `_AHEAD`, until the rest moves.
@@ -129,14 +138,29 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
         values = signal[start:end]                                        # the run, and the still frame after it
         if values.size:
             top = int(np.argmax(values))
+            if values[top] > peak:
+                peak_at = int(start) + top
             peak, trough = ((float(values[top]), float(values[top:].min())) if values[top] > peak
                             else (peak, min(trough, float(values.min()))))
+        if peak >= high_px:  # a lift stopped at once by the next contact: no still frame between them
+            stopped = _stopped_by_contact(signal, max(int(start), peak_at + 2, anchor + 2), min(int(stop), len(data)),
+                                          peak * share, trough + high_px, low_px, high_px)
+            if stopped is not None:
+                rests.append(stopped)
+                anchor, known, ahead = stopped, max(end, min(stopped + _FIRST, len(data))), _FIRST
+                signal[anchor:known] = tap_signal(data[anchor:known] - data[anchor])
+                after = signal[anchor + 1:end]
+                peak, trough, peak_at = 0.0, 0.0, anchor
+                if after.size:
+                    top = int(np.argmax(after))
+                    peak, trough, peak_at = float(after[top]), float(after[top:].min()), anchor + 1 + top
+                values = signal[start:end]
         if stop >= len(data):
             break
         now = float(values[-1])                                           # the still frame's signal
         before = float(values[-2]) if values.size > 1 else 0.0            # the frame's before it
-        lift = (peak >= high_px and now <= share * peak and now < trough + high_px   # fallen, not risen again,
-                and before - now < 0.5 * low_px)                                    # no longer falling
+        lift = (peak >= high_px and now <= share * peak and before - now < 0.5 * low_px   # fallen, no longer falling,
+                and _moved_since_fall(data, signal, peak_at, int(stop), share * peak, low_px) < high_px)  # no press
         if peak < high_px and anchor not in displaced:
             displaced[anchor] = float(tap_signal(data[anchor:anchor + 1])[0])
         creep = (peak < high_px and displaced[anchor] >= low_px and still[stop + 1:stop + 3].all()
@@ -179,6 +203,31 @@ def skin_rest(field: np.ndarray, *, low_px: float, high_px: float, share: float 
     rest = np.where((index >= 0)[..., None], value[np.maximum(index, 0), pins[None]], np.nan)
     rest[:first] = 0.0
     return (rest, rests) if return_frames else rest
+
+
+def _stopped_by_contact(signal: np.ndarray, first: int, stop: int, fallen: float, below: float, low_px: float,
+                        high_px: float) -> int | None:
+    """The first frame in [first, stop) where a lift's signal (px, from the rest) that fell by ``high_px`` or more in
+    the frame before stopped at once (by less than half ``low_px``), at most ``fallen`` and below ``below``: the
+    plate came off and the next contact held the skin there (a rest of a frame or two, no still frame); else None."""
+    for f in range(first, stop):
+        if (signal[f] <= fallen and signal[f] < below and signal[f - 1] - signal[f] < 0.5 * low_px
+                and signal[f - 2] - signal[f - 1] >= high_px):
+            return f
+    return None
+
+
+def _moved_since_fall(data: np.ndarray, signal: np.ndarray, peak_at: int, stop: int, fallen: float,
+                      low_px: float) -> float:
+    """How far the pins moved (`tap_signal` of the change, px) from where the signal after the peak at ``peak_at``
+    stopped falling at ``fallen`` px or below, to frame ``stop``: a press right after a slide moves them from there,
+    while the signal from the rest, a percentile over pins that come and go (those found again after a lift), may not
+    show it."""
+    fall = signal[peak_at:stop] - signal[peak_at + 1:stop + 1]
+    ended = (fall < 0.5 * low_px) & (signal[peak_at + 1:stop + 1] <= fallen)
+    if not ended.any():
+        return 0.0
+    return float(tap_signal((data[stop] - data[peak_at + 1 + int(np.argmax(ended))])[None])[0])
 
 
 def _back(now: np.ndarray, then: np.ndarray, level_px: float, pins: np.ndarray | None = None) -> float:

@@ -23,7 +23,8 @@ A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; n
   and a pin found keeps its tip only when no other pin is expected nearer to it (`pins._identity`):
   through slides that squeeze the skin ahead of them, a pin is rather lost than on another's tip;
 - retirement: a pin lost for more than `retire_after` frames (a rim pin leaving view) is retired:
-  searched for only once in `check_every` frames, in turns, until it comes back with its identity;
+  searched for once in `check_every` frames, and followed from where the placed pins around put it
+  while they are still;
 - recovery at a bounded rate: when a pin that is not retired is still missing, the frame's blobs
   are detected (`pins.detect`, a few ms), at most once in `detect_every` frames: implausible pins
   take the blob they landed on, and free blobs are assigned to lost pins one-to-one (Hungarian
@@ -55,7 +56,7 @@ from scipy.spatial import cKDTree
 
 from ._edge import FrameEdge, read_region, tracking_crop
 from ._identity import kept_on_own_tips
-from ._motion import field_guesses
+from ._motion import field_guesses, retired_guesses
 from ._pairfit import part_overlapping
 from ._predict import settle
 from ._recover import _as_points, match_to_blobs
@@ -374,6 +375,10 @@ class PinTracker:
         origin = self._origin
         # Constant velocity over one frame; after blank frames, from where the pins were last seen.
         guess = self._reference + self._velocity if self._since_good == 1 else self._reference
+        if self.refine and self._since_good == 1 and self.frames % self.check_every == 0 and self.retired.any():
+            # (Where the placed pins around them agree and did not move: not mid-slide, `retired_guesses`.)
+            guess[self.retired] = retired_guesses(self._refiner.rest_positions, self._reference, self.retired,
+                                                  self.spacing_px, self._refiner.still)
         detected = False
         if self.refine:
             positions, blank, detected = self._refine(grey, current, guess)
@@ -427,7 +432,7 @@ class PinTracker:
         # Retired pins take turns: each is searched for once in `check_every` frames.
         search = ~self.retired | ((self._index + self.frames) % self.check_every == 0)
         positions, filled = refiner.follow(crop, guess, self._last_seen, search)
-        need = np.isnan(positions[:, 0]) & np.isfinite(guess[:, 0])
+        need = np.isnan(positions[:, 0]) & np.isfinite(self._reference[:, 0])  # (not retired pins guessed)
         tracked = positions
         # A few pins not found (searched for from their predictions too) have vanished; when many
         # are not (a sudden change of motion), LK looks for them from the last good frame, each
@@ -465,16 +470,14 @@ class PinTracker:
         wanted = missing & ~self.retired
         detected = bool(self._since_detection + 1 >= self.detect_every and np.count_nonzero(wanted))
         if detected:
-            # Blobs only around the pins that asked for them: retired pins, spread along the rim,
-            # would widen the detection to most of the disc; they come back by their own search.
+            # Blobs only around pins not retired (spread along the rim, they would widen it to most of the disc).
             before = positions
             positions = refiner.recover(grey, tracked, positions, self._last_seen, crop, around=wanted)
             # (A missing pin is expected at its guess, or where lost at its prediction: `filled`.)
             positions = kept_on_own_tips(before, positions, np.where(np.isfinite(tracked), tracked, filled), filled,
                                          refiner._identity_index)
-        # Pins just seen, on a sloped background at rest (a veil's or a reflection's flank, which their
-        # windows weigh as tip), and missing now: fitted as opaque ellipses where their tips show.
-        # (Those lost for longer come back by their windows' search, snapping to rest and blobs.)
+        # Pins just seen, on a sloped background at rest (a veil's or a reflection's flank, which their windows
+        # weigh as tip), and missing now: fitted as opaque ellipses where their tips show (not those lost longer).
         fit = (np.isnan(positions[:, 0]) & (self._lost_run == 0) & refiner.sloped).nonzero()[0]
         if fit.size:
             positions = refiner.fit_tips(crop, positions, self._last_seen, fit)
