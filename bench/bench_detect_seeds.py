@@ -36,6 +36,15 @@ Left: a glare blob beyond a corner of the outer ring (a true corner pin's edges 
 0.80-0.86 of its neighbours', as pins'): brown-127 seed 11 at rest and tapped; seed 7 tapped and the audit's
 seed 61 keep one each too (not looked at).
 
+Session 23's probe23 (tips a fit left beyond its reach fitted again where it ended, `pins._tipfit`): radial-led-120
+seeds 0-35, the frames' RMSE (rms over frames) rest 0.1050 -> 0.1015 px, tapped 0.1098 -> 0.1051, worst frame 0.177 ->
+0.148 (seed 9 at rest, a probed tip 1.3 px off its truth) and 0.169 -> 0.126; frames over 0.1 px 20 -> 16 and 26 ->
+25 of 36; held out 48-59: 0.0996 -> 0.0997, 0.1034 -> 0.1029, 5 -> 5 and 9 -> 8 of 12. Fitted from the true centres
+0.097 and 0.103 (12 and 21 frames over): the bar of 0.1 px on every frame lies at the noise limit of a fit per pin
+(`bench_tip_bound.py`: 0.083-0.093 per frame with the membrane and tip level known); the faint outer ring (a sixth of
+the pins, 0.15-0.16 px, at 1.2 times its bound) carries a third of the squared error. Every other preset's fields the
+same to 0.1 mpx (seeds 0-11: recall, precision and worst RMSE as before).
+
 Run: .venv/bin/python bench/bench_detect_seeds.py [--seeds 0-11] [--presets a,b] [--scale] [--failures]
 """
 

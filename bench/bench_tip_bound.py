@@ -17,6 +17,10 @@ noise limit of a per-pin estimate, and a lower RMSE needs a prior across pins (a
 field), not a better tip fit. Also prints the time of `probe_lattice_holes` and `flat_pins` per
 preset (the checks `find_pin_field` added for this pad) beside find_pin_field's own, ms, mean of 3 runs.
 
+(Session 23: the moved renders drop the sensor's cached scene, which had made every one the first one since the
+renders were cached, and the bound a singular matrix.) Seeds 0-35: bound 0.083-0.093 per frame; the field 0.086-0.148
+at rest, 0.092-0.126 tapped (`bench_detect_seeds.py`).
+
 Run: .venv/bin/python bench/bench_tip_bound.py [--seeds N]
 """
 
@@ -53,10 +57,13 @@ def moved_tips(quiet: SyntheticTacTip, contact, shift_px) -> np.ndarray:
         paint(scene, image_size, np.asarray(centres) + np.asarray(shift_px, np.float64), shape, levels)
 
     _render.paint_pins = shifted
+    # (The sensor keeps its last scene per contact: dropped, so the tips are painted again where moved.)
+    quiet._scenes.clear()
     try:
         return quiet.render(contact).image.astype(np.float64)
     finally:
         _render.paint_pins = paint
+        quiet._scenes.clear()
 
 
 def cramer_rao_rmse_px(quiet: SyntheticTacTip, contact, centres: np.ndarray, reach_px: float,
