@@ -29,21 +29,10 @@ from numba import njit
 # `pins._judge`'s constants, imported by value (the kernel compiles them in); the tests hold them equal.
 _KEPT, _OFF, _SIZE, _CONTRAST = -1, 1, 2, 3
 _NEIGHBOURS = 6
-_SIZE_RANGE = (0.4, 2.2)
-_MIN_FILL = 0.6
-_FILL_AREA = 15.0
-_MIN_CONTRAST = 0.5
-_MIN_SHARPNESS = 0.8
-_TOO_CLOSE = 0.6
-_LINK = 1.3
-_MIRROR = 0.25
-_MIN_ANCHORS = 2
-_WEAK_CONTRAST = (0.5, 0.8)
-_INWARD = -0.5
-_SPREAD = 0.8
-_MIN_PINS = 4
-_AREA_SLACK = 3.0
-_WEAK_SIZE = (1.8, 1.4)
+_SIZE_RANGE, _MIN_FILL, _FILL_AREA, _AREA_SLACK = (0.4, 2.2), 0.6, 15.0, 3.0
+_MIN_CONTRAST, _MIN_SHARPNESS, _TOO_CLOSE, _LINK, _MIRROR = 0.5, 0.8, 0.6, 1.3, 0.25
+_MIN_ANCHORS, _WEAK_CONTRAST, _WEAK_SIZE = 2, (0.5, 0.8), (1.8, 1.4)
+_INWARD, _SPREAD, _MIN_PINS = -0.5, 0.8, 4
 # Values within this of a threshold are judged with NumPy's arithmetic, or by the reference.
 _GUARD = 1e-12
 #: NumPy's logs of the size thresholds (as `pins._judge` computes them: its scalar log) ...
@@ -93,6 +82,7 @@ def _grid(points, members, x0, y0, size, nx, ny, start, order):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _cell(x, y, x0, y0, size, nx, ny):
+    """The number of the cell of (x, y), px (row by row; a point beyond the grid in its nearest cell)."""
     gx = min(max(int((x - x0) / size), 0), nx - 1)
     gy = min(max(int((y - y0) / size), 0), ny - 1)
     return gy * nx + gx
@@ -104,8 +94,8 @@ def _nearest(points, i, want, x0, y0, size, nx, ny, start, order, best_d2, best_
     `best_d2`, `best_id` (room for want + 1); returns how many were found and whether a tie could let the
     reference choose others (the want-th and the next at one distance, or a member at distance 0)."""
     qx, qy = points[i, 0], points[i, 1]
-    gx = min(max(int((qx - x0) / size), 0), nx - 1)
-    gy = min(max(int((qy - y0) / size), 0), ny - 1)
+    at_cell = _cell(qx, qy, x0, y0, size, nx, ny)
+    gx, gy = at_cell % nx, at_cell // nx
     room = want + 1
     found = 0
     eps = 1e-7 * size
@@ -138,8 +128,6 @@ def _nearest(points, i, want, x0, y0, size, nx, ny, start, order, best_d2, best_
                         best_id[at] = j
                         if found < room:
                             found += 1
-                if step == 0:
-                    break
                 cx += step
         # Whatever lies beyond the cells searched is at least this far away.
         if gx - r <= 0 and gy - r <= 0 and gx + r >= nx - 1 and gy + r >= ny - 1:
