@@ -71,21 +71,25 @@ Where it stands (figures per session and what each tried are in `git log -- benc
   decoding (OpenCV's FFmpeg lacks ``--enable-gray``); recycled decoding buffers; pausing the decoder during the field
   search; a shorter GIL switch interval (``--switch-interval``); `_WORKERS` 1 inside replay; a larger read-ahead
   queue; the jitter floor's medians ranked by squared lengths (4.6 -> 4.9 ms: the extra passes cost more than hypot).
-- Session 22, "speed24" (every verdict bit for bit: 7377 recorded judgements of 11 presets' rest frames, seeds
-  0-35, and their fields; this bench's HDF5): the lattice judgement builds its field graph and the kept pins' pitch
-  from its last pass's neighbourhood (no KD-tree built or queried again); the coarse pass judges its sets in
-  descending blob totals (contrast x area), none whose total is below the strongest kept so far
-  (`pins._candidates._strongest`). CPU per judgement 3.12-3.15 -> 2.55-2.61 ms (3 interleaved rounds at load
-  7-14, 819 judgements of seeds 0-3); judgements 7377 -> 6224 (seeds 0-35: all 1153 skipped coarse ones; held out
-  48-51: 821 -> 697, fields bit for bit), but on this bench's frame all 5 coarse sets must be judged (totals
-  60.1k/51.5k/47.1k/46.4k/46.2k, the strongest kept 45.9k): the field search alone there, median CPU
-  153/148/164 -> 148/148/153 ms (3 interleaved rounds against 73bb19b, load 4-9), within the noise.
-- Left: the lattice judgement (~50-60 ms of the start's CPU: on this bench's frame 5.2 verdict passes a judgement,
-  a fifth of each the mirror images' KD-tree look-ups, the rest ~40 small NumPy calls: one compiled pass would cut
-  most of it); the tracker's start (12 ms: `pins._refine`'s tip shapes fit the tips again); the tail's contacts
-  (`tactip.replay.contacts`, `pins.contacts`); FFmpeg's one decode thread slower beside the tracking than alone
-  (~0.7 against ~0.51 ms/frame). A process's first replay also pays one-off loads the best of the repeats leaves out
-  (Numba and the kernels' cache, ~0.4-0.6 s; h5py ~0.03 s; compiling the kernels once per machine, tens of s).
+- Session 22, "speed24": the lattice judgement's field graph and pitch from its last pass's neighbourhood, and the
+  coarse pass judging only the sets that could be strongest (`pins._candidates._strongest`: 7377 -> 6224 judgements
+  on 11 presets' rest frames, seeds 0-35; CPU per judgement 3.1 -> 2.6 ms; on this bench's frame all 5 coarse sets
+  are judged still).
+- Session 23, "speed25" (every verdict bit for bit): the lattice judgement compiled (`pins._jit_judge`: its verdict
+  passes and the field's link groups, one Numba call each, without the GIL; ties between neighbours left to the
+  NumPy reference, none met on the frames below). `bench_replay_judge.py`, every judgement of the field search on 11
+  presets' rest frames, seeds 0-35: 6224 judgements, verdicts and fields identical, CPU per judgement median 2.73 ->
+  0.70 ms (mean 3.25 -> 0.88, load 15-22); this bench's HDF5 identical (mp4v, MJPG). Against 43b3857, 3 interleaved
+  rounds at load 18-21 (CPU, best of 3, ms/frame): the candidate threads ("replay other") 0.14/0.14/0.13 ->
+  0.05/0.05/0.05 (~110 -> ~40 ms), the field alone 0.22/0.21/0.19 -> 0.11/0.10/0.10, the main thread unchanged
+  (0.71-0.77 -> 0.74-0.75); on the rest frame, 2 rounds of 12: the field search's main thread 56/58 -> 51/52 ms
+  (the other polarity's probe judges there), its candidate threads 109/112 -> 41/40 ms. The clock is to be judged
+  on a quiet machine.
+- Left: the field search's main thread (~50 ms: tip fits, the discs, hole filling, exposure, spills); the tracker's
+  start (12-14 ms: `pins._refine`'s tip shapes fit the tips again); the tail's contacts (`tactip.replay.contacts`,
+  `pins.contacts`); FFmpeg's one decode thread slower beside the tracking than alone (~0.7 against ~0.51 ms/frame).
+  A process's first replay also pays one-off loads the best of the repeats leaves out (Numba and the kernels'
+  cache, ~0.4-0.6 s; h5py ~0.03 s; compiling the kernels once per machine, tens of s).
 
 Run: .venv/bin/python bench/bench_replay.py [--preset NAME] [--taps N] [--repeats N] [--codec mp4v|MJPG]
      .venv/bin/python bench/bench_replay.py --slides 8 --codec MJPG [--decode-threads N] [--switch-interval S]

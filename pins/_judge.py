@@ -19,6 +19,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from . import _kernels
 from .detect import Blobs, DetectionParams
 from .disc import SensorDisc
 
@@ -120,13 +121,42 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
     if n < _MIN_PINS:
         reason[:] = _OFF
         return reason, np.nan
+    centres = blobs.centres
+    reason, index, core, pitches, nearest = _compiled_passes(blobs, sharpness) or _passes(blobs, sharpness)
+    if len(index) < _MIN_PINS:
+        reason[index] = _OFF
+        return reason, np.nan
+    if core.sum() < _MIN_FIELD:
+        # A handful of blobs (glare round the rim of a pad without pins) is no pin field.
+        reason[index] = _OFF
+        return reason, np.nan
+    hull = cv2.convexHull(centres[index[core]].astype(np.float32))
+    pitch = float(np.median(pitches[core]))
+    loose = index[~core]
+    reason[loose[_beyond(hull, centres[loose], _HULL_MARGIN * pitch)]] = _OUTSIDE
+    # Whatever else was rejected beyond the field (glare round the rim) is outside it, first of all.
+    kept = reason == _KEPT
+    rejected = np.flatnonzero(~kept)
+    reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
+    kept = reason == _KEPT
+    if np.array_equal(np.flatnonzero(kept), index) and len(index) >= 2:
+        # None of the active blobs left as outside: their nearest-neighbour distances are looked up already.
+        return reason, float(np.median(nearest))
+    return reason, float(_median_nn(centres[kept]))
+
+
+def _passes(blobs: Blobs, sharpness: np.ndarray) -> tuple:
+    """`_judge_lattice`'s verdict passes and the field's groups (the reference): reason per blob, the active
+    blobs' numbers and, when there are `_MIN_PINS` of them, per active blob whether its group makes the field's
+    core, its local pitch and its nearest active neighbour's distance, px (else None each)."""
+    n = len(blobs.centres)
+    reason = np.full(n, _KEPT, dtype=np.int64)
     # Photometry and spacing, iterated: removing an impostor changes its neighbours' medians. Then
     # the blobs rejected are judged again against the blobs kept, because a pin first judged among
     # impostors (skin highlights and specks round the spoke ends or the lone centre pin of a radial
     # layout make it look unlike its neighbours) must come back once they are gone; those that pass
     # rejoin and the iteration runs again, each blob rejoining at most once (else pairs of blobs
     # could take turns).
-    centres = blobs.centres
     active = np.ones(n, bool)
     rejoined = np.zeros(n, bool)
     hood = None   # the last pass's neighbourhood: the next one looks up again only what a removal changed
@@ -152,32 +182,41 @@ def _judge_lattice(blobs: Blobs, sharpness: np.ndarray) -> tuple[np.ndarray, flo
         rejoined |= back
     index = np.flatnonzero(active)
     if len(index) < _MIN_PINS:
-        reason[index] = _OFF
-        return reason, np.nan
-    # The field: groups of blobs joined by lattice links; blobs beyond their hull are outside. The last
-    # pass judged every blob among the active ones: its rows for them are the active blobs' own
-    # neighbourhood (the same tree, the same look-ups), no tree built again.
+        return reason, index, None, None, None
+    # The field: groups of blobs joined by lattice links. The last pass judged every blob among the active
+    # ones: its rows for them are the active blobs' own neighbourhood (the same tree, the same look-ups), no
+    # tree built again.
     hood = hood.among_members()
     groups, label = connected_components(hood.graph(), directed=False)
     sizes = np.bincount(label, minlength=groups)
     core = (sizes >= max(_MIN_PINS, _MIN_GROUP * sizes.max()))[label]
-    if core.sum() < _MIN_FIELD:
-        # A handful of blobs (glare round the rim of a pad without pins) is no pin field.
-        reason[index] = _OFF
-        return reason, np.nan
-    hull = cv2.convexHull(centres[index[core]].astype(np.float32))
-    pitch = float(np.median(hood.pitch[core]))
-    loose = index[~core]
-    reason[loose[_beyond(hull, centres[loose], _HULL_MARGIN * pitch)]] = _OUTSIDE
-    # Whatever else was rejected beyond the field (glare round the rim) is outside it, first of all.
-    kept = reason == _KEPT
-    rejected = np.flatnonzero(~kept)
-    reason[rejected[_beyond(hull, centres[rejected], _OUTSIDE_MARGIN * pitch)]] = _OUTSIDE
-    kept = reason == _KEPT
-    if np.array_equal(np.flatnonzero(kept), index) and len(index) >= 2:
-        # None of the active blobs left as outside: their nearest-neighbour distances are looked up already.
-        return reason, float(np.median(hood.dist[:, 1]))
-    return reason, float(_median_nn(centres[kept]))
+    return reason, index, core, hood.pitch, hood.dist[:, 1]
+
+
+def _compiled_passes(blobs: Blobs, sharpness: np.ndarray) -> tuple | None:
+    """`_passes` by the compiled kernels (`pins._jit_judge.judge_passes` and `field_core`: one call each, without
+    the GIL), or None where the reference must judge: NumPy's code chosen (`pins._kernels`), Numba missing, or
+    the kernel unsure (a tie between neighbours, a value at a threshold)."""
+    kernels = _kernels.compiled("_jit_judge")
+    if kernels is None or blobs.contrasts.dtype != np.float64:
+        return None
+    reason, active, dist, near, pitch, link, k, status = kernels.judge_passes(
+        np.ascontiguousarray(blobs.centres, dtype=np.float64), blobs.areas.astype(np.float64),
+        np.ascontiguousarray(blobs.fills, dtype=np.float64), np.maximum(blobs.contrasts, 1e-6),
+        np.ascontiguousarray(sharpness, dtype=np.float64), *_judge_logs(kernels))
+    if status:
+        return None
+    index = np.flatnonzero(active)
+    if len(index) < _MIN_PINS:
+        return reason, index, None, None, None
+    core = kernels.field_core(near, link, active, k, _MIN_PINS, _MIN_GROUP)
+    return reason, index, core, pitch[index], dist[index, 1]
+
+
+def _judge_logs(kernels=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """NumPy's logs that `pins._jit_judge.judge_passes` takes (its thresholds', and of the ratios that can meet them)."""
+    kernels = kernels or _kernels.compiled("_jit_judge")
+    return kernels.LOGS, kernels.EXACT_X, kernels.EXACT_LOG
 
 
 def _verdicts(blobs: Blobs, sharpness: np.ndarray, members: np.ndarray,

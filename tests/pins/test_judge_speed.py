@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import pins._judge as judge
+import pins._kernels as _kernels
 import pins.lattice as lattice
 from pins._candidates import _SharedCache, _evaluate_all, _strongest
 from pins.detect import Blobs
@@ -34,19 +35,29 @@ def _blob_set(seed: int) -> tuple[Blobs, np.ndarray]:
 
 def _plain_judgement(blobs: Blobs, sharpness: np.ndarray):
     """`_judge_lattice` with its final neighbourhood built anew and the kept pins' pitch looked up anew
-    (as until session 22)."""
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(judge._Neighbourhood, "among_members", lambda self: judge._Neighbourhood(self.points[self.index]))
-        reason, pitch = judge._judge_lattice(blobs, sharpness)
+    (as until session 22), by the NumPy reference."""
+    before = _kernels.choose("numpy")
+    try:
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(judge._Neighbourhood, "among_members", lambda self: judge._Neighbourhood(self.points[self.index]))
+            reason, pitch = judge._judge_lattice(blobs, sharpness)
+    finally:
+        _kernels.choose(before)
     # NaN: no field (an early return); else the median nearest-neighbour distance of the kept.
     return reason, pitch if np.isnan(pitch) else judge._median_nn(blobs.centres[reason == judge._KEPT])
 
 
+@pytest.mark.parametrize("kernels", ["numpy", "compiled"])
 @pytest.mark.parametrize("seed", range(40))
-def test_the_judgement_reuses_its_last_neighbourhood_bit_for_bit(seed):
-    """On random lattices with impostors, the verdicts and the kept pins' pitch equal the plain computation's."""
+def test_the_judgement_reuses_its_last_neighbourhood_bit_for_bit(seed, kernels):
+    """On random lattices with impostors, the verdicts and the kept pins' pitch equal the plain computation's
+    (the NumPy reference's and the compiled passes', `pins._jit_judge`)."""
     blobs, sharpness = _blob_set(seed)
-    reason, pitch = judge._judge_lattice(blobs, sharpness)
+    before = _kernels.choose(kernels)
+    try:
+        reason, pitch = judge._judge_lattice(blobs, sharpness)
+    finally:
+        _kernels.choose(before)
     plain_reason, plain_pitch = _plain_judgement(blobs, sharpness)
     assert np.array_equal(reason, plain_reason)
     assert np.array_equal(pitch, plain_pitch, equal_nan=True)
