@@ -11,8 +11,10 @@ environment each time cost ~4 % of an update) or after ``choose("numpy")``, or w
 the tests hold the kernels to it (switching with `choose`).
 
 Numba is imported, and the kernels loaded (compiled once per machine, then read from their cache
-next to `pins._jit`), on the first call that needs them, not on ``import pins``: a command that
-does not track pays nothing.
+next to `pins._jit`), on the first call that needs them, not on ``import pins``. Since session 23 the field
+search's lattice judgement is one of them (`pins._jit_judge`), so `tactip detect` and `calibrate` load Numba too:
+a process's first `pins.find_pin_field` costs ~0.45-0.5 s of CPU, not ~0.2 (Numba's import and the kernels' cache,
+once per process); replay loaded them anyway.
 
 Numba's cache is checked against each kernel's own file only: a kernel that calls one in another module
 (`pins._jit_rest` and `pins._jit_pairs` call `pins._jit_track`'s and `pins._jit`'s) keeps its cached code
