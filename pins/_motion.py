@@ -18,11 +18,13 @@ and y: 4 coefficients, least squares, once more without the pins far from the fi
 from their guesses in this frame (the slow ones, far from the contact) and predicts the others: the fast
 pins' steps scale with their large displacements. The pins fitted lie near rest and step little, so an
 affine function of both (5 x 2 coefficients, sessions 19-22) was ill-conditioned: fitted to them it held,
-yet stepped the fast pins backwards by 6 times their last steps (tactip-127 seed 4's fifth lift). Where no
-plain fit holds (in a lift's first frame a fifth of the pins placed may sit where they were while their
-tips sprang back half a spacing), a trimmed one (`_trimmed`) is tried. `pins.track.PinTracker` runs it only on frames where many pins were not
-placed from their guesses (those LK looks for: a still pad costs nothing), starts LK there from the
-field, and takes off the pins placed more than half a spacing from it (on another pin's tip).
+with -8 times the last step in x, and stepped the pins needing LK by about 0.2 spacings (median, tactip-127 seed 4's
+second lift of `tests/pins/test_track_lift_field.py`), too little to be used (`_LEAST_STEP`). Where no
+plain fit holds (in a lift's first frame a fifth of the pins placed may sit where they were while their tips
+sprang back half a spacing), a trimmed one (`_trimmed`) is tried. `pins.track.PinTracker` runs it only on
+frames where many pins were not placed from their guesses (those LK looks for: a still pad costs nothing),
+starts LK there from the field, and takes off the pins placed more than half a spacing from it (on another
+pin's tip).
 
 Not in a drag filmed slowly: at 30 frames/s the skin under the plate steps a spacing a frame, beyond what any guess
 keeps from a neighbour's tip, and the field fitted to the slow skin around it steps those pins by a fifth of that;
@@ -144,9 +146,9 @@ def _pin_errors(residual: np.ndarray) -> np.ndarray:
 
 
 def _trimmed(x: np.ndarray, step: np.ndarray) -> np.ndarray:
-    """Pins (M,) bool of a trimmed least-squares fit of `spring_steps`' design `x` to `step` (as `_lstsq`): refitted to
-    the `_TRIM_SHARE` of the pins nearest the last fit until that set stays (at most `_TRIM_ROUNDS` refits; concentration
-    steps of least trimmed squares, Rousseeuw and Van Driessen 2006)."""
+    """Pins (M,) bool of a trimmed least-squares fit of `spring_steps`' design `x` to `step` (as `_lstsq`): refitted
+    to the `_TRIM_SHARE` of the pins nearest the last fit until that set stays (at most `_TRIM_ROUNDS` refits;
+    concentration steps of least trimmed squares, Rousseeuw and Van Driessen 2006)."""
     kept = np.ones(len(step) // 2, dtype=bool)
     for _ in range(_TRIM_ROUNDS):
         error = _pin_errors(x @ _lstsq(x, step, kept) - step)
