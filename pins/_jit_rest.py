@@ -80,8 +80,8 @@ def rest_judge(centres, measures, look, positions, distance, rest_positions, res
     (`rest_scatter_sq`, `rest_scatter_seen`, in place, as `pins._noise._learn_mean_square` with
     `first_count`, `bound_sq`, `rate`) and returns the positions (N, 2), px (a copy with the pins found at
     rest) and whether any was found (else `positions` itself). A pin is quiet only among neighbours that agree as a
-    still membrane's do: each within `guess_sq` of their median or `calm_sq` times its scatter in noise, all but `odd`
-    of a faint tip's (`faint` (F,) pins)."""
+    still membrane's do: each within `guess_sq` of their median or `calm_sq` times its scatter in noise (or beyond
+    `gate_sq` of rest: on another tip), all but `odd` of a faint tip's (`faint` (F,) pins)."""
     count = look.shape[0]
     k = index.shape[1]
     xs = np.empty(k)
@@ -108,11 +108,12 @@ def rest_judge(centres, measures, look, positions, distance, rest_positions, res
             apart = 0
             for j in range(k):
                 other = index[pin, j]
-                ex = (positions[other, 0] - rest_positions[other, 0]) - sx  # (xs, ys: sorted by the median)
-                ey = (positions[other, 1] - rest_positions[other, 1]) - sy
+                mx = positions[other, 0] - rest_positions[other, 0]  # (xs, ys: sorted by the median)
+                my = positions[other, 1] - rest_positions[other, 1]
+                ex, ey = mx - sx, my - sy
                 noise = _nan_max(_nan_max(jitter_sq[other], noise_scatter_sq[other]), jitter_floor)
-                if ex * ex + ey * ey > _nan_max(guess_sq, calm_sq * noise):
-                    apart += 1
+                if ex * ex + ey * ey > _nan_max(guess_sq, calm_sq * noise) and mx * mx + my * my <= gate_sq:
+                    apart += 1  # (beyond the gate: on another tip)
             quiet = apart <= odd_here[pin]
         rx, ry = rest_positions[pin, 0], rest_positions[pin, 1]
         ex = (cx - rx) - sx

@@ -418,8 +418,8 @@ class _AtRest:
         if kernels is not None:
             return self._snap_to_rest_compiled(kernels, crop, positions, search, noise_scatter_sq)
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
-        # Pins that drifted from rest by more than a window's settling in noise are looked at again. (count_nonzero:
-        # `ndarray.any` costs several times more on a hundred pins.)
+        # Pins drifted from rest by more than a window's settling in noise are looked at again (count_nonzero: `any`
+        # costs several times more on a hundred pins).
         drifted = distance > self._guess_px ** 2
         if not (np.count_nonzero(drifted) or np.count_nonzero(np.isnan(distance) & search)):
             return positions
@@ -447,16 +447,16 @@ class _AtRest:
         # Where its neighbours say the pin is: its rest position moved by their median displacement. When they lie
         # within a few tenths of a px of rest, the membrane there is at rest (it is continuous: no pin moves by a px
         # alone), and a window that settles within a few times its own scatter in noise (`observe_still`; up to twice
-        # the search's bound) shows the pin there. (A pin's scatter, or the median pin's if more: it is learnt from
-        # steps.)
+        # the search's bound) shows the pin there. (A pin's scatter, or the median pin's if more: learnt from steps.)
         shift = self.displacement_median(positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
-        # ... among neighbours that agree as a still membrane's do, each within the guess bound of their median or
-        # 5 scatters (a creeping patch spreads over px: tactip-127 seed 0, pin 10 1.2 px off, its 0-2.3, median 0.6).
+        # ... among neighbours that agree as a still membrane's do, each within the guess bound of their median or 5
+        # scatters, or on another tip (tactip-127 seed 0's creeping patch: pin 10 1.2 px off, its 0-2.3, median 0.6).
         index = self._neighbour_index[look]
-        noise = np.maximum(np.maximum(self._jitter_sq[index], noise_scatter_sq[index]), self._jitter_floor)
-        apart = _squared_norm(positions[index] - self.rest_positions[index] - shift[:, None]) > np.maximum(
-            self._guess_px ** 2, _CALM_BOUND ** 2 * noise)  # (NaN, a neighbour not placed, compares False)
+        moved, noise = positions[index] - self.rest_positions[index], np.maximum(np.maximum(
+            self._jitter_sq[index], noise_scatter_sq[index]), self._jitter_floor)  # (NaN, not placed, compares False)
+        apart = _squared_norm(moved - shift[:, None]) > np.maximum(self._guess_px ** 2, _CALM_BOUND ** 2 * noise)
+        apart &= _squared_norm(moved) <= self.gate_px ** 2
         quiet &= np.count_nonzero(apart, axis=1) <= np.isin(look, self._faint) * _ODD_NEIGHBOURS
         residual = _squared_norm(centres - rest - shift)
         scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),

@@ -51,12 +51,15 @@ def _creeping(refiner, rng, amplitude_px):
 
 def _agreeing(refiner, positions, look, noise_scatter_sq):
     """The rule as written out here: (L,) bool, the neighbours of `look` within the guess bound of their median or
-    `_CALM_BOUND` scatters, a faint tip's all but `_ODD_NEIGHBOURS`; and their median (L, 2)."""
+    `_CALM_BOUND` scatters (or beyond the gate: on another tip), a faint tip's all but `_ODD_NEIGHBOURS`; and their
+    median (L, 2)."""
     shift = refiner.displacement_median(positions, look)
     index = refiner._neighbour_index[look]
     noise = np.maximum(np.maximum(refiner._jitter_sq[index], noise_scatter_sq[index]), refiner._jitter_floor)
-    spread = _squared_norm(positions[index] - refiner.rest_positions[index] - shift[:, None])
-    apart = np.sum(spread > np.maximum(refiner._guess_px ** 2, _CALM_BOUND ** 2 * noise), axis=1)
+    moved = positions[index] - refiner.rest_positions[index]
+    bound = np.maximum(refiner._guess_px ** 2, _CALM_BOUND ** 2 * noise)
+    near = _squared_norm(moved) <= refiner.gate_px ** 2
+    apart = np.sum((_squared_norm(moved - shift[:, None]) > bound) & near, axis=1)
     return apart <= np.where(np.isin(look, refiner._faint), _ODD_NEIGHBOURS, 0), shift
 
 
