@@ -1,36 +1,33 @@
-"""The still pad: windows' scatter at rest and pins put back at their rest positions, for
-`pins._refine.Refiner` (paper 002, III-A.3).
+"""The still pad: windows' scatter at rest and pins put back at their rest positions, for `pins._refine.Refiner` (paper
+002, III-A.3).
 
-Rest. The rest positions are the windows' own fixed points near the given ones (a few passes of
-mean shift), and what still pulls a window at rest is the pin's rest offset, taken off its first
-window later: the rest frame given again places every pin. A step within the search's settling
-bound is camera noise, not velocity. Near its rest position a window at its guess is judged by
-its centroid less that offset. On a pad back at rest (half the pins within 0.1 spacing of rest,
-hardly any between that and the gate but a faint tip's jitter among still neighbours), pins far
-from rest, drifted by more than a few tenths of a px, and missing ones are looked for at their
-rest positions (`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on their
-neighbours' tips, nor a faint rim tip's window on the veil beside it.
+Rest. The rest positions are the windows' own fixed points near the given ones (a few passes of mean shift), and what
+still pulls a window at rest is the pin's rest offset, taken off its first window later: the rest frame given again
+places every pin. A step within the search's settling bound is camera noise, not velocity. Near its rest position a
+window at its guess is judged by its centroid less that offset. On a pad back at rest (half the pins within 0.1 spacing
+of rest, hardly any between that and the gate but a faint tip's jitter among still neighbours), pins far from rest,
+drifted by more than a few tenths of a px, and missing ones are looked for at their rest positions
+(`Refiner.snap_to_rest`): a fast return from a slide cannot leave them on their neighbours' tips, nor a faint rim tip's
+window on the veil beside it.
 
-Noise. The bounds the camera's noise sets (each window's scatter in it, its contrast's scatter and with
-it the tips' bounds at rest, `pins._like`) are drawn from the rest frame's own noise; through a video
-codec, which smooths the noise within a frame but not from frame to frame, that is too little, and the
-first still frame after the rest frame widens the tips' bounds to the scatter of the contrast it shows
-(`_AtRest.heed_camera_noise`). In that frame no window's own scatter is learnt yet, and the one the rest frame's
-noise predicts is too small by as much: `snap_to_rest`'s calm test there reads it grown by the ratio of the two
-noises (radial-led-120 mp4v seed 3: a tip's area read 66 px^2 at rest, 240 in the first still frame: lost).
+Noise. The bounds the camera's noise sets (each window's scatter in it, its contrast's scatter and with it the tips'
+bounds at rest, `pins._like`) are drawn from the rest frame's own noise; through a video codec, which smooths the noise
+within a frame but not from frame to frame, that is too little, and the first still frame after the rest frame widens
+the tips' bounds to the scatter of the contrast it shows (`_AtRest.heed_camera_noise`). In that frame no window's own
+scatter is learnt yet, and the one the rest frame's noise predicts is too small by as much: `snap_to_rest`'s calm test
+there reads it grown by the ratio of the two noises (radial-led-120 mp4v seed 3: a tip's area read 66 px^2 at rest, 240
+in the first still frame: lost).
 
-Levels. The rest frame is one noisy frame, and a faint tip's measures there (its bounds the noise's,
-`pins._like`) may lie several of its scatters from its own level: each faint tip learns that level, the mean
-of its window's readings at rest over the frames of a pad at rest, and has the bounds of it (only ever wider)
-while it is still or steady: lost or jittering by its window's noise among still neighbours
-(`_AtRest._learn_levels`, `_AtRest._draw_bounds`).
+Levels. The rest frame is one noisy frame, and a faint tip's measures there (its bounds the noise's, `pins._like`) may
+lie several of its scatters from its own level: each faint tip learns that level, the mean of its window's readings at
+rest over the frames of a pad at rest, and has the bounds of it (only ever wider) while it is still or steady: lost or
+jittering by its window's noise among still neighbours (`_AtRest._learn_levels`, `_AtRest._draw_bounds`).
 
-Each pin has a level, learnt bounds and steadiness in (3, N) and (N,) arrays (only faint tips' change); each
-frame's bounds are picked from them by compiled calls (`pins._jit_rest`: 0.07 ms a frame less than NumPy).
+Each pin has a level, learnt bounds and steadiness in (3, N) and (N,) arrays (only faint tips' change); each frame's
+bounds are picked from them by compiled calls (`pins._jit_rest`: 0.07 ms a frame less than NumPy).
 
-`_AtRest` holds these steps; `pins._refine.Refiner` inherits them and sets the state they read
-(`rest_positions`, `_rest_offset`, `_rest_radius`, the learnt scatters, `_settled_px`, `_guess_px`).
-"""
+`_AtRest` holds these steps; `pins._refine.Refiner` inherits them and sets the state they read (`rest_positions`,
+`_rest_offset`, `_rest_radius`, the learnt scatters, `_settled_px`, `_guess_px`)."""
 
 from __future__ import annotations
 
@@ -50,9 +47,10 @@ _STILL_FRACTION = 0.1
 # ... and at most this share of them lie between that and the gate (a moving pad's field of
 # displacements is continuous: its transition from still to moved pins holds many).
 _BETWEEN_SHARE = 0.02
-# A pin's window at rest is calm within this many times its learnt scatter of where its still
-# neighbours place it (the scatter of its steps misses the constant part: its rest offset's noise).
+# A pin's window at rest is calm within this many times its learnt scatter of where its still neighbours place it (the
+# scatter of its steps misses the constant part: its rest offset's noise); a faint tip's neighbours but this many agree.
 _CALM_BOUND = 5.0
+_ODD_NEIGHBOURS = 1
 _FLOOR_EVERY = 8
 # Draws of noise that measure each rest window's scatter before any is learnt.
 _NOISE_DRAWS = 4
@@ -172,23 +170,22 @@ class _AtRest:
         return np.fmin(still, least)
 
     def _learn_levels(self, crop: np.ndarray, positions: np.ndarray) -> None:
-        """Each faint tip placed near its rest position (within `_STILL_FRACTION` of the spacing; or lost, one
-        judged by its contrast alone) on a pad at rest (`_PAIR_STILL_SHARE` of the pins there) among neighbours
-        that lie within the guess bound of rest reads its window at rest (the rest frame's) in `crop`: its level
-        is the mean of these readings and its rest frame's, its bounds those of that level
-        (`pins._like.bounds_from_level`), which `_draw_bounds` gives it while it is still or steady.
+        """Each faint tip placed near its rest position (within `_STILL_FRACTION` of the spacing; or lost, one judged by
+        its contrast alone) on a pad at rest (`_PAIR_STILL_SHARE` of the pins there) among neighbours that lie within
+        the guess bound of rest reads its window at rest (the rest frame's) in `crop`: its level is the mean of these
+        readings and its rest frame's, its bounds those of that level (`pins._like.bounds_from_level`), which
+        `_draw_bounds` gives it while it is still or steady.
 
-        The rest frame is one noisy frame: a faint tip's contrast there may lie several of its scatters above
-        its level (radial-led-120 seed 37: 22.6 at rest, 14.0 +- 2.3 over 40 still frames; its area 7.9 at
-        rest, 13.2 +- 3.0), and its bounds from that frame then lose it on a still pad. A tip judged by all
-        three measures reads only while placed (one that vanished is lost and teaches nothing); one judged by
-        its contrast alone, which no frame tells from nothing, reads while lost too (its readings while placed
-        would be those its bound let through: seed 46's tip of contrast 9.6 at rest, 4.2 +- 2.8 over the still
-        frames, 7.9 over those it was placed in). The bounds only ever widen, the contrast's by at most one
-        reach more than the rest frame's (a tip fading under glare walks them no farther), the area's and
-        compactness's by at most `_LEVEL_CAP` times; and a judged tip whose level sank within the reach of
-        nothing keeps its rest frame's bounds (a tip that vanished on a still pad, the windows that placed it
-        by their contrast alone, `snap_to_rest`'s calm pins, reading the membrane: its bounds would follow).
+        The rest frame is one noisy frame: a faint tip's contrast there may lie several of its scatters above its level
+        (radial-led-120 seed 37: 22.6 at rest, 14.0 +- 2.3 over 40 still frames; its area 7.9 at rest, 13.2 +- 3.0), and
+        its bounds from that frame then lose it on a still pad. A tip judged by all three measures reads only while
+        placed (one that vanished is lost and teaches nothing); one judged by its contrast alone, which no frame tells
+        from nothing, reads while lost too (its readings while placed would be those its bound let through: seed 46's
+        tip of contrast 9.6 at rest, 4.2 +- 2.8 over the still frames, 7.9 over those it was placed in). The bounds only
+        ever widen, the contrast's by at most one reach more than the rest frame's (a tip fading under glare walks them
+        no farther), the area's and compactness's by at most `_LEVEL_CAP` times; and a judged tip whose level sank
+        within the reach of nothing keeps its rest frame's bounds (a tip that vanished on a still pad, the windows that
+        placed it by their contrast alone, `snap_to_rest`'s calm pins, reading the membrane: its bounds would follow).
         """
         faint = self._faint
         if not faint.size:
@@ -369,22 +366,20 @@ class _AtRest:
     def snap_to_rest(self, crop: np.ndarray, positions: np.ndarray, search: np.ndarray) -> np.ndarray:
         """Pins far from rest on a pad back at rest placed on the tips at their own rest positions.
 
-        When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing
-        of their rest positions and hardly any (`_BETWEEN_SHARE`) lie between that and `gate_px`
-        (the pad is back at rest: a moving pad's field of displacements is continuous; a pin within
-        twice that fraction whose neighbours are still is a faint tip's jitter), a pin farther than
-        `gate_px` from its rest position (a fast return from a slide carried its stale guess onto a
-        neighbour's tip), drifted by more than a few tenths of a px, or missing is looked for in a
-        window at its rest position (its centroid less the rest offset). A pin far from rest or
-        missing is placed there when the window settles within the search's bound on a tip like its
-        own at rest. A *calm* pin (its still neighbours' median displacement within a few tenths of a
-        px, and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its
-        steps, `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip shown by its contrast. A pin placed
-        near rest that is not calm keeps its place. Whatever a moving pad does, nothing is moved:
-        the check costs a few vector operations per frame. (First, till a still frame has been paired with
-        the rest frame, the bounds the camera's noise sets are checked against it: `heed_camera_noise`.)
-        By two compiled kernels round the window
-        measurement (`pins._jit_rest`: the same positions and learnt scatters) unless
+        When at least `_STILL_SHARE` of the placed pins lie within `_STILL_FRACTION` of the spacing of their rest
+        positions and hardly any (`_BETWEEN_SHARE`) lie between that and `gate_px` (the pad is back at rest: a moving
+        pad's field of displacements is continuous; a pin within twice that fraction whose neighbours are still is a
+        faint tip's jitter), a pin farther than `gate_px` from its rest position (a fast return from a slide carried its
+        stale guess onto a neighbour's tip), drifted by more than a few tenths of a px, or missing is looked for in a
+        window at its rest position (its centroid less the rest offset). A pin far from rest or missing is placed there
+        when the window settles within the search's bound on a tip like its own at rest. A *calm* pin (its still
+        neighbours' median displacement within a few tenths of a px, the neighbours agreeing as a still membrane's do,
+        and its window within `_CALM_BOUND` times its learnt scatter of where they place it: from its steps,
+        `observe_still`, or from its windows at rest here, whichever is larger) is placed where they place it, its tip
+        shown by its contrast. A pin placed near rest that is not calm keeps its place. Whatever a moving pad does,
+        nothing is moved: the check costs a few vector operations per frame. (First, till a still frame has been paired
+        with the rest frame, the bounds the camera's noise sets are checked against it: `heed_camera_noise`.) By two
+        compiled kernels round the window measurement (`pins._jit_rest`: the same positions and learnt scatters) unless
         ``TACTIP_KERNELS=numpy`` or Numba is missing.
 
         Parameters
@@ -423,8 +418,8 @@ class _AtRest:
         if kernels is not None:
             return self._snap_to_rest_compiled(kernels, crop, positions, search, noise_scatter_sq)
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing
-        # Pins that drifted from rest by more than a window's settling in noise are looked at again.
-        # (count_nonzero: `ndarray.any` costs several times more on a hundred pins.)
+        # Pins drifted from rest by more than a window's settling in noise are looked at again (count_nonzero: `any`
+        # costs several times more on a hundred pins).
         drifted = distance > self._guess_px ** 2
         if not (np.count_nonzero(drifted) or np.count_nonzero(np.isnan(distance) & search)):
             return positions
@@ -432,11 +427,10 @@ class _AtRest:
         placed = np.count_nonzero(np.isfinite(distance))
         if np.count_nonzero(still) < _STILL_SHARE * placed:
             return positions  # the pad is not at rest (most frames of a contact: decided before the rest)
-        # A moving pad's field of displacements is continuous: between its still pins and those
-        # moved farther than the gate lie pins moved by less. Pins put on wrong tips are off by
-        # a whole spacing, with none in between.
-        # A faint tip's window jitters in noise by up to a fifth of the spacing: a pin within that of
-        # rest whose neighbours are still is such jitter, not motion.
+        # A moving pad's field of displacements is continuous: between its still pins and those moved farther than the
+        # gate lie pins moved by less. Pins put on wrong tips are off by a whole spacing, with none in between. A faint
+        # tip's window jitters in noise by up to a fifth of the spacing: a pin within that of rest whose neighbours are
+        # still is such jitter, not motion.
         far = distance > self.gate_px ** 2
         between = np.flatnonzero(~still & ~far & np.isfinite(distance))
         if between.size:
@@ -450,28 +444,34 @@ class _AtRest:
         rest = self.rest_positions[look]
         centres, measures = self.windows.measure(crop, rest - self.origin, self._rest_radius[look])
         centres += self.origin - self._rest_offset[look]
-        # Where its neighbours say the pin is: its rest position moved by their median displacement.
-        # When they lie within a few tenths of a px of rest, the membrane there is at rest (it is
-        # continuous: no pin moves by a px alone), and a window that settles within a few times its
-        # own scatter in noise (`observe_still`; up to twice the search's bound) shows the pin there.
-        # (A pin's scatter, or the median pin's if more: it is learnt from steps.)
+        # Where its neighbours say the pin is: its rest position moved by their median displacement. When they lie
+        # within a few tenths of a px of rest, the membrane there is at rest (it is continuous: no pin moves by a px
+        # alone), and a window that settles within a few times its own scatter in noise (`observe_still`; up to twice
+        # the search's bound) shows the pin there. (A pin's scatter, or the median pin's if more: learnt from steps.)
         shift = self.displacement_median(positions, look)
         quiet = _squared_norm(shift) <= self._guess_px ** 2  # NaN (no placed neighbour) compares False
+        # ... among neighbours that agree as a still membrane's do, each within the guess bound of their median or 5
+        # scatters, or on another tip (tactip-127 seed 0's creeping patch: pin 10 1.2 px off, its 0-2.3, median 0.6).
+        index = self._neighbour_index[look]
+        moved, noise = positions[index] - self.rest_positions[index], np.maximum(np.maximum(
+            self._jitter_sq[index], noise_scatter_sq[index]), self._jitter_floor)  # (NaN, not placed, compares False)
+        apart = _squared_norm(moved - shift[:, None]) > np.maximum(self._guess_px ** 2, _CALM_BOUND ** 2 * noise)
+        apart &= _squared_norm(moved) <= self.gate_px ** 2
+        quiet &= np.count_nonzero(apart, axis=1) <= np.isin(look, self._faint) * _ODD_NEIGHBOURS
         residual = _squared_norm(centres - rest - shift)
         scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
                              np.maximum(noise_scatter_sq[look], self._jitter_floor))
         calm = quiet & (residual <= _CALM_BOUND ** 2 * scatter)
         bound = np.where(calm, 2.0 * self._settled_px, self._settled_px)
-        # A calm pin's window need only show a tip (its contrast): its area and compactness near the
-        # rim's veil swing with the noise of its top pixels.
+        # A calm pin's window need only show a tip (its contrast): its area and compactness near the rim's veil swing
+        # with the noise of its top pixels.
         like = np.where(calm, measures[1] >= self._at_least[1, look], self._like_at_rest(measures, look))
         found = (_squared_norm(centres - rest) <= bound ** 2) & like
         # A pin placed near rest that really moved keeps its place (a window at rest cuts its tip).
         found &= calm | ~(distance[look] <= self.gate_px ** 2)
-        # The window's own scatter about where its still neighbours place the pin, learnt from the
-        # windows that showed it here, after the test (a window never widens its own bound): a faint
-        # tip in the veil scatters by tenths of a px, and its steps, taken with its neighbours once
-        # it is placed where they say, do not show that.
+        # The window's own scatter about where its still neighbours place the pin, learnt from the windows that showed
+        # it here, after the test (a window never widens its own bound): a faint tip in the veil scatters by tenths of a
+        # px, and its steps, taken with its neighbours once it is placed where they say, do not show that.
         _learn_mean_square(self._rest_scatter_sq, self._rest_scatter_seen, look, residual, quiet & found)
         if not np.count_nonzero(found):
             return positions
@@ -497,4 +497,4 @@ class _AtRest:
             self._neighbour_index, self._guess_px ** 2, _CALM_BOUND ** 2, self._settled_px, self.gate_px ** 2,
             self._jitter_sq, self._rest_scatter_sq, self._rest_scatter_seen, noise_scatter_sq,
             float(self._jitter_floor), self._at_least, self._area_at_most, _JITTER_FIRST, _JITTER_BOUND ** 2,
-            _JITTER_RATE)[0]
+            _JITTER_RATE, self._faint, _ODD_NEIGHBOURS)[0]
