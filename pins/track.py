@@ -23,12 +23,10 @@ A pin that fails is *lost*: its position is NaN and `PinTracker.lost` says so; n
   and a pin found keeps its tip only when no other pin is expected nearer to it (`pins._identity`):
   through slides that squeeze the skin ahead of them, a pin is rather lost than on another's tip;
 - retirement: a pin lost for more than `retire_after` frames (a rim pin leaving view) is retired:
-  searched for once in `check_every` frames, and followed from where the placed pins around put it
-  while they are still;
-- recovery at a bounded rate: when a pin that is not retired is still missing, the frame's blobs
-  are detected (`pins.detect`, a few ms), at most once in `detect_every` frames: implausible pins
-  take the blob they landed on, and free blobs are assigned to lost pins one-to-one (Hungarian
-  method) within the gate around their predictions;
+  searched for once in `check_every` frames, and followed from where the still placed pins around put it;
+- recovery at a bounded rate: when a pin that is not retired is still missing, the frame's blobs are detected
+  (`pins.detect`, a few ms), at most once in `detect_every` frames: implausible pins take the blob they landed
+  on, and free blobs are assigned to lost pins one-to-one (Hungarian method) within the gate around their predictions;
 - the surround: pixels of the crop beyond the sensor disc (less its blurred rim; `pins._surround`)
   that a pin's window can reach take the membrane's grey level, so a bright surround next to the
   pins at the rim of a small pad neither pulls their centroids nor makes them look unlike at rest;
@@ -122,8 +120,7 @@ class PinTracker:
         (default). Without it the tracker is plain LK with checks, equal to `track_pins` (but for
         blank frames), and lost pins stay lost.
     gate_fraction : float
-        Gate of search and recovery as a fraction of the median nearest-neighbour pin spacing at
-        start, in (0, 0.5).
+        Gate of search and recovery as a fraction of the median nearest-neighbour pin spacing at start, in (0, 0.5).
     neighbours : int
         Tracked neighbours whose median displacement predicts where a lost pin is.
     retire_after : int
@@ -406,9 +403,9 @@ class PinTracker:
             if fresh.size:
                 velocity[fresh] = self._refiner.neighbour_median(velocity, fresh)
             self._step = velocity.copy()  # (the steps as measured: the motion field's regressor, `pins._motion`)
-        # A step within the search's settling bound is no motion to carry on (a faint tip's centroid
-        # jitters by a few tenths of a px in noise; extrapolated, the jitter would walk the guesses
-        # off a still pad), unless the pin's neighbourhood moves beyond its noise (`carried_velocity`).
+        # A step within the search's settling bound is no motion to carry on (a faint tip's centroid jitters by a few
+        # tenths of a px in noise; extrapolated, the jitter would walk the guesses off a still pad), unless the pin's
+        # neighbourhood moves beyond its noise (`carried_velocity`).
         if self.refine:
             # (Still for `Refiner._trusted`: moved by no more than a window settles on its guess.)
             self._refiner.still = _squared_norm(velocity) <= self._refiner._guess_px ** 2
@@ -434,9 +431,8 @@ class PinTracker:
         positions, filled = refiner.follow(crop, guess, self._last_seen, search)
         need = np.isnan(positions[:, 0]) & np.isfinite(self._reference[:, 0])  # (not retired pins guessed)
         tracked = positions
-        # A few pins not found (searched for from their predictions too) have vanished; when many
-        # are not (a sudden change of motion), LK looks for them from the last good frame, each
-        # answer checked by its windowed centroid.
+        # A few pins not found (searched for from their predictions too) have vanished; when many are not (a sudden
+        # change of motion), LK looks for them from the last good frame, each answer checked by its windowed centroid.
         if np.count_nonzero(need) > _RETRY_FRACTION * len(need):
             if self._since_good == 1:
                 # From where the frame's motion field, fitted to the pins just placed, puts them (`pins._motion`).
@@ -447,8 +443,8 @@ class PinTracker:
             tracked = np.where(need[:, None], moved + origin, positions)
             positions = refiner.refine(crop, tracked, self._last_seen, need, ~need & np.isfinite(positions[:, 0]),
                                        filled=np.where(need[:, None], tracked, filled))
-        # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and
-        # missing ones, retired too (a slide's return: 3-9 left lost 3 frames after it), at their rest positions.
+        # On a pad back at rest, pins far from rest (carried onto another tip by a stale guess) and missing ones,
+        # retired too (a slide's return: 3-9 left lost 3 frames after it), at their rest positions.
         # (Each pin it moves keeps the tip only where no other pin is expected nearer: issue 20's slides.)
         before = positions
         positions = kept_on_own_tips(positions, refiner.snap_to_rest(crop, positions, self._everyone),
