@@ -149,13 +149,19 @@ def _row_within(points, near, row, want, tx, ty, tolerance):
     (px) to (tx, ty)."""
     far = tolerance * tolerance * (1.0 + 1e-9)
     for c in range(1, want + 1):
-        j = near[row, c]
-        dx = points[j, 0] - tx
-        dy = points[j, 1] - ty
-        d2 = dx * dx + dy * dy
-        if d2 < far and math.sqrt(d2) < tolerance:
+        if _nearer(points, near[row, c], tx, ty, far, tolerance):
             return True
     return False
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _nearer(points, j, tx, ty, far, tolerance):
+    """Whether point `j` lies nearer than `tolerance` (px) to (tx, ty): the square root taken only where its squared
+    distance is below `far` (`tolerance` squared, a hair wider), the reference's exact test."""
+    dx = points[j, 0] - tx
+    dy = points[j, 1] - ty
+    d2 = dx * dx + dy * dy
+    return d2 < far and math.sqrt(d2) < tolerance
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -173,11 +179,7 @@ def _member_within(tx, ty, tolerance, x0, y0, size, nx, ny, start, order, points
         for cx in range(gx0, gx1 + 1):
             c = cy * nx + cx
             for s in range(start[c], start[c + 1]):
-                j = order[s]
-                dx = points[j, 0] - tx
-                dy = points[j, 1] - ty
-                d2 = dx * dx + dy * dy
-                if d2 < far and math.sqrt(d2) < tolerance:
+                if _nearer(points, order[s], tx, ty, far, tolerance):
                     return True
     return False
 
