@@ -159,6 +159,7 @@ def _trimmed(x: np.ndarray, step: np.ndarray) -> np.ndarray:
         kept = nearest
     return kept
 
+
 def field_guesses(rest: np.ndarray, reference: np.ndarray, last_step: np.ndarray, guess: np.ndarray,
                   positions: np.ndarray, need: np.ndarray,
                   spacing_px: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -210,11 +210,11 @@ def _stopped_by_contact(signal: np.ndarray, first: int, stop: int, fallen: float
     """The first frame in [first, stop) where a lift's signal (px, from the rest) that fell by ``high_px`` or more in
     the frame before stopped at once (by less than half ``low_px``), at most ``fallen`` and below ``below``: the
     plate came off and the next contact held the skin there (a rest of a frame or two, no still frame); else None."""
-    for f in range(first, stop):
-        if (signal[f] <= fallen and signal[f] < below and signal[f - 1] - signal[f] < 0.5 * low_px
-                and signal[f - 2] - signal[f - 1] >= high_px):
-            return f
-    return None
+    if stop <= first:
+        return None
+    now, last, earlier = signal[first:stop], signal[first - 1:stop - 1], signal[first - 2:stop - 2]
+    hits = np.flatnonzero((now <= fallen) & (now < below) & (last - now < 0.5 * low_px) & (earlier - last >= high_px))
+    return first + int(hits[0]) if hits.size else None
 
 
 def _moved_since_fall(data: np.ndarray, signal: np.ndarray, peak_at: int, stop: int, fallen: float,
