@@ -48,8 +48,11 @@ with 3-frame rests between the slides (`tactip.sim.SyntheticTacTip.slides`).
 Where it stands (figures per session and what each tried are in `git log -- bench/bench_replay.py`):
 
 - The bar, by the clock on a quiet 2-core VM (load < 1, nothing else running), ``--slides 8 --repeats 5``: MJPG met
-  (1.06-1.31, sessions 16-21); mp4v at its edge: 1.51-1.56 at session 21's end (replay 0.633-0.639 s, decoding alone
-  0.409-0.420 s). On 2 cores the decoder fills one and the main thread (with the field search's candidate threads,
+  (1.06-1.31, sessions 16-21; 0.95 at session 23's end, per-repeat median 0.97); mp4v at its edge at session 21's end
+  (1.51-1.56: replay 0.633-0.639 s, decoding alone 0.409-0.420 s) and 22's (best 1.65), met at session 23's end (main
+  74e5a23, load 0.9-1.6, three runs: best of 5 1.40, 1.38, 1.30, per-repeat medians 1.25, 1.51, 1.31, ranges
+  0.89-1.67; replay 0.542-0.575 s, decoding alone 0.410-0.416 s; the compiled lattice judgement, `pins._jit_judge`,
+  took the field search's candidate threads from ~110 to ~40 ms of CPU). On 2 cores the decoder fills one and the main thread (with the field search's candidate threads,
   GIL-bound) the other, and the main thread never waits for frames: its CPU is replay's clock, start to tail.
 - Where the main thread's CPU goes (session 22, mp4v, main fb192f9, ms, medians at load 5-19): the start ~75 (open
   5; `pins.find_pin_field` ~55 of its own: tip fits 14, the other polarity's probe 11 (its judgement 9), the noise
