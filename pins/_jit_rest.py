@@ -74,14 +74,14 @@ def _nan_max(a, b):
 @njit(cache=True, nogil=True, error_model="numpy")
 def rest_judge(centres, measures, look, positions, distance, rest_positions, rest_offset, origin, index, guess_sq,
                calm_sq, settled_px, gate_sq, jitter_sq, rest_scatter_sq, rest_scatter_seen, noise_scatter_sq,
-               jitter_floor, at_least, area_at_most, first_count, bound_sq, rate, faint, odd):
+               jitter_floor, at_least, area_at_most, first_count, bound_sq, rate, odd_neighbours):
     """`pins._rest._AtRest.snap_to_rest`'s judgement of the windows at rest of pins `look` (L,): their
     centroids `centres` (L, 2), px in the crop at `origin`, and `measures` (3, L). Learns the rest scatter
     (`rest_scatter_sq`, `rest_scatter_seen`, in place, as `pins._noise._learn_mean_square` with
     `first_count`, `bound_sq`, `rate`) and returns the positions (N, 2), px (a copy with the pins found at
     rest) and whether any was found (else `positions` itself). A pin is quiet only among neighbours that agree as a
     still membrane's do: each within `guess_sq` of their median or `calm_sq` times its scatter in noise (or beyond
-    `gate_sq` of rest: on another tip), all but `odd` of a faint tip's (`faint` (F,) pins)."""
+    `gate_sq` of rest: on another tip), all but `odd_neighbours[pin]` ((N,) int) of them."""
     count = look.shape[0]
     k = index.shape[1]
     xs = np.empty(k)
@@ -90,9 +90,6 @@ def rest_judge(centres, measures, look, positions, distance, rest_positions, res
     placed = np.empty((count, 2))
     found = np.zeros(count, np.bool_)
     anything = False
-    odd_here = np.zeros(rest_positions.shape[0], np.int64)
-    for f in range(faint.shape[0]):
-        odd_here[faint[f]] = odd
     for r in range(count):
         pin = look[r]
         cx = centres[r, 0] + (origin[0] - rest_offset[pin, 0])
@@ -114,7 +111,7 @@ def rest_judge(centres, measures, look, positions, distance, rest_positions, res
                 noise = _nan_max(_nan_max(jitter_sq[other], noise_scatter_sq[other]), jitter_floor)
                 if ex * ex + ey * ey > _nan_max(guess_sq, calm_sq * noise) and mx * mx + my * my <= gate_sq:
                     apart += 1  # (beyond the gate: on another tip)
-            quiet = apart <= odd_here[pin]
+            quiet = apart <= odd_neighbours[pin]
         rx, ry = rest_positions[pin, 0], rest_positions[pin, 1]
         ex = (cx - rx) - sx
         ey = (cy - ry) - sy

@@ -151,6 +151,7 @@ class _AtRest:
         self._faint = np.flatnonzero(contrast < 2.0 * _NOISE_REACH * self.contrast_noise)  # (NaN compares False)
         faint = np.zeros(len(contrast), dtype=bool)
         faint[self._faint] = True
+        self._odd_neighbours = faint * np.int64(_ODD_NEIGHBOURS)  # (N,): `snap_to_rest`'s quiet test, per pin
         level = np.stack(measures)
         seen = np.isfinite(level) & faint
         self._level_seen = seen.astype(np.float64)
@@ -258,8 +259,7 @@ class _AtRest:
         Each window's scatter in noise (`_noise_scatter_sq`: the calm test at rest, the drift bound) is left
         as the rest frame draws it. Grown by the square of the same ratio it swapped more identities through
         slides (radial-led-120, 8 slides of 3 pitches, seeds 0-5, MJPG: pin-frames on another pin's tip 213
-        -> 259, half a spacing apart 8 -> 22, > 3 px 56 -> 86; without it 210, 8, 57).
-        """
+        -> 259, half a spacing apart 8 -> 22, > 3 px 56 -> 86; without it 210, 8, 57)."""
         if self._rest_for_noise is None:
             return False
         distance = _squared_norm(positions - self.rest_positions)  # NaN where missing: not near
@@ -457,7 +457,7 @@ class _AtRest:
             self._jitter_sq[index], noise_scatter_sq[index]), self._jitter_floor)  # (NaN, not placed, compares False)
         apart = _squared_norm(moved - shift[:, None]) > np.maximum(self._guess_px ** 2, _CALM_BOUND ** 2 * noise)
         apart &= _squared_norm(moved) <= self.gate_px ** 2
-        quiet &= np.count_nonzero(apart, axis=1) <= np.isin(look, self._faint) * _ODD_NEIGHBOURS
+        quiet &= np.count_nonzero(apart, axis=1) <= self._odd_neighbours[look]
         residual = _squared_norm(centres - rest - shift)
         scatter = np.maximum(np.maximum(self._jitter_sq[look], self._rest_scatter_sq[look]),
                              np.maximum(noise_scatter_sq[look], self._jitter_floor))
@@ -497,4 +497,4 @@ class _AtRest:
             self._neighbour_index, self._guess_px ** 2, _CALM_BOUND ** 2, self._settled_px, self.gate_px ** 2,
             self._jitter_sq, self._rest_scatter_sq, self._rest_scatter_seen, noise_scatter_sq,
             float(self._jitter_floor), self._at_least, self._area_at_most, _JITTER_FIRST, _JITTER_BOUND ** 2,
-            _JITTER_RATE, self._faint, _ODD_NEIGHBOURS)[0]
+            _JITTER_RATE, self._odd_neighbours)[0]
